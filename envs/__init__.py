@@ -1,0 +1,1 @@
+"""Gymnasium environments over simgrip's scene builder (shipped as ``simgrip.envs``)."""
