@@ -1,0 +1,104 @@
+"""The hinge-chain discretisation of a finger: springs, rest angles and masses.
+
+A finger of length ``l`` becomes ``n`` rigid links of length ``ds = l/n``.  Link
+``i`` (``0 <= i < n``) covers ``s in [i ds, (i+1) ds]`` and has absolute angle
+``phi_i`` (counter-clockwise from ``E1``).  Hinge ``j`` sits at node
+``s_j = j ds`` and carries the relative angle ``q_j = phi_j - phi_{j-1}`` with
+``phi_{-1} = 0`` (the clamp).
+
+Derivation (second order in ``ds``).  The link angle approximates the tangent at
+the link's midpoint, ``phi_i ~ theta((i + 1/2) ds)``.  Split the bending energy
+``int EI/2 (theta' - kappa0)^2 ds`` into the cells between link midpoints:
+
+* interior hinge ``j = 1..n-1`` owns ``[(j - 1/2) ds, (j + 1/2) ds]`` (length ds);
+  the midpoint rule there gives ``EI/(2 ds) (q_j - beta_j)^2`` with
+  ``beta_j = int_{(j-1/2)ds}^{(j+1/2)ds} kappa0 ds``;
+* the clamp hinge ``j = 0`` owns only ``[0, ds/2]`` (half a cell), so
+  ``EI/2 * (ds/2) * (q_0/(ds/2) - kappa0)^2 = (2 EI/ds)/2 * (q_0 - beta_0)^2`` with
+  ``beta_0 = int_0^{ds/2} kappa0 ds``: **twice the stiffness, half the rest angle
+  span**;
+* the last half cell ``[l - ds/2, l]`` is moment free (``theta'(l) = kappa0(l)``)
+  and needs no hinge.
+
+Gravity acts on each link's mass ``rho ds`` at its midpoint, and the tip is the
+end of the last link, so ``X(l) = sum ds cos(phi_i)`` is the midpoint rule for
+``int cos(theta)``: every piece is second order.
+
+Everything here is dimensionless unless a :class:`~simgrip.params.PhysicalParams`
+is used by the caller to scale it (stiffness ``EI/ds`` [N m/rad]).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from simgrip.profiles import CurvatureProfile, as_profile
+
+__all__ = ["ChainSprings", "chain_springs", "MIN_LINKS", "check_links", "link_positions"]
+
+#: Fewest links a finger may have (one clamp hinge plus one interior hinge).
+MIN_LINKS = 2
+
+
+def check_links(n) -> int:
+    """Return ``n`` as an int, or raise ``ValueError`` naming ``links`` if it is unusable."""
+    try:
+        ni = int(n)
+    except (TypeError, ValueError):
+        raise ValueError(f"links must be an integer >= {MIN_LINKS}, got {n!r}") from None
+    if ni != n or ni < MIN_LINKS:
+        raise ValueError(f"links must be an integer >= {MIN_LINKS}, got {n!r}")
+    return ni
+
+
+@dataclass(frozen=True)
+class ChainSprings:
+    """Springs of an ``n``-link chain, dimensionless.
+
+    Attributes
+    ----------
+    n : int
+        Number of links.
+    ds : float
+        Link length over ``l``.
+    stiffness : ndarray, shape (n,)
+        Hinge stiffness over ``EI/l``: ``2/ds`` for the clamp hinge, ``1/ds`` otherwise.
+        Multiply by ``EI/l`` [N m] for N m/rad.
+    rest : ndarray, shape (n,)
+        Rest angle of each hinge [rad] (the integrated intrinsic curvature).
+    nodes : ndarray, shape (n,)
+        Arc length ``s/l`` of each hinge.
+    """
+
+    n: int
+    ds: float
+    stiffness: np.ndarray
+    rest: np.ndarray
+    nodes: np.ndarray
+
+
+def chain_springs(profile: CurvatureProfile | float, n: int) -> ChainSprings:
+    """Stiffness factors and rest angles of an ``n``-link chain for ``profile``.
+
+    See the module docstring for the derivation; ``rest[0]`` integrates the
+    curvature over ``[0, ds/2]`` and ``rest[j]`` over ``[(j-1/2) ds, (j+1/2) ds]``.
+    """
+    n = check_links(n)
+    prof = as_profile(profile)
+    ds = 1.0 / n
+    nodes = np.arange(n) * ds
+    lo = np.maximum(nodes - 0.5 * ds, 0.0)
+    hi = nodes + 0.5 * ds
+    rest = np.asarray(prof.integral(lo, hi), dtype=float)
+    stiffness = np.full(n, 1.0 / ds)
+    stiffness[0] = 2.0 / ds
+    return ChainSprings(n=n, ds=ds, stiffness=stiffness, rest=rest, nodes=nodes)
+
+
+def link_positions(link_angles: np.ndarray, ds: float) -> np.ndarray:
+    """Node positions ``(n+1, 2)`` of a chain with absolute link angles ``phi`` [rad], base at the origin."""
+    phi = np.asarray(link_angles, dtype=float)
+    steps = ds * np.stack([np.cos(phi), np.sin(phi)], axis=-1)
+    return np.vstack([np.zeros((1, 2)), np.cumsum(steps, axis=0)])
