@@ -1,0 +1,65 @@
+"""The command line: JSON fields, and exit code 2 with the parameter named for bad input."""
+
+import json
+import subprocess
+import sys
+
+import pytest
+
+from simgrip.cli import main
+
+
+def run_cli(*args):
+    return subprocess.run([sys.executable, "-m", "simgrip.cli", *args], capture_output=True, text=True)
+
+
+def test_solve_json_fields(capsys):
+    assert main(["solve", "I", "--kappa", "-5", "--json"]) == 0
+    rec = json.loads(capsys.readouterr().out)
+    for key in ("tip", "normal_force", "friction_force", "required_mu", "feasible", "min_eigenvalue"):
+        assert key in rec
+    assert rec["tip"][0] == pytest.approx(0.3, abs=1e-9)  # the width constraint X(l) = b/2
+    assert rec["friction_force"] == pytest.approx(-5.0)  # F_f = -M
+    assert rec["required_mu"] == pytest.approx(5.0 / rec["normal_force"])
+
+
+def test_solve_grip_iii_json_has_contact(capsys):
+    assert main(["solve", "III", "--kappa", "-4", "--json"]) == 0
+    rec = json.loads(capsys.readouterr().out)
+    for key in ("contact", "N1", "N2"):
+        assert key in rec
+    assert rec["contact"][0] == pytest.approx(0.3, abs=1e-9)
+    assert rec["N2"] == pytest.approx(-5.0)
+
+
+def test_solve_concentrated_profile_table(capsys):
+    assert main(["solve", "II", "--profile", "concentrated", "--kappa-max", "6", "--alpha", "2"]) == 0
+    out = capsys.readouterr().out
+    assert "normal_force" in out and "Concentrated(kappa_max=6.0, alpha=2.0, p=1)" in out
+
+
+@pytest.mark.parametrize(
+    "args, name",
+    [
+        (["solve", "I", "--kappa", "nan"], "kappa"),
+        (["solve", "IV", "--kappa", "-3"], "grip"),
+        (["solve", "I", "--kappa", "-3", "--D", "-1"], "D"),
+        (["solve", "I", "--kappa", "-3", "--M", "-2"], "M"),
+        (["solve", "I", "--kappa", "-3", "--b", "2.4"], "b"),
+        (["solve", "I", "--kappa", "-3", "--mu", "-0.1"], "mu_s"),
+        (["solve", "III", "--kappa", "-3", "--gamma", "1.2"], "gamma"),
+        (["solve", "I", "--profile", "spiral", "--kappa", "-3"], "profile"),
+        (["solve", "I"], "kappa"),
+        (["solve", "II", "--profile", "concentrated", "--alpha", "-1"], "alpha"),
+    ],
+)
+def test_bad_input_exits_2_naming_the_parameter(args, name):
+    out = run_cli(*args)
+    assert out.returncode == 2, out.stderr
+    assert name in out.stderr
+    assert "Traceback" not in out.stderr
+
+
+def test_argparse_errors_exit_2():
+    out = run_cli("solve", "I", "--kappa", "abc")
+    assert out.returncode == 2 and "--kappa" in out.stderr
