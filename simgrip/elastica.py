@@ -858,6 +858,7 @@ def solve(
     gamma: float | None = None,
     guess: ElasticaSolution | None = None,
     tol: float = 1e-8,
+    fallback: bool = True,
 ) -> ElasticaSolution:
     """Solve the free rod or one grip for ``params`` and curvature ``profile``.
 
@@ -884,6 +885,10 @@ def solve(
         one is used if the direct start fails.
     tol : float
         ``solve_bvp`` tolerance (relative collocation residual and boundary residual).
+    fallback : bool
+        With ``False`` and a ``guess``, try only the direct warm start (one Newton
+        run of ``solve_bvp``): fast and deterministic, for tracking a branch up to
+        its fold, where the fallbacks would search for a distant branch.
 
     Returns
     -------
@@ -918,6 +923,8 @@ def solve(
     if guess is not None and guess._raw is not None:
         g_raw = guess._raw
         raw = _from(g_raw, P, tol)
+        if raw is None and not fallback:
+            raise ElasticaError(f"warm start of grip {grip!r} from the guess did not converge (fallback=False)")
         if raw is None:
             path = _between(g_raw.prob, P)
             if path is not None:

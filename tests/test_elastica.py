@@ -442,3 +442,14 @@ def test_edge_cases_converge_and_balance(grip, D, M, kappa):
         assert sol.contact[0] == pytest.approx(p.b / 2, abs=1e-10)
     if M == 0.0 and grip in ("I", "II") and sol.N1 > 0:
         assert sol.required_mu == 0.0 and sol.feasible
+
+
+def test_fallback_false_only_tries_the_warm_start(monkeypatch):
+    from simgrip import elastica
+    from simgrip.elastica import ElasticaError
+
+    near = solve("I", STANDARD, Uniform(-5.0))
+    assert solve("I", STANDARD, Uniform(-5.1), guess=near, fallback=False).success
+    monkeypatch.setattr(elastica, "_from", lambda *a, **k: None)  # the warm start fails
+    with pytest.raises(ElasticaError, match="fallback=False"):
+        solve("I", STANDARD, Uniform(-5.1), guess=near, fallback=False)
