@@ -52,6 +52,12 @@ def build_parser() -> argparse.ArgumentParser:
     p = sub.add_parser("solve", help="solve the elastica boundary-value problem of one grip")
     _add_state_options(p)
     p.add_argument("--K", type=int, default=128, help="nodes of the discrete stability check [default 128]")
+
+    p = sub.add_parser("figures", help="write the paper's figures (Figs. 6-16) as PNG files")
+    p.add_argument("--out", default="figures", help="output folder [default ./figures]")
+    p.add_argument("--which", nargs="*", default=None, help="figures to make, e.g. 7 9 16 [default: all]")
+    p.add_argument("--jobs", type=int, default=None, help="worker processes [default: all cores]")
+    p.add_argument("--no-progress", action="store_true", help="no progress bar")
     return parser
 
 
@@ -78,6 +84,15 @@ def _cmd_solve(args) -> dict:
     return solve_record(grip, _params(args), _profile(args, grip), K=args.K)
 
 
+def _cmd_figures(args):
+    from simgrip.figures import make_figures
+
+    paths = make_figures(args.out, which=args.which, jobs=args.jobs, progress=not args.no_progress)
+    for path in paths:
+        print(path)
+    return None
+
+
 def _print(record: dict, as_json: bool) -> None:
     from simgrip.io import to_jsonable
     from simgrip.report import format_table
@@ -88,7 +103,7 @@ def _print(record: dict, as_json: bool) -> None:
         print(format_table(record))
 
 
-COMMANDS = {"solve": _cmd_solve}
+COMMANDS = {"solve": _cmd_solve, "figures": _cmd_figures}
 
 
 def main(argv=None) -> int:

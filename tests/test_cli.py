@@ -51,6 +51,8 @@ def test_solve_concentrated_profile_table(capsys):
         (["solve", "I", "--profile", "spiral", "--kappa", "-3"], "profile"),
         (["solve", "I"], "kappa"),
         (["solve", "II", "--profile", "concentrated", "--alpha", "-1"], "alpha"),
+        (["figures", "--which", "99"], "figure"),
+        (["figures", "--jobs", "0"], "jobs"),
     ],
 )
 def test_bad_input_exits_2_naming_the_parameter(args, name):
@@ -63,3 +65,9 @@ def test_bad_input_exits_2_naming_the_parameter(args, name):
 def test_argparse_errors_exit_2():
     out = run_cli("solve", "I", "--kappa", "abc")
     assert out.returncode == 2 and "--kappa" in out.stderr
+
+
+def test_figures_command_writes_pngs(tmp_path, capsys):
+    assert main(["figures", "--out", str(tmp_path), "--which", "6", "--jobs", "1", "--no-progress"]) == 0
+    assert (tmp_path / "fig06.png").stat().st_size > 10_000
+    assert capsys.readouterr().out.strip().endswith("fig06.png")
