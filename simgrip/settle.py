@@ -1,0 +1,1302 @@
+"""Drive a scene to static equilibrium, fast, and read the settled state.
+
+Design
+------
+The settled state depends only on the potential forces (hinge springs,
+gravity) and on the contact forces, not on inertia or damping, so
+:func:`settle` integrates no dynamics at all: it solves the statics of the
+MuJoCo model with Newton's method on MuJoCo's own generalised forces.
+
+* **Forces.**  ``mj_inverse`` at ``qvel = qacc = 0`` gives the generalised
+  force that holds a configuration, ``qfrc_inverse = qfrc_bias - qfrc_passive
+  - qfrc_constraint``; the imbalance ``r(q) = qfrc_applied - qfrc_inverse``
+  holds the springs (``qpos_spring``), gravity and MuJoCo's contact forces.
+  MuJoCo's soft contact is analytically invertible: at rest a contact with
+  penetration ``p`` pushes with ``K_c p`` (``K_c`` from ``solref``/``solimp``
+  and the exact ``A`` diagonal, chosen ~:data:`CONTACT_STIFFNESS` ``rho g`` so
+  that ``p ~ 1e-6 l``).
+* **Contacts as compliant constraints.**  A stiff penalty makes plain Newton
+  crawl (the linearisation of a tip sliding along a face is exact only over
+  ``sqrt(p l)``).  Each touching pair instead carries an unknown normal force
+  ``N`` with the constraint ``K_c dist(q) + N = 0`` -- MuJoCo's contact law,
+  with ``dist`` from ``mj_geomDistance`` and its gradient ``n'(J_2 - J_1)`` at
+  the witness points.  ``K_c`` is read back from MuJoCo's contact force at the
+  solution and the solve repeated until they agree, so the reported residual
+  is MuJoCo's own force balance (contacts on).  Unilateral: a pair with
+  ``N < 0`` leaves the set, a penetrating one joins it.
+* **Static friction.**  MuJoCo's friction is velocity based (its soft friction
+  creeps at rest: 1e-5 of the weight with impratio 1; the no-slip post-solve
+  had no effect on these pair contacts in MuJoCo 4.0.0 and ``mjd_inverseFD``
+  rejects it), so a *sticking* contact is a constraint: the contact points of
+  finger and workpiece do not slide tangentially (re-anchored at the current
+  contact point every iteration, so round geoms roll and the friction acts at
+  the contact point).  Its multiplier is the friction force; MuJoCo's
+  friction cone (the pair's coefficient and ``N``) decides: ``|lambda| <= mu
+  N`` holds, else the contact slips -- Grips I/II drop the workpiece
+  (``held = False``), Grip III slides with friction ``mu N`` to where it holds.
+* **Newton-KKT.**  ``dr/dq`` by ``mjd_inverseFD`` (one C call), the
+  constraints' curvature by differences of ``G' multipliers``, a least-squares
+  KKT step (sticking leaves the sliding direction singular, the two-finger
+  workpiece is neutral in ``x``), a backtracking line search on the residual
+  (constraint rows in length units) and a tunnelling guard for pairs not yet
+  touching (a step closes at most half their gap; :data:`PEN_MAX`).  3-5
+  iterations per solve for a free rod at any ``n``.
+
+Residual and tolerance: ``max |r_i|`` over the dofs, hinge moments over
+``rho g l^2`` and workpiece forces over ``rho g l``; contact-law rows are
+accepted at their round-off floor (``K_c`` times the ~1e-14 l resolution of a
+geom distance, :data:`FLOOR_ULPS`), so a grip's reported residual is ~1e-9 to
+1e-6 while a free rod's is ~1e-15.  :func:`naive_settle` is the plain dynamic
+settle it is measured against.
+
+Grips
+-----
+* I/II: the finger curls with contact off until its tip reaches ``X = b/2``
+  (secant on the curvature factor); the workpiece is placed there and held
+  (frozen, weight cancelled, frictionless) while the curvature ramps to its
+  final value (continuation, halving failed increments); then it is released:
+  stick constraint at the tip's contact, workpiece free, full weight.  If the
+  frictionless closing path folds (large ``|kappa|``), the start is the hinge
+  chain's grip equilibrium instead.
+* III: the scene starts from the shape it was built with (by default the hinge
+  chain's equilibrium with the contact at ``params.gamma``) with the corner on
+  the rod; it is released the same way; the contact settles at the
+  simulation's own ``gamma_sim``.
+* A warm start (:func:`settle_sweep`) releases from the previous equilibrium.
+"""
+
+from __future__ import annotations
+
+import math
+import time
+from dataclasses import dataclass, field
+
+import mujoco
+import numpy as np
+
+from simgrip.chain import link_positions
+from simgrip.scene import Scene, set_curvature
+
+__all__ = [
+    "SettleError",
+    "SettledState",
+    "FingerContact",
+    "settle",
+    "settle_sweep",
+    "static_residual",
+    "naive_settle",
+    "DEFAULT_TOL",
+]
+
+#: Default static residual tolerance (over rho g l^2 and rho g l).
+DEFAULT_TOL = 1e-10
+#: Contact impedance during settle (MuJoCo's maximum is 0.9999).
+CONTACT_IMPEDANCE = 0.9999
+#: Target contact stiffness over rho g (force per length, dimensionless).
+CONTACT_STIFFNESS = 1e6
+#: A Newton step may not push a pair that was not touching deeper than this (over l).
+PEN_MAX = 1e-4
+#: Curvature ramp stages while closing on the held workpiece.
+CLOSE_STAGES = 8
+_FD_EPS = 1e-9
+#: Contact-law residuals ``K_c dist + N`` below this many ulps of ``K_c l`` are round-off
+#: (geom distances carry ~1e-14 l of round-off: capsule-capsule closest points).
+FLOOR_ULPS = 1024.0
+
+
+class SettleError(RuntimeError):
+    """The settle diverged (NaN, MuJoCo warning) or did not converge."""
+
+
+@dataclass
+class FingerContact:
+    """The workpiece's contact on one finger (dimensionless: over ``l`` and ``rho g l``).
+
+    ``N1, N2`` are the force on the rod in the finger's frame (``E1`` away from
+    the palm centre, ``E2`` up); ``normal``/``friction`` are those the theory
+    uses (I/II: ``N1`` and ``N2``; III: ``n`` along ``e2`` and ``f`` along
+    ``e1``); ``gamma`` is the contact's arc length (1 for the tip);
+    ``point`` the contact on the centreline (``X(gamma), Y(gamma)``);
+    ``required_mu`` is ``|friction| / normal`` in the theory's frame and
+    ``required_mu_contact`` the same ratio in MuJoCo's contact frame, the one
+    its friction cone (and so hold/drop) uses: identical for Grips I/II; for
+    Grip III the contact normal is the carrying link's normal, which differs
+    from the centreline's at ``gamma`` by ``O(ds)``.
+    ``moment`` the couple (E3, over ``rho g l^2``) the contact force exerts
+    about that centreline point because it acts at the geoms' surface
+    (measured from MuJoCo's contact position; ``~ -r_tip F_f`` for I/II,
+    ``~ r_link f`` for III): pass it as ``contact_moment`` to the references.
+    """
+
+    N1: float
+    N2: float
+    normal: float
+    friction: float
+    gamma: float
+    point: np.ndarray
+    theta: float
+    moment: float
+    penetration: float
+    required_mu: float
+    required_mu_contact: float = math.nan
+
+
+@dataclass
+class SettledState:
+    """A settled scene, dimensionless (lengths over ``l``, forces over ``rho g l``).
+
+    Per-finger arrays have a leading axis of length ``fingers``; each finger is
+    read in its own frame (``x`` away from the palm centre), so a mirrored
+    finger reads like finger 0.
+    """
+
+    grip: str
+    links: int
+    fingers: int
+    joint_angles: np.ndarray
+    link_angles: np.ndarray
+    nodes: np.ndarray
+    tip: np.ndarray
+    contacts: list
+    workpiece_pose: np.ndarray | None
+    held: bool
+    steps: int
+    newton_iterations: int
+    forward_calls: int
+    wall_time_s: float
+    residual: float
+    penetration: float
+    converged: bool
+    qpos: np.ndarray = field(repr=False)
+
+    # convenience accessors for finger 0 --------------------------------------
+    @property
+    def contact(self) -> FingerContact | None:
+        return self.contacts[0] if self.contacts else None
+
+    @property
+    def N1(self) -> float:
+        return self.contact.N1 if self.contact else 0.0
+
+    @property
+    def N2(self) -> float:
+        return self.contact.N2 if self.contact else 0.0
+
+    @property
+    def normal_force(self) -> float:
+        return self.contact.normal if self.contact else 0.0
+
+    @property
+    def friction_force(self) -> float:
+        return self.contact.friction if self.contact else 0.0
+
+    @property
+    def n(self) -> float:  # noqa: D401 - mirrors the theory's name
+        return self.normal_force
+
+    @property
+    def f(self) -> float:
+        return self.friction_force
+
+    @property
+    def gamma_sim(self) -> float | None:
+        return self.contact.gamma if self.contact else None
+
+    @property
+    def contact_moment(self) -> float:
+        return self.contact.moment if self.contact else 0.0
+
+    @property
+    def required_mu(self) -> float:
+        return self.contact.required_mu if self.contact else 0.0
+
+
+# ---------------------------------------------------------------------------
+# statics
+
+
+def _scales(scene: Scene) -> tuple[np.ndarray, np.ndarray]:
+    """Per-dof force scale (rho g l^2 hinges, rho g l slides) and length scale (1, l)."""
+    m = scene.model
+    force = np.full(m.nv, scene.moment_scale)
+    length = np.ones(m.nv)
+    for j in range(m.njnt):
+        if m.jnt_type[j] == mujoco.mjtJoint.mjJNT_SLIDE:
+            force[m.jnt_dofadr[j]] = scene.force_scale
+            length[m.jnt_dofadr[j]] = scene.length
+    return force, length
+
+
+@dataclass
+class _Stick:
+    """Sticking friction: a finger point and a workpiece point that may not slide along ``t``."""
+
+    finger: int  # finger index
+    body_f: int
+    local_f: np.ndarray
+    body_w: int
+    local_w: np.ndarray
+    t_body: int  # body whose frame carries the tangent
+    t_local: np.ndarray
+    geoms: tuple  # (finger geom, workpiece geom) of the contact pair
+    offset: float = 0.0  # over l: keeps g continuous when the anchors move
+
+    def reanchor(self, d, point) -> None:
+        """Move both anchors to ``point`` (the current contact), keeping ``g`` unchanged.
+
+        Round geoms roll: friction acts at the current contact point, not at a
+        material point; re-anchoring every Newton iteration integrates the
+        no-slip condition of the contact point along the path.
+        """
+        t = self.tangent(d)
+        pf, pw = self.points(d)
+        g_old = float(t @ (pf - pw))
+        self.local_f = d.xmat[self.body_f].reshape(3, 3).T @ (point - d.xpos[self.body_f])
+        self.local_w = d.xmat[self.body_w].reshape(3, 3).T @ (point - d.xpos[self.body_w])
+        self.offset += g_old  # new anchors coincide: t . (pf - pw) = 0
+
+    def tangent(self, d) -> np.ndarray:
+        return d.xmat[self.t_body].reshape(3, 3) @ self.t_local
+
+    def points(self, d) -> tuple[np.ndarray, np.ndarray]:
+        pf = d.xpos[self.body_f] + d.xmat[self.body_f].reshape(3, 3) @ self.local_f
+        pw = d.xpos[self.body_w] + d.xmat[self.body_w].reshape(3, 3) @ self.local_w
+        return pf, pw
+
+
+class _Statics:
+    """Static residual of the model plus sticking constraints, on a scratch MjData."""
+
+    def __init__(self, scene: Scene):
+        self.scene = scene
+        self.m = scene.model
+        self.d = mujoco.MjData(self.m)
+        self.fscale, self.lscale = _scales(scene)
+        self.calls = 0
+
+    def forces(self, q) -> np.ndarray:
+        """``r(q) = qfrc_applied - qfrc_inverse`` at rest, dimensional."""
+        m, d = self.m, self.d
+        d.qpos[:] = q
+        d.qvel[:] = 0.0
+        d.qacc[:] = 0.0
+        d.qfrc_applied[:] = self.scene.data.qfrc_applied
+        mujoco.mj_inverse(m, d)
+        self.calls += 1
+        return d.qfrc_applied - d.qfrc_inverse
+
+    def stick_rows(self, sticks) -> tuple[np.ndarray, np.ndarray]:
+        """Constraint values ``g`` (over l) and gradients ``G`` (n_stick x nv) at the scratch state."""
+        m, d = self.m, self.d
+        g = np.zeros(len(sticks))
+        G = np.zeros((len(sticks), m.nv))
+        jf = np.zeros((3, m.nv))
+        jw = np.zeros((3, m.nv))
+        for i, s in enumerate(sticks):
+            t = s.tangent(d)
+            pf, pw = s.points(d)
+            g[i] = (float(t @ (pf - pw)) + s.offset) / self.scene.length
+            mujoco.mj_jac(m, d, jf, None, pf, s.body_f)
+            mujoco.mj_jac(m, d, jw, None, pw, s.body_w)
+            G[i] = t @ (jf - jw)
+        return g, G
+
+    def jacobian(self, q) -> np.ndarray:
+        """``dr/dq`` (nv x nv, rows = force components) by ``mjd_inverseFD``."""
+        m, d = self.m, self.d
+        d.qpos[:] = q
+        d.qvel[:] = 0.0
+        d.qacc[:] = 0.0
+        d.qfrc_applied[:] = self.scene.data.qfrc_applied
+        DfDq = np.zeros((m.nv, m.nv))
+        mujoco.mjd_inverseFD(m, d, _FD_EPS, False, DfDq, None, None, None, None, None, None)
+        self.calls += 2 * m.nv + 1
+        return -DfDq.T
+
+
+def static_residual(scene: Scene, qpos=None) -> np.ndarray:
+    """Dimensionless static generalised-force imbalance at ``qpos`` (no friction; default: the scene's)."""
+    st = _Statics(scene)
+    q = scene.data.qpos if qpos is None else qpos
+    return st.forces(q) / st.fscale
+
+
+# ---------------------------------------------------------------------------
+# solver options (set for the solve, restored afterwards)
+
+
+@dataclass
+class _Saved:
+    solref: np.ndarray
+    solimp: np.ndarray
+    noslip: int
+    disableflags: int
+    ccd: tuple
+
+
+def _save(m) -> _Saved:
+    return _Saved(m.pair_solref.copy(), m.pair_solimp.copy(), int(m.opt.noslip_iterations), int(m.opt.disableflags),
+                  (float(m.opt.ccd_tolerance), int(m.opt.ccd_iterations)))
+
+
+def _restore(m, s: _Saved) -> None:
+    m.pair_solref[:] = s.solref
+    m.pair_solimp[:] = s.solimp
+    m.opt.noslip_iterations = s.noslip
+    m.opt.disableflags = s.disableflags
+    m.opt.ccd_tolerance, m.opt.ccd_iterations = s.ccd
+
+
+def _configure(scene: Scene) -> None:
+    """Contact settings of the static solve (see the module docstring)."""
+    m = scene.model
+    m.opt.noslip_iterations = 0  # a dynamics post-process; mjd_inverseFD rejects it
+    m.opt.ccd_tolerance = 1e-14  # distances exact to round-off (Newton differentiates them)
+    m.opt.ccd_iterations = 200
+    if m.npair == 0:
+        return
+    # at rest K_c = 1 / (d (1 - d) timeconst^2 A), A ~ 3 / (link mass): pick timeconst for K_c
+    imp = CONTACT_IMPEDANCE
+    m_eff = scene.physical.rho * scene.length / scene.n / 3.0
+    k_c = CONTACT_STIFFNESS * scene.physical.rho * scene.physical.g
+    m.pair_solref[:] = [math.sqrt(m_eff / (imp * (1.0 - imp) * k_c)), 1.0]
+    m.pair_solimp[:, 0] = imp
+    m.pair_solimp[:, 1] = imp
+    m.opt.disableflags |= int(mujoco.mjtDisableBit.mjDSBL_REFSAFE)
+
+
+def _check_warnings(d) -> None:
+    warn = [mujoco.mjtWarning(i).name for i in range(len(d.warning)) if d.warning[i].number > 0]
+    if warn:
+        raise SettleError(f"settle diverged (MuJoCo warnings {', '.join(warn)})")
+
+
+def _pair_contacts(d, g1: int, g2: int) -> list[int]:
+    return [i for i in range(d.ncon) if {int(d.contact.geom1[i]), int(d.contact.geom2[i])} == {g1, g2}]
+
+
+def _normal_force(m, d, i) -> float:
+    f = np.zeros(6)
+    mujoco.mj_contactForce(m, d, i, f)
+    return float(f[0])
+
+
+def _contact_world_force(m, d, i) -> np.ndarray:
+    """World force that geom1 (finger) receives from geom2 (workpiece) in contact ``i``."""
+    f = np.zeros(6)
+    mujoco.mj_contactForce(m, d, i, f)
+    frame = np.asarray(d.contact.frame[i]).reshape(3, 3)
+    return -(frame.T @ f[:3])
+
+
+# ---------------------------------------------------------------------------
+# Newton-KKT
+
+
+class _Newton:
+    """Newton-KKT on the static equilibrium with contact and friction constraints.
+
+    Unknowns: the free dofs' positions, a normal force ``N`` per touching
+    contact pair and a friction force ``lambda`` per sticking contact.
+    Equations (dimensional)::
+
+        r_free(q) + G_n(q)' N + G_s(q)' lambda (+ sliding friction) = 0
+        dist(q) + N / K_c = 0              (MuJoCo's contact law at rest)
+        t . (p_f(q) - p_w(q)) = 0          (sticking)
+
+    ``r_free`` is MuJoCo's generalised force with contacts off; ``K_c`` is read
+    from MuJoCo's own contact force (``efc_force / penetration``) so that, at
+    convergence, the full MuJoCo residual (contacts on) vanishes: that residual
+    is what :func:`settle` checks and reports.  Writing the stiff contact as
+    a compliant constraint keeps Newton well conditioned (a pure penalty would
+    force tiny steps along the face).
+    """
+
+    def __init__(self, scene: Scene):
+        self.scene = scene
+        self.st = _Statics(scene)
+        self.iterations = 0
+        m = scene.model
+        self.pairs = [(int(m.pair_geom1[i]), int(m.pair_geom2[i])) for i in range(m.npair)]
+        self.kc = np.full(m.npair, CONTACT_STIFFNESS * scene.physical.rho * scene.physical.g)
+        self.normal_active: list[int] = []
+        self.N = np.zeros(0)
+        self.sticks: list[_Stick] = []
+        self.lam = np.zeros(0)
+        self.sliding: dict = {}
+
+    @property
+    def static(self):
+        return self.st
+
+    def _contacts_on(self) -> bool:
+        m = self.scene.model
+        return bool(self.pairs) and not (self._flags & int(mujoco.mjtDisableBit.mjDSBL_CONTACT))
+
+    # -- geometry -------------------------------------------------------------
+    def _dists(self, q) -> np.ndarray:
+        """Signed distance of every pair at ``q`` (dimensional); kinematics on the scratch data."""
+        m, sd = self.scene.model, self.st.d
+        sd.qpos[:] = q
+        mujoco.mj_kinematics(m, sd)
+        L = self.scene.length
+        return np.array([mujoco.mj_geomDistance(m, sd, g1, g2, L, None) for g1, g2 in self.pairs])
+
+    def _dist_grad(self, q, pairs) -> np.ndarray:
+        """Gradient of the listed pairs' signed distances over all dofs: ``n' (J_2 - J_1)``.
+
+        ``n`` is the unit normal from geom1 to geom2 and ``J_i`` the Jacobians
+        of the witness points (``mj_geomDistance``'s ``fromto``); central
+        differences when the witness points coincide.
+        """
+        m, sd = self.scene.model, self.st.d
+        L = self.scene.length
+        G = np.zeros((len(pairs), m.nv))
+        sd.qpos[:] = q
+        mujoco.mj_kinematics(m, sd)
+        mujoco.mj_comPos(m, sd)
+        j1 = np.zeros((3, m.nv))
+        j2 = np.zeros((3, m.nv))
+        ft = np.zeros(6)
+        for row, p in enumerate(pairs):
+            g1, g2 = self.pairs[p]
+            dist = mujoco.mj_geomDistance(m, sd, g1, g2, L, ft)
+            seg = ft[3:] - ft[:3]
+            if np.linalg.norm(seg) < 1e-12 * L:
+                G[row] = self._dist_grad_fd(q, p)
+                sd.qpos[:] = q
+                mujoco.mj_kinematics(m, sd)
+                mujoco.mj_comPos(m, sd)
+                continue
+            n = seg / np.linalg.norm(seg) * math.copysign(1.0, dist)
+            mujoco.mj_jac(m, sd, j1, None, ft[:3], int(m.geom_bodyid[g1]))
+            mujoco.mj_jac(m, sd, j2, None, ft[3:], int(m.geom_bodyid[g2]))
+            G[row] = n @ (j2 - j1)
+        return G
+
+    def _dist_grad_fd(self, q, p) -> np.ndarray:
+        m = self.scene.model
+        out = np.zeros(m.nv)
+        for c in range(m.nv):
+            h = 1e-6 * self.st.lscale[c]
+            v = np.zeros(m.nv)
+            v[c] = h
+            qp, qm = q.copy(), q.copy()
+            mujoco.mj_integratePos(m, qp, v, 1.0)
+            mujoco.mj_integratePos(m, qm, -v, 1.0)
+            out[c] = (self._dists(qp)[p] - self._dists(qm)[p]) / (2 * h)
+        return out
+
+    # -- residual --------------------------------------------------------------
+    def _residual(self, q, N, lam, idx):
+        """Scaled KKT residual and the pieces needed for the Jacobian."""
+        m = self.scene.model
+        L = self.scene.length
+        # MuJoCo's forces with contacts off (springs, gravity, applied)
+        m.opt.disableflags = self._flags | int(mujoco.mjtDisableBit.mjDSBL_CONTACT)
+        r = self.st.forces(q)
+        m.opt.disableflags = self._flags
+        _check_warnings(self.st.d)
+        act = self.normal_active
+        dist = self._dists(q)
+        total = r.copy()
+        Gn = Gs = None
+        gs = np.zeros(0)
+        if act:
+            Gn = self._dist_grad_cached(q, act)
+            total += Gn.T @ N
+        stick_act = [i for i in range(len(self.sticks)) if i not in self.sliding]
+        if self.sticks:
+            self.st.d.qpos[:] = q
+            mujoco.mj_kinematics(m, self.st.d)
+            gs_all, Gs_all = self.st.stick_rows(self.sticks)
+            gs, Gs = gs_all[stick_act], Gs_all[stick_act]
+            total += Gs.T @ lam
+            for i, sign in self.sliding.items():
+                k = act.index(self._pair_of(self.sticks[i]))
+                mu = float(m.pair_friction[self._pair_of(self.sticks[i])][0])
+                total += Gs_all[i] * sign * mu * N[k]
+        F = total[idx] / self.st.fscale[idx]
+        W = self.scene.force_scale
+        gn = (self.kc[act] * dist[act] + N) / W if act else np.zeros(0)
+        self._merit_weights = np.concatenate([np.ones(F.size), W / (self.kc[act] * L) if act else np.zeros(0),
+                                              np.ones(gs.size)])
+        return np.concatenate([F, gn, gs]), dist, Gn, Gs
+
+    def _dist_grad_cached(self, q, act):
+        key = (q.tobytes(), tuple(act))
+        if getattr(self, "_gcache_key", None) != key:
+            self._gcache_key = key
+            self._gcache = self._dist_grad(q, act)
+        return self._gcache
+
+    def _pair_of(self, s: _Stick) -> int:
+        for i, (g1, g2) in enumerate(self.pairs):
+            if {g1, g2} == set(s.geoms):
+                return i
+        raise KeyError(s.geoms)
+
+    # -- Newton -----------------------------------------------------------------
+    def solve(self, tol: float, max_iter: int, *, frozen=()) -> tuple[bool, str]:
+        """Newton-KKT until the scaled residual is below ``tol`` with a consistent contact set."""
+        sc = self.scene
+        m, d = sc.model, sc.data
+        self._flags = int(m.opt.disableflags)
+        contacts = self._contacts_on()
+        free = np.ones(m.nv, bool)
+        free[list(frozen)] = False
+        idx = np.flatnonzero(free)
+        q = d.qpos.copy()
+        if not contacts:
+            self.normal_active, self.N = [], np.zeros(0)
+        limit = self.iterations + max_iter
+        if contacts:  # initial contact set: touching pairs and the sticks' pairs
+            dist = self._dists(q)
+            need = {p for p in range(len(self.pairs)) if dist[p] <= 0.0}
+            need |= {self._pair_of(s) for s in self.sticks}
+            for p in sorted(need - set(self.normal_active)):
+                self.normal_active.append(p)
+                self.N = np.append(self.N, 0.0)
+        for _outer in range(8):
+            conv, why, q = self._newton(q, idx, tol, limit, contacts)
+            if not conv:
+                self._commit(q)
+                return False, why
+            if not contacts:
+                self._commit(q)
+                return True, "ok"
+            # contact set and MuJoCo consistency
+            dist = self._dists(q)
+            changed = False
+            keep = [k for k, p in enumerate(self.normal_active) if self.N[k] >= 0.0]
+            if len(keep) != len(self.normal_active):
+                self.normal_active = [self.normal_active[k] for k in keep]
+                self.N = self.N[keep]
+                changed = True
+            for p in range(len(self.pairs)):
+                if p not in self.normal_active and dist[p] < 0.0:
+                    self.normal_active.append(p)
+                    self.N = np.append(self.N, 0.0)
+                    changed = True
+            if not changed and self._update_kc(q):
+                changed = True
+            if not changed:
+                self._commit(q)
+                return True, "ok"
+        self._commit(q)
+        return False, "contact set did not settle"
+
+    def noise_floor(self) -> float:
+        """Round-off floor of the contact force residual: ``K_c`` times the resolution of a distance."""
+        if not self.normal_active:
+            return 0.0
+        kc = float(np.max(self.kc[self.normal_active]))
+        return FLOOR_ULPS * np.finfo(float).eps * kc * self.scene.length / self.scene.force_scale
+
+    def _update_kc(self, q) -> bool:
+        """Read MuJoCo's contact stiffness at ``q``; True if it moved enough to matter."""
+        m, sd = self.scene.model, self.st.d
+        self.st.forces(q)
+        moved = False
+        for k, p in enumerate(self.normal_active):
+            cons = _pair_contacts(sd, *self.pairs[p])
+            if not cons:
+                continue
+            pen = -min(float(sd.contact.dist[c]) for c in cons)
+            fn = sum(_normal_force(m, sd, c) for c in cons)
+            if pen > 0 and fn > 0:
+                kc = fn / pen
+                if abs(kc - self.kc[p]) > 1e-9 * kc:
+                    moved = moved or abs(kc - self.kc[p]) * pen > 0.1 * self.noise_floor() * self.scene.force_scale
+                    self.kc[p] = kc
+        return moved
+
+    def _newton(self, q, idx, tol, max_iter, contacts):
+        sc = self.scene
+        m = sc.model
+        L = sc.length
+        N = self.N.copy()
+        stick_act = [i for i in range(len(self.sticks)) if i not in self.sliding]
+        if self.lam.size != len(self.sticks):
+            self.lam = np.zeros(len(self.sticks))
+        lam = self.lam[stick_act].copy()
+        R, dist, Gn, Gs = self._residual(q, N, lam, idx)
+        while True:
+            res = float(np.max(np.abs(R))) if R.size else 0.0
+            if not math.isfinite(res):
+                raise SettleError("settle diverged (non-finite residual)")
+            nf = idx.size
+            res_f = float(np.max(np.abs(R[:nf]))) if nf else 0.0
+            res_c = float(np.max(np.abs(R[nf:]))) if R.size > nf else 0.0
+            if res_f < tol and res_c < max(tol, self.noise_floor()):
+                break
+            if self.iterations >= max_iter:
+                self.N, self.lam[stick_act] = N, lam
+                return False, "max_iter", q
+            self.iterations += 1
+            if self.sticks:
+                self._reanchor(q)
+                R, dist, Gn, Gs = self._residual(q, N, lam, idx)
+            m.opt.disableflags = self._flags | int(mujoco.mjtDisableBit.mjDSBL_CONTACT)
+            H = self.st.jacobian(q)
+            m.opt.disableflags = self._flags
+            act = self.normal_active
+            if act:  # curvature of the constraints: d(G' mult)/dq by FD
+                H = H + self._constraint_curvature(q, N, lam, stick_act)
+            fs, ls = self.st.fscale[idx], self.st.lscale[idx]
+            nf, nn, ns = idx.size, len(act), len(stick_act)
+            K = np.zeros((nf + nn + ns, nf + nn + ns))
+            K[:nf, :nf] = H[np.ix_(idx, idx)] * ls[None, :] / fs[:, None]
+            if nn:
+                Gi = Gn[:, idx]
+                K[:nf, nf:nf + nn] = Gi.T / fs[:, None]
+                W = sc.force_scale
+                K[nf:nf + nn, :nf] = Gi * ls[None, :] * self.kc[act][:, None] / W
+                K[nf:nf + nn, nf:nf + nn] = np.eye(nn) / W
+            if ns:
+                Gi = Gs[:, idx]
+                K[:nf, nf + nn:] = Gi.T / fs[:, None]
+                K[nf + nn:, :nf] = Gi * ls[None, :] / L
+            if self.sliding and nn:  # sliding friction sign * mu * N depends on N
+                _, Gs_all = self.st.stick_rows(self.sticks)
+                for i, sign in self.sliding.items():
+                    p = self._pair_of(self.sticks[i])
+                    k = act.index(p)
+                    mu = float(m.pair_friction[p][0])
+                    K[:nf, nf + k] += Gs_all[i][idx] * sign * mu / fs
+            sol, *_ = np.linalg.lstsq(K, -R, rcond=1e-14)
+            dq = sol[:nf] * ls
+            dN = sol[nf:nf + nn]
+            dl = sol[nf + nn:]
+            wts = self._merit_weights.copy()
+            merit = float(np.linalg.norm(R * wts))
+            d0 = dist
+            step = 1.0
+            accepted = False
+            for _ in range(50):
+                v = np.zeros(m.nv)
+                v[idx] = step * dq
+                qn = q.copy()
+                mujoco.mj_integratePos(m, qn, v, 1.0)
+                Nn, ln = N + step * dN, lam + step * dl
+                Rn, distn, Gnn, Gsn = self._residual(qn, Nn, ln, idx)
+                ok = bool(np.all(np.isfinite(Rn)))
+                if ok and contacts:
+                    # inactive pairs: no tunnelling (move at most half their gap)
+                    inact = [p for p in range(len(self.pairs)) if p not in act]
+                    if inact:
+                        ok = all(distn[p] > -PEN_MAX * L or d0[p] <= 0 for p in inact) and all(
+                            d0[p] - distn[p] <= max(0.5 * d0[p], 0.0) + PEN_MAX * L for p in inact if d0[p] > 0
+                        )
+                mn = float(np.linalg.norm(Rn * wts))
+                # Armijo on the weighted merit, or (near round-off) a halved max residual
+                if ok and (mn < (1.0 - 1e-4 * step) * merit or (
+                        float(np.max(np.abs(Rn))) < 0.5 * res and mn < max(2.0 * merit, 1e-3 * tol ** 0.5))):
+                    accepted = True
+                    break
+                step *= 0.5
+            if not accepted:
+                self.N, self.lam[stick_act] = N, lam
+                return False, "stalled", q
+            q, N, lam, R, dist, Gn, Gs = qn, Nn, ln, Rn, distn, Gnn, Gsn
+            # a pair that starts touching joins the set at once
+            if contacts:
+                newp = [p for p in range(len(self.pairs)) if p not in self.normal_active and dist[p] < 0.0]
+                if newp:
+                    self.normal_active = self.normal_active + newp
+                    N = np.append(N, np.zeros(len(newp)))
+                    R, dist, Gn, Gs = self._residual(q, N, lam, idx)
+        self.N = N
+        self.lam[stick_act] = lam
+        return True, "ok", q
+
+    def _reanchor(self, q) -> None:
+        """Move every stick's anchors to its pair's current contact point."""
+        m, sd = self.scene.model, self.st.d
+        sd.qpos[:] = q
+        mujoco.mj_kinematics(m, sd)
+        ft = np.zeros(6)
+        for s in self.sticks:
+            mujoco.mj_geomDistance(m, sd, s.geoms[0], s.geoms[1], self.scene.length, ft)
+            s.reanchor(sd, 0.5 * (ft[:3] + ft[3:]))
+
+    def _constraint_curvature(self, q, N, lam, stick_act) -> np.ndarray:
+        """FD of ``G_n' N + G_s' lambda`` over q (geometric stiffness of the constraints)."""
+        m = self.scene.model
+        act = self.normal_active
+
+        def gen(qq):
+            out = np.zeros(m.nv)
+            if act:
+                out += self._dist_grad(qq, act).T @ N
+            if stick_act:
+                self.st.d.qpos[:] = qq
+                mujoco.mj_kinematics(m, self.st.d)
+                _, Gs = self.st.stick_rows(self.sticks)
+                out += Gs[stick_act].T @ lam
+            return out
+
+        base = gen(q)
+        C = np.zeros((m.nv, m.nv))
+        for c in range(m.nv):
+            h = 1e-6 * self.st.lscale[c]
+            v = np.zeros(m.nv)
+            v[c] = h
+            qp = q.copy()
+            mujoco.mj_integratePos(m, qp, v, 1.0)
+            C[:, c] = (gen(qp) - base) / h
+        return C
+
+    def _commit(self, q) -> None:
+        d = self.scene.data
+        d.qpos[:] = q
+        d.qvel[:] = 0.0
+        mujoco.mj_forward(self.scene.model, d)
+        self.st.forces(q)
+
+    # -- friction bookkeeping ------------------------------------------------
+    def stick_now(self) -> int:
+        """Sticking constraints at every current finger-workpiece contact; returns how many."""
+        sc = self.scene
+        m, sd = sc.model, self.st.d
+        self.st.forces(sc.data.qpos)
+        self.sticks, self.sliding = [], {}
+        wg = set(int(g) for g in sc.workpiece_geoms)
+        for f in range(sc.fingers):
+            mine = set(int(g) for g in sc.contact_geoms[f])
+            best = None
+            for i in range(sd.ncon):
+                g1, g2 = int(sd.contact.geom1[i]), int(sd.contact.geom2[i])
+                if g1 in mine and g2 in wg:
+                    fn = _normal_force(m, sd, i)
+                    if best is None or fn > best[0]:
+                        best = (fn, i, g1, g2)
+            if best is None:
+                continue
+            _, i, g1, g2 = best
+            p = np.array(sd.contact.pos[i])
+            bf, bw = int(m.geom_bodyid[g1]), int(m.geom_bodyid[g2])
+            normal = np.array(sd.contact.frame[i][:3])
+            t = np.cross(np.array([0.0, 1.0, 0.0]), normal)  # in-plane tangent
+            if np.linalg.norm(t) < 1e-6:  # out-of-plane normal (tip deep in the box): no planar stick
+                continue
+            t /= np.linalg.norm(t)
+            tb = bw if sc.grip in ("I", "II") else bf
+            self.sticks.append(
+                _Stick(
+                    finger=f,
+                    body_f=bf,
+                    local_f=sd.xmat[bf].reshape(3, 3).T @ (p - sd.xpos[bf]),
+                    body_w=bw,
+                    local_w=sd.xmat[bw].reshape(3, 3).T @ (p - sd.xpos[bw]),
+                    t_body=tb,
+                    t_local=sd.xmat[tb].reshape(3, 3).T @ t,
+                    geoms=(g1, g2),
+                )
+            )
+        self.lam = np.zeros(len(self.sticks))
+        return len(self.sticks)
+
+    def normals_of_sticks(self) -> np.ndarray:
+        out = np.zeros(len(self.sticks))
+        for i, s in enumerate(self.sticks):
+            p = self._pair_of(s)
+            if p in self.normal_active:
+                out[i] = self.N[self.normal_active.index(p)]
+        return out
+
+    def cone_violations(self) -> list[tuple[int, float]]:
+        """``(stick index, sign of lambda)`` for sticks whose friction exceeds ``mu N``."""
+        m = self.scene.model
+        normals = self.normals_of_sticks()
+        out = []
+        for i, s in enumerate(self.sticks):
+            if i in self.sliding:
+                continue
+            mu = float(m.pair_friction[self._pair_of(s)][0])
+            if normals[i] <= 0.0 or abs(self.lam[i]) > mu * normals[i] * (1.0 + 1e-9):
+                out.append((i, math.copysign(1.0, self.lam[i])))
+        return out
+
+    def friction_forces(self) -> np.ndarray:
+        """Friction force on each stick's finger along its tangent (sticking or sliding)."""
+        m = self.scene.model
+        normals = self.normals_of_sticks()
+        out = self.lam.copy()
+        for i, sign in self.sliding.items():
+            out[i] = sign * float(m.pair_friction[self._pair_of(self.sticks[i])][0]) * normals[i]
+        return out
+
+    def full_residual(self, q) -> np.ndarray:
+        """MuJoCo's own static residual (contacts on) plus the friction forces, scaled."""
+        m = self.scene.model
+        r = self.st.forces(q)
+        if self.sticks:
+            _, G = self.st.stick_rows(self.sticks)
+            r = r + G.T @ self.friction_forces()
+        return r / self.st.fscale
+
+
+# ---------------------------------------------------------------------------
+# reading the state
+
+
+def _read(scene: Scene, run: _Newton, t0: float, held: bool, converged: bool) -> SettledState:
+    m, d = scene.model, scene.data
+    mujoco.mj_forward(m, d)
+    L, W = scene.length, scene.force_scale
+    n = scene.n
+    q = np.array(d.qpos[scene.joint_qpos])
+    phi = np.cumsum(q, axis=1)
+    nodes = np.stack([link_positions(p, 1.0 / n) for p in phi])
+    st = run.st
+    fric = run.friction_forces() if (run.sticks and held) else np.zeros(0)
+    if not held:
+        run.sticks, run.sliding = [], {}
+    full = run.full_residual(d.qpos)
+    if not held:
+        full[np.asarray(scene.workpiece_dof, dtype=int)] = 0.0  # parked
+    residual = float(np.max(np.abs(full)))
+    sd = st.d
+    contacts = []
+    pen_max = 0.0
+    wg = set(int(g) for g in scene.workpiece_geoms)
+    for f in range(scene.fingers if held else 0):
+        mine = set(int(g) for g in scene.contact_geoms[f])
+        cons = [i for i in range(sd.ncon) if int(sd.contact.geom1[i]) in mine and int(sd.contact.geom2[i]) in wg]
+        if not cons:
+            continue
+        Fw = np.zeros(3)
+        point = np.zeros(3)
+        wsum = 0.0
+        pen = 0.0
+        for i in cons:
+            fw = _contact_world_force(m, sd, i)
+            Fw += fw
+            w = max(float(np.linalg.norm(fw)), 1e-300)
+            point += w * np.asarray(sd.contact.pos[i])
+            wsum += w
+            pen = max(pen, -float(sd.contact.dist[i]) / L)
+        point /= wsum
+        for k, s in enumerate(run.sticks):
+            if s.finger == f and k < fric.size:
+                Fw += fric[k] * s.tangent(sd)
+        F = np.array([scene.mirror[f] * Fw[0], Fw[2]]) / W
+        p2 = np.array([scene.mirror[f] * point[0], point[2]]) / L
+        pen_max = max(pen_max, pen)
+        if scene.grip in ("I", "II"):
+            gamma, theta = 1.0, float(phi[f, -1])
+            cpoint = nodes[f, -1]
+            normal, friction = F[0], F[1]
+        else:
+            li = _link_of(scene, f, p2, nodes[f], phi[f])
+            t = np.array([math.cos(phi[f, li]), math.sin(phi[f, li])])
+            u = float(np.clip(np.dot(p2 - nodes[f, li], t), 0.0, 1.0 / n))
+            gamma = li / n + u
+            cpoint = nodes[f, li] + u * t
+            # tangent at gamma: link angles are midpoint samples of theta
+            # (second order); interpolate them as the hinge chain does
+            smid = np.concatenate([[0.0], (np.arange(n) + 0.5) / n, [1.0]])
+            theta = float(np.interp(gamma, smid, np.concatenate([[0.0], phi[f], [phi[f, -1]]])))
+            e1 = np.array([math.cos(theta), math.sin(theta)])
+            e2 = np.array([-e1[1], e1[0]])
+            normal, friction = float(F @ e2), float(F @ e1)
+        arm = p2 - cpoint
+        contacts.append(
+            FingerContact(
+                N1=float(F[0]),
+                N2=float(F[1]),
+                normal=float(normal),
+                friction=float(friction),
+                gamma=float(gamma),
+                point=np.array(cpoint),
+                theta=theta,
+                moment=float(arm[0] * F[1] - arm[1] * F[0]),
+                penetration=pen,
+                required_mu=abs(friction) / normal if normal > 0 else math.inf,
+                required_mu_contact=_contact_mu(run, f, fric),
+            )
+        )
+    pose = None
+    if scene.has_workpiece:
+        x = d.xpos[scene.workpiece_body]
+        rot = d.xmat[scene.workpiece_body].reshape(3, 3)
+        pose = np.array([x[0] / L, x[2] / L, math.atan2(rot[0, 2], rot[0, 0])])
+    return SettledState(
+        grip=scene.grip,
+        links=n,
+        fingers=scene.fingers,
+        joint_angles=q,
+        link_angles=phi,
+        nodes=nodes,
+        tip=nodes[:, -1].copy(),
+        contacts=contacts,
+        workpiece_pose=pose,
+        held=held,
+        steps=run.iterations,
+        newton_iterations=run.iterations,
+        forward_calls=st.calls,
+        wall_time_s=time.perf_counter() - t0,
+        residual=residual,
+        penetration=pen_max,
+        converged=converged,
+        qpos=d.qpos.copy(),
+    )
+
+
+def _contact_mu(run, finger, fric) -> float:
+    """|friction| / normal in MuJoCo's contact frame (the one its friction cone uses)."""
+    normals = run.normals_of_sticks() if run.sticks else np.zeros(0)
+    for k, s in enumerate(run.sticks):
+        if s.finger == finger and k < fric.size and normals[k] > 0:
+            return abs(float(fric[k])) / float(normals[k])
+    return math.nan
+
+
+def _link_of(scene, f, point, nodes, phi) -> int:
+    n = scene.n
+    best, bi = math.inf, 0
+    for i in range(n):
+        t = np.array([math.cos(phi[i]), math.sin(phi[i])])
+        u = float(np.clip(np.dot(point - nodes[i], t), 0.0, 1.0 / n))
+        dist = float(np.linalg.norm(point - nodes[i] - u * t))
+        if dist < best:
+            best, bi = dist, i
+    return bi
+
+
+# ---------------------------------------------------------------------------
+# public entry points
+
+
+def _check_settle_args(scene, tol, max_steps):
+    if not isinstance(scene, Scene):
+        raise ValueError(f"scene must be a simgrip.scene.Scene, got {type(scene).__name__}")
+    try:
+        tol = float(tol)
+    except (TypeError, ValueError):
+        raise ValueError(f"tol must be a real number, got {tol!r}") from None
+    if not (math.isfinite(tol) and tol > 0):
+        raise ValueError(f"tol must be positive and finite, got {tol!r}")
+    if isinstance(max_steps, bool) or not isinstance(max_steps, (int, np.integer)) or max_steps < 1:
+        raise ValueError(f"max_steps must be a positive integer, got {max_steps!r}")
+    return tol, int(max_steps)
+
+
+def settle(
+    scene: Scene,
+    *,
+    tol: float = DEFAULT_TOL,
+    max_steps: int = 200,
+    warm_start: SettledState | None = None,
+    close: bool = True,
+    allow_unconverged: bool = False,
+) -> SettledState:
+    """Drive ``scene`` to static equilibrium (see the module docstring).
+
+    Parameters
+    ----------
+    scene : Scene
+    tol : float
+        Static residual tolerance (generalised forces over ``rho g l^2`` / ``rho g l``).
+    max_steps : int
+        Newton iterations allowed in total.
+    warm_start : SettledState, optional
+        Start from this state (same scene layout); skips the closing phase and
+        sticks the workpiece where it touches.
+    close : bool
+        Grips I/II: run the closing procedure (curl, place and hold the
+        workpiece, ramp, release).  ``False`` releases from the current state.
+    allow_unconverged : bool
+        Return ``converged=False`` instead of raising when Newton does not converge.
+
+    Returns
+    -------
+    SettledState
+
+    Raises
+    ------
+    ValueError
+        Bad arguments.
+    SettleError
+        Divergence (non-finite residual, MuJoCo warning), or no convergence
+        unless ``allow_unconverged``.
+    """
+    tol, max_steps = _check_settle_args(scene, tol, max_steps)
+    if warm_start is not None and not isinstance(warm_start, SettledState):
+        raise ValueError(f"warm_start must be a SettledState or None, got {type(warm_start).__name__}")
+    t0 = time.perf_counter()
+    m, d = scene.model, scene.data
+    saved = _save(m)
+    for i in range(len(d.warning)):
+        d.warning[i].number = 0
+    run = _Newton(scene)
+    held = scene.has_workpiece
+    converged, why = True, "ok"
+    try:
+        if warm_start is not None:
+            if warm_start.qpos.shape != d.qpos.shape:
+                raise ValueError("warm_start does not match the scene's layout (qpos size)")
+            d.qpos[:] = warm_start.qpos
+            d.qvel[:] = 0.0
+            mujoco.mj_forward(m, d)
+            held = warm_start.held and scene.has_workpiece
+        _configure(scene)
+        wdofs = tuple(int(x) for x in scene.workpiece_dof)
+        if scene.has_workpiece and held:
+            if scene.grip in ("I", "II") and warm_start is None and close:
+                target = scene.profile
+                try:
+                    held = _close(scene, run, tol, max_steps)
+                except SettleError:
+                    set_curvature(scene, target)
+                    # the frictionless closing path can fold (large |kappa|): start
+                    # instead from the hinge chain's grip equilibrium, tip on the face
+                    held = _place_on_chain(scene, run)
+            if held:
+                held, converged, why = _release(scene, run, tol, max_steps)
+        else:
+            converged, why = run.solve(tol, max_steps, frozen=wdofs)
+        if scene.has_workpiece and not held:
+            converged, why = _finger_alone(scene, run, tol, max_steps)
+        if not converged and not allow_unconverged:
+            raise SettleError(f"settle did not converge ({why} after {run.iterations} Newton iterations)")
+        state = _read(scene, run, t0, held, converged)
+    finally:
+        _restore(m, saved)
+        d.qfrc_applied[:] = 0.0
+        d.qvel[:] = 0.0
+        mujoco.mj_forward(m, d)
+    return state
+
+
+def _hold(scene: Scene, on: bool) -> None:
+    """Hold the workpiece: its weight cancelled by ``qfrc_applied`` (its dofs are also frozen)."""
+    d = scene.data
+    weight = scene.workpiece_mass * scene.physical.g
+    for name, dof in zip(scene.workpiece_joints, scene.workpiece_dof):
+        d.qfrc_applied[dof] = weight if (on and name == "z") else 0.0
+
+
+def _finger_alone(scene, run, tol, max_steps):
+    """The workpiece is gone: park it (held, no contact) and settle the finger."""
+    m = scene.model
+    _hold(scene, True)
+    run.sticks, run.sliding, run.lam = [], {}, np.zeros(0)
+    run.normal_active, run.N = [], np.zeros(0)
+    m.opt.disableflags |= int(mujoco.mjtDisableBit.mjDSBL_CONTACT)
+    return run.solve(tol, max_steps, frozen=tuple(int(x) for x in scene.workpiece_dof))
+
+
+def _release(scene: Scene, run: _Newton, tol: float, max_steps: int) -> tuple[bool, bool, str]:
+    """Let go of the workpiece: stick it where it touches, settle, check the friction cone.
+
+    Returns ``(held, converged, reason)``.  Grips I/II: a violated cone drops the
+    workpiece.  Grip III: violated sticks slide with friction ``mu N`` until the
+    settled state holds, then stick again.
+    """
+    _hold(scene, False)
+    if not scene.free_workpiece:
+        conv, why = run.solve(tol, max_steps, frozen=tuple(int(x) for x in scene.workpiece_dof))
+        return True, conv, why
+    _touch(scene, run)
+    if run.stick_now() == 0:
+        return False, True, "no contact"
+    for _ in range(6):
+        conv, why = run.solve(tol, max_steps)
+        if not conv:
+            if scene.grip == "III" or why != "stalled":
+                return False, conv, why
+            return False, True, "dropped"
+        bad = run.cone_violations()
+        if not bad:
+            return True, True, "ok"
+        if scene.grip in ("I", "II"):
+            return False, True, "dropped"
+        for i, sign in bad:
+            run.sliding[i] = sign
+        conv, why = run.solve(tol, max_steps)
+        if not conv:
+            return False, True, "dropped"
+        run.stick_now()  # stopped sliding: stick at the new contact
+    return False, False, "friction did not settle"
+
+
+def _place_on_chain(scene: Scene, run: _Newton) -> bool:
+    """Fallback start for Grips I/II: the hinge chain's equilibrium, workpiece at the tip."""
+    from simgrip.discrete import DiscreteError, solve_chain
+
+    try:
+        # the tip a hair inside the face so that MuJoCo reports the contact
+        ch = solve_chain(scene.grip, scene.params.replace(b=scene.params.b - 2e-6), scene.profile, scene.n)
+    except DiscreteError as exc:
+        raise SettleError(f"no starting shape for grip {scene.grip}: {exc}") from exc
+    d = scene.data
+    d.qpos[scene.joint_qpos] = ch.joint_angles[None, :]
+    run.N, run.normal_active = np.zeros(0), []
+    scene.model.opt.disableflags = run._flags if hasattr(run, "_flags") else scene.model.opt.disableflags
+    _place_workpiece(scene, float(ch.tip[1]) * scene.length)
+    return True
+
+
+def _touch(scene: Scene, run: _Newton) -> None:
+    """Lower the workpiece onto the finger(s) if it hovers (placement round-off)."""
+    d = scene.data
+    wz = [qa for name, qa in zip(scene.workpiece_joints, scene.workpiece_qpos) if name == "z"]
+    if not wz or not run.pairs:
+        return
+    for _ in range(3):
+        gap = float(np.min(run._dists(d.qpos)))
+        if gap <= 0.0:
+            break
+        d.qpos[wz[0]] -= gap + 1e-9 * scene.length
+    mujoco.mj_forward(scene.model, d)
+
+
+def _close(scene: Scene, run: _Newton, tol: float, max_steps: int) -> bool:
+    """Grips I/II closing: curl (contact off) to first touch, place and hold the box, ramp.
+
+    Returns False when the finger cannot reach the workpiece (its free tip never
+    comes back to ``X = b/2``).
+    """
+    m = scene.model
+    target = scene.profile
+    half = 0.5 * scene.params.b
+    wdofs = tuple(int(x) for x in scene.workpiece_dof)
+    loose = max(tol, 1e-8)
+    flags = int(m.opt.disableflags)
+
+    def free_tip(t):
+        set_curvature(scene, target.scaled(t))
+        conv, why = run.solve(loose, max_steps, frozen=wdofs)
+        if not conv:
+            raise SettleError(f"free finger did not settle while closing ({why})")
+        return _tip(scene)[0]
+
+    _hold(scene, True)
+    m.opt.disableflags = flags | int(mujoco.mjtDisableBit.mjDSBL_CONTACT)
+    x1 = free_tip(1.0)
+    if x1 > half:
+        set_curvature(scene, target)
+        m.opt.disableflags = flags
+        return False
+    x0 = free_tip(0.0)
+    lo, hi, xlo, xhi = 0.0, 1.0, x0, x1
+    t, x = 1.0, x1
+    for _ in range(60):
+        t = lo + (hi - lo) * (xlo - half) / (xlo - xhi)
+        t = min(max(t, lo + 0.02 * (hi - lo)), hi - 0.02 * (hi - lo))
+        x = free_tip(t)
+        if x > half:
+            lo, xlo = t, x
+        else:
+            hi, xhi = t, x
+        if abs(x - half) < 1e-7 or hi - lo < 1e-10:
+            break
+    if x < half:  # start just outside the face
+        t = lo
+        free_tip(t)
+    _place_workpiece(scene, _tip(scene)[1] * scene.length)
+    m.opt.disableflags = flags
+    # continuation in the curvature factor, halving the increment when a stage fails
+    s, h = t, (1.0 - t) / CLOSE_STAGES
+    while s < 1.0:
+        s_next = min(1.0, s + h)
+        q_prev, N_prev, act_prev = scene.data.qpos.copy(), run.N.copy(), list(run.normal_active)
+        set_curvature(scene, target.scaled(s_next))
+        conv, why = run.solve(loose, max_steps, frozen=wdofs)
+        if conv:
+            s = s_next
+            continue
+        if h < (1.0 - t) / CLOSE_STAGES / 8:
+            raise SettleError(f"closing on the held workpiece did not converge ({why}, curvature factor {s_next:g})")
+        scene.data.qpos[:] = q_prev
+        run.N, run.normal_active = N_prev, act_prev
+        h *= 0.5
+    set_curvature(scene, target)
+    return True
+
+
+def _tip(scene) -> np.ndarray:
+    q = np.array(scene.data.qpos[scene.joint_qpos[0]])
+    return link_positions(np.cumsum(q), 1.0 / scene.n)[-1]
+
+
+def _place_workpiece(scene: Scene, z: float) -> None:
+    m, d = scene.model, scene.data
+    body_z = float(m.body_pos[scene.workpiece_body][2])
+    for name, qa in zip(scene.workpiece_joints, scene.workpiece_qpos):
+        d.qpos[qa] = z - body_z if name == "z" else 0.0
+    if not scene.free_workpiece:
+        m.body_pos[scene.workpiece_body][2] = z
+    d.qvel[:] = 0.0
+    mujoco.mj_forward(m, d)
+
+
+def settle_sweep(scene: Scene, profiles, **kw) -> list[SettledState]:
+    """Settle ``scene`` for each profile in turn, warm-starting from the previous state.
+
+    The first profile is settled from the scene's current state (with the
+    closing procedure for Grips I/II); the following ones change only
+    ``qpos_spring`` (:func:`simgrip.scene.set_curvature`) and start from the
+    previous equilibrium.  A dropped workpiece stays dropped.
+    """
+    out = []
+    prev = None
+    for p in profiles:
+        set_curvature(scene, p)
+        st = settle(scene, warm_start=prev, **kw)
+        out.append(st)
+        prev = st
+    return out
+
+
+def naive_settle(scene: Scene, reference: SettledState, *, tol: float = 1e-6, max_steps: int = 1_000_000,
+                 damping_ratio: float = 0.05, check_every: int = 500, start_qpos=None) -> dict:
+    """Baseline: plain MuJoCo dynamics with physical inertia, light damping, largest stable step.
+
+    Damping proportional to stiffness gives the lowest hinge mode
+    ``damping_ratio`` of critical; the time step is ``1.8 / omega_max`` of the
+    undamped chain (semi-implicit Euler's limit is ``2 / omega_max``; the
+    ``implicitfast`` damping does not move it), contacts use MuJoCo's safe
+    minimum time constant ``2 dt`` and the model's friction settings (elliptic
+    cone, no-slip).  Steps from ``start_qpos`` (default: the scene's state)
+    until every link angle is within ``tol`` of ``reference`` (the state
+    :func:`settle` found), i.e. the time a plain simulation needs to reach the
+    same rest state.  Returns a dict: steps, wall_time_s, error (final max angle
+    error), converged, dt, workpiece_drift (over l).
+    """
+    m, d = scene.model, scene.data
+    dt0, damp0, solref0 = float(m.opt.timestep), m.dof_damping.copy(), m.pair_solref.copy()
+    t0 = time.perf_counter()
+    try:
+        if start_qpos is not None:
+            d.qpos[:] = start_qpos
+        d.qvel[:] = 0.0
+        mujoco.mj_forward(m, d)
+        M = np.zeros((m.nv, m.nv))
+        mujoco.mj_fullM(m, d, M)
+        kd = np.where(m.jnt_stiffness[m.dof_jntid] > 0, m.jnt_stiffness[m.dof_jntid], 0.0)
+        sub = np.flatnonzero(kd > 0)
+        w2 = np.linalg.eigvals(np.linalg.solve(M[np.ix_(sub, sub)], np.diag(kd[sub]))).real
+        wmax, wmin = math.sqrt(w2.max()), math.sqrt(w2.min())
+        dt = 1.8 / wmax
+        m.opt.timestep = dt
+        m.dof_damping[:] = 2 * damping_ratio / wmin * kd
+        m.pair_solref[:, 0] = 2 * dt
+        wz0 = d.xpos[scene.workpiece_body].copy() if scene.has_workpiece else None
+        steps, err = 0, math.inf
+        while steps < max_steps:
+            mujoco.mj_step(m, d, check_every)
+            steps += check_every
+            if not np.all(np.isfinite(d.qpos)):
+                raise SettleError("naive settle diverged")
+            phi = np.cumsum(np.array(d.qpos[scene.joint_qpos]), axis=1)
+            err = float(np.max(np.abs(phi - reference.link_angles)))
+            if err < tol:
+                break
+        drift = float(np.linalg.norm(d.xpos[scene.workpiece_body] - wz0)) / scene.length if wz0 is not None else 0.0
+        return {"steps": steps, "wall_time_s": time.perf_counter() - t0, "error": err, "converged": err < tol,
+                "dt": dt, "workpiece_drift": drift}
+    finally:
+        m.opt.timestep, m.dof_damping[:], m.pair_solref[:] = dt0, damp0, solref0

@@ -1,0 +1,254 @@
+"""Settle: equilibrium of the MuJoCo scene vs the hinge-chain minimiser and the elastica BVP.
+
+Tolerances come from the discretisation, not from tuning:
+
+* settle error (MuJoCo chain vs the same chain's exact minimiser): round-off
+  for the free rod; for the grips the only modelling difference is the contact
+  penetration ``p ~ 1e-6 l`` (the centreline meets the face at ``b/2 - p``),
+  so angles agree to ``O(p / l)`` -> 2e-5;
+* the hinge chain is second order (``chain.py``): errors vs the BVP fall by 4
+  per halving of ``ds``; at ``n = 32`` they are ~1e-3 relative.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pytest
+
+from simgrip import STANDARD, Uniform, elastica
+from simgrip.chain import ChainSprings, chain_springs
+from simgrip.discrete import solve_chain
+from simgrip.scene import build_scene, set_curvature
+from simgrip.settle import SettledState, SettleError, naive_settle, settle, settle_sweep
+
+KAPPA = {"I": -6.0, "II": 5.0, "III": -6.0}
+PEN_LIMIT = 1e-4
+
+
+def _chain_with_tip_couple(grip, params, kappa, n, couple):
+    """Hinge chain with a tip couple ``C`` (finite tip radius): rest angles shift by ``C / k_j``."""
+    sp = chain_springs(Uniform(kappa), n)
+    shifted = ChainSprings(n=n, ds=sp.ds, stiffness=sp.stiffness, rest=sp.rest + couple / (params.D * sp.stiffness),
+                           nodes=sp.nodes)
+    return solve_chain(grip, params, Uniform(kappa), n, springs=shifted)
+
+
+@pytest.fixture(scope="module")
+def grip_states():
+    """Settled symmetric-reduction states for Grips I/II/III at n = 8..64 (computed once)."""
+    out = {}
+    for grip in ("I", "II"):
+        for n in (8, 16, 32, 64):
+            out[grip, n] = settle(build_scene(grip, STANDARD, Uniform(KAPPA[grip]), n))
+    for n in (16, 32):
+        out["III", n] = settle(build_scene("III", STANDARD, Uniform(KAPPA["III"]), n))
+    return out
+
+
+# ---------------------------------------------------------------------------
+# free rod
+
+
+@pytest.mark.parametrize("kappa", [-4.0, 3.0])
+@pytest.mark.parametrize("n", [8, 16, 32, 64])
+def test_free_rod_equals_chain_minimiser(n, kappa):
+    st = settle(build_scene("free", STANDARD, Uniform(kappa), n))
+    ch = solve_chain("free", STANDARD, Uniform(kappa), n)
+    assert st.converged and st.residual < 1e-10
+    np.testing.assert_allclose(st.link_angles[0], ch.link_angles, rtol=0, atol=1e-8)
+    np.testing.assert_allclose(st.tip[0], ch.tip, rtol=0, atol=1e-8)
+
+
+def test_free_rod_converges_at_second_order_to_the_bvp():
+    ref = elastica.solve("free", STANDARD, Uniform(-4.0))
+    ns = np.array([8, 16, 32, 64])
+    errs = np.array([np.max(np.abs(settle(build_scene("free", STANDARD, Uniform(-4.0), n)).tip[0] - ref.tip))
+                     for n in ns])
+    orders = np.log2(errs[:-1] / errs[1:])
+    np.testing.assert_allclose(orders, 2.0, atol=0.1)
+
+
+def test_newton_iterations_do_not_grow_with_n():
+    its = [settle(build_scene("free", STANDARD, Uniform(-4.0), n)).newton_iterations for n in (8, 32, 128)]
+    assert max(its) <= 6 and max(its) - min(its) <= 1
+
+
+def test_mirrored_free_fingers_settle_identically():
+    st = settle(build_scene("free", STANDARD, Uniform(-4.0), 16, fingers=2))
+    np.testing.assert_allclose(st.link_angles[1], st.link_angles[0], atol=1e-13)
+
+
+def test_settle_is_much_faster_than_a_naive_simulation():
+    sc = build_scene("free", STANDARD, Uniform(-4.0), 16)
+    q0 = sc.data.qpos.copy()
+    st = settle(sc)
+    naive = naive_settle(sc, st, start_qpos=q0, tol=1e-6, max_steps=200_000)
+    assert naive["converged"]
+    assert naive["steps"] > 1000 * st.newton_iterations
+
+
+# ---------------------------------------------------------------------------
+# Grips I and II
+
+
+@pytest.mark.parametrize("grip", ["I", "II"])
+def test_grip_settle_equals_chain_minimiser(grip_states, grip):
+    for n in (16, 32):
+        st = grip_states[grip, n]
+        assert st.held and st.converged
+        c = st.contact
+        assert c.N2 == pytest.approx(-STANDARD.M, abs=1e-8)  # friction carries the weight exactly
+        assert c.moment == pytest.approx(STANDARD.M * build_scene(grip, STANDARD, 0.0, 2).r_tip, rel=1e-3)
+        ch = _chain_with_tip_couple(grip, STANDARD, KAPPA[grip], n, c.moment)
+        np.testing.assert_allclose(st.link_angles[0], ch.link_angles, atol=2e-5)
+        assert c.N1 == pytest.approx(ch.N1, rel=2e-5)
+        assert st.penetration < PEN_LIMIT
+
+
+@pytest.mark.parametrize("grip", ["I", "II"])
+def test_grip_matches_bvp_and_converges_at_second_order(grip_states, grip):
+    c32 = grip_states[grip, 32].contact
+    ref = elastica.solve(grip, STANDARD, Uniform(KAPPA[grip]), contact_moment=c32.moment)
+    assert ref.feasible
+    errs = []
+    for n in (8, 16, 32, 64):
+        st = grip_states[grip, n]
+        errs.append([abs(st.contact.N1 / ref.N1 - 1), abs(st.tip[0, 1] - ref.tip[1]),
+                     abs(st.required_mu / ref.required_mu - 1)])
+    errs = np.array(errs)
+    n32 = errs[2]
+    assert n32[0] < 5e-3 and n32[1] < 1e-3 and n32[2] < 5e-3  # normal force, tip height, required mu
+    orders = np.log2(errs[:-1] / errs[1:])
+    np.testing.assert_allclose(orders, 2.0, atol=0.15)
+
+
+def test_two_fingers_agree_with_the_symmetric_reduction():
+    for grip in ("I", "III"):
+        one = settle(build_scene(grip, STANDARD, Uniform(KAPPA[grip]), 16))
+        two = settle(build_scene(grip, STANDARD, Uniform(KAPPA[grip]), 16, fingers=2))
+        assert one.held and two.held
+        np.testing.assert_allclose(two.link_angles, np.vstack([one.link_angles] * 2), atol=1e-6)
+        for c in two.contacts:
+            assert c.N1 == pytest.approx(one.N1, rel=1e-6)
+            assert c.N2 == pytest.approx(one.N2, rel=1e-6)
+        assert two.workpiece_pose[0] == pytest.approx(0.0, abs=1e-9)  # centred
+        assert two.workpiece_pose[2] == pytest.approx(0.0, abs=1e-9)  # level
+
+
+# ---------------------------------------------------------------------------
+# Grip III
+
+
+def test_grip_iii_matches_bvp_at_its_own_gamma(grip_states):
+    for n in (16, 32):
+        st = grip_states["III", n]
+        assert st.held and st.penetration < PEN_LIMIT
+        c = st.contact
+        p = STANDARD.replace(b=2 * c.point[0])  # the simulation's own X(gamma)
+        ch = solve_chain("III", p, Uniform(KAPPA["III"]), n, gamma=c.gamma, contact_moment=c.moment)
+        np.testing.assert_allclose(st.link_angles[0], ch.link_angles, atol=2e-5)
+        ref = elastica.solve("III", p, Uniform(KAPPA["III"]), gamma=c.gamma, contact_moment=c.moment)
+        assert c.N2 == pytest.approx(-STANDARD.M, abs=1e-8)
+        assert c.N1 == pytest.approx(ref.N1, rel=1e-2)
+        assert c.normal == pytest.approx(ref.n, rel=1e-2)
+        assert c.friction == pytest.approx(ref.f, rel=1e-2)
+
+
+# ---------------------------------------------------------------------------
+# hold / drop
+
+
+@pytest.mark.parametrize("grip", ["I", "II"])
+def test_hold_and_drop_follow_the_friction_criterion(grip_states, grip):
+    # the BVP's least friction coefficient mg/N (~0.64 for I, ~0.75 for II); the
+    # n = 16 chain differs from it by ~0.3 % (second order), well inside +-2 %
+    moment = grip_states[grip, 16].contact_moment
+    need = elastica.solve(grip, STANDARD, Uniform(KAPPA[grip]), contact_moment=moment).required_mu
+    for factor, held in ((1.02, True), (0.98, False)):
+        st = settle(build_scene(grip, STANDARD.replace(mu_s=need * factor), Uniform(KAPPA[grip]), 16))
+        assert st.held is held
+        if not held:
+            free = solve_chain("free", STANDARD, Uniform(KAPPA[grip]), 16)
+            np.testing.assert_allclose(st.link_angles[0], free.link_angles, atol=1e-8)
+
+
+def test_grip_i_held_where_bvp_feasible_dropped_where_not():
+    for kappa in (-4.0, -5.5, -7.0):
+        ref = elastica.solve("I", STANDARD, Uniform(kappa))
+        margin = STANDARD.mu_s * ref.N1 / STANDARD.M
+        assert abs(margin - 1) > 0.02
+        st = settle(build_scene("I", STANDARD, Uniform(kappa), 16))
+        assert st.held is bool(ref.feasible)
+
+
+# ---------------------------------------------------------------------------
+# runtime edits, sweeps, determinism, errors
+
+
+def test_runtime_curvature_change_equals_rebuilt_scene():
+    sc = build_scene("I", STANDARD, Uniform(-3.0), 16)
+    set_curvature(sc, Uniform(-6.0))
+    a = settle(sc)
+    b = settle(build_scene("I", STANDARD, Uniform(-6.0), 16))
+    np.testing.assert_array_equal(a.link_angles, b.link_angles)
+    assert a.N1 == b.N1
+
+
+def test_same_inputs_give_identical_numbers():
+    a = settle(build_scene("III", STANDARD, Uniform(-6.0), 16, fingers=2))
+    b = settle(build_scene("III", STANDARD, Uniform(-6.0), 16, fingers=2))
+    np.testing.assert_array_equal(a.qpos, b.qpos)
+    assert [c.N1 for c in a.contacts] == [c.N1 for c in b.contacts]
+
+
+def test_warm_started_sweep_matches_cold_settles():
+    kappas = [-6.0, -6.5, -7.0]
+    sc = build_scene("I", STANDARD, Uniform(kappas[0]), 16)
+    sweep = settle_sweep(sc, [Uniform(k) for k in kappas])
+    assert all(s.held for s in sweep)
+    cold = settle(build_scene("I", STANDARD, Uniform(kappas[-1]), 16))
+    # friction is history dependent only through where the tip sticks: same N, same shape
+    assert sweep[-1].N1 == pytest.approx(cold.N1, rel=1e-6)
+    np.testing.assert_allclose(sweep[-1].link_angles, cold.link_angles, atol=1e-6)
+    assert sweep[-1].newton_iterations - sweep[-2].newton_iterations < cold.newton_iterations
+
+
+def test_non_convergence_raises_unless_asked():
+    sc = build_scene("free", STANDARD, Uniform(-4.0), 16)
+    with pytest.raises(SettleError):
+        settle(sc, max_steps=1)
+    st = settle(sc, max_steps=1, allow_unconverged=True)
+    assert isinstance(st, SettledState) and not st.converged
+
+
+@pytest.mark.parametrize("kwargs, name", [(dict(tol=-1.0), "tol"), (dict(tol=float("nan")), "tol"),
+                                          (dict(max_steps=0), "max_steps"), (dict(warm_start=3), "warm_start")])
+def test_invalid_settle_arguments(kwargs, name):
+    sc = build_scene("free", STANDARD, Uniform(-4.0), 8)
+    with pytest.raises(ValueError, match=name):
+        settle(sc, **kwargs)
+    with pytest.raises(ValueError, match="scene"):
+        settle("scene")
+
+
+def test_scene_is_restored_after_settle():
+    sc = build_scene("I", STANDARD, Uniform(-6.0), 16)
+    before = (sc.model.pair_solref.copy(), sc.model.pair_solimp.copy(), int(sc.model.opt.disableflags),
+              int(sc.model.opt.noslip_iterations))
+    settle(sc)
+    after = (sc.model.pair_solref, sc.model.pair_solimp, int(sc.model.opt.disableflags),
+             int(sc.model.opt.noslip_iterations))
+    np.testing.assert_array_equal(before[0], after[0])
+    np.testing.assert_array_equal(before[1], after[1])
+    assert before[2:] == after[2:]
+    assert not math.isnan(sc.data.qpos.sum())
+
+
+def test_si_units_give_the_same_dimensionless_state():
+    a = settle(build_scene("I", STANDARD, Uniform(-6.0), 16))
+    b = settle(build_scene("I", STANDARD.to_physical(length=0.1, rho=0.2, g=9.81), Uniform(-6.0), 16))
+    assert b.held
+    assert b.N1 == pytest.approx(a.N1, rel=1e-8)
+    np.testing.assert_allclose(b.nodes, a.nodes, atol=1e-9)
