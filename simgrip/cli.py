@@ -53,6 +53,14 @@ def build_parser() -> argparse.ArgumentParser:
     _add_state_options(p)
     p.add_argument("--K", type=int, default=128, help="nodes of the discrete stability check [default 128]")
 
+    p = sub.add_parser("simulate", help="settle the MuJoCo finger (symmetric reduction) and print its state")
+    _add_state_options(p)
+    p.add_argument("--links", type=int, default=32, help="links per finger [default 32]")
+
+    p = sub.add_parser("compare", help="simulation, elastica reference and their difference side by side")
+    _add_state_options(p)
+    p.add_argument("--links", type=int, default=32, help="links per finger [default 32]")
+
     p = sub.add_parser("figures", help="write the paper's figures (Figs. 6-16) as PNG files")
     p.add_argument("--out", default="figures", help="output folder [default ./figures]")
     p.add_argument("--which", nargs="*", default=None, help="figures to make, e.g. 7 9 16 [default: all]")
@@ -84,6 +92,27 @@ def _cmd_solve(args) -> dict:
     return solve_record(grip, _params(args), _profile(args, grip), K=args.K)
 
 
+def _cmd_simulate(args) -> dict:
+    from simgrip.chain import check_links
+    from simgrip.compare import settled_record, simulate
+
+    grip = check_grip(args.grip)
+    params, profile, links = _params(args), _profile(args, grip), check_links(args.links)
+    return settled_record(simulate(grip, params, profile, links), params, profile)
+
+
+def _cmd_compare(args):
+    from simgrip.chain import check_links
+    from simgrip.compare import compare
+    from simgrip.io import to_jsonable
+    from simgrip.report import format_comparison
+
+    grip = check_grip(args.grip)
+    result = compare(grip, _params(args), _profile(args, grip), check_links(args.links))
+    print(json.dumps(to_jsonable(result), allow_nan=False) if args.json else format_comparison(result))
+    return None
+
+
 def _cmd_figures(args):
     from simgrip.figures import make_figures
 
@@ -103,7 +132,12 @@ def _print(record: dict, as_json: bool) -> None:
         print(format_table(record))
 
 
-COMMANDS = {"solve": _cmd_solve, "figures": _cmd_figures}
+COMMANDS = {
+    "solve": _cmd_solve,
+    "simulate": _cmd_simulate,
+    "compare": _cmd_compare,
+    "figures": _cmd_figures,
+}
 
 
 def main(argv=None) -> int:
@@ -115,6 +149,9 @@ def main(argv=None) -> int:
     except ValueError as exc:
         print(f"simgrip {args.command}: error: {exc}", file=sys.stderr)
         return EXIT_USAGE
+    except RuntimeError as exc:  # ElasticaError, DiscreteError, SettleError: named, never silent
+        print(f"simgrip {args.command}: failed: {type(exc).__name__}: {exc}", file=sys.stderr)
+        return 1
     if record is not None:
         _print(record, getattr(args, "json", False))
     return 0

@@ -19,7 +19,7 @@ import numpy as np
 
 from simgrip.params import DimensionlessParams
 
-__all__ = ["elastica_record", "solve_record", "format_table", "difference"]
+__all__ = ["elastica_record", "solve_record", "format_table", "format_comparison", "difference"]
 
 #: Keys printed first, in this order, by :func:`format_table`.
 _ORDER = (
@@ -112,11 +112,26 @@ def format_table(record: dict) -> str:
     return "\n".join(lines)
 
 
+def format_comparison(result: dict) -> str:
+    """Simulation, reference and their difference side by side (from :func:`simgrip.compare.compare`)."""
+    sim, ref, diff = result["simulation"], result["reference"], result["difference"]
+    keys = [k for k in _ORDER if k in sim or k in ref] + [
+        k for k in sim if k not in _ORDER and k not in ("params", "profile")
+    ]
+    keys = [k for k in keys if k not in ("source",)]
+    width = max(len(k) for k in keys)
+    rows = [f"{'':<{width}}  {'simulation':>26}  {'reference':>26}  {'difference':>26}"]
+    for k in keys:
+        cells = [_fmt(sim.get(k, "")), _fmt(ref.get(k, "")), _fmt(diff.get(k, ""))]
+        rows.append(f"{k:<{width}}  " + "  ".join(f"{c:>26}" for c in cells))
+    return "\n".join(rows)
+
+
 def difference(a: dict, b: dict) -> dict:
     """``a - b`` for every numeric (or numeric-list) key both records share."""
     out = {}
     for k in a:
-        if k not in b or k in ("params", "source", "grip"):
+        if k not in b or k in ("params", "source", "grip", "residual", "profile"):
             continue
         va, vb = a[k], b[k]
         if isinstance(va, bool) or isinstance(vb, bool) or va is None or vb is None:

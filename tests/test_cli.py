@@ -71,3 +71,37 @@ def test_figures_command_writes_pngs(tmp_path, capsys):
     assert main(["figures", "--out", str(tmp_path), "--which", "6", "--jobs", "1", "--no-progress"]) == 0
     assert (tmp_path / "fig06.png").stat().st_size > 10_000
     assert capsys.readouterr().out.strip().endswith("fig06.png")
+
+
+def test_simulate_json_fields(capsys):
+    assert main(["simulate", "I", "--kappa", "-5.5", "--links", "16", "--json"]) == 0
+    rec = json.loads(capsys.readouterr().out)
+    for key in ("tip", "normal_force", "friction_force", "required_mu", "feasible", "min_eigenvalue",
+                "wall_time_s", "steps", "held", "penetration", "residual"):
+        assert key in rec
+    assert rec["held"] is True and rec["penetration"] < 1e-4
+    assert rec["friction_force"] == pytest.approx(-5.0, rel=1e-6)  # the workpiece's weight M per finger
+
+
+def test_compare_json_differences_are_small(capsys):
+    assert main(["compare", "II", "--kappa", "5", "--links", "32", "--json"]) == 0
+    out = json.loads(capsys.readouterr().out)
+    sim, ref, diff = out["simulation"], out["reference"], out["difference"]
+    assert sim["source"] == "simulation" and ref["source"] == "elastica"
+    # second-order chain: ~1e-3 relative at n = 32 (tests/test_settle.py checks the order itself)
+    assert abs(diff["normal_force"]) < 5e-3 * abs(ref["normal_force"])
+    assert abs(diff["tip"][1]) < 1e-3
+
+
+@pytest.mark.parametrize(
+    "args, name",
+    [
+        (["simulate", "I", "--kappa", "-5", "--links", "1"], "links"),
+        (["simulate", "III", "--kappa", "inf", "--links", "8"], "kappa"),
+        (["compare", "I", "--kappa", "-5", "--b", "-0.2"], "b"),
+        (["compare", "X", "--kappa", "-5"], "grip"),
+    ],
+)
+def test_simulate_and_compare_bad_input(args, name):
+    out = run_cli(*args)
+    assert out.returncode == 2 and name in out.stderr

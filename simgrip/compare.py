@@ -1,0 +1,123 @@
+"""A simulated settled state next to its elastica reference.
+
+The reference is solved for exactly the state the simulation describes:
+
+* the couple the finite-radius contact geoms apply (``contact.moment``) is
+  passed as ``contact_moment``;
+* Grip III is solved at the simulation's own contact arc length ``gamma`` and
+  its own ``X(gamma)`` (NOTES: gamma is not prescribed in a simulation).
+
+All numbers are dimensionless (lengths over ``l``, forces on the rod over
+``rho g l``).
+"""
+
+from __future__ import annotations
+
+import math
+
+from simgrip.params import DimensionlessParams, check_grip
+from simgrip.profiles import as_profile
+from simgrip.report import difference, elastica_record
+
+__all__ = ["simulate", "settled_record", "reference_for", "compare"]
+
+
+def simulate(grip: str, params: DimensionlessParams, profile, links: int, **settle_kw):
+    """Build the symmetric-reduction scene of ``grip`` with ``links`` links per finger and settle it.
+
+    Returns the :class:`~simgrip.settle.SettledState`.  Extra keywords go to
+    :func:`~simgrip.settle.settle`.
+    """
+    from simgrip.scene import build_scene
+    from simgrip.settle import settle
+
+    grip = check_grip(grip)
+    scene = build_scene(grip, params, as_profile(profile), links)
+    return settle(scene, **settle_kw)
+
+
+def _stability(state, grip, params, profile) -> float:
+    """Smallest eigenvalue of the hinge chain's projected Hessian at the settled shape."""
+    from simgrip import discrete
+
+    try:
+        if grip == "III" and state.contact is not None:
+            p = params.replace(b=2.0 * float(state.contact.point[0]))
+            ch = discrete.solve_chain(
+                grip, p, profile, state.links, gamma=state.contact.gamma,
+                contact_moment=state.contact.moment, guess=state.link_angles[0],
+            )
+        else:
+            ch = discrete.solve_chain(grip, params, profile, state.links, guess=state.link_angles[0])
+        return float(ch.min_eigenvalue)
+    except (discrete.DiscreteError, ValueError):
+        return math.nan
+
+
+def settled_record(state, params: DimensionlessParams, profile=None) -> dict:
+    """Record of a settled state in the fields of :func:`simgrip.report.elastica_record`.
+
+    Adds ``wall_time_s``, ``steps``, ``held``, ``penetration`` (over ``l``),
+    ``residual`` and ``links``.  ``feasible`` is the simulation's verdict: the
+    workpiece is held.  ``min_eigenvalue`` is the hinge chain's stability
+    eigenvalue at this shape when ``profile`` is given.
+    """
+    c = state.contact
+    grip = state.grip
+    rec = {
+        "source": "simulation",
+        "grip": grip,
+        "links": int(state.links),
+        "tip": [float(state.tip[0][0]), float(state.tip[0][1])] if state.tip.ndim == 2 else [float(v) for v in state.tip],
+        "normal_force": float(state.normal_force),
+        "friction_force": float(state.friction_force),
+        "required_mu": float(state.required_mu) if c is not None else 0.0,
+        "feasible": bool(state.held) if grip != "free" else True,
+        "min_eigenvalue": None if profile is None else _stability(state, grip, params, as_profile(profile)),
+        "N1": float(state.N1),
+        "N2": float(state.N2),
+        "held": bool(state.held),
+        "wall_time_s": float(state.wall_time_s),
+        "steps": int(state.steps),
+        "penetration": float(state.penetration),
+        "residual": float(state.residual),
+        "converged": bool(state.converged),
+        "params": {"D": params.D, "M": params.M, "b": params.b, "mu_s": params.mu_s, "gamma": params.gamma},
+    }
+    if grip == "III" and c is not None:
+        rec.update(
+            contact=[float(c.point[0]), float(c.point[1])],
+            gamma=float(c.gamma),
+            n=float(c.normal),
+            f=float(c.friction),
+            contact_moment=float(c.moment),
+        )
+    elif c is not None:
+        rec["contact_moment"] = float(c.moment)
+    return rec
+
+
+def reference_for(state, params: DimensionlessParams, profile):
+    """The elastica solution of the state ``state`` describes (see the module docstring)."""
+    from simgrip import elastica
+
+    grip = state.grip
+    c = state.contact
+    if grip == "free" or c is None or not state.held:
+        return elastica.solve(grip, params, profile)
+    if grip == "III":
+        p = params.replace(b=2.0 * float(c.point[0]))
+        return elastica.solve(grip, p, profile, gamma=float(c.gamma), contact_moment=float(c.moment))
+    return elastica.solve(grip, params, profile, contact_moment=float(c.moment))
+
+
+def compare(grip: str, params: DimensionlessParams, profile, links: int) -> dict:
+    """Simulate, solve the matching reference, and return ``{"simulation", "reference", "difference"}``.
+
+    ``difference`` is simulation minus reference for every shared numeric field.
+    """
+    profile = as_profile(profile)
+    state = simulate(grip, params, profile, links)
+    sim = settled_record(state, params, profile)
+    ref = elastica_record(reference_for(state, params, profile))
+    return {"simulation": sim, "reference": ref, "difference": difference(sim, ref)}
