@@ -1,1 +1,40 @@
-"""Gymnasium environments over simgrip's scene builder (shipped as ``simgrip.envs``)."""
+"""Gymnasium environments over simgrip's scene builder (shipped as ``simgrip.envs``).
+
+Importing this package registers the environments (lazy string entry points,
+time limits set here, ``step`` never truncates):
+
+==========================  =======================================  =========
+id                          what                                     max steps
+==========================  =======================================  =========
+``simgrip/Pick-v0``         Grip I: palm-down tip pinch (50 Hz)      200 (4 s)
+``simgrip/PickCradle-v0``   Grip III: cradle from a pedestal (50 Hz) 250 (5 s)
+==========================  =======================================  =========
+
+>>> import gymnasium as gym, simgrip.envs
+>>> env = gym.make("simgrip/Pick-v0")          # doctest: +SKIP
+
+Extra keyword arguments of ``gym.make`` go to :class:`simgrip.envs.pick.PickEnv`.
+"""
+
+from __future__ import annotations
+
+from gymnasium.envs.registration import register, registry
+
+__all__ = ["ENV_IDS", "register_envs"]
+
+#: id -> (entry point, kwargs, max_episode_steps)
+_ENVS = {
+    "simgrip/Pick-v0": ("simgrip.envs.pick:PickEnv", {"grip": "I"}, 200),
+    "simgrip/PickCradle-v0": ("simgrip.envs.pick:PickEnv", {"grip": "III"}, 250),
+}
+ENV_IDS = tuple(_ENVS)
+
+
+def register_envs() -> None:
+    """Register the simgrip environments with Gymnasium (idempotent)."""
+    for env_id, (entry, kwargs, steps) in _ENVS.items():
+        if env_id not in registry:
+            register(id=env_id, entry_point=entry, kwargs=dict(kwargs), max_episode_steps=steps)
+
+
+register_envs()

@@ -21,3 +21,5 @@ __all__ = [
     "UserProfile",
     "as_profile",
 ]
+
+import simgrip.envs  # noqa: E402,F401  registers simgrip/Pick-v0 and simgrip/PickCradle-v0 (lazy entry points)

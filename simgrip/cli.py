@@ -61,6 +61,12 @@ def build_parser() -> argparse.ArgumentParser:
     _add_state_options(p)
     p.add_argument("--links", type=int, default=32, help="links per finger [default 32]")
 
+    p = sub.add_parser("render", help="PNG of a settled grip and GIF of a scripted pick (pick environment)")
+    p.add_argument("--grip", default="I", help="I (pinch) or III (cradle) [default I]")
+    p.add_argument("--seed", type=int, default=0, help="episode seed [default 0]")
+    p.add_argument("--png", default="grip.png", help="PNG of the settled grip [default grip.png]")
+    p.add_argument("--gif", default="pick.gif", help="GIF of the scripted pick [default pick.gif]")
+
     p = sub.add_parser("figures", help="write the paper's figures (Figs. 6-16) as PNG files")
     p.add_argument("--out", default="figures", help="output folder [default ./figures]")
     p.add_argument("--which", nargs="*", default=None, help="figures to make, e.g. 7 9 16 [default: all]")
@@ -113,6 +119,21 @@ def _cmd_compare(args):
     return None
 
 
+def _cmd_render(args):
+    import os
+
+    if "MUJOCO_GL" not in os.environ and not os.environ.get("DISPLAY"):
+        os.environ["MUJOCO_GL"] = "osmesa"  # headless, CPU only
+        os.environ.setdefault("PYOPENGL_PLATFORM", "osmesa")
+    from simgrip.envs.rendering import render_grip_png, render_pick_gif
+
+    render_grip_png(args.png, grip=args.grip, seed=args.seed)
+    render_pick_gif(args.gif, grip=args.grip, seed=args.seed)
+    print(args.png)
+    print(args.gif)
+    return None
+
+
 def _cmd_figures(args):
     from simgrip.figures import make_figures
 
@@ -137,6 +158,7 @@ COMMANDS = {
     "simulate": _cmd_simulate,
     "compare": _cmd_compare,
     "figures": _cmd_figures,
+    "render": _cmd_render,
 }
 
 

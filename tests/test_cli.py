@@ -105,3 +105,10 @@ def test_compare_json_differences_are_small(capsys):
 def test_simulate_and_compare_bad_input(args, name):
     out = run_cli(*args)
     assert out.returncode == 2 and name in out.stderr
+
+
+def test_render_command_writes_png_and_gif(tmp_path):
+    out = run_cli("render", "--png", str(tmp_path / "g.png"), "--gif", str(tmp_path / "p.gif"))
+    assert out.returncode == 0, out.stderr
+    assert (tmp_path / "g.png").read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
+    assert (tmp_path / "p.gif").read_bytes()[:6] in (b"GIF89a", b"GIF87a")

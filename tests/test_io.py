@@ -28,3 +28,13 @@ def test_interrupted_write_leaves_old_file_untouched(tmp_path):
 
 def test_to_jsonable_nested():
     assert to_jsonable({"a": (np.float32(1.5), [np.inf])}) == {"a": [1.5, [None]]}
+
+
+def test_results_files_get_ordinary_permissions(tmp_path):
+    import os
+
+    path = tmp_path / "r.json"
+    write_json(path, {"a": 1})
+    umask = os.umask(0)
+    os.umask(umask)
+    assert path.stat().st_mode & 0o777 == 0o666 & ~umask

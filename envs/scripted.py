@@ -1,0 +1,163 @@
+"""A scripted pick controller that chooses the curvature from the elastica reference.
+
+For the episode's box (width ``b``, half mass ``m`` per finger, friction
+``mu_s``) the controller solves the paper's Grip I boundary-value problem along
+a sweep of uniform curvatures (:func:`simgrip.elastica.kappa_sweep`) and takes
+the gentlest curvature whose required friction ``|F_f|/N`` is at most
+``mu_s / safety``: inside the feasible window, with a safety factor on the
+friction and no more squeeze than that.  The pick itself is open loop in three
+phases: ramp the curvature command to that value, wait for the grip to settle,
+lift the palm by the target height plus an allowance for the fingers' sag, and
+hold.
+
+Grip III (``PickCradle-v0``, the box on a pedestal): the curvature is the
+gentlest whose elastica cradle (contact at ``gamma = 0.8 l``) holds with the
+safety factor, and the palm height puts the box's lower edge where that
+solution has its contact.  Recipe: open the fingers into a claw
+(``kappa_open``), lower the palm around the box, curl the fingers under its
+lower edges, lift and hold.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+from simgrip.elastica import ElasticaError, solve
+from simgrip.profiles import Uniform
+from simgrip.params import DimensionlessParams
+
+__all__ = ["ScriptedPickPolicy", "choose_kappa"]
+
+
+def choose_kappa(grip: str, params: DimensionlessParams, *, safety: float = 2.0,
+                 kappas=None, fallback: float | None = None) -> tuple[float, dict]:
+    """Gentlest uniform ``kappa_bar`` whose elastica grip holds with ``required_mu <= mu_s / safety``.
+
+    Returns ``(kappa, details)``; ``details`` has the solution's ``normal_force``,
+    ``required_mu`` and ``tip`` (dimensionless), and ``window`` (the feasible
+    curvatures met before stopping).  The sweep runs from gentle to strong
+    curvature, each solve warm-started from the previous one, and stops at the
+    first curvature that qualifies or at a jump to another solution branch.  When no curvature of the sweep qualifies,
+    the one with the smallest required friction is returned (or ``fallback``).
+    """
+    if kappas is None:
+        kappas = np.arange(-2.5, -7.01, -0.25) if grip == "I" else np.arange(-2.5, -6.01, -0.25)
+    sols = []
+    best = None
+    prev = None
+    for k in kappas:
+        try:
+            s = solve(grip, params, Uniform(float(k)), guess=prev, tol=1e-6)
+        except ElasticaError:
+            break
+        # stop at a jump to another branch of solutions (the tip height leaps)
+        if prev is not None and abs(s.tip[1] - prev.tip[1]) > 0.15:
+            break
+        sols.append((float(k), s))
+        prev = s
+        if s.feasible and s.required_mu <= params.mu_s / safety:
+            best = (float(k), s)
+            break
+    window = [k for k, s in sols if s.feasible]
+    if best is None:
+        cands = [(s.required_mu, k, s) for k, s in sols if s.feasibility.get("contact", False)]
+        if fallback is not None or not cands:
+            k = float(fallback if fallback is not None else kappas[len(kappas) // 2])
+            return k, {"normal_force": math.nan, "required_mu": math.nan, "tip": None, "contact": None,
+                       "window": window}
+        _, k, s = min(cands)
+        best = (k, s)
+    k, s = best
+    return k, {"normal_force": float(s.normal_force), "required_mu": float(s.required_mu),
+               "tip": np.array(s.tip), "contact": np.array(s.contact), "window": window}
+
+
+class ScriptedPickPolicy:
+    """Open-loop pick: ramp ``kappa`` to the elastica choice, settle, lift, hold.
+
+    Use as ``policy.reset(env, info)`` after ``env.reset`` and
+    ``action = policy(obs)`` each step.  Works with ``per_finger`` either way.
+
+    Parameters
+    ----------
+    safety : float
+        Friction safety factor: the chosen grip needs at most ``mu_s / safety``.
+    ramp_time, settle_time : float
+        Seconds to ramp the curvature command, then to wait before lifting.
+    lift_speed : float
+        Palm speed while lifting, as a fraction of the env's ``palm_speed``.
+    extra_lift : float
+        Palm travel beyond ``target_height`` [m] (the soft fingers sag under the box).
+    """
+
+    def __init__(self, safety: float = 2.0, ramp_time: float = 0.6, settle_time: float = 0.3,
+                 lift_speed: float = 0.5, extra_lift: float = 0.02, kappa_open: float = -1.6,
+                 open_time: float = 0.4):
+        self.safety = float(safety)
+        self.ramp_time = float(ramp_time)
+        self.settle_time = float(settle_time)
+        self.lift_speed = float(lift_speed)
+        self.extra_lift = float(extra_lift)
+        self.kappa_open = float(kappa_open)
+        self.open_time = float(open_time)
+        self.kappa = None
+        self.details = {}
+
+    def reset(self, env, info=None):
+        env = env.unwrapped
+        self.env = env
+        p = env.dimensionless()
+        # the contact sits on the tip sphere: its centre is r_tip outside the box face
+        b_eff = (env.box.width + 2.0 * env.r_tip) / env.length
+        self.grasp_height = None
+        if env.grip == "I":
+            self.kappa, self.details = choose_kappa("I", p.replace(b=min(b_eff, 1.9)), safety=self.safety)
+        else:
+            # cradle: the box's lower edge rests on the link capsules, r_tip outside the centreline
+            self.kappa, self.details = choose_kappa("III", p.replace(b=min(b_eff, 1.9)), safety=self.safety)
+            depth = 0.58 if self.details["contact"] is None else -float(self.details["contact"][1])
+            bottom = env.data.qpos[env.box_qpos + 2] - 0.5 * env.box_height
+            self.grasp_height = bottom + depth * env.length + env.r_tip
+        self.t = 0.0
+        self.palm0 = None
+        self.palm_lift0 = None
+        return self.kappa
+
+    def _a_kappa(self, kappa):
+        lo, hi = self.env.kappa_range
+        return float(np.clip(2.0 * (kappa - lo) / (hi - lo) - 1.0, -1.0, 1.0))
+
+    def __call__(self, obs):
+        env = self.env
+        if self.palm0 is None:
+            self.palm0 = env._palm_target
+        t = self.t
+        self.t += env.dt
+        vz = 0.0
+        if self.grasp_height is None:  # Grip I: ramp, settle, lift
+            k = self.kappa * min(1.0, t / self.ramp_time) if self.ramp_time > 0 else self.kappa
+            t_lift = self.ramp_time + self.settle_time
+        else:  # Grip III: open the claw, descend around the box, curl under it, lift
+            t_down = self.open_time + max(0.0, self.palm0 - self.grasp_height) / (env.palm_speed * self.lift_speed * 2)
+            if t < self.open_time:
+                k = self.kappa_open * t / self.open_time
+            elif t < t_down:
+                k = self.kappa_open
+            else:
+                w = min(1.0, (t - t_down) / self.ramp_time) if self.ramp_time > 0 else 1.0
+                k = self.kappa_open + w * (self.kappa - self.kappa_open)
+            if self.open_time <= t and env._palm_target > self.grasp_height:
+                vz = -min(1.0, (env._palm_target - self.grasp_height) / (env.palm_speed * env.dt))
+            t_lift = t_down + self.ramp_time + self.settle_time
+            if t >= t_lift and self.palm_lift0 is None:
+                self.palm_lift0 = env._palm_target
+        if t >= t_lift:
+            base = self.palm0 if self.grasp_height is None else self.palm_lift0
+            goal = base + env.target_height + self.extra_lift
+            remaining = goal - env._palm_target
+            vz = min(self.lift_speed, remaining / (env.palm_speed * env.dt)) if remaining > 0 else 0.0
+        ak = self._a_kappa(k)
+        a = [ak, ak, vz] if env.per_finger else [ak, vz]
+        return np.array(a, dtype=np.float32)

@@ -1,0 +1,124 @@
+"""Throughput of the pick environment against raw ``mj_step`` (for ``simgrip bench``).
+
+``measure_throughput`` steps the environment with random actions in chunks of
+``chunk`` control steps (resets excluded from the timing).  After each chunk it
+rewinds the simulation to the chunk's start (``mj_getState`` /
+``mj_setState``) and integrates exactly the same physics again with bare
+:func:`mujoco.mj_step` calls, writing the rest angles and the palm servo target
+that ``step`` wrote: once with one ``mj_step`` call per physics step and once
+with ``mj_step(..., nstep=frame_skip)`` (what the environment uses).  Both
+timings therefore cover the same states, contacts included, for the same
+number of physics steps, interleaved closely enough that load changes on a
+shared machine hit both alike.  The overhead is the environment's extra wall
+time (action checks, curvature lag, contact forces, observation, reward) over
+the raw stepping.
+"""
+
+from __future__ import annotations
+
+import time
+
+import mujoco
+import numpy as np
+
+__all__ = ["measure_throughput"]
+
+
+def measure_throughput(steps: int = 2000, *, grip: str = "I", seed: int = 0, repeats: int = 3,
+                       chunk: int = 50, env_kwargs=None) -> dict:
+    """Env steps per second, raw physics steps per second and the env's overhead.
+
+    Parameters
+    ----------
+    steps : int
+        Control steps per repeat (each ``frame_skip`` physics steps).
+    grip, env_kwargs
+        The environment (:class:`~simgrip.envs.pick.PickEnv` arguments).
+    seed : int
+        Seeds the random actions and the episodes.
+    repeats : int
+        Repeats; each figure is the best of them.
+    chunk : int
+        Control steps between switches from the environment to the raw replay.
+
+    Returns
+    -------
+    dict
+        ``env_steps_per_s``, ``env_physics_steps_per_s``,
+        ``raw_physics_steps_per_s`` (one ``mj_step`` call per physics step),
+        ``raw_nstep_physics_steps_per_s`` (``nstep=frame_skip``),
+        ``overhead_percent`` (env against the one-call-per-step loop),
+        ``overhead_vs_nstep_percent``, ``frame_skip``, ``timestep``, ``steps``.
+    """
+    from simgrip.envs.pick import PickEnv
+
+    steps, chunk = int(steps), int(chunk)
+    if steps < 1:
+        raise ValueError(f"steps must be a positive integer, got {steps!r}")
+    if chunk < 1:
+        raise ValueError(f"chunk must be a positive integer, got {chunk!r}")
+    env = PickEnv(grip=grip, **dict(env_kwargs or {}))
+    m, d = env.model, env.data
+    fs = env.frame_skip
+    idx = env._spring_idx
+    spec = mujoco.mjtState.mjSTATE_INTEGRATION
+    size = mujoco.mj_stateSize(m, spec)
+    start, end = np.empty(size), np.empty(size)
+    log_spring = np.empty((chunk, idx.size))
+    log_ctrl = np.empty(chunk)
+    best = {"env": np.inf, "single": np.inf, "nstep": np.inf}
+    for r in range(int(repeats)):
+        rng = np.random.default_rng(seed + r)
+        actions = rng.uniform(-1, 1, size=(steps, env.action_space.shape[0])).astype(np.float32)
+        env.reset(seed=seed + 1000 * r)
+        total = {"env": 0.0, "single": 0.0, "nstep": 0.0}
+        i = 0
+        while i < steps:
+            mujoco.mj_getState(m, d, start, spec)
+            spring0 = m.qpos_spring[idx].copy()
+            n, done = 0, False
+            t0 = time.perf_counter()
+            while n < chunk and i + n < steps and not done:
+                _, _, term, trunc, _ = env.step(actions[i + n])
+                log_spring[n] = m.qpos_spring[idx]
+                log_ctrl[n] = d.ctrl[0]
+                n += 1
+                done = term or trunc
+            total["env"] += time.perf_counter() - t0
+            # the logging above is part of the env timing: a few hundred ns per step, on the safe side
+            mujoco.mj_getState(m, d, end, spec)
+            for mode in ("single", "nstep"):
+                mujoco.mj_setState(m, d, start, spec)
+                m.qpos_spring[idx] = spring0
+                elapsed = 0.0
+                for k in range(n):
+                    m.qpos_spring[idx] = log_spring[k]
+                    d.ctrl[0] = log_ctrl[k]
+                    t0 = time.perf_counter()
+                    if mode == "single":
+                        for _ in range(fs):
+                            mujoco.mj_step(m, d)
+                    else:
+                        mujoco.mj_step(m, d, nstep=fs)
+                    elapsed += time.perf_counter() - t0
+                total[mode] += elapsed
+            mujoco.mj_setState(m, d, end, spec)
+            m.qpos_spring[idx] = log_spring[n - 1]
+            i += n
+            if done:
+                env.reset(seed=seed + 1000 * r + i)
+        for key in best:
+            best[key] = min(best[key], total[key])
+    env.close()
+    n_phys = steps * fs
+    return {
+        "steps": steps,
+        "frame_skip": fs,
+        "timestep": env.timestep,
+        "env_steps_per_s": steps / best["env"],
+        "env_physics_steps_per_s": n_phys / best["env"],
+        "raw_physics_steps_per_s": n_phys / best["single"],
+        "raw_nstep_physics_steps_per_s": n_phys / best["nstep"],
+        "overhead_percent": 100.0 * (best["env"] - best["single"]) / best["single"],
+        "overhead_vs_nstep_percent": 100.0 * (best["env"] - best["nstep"]) / best["nstep"],
+    }
