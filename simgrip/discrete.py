@@ -74,9 +74,12 @@ Multiplier and stability (eqs. 29-31)
     rod is ``-chi grad X``, i.e. ``N1 E1`` at the contact).  Therefore
     ``L = grad^2 V0 + chi grad^2 c`` is the Hessian of the paper's ``V_dis``
     *including* its ``-N (...)`` terms at the converged ``N``.  With ``E`` an
-    orthonormal basis of the null space of ``grad c`` (a Householder
-    reflection), ``min_eigenvalue`` is the smallest eigenvalue of ``E^T L E``;
-    for the free rod it is the smallest eigenvalue of the Hessian.  It is the
+    orthonormal basis of the null space of ``grad c``, ``min_eigenvalue`` is the
+    smallest eigenvalue of ``E^T L E`` (independent of the choice of ``E``); for
+    the free rod it is the smallest eigenvalue of the Hessian.  The solvers get
+    it in O(K) by bisection on Sylvester inertia counts of the tridiagonal ``L``
+    bordered by ``grad c``; :func:`min_eigenvalue` is the dense version (a
+    Householder basis), for any matrix.  It is the
     raw eigenvalue of the paper (Euclidean norm on the angles), which scales like
     ``ds``; ``min_eigenvalue / ds`` approximates the continuum Rayleigh quotient
     and is exposed as ``.min_eigenvalue_continuum``.
@@ -902,9 +905,15 @@ def discrete_from_continuous(continuous, grip, params, profile, K, *, gamma=None
 
     Useful to get the paper's stability eigenvalue at a BVP solution: Newton
     then converges in a few steps to the discrete equilibrium nearest to it.
+    For Grip III, ``gamma`` defaults to ``continuous.gamma`` when it has one;
+    the contact node is ``round(gamma K)``, so pick ``K`` with ``gamma K`` an
+    integer (e.g. a multiple of 5 for 0.8) to keep the contact where the BVP has it.
     """
     if not hasattr(continuous, "theta_at"):
         raise ValueError("continuous must have a theta_at(s) method")
+    if gamma is None and check_grip(grip) == "III":
+        g = getattr(continuous, "gamma", None)
+        gamma = g if g is not None and 0.0 < g < 1.0 else None
     return solve_discrete(grip, params, profile, K, guess=continuous, gamma=gamma)
 
 

@@ -79,11 +79,13 @@ def solve_record(grip: str, params: DimensionlessParams, profile, *, K: int = 12
 
     ``min_eigenvalue`` is the smallest eigenvalue of ``E^T L E`` of the paper's
     nodal scheme with ``K`` elements, started from the BVP solution (Grip III
-    rounds ``gamma K`` to the nearest node).
+    takes the first ``K' in [K, 2K]`` that puts ``gamma`` closest to a node).
     """
     from simgrip import discrete, elastica
 
     sol = elastica.solve(grip, params, profile)
+    if grip == "III":  # the nodal scheme puts the contact on node round(gamma K): pick K with gamma on a node
+        K = min(range(K, 2 * K + 1), key=lambda k: (abs(params.gamma * k - round(params.gamma * k)), k))
     try:
         disc = discrete.discrete_from_continuous(sol, grip, params, profile, K)
         lam = disc.min_eigenvalue if disc.success else math.nan

@@ -14,6 +14,8 @@ import math
 
 import numpy as np
 import pytest
+from hypothesis import given, settings
+from hypothesis import strategies as st
 
 from simgrip import STANDARD, Concentrated, Uniform
 from simgrip.chain import chain_springs
@@ -138,6 +140,26 @@ def test_newton_failure_raises(monkeypatch):
         solve_chain("I", STANDARD, -4.0, 16)
     with pytest.raises(DiscreteError):
         solve_discrete("free", STANDARD, -4.0, 16)
+
+
+def test_homotopy_fallback_reaches_the_same_state(monkeypatch):
+    """If Newton fails from the constrained arc, the arc-to-target homotopy takes over."""
+    import simgrip.discrete as d
+
+    direct = solve_chain("III", STANDARD, Uniform(-8.0), 32)
+    real, calls = d._newton, []
+
+    def flaky(prob, x0, **kw):
+        calls.append(kw)
+        if len(calls) == 1:
+            return d._Result(np.asarray(x0, float), 0.0, 1.0, 1, False, "forced failure")
+        return real(prob, x0, **kw)
+
+    monkeypatch.setattr(d, "_newton", flaky)
+    via = solve_chain("III", STANDARD, Uniform(-8.0), 32)
+    assert len(calls) > 3 and via.success
+    np.testing.assert_allclose(via.link_angles, direct.link_angles, atol=1e-11)
+    assert via.N1 == pytest.approx(direct.N1, rel=1e-11)
 
 
 # ---------------------------------------------------------------------------- derivatives
@@ -415,6 +437,11 @@ def test_newton_from_a_continuous_solution():
     assert eq.iterations <= 5 and eq.success
     with pytest.raises(ValueError, match="theta_at"):
         discrete_from_continuous(np.zeros(3), "I", STANDARD, -5.0, 16)
+    # Grip III takes the contact arc length of the continuous solution
+    c3 = _elastica.solve("III", STANDARD, Uniform(-6.0), gamma=0.75, tol=1e-8)
+    d3 = discrete_from_continuous(c3, "III", STANDARD, Uniform(-6.0), 64)
+    assert d3.gamma == 0.75 and d3.iterations <= 5
+    assert d3.N1 == pytest.approx(c3.N1, rel=1e-3)
 
 
 # ---------------------------------------------------------------------------- hardening
@@ -441,3 +468,30 @@ def test_fine_chains_are_cheap():
     eq = solve_chain("I", STANDARD, Uniform(-4.0), 1024)
     assert eq.success and eq.min_eigenvalue > 0
     assert time.perf_counter() - t0 < 10.0
+
+
+@settings(max_examples=40, deadline=None)
+@given(
+    grip=st.sampled_from(["free", "I", "II", "III"]),
+    D=st.floats(0.05, 20.0),
+    M=st.floats(0.0, 20.0),
+    kappa=st.floats(-10.0, 10.0),
+    alpha=st.floats(0.0, 3.0),
+    n=st.integers(2, 40),
+    gamma=st.floats(0.35, 0.95),
+    chain=st.booleans(),
+)
+def test_random_problems_reach_a_stationary_state(grip, D, M, kappa, alpha, n, gamma, chain):
+    params = STANDARD.replace(D=D, M=M)
+    prof = Concentrated(abs(kappa), alpha, -1 if kappa < 0 else 1)
+    if chain:
+        r = solve_chain(grip, params, prof, n, gamma=gamma)
+        t = chain_energy(grip, params, prof, n, r.link_angles, N1=r.N1, gamma=gamma)
+    else:
+        r = solve_discrete(grip, params, prof, n, gamma=gamma)
+        t = discrete_energy(grip, params, prof, n, r.theta, N1=r.N1, gamma=gamma)
+    assert r.success and r.gradient_norm <= GRADIENT_TOL
+    assert np.max(np.abs(t.gradient)) <= 1e-10 * max(1.0, np.max(np.abs(t.hessian)))
+    assert t.value == pytest.approx(r.energy, rel=1e-12, abs=1e-12)
+    if grip != "free":
+        assert r.contact[0] == pytest.approx(params.b / 2, abs=1e-13)
