@@ -4,6 +4,40 @@ Data flows one way: parameters and curvature profile -> scene (MjSpec) ->
 settle -> settled state -> comparison with the elastica reference.
 """
 
+import importlib.util as _ilu
+import sys as _sys
+from pathlib import Path as _Path
+
+
+def _map_source_checkout() -> None:
+    """Make ``simgrip.models`` / ``simgrip.envs`` importable from a source checkout.
+
+    pyproject's ``package-dir`` maps the top-level ``models/`` and ``envs/``
+    folders to these subpackages in an installed copy.  When this file is
+    imported straight from a checkout (e.g. ``python -m simgrip.cli`` in the
+    repository root, where the folder shadows an installed copy), map them the
+    same way; an installed copy already has them and is left alone.
+    """
+    here = _Path(__file__).resolve().parent
+    root = here.parent
+    if not (root / "pyproject.toml").is_file():
+        return
+    for name in ("models", "envs"):
+        full = f"{__name__}.{name}"
+        init = root / name / "__init__.py"
+        if full in _sys.modules or (here / name).exists() or not init.is_file():
+            continue
+        if _ilu.find_spec(full) is not None:  # an editable install's finder maps it already
+            continue
+        spec = _ilu.spec_from_file_location(full, init, submodule_search_locations=[str(root / name)])
+        module = _ilu.module_from_spec(spec)
+        _sys.modules[full] = module
+        spec.loader.exec_module(module)
+        globals()[name] = module
+
+
+_map_source_checkout()
+
 from simgrip.params import GRIPS, STANDARD, DimensionlessParams, PhysicalParams, check_grip
 from simgrip.profiles import Concentrated, CurvatureProfile, Uniform, UserProfile, as_profile
 
