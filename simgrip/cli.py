@@ -174,8 +174,14 @@ def main(argv=None) -> int:
     except RuntimeError as exc:  # ElasticaError, DiscreteError, SettleError: named, never silent
         print(f"simgrip {args.command}: failed: {type(exc).__name__}: {exc}", file=sys.stderr)
         return 1
-    if record is not None:
-        _print(record, getattr(args, "json", False))
+    try:
+        if record is not None:
+            _print(record, getattr(args, "json", False))
+        sys.stdout.flush()
+    except BrokenPipeError:  # e.g. piped into head: not an error of ours
+        import os
+
+        os.dup2(os.open(os.devnull, os.O_WRONLY), sys.stdout.fileno())
     return 0
 
 
