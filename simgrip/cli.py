@@ -72,6 +72,8 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--which", nargs="*", default=None, help="figures to make, e.g. 7 9 16 [default: all]")
     p.add_argument("--jobs", type=int, default=None, help="worker processes [default: all cores]")
     p.add_argument("--no-progress", action="store_true", help="no progress bar")
+    p.add_argument("--links", type=int, default=16, help="links per finger of the simulated chain overlaid on Figs. 6-9 [default 16]")
+    p.add_argument("--no-simulate", action="store_true", help="reference curves only: no MuJoCo points on Figs. 6-9")
     return parser
 
 
@@ -137,7 +139,8 @@ def _cmd_render(args):
 def _cmd_figures(args):
     from simgrip.figures import make_figures
 
-    paths = make_figures(args.out, which=args.which, jobs=args.jobs, progress=not args.no_progress)
+    paths = make_figures(args.out, which=args.which, jobs=args.jobs, progress=not args.no_progress,
+                         simulate=not args.no_simulate, links=args.links)
     for path in paths:
         print(path)
     return None

@@ -7,9 +7,12 @@ Computation and plotting are separate:
   check them without rendering;
 * :func:`plot_figure` turns those numbers into a :class:`matplotlib.figure.Figure`
   (figures 6-9 optionally with simulated points, see ``overlay`` below);
+* :func:`simulation_overlay` settles the MuJoCo hinge chain (``links`` links,
+  symmetric reduction) at a few ``kappa_bar0`` of figures 6-9, warm-started
+  along the sweep, and returns the simulated points in the overlay format;
 * :func:`make_figures` computes, plots and writes PNG files, in parallel over
   figures, each figure computed independently (so the files do not depend on
-  ``jobs``).
+  ``jobs``); figures 6-9 carry the simulation overlay unless ``simulate=False``.
 
 matplotlib is imported lazily inside the plotting functions (``import simgrip``
 does not import it) and only its object-oriented API is used (Agg canvas, no
@@ -50,21 +53,36 @@ fig16  (a) least ``mu_s = |f|/n`` to hold ``M = 5`` (gaps: no normal force, or
 Overlay (figures 6-9)
 ---------------------
 ``plot_figure(name, data, overlay=...)`` draws simulated points (e.g. from the
-MuJoCo model) over the reference curves.  ``overlay`` is a ``dict``; every key
-but ``"kappa"`` is optional and skipped when absent:
+MuJoCo model) over the reference curves; :func:`simulation_overlay` computes
+one from the MuJoCo hinge chain (what ``make_figures(simulate=True)`` and
+``simgrip figures`` draw).  ``overlay`` is a ``dict``; every key but
+``"kappa"`` is optional and skipped when absent:
 
 =========================  ===================================================
 key                        meaning
 =========================  ===================================================
 ``"kappa"``                ``kappa_bar0`` of each simulated point, shape (n,)
 ``"label"``                legend label (default ``"simulation"``)
-``"shapes"``               list of n ``(x, z)`` array pairs (finger centrelines),
+``"shapes"``               list of ``(x, z)`` array pairs (finger centrelines),
                            drawn as markers on the shape panel
 ``"tip_x"``, ``"tip_z"``   fig06: tip positions (panel (b), or (a) when
                            ``overlay["gravity"]`` is False)
+``"a"``, ``"b"``           fig06: per-panel dicts with ``"tip_x"``, ``"tip_z"``,
+                           ``"shapes"`` (instead of the keys above): (a) without,
+                           (b) with gravity
 ``"muN"``, ``"h"``         fig07/fig08: available friction ``mu_s N`` and tip height
 ``"f"``, ``"mu_n"``,       fig09: ``|f|``, ``mu_s n``, tip height and contact
 ``"h"``, ``"h_gamma"``     height
+``"held"``                 fig07-09: bool (n,), the simulation holds the
+                           workpiece.  Values are drawn (filled markers) only
+                           where held; panel (b) gets a row of verdict markers
+                           along its bottom: filled triangle held, hollow
+                           circle dropped, cross (with ``"feasible"`` False)
+                           held but infeasible -- compare with the shading
+``"feasible"``             fig07-09: bool (n,), the simulation's verdict in the
+                           caption's terms (default ``"held"``)
+``"failed"``               bool (n,): points whose settle failed (NaN values);
+                           listed in the legend, never dropped silently
 =========================  ===================================================
 """
 
@@ -80,7 +98,7 @@ import numpy as np
 from simgrip.params import STANDARD, DimensionlessParams
 from simgrip.profiles import Concentrated, Uniform
 
-__all__ = ["FIGURES", "figure_data", "plot_figure", "make_figures", "save_figure"]
+__all__ = ["FIGURES", "figure_data", "plot_figure", "make_figures", "save_figure", "simulation_overlay"]
 
 #: Figure names, in the paper's order, with a one-line description.
 FIGURES = {
@@ -97,8 +115,8 @@ FIGURES = {
 }
 
 # Rough relative cost, used to submit the slow figures first.
-_COST = {"fig16": 10, "fig11": 8, "fig15": 6, "fig13": 4, "fig14": 4, "fig09": 2,
-         "fig07": 2, "fig08": 2, "fig12": 1, "fig06": 1}
+_COST = {"fig16": 10, "fig11": 8, "fig15": 6, "fig13": 4, "fig14": 4, "fig09": 3,
+         "fig07": 2, "fig08": 2, "fig06": 2, "fig12": 1}
 
 # Resolution of the sweeps (points per curve).
 _N_KAPPA = {"I": 49, "II": 49, "III": 41}  # Figs. 7-9, 16 (steps of 1/8 and 1/4)
@@ -494,6 +512,188 @@ def figure_data(name, *, params: DimensionlessParams | None = None) -> dict:
 
 
 # ---------------------------------------------------------------------------
+# simulation overlay (MuJoCo hinge chain on Figs. 6-9)
+# ---------------------------------------------------------------------------
+
+#: kappa_bar0 of the simulated points.  Integer values coincide with the
+#: reference shapes the figures draw; Grips I/II add half steps where the grip
+#: holds (the feasible interval is only ~1.25 wide), Grip III adds -3 and -5.
+_SIM_KAPPA = {
+    "free": (-6.0, -4.0, -2.0, 0.0, 2.0, 4.0, 6.0),
+    "I": (0.0, -1.0, -2.0, -3.0, -4.0, -5.0, -5.5, -6.0),
+    "II": (0.0, 1.0, 2.0, 3.0, 4.0, 5.0, 5.5, 6.0),
+    "III": (0.0, -2.0, -3.0, -4.0, -5.0, -6.0, -8.0, -10.0),
+}
+_SIM_LABEL = "MuJoCo chain, n = {links}"
+_FIG_GRIP = {"fig07": "I", "fig08": "II", "fig09": "III"}
+_OVERLAY_FIGURES = ("fig06", "fig07", "fig08", "fig09")
+
+
+def _sim_scene(grip, params, kappa, links, gravity):
+    import mujoco
+
+    from simgrip.scene import build_scene
+
+    scene = build_scene(grip, params, Uniform(float(kappa)), links)
+    if not gravity:
+        scene.model.opt.disableflags |= int(mujoco.mjtDisableBit.mjDSBL_GRAVITY)
+    return scene
+
+
+def _sim_sweep(grip, params, kappas, links, *, gravity=True):
+    """Settled states along ``kappas`` (in that order), warm-started.
+
+    Each point starts from the previous equilibrium (the continuation of
+    :func:`simgrip.settle.settle_sweep`) while that one holds the workpiece (a
+    free rod always continues); after a drop -- where ``settle_sweep`` would
+    keep the workpiece dropped -- and whenever a warm start fails, the point is
+    settled cold in a freshly built scene (Grips I/II: the closing procedure;
+    Grip III: the corner placed at ``params.gamma``), so that hold/drop is
+    decided at every point.  Returns ``(states, errors)``: ``states[i]`` is
+    ``None`` where even the cold settle failed, ``errors[i]`` the message(s).
+    """
+    from simgrip.scene import set_curvature
+    from simgrip.settle import SettleError, settle
+
+    states, errors = [], []
+    scene = prev = None
+    for k in kappas:
+        st, msg = None, []
+        if prev is not None and (grip == "free" or prev.held):
+            try:
+                set_curvature(scene, Uniform(float(k)))
+                st = settle(scene, warm_start=prev)
+            except (SettleError, ValueError, ArithmeticError, np.linalg.LinAlgError) as exc:
+                msg.append(f"warm start: {type(exc).__name__}: {exc}")
+                st = None
+        if st is None:
+            try:
+                scene = _sim_scene(grip, params, k, links, gravity)
+                st = settle(scene)
+            except (SettleError, ValueError, ArithmeticError, np.linalg.LinAlgError) as exc:
+                msg.append(f"cold start: {type(exc).__name__}: {exc}")
+                st = None
+        states.append(st)
+        errors.append("; ".join(msg))
+        prev = st
+    return states, errors
+
+
+def _nodes(st):
+    nodes = np.asarray(st.nodes[0], dtype=float)
+    return nodes[:, 0].copy(), nodes[:, 1].copy()
+
+
+def _overlay_free(params, links, kappas):
+    kappas = np.asarray(sorted(kappas), dtype=float)
+    out = {"kappa": kappas, "links": int(links), "label": _SIM_LABEL.format(links=links)}
+    failed = np.zeros(len(kappas), dtype=bool)
+    errors = [""] * len(kappas)
+    for panel, gravity in (("a", False), ("b", True)):
+        # continue outwards from the straight rod in both directions (as the reference does)
+        neg = [i for i, k in enumerate(kappas) if k <= 0][::-1]
+        pos = [i for i, k in enumerate(kappas) if k >= 0]
+        states = [None] * len(kappas)
+        for order in (neg, pos):
+            if not order:
+                continue
+            sts, errs = _sim_sweep("free", params, kappas[order], links, gravity=gravity)
+            for i, s, e in zip(order, sts, errs):
+                if order is pos and kappas[i] == 0 and neg:
+                    continue  # already settled by the sweep towards negative kappa
+                states[i] = s
+                if e:
+                    errors[i] = (errors[i] + f"; ({panel}) " if errors[i] else f"({panel}) ") + e
+        tip = np.array([s.tip[0] if s is not None else (np.nan, np.nan) for s in states], dtype=float)
+        failed |= np.array([s is None for s in states])
+        out[panel] = {
+            "tip_x": tip[:, 0], "tip_z": tip[:, 1],
+            "shapes": [_nodes(s) for s in states if s is not None],
+            "gravity": gravity,
+        }
+    out["failed"] = failed
+    out["errors"] = errors
+    return out
+
+
+def _overlay_grip(grip, params, links, kappas):
+    kappas = np.asarray(kappas, dtype=float)
+    states, errors = _sim_sweep(grip, params, kappas, links)
+    n = len(kappas)
+    nan = np.full(n, np.nan)
+    failed = np.array([s is None for s in states])
+    held = np.array([s is not None and bool(s.held) and s.contact is not None for s in states])
+    tip = np.array([s.tip[0] if s is not None else (np.nan, np.nan) for s in states], dtype=float)
+    out = {"kappa": kappas, "grip": grip, "links": int(links), "label": _SIM_LABEL.format(links=links),
+           "held": held, "failed": failed, "errors": errors, "tip_x": tip[:, 0], "tip_z": tip[:, 1],
+           "residual": np.array([s.residual if s is not None else np.nan for s in states])}
+    c = [s.contact if h else None for s, h in zip(states, held)]
+    pick = lambda f: np.array([f(ci) if ci is not None else np.nan for ci in c], dtype=float)  # noqa: E731
+    out["N1"], out["N2"] = pick(lambda ci: ci.N1), pick(lambda ci: ci.N2)
+    out["n"], out["f_signed"] = pick(lambda ci: ci.normal), pick(lambda ci: ci.friction)
+    out["gamma"] = pick(lambda ci: ci.gamma)
+    out["contact_moment"] = pick(lambda ci: ci.moment)
+    out["h"] = np.where(held, tip[:, 1], nan)
+    mu = params.mu_s
+    if grip in ("I", "II"):
+        out["muN"] = mu * out["N1"]
+        out["feasible"] = held  # the simulation's verdict: the workpiece is held
+    else:
+        out["f"] = np.abs(out["f_signed"])
+        out["mu_n"] = mu * out["n"]
+        out["x_gamma"] = pick(lambda ci: float(ci.point[0]))
+        out["h_gamma"] = pick(lambda ci: float(ci.point[1]))
+        with np.errstate(invalid="ignore"):
+            out["tip_below_contact"] = held & (out["h"] < out["h_gamma"])
+        # the sim's box is not a collider for the tip: condition (23) is checked on its geometry
+        out["feasible"] = out["tip_below_contact"]
+    # shapes: held states at the kappas the reference panel draws (integers; even for Grip III)
+    step = 2.0 if grip == "III" else 1.0
+    out["shape_kappa"] = np.array([k for k, h in zip(kappas, held) if h and float(k / step).is_integer()])
+    out["shapes"] = [_nodes(s) for k, s, h in zip(kappas, states, held) if h and float(k / step).is_integer()]
+    return out
+
+
+def simulation_overlay(name, *, links: int = 16, params: DimensionlessParams | None = None,
+                       kappas=None) -> dict:
+    """Simulated points (MuJoCo hinge chain, symmetric reduction) for figure ``name`` (6-9).
+
+    Settles the chain of ``links`` links per finger at a few ``kappa_bar0``
+    (default :data:`_SIM_KAPPA`, 7-8 values across the figure's range),
+    warm-started along the sweep (see :func:`_sim_sweep`), and returns the
+    ``overlay`` :func:`plot_figure` draws (see the module docstring), plus:
+
+    * ``"failed"`` (bool per point): the settle failed even from a cold start;
+      its numbers are NaN and ``"errors"[i]`` says why (drawn as a note in
+      the figure: never silent);
+    * Figs. 7-9: ``"held"`` -- the simulation holds the workpiece.  Force and
+      height values are NaN where it dropped it (the state is then the free
+      finger, not a grip); ``"tip_x"``/``"tip_z"`` are the tips of every state.
+      ``"feasible"`` is the simulation's verdict in the caption's terms (Grip
+      III: held *and* the tip below the contact, condition (23), measured on
+      the simulated shape: the box is not a collider for the finger's tip);
+      ``"N1"``, ``"N2"``, ``"n"``, ``"f_signed"``, ``"gamma"``,
+      ``"contact_moment"`` (and ``"x_gamma"`` for Grip III) the raw contact;
+    * Fig. 6: ``"a"`` (gravity off, ``mjDSBL_GRAVITY``) and ``"b"`` (gravity
+      on), each with ``"tip_x"``, ``"tip_z"``, ``"shapes"``.
+
+    Shapes are the chain's ``links + 1`` nodes, finger 0's frame (``x`` along
+    ``E1``, ``z`` up, base at the origin).
+    """
+    from simgrip.chain import check_links
+
+    key = _name(name)
+    if key not in _OVERLAY_FIGURES:
+        raise ValueError(f"simulation overlays exist for fig06-fig09 only, not {key}")
+    links = check_links(links)
+    params = STANDARD if params is None else params
+    if key == "fig06":
+        return _overlay_free(params, links, _SIM_KAPPA["free"] if kappas is None else kappas)
+    grip = _FIG_GRIP[key]
+    return _overlay_grip(grip, params, links, _SIM_KAPPA[grip] if kappas is None else kappas)
+
+
+# ---------------------------------------------------------------------------
 # plotting
 # ---------------------------------------------------------------------------
 
@@ -526,13 +726,22 @@ def _shade(ax, x, mask, label="feasible"):
                     alpha=0.18, linewidth=0, label=label, step=None, interpolate=False)
 
 
+def _hatch(ax, x, mask, label="friction suffices, tip above contact"):
+    """Hatch the x-intervals where ``mask`` holds (Grip III: |f| <= mu_s n, but (23) fails)."""
+    mask = np.asarray(mask, dtype=bool)
+    if not mask.any():
+        return
+    ax.fill_between(x, 0, 1, where=mask, transform=ax.get_xaxis_transform(), facecolor="none",
+                    edgecolor="tab:red", alpha=0.35, hatch="///", linewidth=0, label=label)
+
+
 def _shape_axes(ax, title):
     ax.set_aspect("equal", adjustable="datalim")
     ax.set_xlabel(r"$x/\ell$ (along $\mathbf{E}_1$)")
     ax.set_ylabel(r"$z/\ell$ (up)")
     ax.set_title(title, fontsize=10)
     ax.axhline(0.0, color="0.6", lw=0.6)
-    ax.plot([0.0], [0.0], "ks", ms=4)
+    ax.plot([0.0], [0.0], "ks", ms=4, zorder=7)  # the palm (the fingers' base)
 
 
 def _draw_pair(ax, x, z, color, label=None, lw=1.4):
@@ -552,15 +761,63 @@ def _param_text(data, keys=("D", "M", "mu_s", "b")):
 def _overlay_shapes(ax, overlay, label):
     for i, pair in enumerate(overlay.get("shapes") or []):
         x, z = (np.asarray(v, dtype=float) for v in pair)
-        ax.plot(x, z, "o", ms=2.5, mfc="none", color="tab:red", label=label if i == 0 else None)
+        ax.plot(x, z, "o", ms=2.5, mfc="none", mew=0.8, color="tab:red", linestyle="none",
+                label=label if i == 0 else None)
 
 
 def _overlay_points(ax, overlay, key, xfun, label, marker="o", color="tab:red"):
+    """Simulated values ``overlay[key]`` against ``kappa``; filled markers (NaN: not drawn).
+
+    With ``overlay["held"]`` only the held states are drawn (a dropped state is
+    the free finger, not a point of the grip's curves)."""
     if overlay is None or key not in overlay:
         return
     x = xfun(np.asarray(overlay["kappa"], dtype=float))
-    ax.plot(x, np.asarray(overlay[key], dtype=float), marker, color=color, ms=5, mfc="none",
-            linestyle="none", label=label)
+    y = np.asarray(overlay[key], dtype=float)
+    if "held" in overlay:
+        y = np.where(np.asarray(overlay["held"], dtype=bool), y, np.nan)
+    ax.plot(x, y, marker, color=color, ms=5.5, mec="k", mew=0.7, linestyle="none", label=label, zorder=5)
+
+
+def _overlay_verdict(ax, overlay, xfun, grip):
+    """The simulation's hold/drop verdict as a row of markers along the bottom of ``ax``.
+
+    Filled triangle: the workpiece is held (Grip III: and the tip stays below the
+    contact); hollow circle: dropped; cross (Grip III): held, but the tip is above
+    the contact (condition (23) fails on the simulated shape); red X: the settle
+    failed (also listed in the legend).  Compare with the shaded feasible region.
+    """
+    if overlay is None or "held" not in overlay:
+        return
+    import matplotlib.transforms as mtransforms
+
+    tr = mtransforms.blended_transform_factory(ax.transData, ax.transAxes)
+    k = np.asarray(overlay["kappa"], dtype=float)
+    x = xfun(k)
+    held = np.asarray(overlay["held"], dtype=bool)
+    failed = np.asarray(overlay.get("failed", np.zeros(len(k), dtype=bool)), dtype=bool)
+    feas = np.asarray(overlay.get("feasible", held), dtype=bool) & held
+    y = 0.045
+    rows = (
+        (feas, dict(marker="^", color="k", mfc="k", ms=6), "MuJoCo holds the box"),
+        (held & ~feas, dict(marker="x", color="k", ms=6, mew=1.2), "MuJoCo holds, tip above contact"),
+        (~held & ~failed, dict(marker="o", color="k", mfc="white", ms=6, mew=1.0), "MuJoCo drops the box"),
+        (failed, dict(marker="X", color="tab:red", ms=7), None),
+    )
+    for mask, style, lab in rows:
+        if mask.any():
+            ax.plot(x[mask], np.full(mask.sum(), y), linestyle="none", transform=tr, clip_on=False,
+                    zorder=6, label=lab, **style)
+    if failed.any():
+        ks = ", ".join(f"{v:g}" for v in k[failed])
+        ax.plot([], [], "X", color="tab:red", ms=7, label=rf"settle failed at ${_KBAR} = {ks}$")
+
+
+def _overlay_failed_note(ax, overlay, label):
+    failed = np.asarray(overlay.get("failed", []), dtype=bool)
+    if failed.any():
+        ks = ", ".join(f"{v:g}" for v in np.asarray(overlay["kappa"], dtype=float)[failed])
+        ax.plot([], [], "X", color="tab:red", ms=7, label=rf"{label}: failed at ${_KBAR} = {ks}$")
 
 
 def _plot_fig06(data, overlay=None):
@@ -574,12 +831,17 @@ def _plot_fig06(data, overlay=None):
         ax.legend(fontsize=7, loc="best")
     if overlay is not None:
         label = overlay.get("label", "simulation")
-        ax = a if overlay.get("gravity", True) is False else b
-        _overlay_shapes(ax, overlay, label)
-        if "tip_x" in overlay and "tip_z" in overlay:
-            ax.plot(overlay["tip_x"], overlay["tip_z"], "o", color="tab:red", mfc="none", ms=6,
-                    label=f"{label} (tips)")
-        ax.legend(fontsize=7, loc="best")
+        if "a" in overlay or "b" in overlay:  # both panels (simulation_overlay("fig06"))
+            panels = [(ax, overlay[p]) for ax, p in ((a, "a"), (b, "b")) if p in overlay]
+        else:  # one panel, chosen by overlay["gravity"]
+            panels = [(a if overlay.get("gravity", True) is False else b, overlay)]
+        for ax, sub in panels:
+            _overlay_shapes(ax, sub, f"{label} (nodes)")
+            if "tip_x" in sub and "tip_z" in sub:
+                ax.plot(sub["tip_x"], sub["tip_z"], "o", color="tab:red", mec="k", mew=0.7, ms=6,
+                        linestyle="none", label=f"{label} (tips)", zorder=5)
+            _overlay_failed_note(ax, overlay, label)
+            ax.legend(fontsize=7, loc="lower right")
     fig.suptitle(f"Fig. 6 - free clamped rod, uniform ${_KBAR}$, $D = {data['D']:g}$")
     return fig
 
@@ -596,7 +858,7 @@ def _plot_grip_sweep(data, overlay=None):
     fig, (a, b, c) = _new_figure(3)
 
     # (a) shapes
-    _shape_axes(a, "(a) deformed shapes (f: feasible)")
+    _shape_axes(a, "(a) deformed shapes (thick, f: feasible)")
     idx = _shape_indices(len(k), _N_SHAPES[grip])
     colors = _cmap(len(idx))
     for j, i in enumerate(idx):
@@ -606,11 +868,6 @@ def _plot_grip_sweep(data, overlay=None):
         feas = bool(data["feasible"][i])
         _draw_pair(a, x, z, colors[j], label=rf"${_KBAR} = {k[i]:.3g}$" + (" (f)" if feas else ""),
                    lw=2.4 if feas else 1.2)
-        if feas:  # label the pair 'f' beside its widest point
-            w = int(np.nanargmax(x))
-            for sx in (1.0, -1.0):
-                a.annotate("f", (sx * x[w], z[w]), textcoords="offset points", xytext=(7 * sx - 3, -4),
-                           fontsize=11, fontweight="bold", color=colors[j])
         if grip == "III":
             a.plot([data["x_gamma"][i], -data["x_gamma"][i]], [data["h_gamma"][i]] * 2, "v",
                    color=colors[j], ms=4)
@@ -619,10 +876,23 @@ def _plot_grip_sweep(data, overlay=None):
         a.axvline(xv, color="0.5", lw=0.8, ls="--")
     if overlay is not None:
         _overlay_shapes(a, overlay, label)
-    a.legend(fontsize=6.5, loc="best")
+    # room for the legend on the side away from the palm (below for I/III, above for II)
+    zs = np.asarray(data["shape_z"])[np.asarray(data["success"], dtype=bool)]
+    lo, hi = (float(np.nanmin(zs)), float(np.nanmax(zs))) if zs.size else (-1.0, 0.0)
+    lo, hi = min(lo, 0.0) - 0.05, max(hi, 0.0) + 0.05
+    rows = 0.075 * math.ceil((len(idx) + (overlay is not None)) / 2) + 0.06
+    # (extend the data limits, not the view limits: the equal aspect adjusts the data limits)
+    a.update_datalim([(0.0, lo - rows if sign < 0 else hi + rows)])
+    a.autoscale_view()
+    if sign < 0:
+        a.legend(fontsize=6.5, loc="lower center", ncol=2, columnspacing=0.8, handlelength=1.6)
+    else:
+        a.legend(fontsize=6.5, loc="upper center", ncol=2, columnspacing=0.8, handlelength=1.6)
 
     # (b) friction needed vs available
     _shade(b, xk, data["feasible"])
+    if grip == "III":  # friction suffices but condition (23) fails: the tip is above the contact
+        _hatch(b, xk, np.asarray(data["friction_ok"]) & ~np.asarray(data["tip_below_contact"]))
     if grip == "III":
         b.plot(xk, data["required"], color="tab:blue", label=r"$|f|/\rho g\ell$ needed")
         b.plot(xk, data["available"], color="tab:orange", label=r"$\mu_s n/\rho g\ell$ available")
@@ -636,13 +906,21 @@ def _plot_grip_sweep(data, overlay=None):
         b.set_title(r"(b) friction $|F_f|$ needed vs $\mu_s N$ available", fontsize=10)
         if overlay is not None:
             _overlay_points(b, overlay, "muN", xfun, rf"{label}: $\mu_s N$", "s", "tab:orange")
+    if overlay is not None:
+        _overlay_verdict(b, overlay, xfun, grip)
     b.axhline(0.0, color="0.6", lw=0.6)
     b.set_xlabel(xlabel)
     b.set_ylabel(r"force on the rod $/\rho g\ell$")
-    b.legend(fontsize=7, loc="best")
+    # legend in the upper left, above the curves (room made for Grips I/II, whose M line crosses it)
+    if grip != "III":
+        y0, y1 = b.get_ylim()
+        b.set_ylim(y0, y1 + 0.6 * (y1 - y0))
+    b.legend(fontsize=7, loc="upper left")
 
     # (c) heights
     _shade(c, xk, data["feasible"])
+    if grip == "III":
+        _hatch(c, xk, np.asarray(data["friction_ok"]) & ~np.asarray(data["tip_below_contact"]))
     c.plot(xk, data["h"], color="tab:purple", label=r"$h$ (tip)")
     if grip == "III":
         c.plot(xk, data["h_gamma"], color="tab:brown", label=r"$h_\gamma$ (contact $s=\gamma$)")
@@ -656,7 +934,7 @@ def _plot_grip_sweep(data, overlay=None):
             _overlay_points(c, overlay, "h", xfun, f"{label}: $h$", "o", "tab:purple")
     c.set_xlabel(xlabel)
     c.set_ylabel(r"height $/\ell$ ($z$ up)")
-    c.legend(fontsize=7, loc="best")
+    c.legend(fontsize=7, loc="lower right" if grip == "III" else "best")
 
     keys = ("D", "M", "mu_s", "b", "gamma") if grip == "III" else ("D", "M", "mu_s", "b")
     fig.suptitle(f"Fig. {num} - {_GRIP_TITLE[grip]} vs ${_KBAR}$; {_param_text(data, keys)}")
@@ -821,16 +1099,21 @@ def save_figure(fig, path, *, dpi: int = 110) -> Path:
     return path
 
 
-def _render(name: str, out_dir: str) -> str:
-    """Compute, plot and write one figure (runs in a worker process)."""
+def _render(name: str, out_dir: str, simulate: bool = False, links: int = 16) -> str:
+    """Compute, plot and write one figure (runs in a worker process).
+
+    With ``simulate``, figures 6-9 get :func:`simulation_overlay` (``links`` links).
+    """
     key = _name(name)
     data = figure_data(key)
-    fig = plot_figure(key, data)
+    overlay = simulation_overlay(key, links=links) if simulate and key in _OVERLAY_FIGURES else None
+    fig = plot_figure(key, data, overlay=overlay)
     path = save_figure(fig, Path(out_dir) / f"{key}.png")
     return str(path)
 
 
-def make_figures(out_dir, *, which=None, jobs: int | None = None, progress: bool = True) -> list[Path]:
+def make_figures(out_dir, *, which=None, jobs: int | None = None, progress: bool = True,
+                 simulate: bool = True, links: int = 16) -> list[Path]:
     """Write the paper's figures as PNG files ``out_dir/figNN.png``.
 
     Parameters
@@ -844,6 +1127,11 @@ def make_figures(out_dir, *, which=None, jobs: int | None = None, progress: bool
         Each figure is computed independently, so the results do not depend on ``jobs``.
     progress : bool
         Show a tqdm progress bar.
+    simulate : bool
+        Overlay the MuJoCo hinge chain's settled states on figures 6-9
+        (:func:`simulation_overlay`, label ``"MuJoCo chain, n = <links>"``).
+    links : int
+        Links per finger of the simulated chain (default 16).
 
     Returns
     -------
@@ -852,10 +1140,14 @@ def make_figures(out_dir, *, which=None, jobs: int | None = None, progress: bool
     """
     from tqdm import tqdm
 
+    from simgrip.chain import check_links
+
     names = list(FIGURES) if which is None else [_name(w) for w in ([which] if isinstance(which, (str, int)) else which)]
     names = list(dict.fromkeys(names))
     if jobs is not None and int(jobs) < 1:
         raise ValueError(f"jobs must be a positive integer, got {jobs!r}")
+    links = check_links(links)
+    simulate = bool(simulate)
     out = Path(out_dir)
     out.mkdir(parents=True, exist_ok=True)
     workers = min(int(jobs or os.cpu_count() or 1), len(names)) if names else 1
@@ -864,12 +1156,12 @@ def make_figures(out_dir, *, which=None, jobs: int | None = None, progress: bool
         if workers <= 1:
             for key in names:
                 bar.set_postfix_str(key)
-                done[key] = Path(_render(key, str(out)))
+                done[key] = Path(_render(key, str(out), simulate, links))
                 bar.update()
         else:
             order = sorted(names, key=lambda k: -_COST.get(k, 1))
             with ProcessPoolExecutor(max_workers=workers) as pool:
-                futures = {pool.submit(_render, key, str(out)): key for key in order}
+                futures = {pool.submit(_render, key, str(out), simulate, links): key for key in order}
                 for fut in as_completed(futures):
                     key = futures[fut]
                     done[key] = Path(fut.result())

@@ -166,3 +166,189 @@ def test_fig13_concentrating_curvature_does_not_help():
     assert np.all(d["capacity"] < d["uniform_capacity"])
     assert np.all(np.diff(d["capacity"]) < 0)
     assert np.all(d["lambda_min"] > 0)
+
+
+# ---------------------------------------------------------------------------
+# simulation overlay (MuJoCo hinge chain on Figs. 6-9)
+#
+# Tolerances.  The chain is a second-order discretisation of the elastica: on
+# the free rod of Fig. 6 the tip error is 1.19e-3 l at n = 16 and 2.96e-4 l at
+# n = 32 (ratio 4.0, checked below).  For the grips the n = 16 points differ
+# from the figure's curves by (measured, n = 16 / 32 / 64):
+#   * the chain error, second order against the reference solved for the
+#     simulated state (simgrip.compare.reference_for): Grip I at kappa = -6,
+#     dN = 2.5e-2 / 6.2e-3 / 1.5e-3, dh = 2.5e-3 / 6.2e-4 / 1.5e-4;
+#   * an n-independent offset the curves leave out: the contact geoms' radius
+#     (r_tip = r_link = 2e-3 l) moves the contact force off the centreline,
+#     a couple ~ r M; it shifts N by 0.4 % (I) to 0.6 % (II), and Grip III's
+#     f by 0.5 % of mu_s n (with gamma_sim - 0.8 ~ 5e-4).
+# Largest n = 16 deviations from the curves: N 0.67 % of N, |f| 0.6 % and mu_s n
+# 0.4 % of mu_s n, heights 3.0e-3 l (at n = 32: 1.1e-3, 1.6e-3, 0.7e-3 l for
+# Grips I, II, III; 4 x those is 2.8e-3 -- 6.3e-3 l).  Bounds: forces 1e-2
+# relative (the offset + 4 x the chain's n = 32 error), positions 5e-3 l.
+# ---------------------------------------------------------------------------
+
+FORCE_REL = 1e-2   # forces, relative to the available friction mu_s N (mu_s n)
+POS_ABS = 5e-3     # tips and heights, over l
+EDGE = 0.3         # hold/drop is compared this far (in kappa_bar0) from the feasible region's edges
+
+
+@pytest.fixture(scope="module")
+def fig08():
+    return figures.figure_data("fig08")
+
+
+@pytest.fixture(scope="module")
+def sim16():
+    return {k: figures.simulation_overlay(k, links=16) for k in ("fig06", "fig07", "fig08", "fig09")}
+
+
+def _at(data, kappas):
+    """Indices of ``kappas`` on the figure's kappa grid (the simulated kappas lie on it)."""
+    idx = np.array([int(np.argmin(np.abs(data["kappa"] - k))) for k in kappas])
+    np.testing.assert_allclose(data["kappa"][idx], kappas, atol=1e-12)
+    return idx
+
+
+def _away_from_edges(data, mask, kappas, margin=EDGE):
+    """True where ``kappas`` is more than ``margin`` from every switch of ``mask`` along the grid."""
+    k, m = np.asarray(data["kappa"]), np.asarray(mask, dtype=bool)
+    edges = 0.5 * (k[1:] + k[:-1])[m[1:] != m[:-1]]
+    return np.array([np.all(np.abs(edges - kk) > margin) for kk in kappas])
+
+
+def _off_shape(x, z, xr, zr):
+    """Largest distance of chain nodes ``(x, z)`` (at s = i/n) from the reference shape at the same s."""
+    s, sr = np.linspace(0.0, 1.0, len(x)), np.linspace(0.0, 1.0, len(xr))
+    return float(np.hypot(x - np.interp(s, sr, xr), z - np.interp(s, sr, zr)).max())
+
+
+def test_fig06_overlay_is_second_order(sim16):
+    d = figures.figure_data("fig06")
+    o32 = figures.simulation_overlay("fig06", links=32)
+    o16 = sim16["fig06"]
+    assert o16["label"] == "MuJoCo chain, n = 16" and not o16["failed"].any()
+    np.testing.assert_allclose(o16["kappa"], d["kappa"])
+    for p in "ab":
+        e16, e32 = (np.hypot(o[p]["tip_x"] - d[f"x_{p}"][:, -1], o[p]["tip_z"] - d[f"z_{p}"][:, -1])
+                    for o in (o16, o32))
+        assert e16.max() < POS_ABS / 2
+        k = np.abs(d["kappa"]) > 0  # kappa = 0 without gravity is exact (straight rod)
+        ratio = e16.max() / e32.max()
+        assert 3.5 < ratio < 4.5, f"panel ({p}): error ratio n=16/n=32 is {ratio:.2f}, not ~4"
+        assert np.all(e16[k] < 4.5 * e32[k] + 1e-12)
+        # the shapes' nodes lie on the reference shapes (chain nodes at s = i/16)
+        for (x, z), xr, zr in zip(o16[p]["shapes"], d[f"x_{p}"], d[f"z_{p}"]):
+            assert _off_shape(x, z, xr, zr) < POS_ABS / 2
+    # gravity off really is off: the straight rod stays straight, with gravity it sags
+    i0 = int(np.flatnonzero(d["kappa"] == 0)[0])
+    assert abs(o16["a"]["tip_z"][i0]) < 1e-9 and o16["b"]["tip_z"][i0] < -0.1
+
+
+@pytest.mark.parametrize("name", ["fig07", "fig08"])
+def test_grip_overlay_lies_on_the_curves(name, sim16, fig07, fig08):
+    d = {"fig07": fig07, "fig08": fig08}[name]
+    o = sim16[name]
+    i = _at(d, o["kappa"])
+    held = o["held"]
+    assert held.sum() >= 3 and not o["failed"].any()
+    np.testing.assert_allclose(o["N2"][held], -STANDARD.M, rtol=1e-6)        # the friction carries the weight
+    rel = np.abs(o["muN"] - d["available"][i])[held] / d["available"][i][held]
+    assert rel.max() < FORCE_REL, rel
+    assert np.abs(o["h"] - d["h"][i])[held].max() < POS_ABS
+    np.testing.assert_allclose(o["tip_x"][held], STANDARD.b / 2, atol=1e-4)   # tip on the box's face
+    # dropped states carry no force values (the free finger is not a point of the grip's curves)
+    assert np.isnan(o["muN"][~held]).all() and np.isnan(o["h"][~held]).all()
+    # shapes: held states at integer kappa, on the drawn reference shapes
+    for kk, (x, z) in zip(o["shape_kappa"], o["shapes"]):
+        j = _at(d, [kk])[0]
+        assert _off_shape(x, z, d["shape_x"][j], d["shape_z"][j]) < POS_ABS
+
+
+def test_fig09_overlay_lies_on_the_curves(sim16, fig09):
+    d, o = fig09, sim16["fig09"]
+    i = _at(d, o["kappa"])
+    held = o["held"]
+    assert held.sum() >= 3 and not o["failed"].any()
+    np.testing.assert_allclose(o["gamma"][held], STANDARD.gamma, atol=2e-3)   # corner sticks at gamma
+    # the corner capsule sits r_link + r_corner = 3e-3 l off the centreline: as the rod turns under
+    # it (warm-started sweep), X(gamma) moves by up to that much (the box's x is fixed)
+    np.testing.assert_allclose(o["x_gamma"][held], STANDARD.b / 2, atol=3e-3)
+    np.testing.assert_allclose(o["N2"][held], -STANDARD.M, rtol=1e-6)
+    budget = d["available"][i][held]                                          # mu_s n of the curve
+    assert (np.abs(o["f"] - d["required"][i])[held] / budget).max() < FORCE_REL
+    assert (np.abs(o["mu_n"] - d["available"][i])[held] / budget).max() < FORCE_REL
+    assert np.abs(o["h"] - d["h"][i])[held].max() < POS_ABS
+    assert np.abs(o["h_gamma"] - d["h_gamma"][i])[held].max() < POS_ABS
+
+
+@pytest.mark.parametrize("name", ["fig07", "fig08", "fig09"])
+def test_hold_drop_matches_the_feasible_region(name, sim16, fig07, fig08, fig09):
+    d = {"fig07": fig07, "fig08": fig08, "fig09": fig09}[name]
+    o = sim16[name]
+    i = _at(d, o["kappa"])
+    away = _away_from_edges(d, d["feasible"], o["kappa"])
+    assert away.sum() >= 5
+    np.testing.assert_array_equal(o["feasible"][away], d["feasible"][i][away])
+    assert o["feasible"][away].any() and not o["feasible"][away].all()   # both verdicts are tested
+    if name == "fig09":  # the sim's own hold/drop (friction cone) against |f| <= mu_s n
+        away_f = _away_from_edges(d, d["friction_ok"], o["kappa"])
+        np.testing.assert_array_equal(o["held"][away_f], d["friction_ok"][i][away_f])
+        # where friction suffices but the tip rises above the contact, the sim holds (x marker)
+        np.testing.assert_array_equal(o["held"] & ~o["feasible"], o["held"] & ~d["tip_below_contact"][i])
+
+
+def _legend_texts(fig):
+    return [t.get_text() for ax in fig.axes if ax.get_legend() for t in ax.get_legend().get_texts()]
+
+
+def test_figures_render_with_the_simulation_overlay(sim16, fig07, fig09, tmp_path):
+    for name, d in (("fig07", fig07), ("fig09", fig09)):
+        o = sim16[name]
+        base = figures.plot_figure(name, d)
+        fig = figures.plot_figure(name, d, overlay=o)
+        texts = _legend_texts(fig)
+        assert any("MuJoCo chain, n = 16" in t for t in texts)
+        assert "MuJoCo holds the box" in texts and "MuJoCo drops the box" in texts
+        assert sum(len(ax.lines) for ax in fig.axes) > sum(len(ax.lines) for ax in base.axes)
+        _check_png(figures.save_figure(fig, tmp_path / f"{name}.png"))
+    assert "MuJoCo holds, tip above contact" in texts  # fig09, kappa = -6
+    assert "friction suffices, tip above contact" in texts
+    fig6 = figures.plot_figure("fig06", figures.figure_data("fig06"), overlay=sim16["fig06"])
+    assert sum("MuJoCo chain, n = 16 (tips)" in t for t in _legend_texts(fig6)) == 2  # both panels
+
+
+def test_failed_points_are_nan_and_shown(monkeypatch, fig07):
+    import simgrip.settle as settle_mod
+
+    real = settle_mod.settle
+
+    def flaky(scene, **kw):
+        if abs(scene.profile.kappa + 5.5) < 1e-12:
+            raise settle_mod.SettleError("injected failure")
+        return real(scene, **kw)
+
+    monkeypatch.setattr(settle_mod, "settle", flaky)
+    o = figures.simulation_overlay("fig07", kappas=[-5.0, -5.5, -6.0])
+    np.testing.assert_array_equal(o["failed"], [False, True, False])
+    assert np.isnan(o["muN"][1]) and not o["held"][1]
+    assert "injected failure" in o["errors"][1] and "warm start" in o["errors"][1] and "cold start" in o["errors"][1]
+    assert o["held"][2]  # the sweep goes on after a failure (cold start)
+    texts = _legend_texts(figures.plot_figure("fig07", fig07, overlay=o))
+    assert any("settle failed" in t and "-5.5" in t for t in texts)
+
+
+def test_make_figures_simulate_switch_and_cli(tmp_path):
+    from simgrip.cli import build_parser
+
+    off = figures.make_figures(tmp_path / "off", which=[6], jobs=1, progress=False, simulate=False)
+    on = figures.make_figures(tmp_path / "on", which=[6], jobs=1, progress=False, links=8)
+    assert off[0].read_bytes() != on[0].read_bytes()
+    with pytest.raises(ValueError, match="links"):
+        figures.make_figures(tmp_path, which=[6], progress=False, links=1)
+    with pytest.raises(ValueError, match="fig06-fig09"):
+        figures.simulation_overlay("fig11")
+    args = build_parser().parse_args(["figures", "--links", "8", "--no-simulate"])
+    assert args.links == 8 and args.no_simulate
+    args = build_parser().parse_args(["figures"])
+    assert args.links == 16 and not args.no_simulate
