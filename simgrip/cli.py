@@ -53,13 +53,18 @@ def build_parser() -> argparse.ArgumentParser:
     _add_state_options(p)
     p.add_argument("--K", type=int, default=128, help="nodes of the discrete stability check [default 128]")
 
-    p = sub.add_parser("simulate", help="settle the MuJoCo finger (symmetric reduction) and print its state")
-    _add_state_options(p)
-    p.add_argument("--links", type=int, default=32, help="links per finger [default 32]")
-
-    p = sub.add_parser("compare", help="simulation, elastica reference and their difference side by side")
-    _add_state_options(p)
-    p.add_argument("--links", type=int, default=32, help="links per finger [default 32]")
+    for name, text in (
+        ("simulate", "settle the MuJoCo finger (symmetric reduction) and print its state"),
+        ("compare", "simulation, elastica reference and their difference side by side"),
+    ):
+        p = sub.add_parser(name, help=text)
+        _add_state_options(p)
+        p.add_argument("--links", type=int, default=32, help="links per finger [default 32]")
+        p.add_argument(
+            "--method", default="newton",
+            help="settle method: newton (static solve, residual 1e-10) or dynamics "
+            "(over-damped MuJoCo dynamics with MuJoCo's own friction) [default newton]",
+        )
 
     p = sub.add_parser("render", help="PNG of a settled grip and GIF of a scripted pick (pick environment)")
     p.add_argument("--grip", default="I", help="I (pinch) or III (cradle) [default I]")
@@ -106,7 +111,7 @@ def _cmd_simulate(args) -> dict:
 
     grip = check_grip(args.grip)
     params, profile, links = _params(args), _profile(args, grip), check_links(args.links)
-    return settled_record(simulate(grip, params, profile, links), params, profile)
+    return settled_record(simulate(grip, params, profile, links, method=args.method), params, profile)
 
 
 def _cmd_compare(args):
@@ -116,7 +121,7 @@ def _cmd_compare(args):
     from simgrip.report import format_comparison
 
     grip = check_grip(args.grip)
-    result = compare(grip, _params(args), _profile(args, grip), check_links(args.links))
+    result = compare(grip, _params(args), _profile(args, grip), check_links(args.links), method=args.method)
     print(json.dumps(to_jsonable(result), allow_nan=False) if args.json else format_comparison(result))
     return None
 

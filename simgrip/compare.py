@@ -58,8 +58,9 @@ def settled_record(state, params: DimensionlessParams, profile=None) -> dict:
     """Record of a settled state in the fields of :func:`simgrip.report.elastica_record`.
 
     Adds ``wall_time_s``, ``steps``, ``held``, ``penetration`` (over ``l``),
-    ``residual`` and ``links``.  ``feasible`` is the simulation's verdict: the
-    workpiece is held.  ``min_eigenvalue`` is the hinge chain's stability
+    ``residual``, ``links``, ``method`` and ``warnings``.  ``feasible`` is the
+    simulation's verdict: the workpiece is held (and, Grip III, no part of the
+    rod beyond the contact reaches the workpiece: condition (23)).  ``min_eigenvalue`` is the hinge chain's stability
     eigenvalue at this shape when ``profile`` is given.
     """
     c = state.contact
@@ -72,7 +73,7 @@ def settled_record(state, params: DimensionlessParams, profile=None) -> dict:
         "normal_force": float(state.normal_force),
         "friction_force": float(state.friction_force),
         "required_mu": float(state.required_mu) if c is not None else 0.0,
-        "feasible": bool(state.held) if grip != "free" else True,
+        "feasible": bool(state.held and state.tip_clear) if grip != "free" else True,
         "min_eigenvalue": None if profile is None else _stability(state, grip, params, as_profile(profile)),
         "N1": float(state.N1),
         "N2": float(state.N2),
@@ -82,6 +83,8 @@ def settled_record(state, params: DimensionlessParams, profile=None) -> dict:
         "penetration": float(state.penetration),
         "residual": float(state.residual),
         "converged": bool(state.converged),
+        "method": state.method,
+        "warnings": list(state.warnings),
         "params": {"D": params.D, "M": params.M, "b": params.b, "mu_s": params.mu_s, "gamma": params.gamma},
     }
     if grip == "III" and c is not None:
@@ -111,13 +114,14 @@ def reference_for(state, params: DimensionlessParams, profile):
     return elastica.solve(grip, params, profile, contact_moment=float(c.moment))
 
 
-def compare(grip: str, params: DimensionlessParams, profile, links: int) -> dict:
+def compare(grip: str, params: DimensionlessParams, profile, links: int, **settle_kw) -> dict:
     """Simulate, solve the matching reference, and return ``{"simulation", "reference", "difference"}``.
 
     ``difference`` is simulation minus reference for every shared numeric field.
+    Extra keywords (e.g. ``method="dynamics"``) go to :func:`~simgrip.settle.settle`.
     """
     profile = as_profile(profile)
-    state = simulate(grip, params, profile, links)
+    state = simulate(grip, params, profile, links, **settle_kw)
     sim = settled_record(state, params, profile)
     ref = elastica_record(reference_for(state, params, profile))
     return {"simulation": sim, "reference": ref, "difference": difference(sim, ref)}

@@ -1462,7 +1462,9 @@ def settle(
     if method not in ("newton", "dynamics"):
         raise ValueError(f"method must be 'newton' or 'dynamics', got {method!r}")
     if tol is None:
-        tol = DEFAULT_TOL if method == "newton" else DYN_TOL
+        # dynamics: MuJoCo's sticking friction creeps (~1e-5 of the weight), so a
+        # scene with a workpiece stops at DYN_TOL; without contact it goes as far as Newton.
+        tol = DEFAULT_TOL if method == "newton" or not scene.has_workpiece else DYN_TOL
     if max_steps is None:
         max_steps = 200 if method == "newton" else 20_000
     tol, max_steps = _check_settle_args(scene, tol, max_steps)

@@ -83,8 +83,9 @@ def test_simulate_json_fields(capsys):
     assert rec["friction_force"] == pytest.approx(-5.0, rel=1e-6)  # the workpiece's weight M per finger
 
 
-def test_compare_json_differences_are_small(capsys):
-    assert main(["compare", "II", "--kappa", "5", "--links", "32", "--json"]) == 0
+@pytest.mark.parametrize("method", ["newton", "dynamics"])
+def test_compare_json_differences_are_small(capsys, method):
+    assert main(["compare", "II", "--kappa", "5", "--links", "32", "--json", "--method", method]) == 0
     out = json.loads(capsys.readouterr().out)
     sim, ref, diff = out["simulation"], out["reference"], out["difference"]
     assert sim["source"] == "simulation" and ref["source"] == "elastica"
@@ -100,6 +101,7 @@ def test_compare_json_differences_are_small(capsys):
         (["simulate", "III", "--kappa", "inf", "--links", "8"], "kappa"),
         (["compare", "I", "--kappa", "-5", "--b", "-0.2"], "b"),
         (["compare", "X", "--kappa", "-5"], "grip"),
+        (["simulate", "I", "--kappa", "-5", "--method", "rk4"], "method"),
     ],
 )
 def test_simulate_and_compare_bad_input(args, name):
