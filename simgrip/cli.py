@@ -66,6 +66,16 @@ def build_parser() -> argparse.ArgumentParser:
             "(over-damped MuJoCo dynamics with MuJoCo's own friction) [default newton]",
         )
 
+    p = sub.add_parser("bench", help="run time against error, naive vs settle vs minimiser vs BVP, what skipping buys")
+    from simgrip import bench as _bench  # light: matplotlib/mujoco are imported inside its functions
+
+    _bench.add_arguments(p)
+
+    p = sub.add_parser("stress", help="randomised and grid numerical stress test of settle()")
+    from simgrip import stress as _stress
+
+    _stress.add_arguments(p)
+
     p = sub.add_parser("render", help="PNG of a settled grip and GIF of a scripted pick (pick environment)")
     p.add_argument("--grip", default="I", help="I (pinch) or III (cradle) [default I]")
     p.add_argument("--seed", type=int, default=0, help="episode seed [default 0]")
@@ -141,6 +151,24 @@ def _cmd_render(args):
     return None
 
 
+def _cmd_bench(args) -> dict:
+    from simgrip.bench import cli_bench
+
+    if args.jobs is not None and args.jobs < 1:
+        raise ValueError(f"jobs must be a positive integer, got {args.jobs!r}")
+    return cli_bench(args)
+
+
+def _cmd_stress(args) -> dict:
+    from simgrip.stress import cli_stress
+
+    if args.jobs is not None and args.jobs < 1:
+        raise ValueError(f"jobs must be a positive integer, got {args.jobs!r}")
+    if args.cases < 1:
+        raise ValueError(f"cases must be a positive integer, got {args.cases!r}")
+    return cli_stress(args)
+
+
 def _cmd_figures(args):
     from simgrip.figures import make_figures
 
@@ -155,8 +183,8 @@ def _print(record: dict, as_json: bool) -> None:
     from simgrip.io import to_jsonable
     from simgrip.report import format_table
 
-    if as_json:
-        print(json.dumps(to_jsonable(record), allow_nan=False))
+    if as_json or any(isinstance(v, (dict, list)) and k != "params" for k, v in record.items() if k not in ("tip", "contact", "warnings")):
+        print(json.dumps(to_jsonable(record), allow_nan=False, indent=None if as_json else 2))
     else:
         print(format_table(record))
 
@@ -167,6 +195,8 @@ COMMANDS = {
     "compare": _cmd_compare,
     "figures": _cmd_figures,
     "render": _cmd_render,
+    "bench": _cmd_bench,
+    "stress": _cmd_stress,
 }
 
 

@@ -1,0 +1,119 @@
+"""Smoke test of ``simgrip bench --quick``: checks what it measured, never timings."""
+
+from __future__ import annotations
+
+import csv
+import json
+import math
+
+import numpy as np
+import pytest
+
+from simgrip.bench import N_QUICK, STANDARD_CASES, run_bench
+
+
+@pytest.fixture(scope="module")
+def bench(tmp_path_factory):
+    """``simgrip bench --quick`` through the command line, then the same in-process for the result object."""
+    from simgrip.cli import main
+
+    out = tmp_path_factory.mktemp("bench")
+    assert main(["bench", "--quick", "--jobs", "1", "--no-progress", "--out", str(out / "cli")]) == 0
+    assert (out / "cli" / "summary.md").is_file()
+    return run_bench(out, quick=True, jobs=1, progress=False), out
+
+
+def _rows(res, **kw):
+    return sorted(res.select(**kw), key=lambda r: r["n"])
+
+
+def test_files_exist_and_parse(bench):
+    res, out = bench
+    for name in ("bench.csv", "bench.json", "pareto.png", "summary.md", "skips.md", "sweep.json"):
+        assert (out / name).is_file() and (out / name).stat().st_size > 0, name
+    with open(out / "bench.csv", newline="") as fh:
+        rows = list(csv.DictReader(fh))
+    assert len(rows) == len(res.rows)
+    data = json.loads((out / "bench.json").read_text())
+    assert len(data["rows"]) == len(res.rows) and data["ratios"]
+    assert (out / "pareto.png").read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
+    summary = (out / "summary.md").read_text()
+    assert "settle / naive" in summary and "What skipping buys" in summary
+
+
+@pytest.mark.parametrize("grip", list(STANDARD_CASES))
+@pytest.mark.parametrize("method", ["minimiser", "settle"])
+def test_second_order_convergence(bench, grip, method):
+    res, _ = bench
+    rows = _rows(res, grip=grip, method=method)
+    assert [r["n"] for r in rows] == list(N_QUICK)
+    tip = np.array([r["tip_err"] for r in rows])
+    assert np.all(np.isfinite(tip)) and np.all(tip > 0)
+    orders = np.log2(tip[:-1] / tip[1:])
+    assert np.all(orders > 1.6) and np.all(orders < 2.6), orders
+    if grip != "free":
+        force = np.array([r["force_err"] for r in rows])
+        # the contact force converges too (Grip III: gamma off the nodes makes it less regular)
+        assert force[-1] < force[0] / 4, force
+
+
+@pytest.mark.parametrize("grip", list(STANDARD_CASES))
+def test_settle_reaches_the_chain_equilibrium(bench, grip):
+    res, _ = bench
+    for r in _rows(res, grip=grip, method="settle"):
+        # asked for 1e-10; the settle stops at its contact noise floor (reported to the lead)
+        assert r["converged"] and r["residual"] < 1e-7
+        # MuJoCo's soft contact (penetration ~5e-6 l) and the settle tolerance: well below the discretisation error
+        assert r["settle_vs_min_tip"] < 0.05 * r["tip_err"], r
+        if grip != "free":
+            # the contact force feels the penetration through the chain's stiffness: N/1e6 l -> ~2e-4
+            assert r["settle_vs_min_force"] < 0.3 * r["force_err"], r
+
+
+def test_naive_and_bvp_rows(bench):
+    res, _ = bench
+    for grip in STANDARD_CASES:
+        for n in N_QUICK:
+            naive = res.select(grip=grip, n=n, method="naive")
+            assert len(naive) == 1
+            nv = naive[0]
+            assert nv["dt"] is not None and nv["dt"] > 0
+            # time to matched error: measured, extrapolated, or infinite (no static state reached)
+            assert nv["matched"] or nv["extrapolated"] or math.isinf(nv["time_s"]), nv
+            assert nv["matched"] != nv["extrapolated"] or math.isinf(nv["time_s"]), nv
+            mn = res.select(grip=grip, n=n, method="minimiser")[0]
+            if nv["matched"]:
+                assert abs(nv["tip_err"] - mn["tip_err"]) < 0.02 * mn["tip_err"]
+        curve = sorted(res.select(grip=grip, n=0, method="bvp"), key=lambda r: r["tol"])
+        assert curve[0]["tip_err"] == 0.0  # the reference itself
+        assert all(r["tip_err"] < 1e-4 for r in curve)
+
+
+def test_ratios_and_skips(bench):
+    res, _ = bench
+    assert {(r["grip"], r["n"]) for r in res.ratios} == {(g, n) for g in STANDARD_CASES for n in N_QUICK}
+    for r in res.ratios:
+        for k in ("settle_over_minimiser", "settle_over_bvp"):
+            assert r[k] > 0 and math.isfinite(r[k])
+    names = [s["skip"] for s in res.skips]
+    assert any(s.startswith("symmetric reduction") for s in names)
+    assert "warm starts (Fig. 7 sweep)" in names
+    for s in res.skips:
+        if s["skip"].startswith(("symmetric reduction", "warm starts", "contact off")):
+            # skipping must not change the answer
+            assert s["answer_change_tip"] is not None and s["answer_change_tip"] < 1e-6, s
+    sw = res.sweep
+    assert sw["n"] == 16 and len(sw["held"]) == len(sw["kappas"])
+    assert sw["held"][0]  # kappa = -6 holds the workpiece
+    # where the workpiece is held, the simulated force is the chain's exact one
+    assert sw["max_dN_sim_vs_chain"] is not None and sw["max_dN_sim_vs_chain"] < 1e-4
+
+
+def test_errors_do_not_depend_on_jobs(tmp_path, bench):
+    res, _ = bench
+    other = run_bench(tmp_path, quick=True, jobs=2, progress=False, grips=("free", "I"), skips=False, sweep=False)
+    for r in other.rows:
+        same = [x for x in res.rows if (x["grip"], x["n"], x["method"], x["tol"]) == (r["grip"], r["n"], r["method"], r["tol"])]
+        assert len(same) == 1
+        for key in ("tip_err", "force_err", "steps", "converged"):
+            assert same[0][key] == r[key], (r["grip"], r["n"], r["method"], key)
