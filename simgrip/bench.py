@@ -76,6 +76,7 @@ import numpy as np
 from simgrip.io import atomic_write, write_json
 from simgrip.params import STANDARD, DimensionlessParams
 from simgrip.profiles import Uniform
+from simgrip.threads import _openblas_libs, blas_threads  # noqa: F401 - re-exported
 
 __all__ = [
     "STANDARD_CASES",
@@ -114,62 +115,6 @@ COLUMNS = (
 
 # ---------------------------------------------------------------------------
 # helpers
-
-
-def _openblas_libs():
-    """ctypes handles of the OpenBLAS copies numpy and scipy ship (``[]`` when none is found)."""
-    import ctypes
-    import glob
-    import importlib.util
-
-    out = []
-    for pkg in ("numpy", "scipy"):
-        spec = importlib.util.find_spec(pkg)
-        if spec is None or not spec.submodule_search_locations:
-            continue
-        root = os.path.dirname(list(spec.submodule_search_locations)[0])
-        for path in glob.glob(os.path.join(root, f"{pkg}.libs", "*openblas*.so*")):
-            try:
-                lib = ctypes.CDLL(path)
-            except OSError:  # pragma: no cover
-                continue
-            for prefix in ("scipy_openblas", "openblas"):
-                for suffix in ("64_", ""):
-                    get = getattr(lib, f"{prefix}_get_num_threads{suffix}", None)
-                    put = getattr(lib, f"{prefix}_set_num_threads{suffix}", None)
-                    if get is not None and put is not None:
-                        out.append((get, put))
-                        break
-                else:
-                    continue
-                break
-    return out
-
-
-class blas_threads:
-    """Context manager: run with ``k`` BLAS threads in numpy's and scipy's OpenBLAS.
-
-    The settle's least-squares steps are small dense problems; multithreaded
-    OpenBLAS on a busy machine makes them up to 30x slower at ``n >= 128``
-    (threads spin waiting for a core), so the bench and the stress run time
-    everything single-threaded.  A no-op where OpenBLAS is not found.
-    """
-
-    def __init__(self, k: int = 1):
-        self.k = int(k)
-        self.saved = []
-
-    def __enter__(self):
-        for get, put in _openblas_libs():
-            self.saved.append((put, get()))
-            put(self.k)
-        return self
-
-    def __exit__(self, *exc):
-        for put, old in self.saved:
-            put(old)
-        self.saved = []
-        return False
 
 
 def _median_time(fn, repeats: int):

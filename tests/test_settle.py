@@ -459,3 +459,119 @@ def test_grip_iii_flags_a_tip_that_reaches_the_workpiece(method):
     assert any("condition (23)" in w for w in bad.warnings)
     good = settle(build_scene("III", STANDARD, Uniform(KAPPA_III_CLEAR), 32), method=method)
     assert good.tip_clear and not good.warnings
+
+
+# ---------------------------------------------------------------------------
+# stress-run regressions (issue 5): crash, converged flag, budgets, BLAS threads
+
+
+def _stress_scene(grip, D, kappa, M, mu_s, b, n, profile=None):
+    from simgrip.params import DimensionlessParams
+
+    params = DimensionlessParams(D=D, M=M, b=b, mu_s=mu_s)
+    return build_scene(grip, params, profile if profile is not None else Uniform(kappa), n)
+
+
+# Grip III cases whose corner slid off the stuck link: the sliding stick's pair left the
+# contact set and the Newton residual crashed with "ValueError: <pair> is not in list"
+# (stress ids 284, 458, 481).
+GRIP_III_SLIDE_OFF = [
+    dict(D=49.32953174607504, kappa=6.3606442227548925, M=19.385248039837457, mu_s=0.062374180278660284,
+         b=0.6532110506998636, n=4),
+    dict(D=14.40180791130886, kappa=-8.383539236514931, M=19.99879723747138, mu_s=0.3479490547863793,
+         b=0.16583923089500135, n=21),
+    dict(D=27.497204197282763, kappa=-9.076923278164506, M=20.245431709192307, mu_s=0.1409531991381925,
+         b=0.35988568672429266, n=12),
+]
+
+
+@pytest.mark.parametrize("case", GRIP_III_SLIDE_OFF)
+def test_grip_iii_corner_sliding_off_its_link_does_not_crash(case):
+    st = settle(_stress_scene("III", **case))
+    assert st.converged and st.residual <= st.tolerance
+    assert np.all(np.isfinite(st.qpos))
+
+
+@pytest.mark.parametrize("grip, kappa, profile", [
+    ("I", -6.0, "wiggle"),  # stress id 105: residual 1.1e-6 reported as converged (tol 1e-10)
+    ("II", -4.70107041401143, "uniform"),  # stress id 426: 2.2e-6
+])
+def test_converged_means_residual_within_the_reported_tolerance(grip, kappa, profile):
+    from simgrip.profiles import UserProfile
+
+    if profile == "wiggle":
+        prof = UserProfile(lambda s, k=kappa: k * (1.0 + 2.0 * np.sin(40.0 * np.pi * np.asarray(s))), name="wiggle")
+        sc = _stress_scene(grip, 1.0, kappa, 5.0, 1.0, 0.6, 32, prof)
+    else:
+        sc = _stress_scene(grip, 1.2825918808640724, kappa, 1.4411797797813208, 2.95135833952919,
+                           0.28941805953616795, 32)
+    st = settle(sc)
+    assert st.held and st.converged
+    # the tolerance is the requested 1e-10 raised at most to the contact round-off floor
+    assert 1e-10 <= st.tolerance <= 1e-6
+    assert st.residual <= st.tolerance
+    assert st.residual < 1e-7  # was 1.1e-6 / 2.2e-6 before FLOOR_ULPS 64 and KC_RTOL 1e-13
+
+
+def test_a_state_above_its_tolerance_is_not_converged(monkeypatch):
+    """Newton's own rows met, MuJoCo's residual not: SettleError, or converged=False if asked."""
+    import simgrip.settle as S
+
+    monkeypatch.setattr(S, "FLOOR_ULPS", 1e9)  # contact rows accepted far too early
+    monkeypatch.setattr(S, "RESIDUAL_FLOOR_MAX", 0.0)  # ... and the tolerance not raised
+    sc = build_scene("I", STANDARD, Uniform(-6.0), 8)
+    with pytest.raises(SettleError, match="above the tolerance"):
+        settle(sc)
+    st = settle(sc, allow_unconverged=True)
+    assert not st.converged and st.residual > st.tolerance == 1e-10
+
+
+def test_every_converged_state_is_within_tolerance(grip_states, dyn_states):
+    for st in list(grip_states.values()) + list(dyn_states.values()):
+        assert st.converged and st.residual <= st.tolerance, (st.grip, st.links, st.method)
+
+
+def test_newton_settle_is_bounded_by_max_steps():
+    """Stress: max_steps=20000 took 32-84 s at n = 7 (each failing closing stage spent max_steps)."""
+    import time
+
+    sc = _stress_scene("I", 20.04, -8.05, 18.76, 0.215, 0.688, 7)
+    t0 = time.perf_counter()
+    st = settle(sc, max_steps=20000)
+    assert time.perf_counter() - t0 < 10.0  # ~0.5 s
+    assert st.converged and st.newton_iterations <= 1000
+    # max_steps is the budget of the whole settle, with a clear error when spent
+    with pytest.raises(SettleError, match="budget"):
+        settle(sc, max_steps=50)
+    st = settle(sc, max_steps=50, allow_unconverged=True)
+    assert not st.converged and st.newton_iterations <= 50
+
+
+def test_dynamics_settle_is_bounded_by_max_steps():
+    # stress id 458 (Grip III, n = 21): the dynamic settle does not converge; it must stop at the budget
+    sc = _stress_scene("III", **GRIP_III_SLIDE_OFF[1])
+    with pytest.raises(SettleError, match="max_steps"):
+        settle(sc, method="dynamics", max_steps=2000)
+    st = settle(sc, method="dynamics", max_steps=2000, allow_unconverged=True)
+    assert not st.converged and st.steps <= 2000
+
+
+def test_settle_runs_single_threaded_blas_and_restores_it(monkeypatch):
+    from simgrip import threads
+
+    libs = threads._openblas_libs()
+    if not libs:
+        pytest.skip("no OpenBLAS found")
+    get = libs[0][0]
+    before = get()
+    seen = []
+    lstsq = np.linalg.lstsq
+
+    def spy(*a, **k):
+        seen.append(get())
+        return lstsq(*a, **k)
+
+    monkeypatch.setattr(np.linalg, "lstsq", spy)
+    settle(build_scene("free", STANDARD, Uniform(-4.0), 8))
+    assert seen and set(seen) == {1}
+    assert get() == before
