@@ -11,27 +11,18 @@ what a hinge chain uses for its rest angles.
 
 from __future__ import annotations
 
-import math
 from dataclasses import dataclass
 from typing import Callable
 
 import numpy as np
 from scipy import special as _special
 
+from simgrip.params import _finite
+
 __all__ = ["CurvatureProfile", "Uniform", "Concentrated", "UserProfile", "as_profile"]
 
 # 16-point Gauss-Legendre rule on [-1, 1], used for integrals without a closed form.
 _GL_X, _GL_W = np.polynomial.legendre.leggauss(16)
-
-
-def _finite(name: str, value) -> float:
-    try:
-        v = float(value)
-    except (TypeError, ValueError):
-        raise ValueError(f"{name} must be a real number, got {value!r}") from None
-    if not math.isfinite(v):
-        raise ValueError(f"{name} must be finite, got {value!r}")
-    return v
 
 
 class CurvatureProfile:
