@@ -771,6 +771,8 @@ class BenchResult:
         The skipping table.
     sweep : dict
         The Fig. 7 sweep timing (simulation warm, cold, BVP).
+    env : dict
+        Gymnasium env throughput per grip (:func:`simgrip.envs.throughput.measure_throughput`).
     files : dict
         name -> path of every file written.
     jobs, quick, elapsed_s
@@ -780,6 +782,7 @@ class BenchResult:
     ratios: list
     skips: list
     sweep: dict
+    env: dict = field(default_factory=dict)
     files: dict = field(default_factory=dict)
     jobs: int = 1
     quick: bool = False
@@ -950,7 +953,11 @@ def run_bench(
             "answer_change_tip": sweep_rec["max_dtip_warm_vs_cold"],
             "answer_change_force": sweep_rec["max_dN_warm_vs_cold"], "note": "without: each curvature settled from scratch",
         })
-    result = BenchResult(rows=rows, ratios=_ratios(rows), skips=skip_rows, sweep=sweep_rec,
+    from simgrip.envs.throughput import measure_throughput  # issue 4: env overhead over raw mj_step
+
+    env = {grip: measure_throughput(steps=300 if quick else 2000, grip=grip, repeats=1 if quick else 3)
+           for grip in ("I", "III")}
+    result = BenchResult(rows=rows, ratios=_ratios(rows), skips=skip_rows, sweep=sweep_rec, env=env,
                          jobs=workers, quick=bool(quick), elapsed_s=time.perf_counter() - t_start)
     result.files = _write(Path(out_dir), result)
     return result
@@ -985,7 +992,7 @@ def _write(out: Path, res: BenchResult) -> dict:
     files["bench.csv"] = out / "bench.csv"
     meta = {"quick": res.quick, "jobs": res.jobs, "elapsed_s": res.elapsed_s, "params": vars(STANDARD),
             "standard_cases": STANDARD_CASES, "cpu_count": os.cpu_count(), "load_avg": _loadavg()}
-    write_json(out / "bench.json", {"meta": meta, "rows": res.rows, "ratios": res.ratios})
+    write_json(out / "bench.json", {"meta": meta, "rows": res.rows, "ratios": res.ratios, "env": res.env})
     files["bench.json"] = out / "bench.json"
     write_json(out / "sweep.json", res.sweep)
     files["sweep.json"] = out / "sweep.json"
@@ -1076,6 +1083,13 @@ def _summary_md(res: BenchResult) -> str:
               f"{sum(s['held'])}/{len(s['held'])} held, {sum(s['held_bvp_feasible'])} feasible; "
               f"max |N_sim − N_BVP| over held points {_fmt(s['max_dN_sim_vs_bvp'], '.2e')} (BVP without the contact couple; "
               f"discretisation error at this n), max |N_sim − N_chain| {_fmt(s.get('max_dN_sim_vs_chain'), '.2e')}."]
+    if res.env:
+        L += ["", "## Gymnasium pick environment throughput", "",
+              "| env | env steps/s | physics steps/s (env) | raw mj_step steps/s | overhead |", "|---|---|---|---|---|"]
+        for grip, e in res.env.items():
+            L.append(f"| {'Pick-v0' if grip == 'I' else 'PickCradle-v0'} | {_fmt(e['env_steps_per_s'])} | "
+                     f"{_fmt(e['env_physics_steps_per_s'])} | {_fmt(e['raw_physics_steps_per_s'])} | "
+                     f"{e['overhead_percent']:.1f} % |")
     L += ["", "## What skipping buys", "", _skips_md(res)]
     L += ["Reproduce: `simgrip bench" + (" --quick" if res.quick else "") + f" --jobs {res.jobs}` "
           "(or `python -c \"from simgrip.bench import run_bench; run_bench('bench_out')\"`).", ""]

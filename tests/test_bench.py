@@ -117,3 +117,13 @@ def test_errors_do_not_depend_on_jobs(tmp_path, bench):
         assert len(same) == 1
         for key in ("tip_err", "force_err", "steps", "converged"):
             assert same[0][key] == r[key], (r["grip"], r["n"], r["method"], key)
+
+
+def test_env_throughput_is_measured(bench):
+    res, out = bench
+    data = json.loads((out / "bench.json").read_text())
+    for grip in ("I", "III"):
+        e = data["env"][grip]
+        assert e["env_steps_per_s"] > 0 and e["raw_physics_steps_per_s"] > 0
+        assert math.isfinite(e["overhead_percent"])
+    assert "Gymnasium pick environment throughput" in (out / "summary.md").read_text()
