@@ -48,7 +48,9 @@ def _stability(state, grip, params, profile) -> float:
                 contact_moment=state.contact.moment, guess=state.link_angles[0],
             )
         else:
-            ch = discrete.solve_chain(grip, params, profile, state.links, guess=state.link_angles[0])
+            C = float(state.contact.moment) if state.contact is not None and state.held else 0.0
+            ch = discrete.solve_chain(grip, params, profile, state.links, contact_moment=C,
+                                      guess=state.link_angles[0])
         return float(ch.min_eigenvalue)
     except (discrete.DiscreteError, ValueError):
         return math.nan

@@ -1015,6 +1015,8 @@ def _chain_problem(grip, params, springs: ChainSprings, gamma, contact_moment, g
     a = gravity * ds * (1.0 - smid)
     lin = np.zeros(n)
     w, c0, m = None, 0.0, None
+    if grip in ("free", "I", "II"):
+        lin[n - 1] = -float(contact_moment)  # a tip couple turns the last link: potential -C phi_{n-1}
     if grip in ("I", "II"):
         w = np.full(n, ds)
         a = a + params.M * w
@@ -1093,9 +1095,10 @@ def solve_chain(
     gamma : float, optional
         Grip III contact arc length (any value in (0, 1); default ``params.gamma``).
     contact_moment : float
-        Grip III point moment ``M_c`` (E3 component, over ``rho g l^2``) applied
-        by the workpiece at the contact (finite-radius contact geoms); potential
-        ``-M_c phi_m``.
+        Point moment ``M_c`` (E3 component, over ``rho g l^2``) applied by the
+        workpiece at the contact (finite-radius contact geoms): on the link
+        carrying ``gamma`` for Grip III, on the last link (a tip couple) for the
+        free rod and Grips I/II; potential ``-M_c phi``.
     guess : optional
         Link angles, a solution with ``theta_at(s)`` (sampled at link midpoints),
         or None.

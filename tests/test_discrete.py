@@ -495,3 +495,22 @@ def test_random_problems_reach_a_stationary_state(grip, D, M, kappa, alpha, n, g
     assert t.value == pytest.approx(r.energy, rel=1e-12, abs=1e-12)
     if grip != "free":
         assert r.contact[0] == pytest.approx(params.b / 2, abs=1e-13)
+
+
+@pytest.mark.parametrize("grip, kappa", [("free", -3.0), ("I", -5.5), ("II", 5.0)])
+def test_tip_couple_equals_shifted_rest_angles(grip, kappa):
+    """A tip couple C on the last link is exactly a shift of every rest angle by C/(D k_j):
+    sum_j k_j/2 (q_j - r_j)^2 - C sum_j q_j = sum_j k_j/2 (q_j - r_j - C/k_j)^2 + const."""
+    from simgrip.chain import ChainSprings, chain_springs
+    from simgrip.discrete import solve_chain
+    from simgrip.params import STANDARD
+    from simgrip.profiles import Uniform
+
+    params, n, C = STANDARD.replace(D=1.3), 24, 0.07
+    sp = chain_springs(Uniform(kappa), n)
+    shifted = ChainSprings(n=n, ds=sp.ds, stiffness=sp.stiffness, rest=sp.rest + C / (params.D * sp.stiffness),
+                           nodes=sp.nodes)
+    a = solve_chain(grip, params, Uniform(kappa), n, contact_moment=C)
+    b = solve_chain(grip, params, Uniform(kappa), n, springs=shifted)
+    np.testing.assert_allclose(a.link_angles, b.link_angles, rtol=0, atol=1e-11)
+    assert a.N1 == pytest.approx(b.N1, abs=1e-10)
