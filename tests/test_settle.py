@@ -575,3 +575,49 @@ def test_settle_runs_single_threaded_blas_and_restores_it(monkeypatch):
     settle(build_scene("free", STANDARD, Uniform(-4.0), 8))
     assert seen and set(seen) == {1}
     assert get() == before
+
+
+@pytest.mark.parametrize("grip,kappa,n", [("I", -6.0, 16), ("I", -4.0, 32), ("II", 5.0, 32)])
+def test_predicted_closing_equals_the_ramped_closing(monkeypatch, grip, kappa, n):
+    """The predicted closing (chain stages + MuJoCo's last stage) reaches the ramp's state.
+
+    The settled state -- the workpiece's height on its face included -- and the hold/drop
+    decision are those of the staged MuJoCo ramp, in ~half the Newton iterations.
+    """
+    import simgrip.settle as S
+
+    fast = settle(build_scene(grip, STANDARD, Uniform(kappa), n))
+    monkeypatch.setattr(S, "_close_predicted", lambda *a, **k: False)
+    ramp = settle(build_scene(grip, STANDARD, Uniform(kappa), n))
+    assert fast.held == ramp.held
+    assert np.max(np.abs(fast.qpos - ramp.qpos)) < 1e-9
+    assert abs(fast.N1 - ramp.N1) < 1e-7 and abs(fast.N2 - ramp.N2) < 1e-7
+    assert fast.newton_iterations < 0.6 * ramp.newton_iterations
+
+
+def test_predicted_closing_falls_back_to_the_ramp(monkeypatch):
+    """An unusable prediction (here: the chain solver fails) leaves the staged ramp in charge."""
+    import simgrip.discrete as D
+
+    ref = settle(build_scene("I", STANDARD, Uniform(-6.0), 16))
+
+    def boom(*a, **k):
+        raise D.DiscreteError("no")
+
+    monkeypatch.setattr(D, "solve_chain", boom)
+    st = settle(build_scene("I", STANDARD, Uniform(-6.0), 16))
+    assert st.held and st.newton_iterations > ref.newton_iterations
+    assert np.max(np.abs(st.qpos - ref.qpos)) < 1e-9
+
+
+def test_predicted_closing_hands_a_folding_path_to_the_ramp(monkeypatch):
+    """Stress case whose ramp fails at its last stage (the closing falls back to the chain's grip
+    equilibrium): the predictor must not reach the end where the ramp cannot, or the answer changes."""
+    import simgrip.settle as S
+
+    sc = _stress_scene("I", 20.04, -8.05, 18.76, 0.215, 0.688, 7)
+    fast = settle(sc)
+    monkeypatch.setattr(S, "_close_predicted", lambda *a, **k: False)
+    ramp = settle(sc)
+    assert fast.held == ramp.held
+    assert np.max(np.abs(fast.qpos - ramp.qpos)) < 1e-9
