@@ -88,7 +88,7 @@ from scipy import special as _sp
 from scipy.integrate import solve_bvp
 from scipy.optimize import brentq
 
-from simgrip.params import DimensionlessParams, check_grip
+from simgrip.params import DimensionlessParams, _finite, check_grip
 from simgrip.profiles import Concentrated, CurvatureProfile, Uniform, as_profile
 
 __all__ = [
@@ -806,19 +806,9 @@ def _check_tip_load(tip_load) -> tuple[float, float]:
     return float(t[0]), float(t[1])
 
 
-def _check_real(name, v) -> float:
-    try:
-        x = float(v)
-    except (TypeError, ValueError):
-        raise ValueError(f"{name} must be a real number, got {v!r}") from None
-    if not math.isfinite(x):
-        raise ValueError(f"{name} must be finite, got {v!r}")
-    return x
-
-
 def _problem(grip, params, profile, gravity, tip_load, contact_moment, gamma) -> _Problem:
     t1, t2 = _check_tip_load(tip_load)
-    C = _check_real("contact_moment", contact_moment)
+    C = _finite("contact_moment", contact_moment)
     if grip == "III":
         gam = params.gamma if gamma is None else params.replace(gamma=gamma).gamma
         if gam <= params.b / 2.0:
@@ -912,7 +902,7 @@ def solve(
     if not isinstance(params, DimensionlessParams):
         raise ValueError(f"params must be a DimensionlessParams, got {type(params).__name__}")
     profile = as_profile(profile)
-    tol = _check_real("tol", tol)
+    tol = _finite("tol", tol)
     if not 1e-13 <= tol <= 1e-2:
         raise ValueError(f"tol must lie in [1e-13, 1e-2], got {tol!r}")
     if guess is not None and not isinstance(guess, ElasticaSolution):
@@ -1016,7 +1006,7 @@ def max_load(
     grip = check_grip(grip)
     if grip == "free":
         raise ValueError("grip must be one of 'I', 'II', 'III' for max_load, got 'free'")
-    M_max = _check_real("M_max", M_max)
+    M_max = _finite("M_max", M_max)
     if M_max <= 0:
         raise ValueError(f"M_max must be positive, got {M_max!r}")
     profile = as_profile(profile)
