@@ -15,7 +15,6 @@ from dataclasses import dataclass
 from typing import Callable
 
 import numpy as np
-from scipy import special as _special
 
 from simgrip.params import _finite
 
@@ -104,6 +103,8 @@ class Concentrated(CurvatureProfile):
 
     def integral(self, a, b):
         """Exact: ``int (4s(1-s))^alpha ds = 4^alpha B(alpha+1, alpha+1) [I_b - I_a]`` (regularised incomplete beta)."""
+        from scipy import special as _special  # lazily: scipy.special costs ~0.3 s at start-up
+
         a = np.clip(np.asarray(a, dtype=float), 0.0, 1.0)
         b = np.clip(np.asarray(b, dtype=float), 0.0, 1.0)
         k = self.alpha + 1.0
