@@ -1,6 +1,6 @@
 """``PickEnv``: pick a box with two soft fingers by commanding their curvature.
 
-A thin Gymnasium layer over :func:`simgrip.scene.build_scene`: the two fingers
+A thin Gymnasium layer over :func:`simgrip.sim.scene.build_scene`: the two fingers
 (hinge chains whose stiffness ``EI/ds`` and rest angles ``kappa0 ds`` come from
 :func:`simgrip.chain.chain_springs`) are built by the scene builder and attached
 under the palm of ``models/pick_scene.xml``.  The pneumatic actuation is the
@@ -23,7 +23,7 @@ from simgrip.chain import chain_springs, check_links
 from simgrip.models import model_path
 from simgrip.params import DimensionlessParams, PhysicalParams
 from simgrip.profiles import Uniform
-from simgrip.scene import build_scene
+from simgrip.sim.scene import build_scene
 
 __all__ = ["PickEnv", "BoxParams", "OBS_LAYOUT", "obs_layout"]
 
@@ -91,7 +91,7 @@ class PickEnv(gym.Env):
     ## Description
 
     A palm carries two mirrored soft fingers (planar hinge chains, ``n_links``
-    links each, built by :func:`simgrip.scene.build_scene`).  The pneumatic
+    links each, built by :func:`simgrip.sim.scene.build_scene`).  The pneumatic
     pressure is modelled by the fingers' intrinsic curvature
     :math:`\bar\kappa_0 = \ell\kappa_0` (uniform along the finger), which follows
     its command with a first-order lag of time constant ``kappa_tau``.  The

@@ -2,7 +2,7 @@
 
 For the episode's box (width ``b``, half mass ``m`` per finger, friction
 ``mu_s``) the controller solves the paper's Grip I boundary-value problem along
-a sweep of uniform curvatures (:func:`simgrip.elastica.kappa_sweep`) and takes
+a sweep of uniform curvatures (:func:`simgrip.reference.elastica.kappa_sweep`) and takes
 the gentlest curvature whose required friction ``|F_f|/N`` is at most
 ``mu_s / safety``: inside the feasible window, with a safety factor on the
 friction and no more squeeze than that.  The pick itself is open loop in three
@@ -24,7 +24,7 @@ import math
 
 import numpy as np
 
-from simgrip.elastica import ElasticaError, solve
+from simgrip.reference.elastica import ElasticaError, solve
 from simgrip.profiles import Uniform
 from simgrip.params import DimensionlessParams
 

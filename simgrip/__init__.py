@@ -56,4 +56,15 @@ __all__ = [
     "as_profile",
 ]
 
+
+
+def __getattr__(name: str):
+    """``from simgrip import elastica`` / ``discrete``: the reference solvers, imported lazily (SciPy)."""
+    if name in ("elastica", "discrete"):
+        import importlib
+
+        return importlib.import_module(f"simgrip.reference.{name}")
+    raise AttributeError(f"module 'simgrip' has no attribute {name!r}")
+
+
 import simgrip.envs  # noqa: E402,F401  registers simgrip/Pick-v0 and simgrip/PickCradle-v0 (lazy entry points)

@@ -67,12 +67,12 @@ def build_parser() -> argparse.ArgumentParser:
         )
 
     p = sub.add_parser("bench", help="run time against error, naive vs settle vs minimiser vs BVP, what skipping buys")
-    from simgrip import bench as _bench  # light: matplotlib/mujoco are imported inside its functions
+    from simgrip.harness import bench as _bench  # light: matplotlib/mujoco are imported inside its functions
 
     _bench.add_arguments(p)
 
     p = sub.add_parser("stress", help="randomised and grid numerical stress test of settle()")
-    from simgrip import stress as _stress
+    from simgrip.harness import stress as _stress
 
     _stress.add_arguments(p)
 
@@ -152,7 +152,7 @@ def _cmd_render(args):
 
 
 def _cmd_bench(args) -> dict:
-    from simgrip.bench import cli_bench
+    from simgrip.harness.bench import cli_bench
 
     if args.jobs is not None and args.jobs < 1:
         raise ValueError(f"jobs must be a positive integer, got {args.jobs!r}")
@@ -160,7 +160,7 @@ def _cmd_bench(args) -> dict:
 
 
 def _cmd_stress(args) -> dict:
-    from simgrip.stress import cli_stress
+    from simgrip.harness.stress import cli_stress
 
     if args.jobs is not None and args.jobs < 1:
         raise ValueError(f"jobs must be a positive integer, got {args.jobs!r}")

@@ -28,7 +28,7 @@ def simulate(grip: str, params: DimensionlessParams, profile, links: int, **sett
     Returns the :class:`~simgrip.settle.SettledState`.  Extra keywords go to
     :func:`~simgrip.settle.settle`.
     """
-    from simgrip.scene import build_scene
+    from simgrip.sim.scene import build_scene
     from simgrip.settle import settle
 
     grip = check_grip(grip)
@@ -38,7 +38,7 @@ def simulate(grip: str, params: DimensionlessParams, profile, links: int, **sett
 
 def _stability(state, grip, params, profile) -> float:
     """Smallest eigenvalue of the hinge chain's projected Hessian at the settled shape."""
-    from simgrip import discrete
+    from simgrip.reference import discrete
 
     try:
         if grip == "III" and state.contact is not None:
@@ -104,7 +104,7 @@ def settled_record(state, params: DimensionlessParams, profile=None) -> dict:
 
 def reference_for(state, params: DimensionlessParams, profile):
     """The elastica solution of the state ``state`` describes (see the module docstring)."""
-    from simgrip import elastica
+    from simgrip.reference import elastica
 
     grip = state.grip
     c = state.contact

@@ -46,7 +46,7 @@ def _params_record(params: DimensionlessParams) -> dict:
 
 
 def elastica_record(sol, min_eigenvalue: float | None = None) -> dict:
-    """Record of an :class:`~simgrip.elastica.ElasticaSolution` (plus the discrete stability eigenvalue)."""
+    """Record of an :class:`~simgrip.reference.elastica.ElasticaSolution` (plus the discrete stability eigenvalue)."""
     rec = {
         "source": "elastica",
         "grip": sol.grip,
@@ -81,7 +81,7 @@ def solve_record(grip: str, params: DimensionlessParams, profile, *, K: int = 12
     nodal scheme with ``K`` elements, started from the BVP solution (Grip III
     takes the first ``K' in [K, 2K]`` that puts ``gamma`` closest to a node).
     """
-    from simgrip import discrete, elastica
+    from simgrip.reference import discrete, elastica
 
     sol = elastica.solve(grip, params, profile)
     if grip == "III":  # the nodal scheme puts the contact on node round(gamma K): pick K with gamma on a node

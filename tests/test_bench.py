@@ -9,7 +9,7 @@ import math
 import numpy as np
 import pytest
 
-from simgrip.bench import N_QUICK, STANDARD_CASES, run_bench
+from simgrip.harness.bench import N_QUICK, STANDARD_CASES, run_bench
 
 
 @pytest.fixture(scope="module")

@@ -1,8 +1,8 @@
-"""Tests of simgrip.discrete: the paper's nodal scheme, the hinge chain and their stability.
+"""Tests of simgrip.reference.discrete: the paper's nodal scheme, the hinge chain and their stability.
 
 Orders of accuracy (derived in the module docstring, measured here): both schemes
 are O(ds^2) in tip/contact position and contact force.  The reference is the
-continuous BVP (:mod:`simgrip.elastica`, tol 1e-10, whose error is far below the
+continuous BVP (:mod:`simgrip.reference.elastica`, tol 1e-10, whose error is far below the
 discretisation errors tested); if that module is missing, a Richardson
 extrapolation of the nodal scheme at K = 512, 1024 stands in.
 """
@@ -19,7 +19,7 @@ from hypothesis import strategies as st
 
 from simgrip import STANDARD, Concentrated, Uniform
 from simgrip.chain import chain_springs
-from simgrip.discrete import (
+from simgrip.reference.discrete import (
     GRADIENT_TOL,
     ChainEquilibrium,
     DiscreteError,
@@ -33,7 +33,7 @@ from simgrip.discrete import (
 )
 
 try:  # the continuous reference, when present
-    from simgrip import elastica as _elastica
+    from simgrip.reference import elastica as _elastica
 except ImportError:  # pragma: no cover - depends on the tree
     _elastica = None
 
@@ -130,7 +130,7 @@ def test_grip_names_are_normalised_and_results_typed():
 
 
 def test_newton_failure_raises(monkeypatch):
-    import simgrip.discrete as d
+    import simgrip.reference.discrete as d
 
     def never(prob, x0, **kw):
         return d._Result(np.asarray(x0, float), 0.0, 1.0, 1, False, "forced failure")
@@ -144,7 +144,7 @@ def test_newton_failure_raises(monkeypatch):
 
 def test_homotopy_fallback_reaches_the_same_state(monkeypatch):
     """If Newton fails from the constrained arc, the arc-to-target homotopy takes over."""
-    import simgrip.discrete as d
+    import simgrip.reference.discrete as d
 
     direct = solve_chain("III", STANDARD, Uniform(-8.0), 32)
     real, calls = d._newton, []
@@ -300,7 +300,7 @@ def test_contact_moment_matches_the_bvp():
     The couple loads link ``m`` as a whole, so it is second order when the contact
     sits at the link's midpoint (the BVP is solved at each level's own gamma)."""
     if _elastica is None:  # pragma: no cover
-        pytest.skip("simgrip.elastica not available")
+        pytest.skip("simgrip.reference.elastica not available")
     prof, mc = Uniform(-6.0), 0.8
     assert abs(reference("III", prof, 0.75, contact_moment=mc).N1 - reference("III", prof, 0.75).N1) > 0.05
     tip_err, n_err = [], []
@@ -426,7 +426,7 @@ def test_paper_branches_are_stable(scheme, grip):
 
 def test_newton_from_a_continuous_solution():
     if _elastica is None:  # pragma: no cover
-        pytest.skip("simgrip.elastica not available")
+        pytest.skip("simgrip.reference.elastica not available")
     cont = _elastica.solve("I", STANDARD, Uniform(-5.0), tol=1e-8)
     warm = discrete_from_continuous(cont, "I", STANDARD, Uniform(-5.0), 64)
     cold = solve_discrete("I", STANDARD, Uniform(-5.0), 64)
@@ -502,7 +502,7 @@ def test_tip_couple_equals_shifted_rest_angles(grip, kappa):
     """A tip couple C on the last link is exactly a shift of every rest angle by C/(D k_j):
     sum_j k_j/2 (q_j - r_j)^2 - C sum_j q_j = sum_j k_j/2 (q_j - r_j - C/k_j)^2 + const."""
     from simgrip.chain import ChainSprings, chain_springs
-    from simgrip.discrete import solve_chain
+    from simgrip.reference.discrete import solve_chain
     from simgrip.params import STANDARD
     from simgrip.profiles import Uniform
 

@@ -1,4 +1,4 @@
-"""Tests of the continuous elastica reference (simgrip.elastica).
+"""Tests of the continuous elastica reference (simgrip.reference.elastica).
 
 Tolerances come from the method: ``solve`` runs ``solve_bvp`` at ``tol = 1e-8``
 (relative collocation residual of a 4th-order method); measured tip errors
@@ -15,7 +15,7 @@ import numpy as np
 import pytest
 
 from simgrip import STANDARD, Concentrated, DimensionlessParams, Uniform
-from simgrip.elastica import (
+from simgrip.reference.elastica import (
     FINE_POINTS,
     ElasticaError,
     ElasticaSolution,
@@ -269,7 +269,7 @@ def test_feasible_windows_at_the_standard_case(grip_sweeps):
     each refined edge one condition is exactly marginal."""
     from scipy.optimize import brentq
 
-    from simgrip.elastica import _margin
+    from simgrip.reference.elastica import _margin
 
     mu = STANDARD.mu_s
     for grip, (ks, sols) in grip_sweeps.items():
@@ -445,8 +445,8 @@ def test_edge_cases_converge_and_balance(grip, D, M, kappa):
 
 
 def test_fallback_false_only_tries_the_warm_start(monkeypatch):
-    from simgrip import elastica
-    from simgrip.elastica import ElasticaError
+    from simgrip.reference import elastica
+    from simgrip.reference.elastica import ElasticaError
 
     near = solve("I", STANDARD, Uniform(-5.0))
     assert solve("I", STANDARD, Uniform(-5.1), guess=near, fallback=False).success

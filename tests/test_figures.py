@@ -149,7 +149,7 @@ def test_fig16_matches_fig07(fig07):
     sel = np.searchsorted(-d["kappa_I"], -d["kappa_load_I"])
     np.testing.assert_array_equal(d["max_load_I"] >= STANDARD.M, fig07["feasible"][sel])
     # and agrees with the elastica's own search
-    from simgrip import elastica
+    from simgrip.reference import elastica
 
     i = int(np.flatnonzero(d["kappa_load_I"] == -5.0)[0])
     ref = elastica.max_load("I", STANDARD, Uniform(-5.0), tol=1e-6)

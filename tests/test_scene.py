@@ -12,7 +12,7 @@ from simgrip import STANDARD, Uniform
 from simgrip.chain import chain_springs
 from simgrip.models import available, model_path
 from simgrip.params import DimensionlessParams
-from simgrip.scene import Scene, build_scene, finger_state, set_curvature, set_joint_angles
+from simgrip.sim.scene import Scene, build_scene, finger_state, set_curvature, set_joint_angles
 
 KAPPA = {"free": -4.0, "I": -6.0, "II": 5.0, "III": -6.0}
 N = 12

@@ -18,10 +18,11 @@ import math
 import numpy as np
 import pytest
 
-from simgrip import STANDARD, Uniform, elastica
+from simgrip import STANDARD, Uniform
+from simgrip.reference import elastica
 from simgrip.chain import ChainSprings, chain_springs
-from simgrip.discrete import solve_chain
-from simgrip.scene import build_scene, set_curvature
+from simgrip.reference.discrete import solve_chain
+from simgrip.sim.scene import build_scene, set_curvature
 from simgrip.settle import SettledState, SettleError, naive_settle, settle, settle_sweep
 
 KAPPA = {"I": -6.0, "II": 5.0, "III": -6.0}
@@ -597,7 +598,7 @@ def test_predicted_closing_equals_the_ramped_closing(monkeypatch, grip, kappa, n
 
 def test_predicted_closing_falls_back_to_the_ramp(monkeypatch):
     """An unusable prediction (here: the chain solver fails) leaves the staged ramp in charge."""
-    import simgrip.discrete as D
+    import simgrip.reference.discrete as D
 
     ref = settle(build_scene("I", STANDARD, Uniform(-6.0), 16))
 

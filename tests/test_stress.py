@@ -8,7 +8,7 @@ import math
 import numpy as np
 import pytest
 
-from simgrip.stress import (
+from simgrip.harness.stress import (
     GRIPS,
     make_cases,
     names_an_input,

@@ -9,7 +9,7 @@ with ``quick=True``), four methods side by side:
 
 ``settle``
     :func:`simgrip.settle.settle` on a freshly built scene (the time includes
-    :func:`simgrip.scene.build_scene`; ``build_s`` gives that part alone).
+    :func:`simgrip.sim.scene.build_scene`; ``build_s`` gives that part alone).
 ``naive``
     A plain MuJoCo relaxation of the *same* chain (:func:`naive_relax`):
     physical inertia, light stiffness-proportional damping (ratio
@@ -26,10 +26,10 @@ with ``quick=True``), four methods side by side:
     fitted and the time is **extrapolated** (flagged); when the workpiece slides
     off (MuJoCo's soft friction creeps) there is no static state: ``inf``.
 ``minimiser``
-    :func:`simgrip.discrete.solve_chain`, Newton on the hinge chain's energy:
+    :func:`simgrip.reference.discrete.solve_chain`, Newton on the hinge chain's energy:
     the exact limit of this discretisation.
 ``bvp``
-    :func:`simgrip.elastica.solve` of the same state (same contact couple and,
+    :func:`simgrip.reference.elastica.solve` of the same state (same contact couple and,
     for Grip III, the simulation's own contact arc length), cold start.  Per
     grip it is also timed at the tolerances :data:`BVP_TOLS` (rows with
     ``n = 0``), which gives its own error-vs-time curve.
@@ -423,7 +423,7 @@ def _extrapolate(steps, res, tol) -> float | None:
 
 
 def _reference(grip, params, prof, *, gamma=None, contact_moment=0.0, tol=REF_TOL, guess=None):
-    from simgrip import elastica
+    from simgrip.reference import elastica
 
     kw = {"contact_moment": contact_moment, "tol": tol}
     if grip == "III":
@@ -434,12 +434,12 @@ def _reference(grip, params, prof, *, gamma=None, contact_moment=0.0, tol=REF_TO
 def _chain(grip, params, prof, n, *, gamma=None, contact_moment=0.0, guess=None):
     """The hinge chain's exact equilibrium with the same contact couple as the simulation.
 
-    :func:`simgrip.discrete.solve_chain` takes the couple only for Grip III; for
+    :func:`simgrip.reference.discrete.solve_chain` takes the couple only for Grip III; for
     Grips I/II a tip couple ``C`` adds ``-C phi_last = -C sum q_j`` to the
     energy, which is the same as shifting every rest angle by ``C / (D k_j)``.
     """
     from simgrip.chain import ChainSprings, chain_springs
-    from simgrip.discrete import solve_chain
+    from simgrip.reference.discrete import solve_chain
 
     if grip in ("I", "II") and contact_moment:
         sp = chain_springs(prof, n)
@@ -464,8 +464,8 @@ def _start_state(scene, grip, params, prof, n, C):
     """
     import mujoco
 
-    from simgrip.discrete import solve_chain
-    from simgrip.scene import set_joint_angles
+    from simgrip.reference.discrete import solve_chain
+    from simgrip.sim.scene import set_joint_angles
 
     if grip in ("I", "II"):
         q = _chain(grip, params, prof.scaled(0.8), n, contact_moment=C).joint_angles
@@ -481,8 +481,8 @@ def _start_state(scene, grip, params, prof, n, C):
 
 
 def _bench_task(grip: str, n: int, repeats: int, naive_budget_s: float, params: DimensionlessParams) -> list[dict]:
-    from simgrip.discrete import solve_chain
-    from simgrip.scene import DEFAULT_R_TIP, build_scene
+    from simgrip.reference.discrete import solve_chain
+    from simgrip.sim.scene import DEFAULT_R_TIP, build_scene
     from simgrip.settle import DEFAULT_TOL, SettleError, settle
 
     kappa = STANDARD_CASES[grip]
@@ -594,8 +594,8 @@ def _bench_task(grip: str, n: int, repeats: int, naive_budget_s: float, params: 
 
 def _sweep_task(n: int, kappas: tuple, params: DimensionlessParams) -> dict:
     """Fig. 7 (Grip I) by simulation with warm starts, cold, and by the BVP."""
-    from simgrip import elastica
-    from simgrip.scene import build_scene
+    from simgrip.reference import elastica
+    from simgrip.sim.scene import build_scene
     from simgrip.settle import settle, settle_sweep
 
     profs = [Uniform(k) for k in kappas]
@@ -657,7 +657,7 @@ def _answer(st) -> np.ndarray:
 
 def _skip_task(which: str, n: int, repeats: int, params: DimensionlessParams, naive_budget_s: float) -> dict:
     """One row of the skipping table: time with the skip (simgrip's default) and without it."""
-    from simgrip.scene import build_scene
+    from simgrip.sim.scene import build_scene
 
     k = STANDARD_CASES
     row = {"skip": which, "n": n}
@@ -692,8 +692,8 @@ def _skip_task(which: str, n: int, repeats: int, params: DimensionlessParams, na
         _, b, tb = _timed_settle(lambda: build_scene(g, params, Uniform(k[g]), n, fingers=2), repeats)
         row.update(case=f"{g}, kappa={k[g]:g}", note="without: two fingers, workpiece free in x, z, rotation")
     elif which.startswith("inertia and damping") or which.startswith("all together"):
-        from simgrip.discrete import solve_chain
-        from simgrip.scene import DEFAULT_R_TIP
+        from simgrip.reference.discrete import solve_chain
+        from simgrip.sim.scene import DEFAULT_R_TIP
         from simgrip.settle import settle
 
         allt = which.startswith("all together")
@@ -1092,7 +1092,7 @@ def _summary_md(res: BenchResult) -> str:
                      f"{e['overhead_percent']:.1f} % |")
     L += ["", "## What skipping buys", "", _skips_md(res)]
     L += ["Reproduce: `simgrip bench" + (" --quick" if res.quick else "") + f" --jobs {res.jobs}` "
-          "(or `python -c \"from simgrip.bench import run_bench; run_bench('bench_out')\"`).", ""]
+          "(or `python -c \"from simgrip.harness.bench import run_bench; run_bench('bench_out')\"`).", ""]
     return "\n".join(L)
 
 

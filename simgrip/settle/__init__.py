@@ -157,7 +157,7 @@ import mujoco
 import numpy as np
 
 from simgrip.chain import link_positions
-from simgrip.scene import BOX_HEIGHT, Scene, set_curvature
+from simgrip.sim.scene import BOX_HEIGHT, Scene, set_curvature
 from simgrip.threads import blas_threads
 
 __all__ = [
@@ -1472,7 +1472,7 @@ def _check_tip(scene: Scene, state: SettledState) -> None:
 
 def _check_settle_args(scene, tol, max_steps):
     if not isinstance(scene, Scene):
-        raise ValueError(f"scene must be a simgrip.scene.Scene, got {type(scene).__name__}")
+        raise ValueError(f"scene must be a simgrip.sim.scene.Scene, got {type(scene).__name__}")
     try:
         tol = float(tol)
     except (TypeError, ValueError):
@@ -1679,7 +1679,7 @@ def _release(scene: Scene, run: _Newton, tol: float, max_steps: int) -> tuple[bo
 
 def _place_on_chain(scene: Scene, run: _Newton) -> bool:
     """Fallback start for Grips I/II: the hinge chain's equilibrium, workpiece at the tip."""
-    from simgrip.discrete import DiscreteError, solve_chain
+    from simgrip.reference.discrete import DiscreteError, solve_chain
 
     try:
         # the tip a hair inside the face so that MuJoCo reports the contact
@@ -1796,7 +1796,7 @@ def _close_predicted(scene: Scene, run: _Newton, target, t: float, z0: float, to
     every tip pair carrying a positive normal force; otherwise the scene and the
     Newton state are restored and False returned (the MuJoCo ramp then runs).
     """
-    from simgrip.discrete import DiscreteError, solve_chain
+    from simgrip.reference.discrete import DiscreteError, solve_chain
 
     m, d = scene.model, scene.data
     margin = 0.5 * BOX_HEIGHT - 0.1
@@ -1877,7 +1877,7 @@ def settle_sweep(scene: Scene, profiles, **kw) -> list[SettledState]:
 
     The first profile is settled from the scene's current state (with the
     closing procedure for Grips I/II); the following ones change only
-    ``qpos_spring`` (:func:`simgrip.scene.set_curvature`) and start from the
+    ``qpos_spring`` (:func:`simgrip.sim.scene.set_curvature`) and start from the
     previous equilibrium.  A dropped workpiece stays dropped.
     """
     out = []

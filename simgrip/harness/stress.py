@@ -293,7 +293,7 @@ def _alarm(signum, frame):  # pragma: no cover - only on a hang
 def run_case(case: dict, *, timeout_s: float = CASE_TIMEOUT_S, max_steps: int | None = MAX_STEPS) -> dict:
     """Build and settle one case; return the case with ``outcome``, ``error``, ``steps``, flags..."""
     from simgrip.params import DimensionlessParams
-    from simgrip.scene import build_scene
+    from simgrip.sim.scene import build_scene
     from simgrip.settle import DEFAULT_TOL, SettleError, settle
 
     rec = dict(case)
@@ -357,7 +357,7 @@ def _main_thread() -> bool:
 
 
 def _run_chunk(chunk, timeout_s, max_steps):
-    from simgrip.bench import blas_threads
+    from simgrip.harness.bench import blas_threads
 
     with blas_threads(1):
         return [run_case(c, timeout_s=timeout_s, max_steps=max_steps) for c in chunk]

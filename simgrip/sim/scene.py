@@ -39,7 +39,7 @@ Contact geometry (centreline where the theory puts it):
   ``r_link + r_corner`` from the centreline along the normal, so the
   centreline passes ``X(gamma) = b/2`` for the initial shape (by default the
   hinge chain's equilibrium at ``params.gamma`` from
-  :func:`simgrip.discrete.solve_chain`); a settled state reports its own
+  :func:`simgrip.reference.discrete.solve_chain`); a settled state reports its own
   ``gamma`` and ``X(gamma)``.  The friction force acts ``r_link`` off the
   centreline: couple ``C = r_link f`` at ``gamma``.
 
@@ -482,7 +482,7 @@ def _add_pair(spec, name, g1, g2, mu):
 
 def _cradle_angles(params, profile, n) -> np.ndarray:
     """Default Grip III start: the hinge chain's equilibrium with the contact at ``params.gamma``."""
-    from simgrip.discrete import DiscreteError, solve_chain
+    from simgrip.reference.discrete import DiscreteError, solve_chain
 
     try:
         return solve_chain("III", params, profile, n).joint_angles

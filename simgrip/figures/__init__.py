@@ -215,8 +215,8 @@ def _sweep_arrays(sols, grip: str, params: DimensionlessParams) -> dict:
 
 
 def _solve(grip, params, profile, guess=None, *, gravity=True, tol=_TOL, fallback=True):
-    """:func:`simgrip.elastica.solve` at ``tol``; ``None`` when it fails."""
-    from simgrip import elastica
+    """:func:`simgrip.reference.elastica.solve` at ``tol``; ``None`` when it fails."""
+    from simgrip.reference import elastica
 
     try:
         return elastica.solve(grip, params, profile, gravity=gravity, guess=guess, tol=tol, fallback=fallback)
@@ -351,7 +351,7 @@ def _track_loads(grip, params, profiles, bases):
 def _min_eigenvalues(grip, params, profiles, guesses, K=_K_DISCRETE, gravity=True) -> np.ndarray:
     """Smallest eigenvalue of ``E^T L E`` (paper Section 4) of the discrete problem with
     ``K`` elements, started from the continuous solutions ``guesses`` (NaN where a solve fails)."""
-    from simgrip import discrete
+    from simgrip.reference import discrete
 
     out = np.full(len(profiles), np.nan)
     for i, (prof, g) in enumerate(zip(profiles, guesses)):
@@ -532,7 +532,7 @@ _OVERLAY_FIGURES = ("fig06", "fig07", "fig08", "fig09")
 def _sim_scene(grip, params, kappa, links, gravity):
     import mujoco
 
-    from simgrip.scene import build_scene
+    from simgrip.sim.scene import build_scene
 
     scene = build_scene(grip, params, Uniform(float(kappa)), links)
     if not gravity:
@@ -552,7 +552,7 @@ def _sim_sweep(grip, params, kappas, links, *, gravity=True):
     decided at every point.  Returns ``(states, errors)``: ``states[i]`` is
     ``None`` where even the cold settle failed, ``errors[i]`` the message(s).
     """
-    from simgrip.scene import set_curvature
+    from simgrip.sim.scene import set_curvature
     from simgrip.settle import SettleError, settle
 
     states, errors = [], []

@@ -1,0 +1,1 @@
+"""Benchmarks and stress tests of simgrip (physics modules never import this package)."""
