@@ -1,0 +1,59 @@
+"""One way to turn MuJoCo's warnings and non-finite states into errors.
+
+MuJoCo does not raise when a simulation goes wrong: it counts warnings in
+``data.warning`` (bad accelerations, contact buffer full, NaN in qpos, ...) and
+carries on, often after resetting the state.  Everything in simgrip that steps
+or evaluates a model checks through :func:`check_invalid_state` (modelled on
+dm_control's ``Physics.check_invalid_state``), so a diverged state is never
+reported as a result.
+"""
+
+from __future__ import annotations
+
+import contextlib
+from typing import Iterator
+
+import mujoco
+import numpy as np
+
+__all__ = ["PhysicsError", "active_warnings", "check_invalid_state", "clear_warnings", "invalid_state"]
+
+
+class PhysicsError(RuntimeError):
+    """MuJoCo warned (instability, buffer overflow, NaN) or the state is not finite."""
+
+
+def active_warnings(data: mujoco.MjData) -> list[str]:
+    """Names of the MuJoCo warnings counted in ``data`` (e.g. ``['mjWARN_BADQACC']``)."""
+    return [mujoco.mjtWarning(i).name for i in range(len(data.warning)) if data.warning[i].number > 0]
+
+
+def clear_warnings(data: mujoco.MjData) -> None:
+    """Reset MuJoCo's warning counters of ``data`` (before a new check window)."""
+    for i in range(len(data.warning)):
+        data.warning[i].number = 0
+
+
+def invalid_state(data: mujoco.MjData) -> str | None:
+    """Why ``data`` is not a valid state (warnings or non-finite qpos/qvel), or ``None`` when it is."""
+    warn = active_warnings(data)
+    if warn:
+        return f"MuJoCo warnings {', '.join(warn)}"
+    if not (np.all(np.isfinite(data.qpos)) and np.all(np.isfinite(data.qvel))):
+        return "non-finite qpos or qvel"
+    return None
+
+
+@contextlib.contextmanager
+def check_invalid_state(data: mujoco.MjData, what: str = "simulation", error: type[Exception] = PhysicsError) -> Iterator[None]:
+    """Raise ``error`` if MuJoCo warns or the state turns non-finite inside the block.
+
+    The warning counters are cleared on entry, so only what happens inside the
+    block counts.  ``what`` names the operation in the message
+    (``"settle diverged (MuJoCo warnings mjWARN_BADQACC)"``).
+    """
+    clear_warnings(data)
+    yield
+    why = invalid_state(data)
+    if why is not None:
+        raise error(f"{what} diverged ({why})")
