@@ -4,6 +4,12 @@ Every file simgrip writes (JSON, CSV, PNG, GIF) goes through :func:`atomic_write
 the content is written to a temporary file in the destination folder and moved
 into place with :func:`os.replace`, so an interrupted run never leaves a
 half-written result behind.
+
+Commands that write results check their destination *before* any work with
+:func:`check_output_dir` (a folder, e.g. ``--out``) or :func:`check_output_file`
+(a file, e.g. ``--png``): a path that is an existing file, cannot be created or
+is not writable raises ``ValueError`` naming the option, so a bad path costs
+nothing instead of a traceback after minutes of computing.
 """
 
 from __future__ import annotations
@@ -18,7 +24,7 @@ from typing import Iterator
 
 import numpy as np
 
-__all__ = ["atomic_write", "write_json", "to_jsonable"]
+__all__ = ["atomic_write", "check_output_dir", "write_json", "to_jsonable"]
 
 
 @contextlib.contextmanager
@@ -47,6 +53,26 @@ def atomic_write(path: str | os.PathLike, mode: str = "w") -> Iterator:
         raise
 
 
+def check_output_dir(path: str | os.PathLike, option: str = "--out") -> Path:
+    """Make sure ``path`` is a folder results can be written to, before any work is done.
+
+    Creates the folder (and its parents) when missing and writes and deletes a
+    probe file in it.  Raises ``ValueError`` naming ``option`` (the command-line
+    option or parameter that gave the path) when ``path`` is an existing file,
+    sits below a file, or cannot be written.  Returns ``path`` as a ``Path``.
+    """
+    target = Path(path)
+    if target.exists() and not target.is_dir():
+        raise ValueError(f"{option}: {str(target)!r} is an existing file, not a folder")
+    try:
+        target.mkdir(parents=True, exist_ok=True)
+        with tempfile.TemporaryFile(prefix=".simgrip-probe.", dir=target):
+            pass
+    except OSError as exc:
+        raise ValueError(f"{option}: cannot write results to {str(target)!r} ({exc.strerror or exc})") from None
+    return target
+
+
 def to_jsonable(obj):
     """Convert NumPy scalars/arrays (recursively) to plain Python; non-finite floats become ``None``."""
     if isinstance(obj, dict):
@@ -70,3 +96,44 @@ def write_json(path: str | os.PathLike, data, indent: int = 2) -> None:
     text = json.dumps(to_jsonable(data), indent=indent, allow_nan=False)
     with atomic_write(path) as fh:
         fh.write(text + "\n")
+
+
+def check_output_dir(path: str | os.PathLike, option: str = "--out") -> Path:
+    """Create the output folder ``path`` if needed and check that files can be written in it.
+
+    Returns the folder as a :class:`~pathlib.Path`.  Raises ``ValueError`` naming
+    ``option`` when ``path`` is empty, is an existing file (or has a file among
+    its parents), cannot be created, or is not writable.  Call it before any
+    computing, so that a bad destination is refused at once.
+    """
+    if path is None or str(path).strip() == "":
+        raise ValueError(f"{option} must name a folder, got {path!r}")
+    folder = Path(path)
+    if folder.exists() and not folder.is_dir():
+        raise ValueError(f"{option} {str(folder)!r} is an existing file, not a folder")
+    try:
+        folder.mkdir(parents=True, exist_ok=True)
+    except OSError as exc:
+        raise ValueError(f"{option} {str(folder)!r}: cannot create the folder ({exc.strerror or exc})") from None
+    try:  # os.access is wrong for root and some file systems: really create a file
+        fd, probe = tempfile.mkstemp(prefix=".simgrip-write-check.", dir=folder)
+    except OSError as exc:
+        raise ValueError(f"{option} {str(folder)!r} is not writable ({exc.strerror or exc})") from None
+    os.close(fd)
+    os.unlink(probe)
+    return folder
+
+
+def check_output_file(path: str | os.PathLike, option: str) -> Path:
+    """Check that the file ``path`` can be written (its folder is created if needed).
+
+    Raises ``ValueError`` naming ``option`` when ``path`` is empty, is an existing
+    folder, or its folder cannot be created or written (see :func:`check_output_dir`).
+    """
+    if path is None or str(path).strip() == "":
+        raise ValueError(f"{option} must name a file, got {path!r}")
+    target = Path(path)
+    if target.is_dir():
+        raise ValueError(f"{option} {str(target)!r} is an existing folder, not a file")
+    check_output_dir(target.parent if str(target.parent) else ".", option)
+    return target

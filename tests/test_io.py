@@ -38,3 +38,16 @@ def test_results_files_get_ordinary_permissions(tmp_path):
     umask = os.umask(0)
     os.umask(umask)
     assert path.stat().st_mode & 0o777 == 0o666 & ~umask
+
+
+def test_check_output_dir(tmp_path):
+    from simgrip.io import check_output_dir
+
+    assert check_output_dir(tmp_path / "a" / "b") == tmp_path / "a" / "b"
+    assert (tmp_path / "a" / "b").is_dir() and list((tmp_path / "a" / "b").iterdir()) == []
+    (tmp_path / "f").write_text("x")
+    for bad in (tmp_path / "f", tmp_path / "f" / "sub"):
+        with pytest.raises(ValueError, match="--out"):
+            check_output_dir(bad)
+    with pytest.raises(ValueError, match="out_dir"):
+        check_output_dir(tmp_path / "f", option="out_dir")
