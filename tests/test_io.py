@@ -51,3 +51,52 @@ def test_check_output_dir(tmp_path):
             check_output_dir(bad)
     with pytest.raises(ValueError, match="out_dir"):
         check_output_dir(tmp_path / "f", option="out_dir")
+
+
+def test_check_output_dir_accepts_new_and_existing_folders_without_creating(tmp_path):
+    from simgrip.io import check_output_dir
+
+    assert check_output_dir(tmp_path) == tmp_path
+    new = tmp_path / "a" / "b"
+    assert check_output_dir(new, "--out") == new
+    assert not (tmp_path / "a").exists()  # a check creates nothing
+    assert list(tmp_path.iterdir()) == []  # and leaves no probe file
+
+
+@pytest.mark.parametrize("make", ["file", "under_file", "empty"])
+def test_check_output_dir_names_the_option(tmp_path, make):
+    from simgrip.io import check_output_dir
+
+    f = tmp_path / "f"
+    f.write_text("x")
+    path = {"file": f, "under_file": f / "sub", "empty": ""}[make]
+    with pytest.raises(ValueError, match="--where"):
+        check_output_dir(path, "--where")
+
+
+def test_check_output_dir_refuses_a_read_only_folder(tmp_path):
+    import os
+
+    from simgrip.io import check_output_dir
+
+    ro = tmp_path / "ro"
+    ro.mkdir()
+    ro.chmod(0o500)
+    try:
+        if os.access(ro, os.W_OK) and os.geteuid() == 0:
+            pytest.skip("root writes into read-only folders")
+        with pytest.raises(ValueError, match="--out.*not writable"):
+            check_output_dir(ro / "sub")
+    finally:
+        ro.chmod(0o700)
+
+
+def test_check_output_file_names_the_option(tmp_path):
+    from simgrip.io import check_output_file
+
+    assert check_output_file(tmp_path / "x" / "g.png", "--png") == tmp_path / "x" / "g.png"
+    with pytest.raises(ValueError, match="--png.*folder"):
+        check_output_file(tmp_path, "--png")
+    (tmp_path / "f").write_text("x")
+    with pytest.raises(ValueError, match="--gif"):
+        check_output_file(tmp_path / "f" / "p.gif", "--gif")
