@@ -24,7 +24,7 @@ from typing import Iterator
 
 import numpy as np
 
-__all__ = ["atomic_write", "check_output_dir", "write_json", "to_jsonable"]
+__all__ = ["atomic_write", "check_output_dir", "check_output_file", "write_json", "to_jsonable"]
 
 
 @contextlib.contextmanager
@@ -54,43 +54,65 @@ def atomic_write(path: str | os.PathLike, mode: str = "w") -> Iterator:
 
 
 def check_output_dir(path: str | os.PathLike, option: str = "--out") -> Path:
-    """Check, before any work, that result files can be written in the folder ``path``.
+    """Make sure ``path`` is a folder results can be written to, before any work is done.
 
-    Returns ``path`` as a :class:`~pathlib.Path`; nothing is created (the writers
-    create missing folders).  Raises ``ValueError`` naming ``option`` when
-    ``path`` is empty, is an existing file, has a file among its parents, or when
-    its nearest existing folder is not writable (tested by really creating and
-    deleting a file there, which also catches read-only file systems and root).
+    Creates the folder (and its parents) when missing and writes and deletes a
+    probe file in it (which also catches read-only file systems, and works for
+    root, unlike :func:`os.access`).  Raises ``ValueError`` naming ``option``
+    (the command-line option or parameter that gave the path) when ``path`` is
+    empty, an existing file, sits below a file, or cannot be written.  Returns
+    ``path`` as a ``Path``.
     """
     if path is None or str(path).strip() == "":
         raise ValueError(f"{option} must name a folder, got {path!r}")
-    folder = Path(path)
-    if folder.exists() and not folder.is_dir():
-        raise ValueError(f"{option} {str(folder)!r} is an existing file, not a folder")
-    existing = folder.absolute()
-    while not existing.exists():
-        existing = existing.parent
-    if not existing.is_dir():
-        raise ValueError(f"{option} {str(folder)!r} cannot be created: {str(existing)!r} is a file")
+    target = Path(path)
+    if target.exists() and not target.is_dir():
+        raise ValueError(f"{option}: {str(target)!r} is an existing file, not a folder")
     try:
-        fd, probe = tempfile.mkstemp(prefix=".simgrip-write-check.", dir=existing)
+        target.mkdir(parents=True, exist_ok=True)
+        with tempfile.TemporaryFile(prefix=".simgrip-probe.", dir=target):
+            pass
     except OSError as exc:
-        raise ValueError(f"{option} {str(folder)!r} is not writable ({exc.strerror or exc})") from None
-    os.close(fd)
-    os.unlink(probe)
-    return folder
+        raise ValueError(f"{option}: cannot write results to {str(target)!r} ({exc.strerror or exc})") from None
+    return target
 
 
 def check_output_file(path: str | os.PathLike, option: str) -> Path:
-    """Check that the file ``path`` can be written (its folder is created if needed).
+    """Check that the file ``path`` can be written, before any work is done.
 
-    Raises ``ValueError`` naming ``option`` when ``path`` is empty, is an existing
-    folder, or its folder cannot be created or written (see :func:`check_output_dir`).
+    Its folder is checked (and created) by :func:`check_output_dir`.  Raises
+    ``ValueError`` naming ``option`` when ``path`` is empty, an existing folder,
+    or its folder cannot be written.  Returns ``path`` as a ``Path``.
     """
     if path is None or str(path).strip() == "":
         raise ValueError(f"{option} must name a file, got {path!r}")
     target = Path(path)
     if target.is_dir():
-        raise ValueError(f"{option} {str(target)!r} is an existing folder, not a file")
+        raise ValueError(f"{option}: {str(target)!r} is an existing folder, not a file")
     check_output_dir(target.parent, option)
     return target
+
+
+def to_jsonable(obj):
+    """Convert NumPy scalars/arrays (recursively) to plain Python; non-finite floats become ``None``."""
+    if isinstance(obj, dict):
+        return {str(k): to_jsonable(v) for k, v in obj.items()}
+    if isinstance(obj, (list, tuple)):
+        return [to_jsonable(v) for v in obj]
+    if isinstance(obj, np.ndarray):
+        return to_jsonable(obj.tolist())
+    if isinstance(obj, (np.bool_, bool)):
+        return bool(obj)
+    if isinstance(obj, (np.integer,)):
+        return int(obj)
+    if isinstance(obj, (float, np.floating)):
+        f = float(obj)
+        return f if math.isfinite(f) else None
+    return obj
+
+
+def write_json(path: str | os.PathLike, data, indent: int = 2) -> None:
+    """Write ``data`` as JSON atomically (see :func:`atomic_write`)."""
+    text = json.dumps(to_jsonable(data), indent=indent, allow_nan=False)
+    with atomic_write(path) as fh:
+        fh.write(text + "\n")

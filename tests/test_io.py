@@ -53,14 +53,11 @@ def test_check_output_dir(tmp_path):
         check_output_dir(tmp_path / "f", option="out_dir")
 
 
-def test_check_output_dir_accepts_new_and_existing_folders_without_creating(tmp_path):
+def test_check_output_dir_leaves_no_probe_file(tmp_path):
     from simgrip.io import check_output_dir
 
     assert check_output_dir(tmp_path) == tmp_path
-    new = tmp_path / "a" / "b"
-    assert check_output_dir(new, "--out") == new
-    assert not (tmp_path / "a").exists()  # a check creates nothing
-    assert list(tmp_path.iterdir()) == []  # and leaves no probe file
+    assert list(tmp_path.iterdir()) == []
 
 
 @pytest.mark.parametrize("make", ["file", "under_file", "empty"])
