@@ -1,0 +1,419 @@
+"""The one parallel runner: apply a function to many items, in-process or on a Dask cluster.
+
+:func:`run_tasks` is what ``bench``, ``stress``, ``figures`` and ``sweep`` use
+to spread independent work (settles, solves, figures) over processes:
+
+* ``jobs=1`` (and no scheduler): a plain in-process loop; Dask is not imported.
+* otherwise a :mod:`dask.distributed` cluster: by default a ``LocalCluster`` of
+  ``jobs`` worker processes (one thread each) on 127.0.0.1 with no dashboard,
+  started for the call and closed after it; or an existing cluster reached by
+  ``scheduler`` (address, e.g. ``tcp://127.0.0.1:8786``) or ``scheduler_file``
+  (``dask scheduler --scheduler-file``), which is left running.
+
+Items are grouped into contiguous batches, one Dask task per batch, so that the
+scheduler's per-task overhead (~ms) stays small against the work; results come
+back in item order whatever the batch size.  Workers compute with one BLAS
+thread (:class:`simgrip.threads.blas_threads`).  A worker process that dies is
+replaced and its batch recomputed by the scheduler (Dask's own retry of lost
+tasks); an exception raised by ``fn`` propagates unchanged (callers that must
+not stop catch inside ``fn`` and return an error record).  A cluster that goes
+away (scheduler gone, a batch killing its workers again and again) raises
+:class:`RunnerError`.
+
+Interrupts: Ctrl-C (SIGINT) or SIGTERM during :func:`run_tasks` cancels what is
+pending, kills the local cluster's worker processes, closes the cluster and
+re-raises :class:`KeyboardInterrupt` (within ~2 s).  Worker processes of the
+local cluster ignore SIGINT themselves, so a Ctrl-C at a terminal (sent to the
+whole process group) is handled once, by this process.  The runner writes no
+files.
+"""
+
+from __future__ import annotations
+
+import contextlib
+import math
+import os
+import signal
+import threading
+import time
+from dataclasses import dataclass
+from typing import Callable, Iterable
+
+from simgrip.threads import blas_threads
+
+__all__ = [
+    "RunnerOptions",
+    "RunnerError",
+    "add_runner_arguments",
+    "runner_options",
+    "run_tasks",
+    "default_batch_size",
+]
+
+#: Largest default batch: bounds the work lost with a killed worker and keeps the progress bar moving.
+MAX_BATCH = 32
+#: Default batches per worker (load balance: the last batches of a run finish at different times).
+BATCHES_PER_WORKER = 4
+#: Seconds allowed to reach a remote scheduler.
+CONNECT_TIMEOUT_S = 10.0
+#: Seconds allowed to close the local cluster after an interrupt before its processes are killed.
+CLOSE_TIMEOUT_S = 1.0
+
+
+class RunnerError(RuntimeError):
+    """The cluster failed (scheduler unreachable or gone, workers lost repeatedly); ``fn`` did not raise."""
+
+
+@dataclass(frozen=True)
+class RunnerOptions:
+    """How :func:`run_tasks` runs.
+
+    Attributes
+    ----------
+    jobs : int or None
+        Local worker processes (default: all cores available to this process);
+        ``1`` runs a plain in-process loop without Dask.  Unused with a scheduler.
+    scheduler : str or None
+        Address of an existing ``dask.distributed`` scheduler, e.g. ``"tcp://127.0.0.1:8786"``.
+    scheduler_file : str or None
+        Or the scheduler file it wrote (``dask scheduler --scheduler-file FILE``).
+    progress : bool
+        One tqdm progress bar on stderr.
+    """
+
+    jobs: int | None = None
+    scheduler: str | None = None
+    scheduler_file: str | None = None
+    progress: bool = True
+
+    def __post_init__(self):
+        if self.jobs is not None:
+            if isinstance(self.jobs, bool) or not isinstance(self.jobs, int) or self.jobs < 1:
+                raise ValueError(f"jobs must be a positive integer, got {self.jobs!r}")
+        if self.scheduler is not None and self.scheduler_file is not None:
+            raise ValueError("scheduler and scheduler_file are exclusive: give one of --scheduler, --scheduler-file")
+        if self.scheduler is not None and (not isinstance(self.scheduler, str) or not self.scheduler.strip()):
+            raise ValueError(f"scheduler must be an address such as tcp://127.0.0.1:8786, got {self.scheduler!r}")
+        if self.scheduler_file is not None and not os.path.isfile(self.scheduler_file):
+            raise ValueError(f"scheduler-file {self.scheduler_file!r} does not exist (dask scheduler --scheduler-file FILE)")
+
+    @property
+    def remote(self) -> bool:
+        """True when an existing cluster is used."""
+        return self.scheduler is not None or self.scheduler_file is not None
+
+    @property
+    def local_workers(self) -> int:
+        """Worker processes of the local cluster (``jobs`` or all available cores)."""
+        if self.jobs is not None:
+            return self.jobs
+        try:
+            return max(1, len(os.sched_getaffinity(0)))
+        except AttributeError:  # pragma: no cover - not Linux
+            return max(1, os.cpu_count() or 1)
+
+    @property
+    def in_process(self) -> bool:
+        """True for the plain loop (``jobs=1`` and no scheduler)."""
+        return not self.remote and self.local_workers == 1
+
+
+def add_runner_arguments(parser) -> None:
+    """Add ``--jobs N``, ``--scheduler ADDRESS``, ``--scheduler-file FILE`` and ``--no-progress`` to ``parser``."""
+    g = parser.add_argument_group("parallel runner (Dask)")
+    g.add_argument("--jobs", type=int, default=None,
+                   help="local worker processes [default: all cores]; 1 = in-process, no Dask")
+    g.add_argument("--scheduler", default=None, metavar="ADDRESS",
+                   help="run on an existing dask.distributed cluster, e.g. tcp://127.0.0.1:8786")
+    g.add_argument("--scheduler-file", default=None, metavar="FILE",
+                   help="or reach it through its scheduler file (dask scheduler --scheduler-file FILE)")
+    g.add_argument("--no-progress", action="store_true", help="no progress bar")
+
+
+def runner_options(args) -> RunnerOptions:
+    """:class:`RunnerOptions` from arguments parsed with :func:`add_runner_arguments`.
+
+    Raises ``ValueError`` naming the option (``jobs``, ``scheduler``, ``scheduler-file``).
+    """
+    jobs = getattr(args, "jobs", None)
+    scheduler = getattr(args, "scheduler", None)
+    scheduler_file = getattr(args, "scheduler_file", None)
+    if jobs is not None and (scheduler is not None or scheduler_file is not None):
+        raise ValueError("jobs is not used with --scheduler/--scheduler-file (the cluster's workers run the tasks)")
+    return RunnerOptions(jobs=jobs, scheduler=scheduler, scheduler_file=scheduler_file,
+                         progress=not getattr(args, "no_progress", False))
+
+
+def default_batch_size(n_items: int, workers: int) -> int:
+    """Items per task: about :data:`BATCHES_PER_WORKER` batches per worker, at most :data:`MAX_BATCH`."""
+    return max(1, min(MAX_BATCH, math.ceil(n_items / (BATCHES_PER_WORKER * max(1, workers)))))
+
+
+def _run_batch(fn, chunk):
+    """Worker side: ``[fn(x) for x in chunk]`` with one BLAS thread."""
+    with blas_threads(1):
+        return [fn(x) for x in chunk]
+
+
+def _check_batch_size(batch_size):
+    if batch_size is None:
+        return None
+    if isinstance(batch_size, bool) or not isinstance(batch_size, int) or batch_size < 1:
+        raise ValueError(f"batch_size must be a positive integer, got {batch_size!r}")
+    return batch_size
+
+
+def run_tasks(fn: Callable, items: Iterable, *, options: RunnerOptions = RunnerOptions(), desc: str = "",
+              batch_size: int | None = None, on_result: Callable | None = None) -> list:
+    """Apply ``fn`` to every item and return the results in item order.
+
+    Parameters
+    ----------
+    fn : callable
+        A picklable top-level function of one item (Dask pickles it by reference,
+        so a remote worker needs simgrip installed).
+    items : iterable
+        The inputs (materialised into a list).
+    options : RunnerOptions
+        In-process loop, local cluster or existing cluster (see the module docstring).
+    desc : str
+        Label of the progress bar.
+    batch_size : int, optional
+        Items per Dask task (default :func:`default_batch_size`).  Does not change
+        the results.
+    on_result : callable, optional
+        Called in this process as ``on_result(index, result)`` for every item as
+        its batch completes (completion order, not item order): the hook for
+        saving partial results.
+
+    Raises
+    ------
+    Exception
+        Whatever ``fn`` raised, unchanged (the other tasks are cancelled).
+    RunnerError
+        The cluster could not be reached or went away.
+    KeyboardInterrupt
+        On Ctrl-C or SIGTERM, after the pending work is cancelled and the local
+        cluster is closed and its processes killed.
+    """
+    if not isinstance(options, RunnerOptions):
+        raise ValueError(f"options must be a RunnerOptions, got {type(options).__name__}")
+    batch_size = _check_batch_size(batch_size)
+    items = list(items)
+    if not items:
+        return []
+    from tqdm import tqdm
+
+    with _sigterm_as_interrupt(), tqdm(total=len(items), desc=desc or None, unit="task",
+                                       disable=not options.progress) as bar:
+        if options.in_process:
+            out = []
+            with blas_threads(1):
+                for i, item in enumerate(items):
+                    res = fn(item)
+                    out.append(res)
+                    if on_result is not None:
+                        on_result(i, res)
+                    bar.update(1)
+            return out
+        return _run_dask(fn, items, options, batch_size, on_result, bar)
+
+
+@contextlib.contextmanager
+def _sigterm_as_interrupt():
+    """Within the block, SIGTERM raises KeyboardInterrupt (main thread only; elsewhere a no-op)."""
+    if threading.current_thread() is not threading.main_thread():
+        yield
+        return
+
+    def handler(signum, frame):
+        raise KeyboardInterrupt(f"signal {signum}")
+
+    old = signal.signal(signal.SIGTERM, handler)
+    try:
+        yield
+    finally:
+        signal.signal(signal.SIGTERM, old)
+
+
+@contextlib.contextmanager
+def _sigint_ignored():
+    """Ignore SIGINT while worker processes are spawned: they inherit it (across exec) and so
+    leave a terminal's Ctrl-C to this process, which stops them."""
+    if threading.current_thread() is not threading.main_thread():
+        yield
+        return
+    old = signal.signal(signal.SIGINT, signal.SIG_IGN)
+    try:
+        yield
+    finally:
+        signal.signal(signal.SIGINT, old)
+
+
+def _children() -> dict[int, int]:
+    """``{pid: ppid}`` of every process (from /proc; empty where there is none)."""
+    out = {}
+    try:
+        names = os.listdir("/proc")
+    except OSError:  # pragma: no cover - not Linux
+        return out
+    for name in names:
+        if not name.isdigit():
+            continue
+        try:
+            with open(f"/proc/{name}/stat", "rb") as fh:
+                stat = fh.read().decode(errors="replace")
+            out[int(name)] = int(stat.rsplit(")", 1)[1].split()[1])
+        except (OSError, IndexError, ValueError):
+            continue
+    return out
+
+
+def descendants(pid: int | None = None) -> set[int]:
+    """Process ids of every descendant of ``pid`` (default: this process), from /proc."""
+    pid = os.getpid() if pid is None else pid
+    table = _children()
+    kids: dict[int, list[int]] = {}
+    for c, p in table.items():
+        kids.setdefault(p, []).append(c)
+    out, todo = set(), [pid]
+    while todo:
+        for c in kids.get(todo.pop(), ()):
+            if c not in out:
+                out.add(c)
+                todo.append(c)
+    return out
+
+
+def _kill(pids) -> None:
+    for pid in pids:
+        with contextlib.suppress(ProcessLookupError, PermissionError):
+            os.kill(pid, signal.SIGKILL)
+
+
+class _Local:
+    """A LocalCluster + Client for one call; :meth:`stop` closes it, :meth:`kill` kills its processes."""
+
+    def __init__(self, workers: int):
+        from distributed import Client, LocalCluster
+
+        self.before = descendants()
+        with _sigint_ignored():
+            self.cluster = LocalCluster(
+                n_workers=workers, threads_per_worker=1, processes=True, host="127.0.0.1",
+                dashboard_address=None, worker_dashboard_address=None, silence_logs=50,
+            )
+            self.client = Client(self.cluster, set_as_default=False)
+
+    def spawned(self) -> set[int]:
+        """Processes started since the cluster was (its workers), except multiprocessing's resource
+        tracker (shared by the whole process; killing it only makes multiprocessing warn)."""
+        out = set()
+        for pid in descendants() - self.before:
+            try:
+                with open(f"/proc/{pid}/cmdline", "rb") as fh:
+                    if b"resource_tracker" in fh.read():
+                        continue
+            except OSError:
+                continue
+            out.add(pid)
+        return out
+
+    def stop(self, interrupted: bool) -> None:
+        if interrupted:
+            # no restarts: the nannies are told the workers may go away, then the workers are killed
+            for nanny in list(self.cluster.workers.values()):
+                with contextlib.suppress(Exception):
+                    nanny.close_gracefully(reason="simgrip interrupted")
+            _kill(self.spawned())
+        closer = threading.Thread(target=self._close, daemon=True)
+        closer.start()
+        closer.join(CLOSE_TIMEOUT_S if interrupted else 30.0)
+        _kill(self.spawned())  # whatever is still alive (a worker stuck in C code, a restarted one)
+
+    def _close(self) -> None:
+        with contextlib.suppress(Exception):
+            self.client.close(timeout=CLOSE_TIMEOUT_S)
+        with contextlib.suppress(Exception):
+            self.cluster.close(timeout=CLOSE_TIMEOUT_S)
+
+
+class _Remote:
+    """A Client of an existing cluster; :meth:`stop` cancels this call's work and disconnects."""
+
+    def __init__(self, options: RunnerOptions):
+        from distributed import Client
+
+        where = options.scheduler if options.scheduler is not None else f"scheduler file {options.scheduler_file}"
+        try:
+            if options.scheduler is not None:
+                self.client = Client(options.scheduler, timeout=CONNECT_TIMEOUT_S, set_as_default=False)
+            else:
+                self.client = Client(scheduler_file=options.scheduler_file, timeout=CONNECT_TIMEOUT_S,
+                                     set_as_default=False)
+        except (OSError, TimeoutError) as exc:
+            raise RunnerError(f"cannot reach the Dask scheduler at {where}: {exc}") from None
+        self.futures = []
+
+    def stop(self, interrupted: bool) -> None:
+        def close():
+            with contextlib.suppress(Exception):
+                if interrupted and self.futures:
+                    self.client.cancel(self.futures, force=True)
+            with contextlib.suppress(Exception):
+                self.client.close(timeout=CLOSE_TIMEOUT_S)
+
+        closer = threading.Thread(target=close, daemon=True)
+        closer.start()
+        closer.join(2 * CLOSE_TIMEOUT_S)
+
+
+def _run_dask(fn, items, options, batch_size, on_result, bar) -> list:
+    from distributed import KilledWorker, as_completed
+
+    interrupted = False
+    env = _Remote(options) if options.remote else _Local(options.local_workers)
+    try:
+        client = env.client
+        if batch_size is None:
+            workers = options.local_workers if not options.remote else max(1, len(client.scheduler_info()["workers"]))
+            batch_size = default_batch_size(len(items), workers)
+        starts = list(range(0, len(items), batch_size))
+        futures = [client.submit(_run_batch, fn, items[s:s + batch_size], pure=False, key=f"simgrip-batch-{s}-{_token()}")
+                   for s in starts]
+        if isinstance(env, _Remote):
+            env.futures = futures
+        start_of = {f.key: s for f, s in zip(futures, starts)}
+        out = [None] * len(items)
+        for fut in as_completed(futures, loop=client.loop):
+            if fut.status == "error":
+                exc = fut.exception()
+                if isinstance(exc, KilledWorker):
+                    raise RunnerError(f"a batch killed {type(exc).__name__}: {exc}") from None
+                raise exc.with_traceback(fut.traceback())
+            if fut.status != "finished":
+                raise RunnerError(f"the Dask cluster lost a batch ({fut.status}); scheduler gone or workers failing")
+            try:
+                chunk = fut.result()
+            except Exception as exc:  # cancelled/lost: the cluster's failure, not fn's
+                raise RunnerError(f"the Dask cluster failed: {type(exc).__name__}: {exc}") from None
+            s = start_of[fut.key]
+            for j, res in enumerate(chunk):
+                out[s + j] = res
+                if on_result is not None:
+                    on_result(s + j, res)
+            bar.update(len(chunk))
+            fut.release()
+        return out
+    except KeyboardInterrupt:
+        interrupted = True
+        raise
+    except BaseException:
+        interrupted = True  # fn failed or the cluster did: stop the rest now
+        raise
+    finally:
+        env.stop(interrupted)
+
+
+def _token() -> str:
+    return f"{os.getpid()}-{time.monotonic_ns()}"
