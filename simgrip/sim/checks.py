@@ -11,6 +11,7 @@ reported as a result.
 from __future__ import annotations
 
 import contextlib
+import math
 from typing import Iterator
 
 import mujoco
@@ -25,21 +26,20 @@ class PhysicsError(RuntimeError):
 
 def active_warnings(data: mujoco.MjData) -> list[str]:
     """Names of the MuJoCo warnings counted in ``data`` (e.g. ``['mjWARN_BADQACC']``)."""
-    return [mujoco.mjtWarning(i).name for i in range(len(data.warning)) if data.warning[i].number > 0]
+    return [mujoco.mjtWarning(int(i)).name for i in np.flatnonzero(data.warning.number)]
 
 
 def clear_warnings(data: mujoco.MjData) -> None:
     """Reset MuJoCo's warning counters of ``data`` (before a new check window)."""
-    for i in range(len(data.warning)):
-        data.warning[i].number = 0
+    data.warning.number[:] = 0  # a view of the counters (one call: cheap enough for every env step)
 
 
 def invalid_state(data: mujoco.MjData) -> str | None:
     """Why ``data`` is not a valid state (warnings or non-finite qpos/qvel), or ``None`` when it is."""
-    warn = active_warnings(data)
-    if warn:
-        return f"MuJoCo warnings {', '.join(warn)}"
-    if not (np.all(np.isfinite(data.qpos)) and np.all(np.isfinite(data.qvel))):
+    if data.warning.number.any():
+        return f"MuJoCo warnings {', '.join(active_warnings(data))}"
+    # a sum is finite only if every entry is (cheap enough for every env step; an overflow counts too)
+    if not math.isfinite(float(data.qpos.sum()) + float(data.qvel.sum())):
         return "non-finite qpos or qvel"
     return None
 
