@@ -83,12 +83,9 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--gif", default="pick.gif", help="GIF of the scripted pick [default pick.gif]")
 
     p = sub.add_parser("figures", help="write the paper's figures (Figs. 6-16) as PNG files")
-    p.add_argument("--out", default="figures", help="output folder [default ./figures]")
-    p.add_argument("--which", nargs="*", default=None, help="figures to make, e.g. 7 9 16 [default: all]")
-    p.add_argument("--jobs", type=int, default=None, help="worker processes [default: all cores]")
-    p.add_argument("--no-progress", action="store_true", help="no progress bar")
-    p.add_argument("--links", type=int, default=16, help="links per finger of the simulated chain overlaid on Figs. 6-9 [default 16]")
-    p.add_argument("--no-simulate", action="store_true", help="reference curves only: no MuJoCo points on Figs. 6-9")
+    from simgrip import figures as _figures  # light: matplotlib/mujoco are imported inside its functions
+
+    _figures.add_arguments(p)
     return parser
 
 
@@ -170,11 +167,9 @@ def _cmd_stress(args) -> dict:
 
 
 def _cmd_figures(args):
-    from simgrip.figures import make_figures
+    from simgrip.figures import cli_figures
 
-    paths = make_figures(args.out, which=args.which, jobs=args.jobs, progress=not args.no_progress,
-                         simulate=not args.no_simulate, links=args.links)
-    for path in paths:
+    for path in cli_figures(args):
         print(path)
     return None
 

@@ -35,7 +35,7 @@ def test_import_does_not_import_matplotlib():
 
 
 def test_names_are_normalised_and_checked(tmp_path):
-    assert figures._name(7) == figures._name("fig7") == figures._name("FIG07") == "fig07"
+    assert figures.figure_key(7) == figures.figure_key("fig7") == figures.figure_key("FIG07") == "fig07"
     with pytest.raises(ValueError, match="fig10"):
         figures.figure_data("fig10")
     with pytest.raises(ValueError, match="unknown figure"):
@@ -352,3 +352,19 @@ def test_make_figures_simulate_switch_and_cli(tmp_path):
     assert args.links == 8 and args.no_simulate
     args = build_parser().parse_args(["figures"])
     assert args.links == 16 and not args.no_simulate
+
+
+def test_bad_out_is_refused_before_any_work(tmp_path, capsys, monkeypatch):
+    from simgrip.cli import main
+    from simgrip.figures import make
+
+    def never(task):
+        raise AssertionError("a figure was computed before --out was checked")
+
+    monkeypatch.setattr(make, "_render", never)
+    (tmp_path / "file").write_text("x")
+    for out in (tmp_path / "file", tmp_path / "file" / "sub"):
+        assert main(["figures", "--which", "6", "--jobs", "1", "--no-progress", "--out", str(out)]) == 2
+        assert "--out" in capsys.readouterr().err
+    with pytest.raises(ValueError, match="out_dir"):
+        figures.make_figures(tmp_path / "file", which=[6], jobs=1, progress=False)

@@ -1,0 +1,395 @@
+"""The numbers behind the paper's figures 6-9 and 11-16, computed from the elastica reference.
+
+:func:`figure_data` returns a ``dict`` of NumPy arrays and floats per figure
+(no matplotlib here), so that tests and other tools check what a figure shows
+without rendering it.  Sweeps are continuations (each solve warm-started from
+the last success; a failed point becomes NaN instead of aborting the sweep);
+load capacities come from :mod:`simgrip.reference.capacity`; stability from the
+discrete problem's projected Hessian (:mod:`simgrip.reference.discrete`).
+
+Conventions: dimensionless units (lengths over ``l``, forces on the rod over
+``rho g l``), the finger's base at the origin, ``x`` along ``E1``, ``z`` up.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+from simgrip.figures.catalog import GRIP_SIGN, figure_key
+from simgrip.params import STANDARD, DimensionlessParams
+from simgrip.profiles import Concentrated, Uniform
+
+__all__ = ["figure_data"]
+
+# Resolution of the sweeps (points per curve).
+_N_KAPPA = {"I": 49, "II": 49, "III": 41}  # Figs. 7-9, 16 (steps of 1/8 and 1/4)
+_N_KAPPA_STAB = 25     # Fig. 11 (each point also solves the discrete problem)
+_LOAD_EVERY = 2        # Fig. 16 (b): every 2nd point of the sweep (each is a continuation in M)
+_N_ALPHA = 21          # Figs. 13-15 capacity curves
+_N_ALPHA_STAB = 11     # Figs. 13-15 eigenvalue curves
+_N_RAMP = 13           # continuation steps in kappa_max before an alpha sweep
+_K_DISCRETE = 60       # elements of the discrete stability problem (gamma K integer for gamma = 0.8)
+_N_SHAPE = 101         # points per stored centreline
+_TOL = 1e-8            # solve_bvp tolerance (8 digits: far below what a plot resolves)
+_TOL_LOAD = 1e-6       # tolerance of the load search's many probe solves (plot accuracy)
+_M_MAX = 200.0         # largest load tried by the load-capacity search
+_JUMP = 0.2            # tip displacement between continuation steps taken as a branch jump
+_KAPPA_RANGE = {"I": (0.0, -6.0), "II": (0.0, 6.0), "III": (0.0, -10.0)}
+_ALPHAS_SHAPES = (1.0, 1.5, 2.0, 2.5, 3.0)
+
+
+def _field(sol, name, default=np.nan) -> float:
+    v = getattr(sol, name, default)
+    try:
+        return float(v)
+    except (TypeError, ValueError):
+        return default
+
+
+def _ok(sol) -> bool:
+    return sol is not None and bool(getattr(sol, "success", True))
+
+
+def _resample(sol, n=_N_SHAPE):
+    """Centreline ``(x, z)`` of a solution on ``n`` equally spaced arc lengths."""
+    if not _ok(sol):
+        return np.full(n, np.nan), np.full(n, np.nan)
+    s = np.asarray(sol.s, dtype=float)
+    x = np.asarray(sol.x, dtype=float)
+    z = np.asarray(sol.y, dtype=float)
+    # drop repeated nodes (a two-segment solution may repeat s = gamma)
+    keep = np.concatenate([[True], np.diff(s) > 0])
+    sg = np.linspace(s[0], s[-1], n)
+    return np.interp(sg, s[keep], x[keep]), np.interp(sg, s[keep], z[keep])
+
+
+def _sweep_arrays(sols, grip: str, params: DimensionlessParams) -> dict:
+    """Forces, heights, feasibility and shapes of a list of solutions (failed ones become NaN)."""
+    n = len(sols)
+    ok = np.array([_ok(s) for s in sols], dtype=bool)
+    get = lambda f: np.array([_field(s, f) if o else np.nan for s, o in zip(sols, ok)])  # noqa: E731
+    out = {"success": ok, "N1": get("N1"), "N2": get("N2"), "n": get("n"), "f": get("f")}
+    out["h"] = np.array([float(np.asarray(s.tip)[1]) if o else np.nan for s, o in zip(sols, ok)])
+    if grip == "III":
+        out["h_gamma"] = np.array([float(np.asarray(s.contact)[1]) if o else np.nan for s, o in zip(sols, ok)])
+        out["x_gamma"] = np.array([float(np.asarray(s.contact)[0]) if o else np.nan for s, o in zip(sols, ok)])
+    shapes = [_resample(s) for s in sols]
+    out["shape_x"] = np.array([p[0] for p in shapes]).reshape(n, _N_SHAPE)
+    out["shape_z"] = np.array([p[1] for p in shapes]).reshape(n, _N_SHAPE)
+    out["solver_feasible"] = np.array([bool(getattr(s, "feasible", False)) and o for s, o in zip(sols, ok)])
+    mu = params.mu_s
+    with np.errstate(invalid="ignore"):
+        if grip in ("I", "II"):
+            out["N"] = out["N1"]
+            out["required"] = np.abs(out["N2"])          # |F_f| = M
+            out["available"] = mu * out["N1"]            # mu_s N
+            out["feasible"] = ok & (out["N1"] > 0) & (out["required"] <= out["available"])
+            out["least_mu"] = np.where(out["N1"] > 0, out["required"] / out["N1"], np.nan)
+        elif grip == "III":
+            out["required"] = np.abs(out["f"])           # |f|
+            out["available"] = mu * out["n"]             # mu_s n
+            out["tip_below_contact"] = ok & (out["h"] < out["h_gamma"])
+            out["friction_ok"] = ok & (out["n"] > 0) & (out["required"] <= out["available"])
+            out["feasible"] = out["friction_ok"] & out["tip_below_contact"]
+            out["least_mu"] = np.where(out["n"] > 0, out["required"] / out["n"], np.nan)
+    return out
+
+
+def _solve(grip, params, profile, guess=None, *, gravity=True, tol=_TOL, fallback=True):
+    """:func:`simgrip.reference.elastica.solve` at ``tol``; ``None`` when it fails."""
+    from simgrip.reference import elastica
+
+    try:
+        return elastica.solve(grip, params, profile, gravity=gravity, guess=guess, tol=tol, fallback=fallback)
+    except (elastica.ElasticaError, ArithmeticError, np.linalg.LinAlgError):
+        return None
+
+
+def _warm_solve(grip, params, profile, guess):
+    """One Newton run of ``solve_bvp`` from ``guess``, without the solver's fallback strategies.
+
+    Deterministic and fast; ``None`` when it does not converge (e.g. past a fold,
+    where a full solve would search for a distant branch).
+    """
+    return _solve(grip, params, profile, guess, tol=_TOL_LOAD, fallback=False)
+
+
+def _sweep(grip, params, profiles, *, gravity=True, start=None):
+    """Continuation along ``profiles`` (each solve warm-started from the last success);
+    failed points are ``None`` instead of aborting the whole sweep."""
+    out, prev = [], start
+    for prof in profiles:
+        sol = _solve(grip, params, prof, prev, gravity=gravity)
+        out.append(sol)
+        if sol is not None:
+            prev = sol
+    return out
+
+
+def _kappa_sweep(grip, params, kappas):
+    return _sweep(grip, params, [Uniform(float(k)) for k in kappas])
+
+
+def _alpha_profiles(grip, alphas, kappa_max=6.0, n_ramp=_N_RAMP):
+    """Continuation path: ramp kappa_max at alpha = alphas[0], then sweep alpha."""
+    p = GRIP_SIGN.get(grip, -1)
+    ramp = [Concentrated(kappa_max * t, float(alphas[0]), p) for t in np.linspace(0.0, 1.0, n_ramp)[:-1]]
+    return ramp, [Concentrated(kappa_max, float(a), p) for a in alphas]
+
+
+def _alpha_sweep(grip, params, alphas, kappa_max=6.0, gravity=True):
+    ramp, profiles = _alpha_profiles(grip, alphas, kappa_max)
+    sols = _sweep(grip, params, ramp + profiles, gravity=gravity)
+    return sols[len(ramp):], profiles
+
+
+def _margin(sol, grip, mu) -> float:
+    """Feasibility margin, >= 0 iff the grip holds (the captions' criteria):
+    ``min(mu_s n - |f|, n)``, and for Grip III also ``h_gamma - h`` (tip below contact)."""
+    terms = [mu * sol.normal_force - abs(sol.friction_force), sol.normal_force]
+    if grip == "III":
+        terms.append(float(sol.contact[1]) - float(sol.tip[1]))
+    return float(min(terms))
+
+
+def _largest_load(grip, params, profile, base, *, start=None, M_max=_M_MAX, iterations=10):
+    """Largest load ``M`` held at ``params.mu_s`` (the contact force depends on ``M``).
+
+    Continuation in ``M`` upwards from 0, starting from ``base`` (a solution of the
+    same grip and profile), until the first feasible -> infeasible transition, the
+    end of the solution branch (a fold: no nearby solution, or a jump of the tip
+    to another branch, i.e. the finger snaps through) or ``M_max``; the transition
+    is then located by bisection.  Returns ``(M, reason)``: ``M`` is 0.0 when no
+    load is held, ``inf`` when ``M_max`` is still held, NaN when even ``M = 0``
+    cannot be solved; ``reason`` is ``"friction"`` (the margin crosses zero),
+    ``"fold"`` (the branch ends: the finger snaps through), ``"limit"`` or ``"none"``.
+
+    ``start = (M, solution)`` (the last feasible point of a neighbouring profile,
+    as returned in the third item) starts the march there instead of at 0 when
+    that load is still held: one search per point of a sweep then takes a few
+    probes instead of a march from 0.  Returns ``(M, reason, (M_ok, sol_ok))``.
+    """
+    mu = params.mu_s
+
+    def probe(M, guess):
+        s = _warm_solve(grip, params.replace(M=M), profile, guess)
+        if s is not None and np.hypot(*(np.asarray(s.tip) - np.asarray(guess.tip))) > _JUMP:
+            return None
+        return s
+
+    s0 = None
+    if start is not None and start[1] is not None and start[0] > 0:
+        s0 = _warm_solve(grip, params.replace(M=start[0]), profile, start[1])
+        if s0 is not None and _margin(s0, grip, mu) >= 0:
+            M, sol = float(start[0]), s0
+        else:
+            s0 = None
+    if s0 is None:
+        s0 = _solve(grip, params.replace(M=0.0), profile, base, tol=_TOL_LOAD)
+        if s0 is None:
+            return math.nan, "none", None
+        M, sol = 0.0, s0
+    ok_M, ok_sol = (M, s0) if _margin(s0, grip, mu) >= 0 else (None, None)
+    bad_M = reason = None
+    while M < M_max:
+        Mn = min(M_max, M + max(0.5, 0.25 * M))
+        sn = probe(Mn, sol)
+        if sn is not None and _margin(sn, grip, mu) >= 0:
+            ok_M, ok_sol = Mn, sn
+        elif ok_M is not None:
+            bad_M, reason = Mn, "fold" if sn is None else "friction"
+            break
+        if sn is None:  # branch ends before any feasible load
+            return 0.0, "none", None
+        M, sol = Mn, sn
+    if ok_M is None:
+        return 0.0, "none", None
+    if bad_M is None:
+        return math.inf, "limit", (ok_M, ok_sol)
+    lo, hi, g = ok_M, bad_M, ok_sol
+    for _ in range(iterations):
+        mid = 0.5 * (lo + hi)
+        sm = probe(mid, g)
+        if sm is not None and _margin(sm, grip, mu) >= 0:
+            lo, g = mid, sm
+        else:
+            hi, reason = mid, "fold" if sm is None else "friction"
+    return lo, reason, (lo, g)
+
+
+def _track_loads(grip, params, profiles, bases):
+    """:func:`_largest_load` along a sweep, each search started from the previous one's result."""
+    out, start = [], None
+    for prof, base in zip(profiles, bases):
+        if base is None:
+            out.append((math.nan, "none"))
+            continue
+        M, reason, start = _largest_load(grip, params, prof, base, start=start)
+        out.append((M, reason))
+    return out
+
+
+def _min_eigenvalues(grip, params, profiles, guesses, K=_K_DISCRETE, gravity=True) -> np.ndarray:
+    """Smallest eigenvalue of ``E^T L E`` (paper Section 4) of the discrete problem with
+    ``K`` elements, started from the continuous solutions ``guesses`` (NaN where a solve fails)."""
+    from simgrip.reference import discrete
+
+    out = np.full(len(profiles), np.nan)
+    for i, (prof, g) in enumerate(zip(profiles, guesses)):
+        if g is None:
+            continue
+        try:
+            d = discrete.discrete_from_continuous(g, grip, params, prof, K)
+        except (discrete.DiscreteError, ArithmeticError, np.linalg.LinAlgError):
+            continue
+        if d.success:
+            out[i] = float(d.min_eigenvalue)
+    return out
+
+
+def _data_fig06(params):
+    kappas = np.array([-6.0, -4.0, -2.0, 0.0, 2.0, 4.0, 6.0])
+    data = {"kappa": kappas, "D": params.D}
+    for panel, gravity in (("a", False), ("b", True)):
+        # continue outwards from the straight rod in both directions
+        sols = {}
+        for end in (kappas[0], kappas[-1]):
+            ks = np.linspace(0.0, end, 13)
+            for k, s in zip(ks, _sweep("free", params, [Uniform(float(k)) for k in ks], gravity=gravity)):
+                sols[round(float(k), 9)] = s
+        xs, zs = zip(*(_resample(sols[round(float(k), 9)]) for k in kappas))
+        data[f"x_{panel}"] = np.array(xs)
+        data[f"z_{panel}"] = np.array(zs)
+    return data
+
+
+def _data_grip_sweep(grip, params):
+    lo, hi = _KAPPA_RANGE[grip]
+    kappas = np.linspace(lo, hi, _N_KAPPA[grip])
+    data = {"grip": grip, "kappa": kappas, "M": params.M, "mu_s": params.mu_s, "b": params.b,
+            "D": params.D, "gamma": params.gamma}
+    data.update(_sweep_arrays(_kappa_sweep(grip, params, kappas), grip, params))
+    return data
+
+
+def _data_fig11(params):
+    data = {"M": params.M, "mu_s": params.mu_s, "b": params.b, "D": params.D, "gamma": params.gamma,
+            "K": _K_DISCRETE}
+    for grip in ("I", "II", "III"):
+        lo, hi = _KAPPA_RANGE[grip]
+        kappas = np.linspace(lo, hi, _N_KAPPA_STAB)
+        sols = _kappa_sweep(grip, params, kappas)
+        arr = _sweep_arrays(sols, grip, params)
+        data[f"kappa_{grip}"] = kappas
+        data[f"lambda_min_{grip}"] = _min_eigenvalues(grip, params, [Uniform(k) for k in kappas], sols)
+        data[f"feasible_{grip}"] = arr["feasible"]
+    return data
+
+
+def _data_fig12(params):
+    alphas = np.array(_ALPHAS_SHAPES)
+    s = np.linspace(0.0, 1.0, _N_SHAPE)
+    sols, profiles = _alpha_sweep("free", params, alphas, gravity=True)
+    xs, zs = zip(*(_resample(sol) for sol in sols))
+    return {"alpha": alphas, "kappa_max": 6.0, "p": -1, "D": params.D, "s": s,
+            "profile": np.array([prof(s) for prof in profiles]), "x": np.array(xs), "z": np.array(zs)}
+
+
+def _data_alpha(grip, params):
+    alphas = np.linspace(1.0, 3.0, _N_ALPHA)
+    sols, profiles = _alpha_sweep(grip, params, alphas)
+    arr = _sweep_arrays(sols, grip, params)
+    data = {"grip": grip, "alpha": alphas, "M": params.M, "mu_s": params.mu_s, "b": params.b,
+            "D": params.D, "gamma": params.gamma, "kappa_max": 6.0, "p": GRIP_SIGN[grip],
+            "K": _K_DISCRETE}
+    data.update(arr)
+    # shapes at a few alphas
+    idx = [int(np.argmin(np.abs(alphas - a))) for a in _ALPHAS_SHAPES]
+    data["shape_index"] = np.array(idx)
+    # stability on a coarser set of alphas
+    stab = np.linspace(0, _N_ALPHA - 1, _N_ALPHA_STAB).round().astype(int)
+    data["alpha_stab"] = alphas[stab]
+    data["lambda_min"] = _min_eigenvalues(grip, params, [profiles[i] for i in stab], [sols[i] for i in stab])
+    if grip == "III":
+        # load capacity: the largest |N2| = M the grip holds at mu_s (caption of Fig. 15)
+        data["alpha_capacity"] = alphas
+        res = _track_loads(grip, params, profiles, sols)
+        data["capacity"] = np.array([r[0] for r in res])
+        data["capacity_reason"] = np.array([r[1] for r in res])
+    else:
+        # load capacity: the largest friction force mu_s N at the standard load M
+        data["alpha_capacity"] = alphas
+        data["capacity"] = arr["available"]
+    # reference: the uniform profile with the same peak curvature (alpha = 0)
+    kap = GRIP_SIGN[grip] * data["kappa_max"]
+    uni = _kappa_sweep(grip, params, np.linspace(0.0, kap, 13))[-1]
+    if uni is None:
+        data["uniform_capacity"] = math.nan
+    elif grip == "III":
+        data["uniform_capacity"] = _largest_load(grip, params, Uniform(kap), uni)[0]
+    else:
+        data["uniform_capacity"] = params.mu_s * uni.normal_force
+    return data
+
+
+def _data_fig16(params):
+    data = {"M": params.M, "mu_s": params.mu_s, "b": params.b, "D": params.D, "gamma": params.gamma,
+            "M_max": _M_MAX}
+    p1 = params.replace(mu_s=1.0)
+    for grip in ("I", "II", "III"):
+        lo, hi = _KAPPA_RANGE[grip]
+        kappas = np.linspace(lo, hi, _N_KAPPA[grip])
+        sols = _kappa_sweep(grip, params, kappas)
+        arr = _sweep_arrays(sols, grip, params)
+        lm = arr["least_mu"]
+        if grip == "III":  # the grip only holds where the tip stays below the contact
+            lm = np.where(arr["tip_below_contact"], lm, np.nan)
+        data[f"kappa_{grip}"] = kappas
+        data[f"least_mu_{grip}"] = lm
+        sel = np.arange(0, len(kappas), _LOAD_EVERY)
+        data[f"kappa_load_{grip}"] = kappas[sel]
+        res = _track_loads(grip, p1, [Uniform(float(kappas[i])) for i in sel], [sols[i] for i in sel])
+        data[f"max_load_{grip}"] = np.array([r[0] for r in res])
+        data[f"max_load_reason_{grip}"] = np.array([r[1] for r in res])
+    return data
+
+
+def figure_data(name, *, params: DimensionlessParams | None = None) -> dict:
+    """Compute the numbers shown by figure ``name`` (``"fig06"`` ... ``"fig16"``, or ``6``).
+
+    Parameters
+    ----------
+    name : str or int
+        One of :data:`FIGURES`.
+    params : DimensionlessParams, optional
+        Defaults to the paper's standard case :data:`simgrip.params.STANDARD`
+        (D = 1, M = 5, mu_s = 1, b = 0.6, gamma = 0.8).
+
+    Returns
+    -------
+    dict
+        NumPy arrays and floats; ``"name"`` is the normalised figure name.
+        Sweep figures (7-9) hold ``kappa``, ``N1``, ``N2``, ``n``, ``f``, ``h``
+        (tip height, z up), ``required`` / ``available`` friction,
+        ``feasible`` (the shaded region), ``shape_x``/``shape_z`` (n_kappa x 101)
+        and, for Grip III, ``h_gamma`` and ``tip_below_contact``.
+    """
+    key = figure_key(name)
+    params = STANDARD if params is None else params
+    if key == "fig06":
+        data = _data_fig06(params)
+    elif key in ("fig07", "fig08", "fig09"):
+        data = _data_grip_sweep({"fig07": "I", "fig08": "II", "fig09": "III"}[key], params)
+    elif key == "fig11":
+        data = _data_fig11(params)
+    elif key == "fig12":
+        data = _data_fig12(params)
+    elif key in ("fig13", "fig14", "fig15"):
+        data = _data_alpha({"fig13": "I", "fig14": "II", "fig15": "III"}[key], params)
+    else:
+        data = _data_fig16(params)
+    data["name"] = key
+    return data
+

@@ -1,0 +1,97 @@
+"""Compute, draw and write the figures as PNG files (``simgrip figures``).
+
+Each figure is one task of :func:`simgrip.harness.runner.run_tasks` (the
+slowest first); a figure's numbers do not depend on the others, so the files do
+not depend on ``jobs``.  The output folder is checked before any work.
+"""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+from simgrip.figures.catalog import COST, FIGURES, OVERLAY_FIGURES, figure_key
+
+__all__ = ["make_figures", "add_arguments", "cli_figures"]
+
+
+def _render(task: tuple) -> str:
+    """Compute, plot and write one figure: ``task = (name, out_dir, simulate, links)`` (runs in a worker).
+
+    With ``simulate``, figures 6-9 get :func:`simgrip.figures.simulation_overlay` (``links`` links).
+    """
+    from simgrip.figures.data import figure_data
+    from simgrip.figures.overlay import simulation_overlay
+    from simgrip.figures.plot import plot_figure, save_figure
+
+    name, out_dir, simulate, links = task
+    data = figure_data(name)
+    overlay = simulation_overlay(name, links=links) if simulate and name in OVERLAY_FIGURES else None
+    return str(save_figure(plot_figure(name, data, overlay=overlay), Path(out_dir) / f"{name}.png"))
+
+
+def make_figures(out_dir, *, which=None, jobs: int | None = None, progress: bool = True,
+                 simulate: bool = True, links: int = 16, options=None) -> list[Path]:
+    """Write the paper's figures as PNG files ``out_dir/figNN.png``.
+
+    Parameters
+    ----------
+    out_dir : path
+        Destination folder (created if missing; checked before any work).
+    which : iterable of str or int, optional
+        Figures to make (``"fig07"``, ``7``...); all of :data:`FIGURES` by default.
+    jobs : int, optional
+        Worker processes (default: all cores); ``1`` runs in this process.
+    progress : bool
+        Show a progress bar.
+    simulate : bool
+        Overlay the MuJoCo hinge chain's settled states on figures 6-9
+        (:func:`simgrip.figures.simulation_overlay`, label ``"MuJoCo chain, n = <links>"``).
+    links : int
+        Links per finger of the simulated chain (default 16).
+    options : simgrip.harness.runner.RunnerOptions, optional
+        How to run (e.g. on an existing Dask cluster); replaces ``jobs`` and ``progress``.
+
+    Returns
+    -------
+    list of Path
+        The files written, in the order of ``which``.
+    """
+    from simgrip.chain import check_links
+    from simgrip.harness.runner import RunnerOptions, run_tasks
+    from simgrip.io import check_output_dir
+
+    if which is None:
+        names = list(FIGURES)
+    else:
+        names = [figure_key(w) for w in ([which] if isinstance(which, (str, int)) else which)]
+    names = list(dict.fromkeys(names))
+    options = RunnerOptions(jobs=jobs, progress=progress) if options is None else options
+    links = check_links(links)
+    out = check_output_dir(out_dir, option="out_dir")
+    order = sorted(names, key=lambda k: -COST.get(k, 1))
+    paths = run_tasks(_render, [(k, str(out), bool(simulate), links) for k in order],
+                      options=options, desc="figures", batch_size=1)
+    done = dict(zip(order, paths))
+    return [Path(done[k]) for k in names]
+
+
+def add_arguments(p) -> None:
+    """Add the options of ``simgrip figures`` to an argparse parser."""
+    from simgrip.harness.runner import add_runner_arguments
+
+    p.add_argument("--out", default="figures", help="output folder [default ./figures]")
+    p.add_argument("--which", nargs="+", default=None, help="figures to make, e.g. 7 9 16 [default: all]")
+    p.add_argument("--links", type=int, default=16,
+                   help="links per finger of the simulated chain overlaid on Figs. 6-9 [default 16]")
+    p.add_argument("--no-simulate", action="store_true", help="reference curves only: no MuJoCo points on Figs. 6-9")
+    add_runner_arguments(p)
+
+
+def cli_figures(args) -> list[Path]:
+    """Run ``simgrip figures`` from parsed arguments (output folder checked first); returns the files."""
+    from simgrip.harness.runner import runner_options
+    from simgrip.io import check_output_dir
+
+    check_output_dir(args.out, option="--out")
+    return make_figures(args.out, which=args.which, simulate=not args.no_simulate, links=args.links,
+                        options=runner_options(args))
