@@ -517,8 +517,9 @@ def test_converged_means_residual_within_the_reported_tolerance(grip, kappa, pro
 def test_a_state_above_its_tolerance_is_not_converged(monkeypatch):
     """Newton's own rows met, MuJoCo's residual not: SettleError, or converged=False if asked."""
     import simgrip.settle as S
+    import simgrip.settle.newton as SN
 
-    monkeypatch.setattr(S, "FLOOR_ULPS", 1e9)  # contact rows accepted far too early
+    monkeypatch.setattr(SN, "FLOOR_ULPS", 1e9)  # contact rows accepted far too early
     monkeypatch.setattr(S, "RESIDUAL_FLOOR_MAX", 0.0)  # ... and the tolerance not raised
     sc = build_scene("I", STANDARD, Uniform(-6.0), 8)
     with pytest.raises(SettleError, match="above the tolerance"):
@@ -585,7 +586,7 @@ def test_predicted_closing_equals_the_ramped_closing(monkeypatch, grip, kappa, n
     The settled state -- the workpiece's height on its face included -- and the hold/drop
     decision are those of the staged MuJoCo ramp, in ~half the Newton iterations.
     """
-    import simgrip.settle as S
+    import simgrip.settle.closing as S
 
     fast = settle(build_scene(grip, STANDARD, Uniform(kappa), n))
     monkeypatch.setattr(S, "_close_predicted", lambda *a, **k: False)
@@ -614,7 +615,7 @@ def test_predicted_closing_falls_back_to_the_ramp(monkeypatch):
 def test_predicted_closing_hands_a_folding_path_to_the_ramp(monkeypatch):
     """Stress case whose ramp fails at its last stage (the closing falls back to the chain's grip
     equilibrium): the predictor must not reach the end where the ramp cannot, or the answer changes."""
-    import simgrip.settle as S
+    import simgrip.settle.closing as S
 
     sc = _stress_scene("I", 20.04, -8.05, 18.76, 0.215, 0.688, 7)
     fast = settle(sc)

@@ -1,0 +1,320 @@
+"""``method="dynamics"``: a settle that really simulates, with MuJoCo's own contact and friction.
+
+Everything is chosen from the model:
+
+* **Integrator** ``mjINT_DISCRETE``: the constraint solve and the implicit
+  velocity update share the metric ``M + h D + h^2 K``, so hinge stiffness is
+  implicit and contacts with a time constant far below the step
+  (:data:`DYN_TIMECONST` ``h``, refsafe off) stay stable.
+* **Damping and step**: hinge damping ``D = h K`` (stiffness-proportional: the
+  over-damped flow is preconditioned by the spring matrix, so the number of
+  steps does not grow with ``n``); ``h = 1 / omega_min`` of the hinge chain with
+  its physical inertia.  The workpiece has no stiffness: damping ``3 m / h``
+  (Grip III raises it so a falling workpiece moves at most
+  :data:`DYN_FALL_STEP` contact radii per step).
+* **Contacts**: elliptic cone, ``impratio =`` :data:`DYN_IMPRATIO` (MuJoCo's
+  sticking friction creeps at a speed ~ 1/impratio and leaves ~1e-5 of the
+  weight unbalanced, hence :data:`DYN_TOL`); a state penetrating more than
+  :data:`DYN_PEN_LIMIT` restarts with half the step.
+* **Closing** (I/II): contact on, frictionless, workpiece held, rest angles
+  ramped at <= :data:`DYN_CLOSE_RATE` rad of total rotation per step; the
+  holding force then fades out over :data:`DYN_RELEASE_STEPS` steps.
+* **Stop**: the static residual at rest below ``tol`` and velocities below
+  :data:`DYN_VTOL`.  Drop: the tip slips :data:`DYN_DROP_SLIP` along the face
+  (I/II) or the workpiece falls out of contact; then the finger settles alone.
+"""
+
+from __future__ import annotations
+
+import math
+import time
+
+import mujoco
+import numpy as np
+
+from simgrip.settle.closing import hold_workpiece
+from simgrip.settle.state import SettledState, SettleError, read_state
+from simgrip.settle.statics import CONTACT_IMPEDANCE, RestResidual, check_warnings, dof_scales
+from simgrip.sim.scene import Scene, set_curvature
+
+__all__ = ["DYN_TOL", "Dyn", "settle_dynamics"]
+
+#: Time step over ``1 / omega_min`` (lowest hinge mode with the physical inertia).
+DYN_STEP = 1.0
+#: Hinge damping time over the time step: ``D = DYN_DAMPING h K`` (over-damped, n-independent).
+DYN_DAMPING = 1.0
+#: Workpiece damping: ``D_w = DYN_WORKPIECE_DAMPING m_w / h`` (over-damped, no stiffness to scale by).
+DYN_WORKPIECE_DAMPING = 3.0
+#: Grip III: largest free fall of the workpiece per step, over the contact radii ``r_link + r_corner``.
+DYN_FALL_STEP = 0.3
+#: Contact time constant over the time step (refsafe off: mjINT_DISCRETE solves contacts implicitly).
+DYN_TIMECONST = 1e-2
+#: Friction-to-normal impedance ratio: MuJoCo's sticking friction creeps at a speed ~ 1/impratio.
+DYN_IMPRATIO = 1e4
+#: Default static residual tolerance of the dynamic settle (the creep floor is ~2e-6).
+DYN_TOL = 1e-5
+#: Velocity tolerance (rad or l per sqrt(l/g)).
+DYN_VTOL = 1e-6
+#: Closing ramp: largest change of the total rest rotation per physics step [rad] (one step moves
+#: the finger most of the way to the new equilibrium, and a tip jumping deeper than ~0.05 l
+#: into the face in one step is not pushed back: measured).
+DYN_CLOSE_RATE = 0.05
+#: Penetration (over l) above which the dynamic settle restarts with half the time step.
+DYN_PEN_LIMIT = 1e-4
+#: Physics steps over which the workpiece's holding force fades out at release.
+DYN_RELEASE_STEPS = 20
+#: Tangential slip (over l) of the tip on the workpiece after release that counts as a drop.
+DYN_DROP_SLIP = 0.02
+
+
+class Dyn:
+    """Over-damped MuJoCo dynamics (``mjINT_DISCRETE``) configured from the model's scales."""
+
+    def __init__(self, scene: Scene, step_factor: float = 1.0):
+        self.scene = scene
+        m, d = scene.model, scene.data
+        self.m, self.d = m, d
+        self.fscale, self.lscale = dof_scales(scene)
+        self.vscale = self.lscale / math.sqrt(scene.length / scene.physical.g)
+        self.rest_residual = RestResidual(scene)
+        self.steps = 0
+        self.calls = 0
+        k = m.jnt_stiffness[m.dof_jntid].copy()
+        sprung = np.flatnonzero(k > 0)
+        mujoco.mj_forward(m, d)
+        M = np.zeros((m.nv, m.nv))
+        mujoco.mj_fullM(m, d, M)
+        w2 = np.linalg.eigvals(np.linalg.solve(M[np.ix_(sprung, sprung)], np.diag(k[sprung]))).real
+        self.omega_min = math.sqrt(float(w2[w2 > 0].min()))
+        h = step_factor * DYN_STEP / self.omega_min
+        self.h = h
+        m.opt.integrator = mujoco.mjtIntegrator.mjINT_DISCRETE
+        m.opt.timestep = h
+        m.opt.cone = mujoco.mjtCone.mjCONE_ELLIPTIC
+        m.opt.impratio = DYN_IMPRATIO
+        m.opt.noslip_iterations = 0  # no effect on pair contacts with mjINT_DISCRETE (measured)
+        m.opt.disableflags |= int(mujoco.mjtDisableBit.mjDSBL_REFSAFE)
+        m.dof_damping[:] = DYN_DAMPING * h * k
+        wd = np.asarray(scene.workpiece_dof, dtype=int)
+        if wd.size:
+            dw = DYN_WORKPIECE_DAMPING / h
+            if scene.grip == "III":
+                # the corner meets thin capsules: falling freely, the workpiece may move at most
+                # DYN_FALL_STEP contact radii per step (else it tunnels through the rod)
+                r = (scene.r_link + scene.r_corner) * scene.length
+                slow = max(1.0, scene.physical.g * h / (DYN_FALL_STEP * r) / dw)
+                dw *= slow
+                # the finger slowed alike: a sliding corner must not see the rod spring away
+                m.dof_damping[:] *= slow
+            m.dof_damping[wd] = dw * scene.workpiece_mass
+            for j, name in zip(wd, scene.workpiece_joints):
+                if name == "ry":  # rotation: inertia about y instead of mass
+                    m.dof_damping[j] = DYN_WORKPIECE_DAMPING * float(M[j, j]) / h
+        if m.npair:
+            m.pair_solref[:] = [DYN_TIMECONST * h, 1.0]
+            m.pair_solimp[:, 0] = CONTACT_IMPEDANCE
+            m.pair_solimp[:, 1] = CONTACT_IMPEDANCE
+        self.held_q = None
+
+    def residual(self) -> float:
+        """Static residual at rest: ``qfrc_smooth + qfrc_constraint`` at ``qvel = 0`` (MuJoCo's friction included)."""
+        r = self.rest_residual.vector(self.d.qpos, self.d.qfrc_applied)
+        self.calls += 1
+        if self.held_q is not None:
+            r[np.asarray(self.scene.workpiece_dof, dtype=int)] = 0.0
+        return float(np.max(np.abs(r)))
+
+    def velocity(self) -> float:
+        v = np.array(self.d.qvel) / self.vscale
+        if self.held_q is not None:
+            v[np.asarray(self.scene.workpiece_dof, dtype=int)] = 0.0
+        return float(np.max(np.abs(v))) if v.size else 0.0
+
+    def step(self) -> None:
+        m, d = self.m, self.d
+        mujoco.mj_step(m, d)
+        self.steps += 1
+        self.calls += 1
+        if self.held_q is not None:
+            d.qpos[self.scene.workpiece_qpos] = self.held_q
+            d.qvel[self.scene.workpiece_dof] = 0.0
+        if not np.all(np.isfinite(d.qpos)) or not np.all(np.isfinite(d.qvel)):
+            raise SettleError("dynamic settle diverged (non-finite state)")
+        check_warnings(d)
+
+    def hold(self, on: bool) -> None:
+        hold_workpiece(self.scene, on)
+        self.held_q = np.array(self.d.qpos[self.scene.workpiece_qpos]) if on else None
+
+    def run(self, tol, vtol, budget, watch=None) -> tuple[bool, str]:
+        """Step until residual < tol and velocity < vtol; ``watch()`` returning a reason stops early."""
+        while True:
+            # the residual (one more forward pass) only once at rest: halves the cost of a step
+            if self.velocity() < vtol:
+                r = self.residual()
+                if not math.isfinite(r):
+                    raise SettleError("dynamic settle diverged (non-finite residual)")
+                if r < tol:
+                    return True, "ok"
+            if watch is not None:
+                why = watch()
+                if why:
+                    return False, why
+            if self.steps >= budget:
+                return False, "max_steps"
+            self.step()
+
+
+def _slip_coordinate(scene: Scene) -> float:
+    """Tangential position (over l) of the contact on the workpiece: tip height minus workpiece height."""
+    d = scene.data
+    if scene.grip in ("I", "II"):
+        return float(d.geom_xpos[scene.tip_geom[0]][2] - d.xpos[scene.workpiece_body][2]) / scene.length
+    return 0.0
+
+
+def _lower_onto(scene: Scene) -> None:
+    """Lower a hovering workpiece (placement round-off) until its nearest pair touches (1e-9 l deep)."""
+    m, d = scene.model, scene.data
+    wz = [qa for name, qa in zip(scene.workpiece_joints, scene.workpiece_qpos) if name == "z"]
+    if not wz or m.npair == 0:
+        return
+    L = scene.length
+    for _ in range(3):
+        mujoco.mj_kinematics(m, d)
+        gap = min(mujoco.mj_geomDistance(m, d, int(m.pair_geom1[i]), int(m.pair_geom2[i]), L, None)
+                  for i in range(m.npair))
+        if gap < 0.0:
+            break
+        d.qpos[wz[0]] -= gap + 1e-9 * L
+    mujoco.mj_forward(m, d)
+
+
+def _finger_pairs_touching(scene: Scene) -> bool:
+    d = scene.data
+    mine = set(int(g) for f in range(scene.fingers) for g in scene.contact_geoms[f])
+    wg = set(int(g) for g in scene.workpiece_geoms)
+    return any((int(d.contact.geom1[i]) in mine and int(d.contact.geom2[i]) in wg) for i in range(d.ncon))
+
+
+def settle_dynamics(scene: Scene, tol: float, max_steps: int, warm_start, close: bool,
+                     allow_unconverged: bool, t0: float) -> SettledState:
+    """Over-damped settle; the time step halves (from the start) while penetration >= DYN_PEN_LIMIT."""
+    d = scene.data
+    q0 = d.qpos.copy()
+    steps = calls = 0
+    factor = 1.0
+    for _attempt in range(4):
+        # max_steps is the budget of the whole settle: a restart gets what the earlier attempts left
+        state = _settle_dynamics_once(scene, tol, max_steps - steps, warm_start, close, allow_unconverged, t0, factor)
+        steps += state.steps
+        calls += state.forward_calls
+        if state.penetration < DYN_PEN_LIMIT or _attempt == 3 or steps >= max_steps or not state.converged:
+            break
+        d.qpos[:] = q0
+        d.qvel[:] = 0.0
+        d.qfrc_applied[:] = 0.0
+        mujoco.mj_forward(scene.model, d)
+        factor *= 0.5
+    state.steps, state.forward_calls = steps, calls
+    return state
+
+
+def _settle_dynamics_once(scene: Scene, tol: float, max_steps: int, warm_start, close: bool,
+                          allow_unconverged: bool, t0: float, step_factor: float) -> SettledState:
+    m, d = scene.model, scene.data
+    dyn = Dyn(scene, step_factor)
+    vtol = DYN_VTOL
+    held = scene.has_workpiece
+    converged, why = True, "ok"
+    if warm_start is not None:
+        held = warm_start.held and scene.has_workpiece
+    contact_off = int(mujoco.mjtDisableBit.mjDSBL_CONTACT)
+    flags = int(m.opt.disableflags)
+    dim = m.pair_dim.copy()
+    closed = False
+    if scene.has_workpiece and held:
+        if scene.grip in ("I", "II") and warm_start is None and close:
+            # ramp the curvature with contact on, the workpiece held and frictionless
+            target = scene.profile
+            dyn.hold(True)
+            m.pair_dim[:] = 1
+            try:
+                stages = max(1, math.ceil(float(np.sum(np.abs(scene.springs.rest))) / DYN_CLOSE_RATE))
+                for i in range(1, stages + 1):
+                    if dyn.steps >= max_steps:
+                        break
+                    set_curvature(scene, target.scaled(i / stages))
+                    dyn.step()
+                conv, why = dyn.run(max(tol, 1e-8), vtol, max_steps)
+            finally:
+                set_curvature(scene, target)
+                m.pair_dim[:] = dim
+            if not conv:
+                converged = False
+            held = _finger_pairs_touching(scene)
+            closed = True
+        if held and converged and not scene.free_workpiece:  # fixed workpiece: settle against it
+            dyn.hold(False)
+            converged, why = dyn.run(tol, vtol, max_steps)
+        elif held and converged:
+            s0 = _slip_coordinate(scene)
+            z0 = float(d.xpos[scene.workpiece_body][2])
+            # let go gently: the holding force fades out over DYN_RELEASE_STEPS steps, so the
+            # workpiece never moves more than a contact radius in one step (no tunnelling)
+            # (after closing: the finger carries no load yet).  A loaded start (Grip III,
+            # warm start) is released at once, the workpiece lowered onto the rod first so
+            # that MuJoCo sees the contact in the first step.
+            if closed:
+                dyn.hold(True)
+                dyn.held_q = None
+                wz = [dof for name, dof in zip(scene.workpiece_joints, scene.workpiece_dof) if name == "z"]
+                weight = scene.workpiece_mass * scene.physical.g
+                for i in range(1, DYN_RELEASE_STEPS + 1):
+                    d.qfrc_applied[wz] = weight * (1.0 - i / DYN_RELEASE_STEPS)
+                    dyn.step()  # 20 steps: counted, and run() below stops at the budget
+            else:
+                _lower_onto(scene)
+            dyn.hold(False)
+            if warm_start is not None and warm_start.rest is not None and warm_start.rest.shape == (scene.n,):
+                # warm start: ramp the rest angles from the previous state's (loaded, friction on)
+                target = scene.springs.rest.copy()
+                stages = max(1, math.ceil(float(np.sum(np.abs(target - warm_start.rest))) / DYN_CLOSE_RATE))
+                for i in range(1, stages + 1):
+                    if dyn.steps >= max_steps:
+                        break
+                    m.qpos_spring[scene.joint_qpos] = (warm_start.rest + (target - warm_start.rest) * i / stages)[None, :]
+                    dyn.step()
+                m.qpos_spring[scene.joint_qpos] = target[None, :]
+
+            def watch():
+                fell = (z0 - float(d.xpos[scene.workpiece_body][2])) / scene.length > DYN_DROP_SLIP
+                if fell and not _finger_pairs_touching(scene):
+                    return "lost contact"
+                if scene.grip in ("I", "II") and abs(_slip_coordinate(scene) - s0) > DYN_DROP_SLIP:
+                    return "slipped"
+                return None
+
+            converged, why = dyn.run(tol, vtol, max_steps, watch)
+            if why in ("lost contact", "slipped"):
+                held, converged = False, True
+    if not (scene.has_workpiece and held) and converged:
+        if scene.has_workpiece:  # park the workpiece, settle the finger alone
+            dyn.hold(True)
+            m.opt.disableflags = flags | contact_off
+        converged, why = dyn.run(tol, vtol, max_steps)
+    if not converged and not allow_unconverged:
+        raise SettleError(f"dynamic settle did not converge ({why} after {dyn.steps} steps)")
+    return read_dynamics(scene, dyn, t0, held, converged)
+
+
+def read_dynamics(scene: Scene, dyn: Dyn, t0: float, held: bool, converged: bool) -> SettledState:
+    """The settled state from MuJoCo's own contact forces (friction included), at rest."""
+    m, d = scene.model, scene.data
+    residual = dyn.residual()
+    vmax = dyn.velocity()
+    d.qvel[:] = 0.0
+    mujoco.mj_forward(m, d)
+    return read_state(scene, d, held=held, method="dynamics", residual=residual, converged=converged,
+                      steps=dyn.steps, newton_iterations=0, forward_calls=dyn.calls,
+                      wall_time_s=time.perf_counter() - t0, velocity=vmax, timestep=dyn.h)

@@ -1,0 +1,255 @@
+"""MuJoCo's static force balance of a scene, the sticking constraints, the solve's contact settings.
+
+At rest (``qvel = qacc = 0``) ``mj_inverse`` gives the generalised force that
+holds a configuration, ``qfrc_inverse = qfrc_bias - qfrc_passive -
+qfrc_constraint``; the imbalance ``r(q) = qfrc_applied - qfrc_inverse`` holds the
+springs (``qpos_spring``), gravity and MuJoCo's contact forces.  It is scaled per
+dof by :func:`dof_scales` (``rho g l^2`` for hinges, ``rho g l`` for slides): that
+is the residual every settle reports.  :class:`RestResidual` is the same
+balance from ``mj_forward`` (``qfrc_smooth + qfrc_constraint`` at ``qvel = 0``),
+used by the dynamic settles.
+
+MuJoCo's soft contact is invertible at rest: a contact with penetration ``p``
+pushes with ``K_c p``; :func:`configure_statics` picks ``solref`` so that
+``K_c ~`` :data:`CONTACT_STIFFNESS` ``rho g`` (``p ~ 1e-6 l``).
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import mujoco
+import numpy as np
+
+from simgrip.sim.checks import active_warnings
+from simgrip.sim.scene import Scene
+from simgrip.settle.state import SettleError
+
+__all__ = ["CONTACT_IMPEDANCE", "CONTACT_STIFFNESS", "RestResidual", "Statics", "Stick", "dof_scales",
+           "static_residual"]
+
+#: Contact impedance during settle (MuJoCo's maximum is 0.9999).
+CONTACT_IMPEDANCE = 0.9999
+#: Target contact stiffness over rho g (force per length, dimensionless).
+CONTACT_STIFFNESS = 1e6
+_FD_EPS = 1e-9
+
+
+# ---------------------------------------------------------------------------
+# statics
+
+
+def dof_scales(scene: Scene) -> tuple[np.ndarray, np.ndarray]:
+    """Per-dof force scale (rho g l^2 hinges, rho g l slides) and length scale (1, l)."""
+    m = scene.model
+    force = np.full(m.nv, scene.moment_scale)
+    length = np.ones(m.nv)
+    for j in range(m.njnt):
+        if m.jnt_type[j] == mujoco.mjtJoint.mjJNT_SLIDE:
+            force[m.jnt_dofadr[j]] = scene.force_scale
+            length[m.jnt_dofadr[j]] = scene.length
+    return force, length
+
+
+@dataclass
+class Stick:
+    """Sticking friction: a finger point and a workpiece point that may not slide along ``t``."""
+
+    finger: int  # finger index
+    body_f: int
+    local_f: np.ndarray
+    body_w: int
+    local_w: np.ndarray
+    t_body: int  # body whose frame carries the tangent
+    t_local: np.ndarray
+    geoms: tuple  # (finger geom, workpiece geom) of the contact pair
+    offset: float = 0.0  # over l: keeps g continuous when the anchors move
+
+    def reanchor(self, d, point) -> None:
+        """Move both anchors to ``point`` (the current contact), keeping ``g`` unchanged.
+
+        Round geoms roll: friction acts at the current contact point, not at a
+        material point; re-anchoring every Newton iteration integrates the
+        no-slip condition of the contact point along the path.
+        """
+        t = self.tangent(d)
+        pf, pw = self.points(d)
+        g_old = float(t @ (pf - pw))
+        self.local_f = d.xmat[self.body_f].reshape(3, 3).T @ (point - d.xpos[self.body_f])
+        self.local_w = d.xmat[self.body_w].reshape(3, 3).T @ (point - d.xpos[self.body_w])
+        self.offset += g_old  # new anchors coincide: t . (pf - pw) = 0
+
+    def tangent(self, d) -> np.ndarray:
+        return d.xmat[self.t_body].reshape(3, 3) @ self.t_local
+
+    def points(self, d) -> tuple[np.ndarray, np.ndarray]:
+        pf = d.xpos[self.body_f] + d.xmat[self.body_f].reshape(3, 3) @ self.local_f
+        pw = d.xpos[self.body_w] + d.xmat[self.body_w].reshape(3, 3) @ self.local_w
+        return pf, pw
+
+
+class Statics:
+    """Static residual of the model plus sticking constraints, on a scratch MjData."""
+
+    def __init__(self, scene: Scene):
+        self.scene = scene
+        self.m = scene.model
+        self.d = mujoco.MjData(self.m)
+        self.fscale, self.lscale = dof_scales(scene)
+        self.calls = 0
+
+    def forces(self, q) -> np.ndarray:
+        """``r(q) = qfrc_applied - qfrc_inverse`` at rest, dimensional."""
+        m, d = self.m, self.d
+        d.qpos[:] = q
+        d.qvel[:] = 0.0
+        d.qacc[:] = 0.0
+        d.qfrc_applied[:] = self.scene.data.qfrc_applied
+        mujoco.mj_inverse(m, d)
+        self.calls += 1
+        return d.qfrc_applied - d.qfrc_inverse
+
+    def stick_rows(self, sticks) -> tuple[np.ndarray, np.ndarray]:
+        """Constraint values ``g`` (over l) and gradients ``G`` (n_stick x nv) at the scratch state."""
+        m, d = self.m, self.d
+        g = np.zeros(len(sticks))
+        G = np.zeros((len(sticks), m.nv))
+        jf = np.zeros((3, m.nv))
+        jw = np.zeros((3, m.nv))
+        for i, s in enumerate(sticks):
+            t = s.tangent(d)
+            pf, pw = s.points(d)
+            g[i] = (float(t @ (pf - pw)) + s.offset) / self.scene.length
+            mujoco.mj_jac(m, d, jf, None, pf, s.body_f)
+            mujoco.mj_jac(m, d, jw, None, pw, s.body_w)
+            G[i] = t @ (jf - jw)
+        return g, G
+
+    def jacobian(self, q) -> np.ndarray:
+        """``dr/dq`` (nv x nv, rows = force components) by ``mjd_inverseFD``."""
+        m, d = self.m, self.d
+        d.qpos[:] = q
+        d.qvel[:] = 0.0
+        d.qacc[:] = 0.0
+        d.qfrc_applied[:] = self.scene.data.qfrc_applied
+        DfDq = np.zeros((m.nv, m.nv))
+        mujoco.mjd_inverseFD(m, d, _FD_EPS, False, DfDq, None, None, None, None, None, None)
+        self.calls += 2 * m.nv + 1
+        return -DfDq.T
+
+
+def static_residual(scene: Scene, qpos=None) -> np.ndarray:
+    """Dimensionless static generalised-force imbalance at ``qpos`` (default: the scene's).
+
+    ``mj_inverse`` at rest with the scene's ``qfrc_applied`` and contact
+    settings; MuJoCo's (velocity-based) friction is zero at rest, so sticking
+    friction is not in it.  Hinge rows over ``rho g l^2``, slide rows over ``rho g l``.
+    """
+    st = Statics(scene)
+    q = scene.data.qpos if qpos is None else qpos
+    return st.forces(q) / st.fscale
+
+
+class RestResidual:
+    """``max |qfrc_smooth + qfrc_constraint|`` at ``qvel = 0`` (scaled as :func:`static_residual`), on scratch data.
+
+    ``mj_forward``'s balance (the dynamic settles' stop test).  ``dofs``
+    restricts the max; ``applied`` is the ``qfrc_applied`` to use (default 0).
+    """
+
+    def __init__(self, scene: Scene, dofs=None):
+        self.m = scene.model
+        self.d = mujoco.MjData(self.m)
+        self.scale = dof_scales(scene)[0]
+        self.dofs = None if dofs is None else np.asarray(dofs, int)
+        self.calls = 0
+
+    def vector(self, qpos, applied=None) -> np.ndarray:
+        """The scaled balance per dof."""
+        d = self.d
+        d.qpos[:] = qpos
+        d.qvel[:] = 0.0
+        d.qfrc_applied[:] = 0.0 if applied is None else applied
+        mujoco.mj_forward(self.m, d)
+        self.calls += 1
+        return (d.qfrc_smooth + d.qfrc_constraint) / self.scale
+
+    def __call__(self, qpos, applied=None) -> float:
+        r = self.vector(qpos, applied)
+        return float(np.max(np.abs(r if self.dofs is None else r[self.dofs])))
+
+
+# ---------------------------------------------------------------------------
+# solver options (set for the solve, restored afterwards)
+
+
+@dataclass
+class SavedOptions:
+    solref: np.ndarray
+    solimp: np.ndarray
+    noslip: int
+    disableflags: int
+    ccd: tuple
+    dynamics: tuple = ()
+
+
+def save_options(m) -> SavedOptions:
+    dyn = (int(m.opt.integrator), float(m.opt.timestep), int(m.opt.cone), float(m.opt.impratio),
+           m.dof_damping.copy(), m.pair_dim.copy(), m.pair_friction.copy())
+    return SavedOptions(m.pair_solref.copy(), m.pair_solimp.copy(), int(m.opt.noslip_iterations), int(m.opt.disableflags),
+                  (float(m.opt.ccd_tolerance), int(m.opt.ccd_iterations)), dyn)
+
+
+def restore_options(m, s: SavedOptions) -> None:
+    m.pair_solref[:] = s.solref
+    m.pair_solimp[:] = s.solimp
+    m.opt.noslip_iterations = s.noslip
+    m.opt.disableflags = s.disableflags
+    m.opt.ccd_tolerance, m.opt.ccd_iterations = s.ccd
+    if s.dynamics:
+        m.opt.integrator, m.opt.timestep, m.opt.cone, m.opt.impratio = s.dynamics[:4]
+        m.dof_damping[:], m.pair_dim[:], m.pair_friction[:] = s.dynamics[4:]
+
+
+def configure_statics(scene: Scene) -> None:
+    """Contact settings of the static solve (see the module docstring)."""
+    m = scene.model
+    m.opt.noslip_iterations = 0  # a dynamics post-process; mjd_inverseFD rejects it
+    m.opt.ccd_tolerance = 1e-14  # distances exact to round-off (Newton differentiates them)
+    m.opt.ccd_iterations = 200
+    if m.npair == 0:
+        return
+    # at rest K_c = 1 / (d (1 - d) timeconst^2 A), A ~ 3 / (link mass): pick timeconst for K_c
+    imp = CONTACT_IMPEDANCE
+    m_eff = scene.physical.rho * scene.length / scene.n / 3.0
+    k_c = CONTACT_STIFFNESS * scene.physical.rho * scene.physical.g
+    m.pair_solref[:] = [math.sqrt(m_eff / (imp * (1.0 - imp) * k_c)), 1.0]
+    m.pair_solimp[:, 0] = imp
+    m.pair_solimp[:, 1] = imp
+    m.opt.disableflags |= int(mujoco.mjtDisableBit.mjDSBL_REFSAFE)
+
+
+def check_warnings(d) -> None:
+    """Raise :class:`SettleError` when MuJoCo counted a warning in ``d`` (see :mod:`simgrip.sim.checks`)."""
+    warn = active_warnings(d)
+    if warn:
+        raise SettleError(f"settle diverged (MuJoCo warnings {', '.join(warn)})")
+
+
+def pair_contacts(d, g1: int, g2: int) -> list[int]:
+    return [i for i in range(d.ncon) if {int(d.contact.geom1[i]), int(d.contact.geom2[i])} == {g1, g2}]
+
+
+def normal_force(m, d, i) -> float:
+    f = np.zeros(6)
+    mujoco.mj_contactForce(m, d, i, f)
+    return float(f[0])
+
+
+def contact_world_force(m, d, i) -> np.ndarray:
+    """World force that geom1 (finger) receives from geom2 (workpiece) in contact ``i``."""
+    f = np.zeros(6)
+    mujoco.mj_contactForce(m, d, i, f)
+    frame = np.asarray(d.contact.frame[i]).reshape(3, 3)
+    return -(frame.T @ f[:3])
