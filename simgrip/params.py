@@ -13,6 +13,46 @@ Dimensionless groups (paper eq. 24)::
 lengths are scaled by ``l`` and forces by ``rho g l``.  The solvers in this
 package all work in dimensionless units (``l = 1``, ``rho g = 1``, so
 ``EI = D`` and the per-finger workpiece weight is ``M``).
+
+Where the parameter space ends
+------------------------------
+Every group is validated on construction; a value outside its range raises
+``ValueError`` naming the parameter.  The bounds are where the model or its
+double-precision numerics stop meaning anything, not where the paper's
+figures stop:
+
+* ``D`` in ``[D_MIN, D_MAX] = [1e-3, 1e6]``.  Below: the heavy rod's bending
+  boundary layer at the clamp has length ``~ sqrt(D) l``, under one link of
+  the default 32-link chain at ``D = 1e-3``; the finger is a hanging string,
+  not a bending finger, and neither the chain nor a contact grip resolves it.
+  Above: the rod's own weight moves the tip by ``1/(8 D) l = 1.25e-7 l``, below
+  the settle's contact tolerance (1e-4 l), so the finger is rigid for every
+  purpose; and the stiffness-to-weight ratio of the chain, ``D n^2`` (``~1e12``
+  at ``n = MAX_LINKS``), would leave fewer than 4 significant digits of the
+  load response in double precision.
+* ``M`` in ``[0, M_MAX] = [0, 1e4]``.  Forces of size ``M`` carry round-off
+  ``M * 2.2e-16``; the settle's force residual is 1e-10 (forces over
+  ``rho g l``), which must stay above it with margin: ``M <= 1e4`` keeps four
+  orders.  (``M = 1e300`` overflowed in the reference's stability test.)
+* ``b`` in ``(0, 2)`` (``b/2 < l``: a straight finger reaches ``X = l``).
+* ``mu_s`` in ``[0, MU_MAX] = [0, 100]``.  Real material pairs have
+  ``mu_s <~ 4``; at 100 no grip is ever friction-limited, and MuJoCo's
+  elliptic friction cone (``impratio`` 1e4) is ill-conditioned beyond.
+* ``gamma`` in ``(0, 1)``: the Grip III contact lies on the finger.
+* ``|kappa_bar|`` at most ``KAPPA_LIMIT = 100`` (uniform curvature, the peak
+  of the concentrated profile; in :mod:`simgrip.profiles`).  A uniform rest
+  shape closes on itself at ``2 pi`` (self-contact is not modelled, so beyond
+  that the rod passes through itself); 100 (a curl radius of ``l/100``, 16
+  turns) is kept as the numerical limit: the chain's rest angle per hinge,
+  ``kappa_bar / n``, stays below 0.1 rad at ``n = MAX_LINKS``.
+* ``alpha`` (concentrated profile, eq. 34) in ``[0, ALPHA_MAX] = [0, 100]``:
+  ``(4 s (1 - s))^alpha ~ exp(-4 alpha (s - 1/2)^2)`` has width
+  ``1/sqrt(8 alpha) = 0.035 l`` at 100, about one link of the default chain;
+  sharper is a kink the chain and the BVP mesh cannot resolve.
+* links per finger in ``[2, MAX_LINKS] = [2, 1024]``.  The chain is second
+  order: its error at 1024 links is ``(32/1024)^2 = 1e-3`` of that at 32
+  (normal force ~5e-6 relative, tip ~1e-6 l), below the contact tolerance,
+  so more links buy nothing, while the settle's cost grows faster than ``n``.
 """
 
 from __future__ import annotations
@@ -20,10 +60,39 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass, fields
 
-__all__ = ["PhysicalParams", "DimensionlessParams", "GRIPS", "check_grip", "STANDARD"]
+__all__ = [
+    "PhysicalParams",
+    "DimensionlessParams",
+    "GRIPS",
+    "check_grip",
+    "STANDARD",
+    "D_MIN",
+    "D_MAX",
+    "M_MAX",
+    "MU_MAX",
+    "KAPPA_LIMIT",
+    "ALPHA_MAX",
+    "MAX_LINKS",
+]
 
 #: Grip names understood everywhere in simgrip.
 GRIPS = ("free", "I", "II", "III")
+
+# Bounds of the parameter space; the module docstring says why each is where it is.
+#: Softest rod: its clamp boundary layer (~ sqrt(D) l) is one link of the default chain.
+D_MIN = 1e-3
+#: Stiffest rod: self-weight deflection 1/(8 D) l below the contact tolerance; conditioning D n^2.
+D_MAX = 1e6
+#: Heaviest workpiece per finger (in rod weights): round-off M * 2.2e-16 stays 1e4 below the settle residual.
+M_MAX = 1e4
+#: Largest static friction coefficient.
+MU_MAX = 100.0
+#: Largest |kappa_bar| (uniform curvature, peak of the concentrated profile).
+KAPPA_LIMIT = 100.0
+#: Largest concentration exponent of eq. (34): peak width 1/sqrt(8 alpha) = 0.035 l.
+ALPHA_MAX = 100.0
+#: Most links per finger: discretisation error (32/n)^2 of n = 32's is below the contact tolerance.
+MAX_LINKS = 1024
 
 
 def check_grip(grip: str) -> str:
@@ -61,6 +130,15 @@ def _nonnegative(name: str, value) -> float:
     return v
 
 
+def _within(name: str, value, lo: float, hi: float, why: str = "") -> float:
+    """``value`` as a float in ``[lo, hi]``, or ``ValueError`` naming ``name`` (and why the bound exists)."""
+    v = _finite(name, value)
+    if not lo <= v <= hi:
+        reason = f" ({why})" if why else ""
+        raise ValueError(f"{name} must lie in [{lo:g}, {hi:g}], got {v!r}{reason}")
+    return v
+
+
 @dataclass(frozen=True)
 class DimensionlessParams:
     """The paper's dimensionless groups for one finger and its share of the workpiece.
@@ -68,16 +146,18 @@ class DimensionlessParams:
     Parameters
     ----------
     D : float
-        Bending stiffness ``EI / (rho g l^3)``; must be > 0.
+        Bending stiffness ``EI / (rho g l^3)``, in ``[D_MIN, D_MAX] = [1e-3, 1e6]``.
     M : float
-        Workpiece mass per finger ``m / (rho l)``; must be >= 0.
+        Workpiece mass per finger ``m / (rho l)``, in ``[0, M_MAX] = [0, 1e4]``.
     b : float
         Workpiece width over rod length ``b / l``; ``0 < b < 2`` (the tip of a
         straight finger reaches ``X = l``, so ``b/2 >= l`` is out of reach).
     mu_s : float
-        Coefficient of static friction; must be >= 0.
+        Coefficient of static friction, in ``[0, MU_MAX] = [0, 100]``.
     gamma : float
         Grip III contact arc length ``gamma / l`` in ``(0, 1)``.
+
+    The bounds are explained in the module docstring.
     """
 
     D: float = 1.0
@@ -87,8 +167,11 @@ class DimensionlessParams:
     gamma: float = 0.8
 
     def __post_init__(self):
-        object.__setattr__(self, "D", _positive("D", self.D))
-        object.__setattr__(self, "M", _nonnegative("M", self.M))
+        object.__setattr__(self, "D", _within("D", _positive("D", self.D), D_MIN, D_MAX,
+                                              "softer hangs like a string, stiffer is rigid to the contact "
+                                              "tolerance; see simgrip.params"))
+        object.__setattr__(self, "M", _within("M", _nonnegative("M", self.M), 0.0, M_MAX,
+                                              "heavier drowns the rod's weight in round-off; see simgrip.params"))
         b = _positive("b", self.b)
         if b / 2.0 >= 1.0:
             raise ValueError(
@@ -96,7 +179,8 @@ class DimensionlessParams:
                 "the fingers can reach (need b/2 < l)"
             )
         object.__setattr__(self, "b", b)
-        object.__setattr__(self, "mu_s", _nonnegative("mu_s", self.mu_s))
+        object.__setattr__(self, "mu_s", _within("mu_s", _nonnegative("mu_s", self.mu_s), 0.0, MU_MAX,
+                                                 "no real material pair; never friction-limited"))
         gamma = _finite("gamma", self.gamma)
         if not 0.0 < gamma < 1.0:
             raise ValueError(f"gamma (contact arc length over l) must lie in (0, 1), got {gamma!r}")
@@ -115,7 +199,7 @@ class DimensionlessParams:
         g = _positive("g", g)
         return PhysicalParams(
             length=length,
-            EI=self.D * rho * g * length**3,
+            EI=self.D * rho * g * (length * length * length),  # products overflow to inf (named below), ** raises
             rho=rho,
             g=g,
             m=self.M * rho * length,
@@ -173,12 +257,19 @@ class PhysicalParams:
         if not 0.0 < gamma < self.length:
             raise ValueError(f"gamma must lie in (0, length) = (0, {self.length!r}) m, got {gamma!r}")
         object.__setattr__(self, "gamma", gamma)
+        try:  # the model's range is stated in dimensionless groups
+            self.dimensionless()
+        except ValueError as exc:
+            raise ValueError(
+                f"these physical parameters leave the model's range: {exc} "
+                "(D = EI/(rho g length^3), M = m/(rho length), b/length, gamma/length)"
+            ) from None
 
     def dimensionless(self) -> DimensionlessParams:
         """The paper's dimensionless groups ``D, M, b/l, mu_s, gamma/l``."""
         w = self.rho * self.g * self.length  # weight of the rod [N], the force scale
         return DimensionlessParams(
-            D=self.EI / (w * self.length**2),
+            D=self.EI / (w * self.length * self.length),
             M=self.m / (self.rho * self.length),
             b=self.b / self.length,
             mu_s=self.mu_s,

@@ -7,6 +7,10 @@ positive, so ``kappa_bar < 0`` curls the finger downwards (Grips I and III) and
 
 A profile knows its values and its integral over any interval; the integral is
 what a hinge chain uses for its rest angles.
+
+Parameters are validated on construction (``ValueError`` naming them):
+``|kappa|`` and ``kappa_max`` at most :data:`~simgrip.params.KAPPA_LIMIT`,
+``alpha`` in ``[0, ALPHA_MAX]`` (the reasons are in :mod:`simgrip.params`).
 """
 
 from __future__ import annotations
@@ -16,9 +20,12 @@ from typing import Callable
 
 import numpy as np
 
-from simgrip.params import _finite
+from simgrip.params import ALPHA_MAX, KAPPA_LIMIT, _finite, _within
 
 __all__ = ["CurvatureProfile", "Uniform", "Concentrated", "UserProfile", "as_profile"]
+
+_KAPPA_WHY = "a curl radius under l/100; see simgrip.params"
+_ALPHA_WHY = "a sharper peak than 0.035 l is a kink the chain cannot resolve; see simgrip.params"
 
 # 16-point Gauss-Legendre rule on [-1, 1], used for integrals without a closed form.
 _GL_X, _GL_W = np.polynomial.legendre.leggauss(16)
@@ -59,7 +66,7 @@ class Uniform(CurvatureProfile):
     kappa: float = 0.0
 
     def __post_init__(self):
-        object.__setattr__(self, "kappa", _finite("kappa", self.kappa))
+        object.__setattr__(self, "kappa", _within("kappa", self.kappa, -KAPPA_LIMIT, KAPPA_LIMIT, _KAPPA_WHY))
 
     def _eval(self, s):
         return np.full(np.shape(s), self.kappa)
@@ -89,13 +96,14 @@ class Concentrated(CurvatureProfile):
         km = _finite("kappa_max", self.kappa_max)
         if km < 0:
             raise ValueError(f"kappa_max must be non-negative (the sign is p), got {km!r}")
-        object.__setattr__(self, "kappa_max", km)
+        object.__setattr__(self, "kappa_max", _within("kappa_max", km, 0.0, KAPPA_LIMIT, _KAPPA_WHY))
         a = _finite("alpha", self.alpha)
         if a < 0:
             raise ValueError(f"alpha must be non-negative, got {a!r}")
-        object.__setattr__(self, "alpha", a)
-        if self.p not in (-1, 1):
+        object.__setattr__(self, "alpha", _within("alpha", a, 0.0, ALPHA_MAX, _ALPHA_WHY))
+        if isinstance(self.p, bool) or self.p not in (-1, 1):
             raise ValueError(f"p must be -1 or +1, got {self.p!r}")
+        object.__setattr__(self, "p", int(self.p))
 
     def _eval(self, s):
         base = np.clip(4.0 * s * (1.0 - s), 0.0, None)
@@ -108,7 +116,8 @@ class Concentrated(CurvatureProfile):
         a = np.clip(np.asarray(a, dtype=float), 0.0, 1.0)
         b = np.clip(np.asarray(b, dtype=float), 0.0, 1.0)
         k = self.alpha + 1.0
-        scale = self.p * self.kappa_max * 4.0**self.alpha * _special.beta(k, k)
+        # 4^alpha B(k, k) in log space: each factor alone overflows/underflows for large alpha
+        scale = self.p * self.kappa_max * np.exp(self.alpha * np.log(4.0) + _special.betaln(k, k))
         return scale * (_special.betainc(k, k, b) - _special.betainc(k, k, a))
 
     def scaled(self, factor):

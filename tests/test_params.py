@@ -77,3 +77,35 @@ def test_grip_names(grip, norm):
 def test_unknown_grip_is_named(grip):
     with pytest.raises(ValueError, match="grip"):
         check_grip(grip)
+
+
+@pytest.mark.parametrize(
+    "field, value",
+    [("D", 1e-4), ("D", 1e7), ("M", 1e300), ("M", 2e4), ("mu_s", 1e3)],
+)
+def test_the_parameter_space_ends_with_a_named_error(field, value):
+    with pytest.raises(ValueError, match=rf"^{field} must lie in \["):
+        DimensionlessParams(**{field: value})
+
+
+def test_the_bounds_are_inclusive():
+    from simgrip.params import D_MAX, D_MIN, M_MAX, MU_MAX
+
+    for kw in (dict(D=D_MIN), dict(D=D_MAX), dict(M=M_MAX), dict(mu_s=MU_MAX), dict(M=0.0), dict(mu_s=0.0)):
+        DimensionlessParams(**kw)
+
+
+@pytest.mark.parametrize(
+    "kw, name",
+    [(dict(EI=1e300), "D"), (dict(m=1e300), "M"), (dict(length=1e200, b=1.0, gamma=1.0), "D"), (dict(EI=1e-12), "D")],
+)
+def test_physical_params_out_of_range_name_the_group_and_its_fields(kw, name):
+    from simgrip.params import PhysicalParams
+
+    with pytest.raises(ValueError, match=rf"{name} must .*EI/\(rho g length\^3\)"):
+        PhysicalParams(**kw)
+
+
+def test_to_physical_overflow_is_a_named_error():
+    with pytest.raises(ValueError, match="EI"):
+        DimensionlessParams(D=1e6).to_physical(length=1e300)

@@ -4,7 +4,7 @@ import numpy as np
 import pytest
 from scipy.special import beta as beta_fn
 
-from simgrip.profiles import Concentrated, Uniform, UserProfile, as_profile
+from simgrip.profiles import Concentrated, CurvatureProfile, Uniform, UserProfile, as_profile
 
 
 def test_uniform_values_and_integral():
@@ -89,3 +89,28 @@ def test_concentrated_integral_exact_for_fractional_alpha(alpha):
     for a, b in [(0.0, 1e-3), (0.0, 0.5), (0.3, 0.9), (0.999, 1.0)]:
         ref, _ = quad(lambda s: float(p(s)), a, b, epsabs=1e-15, epsrel=1e-13, limit=200)
         assert np.isclose(p.integral(a, b), ref, rtol=1e-11, atol=1e-16)
+
+
+@pytest.mark.parametrize(
+    "make, name",
+    [
+        (lambda: Uniform(101.0), "kappa"),
+        (lambda: Uniform(-1e6), "kappa"),
+        (lambda: Concentrated(kappa_max=1e3), "kappa_max"),
+        (lambda: Concentrated(alpha=520.0), "alpha"),
+        (lambda: Concentrated(p=True), "p"),
+    ],
+)
+def test_profile_bounds_are_named(make, name):
+    with pytest.raises(ValueError, match=rf"^{name} must"):
+        make()
+
+
+@pytest.mark.parametrize("alpha", [0.0, 3.0, 100.0])
+def test_concentrated_integral_in_log_space_matches_quadrature(alpha):
+    """4^alpha B(a+1, a+1) is evaluated in log space; compare with Gauss-Legendre on fine panels."""
+    prof = Concentrated(kappa_max=6.0, alpha=alpha, p=-1)
+    edges = np.linspace(0.0, 1.0, 401)
+    quad = float(np.sum(CurvatureProfile.integral(prof, edges[:-1], edges[1:])))
+    assert float(prof.integral(0.0, 1.0)) == pytest.approx(quad, rel=1e-12)
+    assert np.isfinite(prof.integral(np.array([0.0, 0.3]), np.array([0.5, 1.0]))).all()
