@@ -6,14 +6,17 @@ time limits set here, ``step`` never truncates):
 ==========================  =======================================  =========
 id                          what                                     max steps
 ==========================  =======================================  =========
-``simgrip/Pick-v0``         Grip I: palm-down tip pinch (50 Hz)      200 (4 s)
-``simgrip/PickCradle-v0``   Grip III: cradle from a pedestal (50 Hz) 250 (5 s)
+``simgrip/Pick-v1``         Grip I: palm-down tip pinch (50 Hz)      200 (4 s)
+``simgrip/PickCradle-v1``   Grip III: cradle from a pedestal (50 Hz) 250 (5 s)
 ==========================  =======================================  =========
 
 >>> import gymnasium as gym, simgrip.envs
->>> env = gym.make("simgrip/Pick-v0")          # doctest: +SKIP
+>>> env = gym.make("simgrip/Pick-v1")          # doctest: +SKIP
 
 Extra keyword arguments of ``gym.make`` go to :class:`simgrip.envs.pick.PickEnv`.
+The v0 ids are retired (v1 changed the reward and the observation, see the
+version history in :class:`~simgrip.envs.pick.PickEnv`); Gymnasium answers
+``gym.make("simgrip/Pick-v0")`` with ``DeprecatedEnv`` naming v1.
 """
 
 from __future__ import annotations
@@ -24,8 +27,8 @@ __all__ = ["ENV_IDS", "register_envs"]
 
 #: id -> (entry point, kwargs, max_episode_steps)
 _ENVS = {
-    "simgrip/Pick-v0": ("simgrip.envs.pick:PickEnv", {"grip": "I"}, 200),
-    "simgrip/PickCradle-v0": ("simgrip.envs.pick:PickEnv", {"grip": "III"}, 250),
+    "simgrip/Pick-v1": ("simgrip.envs.pick:PickEnv", {"grip": "I"}, 200),
+    "simgrip/PickCradle-v1": ("simgrip.envs.pick:PickEnv", {"grip": "III"}, 250),
 }
 ENV_IDS = tuple(_ENVS)
 

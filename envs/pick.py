@@ -18,11 +18,13 @@ import gymnasium as gym
 import mujoco
 import numpy as np
 from gymnasium import spaces
+from gymnasium.error import ResetNeeded
 
 from simgrip.chain import chain_springs, check_links
 from simgrip.models import model_path
 from simgrip.params import DimensionlessParams, PhysicalParams
 from simgrip.profiles import Uniform
+from simgrip.sim.checks import PhysicsError, check_invalid_state, clear_warnings, invalid_state
 from simgrip.sim.scene import build_scene
 
 __all__ = ["PickEnv", "BoxParams", "OBS_LAYOUT", "obs_layout"]
@@ -41,13 +43,14 @@ class BoxParams:
     friction: float
 
 
-def _range(name, value, lo=-math.inf, hi=math.inf, positive=True):
+def _range(name, value, lo=-math.inf, hi=math.inf, positive=True, strict=False):
     try:
         a, b = (float(v) for v in value)
     except (TypeError, ValueError):
         raise ValueError(f"{name} must be a (low, high) pair of numbers, got {value!r}") from None
-    if not (math.isfinite(a) and math.isfinite(b)) or a > b:
-        raise ValueError(f"{name} must be a finite (low, high) pair with low <= high, got {value!r}")
+    if not (math.isfinite(a) and math.isfinite(b)) or a > b or (strict and a == b):
+        rel = "<" if strict else "<="
+        raise ValueError(f"{name} must be a finite (low, high) pair with low {rel} high, got {value!r}")
     if positive and a <= 0:
         raise ValueError(f"{name} must be positive, got {value!r}")
     if a < lo or b > hi:
@@ -55,34 +58,67 @@ def _range(name, value, lo=-math.inf, hi=math.inf, positive=True):
     return (a, b)
 
 
-def _pos(name, value):
+def _num(name, value, *, positive=True) -> float:
+    """``value`` as a finite float, > 0 (``positive``) or >= 0; ValueError naming ``name`` otherwise."""
+    what = "a positive number" if positive else "a number >= 0"
+    if isinstance(value, (bool, np.bool_)):
+        raise ValueError(f"{name} must be {what}, got {value!r}")
     try:
         v = float(value)
     except (TypeError, ValueError):
-        raise ValueError(f"{name} must be a positive number, got {value!r}") from None
-    if not (math.isfinite(v) and v > 0):
-        raise ValueError(f"{name} must be a positive number, got {value!r}")
+        raise ValueError(f"{name} must be {what}, got {value!r}") from None
+    if not (math.isfinite(v) and (v > 0 if positive else v >= 0)):
+        raise ValueError(f"{name} must be {what}, got {value!r}")
     return v
 
 
-def obs_layout(shape_points: int = 8) -> list[tuple[str, int]]:
+def _pos(name, value) -> float:
+    return _num(name, value, positive=True)
+
+
+def _int(name, value, low: int) -> int:
+    """``value`` as an int >= ``low`` (integral floats accepted, bools refused); ValueError naming ``name``."""
+    ok = not isinstance(value, (bool, np.bool_))
+    try:
+        v = int(value)
+        ok = ok and v == value
+    except (TypeError, ValueError, OverflowError):
+        ok = False
+    if not ok or v < low:
+        raise ValueError(f"{name} must be an integer >= {low}, got {value!r}")
+    return v
+
+
+def _bool(name, value) -> bool:
+    if not isinstance(value, (bool, np.bool_)):
+        raise ValueError(f"{name} must be True or False, got {value!r}")
+    return bool(value)
+
+
+def obs_layout(shape_points: int = 8, per_finger: bool = False) -> list[tuple[str, int]]:
     """``(name, size)`` of the observation's blocks, in order (see :class:`PickEnv`)."""
+    nk = 2 if per_finger else 1
     return [
         ("palm_height", 1),
-        ("kappa_command", 2),
-        ("kappa_actual", 2),
+        ("kappa_command", nk),
+        ("kappa_actual", nk),
         ("finger_shape", 2 * shape_points),
         ("tip_position", 4),
-        ("box_position", 3),
-        ("box_quat", 4),
-        ("box_linvel", 3),
-        ("box_angvel", 3),
+        ("box_position", 2),
+        ("box_tilt", 1),
+        ("box_velocity", 2),
+        ("box_spin", 1),
+        ("box_lift", 1),
         ("contact_force", 4),
+        ("hold", 1),
     ]
 
 
-#: Layout of the default observation (``shape_points = 8``): 42 entries.
+#: Layout of the default observation (``shape_points = 8``, ``per_finger = False``): 35 entries.
 OBS_LAYOUT = obs_layout(8)
+
+#: The box's spin is observed as ``omega_y * SPIN_TIME`` (rad per 0.1 s).
+SPIN_TIME = 0.1
 
 
 class PickEnv(gym.Env):
@@ -99,13 +135,14 @@ class PickEnv(gym.Env):
     the box must rise by ``target_height`` and stay there for ``hold_time``,
     squeezed no harder than needed.  Axes: ``x`` from the palm centre towards
     finger 0, ``z`` up (the paper's ``E1``, ``E2``); the table top is ``z = 0``.
+    The task is planar: nothing moves along ``y``.
 
     Grips (``grip``):
 
     | grip | id | scene |
     |------|----|-------|
-    | ``"I"`` (pinch) | ``simgrip/Pick-v0`` | palm down, the fingertips pinch the box's side faces |
-    | ``"III"`` (cradle) | ``simgrip/PickCradle-v0`` | the box (3.5 cm tall) stands on a narrow 4 cm pedestal; the fingers curl under its lower edges and carry it on their links |
+    | ``"I"`` (pinch) | ``simgrip/Pick-v1`` | palm down, the fingertips pinch the box's side faces |
+    | ``"III"`` (cradle) | ``simgrip/PickCradle-v1`` | the box (3.5 cm tall) stands on a narrow 4 cm pedestal; the fingers curl under its lower edges and carry it on their links |
 
     ## Physical defaults (SI) and the paper's groups
 
@@ -126,14 +163,13 @@ class PickEnv(gym.Env):
     damping (``finger_damping_time = 20 ms``, lossy silicone) and an armature
     of ``1e-5 kg m^2`` (numerical: it slows the hinge modes so that 2 ms steps
     and the friction solve stay well conditioned; equilibria are unchanged).
-    Without the armature the light links (1.25 g) let the tips creep along the
-    box under friction and the scripted pick fails.  Tip and link contacts are
-    condim 4 (torsional friction ``spin_friction * mu``, 4 mm, a soft tip's
-    contact patch) so the box cannot swing about the line through the tips.  The palm slides vertically on a joint driven by a stiff position
-    servo (4000 N/m, critically damped): a mocap body has no velocity, so it
-    could not drag the box up by friction.  Contacts are explicit pairs only
-    (tip and link of each finger, and the palm slab, with the box; box with
-    table/pedestal); no finger self-collision, the fingers pass through the table.
+    Tip and link contacts are condim 4 (torsional friction ``spin_friction *
+    mu``) so the box cannot swing about the line through the tips.  The palm
+    slides vertically on a joint driven by a stiff, critically damped position
+    servo.  Contacts are explicit pairs only (tip and links of each finger, and
+    the palm slab, with the box; box with table/pedestal).  A MuJoCo warning
+    or a non-finite state during ``reset`` or ``step`` raises
+    :class:`simgrip.sim.checks.PhysicsError`.
 
     ## Action space
 
@@ -149,47 +185,64 @@ class PickEnv(gym.Env):
 
     ## Observation space
 
-    ``Box(low, high, (26 + 2 shape_points,), float64)``; 42 entries by default.
-    Values are clipped to the finite bounds listed (they are never reached in
-    normal use).  Positions and velocities are relative to the palm (finger
-    roots) in world axes; finger 1 is the mirror image of finger 0 (its tip has
-    ``x < 0``).
+    ``Box(low, high, (27 + 2 shape_points + 2 per_finger,), float64)``: 35
+    entries by default, every one of them varies during an episode (the
+    out-of-plane coordinates are left out).  Lengths are in finger lengths
+    ``l`` (``length``), velocities in ``l`` per second, angles in radians,
+    forces in units of the mean box weight ``W = g * mean(box_mass_range)``
+    (a constant of the env, not the episode's box).  Positions and velocities
+    are relative to the palm (finger roots), in world axes; finger 1 is the
+    mirror image of finger 0 (its tip has ``x < 0``).  Values are clipped to
+    the bounds listed, which normal use does not reach.  ``obs_layout`` holds
+    the ``(name, size)`` blocks and ``obs_slices`` their slices.
 
-    | slice (default) | name | size | unit | bounds |
-    |-----------------|------|------|------|--------|
-    | 0 | palm height above the table | 1 | m | [0, 1] |
-    | 1:3 | curvature commands :math:`\bar\kappa_{cmd}` (finger 0, 1) | 2 | - | [-50, 50] |
-    | 3:5 | actual curvatures (after the lag) | 2 | - | [-50, 50] |
-    | 5:21 | finger shape: tangent angle (rad, each finger in its own frame, counter-clockwise positive) at ``shape_points`` equally spaced arc lengths ``s/l = (k+1/2)/K``, interpolated between link midpoints (independent of ``n_links``); finger 0 then finger 1 | 2K | rad | [-20, 20] |
-    | 21:25 | fingertip positions ``(x, z)``, finger 0 then 1 | 4 | m | [-1, 1] |
-    | 25:28 | box centre ``(x, y, z)`` | 3 | m | [-1, 1] |
-    | 28:32 | box orientation quaternion ``(w, x, y, z)`` | 4 | - | [-1, 1] |
-    | 32:35 | box linear velocity | 3 | m/s | [-10, 10] |
-    | 35:38 | box angular velocity (box frame) | 3 | rad/s | [-100, 100] |
-    | 38:42 | contact force of the box on each finger: normal, friction magnitude (finger 0, then 1) | 4 | N | [0, 100] |
+    | index (default) | name | size | meaning | unit | bounds |
+    |-----------------|------|------|---------|------|--------|
+    | 0 | ``palm_height`` | 1 | palm (finger roots) above the table | l | [0, 10] |
+    | 1 | ``kappa_command`` | 1 (2) | curvature command, in action units (the action that gives it) | - | [-2, 2] |
+    | 2 | ``kappa_actual`` | 1 (2) | actual curvature after the lag, in action units | - | [-2, 2] |
+    | 3:19 | ``finger_shape`` | 2K | tangent angle (each finger in its own frame, counter-clockwise positive, 0 along a straight finger) at ``K = shape_points`` arc lengths ``s/l = (k+1/2)/K``, interpolated between link midpoints (independent of ``n_links``); finger 0 then finger 1 | rad | [-B, B], ``B = max(20, 2 max abs kappa_range)`` |
+    | 19:23 | ``tip_position`` | 4 | fingertip ``(x, z)`` relative to the palm, finger 0 then 1 | l | [-5, 5] |
+    | 23:25 | ``box_position`` | 2 | box centre ``(x, z)`` relative to the palm | l | [-10, 10] |
+    | 25 | ``box_tilt`` | 1 | box rotation about ``y`` (its ``z`` axis towards ``+x`` is positive) | rad | [-pi, pi] |
+    | 26:28 | ``box_velocity`` | 2 | box centre velocity ``(v_x, v_z)`` relative to the palm | l/s | [-100, 100] |
+    | 28 | ``box_spin`` | 1 | box angular velocity about ``y`` times 0.1 s (``SPIN_TIME``) | rad | [-100, 100] |
+    | 29 | ``box_lift`` | 1 | box height gained since the start of the episode, in units of ``target_height`` (1 = at the target) | - | [-20, 20] |
+    | 30:34 | ``contact_force`` | 4 | ``log(1 + F/W)`` of the box's contact force on each finger: normal, then friction magnitude; finger 0, then 1 | - | [0, 20] |
+    | 34 | ``hold`` | 1 | time held at the target, in units of ``hold_time`` (success at 1) | - | [0, 1] |
 
     ## Rewards
 
-    ``reward = lift + success + squeeze + drop``, each term in ``info`` as
+    ``reward = lift + success + squeeze + drop``; each term is in ``info`` as
     ``reward_lift``, ``reward_success``, ``reward_squeeze``, ``reward_drop``.
+    Let ``phi = clip(dz / target_height, 0, 1)`` be the progress (``dz`` the box's
+    height gain since the start of the episode; ``phi = 0`` once the box is
+    lost).
 
-    | term | value |
-    |------|-------|
-    | lift | ``w_lift * clip(dz / target_height, 0, 1)`` each step, ``dz`` = box height gain |
-    | success | ``w_success`` once, when the box has stayed ``>= target_height`` above its start, touched by both fingers, for ``hold_time`` |
-    | squeeze | ``-w_squeeze * sum_f max(0, N_f - squeeze_margin * N_need) / (m_box g)``: normal force beyond ``squeeze_margin`` times the least one that holds the box, ``N_need = m_box g / (2 mu_s)`` |
-    | drop | ``-w_drop`` once, when the box is dropped or knocked over (see below) |
+    | term | value | over an episode |
+    |------|-------|-----------------|
+    | lift | ``w_lift * (phi_t - phi_{t-1})``: progress paid as height gained, taken back when the box sinks or is lost | sums to ``w_lift * phi_final`` in ``[0, w_lift]`` (10) |
+    | success | ``w_success`` once, on the step the box has stayed ``>= target_height`` above its start, touched by both fingers, for ``hold_time``; the episode terminates | ``w_success`` (20) |
+    | squeeze | ``-w_squeeze * mean_f x_f / (1 + x_f)``, ``x_f = max(0, S_f - squeeze_margin * N_need) / (m g)``: ``S_f`` is the horizontal (squeezing) component of finger ``f``'s normal forces on the box, ``N_need = m g / (2 mu)`` the least that holds it; pressing on the box's top is not counted | in ``[-w_squeeze, 0]`` per step (0.04) |
+    | drop | ``-w_drop`` once, when the box is dropped or knocked over (the episode terminates) | ``-w_drop`` (-10) |
+
+    Ordering, with the defaults and the registered time limits (``T`` = 200 or
+    250 steps): any success returns at least ``w_lift + w_success - w_squeeze T
+    >= 20``; any episode without success at most ``w_lift = 10`` (hovering just
+    below the target), doing nothing 0, a drop at most ``-w_drop``.  Since
+    ``w_squeeze T <= w_drop``, ending an episode by dropping the box never pays
+    more than going on, however hard the fingers squeeze.
 
     ## Starting state
 
     Box (width, mass, friction drawn uniformly from ``box_width_range``,
     ``box_mass_range``, ``friction_range`` with the ``reset`` seed; fixed
     values via ``reset(options={"box_width": ..., "box_mass": ...,
-    "friction": ...})``) at rest on the table (Grip I) or the pedestal (Grip
-    III), centred under the palm.  Palm at a height drawn from ``palm_start``;
-    fingers straight with zero curvature command, left to settle under
-    gravity for ``settle_time`` before the first observation.  ``info`` of
-    ``reset`` holds the box parameters and the dimensionless groups.
+    "friction": ..., "palm_height": ...})``) at rest on the table (Grip I) or
+    the pedestal (Grip III), centred under the palm.  Palm at a height drawn
+    from ``palm_start``; fingers straight with zero curvature, left to settle
+    under gravity for ``settle_time`` before the first observation.  ``info``
+    of ``reset`` holds the box parameters and the dimensionless groups.
 
     ## Episode end
 
@@ -197,10 +250,15 @@ class PickEnv(gym.Env):
     more than ``drop_distance`` relative to the palm from where it was when
     first lifted; releasing it counts as a drop) and on knocking it over
     (tilted more than 30 degrees, or pushed more than 3 cm sideways).  Time
-    limit at registration: 200 steps (4 s) for ``Pick-v0`` and 250 for
-    ``PickCradle-v0``; ``step`` itself never truncates.
+    limit at registration: 200 steps (4 s) for ``Pick-v1`` and 250 for
+    ``PickCradle-v1``; ``step`` itself never truncates.  Calling ``step``
+    after the episode has terminated (or before the first ``reset``) raises
+    :class:`gymnasium.error.ResetNeeded`: as Gymnasium's ``Env.step`` says,
+    the user needs to call ``reset`` then.
 
     ## Arguments
+
+    Every argument is checked: a bad value raises ``ValueError`` naming it.
 
     | argument | default | meaning |
     |----------|---------|---------|
@@ -211,20 +269,28 @@ class PickEnv(gym.Env):
     | ``box_width_range``, ``box_mass_range``, ``friction_range`` | (0.04, 0.065), (0.02, 0.06), (0.5, 1.2) | domain randomisation |
     | ``box_height``, ``box_depth`` | 0.06 (cradle 0.035), 0.04 | box size [m] |
     | ``per_finger`` | False | one curvature command per finger |
-    | ``kappa_range`` | (-10, 0) | curvature command bounds (dimensionless) |
+    | ``kappa_range`` | (-10, 0) | curvature command bounds (dimensionless, low < high) |
     | ``kappa_tau`` | 0.1 | pneumatic lag [s] (0: none) |
     | ``palm_speed``, ``palm_range``, ``palm_start`` | 0.1, (0.05, 0.25), (0.105, 0.115) (cradle (0.13, 0.14)) | palm speed [m/s], target range, start range [m] |
     | ``target_height``, ``hold_time`` | 0.03, 0.5 | success [m, s] |
-    | ``w_lift``, ``w_success``, ``w_squeeze``, ``w_drop`` | 1, 50, 0.2, 20 | reward weights |
-    | ``squeeze_margin``, ``drop_distance`` | 2.0, 0.02 | squeeze allowance, drop threshold [m] |
+    | ``w_lift``, ``w_success``, ``w_squeeze``, ``w_drop`` | 10, 20, 0.04, 10 | reward weights (>= 0) |
+    | ``squeeze_margin``, ``drop_distance`` | 2.0, 0.02 | squeeze allowance (times the least normal force that holds), drop threshold [m] |
     | ``timestep``, ``frame_skip``, ``settle_time`` | 0.002, 10, 0.1 | physics step [s], steps per action, settling at reset [s] |
     | ``finger_damping_time``, ``finger_armature`` | 0.02, 1e-5 | hinge damping / stiffness [s], hinge armature [kg m^2] |
     | ``r_tip``, ``spin_friction``, ``impratio`` | 0.004, 0.004, 1 | tip/link radius [m], torsional friction length [m], MuJoCo impratio |
-    | ``shape_points`` | 8 | finger shape samples per finger |
-    | ``width``, ``height``, ``camera`` | 480, 360, ``"front"`` | rendering |
+    | ``shape_points`` | 8 | finger shape samples per finger (>= 2) |
+    | ``width``, ``height``, ``camera`` | 480, 360, ``"front"`` | rendering (pixels, a camera of the model) |
 
     ## Version history
 
+    * v1: reward terms that rank success above every failure (progress paid as
+      height gained, a bounded squeeze penalty on the side contacts only, no
+      success bonus after the end: ``step`` after termination raises);
+      observations in finger lengths and box weights with the out-of-plane and
+      duplicated entries dropped (42 -> 35); every constructor argument
+      validated; pickling and ``copy.deepcopy`` continue the episode exactly.
+      v0 is retired: ``gym.make("simgrip/Pick-v0")`` raises Gymnasium's
+      ``DeprecatedEnv`` pointing to v1.
     * v0: initial version.
     """
 
@@ -253,10 +319,10 @@ class PickEnv(gym.Env):
         palm_start=None,
         target_height: float = 0.03,
         hold_time: float = 0.5,
-        w_lift: float = 1.0,
-        w_success: float = 50.0,
-        w_squeeze: float = 0.2,
-        w_drop: float = 20.0,
+        w_lift: float = 10.0,
+        w_success: float = 20.0,
+        w_squeeze: float = 0.04,
+        w_drop: float = 10.0,
         squeeze_margin: float = 2.0,
         drop_distance: float = 0.02,
         timestep: float = 0.002,
@@ -278,7 +344,10 @@ class PickEnv(gym.Env):
         if render_mode is not None and render_mode not in self.metadata["render_modes"]:
             raise ValueError(f"render_mode must be None or 'rgb_array', got {render_mode!r}")
         self.render_mode = render_mode
-        self.n = check_links(n_links)
+        try:
+            self.n = check_links(n_links)
+        except ValueError as e:
+            raise ValueError(str(e).replace("links must", "n_links must", 1)) from None
         self.length = _pos("length", length)
         self.EI = _pos("EI", EI)
         self.rho = _pos("rho", rho)
@@ -290,69 +359,70 @@ class PickEnv(gym.Env):
             box_height = 0.06 if self.grip == "I" else 0.035
         self.box_height = _pos("box_height", box_height)
         self.box_depth = _pos("box_depth", box_depth)
-        self.per_finger = bool(per_finger)
-        self.kappa_range = _range("kappa_range", kappa_range, positive=False)
-        self.kappa_tau = float(kappa_tau)
-        if not (math.isfinite(self.kappa_tau) and self.kappa_tau >= 0):
-            raise ValueError(f"kappa_tau must be >= 0, got {kappa_tau!r}")
+        self.per_finger = _bool("per_finger", per_finger)
+        self.kappa_range = _range("kappa_range", kappa_range, positive=False, strict=True)
+        self.kappa_tau = _num("kappa_tau", kappa_tau, positive=False)
         self.palm_speed = _pos("palm_speed", palm_speed)
         self.palm_range = _range("palm_range", palm_range)
         if palm_start is None:
             palm_start = (0.105, 0.115) if self.grip == "I" else (0.13, 0.14)
         self.palm_start = _range("palm_start", palm_start, lo=self.palm_range[0], hi=self.palm_range[1])
         self.target_height = _pos("target_height", target_height)
-        self.hold_time = float(hold_time)
-        if not (math.isfinite(self.hold_time) and self.hold_time >= 0):
-            raise ValueError(f"hold_time must be >= 0, got {hold_time!r}")
-        self.w_lift, self.w_success, self.w_squeeze, self.w_drop = (
-            float(w_lift), float(w_success), float(w_squeeze), float(w_drop))
+        self.hold_time = _num("hold_time", hold_time, positive=False)
+        self.w_lift = _num("w_lift", w_lift, positive=False)
+        self.w_success = _num("w_success", w_success, positive=False)
+        self.w_squeeze = _num("w_squeeze", w_squeeze, positive=False)
+        self.w_drop = _num("w_drop", w_drop, positive=False)
         self.squeeze_margin = _pos("squeeze_margin", squeeze_margin)
         self.drop_distance = _pos("drop_distance", drop_distance)
         self.timestep = _pos("timestep", timestep)
-        if not isinstance(frame_skip, (int, np.integer)) or frame_skip < 1:
-            raise ValueError(f"frame_skip must be a positive integer, got {frame_skip!r}")
-        self.frame_skip = int(frame_skip)
-        self.settle_steps = int(round(float(settle_time) / self.timestep))
-        self.finger_damping_time = float(finger_damping_time)
-        if not (isinstance(shape_points, (int, np.integer)) and shape_points >= 2):
-            raise ValueError(f"shape_points must be an integer >= 2, got {shape_points!r}")
-        self.shape_points = int(shape_points)
+        self.frame_skip = _int("frame_skip", frame_skip, 1)
+        self.settle_time = _num("settle_time", settle_time, positive=False)
+        self.settle_steps = int(round(self.settle_time / self.timestep))
+        self.finger_damping_time = _num("finger_damping_time", finger_damping_time, positive=False)
+        self.shape_points = _int("shape_points", shape_points, 2)
         self.r_tip = _pos("r_tip", r_tip)
         self.spin_friction = _pos("spin_friction", spin_friction)
         self.impratio = _pos("impratio", impratio)
-        self.finger_armature = float(finger_armature)
-        if not (math.isfinite(self.finger_armature) and self.finger_armature >= 0):
-            raise ValueError(f"finger_armature must be >= 0, got {finger_armature!r}")
-        self.width, self.height, self.camera = int(width), int(height), str(camera)
+        self.finger_armature = _num("finger_armature", finger_armature, positive=False)
+        self.width = _int("width", width, 1)
+        self.height = _int("height", height, 1)
+        if not isinstance(camera, str) or not camera:
+            raise ValueError(f"camera must be the name of a camera of the model, got {camera!r}")
+        self.camera = camera
         self.dt = self.timestep * self.frame_skip
         self._lag_alpha = 1.0 if self.kappa_tau == 0 else 1.0 - math.exp(-self.dt / self.kappa_tau)
         self.metadata = dict(self.metadata, render_fps=int(round(1.0 / self.dt)))
 
         self._build()
 
+        if mujoco.mj_name2id(self.model, mujoco.mjtObj.mjOBJ_CAMERA, self.camera) < 0:
+            cams = [self.model.camera(i).name for i in range(self.model.ncam)]
+            raise ValueError(f"camera must be one of {cams}, got {self.camera!r}")
         na = 3 if self.per_finger else 2
         self.action_space = spaces.Box(-1.0, 1.0, (na,), dtype=np.float32)
-        lows, highs = [], []
+        lo, hi = self.kappa_range
+        k_bound = max(2.0, abs(2.0 * (0.0 - lo) / (hi - lo) - 1.0))  # the fingers start straight (kappa = 0)
+        a_bound = max(20.0, 2.0 * max(abs(lo), abs(hi)))
         bounds = {
-            "palm_height": (0, 1), "kappa_command": (-50, 50), "kappa_actual": (-50, 50),
-            "finger_shape": (-20, 20), "tip_position": (-1, 1), "box_position": (-1, 1),
-            "box_quat": (-1, 1), "box_linvel": (-10, 10), "box_angvel": (-100, 100), "contact_force": (0, 100),
+            "palm_height": (0, 10), "kappa_command": (-k_bound, k_bound), "kappa_actual": (-k_bound, k_bound),
+            "finger_shape": (-a_bound, a_bound), "tip_position": (-5, 5), "box_position": (-10, 10),
+            "box_tilt": (-math.pi, math.pi), "box_velocity": (-100, 100), "box_spin": (-100, 100),
+            "box_lift": (-20, 20), "contact_force": (0, 20), "hold": (0, 1),
         }
-        self.obs_layout = obs_layout(self.shape_points)
+        self.obs_layout = obs_layout(self.shape_points, self.per_finger)
+        lows, highs = [], []
+        self.obs_slices, start = {}, 0
         for name, size in self.obs_layout:
-            lo, hi = bounds[name]
-            lows += [lo] * size
-            highs += [hi] * size
-        self._slices, start = {}, 0
-        for name, size in self.obs_layout:
-            self._slices[name] = slice(start, start + size)
+            lows += [bounds[name][0]] * size
+            highs += [bounds[name][1]] * size
+            self.obs_slices[name] = slice(start, start + size)
             start += size
-        sl = self._slices
-        self._rel_idx = (sl["tip_position"].start + 1, sl["tip_position"].start + 3,
-                         sl["box_position"].start + 2, sl["box_linvel"].start + 2)
         self._obs_low = np.array(lows, dtype=np.float64)
         self._obs_high = np.array(highs, dtype=np.float64)
         self.observation_space = spaces.Box(self._obs_low, self._obs_high, dtype=np.float64)
+        self._nk = 2 if self.per_finger else 1
+        self._force_unit = self.g * float(np.mean(self.box_mass_range))
         self._renderer = None
         self.box = BoxParams(np.mean(self.box_width_range), np.mean(self.box_mass_range), np.mean(self.friction_range))
         self._reset_state()
@@ -539,53 +609,98 @@ class PickEnv(gym.Env):
         self._kappa = np.zeros(2)
         self._palm_target = float(self.palm_start[0])
         self._z0 = 0.0
+        self._xy0 = np.zeros(2)
         self._lifted_rel = None
         self._hold = 0.0
-        self._done = False
+        self._phi = 0.0
+        self._needs_reset = True  # until reset() has run; again once the episode terminates
+
+    # Pickling and deep copies: the state is the model (its rest angles change at run time), the data
+    # (including the solver's warm start), the lag filter, the palm target, the episode's bookkeeping and
+    # the RNG, all plain attributes; what must be rebuilt is the view of the rest angles into the model
+    # and the renderer (a GL context, made again on the next render()).
+    def __getstate__(self):
+        state = self.__dict__.copy()
+        state["_renderer"] = None
+        state["_spring_view"] = None
+        if isinstance(state.get("spec"), mujoco.MjSpec):  # the builder's MjSpec cannot be pickled
+            state["spec"] = None
+        return state
+
+    def __setstate__(self, state):
+        self.__dict__.update(state)
+        self._bind_spring_view()
+
+    def _bind_spring_view(self):
+        """Point ``_spring_view`` at the fingers' rest angles inside ``model.qpos_spring`` (when contiguous)."""
+        flat = self._spring_idx
+        if np.array_equal(flat, np.arange(flat[0], flat[0] + flat.size)):
+            self._spring_view = self.model.qpos_spring[flat[0]:flat[0] + flat.size].reshape(2, self.n)
+        else:  # pragma: no cover - the builder always makes them contiguous
+            self._spring_view = None
 
     def _contact_forces(self) -> list:
-        """Force of the box on each finger: ``[normal_0, friction_0, normal_1, friction_1]`` [N]."""
+        """Forces of the box on each finger [N]: ``[normal_0, friction_0, normal_1, friction_1, side_0, side_1]``.
+
+        ``side_f`` is the horizontal (squeezing) component of finger ``f``'s normal forces; a finger pressing on
+        the box's top adds to its normal force but not to its side force.
+        """
         m, d = self.model, self.data
-        out = [0.0, 0.0, 0.0, 0.0]
+        out = [0.0, 0.0, 0.0, 0.0, 0.0, 0.0]
         if d.ncon == 0:
             return out
         fog, bg = self._fog_list, self.box_geom
         con = d.contact
         geoms = con.geom.tolist()
+        nx = con.frame[:, 0].tolist()  # x component of each contact normal
         if self._elliptic:
             # elliptic cones: a contact's constraint rows are its contact-frame force (normal, t1, t2, ...)
             adrs = con.efc_address.tolist()
             ef = d.efc_force
-            for (g1, g2), adr in zip(geoms, adrs):
+            for (g1, g2), adr, n_x in zip(geoms, adrs, nx):
                 f = fog[g2] if g1 == bg else (fog[g1] if g2 == bg else -1)
                 if f >= 0:
-                    out[2 * f] += float(ef[adr])
+                    fn = float(ef[adr])
+                    out[2 * f] += fn
                     out[2 * f + 1] += math.hypot(ef[adr + 1], ef[adr + 2])
+                    out[4 + f] += fn * abs(n_x)
             return out
         cf = self._cf
-        for i, (g1, g2) in enumerate(geoms):
+        for i, ((g1, g2), n_x) in enumerate(zip(geoms, nx)):
             f = fog[g2] if g1 == bg else (fog[g1] if g2 == bg else -1)
             if f >= 0:
                 mujoco.mj_contactForce(m, d, i, cf)
                 out[2 * f] += float(cf[0])
                 out[2 * f + 1] += math.hypot(cf[1], cf[2])
+                out[4 + f] += float(cf[0]) * abs(n_x)
         return out
+
+    def _action_units(self, kappa):
+        lo, hi = self.kappa_range
+        return 2.0 * (kappa[:self._nk] - lo) / (hi - lo) - 1.0
 
     def _get_obs(self, forces):
         d = self.data
         qpos, qvel, xpos = d.qpos, d.qvel, d.geom_xpos
+        inv_l = 1.0 / self.length
         palm_z = float(qpos[self.palm_qpos])
+        palm_v = float(qvel[self.palm_dof])
         bq, bd = self.box_qpos, self.box_dof
+        bx, _, bz, qw, qx, qy, qz = qpos[bq:bq + 7].tolist()
+        vx, _, vz, _, wy, _ = qvel[bd:bd + 6].tolist()
         t0, t1 = self._tips
+        tilt = math.atan2(2.0 * (qx * qz + qw * qy), 1.0 - 2.0 * (qx * qx + qy * qy))
+        fu = self._force_unit
         obs = np.concatenate((
-            (palm_z,), self._kappa_cmd, self._kappa,
+            (palm_z * inv_l,), self._action_units(self._kappa_cmd), self._action_units(self._kappa),
             (qpos[self._fq].reshape(2, self.n) @ self._shape_matrix_t).ravel(),
-            (xpos[t0, 0], xpos[t0, 2] - palm_z, xpos[t1, 0], xpos[t1, 2] - palm_z),
-            qpos[bq:bq + 7], qvel[bd:bd + 6], forces,
+            (xpos[t0, 0] * inv_l, (xpos[t0, 2] - palm_z) * inv_l, xpos[t1, 0] * inv_l, (xpos[t1, 2] - palm_z) * inv_l,
+             bx * inv_l, (bz - palm_z) * inv_l, tilt, vx * inv_l, (vz - palm_v) * inv_l, wy * SPIN_TIME,
+             (bz - self._z0) / self.target_height,
+             math.log1p(forces[0] / fu), math.log1p(forces[1] / fu), math.log1p(forces[2] / fu),
+             math.log1p(forces[3] / fu),
+             min(self._hold / self.hold_time, 1.0) if self.hold_time > 0 else 0.0),
         ))
-        # relative to the palm (it moves along z only)
-        obs[self._rel_idx[2]] -= palm_z
-        obs[self._rel_idx[3]] -= qvel[self.palm_dof]
         np.maximum(obs, self._obs_low, out=obs)
         np.minimum(obs, self._obs_high, out=obs)
         return obs
@@ -618,11 +733,13 @@ class PickEnv(gym.Env):
         d.ctrl[0] = palm_z
         d.qpos[self.box_qpos:self.box_qpos + 3] = [0.0, 0.0, self._pedestal_h + 0.5 * self.box_height]
         d.qpos[self.box_qpos + 3:self.box_qpos + 7] = [1.0, 0.0, 0.0, 0.0]
-        mujoco.mj_forward(m, d)
-        if self.settle_steps:
-            mujoco.mj_step(m, d, nstep=self.settle_steps)
+        with check_invalid_state(d, "reset: settling the fingers and box"):
+            mujoco.mj_forward(m, d)
+            if self.settle_steps:
+                mujoco.mj_step(m, d, nstep=self.settle_steps)
         self._z0 = float(d.qpos[self.box_qpos + 2])
         self._xy0 = np.array(d.qpos[self.box_qpos:self.box_qpos + 2])
+        self._needs_reset = False
         forces = self._contact_forces()
         info = {
             "box_width": width, "box_mass": mass, "box_friction": mu, "palm_height": palm_z,
@@ -645,6 +762,8 @@ class PickEnv(gym.Env):
         return [-1.0 if v < -1.0 else (1.0 if v > 1.0 else v) for v in vals]
 
     def step(self, action):
+        if self._needs_reset:
+            raise ResetNeeded("step() called before reset() or after the episode terminated; call reset()")
         a = self._check_action(action)
         m, d = self.model, self.data
         lo, hi = self.kappa_range
@@ -659,20 +778,19 @@ class PickEnv(gym.Env):
         self._palm_target = min(max(self._palm_target + a[-1] * self.palm_speed * self.dt,
                                     self.palm_range[0]), self.palm_range[1])
         d.ctrl[0] = self._palm_target
+        clear_warnings(d)
         mujoco.mj_step(m, d, nstep=self.frame_skip)
+        why = invalid_state(d)
+        if why is not None:
+            self._needs_reset = True
+            raise PhysicsError(f"step diverged ({why})")
 
         forces = self._contact_forces()
-        obs = self._get_obs(forces)
         bx, by, box_z, _, qx, qy, _ = d.qpos[self.box_qpos:self.box_qpos + 7].tolist()
         gain = box_z - self._z0
         rel = box_z - float(d.qpos[self.palm_qpos])
-        n0, f0, n1, f1 = forces
+        n0, f0, n1, f1, s0, s1 = forces
         both = n0 > 0.0 and n1 > 0.0
-        weight = self.box.mass * self.g
-        allow = self.squeeze_margin * weight / (2.0 * self.box.friction)
-        excess = max(n0 - allow, 0.0) + max(n1 - allow, 0.0)
-        r_lift = self.w_lift * min(max(gain / self.target_height, 0.0), 1.0)
-        r_squeeze = -self.w_squeeze * excess / weight
         if self._lifted_rel is None and gain > 0.005 and both:
             self._lifted_rel = rel
         dropped = self._lifted_rel is not None and rel < self._lifted_rel - self.drop_distance
@@ -684,15 +802,29 @@ class PickEnv(gym.Env):
         else:
             self._hold = 0.0
         success = self._hold >= self.hold_time - 1e-9
+        lost = (dropped or knocked) and not success
+        # progress: potential phi = clip(gain / target, 0, 1), zero once the box is lost
+        phi = 0.0 if lost else min(max(gain / self.target_height, 0.0), 1.0)
+        r_lift = self.w_lift * (phi - self._phi)
+        self._phi = phi
+        # squeeze beyond what holds the box, side contacts only, bounded per step
+        weight = self.box.mass * self.g
+        allow = self.squeeze_margin * weight / (2.0 * self.box.friction)
+        x0 = max(s0 - allow, 0.0) / weight
+        x1 = max(s1 - allow, 0.0) / weight
+        r_squeeze = -0.5 * self.w_squeeze * (x0 / (1.0 + x0) + x1 / (1.0 + x1))
         r_success = self.w_success if success else 0.0
-        r_drop = -self.w_drop if (dropped or knocked) and not success else 0.0
-        terminated = bool(success or dropped or knocked)
+        r_drop = -self.w_drop if lost else 0.0
+        terminated = bool(success or lost)
+        self._needs_reset = terminated
         reward = r_lift + r_success + r_squeeze + r_drop
+        obs = self._get_obs(forces)
         info = {
             "reward_lift": r_lift, "reward_success": r_success, "reward_squeeze": r_squeeze,
             "reward_drop": r_drop, "is_success": success, "dropped": dropped and not success,
             "knocked_over": knocked and not success, "box_lift": gain,
-            "normal_force": np.array((n0, n1)), "friction_force": np.array((f0, f1)), "hold_time": self._hold,
+            "normal_force": np.array((n0, n1)), "friction_force": np.array((f0, f1)),
+            "side_force": np.array((s0, s1)), "hold_time": self._hold,
         }
         return obs, reward, terminated, False, info
 

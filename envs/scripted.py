@@ -28,7 +28,7 @@ from simgrip.reference.elastica import ElasticaError, solve
 from simgrip.profiles import Uniform
 from simgrip.params import DimensionlessParams
 
-__all__ = ["ScriptedPickPolicy", "choose_kappa"]
+__all__ = ["ObservationPickPolicy", "ScriptedPickPolicy", "choose_kappa"]
 
 
 def choose_kappa(grip: str, params: DimensionlessParams, *, safety: float = 2.0,
@@ -75,10 +75,13 @@ def choose_kappa(grip: str, params: DimensionlessParams, *, safety: float = 2.0,
 
 
 class ScriptedPickPolicy:
-    """Open-loop pick: ramp ``kappa`` to the elastica choice, settle, lift, hold.
+    """Oracle open-loop pick: ramp ``kappa`` to the elastica choice, settle, lift, hold.
 
-    Use as ``policy.reset(env, info)`` after ``env.reset`` and
-    ``action = policy(obs)`` each step.  Works with ``per_finger`` either way.
+    The oracle reads the episode's true box (width, mass, friction: ``env.box``) to
+    choose its curvature from the elastica; :class:`ObservationPickPolicy` is the
+    honest variant that sees only what a learned policy sees.  Use as
+    ``policy.reset(env, info)`` after ``env.reset`` and ``action = policy(obs)``
+    each step.  Works with ``per_finger`` either way.
 
     Parameters
     ----------
@@ -90,6 +93,8 @@ class ScriptedPickPolicy:
         Palm speed while lifting, as a fraction of the env's ``palm_speed``.
     extra_lift : float
         Palm travel beyond ``target_height`` [m] (the soft fingers sag under the box).
+    kappa_open, open_time : float
+        Grip III: the claw's curvature and the seconds to open it before descending.
     """
 
     def __init__(self, safety: float = 2.0, ramp_time: float = 0.6, settle_time: float = 0.3,
@@ -103,24 +108,31 @@ class ScriptedPickPolicy:
         self.kappa_open = float(kappa_open)
         self.open_time = float(open_time)
         self.kappa = None
+        self.depth = None
         self.details = {}
 
-    def reset(self, env, info=None):
-        env = env.unwrapped
-        self.env = env
+    def _plan(self, env) -> tuple[float, float | None]:
+        """``(kappa, depth)``: the curvature to grip with and, for Grip III, how deep under the palm
+        (in finger lengths) the box's lower edge is carried; from the true box (oracle)."""
         p = env.dimensionless()
         # the contact sits on the tip sphere: its centre is r_tip outside the box face
         b_eff = (env.box.width + 2.0 * env.r_tip) / env.length
-        self.grasp_height = None
         if env.grip == "I":
-            self.kappa, self.details = choose_kappa("I", p.replace(b=min(b_eff, 1.9)), safety=self.safety)
-        else:
-            # cradle: the box's lower edge rests on the link capsules, r_tip outside the centreline
-            self.kappa, self.details = choose_kappa("III", p.replace(b=min(b_eff, 1.9)), safety=self.safety)
-            depth = 0.58 if self.details["contact"] is None else -float(self.details["contact"][1])
-            bottom = env.data.qpos[env.box_qpos + 2] - 0.5 * env.box_height
-            self.grasp_height = bottom + depth * env.length + env.r_tip
+            kappa, self.details = choose_kappa("I", p.replace(b=min(b_eff, 1.9)), safety=self.safety)
+            return kappa, None
+        # cradle: the box's lower edge rests on the link capsules, r_tip outside the centreline
+        kappa, self.details = choose_kappa("III", p.replace(b=min(b_eff, 1.9)), safety=self.safety)
+        depth = 0.58 if self.details["contact"] is None else -float(self.details["contact"][1])
+        return kappa, depth
+
+    def reset(self, env, info=None):
+        """Plan the episode of ``env`` (just reset); returns the chosen curvature."""
+        env = env.unwrapped
+        self.env = env
+        self.kappa, self.depth = self._plan(env)
+        self.grasp_height = None
         self.t = 0.0
+        self.palm_target = None  # the palm's target height [m], integrated from our own commands
         self.palm0 = None
         self.palm_lift0 = None
         return self.kappa
@@ -129,16 +141,33 @@ class ScriptedPickPolicy:
         lo, hi = self.env.kappa_range
         return float(np.clip(2.0 * (kappa - lo) / (hi - lo) - 1.0, -1.0, 1.0))
 
+    def _first(self, obs):
+        """Read the palm's start height and (Grip III) the grasp height off the first observation."""
+        env = self.env
+        sl, L = env.obs_slices, env.length
+        self.palm_target = self.palm0 = float(obs[sl["palm_height"]][0]) * L
+        if self.depth is not None:
+            # box centre relative to the palm -> its lower edge above the table
+            bottom = self.palm0 + float(obs[sl["box_position"]][1]) * L - 0.5 * env.box_height
+            self.grasp_height = bottom + self.depth * L + env.r_tip
+
+    def _kappa_now(self, t, obs):
+        """Curvature command at time ``t`` after the lift began (Grip I hook for closed-loop variants)."""
+        return self.kappa
+
     def __call__(self, obs):
         env = self.env
-        if self.palm0 is None:
-            self.palm0 = env._palm_target
+        if self.palm_target is None:
+            self._first(obs)
         t = self.t
         self.t += env.dt
         vz = 0.0
         if self.grasp_height is None:  # Grip I: ramp, settle, lift
-            k = self.kappa * min(1.0, t / self.ramp_time) if self.ramp_time > 0 else self.kappa
             t_lift = self.ramp_time + self.settle_time
+            if t < t_lift:
+                k = self.kappa * min(1.0, t / self.ramp_time) if self.ramp_time > 0 else self.kappa
+            else:
+                k = self._kappa_now(t - t_lift, obs)
         else:  # Grip III: open the claw, descend around the box, curl under it, lift
             t_down = self.open_time + max(0.0, self.palm0 - self.grasp_height) / (env.palm_speed * self.lift_speed * 2)
             if t < self.open_time:
@@ -148,16 +177,61 @@ class ScriptedPickPolicy:
             else:
                 w = min(1.0, (t - t_down) / self.ramp_time) if self.ramp_time > 0 else 1.0
                 k = self.kappa_open + w * (self.kappa - self.kappa_open)
-            if self.open_time <= t and env._palm_target > self.grasp_height:
-                vz = -min(1.0, (env._palm_target - self.grasp_height) / (env.palm_speed * env.dt))
+            if self.open_time <= t and self.palm_target > self.grasp_height:
+                vz = -min(1.0, (self.palm_target - self.grasp_height) / (env.palm_speed * env.dt))
             t_lift = t_down + self.ramp_time + self.settle_time
             if t >= t_lift and self.palm_lift0 is None:
-                self.palm_lift0 = env._palm_target
+                self.palm_lift0 = self.palm_target
         if t >= t_lift:
             base = self.palm0 if self.grasp_height is None else self.palm_lift0
             goal = base + env.target_height + self.extra_lift
-            remaining = goal - env._palm_target
+            remaining = goal - self.palm_target
             vz = min(self.lift_speed, remaining / (env.palm_speed * env.dt)) if remaining > 0 else 0.0
+        lo, hi = env.palm_range
+        self.palm_target = min(max(self.palm_target + vz * env.palm_speed * env.dt, lo), hi)
         ak = self._a_kappa(k)
         a = [ak, ak, vz] if env.per_finger else [ak, vz]
         return np.array(a, dtype=np.float32)
+
+
+class ObservationPickPolicy(ScriptedPickPolicy):
+    """Honest scripted pick: sees only the observation and the env's configuration.
+
+    Unlike the oracle :class:`ScriptedPickPolicy` it does not know the episode's box
+    mass, width or friction: it grips with one curvature ``kappa`` chosen for the
+    whole randomised range (Grip III: one carrying depth ``depth``), and while
+    lifting it curls further by ``kappa_step`` whenever the observed box lags the
+    palm (``box_position`` sinking by more than ``slip`` finger lengths since the
+    lift began), down to ``kappa_min``.  The configuration it reads (finger
+    length, control step, palm speed and range, curvature range, target height,
+    box height, tip radius, observation layout) is what a controller author sets
+    when making the env, not hidden state.
+    """
+
+    def __init__(self, kappa: float | None = None, depth: float = 0.58, kappa_step: float = 0.25,
+                 kappa_min: float | None = None, slip: float = 0.01, **kwargs):
+        super().__init__(**kwargs)
+        self.kappa_fixed = kappa
+        self.depth_fixed = float(depth)
+        self.kappa_step = float(kappa_step)
+        self.kappa_min = kappa_min
+        self.slip = float(slip)
+
+    def _plan(self, env):
+        self.details = {}
+        self._rel0 = None
+        if env.grip == "I":
+            k = -6.0 if self.kappa_fixed is None else float(self.kappa_fixed)
+            return k, None
+        k = -4.5 if self.kappa_fixed is None else float(self.kappa_fixed)
+        return k, self.depth_fixed
+
+    def _kappa_now(self, t, obs):
+        rel = float(obs[self.env.obs_slices["box_position"]][1])
+        if self._rel0 is None:
+            self._rel0 = rel
+        elif rel < self._rel0 - self.slip:
+            lo = self.env.kappa_range[0] if self.kappa_min is None else float(self.kappa_min)
+            self.kappa = max(self.kappa - self.kappa_step, lo)
+            self._rel0 = rel
+        return self.kappa

@@ -1,0 +1,208 @@
+"""Train SAC and PPO (Stable-Baselines3, library defaults) on a simgrip env and evaluate them.
+
+Needs the optional extra: ``pip install "simgrip[rl]"`` (Stable-Baselines3 and
+PyTorch; a CPU build of PyTorch is enough).
+
+    python examples/train_sb3.py --algo ppo sac --minutes 15 --out runs/pick [--env simgrip/Pick-v1]
+
+For each algorithm: ``algo("MlpPolicy", env)`` with Stable-Baselines3's default
+hyperparameters on one environment, trained until ``--steps`` environment steps
+or ``--minutes`` of wall-clock time, whichever comes first (the training stops
+at the end of the step that crosses the budget).  Then the deterministic
+policy runs ``--eval-episodes`` episodes on held-out seeds (``--eval-seed``,
+``--eval-seed + 1``, ...; training episodes are drawn from ``--seed``).
+
+Writes into ``--out`` (created if needed, files written whole):
+
+* ``<algo>_curve.csv``: one row per training episode: ``episode, timesteps,
+  wall_s, return, length, success``;
+* ``<algo>_eval.json``: ``{"algo", "env", "timesteps", "wall_s", "episodes",
+  "success_rate", "mean_return", ...}`` (also printed on one line);
+* ``<algo>_model.zip``: the trained policy;
+* ``curves.png``: success rate of the training episodes (moving average over
+  100 episodes) against environment steps and against wall-clock minutes, for
+  every ``*_curve.csv`` in ``--out`` (so two runs into one folder share a plot).
+
+``--threads`` sets PyTorch's intra-op threads (default 1: one core per
+training; run two trainings side by side to use two cores).
+"""
+
+from __future__ import annotations
+
+import argparse
+import csv
+import io
+import json
+import sys
+import time
+from pathlib import Path
+
+import gymnasium as gym
+import numpy as np
+
+import simgrip.envs  # noqa: F401  (registers the simgrip ids)
+from simgrip.io import atomic_write, write_json
+
+ALGOS = ("ppo", "sac")
+
+
+def _positive(kind):
+    def parse(text):
+        try:
+            v = kind(text)
+        except ValueError:
+            raise argparse.ArgumentTypeError(f"expected a positive {kind.__name__}, got {text!r}") from None
+        if not v > 0 or v != v:
+            raise argparse.ArgumentTypeError(f"expected a positive {kind.__name__}, got {text!r}")
+        return v
+    return parse
+
+
+def _non_negative_int(text):
+    try:
+        v = int(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"expected an integer >= 0, got {text!r}") from None
+    if v < 0:
+        raise argparse.ArgumentTypeError(f"expected an integer >= 0, got {text!r}")
+    return v
+
+
+def evaluate(model, env_id: str, episodes: int, seed0: int) -> dict:
+    """Run the deterministic policy of ``model`` for ``episodes`` episodes on seeds ``seed0 + i``."""
+    env = gym.make(env_id)
+    wins, returns, lengths = 0, [], []
+    try:
+        for i in range(episodes):
+            obs, _ = env.reset(seed=seed0 + i)
+            ret, n = 0.0, 0
+            while True:
+                action, _ = model.predict(obs, deterministic=True)
+                obs, reward, terminated, truncated, info = env.step(action)
+                ret += float(reward)
+                n += 1
+                if terminated or truncated:
+                    break
+            wins += bool(info["is_success"])
+            returns.append(ret)
+            lengths.append(n)
+    finally:
+        env.close()
+    return {"episodes": episodes, "success_rate": wins / episodes, "mean_return": float(np.mean(returns)),
+            "mean_length": float(np.mean(lengths)), "eval_seeds": [seed0, seed0 + episodes - 1]}
+
+
+def train(algo: str, env_id: str, *, steps: int, minutes: float, seed: int, out: Path,
+          eval_episodes: int, eval_seed: int) -> dict:
+    """Train ``algo`` with library defaults within the budget, write its curve, model and evaluation."""
+    from stable_baselines3 import PPO, SAC
+    from stable_baselines3.common.callbacks import BaseCallback
+    from stable_baselines3.common.env_util import make_vec_env
+
+    cls = {"ppo": PPO, "sac": SAC}[algo]
+    rows = []
+    t_start = time.perf_counter()
+    budget = 60.0 * minutes
+
+    class Budget(BaseCallback):
+        """Record every finished training episode; stop when the wall-clock budget is spent."""
+
+        def _on_step(self) -> bool:
+            for info in self.locals.get("infos", ()):
+                ep = info.get("episode")
+                if ep is not None:
+                    rows.append((len(rows), self.num_timesteps, time.perf_counter() - t_start, float(ep["r"]),
+                                 int(ep["l"]), int(bool(info.get("is_success", False)))))
+            return time.perf_counter() - t_start < budget
+
+    env = make_vec_env(env_id, n_envs=1, seed=seed)
+    model = cls("MlpPolicy", env, seed=seed, verbose=0)
+    model.learn(total_timesteps=steps, callback=Budget())
+    wall = time.perf_counter() - t_start
+    env.close()
+
+    buf = io.StringIO()
+    w = csv.writer(buf)
+    w.writerow(["episode", "timesteps", "wall_s", "return", "length", "success"])
+    w.writerows(rows)
+    with atomic_write(out / f"{algo}_curve.csv") as fh:
+        fh.write(buf.getvalue())
+    with atomic_write(out / f"{algo}_model.zip", "wb") as fh:
+        model.save(fh)
+    result = {"algo": algo.upper(), "env": env_id, "timesteps": int(model.num_timesteps), "wall_s": round(wall, 1),
+              "train_episodes": len(rows), "seed": seed, "hyperparameters": "Stable-Baselines3 defaults"}
+    result.update(evaluate(model, env_id, eval_episodes, eval_seed))
+    write_json(out / f"{algo}_eval.json", result)
+    return result
+
+
+def plot_curves(out: Path, window: int = 100) -> Path | None:
+    """Plot every ``*_curve.csv`` in ``out`` into ``out/curves.png``; returns its path (None if no curves)."""
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    curves = sorted(out.glob("*_curve.csv"))
+    if not curves:
+        return None
+    fig, axes = plt.subplots(1, 2, figsize=(10, 3.8), constrained_layout=True)
+    for path in curves:
+        data = np.genfromtxt(path, delimiter=",", names=True)
+        if data.size < 2:
+            continue
+        succ = np.atleast_1d(data["success"]).astype(float)
+        k = min(window, succ.size)
+        avg = np.convolve(succ, np.ones(k) / k, mode="valid")
+        label = path.name.split("_")[0].upper()
+        axes[0].plot(np.atleast_1d(data["timesteps"])[k - 1:], avg, label=label)
+        axes[1].plot(np.atleast_1d(data["wall_s"])[k - 1:] / 60.0, avg, label=label)
+    for ax, xlabel in zip(axes, ("environment steps", "wall-clock minutes")):
+        ax.set_xlabel(xlabel)
+        ax.set_ylabel(f"training success rate (last {window} episodes)")
+        ax.set_ylim(-0.02, 1.02)
+        ax.grid(alpha=0.3)
+        ax.legend()
+    axes[0].set_xscale("log")
+    target = out / "curves.png"
+    with atomic_write(target, "wb") as fh:
+        fig.savefig(fh, format="png", dpi=110)
+    plt.close(fig)
+    return target
+
+
+def main(argv=None) -> int:
+    p = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
+    p.add_argument("--algo", nargs="+", choices=ALGOS, default=list(ALGOS), help="algorithms, trained one after the other")
+    p.add_argument("--env", default="simgrip/Pick-v1", help="registered env id (default simgrip/Pick-v1)")
+    p.add_argument("--minutes", type=_positive(float), default=15.0, help="wall-clock budget per algorithm (default 15)")
+    p.add_argument("--steps", type=_positive(int), default=10_000_000, help="environment-step budget per algorithm")
+    p.add_argument("--seed", type=_non_negative_int, default=0, help="training seed (default 0)")
+    p.add_argument("--eval-episodes", type=_positive(int), default=50, help="held-out evaluation episodes (default 50)")
+    p.add_argument("--eval-seed", type=_non_negative_int, default=1_000_000, help="first evaluation seed (default 1000000)")
+    p.add_argument("--threads", type=_positive(int), default=1, help="PyTorch threads (default 1)")
+    p.add_argument("--out", required=True, help="output folder")
+    args = p.parse_args(argv)
+    try:
+        import stable_baselines3  # noqa: F401
+        import torch
+    except ImportError:
+        p.error('needs Stable-Baselines3 and PyTorch: pip install "simgrip[rl]"')
+    if args.env not in gym.registry:
+        p.error(f"--env: unknown id {args.env!r}")
+    out = Path(args.out)
+    try:
+        out.mkdir(parents=True, exist_ok=True)
+    except OSError as e:
+        p.error(f"--out: cannot create {out}: {e}")
+    torch.set_num_threads(args.threads)
+    for algo in args.algo:
+        result = train(algo, args.env, steps=args.steps, minutes=args.minutes, seed=args.seed, out=out,
+                       eval_episodes=args.eval_episodes, eval_seed=args.eval_seed)
+        print(json.dumps(result), flush=True)
+    plot_curves(out)
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
