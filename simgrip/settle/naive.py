@@ -229,7 +229,8 @@ def naive_relax(
             return {"steps": steps, "dt": dt, "setup_s": setup_s, "omega_max": wmax, "omega_min": wmin,
                     "converged": False, "matched": False, "steps_to_tol": None, "time_to_tol_s": math.inf,
                     "tol_extrapolated": False, "steps_to_match": None, "time_to_match_s": math.inf,
-                    "match_extrapolated": False, "residual": math.nan, "measured_s": wall, "note": "diverged"}
+                    "match_extrapolated": False, "residual": math.nan, "measured_s": wall, "note": "diverged",
+                    "diverged": True}
         rate = wall / max(steps, 1)
         lost = False
         if wdofs:
@@ -242,7 +243,8 @@ def naive_relax(
                     "converged": False, "matched": False, "steps_to_tol": None, "time_to_tol_s": math.inf,
                     "tol_extrapolated": False, "steps_to_match": None, "time_to_match_s": math.inf,
                     "match_extrapolated": False, "residual": res, "measured_s": wall,
-                    "note": f"workpiece slid off after {steps} steps (MuJoCo's soft friction): no static state"}
+                    "note": f"workpiece slid off after {steps} steps (MuJoCo's soft friction): no static state",
+                    "workpiece_lost": True}
         out = {"steps": steps, "dt": dt, "setup_s": setup_s, "omega_max": wmax, "omega_min": wmin,
                "residual": res, "measured_s": wall, "note": ""}
         notes = []
