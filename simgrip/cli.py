@@ -2,22 +2,46 @@
 
 Every command works in the paper's dimensionless units (lengths over the finger
 length, forces on the rod over ``rho g l``, z up, the finger's base at the
-origin).  Bad input prints one clear message naming the parameter and exits
-with status 2.
+origin).
+
+What every command does with its input and with an interrupt:
+
+* bad input prints one line naming the parameter (or option) and exits with
+  status 2, before any work: output paths (``--out``, ``--png``, ``--gif``) are
+  checked first, then the values; numeric options take negative values as
+  values (``--kappa -1e6``, ``--kappa -inf`` reach validation);
+* a solver that cannot converge says so and exits with status 1;
+* Ctrl-C (SIGINT) or SIGTERM prints ``simgrip <command>: interrupted`` and
+  exits with status 130, without a traceback; the parallel runner has stopped
+  its workers by then, and results, written whole or not at all
+  (:func:`simgrip.io.atomic_write`), leave no partial file behind;
+* a closed standard output (``simgrip compare ... | head -1``) ends quietly.
 """
 
 from __future__ import annotations
 
 import argparse
+import contextlib
 import json
+import signal
 import sys
+import threading
+from pathlib import Path
 
-from simgrip.params import DimensionlessParams, check_grip
+from simgrip.params import MAX_LINKS, DimensionlessParams, check_grip
 from simgrip.profiles import Concentrated, Uniform
 
 __all__ = ["main", "build_parser"]
 
+EXIT_FAILED = 1
 EXIT_USAGE = 2
+EXIT_INTERRUPTED = 130  # 128 + SIGINT, what shells report for a Ctrl-C
+#: Most nodes of solve's discrete stability check: its error falls as 1/K^2, ~1e-8 relative here, in about 2 s.
+MAX_K = 16384
+#: Links above which simulate/compare say on stderr that the settle takes a while.
+SLOW_LINKS = 256
+#: Output options and whether each names a folder (True) or a file (False), checked before any work.
+OUTPUT_OPTIONS = {"out": ("--out", True), "png": ("--png", False), "gif": ("--gif", False)}
 
 
 class _Parser(argparse.ArgumentParser):
@@ -51,7 +75,7 @@ def build_parser() -> argparse.ArgumentParser:
 
     p = sub.add_parser("solve", help="solve the elastica boundary-value problem of one grip")
     _add_state_options(p)
-    p.add_argument("--K", type=int, default=128, help="nodes of the discrete stability check [default 128]")
+    p.add_argument("--K", type=int, default=128, help=f"nodes of the discrete stability check, 2..{MAX_K} [default 128]")
 
     for name, text in (
         ("simulate", "settle the MuJoCo finger (symmetric reduction) and print its state"),
@@ -75,6 +99,11 @@ def build_parser() -> argparse.ArgumentParser:
     from simgrip.harness import stress as _stress
 
     _stress.add_arguments(p)
+
+    p = sub.add_parser("sweep", help="design map: settled simulation beside the elastica BVP over a grid (Dask)")
+    from simgrip.harness import sweep as _sweep  # light: Dask, MuJoCo and matplotlib are imported when it runs
+
+    _sweep.add_arguments(p)
 
     p = sub.add_parser("render", help="PNG of a settled grip and GIF of a scripted pick (pick environment)")
     p.add_argument("--grip", default="I", help="I (pinch) or III (cradle) [default I]")
@@ -105,32 +134,53 @@ def _profile(args, grip: str):
     raise ValueError(f"profile must be 'uniform' or 'concentrated', got {args.profile!r}")
 
 
+def _links(value) -> int:
+    """``--links`` as an int in ``[2, MAX_LINKS]`` (see :mod:`simgrip.params` for the maximum's reason)."""
+    from simgrip.chain import check_links
+
+    n = check_links(value)
+    if n > MAX_LINKS:
+        raise ValueError(
+            f"links must be at most {MAX_LINKS}, got {n!r} (the chain's error at {MAX_LINKS} links is "
+            f"already below the contact tolerance; see simgrip.params)"
+        )
+    if n > SLOW_LINKS:
+        print(f"simgrip: {n} links per finger: building and settling may take minutes", file=sys.stderr, flush=True)
+    return n
+
+
+def _seed(value) -> int:
+    """A seed: a non-negative integer (NumPy's and Gymnasium's generators refuse negative ones)."""
+    if isinstance(value, bool) or not isinstance(value, int) or value < 0:
+        raise ValueError(f"seed must be a non-negative integer, got {value!r}")
+    return value
+
+
 def _cmd_solve(args) -> dict:
     from simgrip.report import solve_record
 
     grip = check_grip(args.grip)
+    if args.K > MAX_K:
+        raise ValueError(f"K must be at most {MAX_K}, got {args.K!r} (the stability check's error is ~1e-8 there)")
     return solve_record(grip, _params(args), _profile(args, grip), K=args.K)
 
 
 def _cmd_simulate(args) -> dict:
-    from simgrip.chain import check_links
     from simgrip.compare import settled_record, simulate
 
     grip = check_grip(args.grip)
-    params, profile, links = _params(args), _profile(args, grip), check_links(args.links)
+    params, profile, links = _params(args), _profile(args, grip), _links(args.links)
     return settled_record(simulate(grip, params, profile, links, method=args.method), params, profile)
 
 
-def _cmd_compare(args):
-    from simgrip.chain import check_links
+def _cmd_compare(args) -> str:
     from simgrip.compare import compare
     from simgrip.io import to_jsonable
     from simgrip.report import format_comparison
 
     grip = check_grip(args.grip)
-    result = compare(grip, _params(args), _profile(args, grip), check_links(args.links), method=args.method)
-    print(json.dumps(to_jsonable(result), allow_nan=False) if args.json else format_comparison(result))
-    return None
+    result = compare(grip, _params(args), _profile(args, grip), _links(args.links), method=args.method)
+    return json.dumps(to_jsonable(result), allow_nan=False) if args.json else format_comparison(result)
 
 
 def _cmd_render(args):
@@ -141,11 +191,10 @@ def _cmd_render(args):
         os.environ.setdefault("PYOPENGL_PLATFORM", "osmesa")
     from simgrip.envs.rendering import render_grip_png, render_pick_gif
 
-    render_grip_png(args.png, grip=args.grip, seed=args.seed)
-    render_pick_gif(args.gif, grip=args.grip, seed=args.seed)
-    print(args.png)
-    print(args.gif)
-    return None
+    seed = _seed(args.seed)
+    render_grip_png(args.png, grip=args.grip, seed=seed)
+    render_pick_gif(args.gif, grip=args.grip, seed=seed)
+    return [str(args.png), str(args.gif)]
 
 
 def _cmd_bench(args) -> dict:
@@ -163,25 +212,39 @@ def _cmd_stress(args) -> dict:
         raise ValueError(f"jobs must be a positive integer, got {args.jobs!r}")
     if args.cases < 1:
         raise ValueError(f"cases must be a positive integer, got {args.cases!r}")
+    _seed(args.seed)
     return cli_stress(args)
+
+
+def _cmd_sweep(args):
+    from simgrip.harness.sweep import cli_sweep
+
+    return cli_sweep(args)
 
 
 def _cmd_figures(args):
     from simgrip.figures import cli_figures
 
-    for path in cli_figures(args):
-        print(path)
-    return None
+    return [str(path) for path in cli_figures(args)]
 
 
-def _print(record: dict, as_json: bool) -> None:
+def _print(result, as_json: bool) -> None:
+    """Print what a command returned: a record (table or JSON), a text, or lines (e.g. files written)."""
     from simgrip.io import to_jsonable
     from simgrip.report import format_table
 
-    if as_json or any(isinstance(v, (dict, list)) and k != "params" for k, v in record.items() if k not in ("tip", "contact", "warnings")):
-        print(json.dumps(to_jsonable(record), allow_nan=False, indent=None if as_json else 2))
+    if result is None:
+        return
+    if isinstance(result, str):
+        print(result)
+    elif isinstance(result, (list, tuple)):
+        for line in result:
+            print(line)
+    elif as_json or any(isinstance(v, (dict, list)) and k != "params" for k, v in result.items()
+                        if k not in ("tip", "contact", "warnings")):
+        print(json.dumps(to_jsonable(result), allow_nan=False, indent=None if as_json else 2))
     else:
-        print(format_table(record))
+        print(format_table(result))
 
 
 COMMANDS = {
@@ -192,30 +255,157 @@ COMMANDS = {
     "render": _cmd_render,
     "bench": _cmd_bench,
     "stress": _cmd_stress,
+    "sweep": _cmd_sweep,
 }
 
 
-def main(argv=None) -> int:
-    """Entry point of the ``simgrip`` command; returns the exit status."""
-    parser = build_parser()
-    args = parser.parse_args(argv)
-    try:
-        record = COMMANDS[args.command](args)
-    except ValueError as exc:
-        print(f"simgrip {args.command}: error: {exc}", file=sys.stderr)
-        return EXIT_USAGE
-    except RuntimeError as exc:  # ElasticaError, DiscreteError, SettleError: named, never silent
-        print(f"simgrip {args.command}: failed: {type(exc).__name__}: {exc}", file=sys.stderr)
-        return 1
-    try:
-        if record is not None:
-            _print(record, getattr(args, "json", False))
-        sys.stdout.flush()
-    except BrokenPipeError:  # e.g. piped into head: not an error of ours
-        import os
+def _negative_values(argv: list[str], parser: argparse.ArgumentParser) -> list[str]:
+    """``["--kappa", "-1e6"]`` -> ``["--kappa=-1e6"]`` for every option that takes one value.
 
+    argparse reads ``-1e6``, ``-inf`` or ``-nan`` after an option as another
+    option ("expected one argument"); joined with ``=`` they reach the option's
+    type and then validation, which names the parameter.
+    """
+    takes_value = set()
+    parsers = [parser]
+    while parsers:
+        p = parsers.pop()
+        for action in p._actions:
+            if isinstance(action, argparse._SubParsersAction):
+                parsers.extend(action.choices.values())
+            elif action.option_strings and action.nargs is None:
+                takes_value.update(action.option_strings)
+    out: list[str] = []
+    i = 0
+    while i < len(argv):
+        tok = argv[i]
+        if tok == "--":
+            out.extend(argv[i:])
+            break
+        nxt = argv[i + 1] if i + 1 < len(argv) else None
+        if tok in takes_value and isinstance(nxt, str) and nxt.startswith("-") and _is_number(nxt):
+            out.append(f"{tok}={nxt}")
+            i += 2
+            continue
+        out.append(tok)
+        i += 1
+    return out
+
+
+def _is_number(text: str) -> bool:
+    try:
+        float(text)
+    except ValueError:
+        return False
+    return True
+
+
+def _check_outputs(args) -> list[Path]:
+    """Check every output path of the command before any work (nothing is created); returns the folders.
+
+    The one check of ``--out`` (bench, stress, figures, sweep, ...) and of
+    render's ``--png``/``--gif``: ``ValueError`` naming the option when a path
+    is an existing file/folder of the wrong kind or cannot be written.
+    """
+    from simgrip.io import check_output_dir, check_output_file
+
+    folders = []
+    for attr, (option, is_dir) in OUTPUT_OPTIONS.items():
+        value = getattr(args, attr, None)
+        if value is None:
+            continue
+        if is_dir:
+            folders.append(check_output_dir(value, option, create=False))
+        else:
+            folders.append(check_output_file(value, option, create=False).parent)
+    return folders
+
+
+def _clean_after_interrupt(folders: list[Path], created: list[Path]) -> None:
+    """Remove partial files (of workers killed mid-write) and output folders this run created and left empty."""
+    from simgrip.io import remove_partial_files
+
+    for folder in folders:
+        remove_partial_files(folder, recursive=folder not in (Path("."), Path.cwd()))
+    for folder in created:
+        with contextlib.suppress(OSError):
+            folder.rmdir()  # only if empty
+
+
+@contextlib.contextmanager
+def _sigterm_as_interrupt():
+    """Within the block, SIGTERM raises ``KeyboardInterrupt`` like Ctrl-C (main thread only)."""
+    if threading.current_thread() is not threading.main_thread():
+        yield
+        return
+
+    def _raise(signum, frame):
+        raise KeyboardInterrupt
+
+    previous = signal.signal(signal.SIGTERM, _raise)
+    try:
+        yield
+    finally:
+        signal.signal(signal.SIGTERM, previous)
+
+
+def _command_name(argv: list[str]) -> str:
+    return next((a for a in argv if a in COMMANDS), "")
+
+
+def _quiet_stdout() -> None:
+    """Point stdout at /dev/null after a broken pipe, so that the interpreter's final flush stays quiet."""
+    import os
+
+    with contextlib.suppress(OSError, ValueError):
         os.dup2(os.open(os.devnull, os.O_WRONLY), sys.stdout.fileno())
-    return 0
+
+
+def main(argv=None) -> int:
+    """Entry point of the ``simgrip`` command; returns the exit status.
+
+    0: done; 1: a solver or the cluster failed (named); 2: bad input (named);
+    130: interrupted (Ctrl-C or SIGTERM).
+    """
+    argv = list(sys.argv[1:] if argv is None else argv)
+    command = _command_name(argv)
+    prefix = f"simgrip {command}" if command else "simgrip"
+    folders: list[Path] = []
+    created: list[Path] = []
+    with _sigterm_as_interrupt():
+        try:
+            try:
+                parser = build_parser()
+                args = parser.parse_args(_negative_values(argv, parser))
+            except SystemExit as exc:  # --help, or argparse's own message (exit 2)
+                return exc.code if isinstance(exc.code, int) else (0 if exc.code is None else EXIT_USAGE)
+            try:
+                folders = _check_outputs(args)
+                created = [f for f in folders if not f.exists()]
+                result = COMMANDS[args.command](args)
+            except ValueError as exc:
+                print(f"{prefix}: error: {exc}", file=sys.stderr)
+                return EXIT_USAGE
+            except RuntimeError as exc:  # ElasticaError, DiscreteError, SettleError, RunnerError: named, never silent
+                print(f"{prefix}: failed: {type(exc).__name__}: {exc}", file=sys.stderr)
+                return EXIT_FAILED
+            try:
+                _print(result, getattr(args, "json", False))
+                sys.stdout.flush()
+            except BrokenPipeError:  # e.g. piped into head: not an error of ours
+                _quiet_stdout()
+            return 0
+        except KeyboardInterrupt:
+            previous = signal.signal(signal.SIGINT, signal.SIG_IGN)  # a second Ctrl-C must not cut the clean-up short
+            try:
+                _clean_after_interrupt(folders, created)
+                with contextlib.suppress(OSError, ValueError):
+                    start = "\n" if sys.stderr.isatty() else ""  # off a progress bar's line
+                    sys.stderr.write(f"{start}{prefix}: interrupted\n")
+                    sys.stderr.flush()
+            finally:
+                signal.signal(signal.SIGINT, previous)
+            return EXIT_INTERRUPTED
 
 
 if __name__ == "__main__":  # pragma: no cover
