@@ -5,11 +5,13 @@ from __future__ import annotations
 import csv
 import json
 import math
+import re
 
 import numpy as np
 import pytest
 
 from simgrip.harness.bench import N_QUICK, STANDARD_CASES, run_bench
+from simgrip.harness.methods import MAX_EXTRAPOLATION
 
 
 @pytest.fixture(scope="module")
@@ -127,3 +129,34 @@ def test_env_throughput_is_measured(bench):
         assert e["env_steps_per_s"] > 0 and e["raw_physics_steps_per_s"] > 0
         assert math.isfinite(e["overhead_percent"])
     assert "Gymnasium pick environment throughput" in (out / "summary.md").read_text()
+
+
+def test_far_extrapolations_are_only_lower_bounds(bench):
+    res, out = bench
+    for r in res.select(method="naive"):
+        if r["extrapolated"] and not r["lower_bound"]:  # trusted: within MAX_EXTRAPOLATION times the measured run
+            assert r["time_s"] <= MAX_EXTRAPOLATION * r["time_min_s"], r
+        if r["lower_bound"]:
+            assert not r["matched"] and r["time_min_s"] > 0, r
+    for r in res.ratios:
+        if r.get("naive_lower_bound"):  # the ratio uses the measured time: an upper bound
+            assert r["naive_s"] == res.select(grip=r["grip"], n=r["n"], method="naive")[0]["time_min_s"]
+    for name in ("summary.md", "skips.md"):
+        text = (out / name).read_text()
+        assert not re.search(r"\b-?inf\b|∞|\bnan\b", text), name
+
+
+def test_bad_out_is_refused_before_any_work(tmp_path, capsys, monkeypatch):
+    from simgrip.cli import main
+    from simgrip.harness import runner
+
+    def never(*a, **k):
+        raise AssertionError("work started before --out was checked")
+
+    monkeypatch.setattr(runner, "run_tasks", never)
+    (tmp_path / "file").write_text("x")
+    for out in (tmp_path / "file", tmp_path / "file" / "sub"):
+        assert main(["bench", "--quick", "--jobs", "1", "--no-progress", "--out", str(out)]) == 2
+        assert "--out" in capsys.readouterr().err
+    with pytest.raises(ValueError, match="out_dir"):
+        run_bench(tmp_path / "file", quick=True, jobs=1, progress=False)

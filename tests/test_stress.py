@@ -81,3 +81,52 @@ def test_self_intersection_check():
     zigzag = np.array([[0, 0], [1, 0], [1, 1], [0.5, -0.5]])
     assert self_intersects(zigzag)
     assert not self_intersects(np.array([[0, 0], [1, 0], [2, 0]]))
+
+
+def test_small_runs_spread_over_the_box():
+    from simgrip.harness.stress_cases import BOX
+
+    cs = make_cases(20)
+    assert {c["grip"] for c in cs} == set(GRIPS)
+    assert min(c["kappa"] for c in cs) < 0 < max(c["kappa"] for c in cs)
+    logs = {"D", "mu_s", "n"}
+    for key in ("D", "kappa", "M", "mu_s", "b", "n"):
+        lo, hi = BOX[key]
+        f = (lambda v: np.log10(v)) if key in logs else (lambda v: v)  # noqa: E731
+        vals = [(f(c[key]) - f(lo)) / (f(hi) - f(lo)) for c in cs]
+        assert min(vals) < 0.25 and max(vals) > 0.75, (key, vals)  # both ends of every range, not one row
+    assert len({c["D"] for c in cs}) >= 5
+
+
+def test_bad_inputs_and_out_are_refused_before_any_work(tmp_path, capsys, monkeypatch):
+    from simgrip.cli import main
+    from simgrip.harness import runner
+
+    def never(*a, **k):
+        raise AssertionError("work started before the inputs were checked")
+
+    monkeypatch.setattr(runner, "run_tasks", never)
+    (tmp_path / "file").write_text("x")
+    assert main(["stress", "--cases", "2", "--jobs", "1", "--no-progress", "--out", str(tmp_path / "file")]) == 2
+    assert "--out" in capsys.readouterr().err
+    assert main(["stress", "--cases", "2", "--seed", "-1", "--out", str(tmp_path / "o")]) == 2
+    assert "seed" in capsys.readouterr().err
+    with pytest.raises(ValueError, match="out_dir"):
+        run_stress(tmp_path / "file", cases=2, jobs=1, progress=False)
+
+
+def test_a_hang_is_a_named_failure_in_any_thread():
+    import threading
+
+    from simgrip.harness.stress import run_case
+
+    case = dict(make_cases(1)[0], n=256)
+    out = {}
+    for where in ("main", "worker"):
+        if where == "main":
+            out[where] = run_case(case, timeout_s=0.02)
+        else:  # a Dask worker runs tasks outside its main thread: no SIGALRM there
+            t = threading.Thread(target=lambda: out.__setitem__(where, run_case(case, timeout_s=0.02)))
+            t.start()
+            t.join()
+        assert out[where]["outcome"] == "failed" and out[where]["error_type"] == "Timeout", out[where]
