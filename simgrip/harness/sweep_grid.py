@@ -1,0 +1,182 @@
+"""The grid of a design sweep: six axes (kappa, D, M, mu, b, gamma), each one value or an inclusive linspace.
+
+A :class:`SweepGrid` is the full Cartesian product of its axes in a fixed
+order, :data:`AXES`, the first axis varying slowest (``itertools.product``), so
+point ``i`` and its parameters follow from the grid alone: rows of
+``sweep.csv`` come in this order whatever ran them.  Axis values are checked
+when the grid is made: each must be a valid value of its parameter
+(:class:`simgrip.params.DimensionlessParams`, :class:`simgrip.profiles.Uniform`);
+combinations that a grip cannot build (e.g. a Grip III corner that misses the
+rod) are the points' business (status ``rejected``).
+"""
+
+from __future__ import annotations
+
+import itertools
+import math
+from dataclasses import dataclass
+
+import numpy as np
+
+from simgrip.chain import check_links
+from simgrip.params import DimensionlessParams, check_grip
+from simgrip.profiles import Uniform
+
+__all__ = ["AXES", "DEFAULTS", "SweepGrid", "SweepPoint", "parse_axis", "make_grid"]
+
+#: Swept parameters in grid order (the CLI option of each is ``--<name>``; ``mu`` is ``mu_s``).
+AXES = ("kappa", "D", "M", "mu", "b", "gamma")
+#: Values of the axes not given (the CLI's defaults: the paper's standard case).
+DEFAULTS = {"D": 1.0, "M": 5.0, "mu": 1.0, "b": 0.6, "gamma": 0.8}
+#: Settle methods (:func:`simgrip.settle.settle`).
+METHODS = ("newton", "dynamics")
+#: Grips a sweep can run: the free rod holds nothing.
+SWEEP_GRIPS = ("I", "II", "III")
+
+
+def _number(name: str, what: str, value) -> float:
+    try:
+        v = float(value)
+    except (TypeError, ValueError):
+        raise ValueError(f"{name}: {what} must be a number, got {value!r}") from None
+    if not math.isfinite(v):
+        raise ValueError(f"{name}: {what} must be finite, got {value!r}")
+    return v
+
+
+def parse_axis(name: str, values) -> tuple[float, ...]:
+    """Values of axis ``name`` from one value or ``(START, STOP, NUM)`` (inclusive linspace).
+
+    ``NUM`` is an integer >= 1; ``STOP >= START`` when ``NUM > 1`` (``NUM = 1``
+    gives ``START``).  Every value is checked as a value of its parameter.
+    Raises ``ValueError`` naming ``name``.
+    """
+    if name not in AXES:
+        raise ValueError(f"axis must be one of {AXES}, got {name!r}")
+    if isinstance(values, (str, bytes)) or not hasattr(values, "__len__"):
+        values = [values]
+    values = list(values)
+    if len(values) == 1:
+        out = (_number(name, "the value", values[0]),)
+    elif len(values) == 3:
+        start = _number(name, "START", values[0])
+        stop = _number(name, "STOP", values[1])
+        num_f = _number(name, "NUM", values[2])
+        if num_f != int(num_f) or num_f < 1:
+            raise ValueError(f"{name}: NUM must be an integer >= 1, got {values[2]!r}")
+        num = int(num_f)
+        if num > 1 and stop < start:
+            raise ValueError(f"{name}: STOP must not be below START when NUM > 1, got START {start!r}, STOP {stop!r}")
+        if num > 1 and stop == start:
+            raise ValueError(f"{name}: STOP equals START with NUM = {num}: give one value instead")
+        out = tuple(float(v) for v in np.linspace(start, stop, num)) if num > 1 else (start,)
+    else:
+        raise ValueError(f"{name} takes one value or START STOP NUM, got {len(values)} values {values!r}")
+    for v in out:
+        _check_value(name, v)
+    return out
+
+
+def _check_value(name: str, v: float) -> None:
+    """``ValueError`` naming ``name`` when ``v`` is not a valid value of that parameter."""
+    if name == "kappa":
+        Uniform(v)
+    else:
+        key = "mu_s" if name == "mu" else name
+        try:
+            DimensionlessParams(**{key: v})
+        except ValueError as exc:
+            msg = str(exc)
+            raise ValueError(msg if msg.startswith(name) else f"{name}: {msg}") from None
+
+
+@dataclass(frozen=True)
+class SweepPoint:
+    """One grid point: what a worker needs to settle and solve it (picklable)."""
+
+    index: int
+    grip: str
+    kappa: float
+    D: float
+    M: float
+    mu: float
+    b: float
+    gamma: float
+    links: int
+    method: str
+
+    def params(self) -> DimensionlessParams:
+        """The point's :class:`DimensionlessParams` (validated)."""
+        return DimensionlessParams(D=self.D, M=self.M, b=self.b, mu_s=self.mu, gamma=self.gamma)
+
+    def values(self) -> dict:
+        """``{axis: value}`` in :data:`AXES` order."""
+        return {a: getattr(self, a) for a in AXES}
+
+
+@dataclass(frozen=True)
+class SweepGrid:
+    """A sweep's definition: grip, axis values (each a non-empty tuple), links per finger and settle method."""
+
+    grip: str
+    axes: dict
+    links: int
+    method: str = "newton"
+
+    def __post_init__(self):
+        grip = check_grip(self.grip)
+        if grip not in SWEEP_GRIPS:
+            raise ValueError(f"grip must be one of {SWEEP_GRIPS} for a sweep (the free rod holds nothing), got {self.grip!r}")
+        object.__setattr__(self, "grip", grip)
+        if set(self.axes) != set(AXES):
+            raise ValueError(f"axes must give every one of {AXES}, got {sorted(self.axes)}")
+        object.__setattr__(self, "axes", {a: tuple(float(v) for v in self.axes[a]) for a in AXES})
+        for a in AXES:
+            if not self.axes[a]:
+                raise ValueError(f"{a}: the axis has no values")
+        object.__setattr__(self, "links", check_links(self.links))
+        method = str(self.method).strip().lower()
+        if method not in METHODS:
+            raise ValueError(f"method must be one of {METHODS}, got {self.method!r}")
+        object.__setattr__(self, "method", method)
+
+    @property
+    def shape(self) -> tuple[int, ...]:
+        """Number of values of each axis, in :data:`AXES` order."""
+        return tuple(len(self.axes[a]) for a in AXES)
+
+    @property
+    def size(self) -> int:
+        """Number of points."""
+        return math.prod(self.shape)
+
+    @property
+    def swept(self) -> tuple[str, ...]:
+        """Axes with more than one value, in :data:`AXES` order (the map uses the first two)."""
+        return tuple(a for a in AXES if len(self.axes[a]) > 1)
+
+    def point(self, index: int) -> SweepPoint:
+        """Point ``index`` (grid order)."""
+        idx = np.unravel_index(int(index), self.shape)
+        vals = {a: self.axes[a][i] for a, i in zip(AXES, idx)}
+        return SweepPoint(index=int(index), grip=self.grip, links=self.links, method=self.method, **vals)
+
+    def points(self):
+        """Every point, in grid order."""
+        for i, combo in enumerate(itertools.product(*(self.axes[a] for a in AXES))):
+            yield SweepPoint(i, self.grip, *combo, links=self.links, method=self.method)
+
+    def spec(self) -> dict:
+        """JSON-able definition (the identity of a sweep: ``--resume`` checks it)."""
+        return {"grip": self.grip, "links": self.links, "method": self.method,
+                "axes": {a: list(self.axes[a]) for a in AXES}}
+
+
+def make_grid(grip: str, *, kappa, D=None, M=None, mu=None, b=None, gamma=None, links: int,
+              method: str = "newton") -> SweepGrid:
+    """A :class:`SweepGrid` from axis specifications (see :func:`parse_axis`); ``None`` takes :data:`DEFAULTS`."""
+    given = {"kappa": kappa, "D": D, "M": M, "mu": mu, "b": b, "gamma": gamma}
+    if kappa is None:
+        raise ValueError("kappa is required (--kappa K or --kappa START STOP NUM)")
+    axes = {a: parse_axis(a, DEFAULTS[a] if v is None else v) for a, v in given.items()}
+    return SweepGrid(grip=grip, axes=axes, links=links, method=method)
