@@ -271,8 +271,9 @@ def _negative_values(argv: list[str], parser: argparse.ArgumentParser) -> list[s
     while parsers:
         p = parsers.pop()
         for action in p._actions:
-            if isinstance(action, argparse._SubParsersAction):
-                parsers.extend(action.choices.values())
+            if isinstance(action, argparse._SubParsersAction):  # only the command's own options (sweep's --kappa takes 1 or 3)
+                command = next((a for a in argv if a in action.choices), None)
+                parsers.extend([action.choices[command]] if command else [])
             elif action.option_strings and action.nargs is None:
                 takes_value.update(action.option_strings)
     out: list[str] = []
