@@ -114,3 +114,123 @@ def test_render_command_writes_png_and_gif(tmp_path):
     assert out.returncode == 0, out.stderr
     assert (tmp_path / "g.png").read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
     assert (tmp_path / "p.gif").read_bytes()[:6] in (b"GIF89a", b"GIF87a")
+
+
+@pytest.mark.parametrize(
+    "args, name",
+    [
+        (["solve", "I", "--kappa", "-1e6"], "kappa"),  # argparse used to read -1e6 as an option
+        (["solve", "I", "--kappa", "-inf"], "kappa"),
+        (["solve", "I", "--kappa", "-nan"], "kappa"),
+        (["solve", "I", "--kappa", "-4", "--D", "-1e-3"], "D"),
+        (["solve", "I", "--profile", "concentrated", "--alpha", "520"], "alpha"),  # was an OverflowError
+        (["simulate", "I", "--profile", "concentrated", "--alpha", "520"], "alpha"),
+        (["simulate", "I", "--kappa", "-5.5", "--M", "1e300"], "M"),  # was exit 0 with an overflow warning
+        (["simulate", "I", "--kappa", "-5.5", "--links", "100000"], "links"),  # used to hang in the builder
+        (["solve", "I", "--kappa", "-4", "--K", "100000000"], "K"),
+        (["stress", "--seed", "-1"], "seed"),
+        (["render", "--seed", "-1"], "seed"),  # was a Gymnasium traceback
+        (["figures", "--which"], "--which"),  # did nothing and exited 0
+    ],
+)
+def test_hostile_values_are_named_in_process(capsys, args, name):
+    assert main(args) == 2
+    err = capsys.readouterr().err
+    assert name in err and "Traceback" not in err
+
+
+@pytest.mark.parametrize(
+    "command",
+    [["bench", "--quick"], ["stress", "--cases", "3"], ["figures", "--which", "6"], ["render"]],
+)
+def test_output_paths_are_checked_before_any_work(tmp_path, capsys, monkeypatch, command):
+    """An existing file as the output is refused at once, naming the option; the command never runs."""
+    import simgrip.cli as cli
+
+    blocker = tmp_path / "file"
+    blocker.write_text("x")
+    option = ["--png", str(blocker / "g.png")] if command[0] == "render" else ["--out", str(blocker)]
+    ran = []
+    monkeypatch.setitem(cli.COMMANDS, command[0], lambda args: ran.append(args))
+    assert main([*command, *option]) == 2
+    assert ran == []
+    assert option[0] in capsys.readouterr().err
+
+
+def test_interrupt_is_one_line_exit_130_and_no_partial_file(tmp_path, capsys, monkeypatch):
+    import simgrip.cli as cli
+    from simgrip.io import atomic_write
+
+    out = tmp_path / "new" / "out"
+
+    def interrupted(args):
+        (out / "sub").mkdir(parents=True)
+        with atomic_write(out / "done.json") as fh:
+            fh.write("{}")
+        # a worker killed mid-write leaves its temporary file behind; the CLI removes it
+        cm = atomic_write(out / "sub" / "half.json")
+        cm.__enter__().write("{")
+        raise KeyboardInterrupt
+
+    monkeypatch.setitem(cli.COMMANDS, "stress", interrupted)
+    assert main(["stress", "--out", str(out)]) == 130
+    err = capsys.readouterr().err
+    assert err.strip() == "simgrip stress: interrupted"
+    assert sorted(p.name for p in out.rglob("*")) == ["done.json", "sub"]
+
+
+def test_interrupt_removes_an_output_folder_it_created_and_left_empty(tmp_path, monkeypatch, capsys):
+    import simgrip.cli as cli
+
+    out = tmp_path / "fresh"
+
+    def interrupted(args):
+        out.mkdir()
+        raise KeyboardInterrupt
+
+    monkeypatch.setitem(cli.COMMANDS, "figures", interrupted)
+    assert main(["figures", "--out", str(out)]) == 130
+    assert not out.exists()
+
+
+def test_sigterm_is_an_interrupt():
+    import os
+    import signal
+    import time
+
+    proc = subprocess.Popen([sys.executable, "-c", "import time, simgrip.cli as c; "
+                             "c.COMMANDS['solve'] = lambda a: time.sleep(60); "
+                             "raise SystemExit(c.main(['solve', 'I', '--kappa', '-4']))"],
+                            stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+    time.sleep(1.5)
+    proc.send_signal(signal.SIGTERM)
+    out, err = proc.communicate(timeout=10)
+    assert proc.returncode == 130, err
+    assert err.strip() == "simgrip solve: interrupted"
+    assert not os.path.exists("grip.png")
+
+
+def test_closed_stdout_is_quiet():
+    """simgrip ... | true: the reader is gone before we print; no BrokenPipeError."""
+    import os
+
+    r, w = os.pipe()
+    os.close(r)
+    proc = subprocess.run([sys.executable, "-m", "simgrip.cli", "solve", "I", "--kappa", "-5"],
+                          stdout=w, stderr=subprocess.PIPE, text=True)
+    os.close(w)
+    assert proc.returncode == 0 and proc.stderr == "", proc.stderr
+
+
+def test_help_returns_0(capsys):
+    assert main(["--help"]) == 0
+    assert "simgrip" in capsys.readouterr().out
+
+
+def test_negative_values_reach_every_numeric_option():
+    from simgrip.cli import _negative_values, build_parser
+
+    parser = build_parser()
+    argv = ["simulate", "I", "--kappa", "-1e6", "--D", "-inf", "--links", "-3", "--json", "--", "-x"]
+    assert _negative_values(argv, parser) == [
+        "simulate", "I", "--kappa=-1e6", "--D=-inf", "--links=-3", "--json", "--", "-x"]
