@@ -88,10 +88,8 @@ def add_arguments(p) -> None:
 
 
 def cli_figures(args) -> list[Path]:
-    """Run ``simgrip figures`` from parsed arguments (output folder checked first); returns the files."""
+    """Run ``simgrip figures`` from parsed arguments; returns the files (the CLI checked ``--out`` first)."""
     from simgrip.harness.runner import runner_options
-    from simgrip.io import check_output_dir
 
-    check_output_dir(args.out, option="--out")
     return make_figures(args.out, which=args.which, simulate=not args.no_simulate, links=args.links,
                         options=runner_options(args))

@@ -244,12 +244,9 @@ def add_arguments(p) -> None:
 
 
 def cli_bench(args) -> dict:
-    """Run the bench from parsed arguments (output folder checked first); returns a small record for the CLI."""
+    """Run the bench from parsed arguments; returns a small record for the CLI (which checked ``--out`` first)."""
     from simgrip.harness.runner import runner_options
 
-    options = runner_options(args)
-    _check_positive("repeats", args.repeats)
-    check_output_dir(args.out, option="--out")
-    res = run_bench(args.out, quick=args.quick, repeats=args.repeats, options=options)
+    res = run_bench(args.out, quick=args.quick, repeats=args.repeats, options=runner_options(args))
     return {"out": str(args.out), "files": sorted(str(p) for p in res.files.values()),
             "elapsed_s": res.elapsed_s, "ratios": res.ratios}

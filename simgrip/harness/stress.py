@@ -413,11 +413,9 @@ def add_arguments(p) -> None:
 
 
 def cli_stress(args) -> dict:
-    """Run the stress test from parsed arguments (output folder checked first); returns the counts and the failures."""
+    """Run the stress test from parsed arguments; returns the counts and the failures (the CLI checked ``--out`` first)."""
     from simgrip.harness.runner import runner_options
 
-    make_cases(args.cases, args.seed)  # the inputs' errors first, named
-    check_output_dir(args.out, option="--out")
     res = run_stress(args.out, cases=args.cases, seed=args.seed, options=runner_options(args))
     return {"out": str(args.out), "counts": res.counts,
             "failures": [{k: c[k] for k in ("id", "grip", "D", "kappa", "M", "mu_s", "b", "n", "profile", "error")}
