@@ -28,7 +28,7 @@ def simulate(grip: str, params: DimensionlessParams, profile, links: int, **sett
     Returns the :class:`~simgrip.settle.SettledState`.  Extra keywords go to
     :func:`~simgrip.settle.settle`.
     """
-    from simgrip.sim.scene import build_scene
+    from simgrip.scenes import build_scene
     from simgrip.settle import settle
 
     grip = check_grip(grip)
@@ -38,7 +38,7 @@ def simulate(grip: str, params: DimensionlessParams, profile, links: int, **sett
 
 def _stability(state, grip, params, profile) -> float:
     """Smallest eigenvalue of the hinge chain's projected Hessian at the settled shape."""
-    from simgrip.reference import discrete
+    from simgrip import reference as discrete
 
     try:
         if grip == "III" and state.contact is not None:

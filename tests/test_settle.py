@@ -21,8 +21,9 @@ import pytest
 from simgrip import STANDARD, Uniform
 from simgrip.reference import elastica
 from simgrip.chain import ChainSprings, chain_springs
-from simgrip.reference.discrete import solve_chain
-from simgrip.sim.scene import build_scene, set_curvature
+from simgrip.reference import solve_chain
+from simgrip.scenes import build_scene
+from simgrip.sim.scene import set_curvature
 from simgrip.settle import SettledState, SettleError, naive_settle, settle, settle_sweep
 
 KAPPA = {"I": -6.0, "II": 5.0, "III": -6.0}
@@ -599,7 +600,7 @@ def test_predicted_closing_equals_the_ramped_closing(monkeypatch, grip, kappa, n
 
 def test_predicted_closing_falls_back_to_the_ramp(monkeypatch):
     """An unusable prediction (here: the chain solver fails) leaves the staged ramp in charge."""
-    import simgrip.reference.discrete as D
+    import simgrip.reference.hinge_chain as D
 
     ref = settle(build_scene("I", STANDARD, Uniform(-6.0), 16))
 

@@ -61,7 +61,7 @@ _SIM_LABEL = "MuJoCo chain, n = {links}"
 def _sim_scene(grip, params, kappa, links, gravity):
     import mujoco
 
-    from simgrip.sim.scene import build_scene
+    from simgrip.scenes import build_scene
 
     scene = build_scene(grip, params, Uniform(float(kappa)), links)
     if not gravity:

@@ -155,7 +155,8 @@ def _settle_row(st, method, ref, chn, grip, extra, timing) -> dict:
 def bench_task(grip: str, n: int, repeats: int, naive_budget_s: float, params: DimensionlessParams) -> list[dict]:
     """Rows of every method for ``grip`` (its :data:`STANDARD_CASES` curvature) at ``n`` links (``n = 0``: BVP curve)."""
     from simgrip.settle import DEFAULT_TOL, SettleError, settle
-    from simgrip.sim.scene import DEFAULT_R_TIP, build_scene
+    from simgrip.scenes import build_scene
+    from simgrip.sim.scene import DEFAULT_R_TIP
 
     kappa = STANDARD_CASES[grip]
     prof = Uniform(kappa)

@@ -46,7 +46,7 @@ def sweep_task(n: int, kappas: tuple, params: DimensionlessParams) -> dict:
     """Fig. 7 (Grip I) by simulation with warm starts, cold, and by the BVP; times and answer changes."""
     from simgrip.reference import elastica
     from simgrip.settle import settle, settle_sweep
-    from simgrip.sim.scene import build_scene
+    from simgrip.scenes import build_scene
 
     profs = [Uniform(k) for k in kappas]
     t0 = time.perf_counter()
@@ -122,7 +122,8 @@ def _without(make, undo):
 def _versus_naive(which, g, params, n, repeats, budget_s):
     """Static settle (build excluded) vs the naive relaxation to matched error, from a head start."""
     from simgrip.settle import settle
-    from simgrip.sim.scene import DEFAULT_R_TIP, build_scene
+    from simgrip.scenes import build_scene
+    from simgrip.sim.scene import DEFAULT_R_TIP
 
     allt = which.startswith("all together")
     prof = Uniform(STANDARD_CASES[g])
@@ -160,7 +161,7 @@ def _versus_naive(which, g, params, n, repeats, budget_s):
 
 def skip_task(which: str, n: int, repeats: int, params: DimensionlessParams, naive_budget_s: float) -> dict:
     """One row of the skipping table (``which`` in :data:`SKIPS`): time with the skip and without it."""
-    from simgrip.sim.scene import build_scene
+    from simgrip.scenes import build_scene
 
     k = STANDARD_CASES
     row = {"skip": which, "n": n, "answer_change_tip": None, "answer_change_force": None}

@@ -1,0 +1,222 @@
+"""The workpiece: a rigid box, where it is placed against the fingers, and how it is held, moved and read.
+
+Geometry (the contact centreline where the theory puts it):
+
+* Grips I/II: the finger's tip sphere (radius ``r_tip``) is centred at
+  ``s = l``; the box face is at ``x = b/2 - r_tip``, so a touching tip has its
+  centreline at ``X(l) = b/2``.  The box's centre starts level with the tip of
+  the start shape.
+* Grip III: a capsule (radius ``r_corner``) along ``y`` on each lower edge of
+  the box touches the link capsules (radius ``r_link``).  It is placed
+  ``r_link + r_corner`` from the start shape's centreline along the normal, at
+  the point where the centreline crosses ``X = b/2`` heading inwards (the
+  crossing nearest ``gamma``; :func:`cradle_contact`).  Only links within
+  ``contact_window`` of that point get a contact pair.
+
+The box is free in the plane between two fingers (slide ``x``, slide ``z``,
+hinge ``y``), slides in ``z`` only in the symmetric reduction (one finger:
+half the weight, its ``x`` held by the missing mirror finger), or is fixed.
+
+:func:`cradle_start` is a Grip III start shape made of a straight piece and a
+circular arc that crosses ``X = b/2`` at ``s = gamma`` heading inwards: pure
+geometry, no mechanics.  Friction keeps the contact where it first touches, so
+a settle from this start ends near, not at, ``gamma``; the hinge chain's
+equilibrium (:func:`simgrip.scenes.start_angles`) is the start that settles at
+``gamma`` itself.
+"""
+
+from __future__ import annotations
+
+import math
+from typing import TYPE_CHECKING
+
+import mujoco
+import numpy as np
+
+from simgrip.chain import ChainSprings, chain_springs, link_positions
+from simgrip.models import model_path
+
+if TYPE_CHECKING:  # pragma: no cover
+    from simgrip.sim.scene import Scene
+
+__all__ = [
+    "BOX_DEPTH",
+    "BOX_HEIGHT",
+    "add_workpiece",
+    "contact_links",
+    "corner_placement",
+    "cradle_contact",
+    "cradle_start",
+    "hold_workpiece",
+    "lower_onto_fingers",
+    "place_workpiece",
+    "slip_coordinate",
+    "workpiece_pose",
+]
+
+#: Box height and depth over ``l``.
+BOX_HEIGHT = 2.0  # tall: a frictionless tip slides along the face while closing
+BOX_DEPTH = 0.2
+
+_TURN = 0.75 * math.pi  # turn of the arc of cradle_start (heading 45 degrees inwards at gamma)
+_SINC_TURN = math.sin(_TURN) / _TURN
+
+
+# ---------------------------------------------------------------------------
+# placement
+
+
+def cradle_start(b: float, gamma: float, profile, n: int) -> np.ndarray:
+    """Joint angles of a Grip III start shape crossing ``X = b/2`` at ``s = gamma`` heading inwards.
+
+    On ``[0, gamma]`` the centreline is straight for a length ``a`` and then a
+    circular arc turning clockwise by ``3 pi / 4`` (``a = 0`` and a larger turn
+    when ``b/2 < 0.3 gamma``); beyond ``gamma`` it bends as the rest shape of
+    ``profile``.  Link ``i`` takes the centreline's angle at its midpoint.
+    Lengths over ``l``.
+    """
+    h = 0.5 * float(b)
+    g = float(gamma)
+    if not 0.0 < h < g:
+        raise ValueError(f"b/2 must be below gamma for the cradle (Grip III), got b = {b:g}, gamma = {g:g}")
+    if h >= _SINC_TURN * g:
+        turn = _TURN
+        a = (h - _SINC_TURN * g) / (1.0 - _SINC_TURN)
+    else:  # sin(turn)/turn = h/g on (3 pi/4, pi), decreasing: bisection
+        lo, hi = _TURN, math.pi
+        for _ in range(60):
+            mid = 0.5 * (lo + hi)
+            lo, hi = (mid, hi) if math.sin(mid) / mid > h / g else (lo, mid)
+        turn, a = 0.5 * (lo + hi), 0.0
+    c = turn / (g - a)
+    s = (np.arange(n) + 0.5) / n
+    theta = -c * np.clip(s - a, 0.0, g - a)
+    rest = np.cumsum(chain_springs(profile, n).rest)
+    beyond = s > g
+    theta[beyond] += rest[beyond] - np.interp(g, s, rest)
+    return np.diff(np.concatenate(([0.0], theta)))
+
+
+def cradle_contact(q0, springs: ChainSprings, b: float, gamma: float) -> tuple[float, float, np.ndarray]:
+    """Arc length (over l), tangent angle and point of the Grip III contact on the shape ``q0``.
+
+    The contact is where the centreline crosses ``X = b/2`` heading inwards
+    (``cos theta < 0``); among those crossings, the one nearest ``gamma``.
+    Without such a crossing, the material point at ``gamma``.
+    """
+    phi = np.cumsum(q0)
+    nodes = link_positions(phi, springs.ds)
+    x = nodes[:, 0] - 0.5 * b
+    cross = np.flatnonzero((x[:-1] * x[1:] <= 0.0) & (x[:-1] != x[1:]) & (np.cos(phi) < 0.0))
+    if cross.size:
+        t = x[cross] / (x[cross] - x[cross + 1])
+        s = (cross + t) * springs.ds
+        k = int(np.argmin(np.abs(s - gamma)))
+        i, t, s = int(cross[k]), float(t[k]), float(s[k])
+    else:
+        s = float(gamma)
+        i = min(int(s / springs.ds), springs.n - 1)
+        t = s / springs.ds - i
+    return s, float(phi[i]), nodes[i] + t * (nodes[i + 1] - nodes[i])
+
+
+def corner_placement(q0, springs: ChainSprings, b: float, gamma: float, r_link: float, r_corner: float,
+                     length: float) -> tuple[float, float, float]:
+    """``(x, z, s)``: corner capsule centre [m] touching the shape ``q0`` and the contact's arc length (over l)."""
+    s, th, point = cradle_contact(q0, springs, b, gamma)
+    e2 = np.array([-math.sin(th), math.cos(th)])
+    sign = 1.0 if e2[1] <= 0.0 else -1.0  # the box sits above the rod
+    corner = (point - sign * (r_link + r_corner) * e2) * length
+    return float(corner[0]), float(corner[1]), s
+
+
+def contact_links(s: float, springs: ChainSprings, window: float) -> np.ndarray:
+    """Links whose span lies within ``window`` (over l) of the arc length ``s``."""
+    i = np.arange(springs.n)
+    ds = springs.ds
+    return i[((i + 1) * ds >= s - window) & (i * ds <= s + window)]
+
+
+# ---------------------------------------------------------------------------
+# building
+
+
+def add_workpiece(spec: mujoco.MjSpec, *, half_size, center_z: float, mass: float, joints: tuple) -> mujoco.MjsBody:
+    """Attach ``models/workpiece.xml`` as ``workpiece_body`` with box ``half_size`` [m] centred at ``(0, 0, center_z)``.
+
+    ``mass`` [kg] with the solid box's inertia; ``joints`` any of ``"x"``,
+    ``"z"`` (slides) and ``"ry"`` (hinge about ``-y``), named ``workpiece_{name}``.
+    """
+    part = mujoco.MjSpec.from_file(str(model_path("workpiece.xml")))
+    body = spec.worldbody.add_frame().attach_body(part.body("body"), "workpiece_", "")
+    hx, hy, hz = (float(v) for v in half_size)
+    body.pos = [0.0, 0.0, float(center_z)]
+    body.explicitinertial = True
+    body.mass = mass
+    body.ipos = [0.0, 0.0, 0.0]
+    body.inertia = [mass / 3.0 * (hy**2 + hz**2), mass / 3.0 * (hx**2 + hz**2), mass / 3.0 * (hx**2 + hy**2)]
+    body.first_geom().size = [hx, hy, hz]
+    axes = {"x": [1, 0, 0], "z": [0, 0, 1], "ry": [0, -1, 0]}
+    for name in joints:
+        kind = mujoco.mjtJoint.mjJNT_HINGE if name == "ry" else mujoco.mjtJoint.mjJNT_SLIDE
+        body.add_joint(name=f"workpiece_{name}", type=kind, axis=axes[name])
+    return body
+
+
+# ---------------------------------------------------------------------------
+# holding, moving and reading a built scene
+
+
+def hold_workpiece(scene: Scene, on: bool) -> None:
+    """Hold the workpiece: its weight cancelled by ``qfrc_applied`` on its ``z`` slide (or released)."""
+    d = scene.data
+    weight = scene.workpiece_mass * scene.physical.g
+    for name, dof in zip(scene.workpiece_joints, scene.workpiece_dof):
+        d.qfrc_applied[dof] = weight if (on and name == "z") else 0.0
+
+
+def place_workpiece(scene: Scene, z: float) -> None:
+    """Put the workpiece's centre at height ``z`` [m] (joint or, when fixed, body position), forward."""
+    m, d = scene.model, scene.data
+    body_z = float(m.body_pos[scene.workpiece_body][2])
+    for name, qa in zip(scene.workpiece_joints, scene.workpiece_qpos):
+        d.qpos[qa] = z - body_z if name == "z" else 0.0
+    if not scene.free_workpiece:
+        m.body_pos[scene.workpiece_body][2] = z
+    d.qvel[:] = 0.0
+    mujoco.mj_forward(m, d)
+
+
+def lower_onto_fingers(scene: Scene) -> None:
+    """Lower a hovering workpiece (placement round-off) until its nearest pair touches (1e-9 l deep)."""
+    m, d = scene.model, scene.data
+    wz = [qa for name, qa in zip(scene.workpiece_joints, scene.workpiece_qpos) if name == "z"]
+    if not wz or m.npair == 0:
+        return
+    L = scene.length
+    for _ in range(3):
+        mujoco.mj_kinematics(m, d)
+        gap = min(mujoco.mj_geomDistance(m, d, int(m.pair_geom1[i]), int(m.pair_geom2[i]), L, None)
+                  for i in range(m.npair))
+        if gap < 0.0:
+            break
+        d.qpos[wz[0]] -= gap + 1e-9 * L
+    mujoco.mj_forward(m, d)
+
+
+def workpiece_pose(scene: Scene):
+    """Workpiece ``(x, z, angle)`` (over l, rad) from the scene's data, or None without one."""
+    if not scene.has_workpiece:
+        return None
+    d, L = scene.data, scene.length
+    x = d.xpos[scene.workpiece_body]
+    rot = d.xmat[scene.workpiece_body].reshape(3, 3)
+    return np.array([x[0] / L, x[2] / L, math.atan2(rot[0, 2], rot[0, 0])])
+
+
+def slip_coordinate(scene: Scene) -> float:
+    """Tangential position (over l) of a Grip I/II contact on the workpiece: tip height minus workpiece height."""
+    d = scene.data
+    if scene.grip in ("I", "II"):
+        return float(d.geom_xpos[scene.tip_geom[0]][2] - d.xpos[scene.workpiece_body][2]) / scene.length
+    return 0.0
