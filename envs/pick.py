@@ -25,7 +25,6 @@ from simgrip.models import model_path
 from simgrip.params import DimensionlessParams, PhysicalParams
 from simgrip.profiles import Uniform
 from simgrip.sim.checks import PhysicsError, check_invalid_state, clear_warnings, invalid_state
-from simgrip.sim.scene import build_scene
 
 __all__ = ["PickEnv", "BoxParams", "OBS_LAYOUT", "obs_layout"]
 
@@ -185,7 +184,7 @@ class PickEnv(gym.Env):
 
     ## Observation space
 
-    ``Box(low, high, (27 + 2 shape_points + 2 per_finger,), float64)``: 35
+    ``Box(low, high, (19 + 2 shape_points + 2 per_finger,), float64)``: 35
     entries by default, every one of them varies during an episode (the
     out-of-plane coordinates are left out).  Lengths are in finger lengths
     ``l`` (``length``), velocities in ``l`` per second, angles in radians,
@@ -272,7 +271,7 @@ class PickEnv(gym.Env):
     | ``kappa_range`` | (-10, 0) | curvature command bounds (dimensionless, low < high) |
     | ``kappa_tau`` | 0.1 | pneumatic lag [s] (0: none) |
     | ``palm_speed``, ``palm_range``, ``palm_start`` | 0.1, (0.05, 0.25), (0.105, 0.115) (cradle (0.13, 0.14)) | palm speed [m/s], target range, start range [m] |
-    | ``target_height``, ``hold_time`` | 0.03, 0.5 | success [m, s] |
+    | ``target_height``, ``hold_time`` | 0.06 (cradle 0.08), 0.5 | success: box height gain [m] (more than curling the fingers alone gives: up to 4.7 cm pinched, 5.7 cm cradled), hold [s] |
     | ``w_lift``, ``w_success``, ``w_squeeze``, ``w_drop`` | 10, 20, 0.04, 10 | reward weights (>= 0) |
     | ``squeeze_margin``, ``drop_distance`` | 2.0, 0.02 | squeeze allowance (times the least normal force that holds), drop threshold [m] |
     | ``timestep``, ``frame_skip``, ``settle_time`` | 0.002, 10, 0.1 | physics step [s], steps per action, settling at reset [s] |
@@ -317,7 +316,7 @@ class PickEnv(gym.Env):
         palm_speed: float = 0.1,
         palm_range=(0.05, 0.25),
         palm_start=None,
-        target_height: float = 0.03,
+        target_height: float | None = None,
         hold_time: float = 0.5,
         w_lift: float = 10.0,
         w_success: float = 20.0,
@@ -367,6 +366,9 @@ class PickEnv(gym.Env):
         if palm_start is None:
             palm_start = (0.105, 0.115) if self.grip == "I" else (0.13, 0.14)
         self.palm_start = _range("palm_start", palm_start, lo=self.palm_range[0], hi=self.palm_range[1])
+        if target_height is None:
+            # higher than curling the fingers alone raises the box (up to ~4.7 cm pinched, ~5.7 cm cradled)
+            target_height = 0.06 if self.grip == "I" else 0.08
         self.target_height = _pos("target_height", target_height)
         self.hold_time = _num("hold_time", hold_time, positive=False)
         self.w_lift = _num("w_lift", w_lift, positive=False)
@@ -429,149 +431,56 @@ class PickEnv(gym.Env):
 
     # ------------------------------------------------------------------ model
     def _build(self):
+        """Build the model (:func:`simgrip.envs.pick_model.build_pick_model`) and keep what ``step`` reads."""
         L, n = self.length, self.n
         mid_w = float(np.mean(self.box_width_range))
-        mid_m = float(np.mean(self.box_mass_range))
-        phys = PhysicalParams(length=L, EI=self.EI, rho=self.rho, g=self.g, m=0.5 * mid_m,
-                              b=min(mid_w, 1.9 * L), mu_s=float(np.mean(self.friction_range)), gamma=0.8 * L)
-        self.physical = phys
-        r_over_l = min(self.r_tip / L, 0.05)
-        # The fingers come from the simulator's own scene builder (no second finger model).
-        fingers = build_scene("free", phys, Uniform(0.0), n, fingers=2, r_tip=r_over_l, r_link=r_over_l)
-        spec = mujoco.MjSpec.from_file(str(model_path("pick_scene.xml")))
-        spec.option.timestep = self.timestep
-        spec.option.impratio = self.impratio
-        spec.option.gravity = [0.0, 0.0, -self.g]
-        spec.option.disableflags &= ~int(mujoco.mjtDisableBit.mjDSBL_ACTUATION)
-        # Align the finger spec's options with ours so attaching raises no conflict.
-        for name in ("timestep", "tolerance", "iterations", "ls_iterations", "ls_tolerance", "noslip_iterations",
-                     "noslip_tolerance", "integrator", "cone", "solver", "disableflags", "enableflags", "impratio",
-                     "gravity"):
-            setattr(fingers.spec.option, name, getattr(spec.option, name))
-
-        # Palm: a vertical slide joint with a stiff, critically damped position servo.
-        palm = spec.body("palm")
-        palm.gravcomp = 1.0
-        palm.add_joint(name="palm_z", type=mujoco.mjtJoint.mjJNT_SLIDE, axis=[0, 0, 1])
-        palm_mass = 0.2
-        palm.explicitinertial = True
-        palm.mass = palm_mass
-        palm.inertia = [1e-4, 1e-4, 1e-4]
-        kp = 4000.0
-        kv = 2.0 * math.sqrt(kp * (palm_mass + 2 * self.rho * L + self.box_mass_range[1]))
-        act = spec.add_actuator(name="palm_servo", target="palm_z", trntype=mujoco.mjtTrn.mjTRN_JOINT)
-        act.set_to_position(kp=kp, kv=kv)
-
-        for f in range(2):
-            palm.add_frame().attach_body(fingers.spec.body(f"f{f}_link0"), PREFIX, "")
-        ds = L / n
-        for f in range(2):
-            for i in range(n):
-                j = spec.joint(f"{PREFIX}f{f}_joint{i}")
-                k = float(np.atleast_1d(j.stiffness)[0])  # EI/ds (2 EI/ds at the clamp), set by build_scene
-                j.damping = [self.finger_damping_time * k] + [0.0] * (len(j.damping) - 1)
-                j.armature = self.finger_armature
-            tip = spec.geom(f"{PREFIX}f{f}_tip")
-            if tip is None:  # the scene builder adds tips only for grips with tip contact / rendering
-                tip = spec.body(f"{PREFIX}f{f}_link{n - 1}").add_geom(
-                    name=f"{PREFIX}f{f}_tip", type=mujoco.mjtGeom.mjGEOM_SPHERE, pos=[ds, 0, 0],
-                    size=[self.r_tip, 0, 0], contype=0, conaffinity=0, group=1, mass=0,
-                    rgba=[0.95, 0.75, 0.2, 1])
-            tip.size = [self.r_tip, 0, 0]
-            for i in range(n):
-                g = spec.geom(f"{PREFIX}f{f}_geom{i}")
-                g.size = [self.r_tip, 0, 0]
-                g.rgba = [0.88, 0.42, 0.22, 1]
-
-        # Box: default size; resized per episode.
-        hx, hy, hz = 0.5 * mid_w, 0.5 * self.box_depth, 0.5 * self.box_height
-        spec.geom("box").size = [hx, hy, hz]
-        self._pedestal_h = 0.0
-        if self.grip == "III":
-            self._pedestal_h = 0.04
-            ph = 0.5 * self._pedestal_h
-            spec.worldbody.add_geom(name="pedestal", type=mujoco.mjtGeom.mjGEOM_BOX,
-                                    size=[0.006, hy, ph], pos=[0, 0, ph],
-                                    contype=0, conaffinity=0, rgba=[0.45, 0.4, 0.35, 1])
-
-        def pair(g1, g2, mu, name, condim=3):
-            p = spec.add_pair(name=name, geomname1=g1, geomname2=g2)
-            p.condim = condim
-            p.friction = [mu, mu, self.spin_friction * mu, 0.0, 0.0]
-            p.solref = [0.005, 1.0]
-            p.solimp = [0.95, 0.99, 0.001, 0.5, 2.0]
-            return p
-
         mu0 = float(np.mean(self.friction_range))
-        self._finger_pairs = []
-        for f in range(2):
-            pair(f"{PREFIX}f{f}_tip", "box", mu0, f"pair_f{f}_tip", condim=4)
-            self._finger_pairs.append(f"pair_f{f}_tip")
-            for i in range(n - 1):  # the last link's far end is the tip sphere
-                pair(f"{PREFIX}f{f}_geom{i}", "box", mu0, f"pair_f{f}_link{i}", condim=4)
-                self._finger_pairs.append(f"pair_f{f}_link{i}")
-        pair("palm_slab", "box", 0.5, "pair_palm_box")
-        pair("box", "table", 0.6, "pair_box_table")
-        if self.grip == "III":
-            pair("box", "pedestal", 0.6, "pair_box_pedestal")
-        self.spec = spec
-        self.model = spec.compile()
+        self.physical = PhysicalParams(length=L, EI=self.EI, rho=self.rho, g=self.g,
+                                       m=0.5 * float(np.mean(self.box_mass_range)), b=min(mid_w, 1.9 * L),
+                                       mu_s=mu0, gamma=0.8 * L)
+        pm = build_pick_model(self.grip, n_links=n, length=L, EI=self.EI, rho=self.rho, g=self.g, r_tip=self.r_tip,
+                              box_size=(mid_w, self.box_depth, self.box_height), box_mass_max=self.box_mass_range[1],
+                              friction=mu0, spin_friction=self.spin_friction, timestep=self.timestep,
+                              impratio=self.impratio, damping_time=self.finger_damping_time,
+                              armature=self.finger_armature)
+        self.spec, self.model = pm.spec, pm.model
         self.data = mujoco.MjData(self.model)
-        m = self.model
-
-        def jid(name):
-            return mujoco.mj_name2id(m, mujoco.mjtObj.mjOBJ_JOINT, name)
-
-        def gid(name):
-            return mujoco.mj_name2id(m, mujoco.mjtObj.mjOBJ_GEOM, name)
-
-        joints = np.array([[jid(f"{PREFIX}f{f}_joint{i}") for i in range(n)] for f in range(2)])
-        self.joint_qpos = m.jnt_qposadr[joints]
-        self.joint_dof = m.jnt_dofadr[joints]
-        self._spring_idx = self.joint_qpos.ravel()
-        self._unit_rest = chain_springs(Uniform(1.0), n).rest  # rest angles are linear in a uniform kappa
+        self.fingers = pm.fingers
+        self.palm_qpos, self.palm_dof = pm.palm_qpos, pm.palm_dof
+        self.box_qpos, self.box_dof, self.box_body, self.box_geom = pm.box_qpos, pm.box_dof, pm.box_body, pm.box_geom
+        self._finger_pair_ids = pm.finger_pairs
+        self._pedestal_h = pm.pedestal_height
+        self._unit_rest = pm.unit_rest
         self._rest_buf = np.empty((2, n))
-        self.palm_qpos = int(m.jnt_qposadr[jid("palm_z")])
-        self.palm_dof = int(m.jnt_dofadr[jid("palm_z")])
-        bj = jid("box_free")
-        self.box_qpos = int(m.jnt_qposadr[bj])
-        self.box_dof = int(m.jnt_dofadr[bj])
-        self.box_body = mujoco.mj_name2id(m, mujoco.mjtObj.mjOBJ_BODY, "box")
-        self.box_geom = gid("box")
-        self.tip_geom = np.array([gid(f"{PREFIX}f{f}_tip") for f in range(2)])
-        self._finger_of_geom = np.full(m.ngeom, -1, dtype=int)
-        for f in range(2):
-            self._finger_of_geom[self.tip_geom[f]] = f
-            for i in range(n):
-                self._finger_of_geom[gid(f"{PREFIX}f{f}_geom{i}")] = f
-        self._finger_pair_ids = np.array([mujoco.mj_name2id(m, mujoco.mjtObj.mjOBJ_PAIR, p) for p in self._finger_pairs])
-        # shape sampling: tangent angles at s/l = (k+1/2)/K from link angles (cumulative hinge angles)
-        K = self.shape_points
-        s_link = (np.arange(n) + 0.5) / n
-        s_k = (np.arange(K) + 0.5) / K
-        interp = np.zeros((K, n))
-        for k, s in enumerate(s_k):
-            e = np.zeros(n)
-            for i in range(n):
-                e[:] = 0
-                e[i] = 1
-                interp[k, i] = np.interp(s, s_link, e)
-        self._shape_matrix = interp @ np.tril(np.ones((n, n)))  # q -> theta(s_k)
-        self._shape_matrix_t = np.ascontiguousarray(self._shape_matrix.T)
+        self._spring_idx = pm.fingers.joint_qpos.ravel()
+        hinges = pm.fingers.hinge_qpos
+        self._fq = (hinges,) if hinges is not None else (pm.fingers.joint_qpos,)
+        self._bind_spring_view()
+        self._tips = (int(pm.fingers.tip_geom[0]), int(pm.fingers.tip_geom[1]))
+        self._fog_list = pm.fingers.finger_of_geom.tolist()
+        self._elliptic = self.model.opt.cone == mujoco.mjtCone.mjCONE_ELLIPTIC
         self._cf = np.zeros(6)
-        self._fog_list = self._finger_of_geom.tolist()
-        self._elliptic = m.opt.cone == mujoco.mjtCone.mjCONE_ELLIPTIC
-        flat = self._spring_idx
-        if np.array_equal(flat, np.arange(flat[0], flat[0] + flat.size)):
-            # the hinges' qpos are contiguous: write the rest angles through a view
-            self._spring_view = m.qpos_spring[flat[0]:flat[0] + flat.size].reshape(2, n)
-        else:  # pragma: no cover - the builder always makes them contiguous
-            self._spring_view = None
-        self._tips = (int(self.tip_geom[0]), int(self.tip_geom[1]))
-        # finger hinge qpos as a (2, n) view when contiguous, else a fancy index
-        q0 = int(flat[0])
-        contiguous = np.array_equal(flat, np.arange(q0, q0 + flat.size))
-        self._fq = (slice(q0, q0 + flat.size),) if contiguous else (self.joint_qpos,)
+        # shape sampling: tangent angles at s/l = (k+1/2)/K, interpolated between link midpoints, from the
+        # link angles (cumulative hinge angles)
+        s_link = (np.arange(n) + 0.5) / n
+        s_k = (np.arange(self.shape_points) + 0.5) / self.shape_points
+        interp = np.array([np.interp(s_k, s_link, e) for e in np.eye(n)]).T
+        self._shape_matrix_t = np.ascontiguousarray((interp @ np.tril(np.ones((n, n)))).T)  # q -> theta(s_k)
+
+    @property
+    def joint_qpos(self) -> np.ndarray:
+        """qpos addresses of the finger hinges, (2, n_links) (read-only)."""
+        return self.fingers.joint_qpos
+
+    @property
+    def joint_dof(self) -> np.ndarray:
+        """dof addresses of the finger hinges, (2, n_links) (read-only)."""
+        return self.fingers.joint_dof
+
+    @property
+    def tip_geom(self) -> np.ndarray:
+        """Geom ids of the two tip spheres (read-only)."""
+        return self.fingers.tip_geom
 
     # ------------------------------------------------------------- helpers
     def dimensionless(self) -> DimensionlessParams:

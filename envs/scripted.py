@@ -26,7 +26,7 @@ import numpy as np
 
 from simgrip.reference.elastica import ElasticaError, solve
 from simgrip.profiles import Uniform
-from simgrip.params import DimensionlessParams
+from simgrip.params import DimensionlessParams, PhysicalParams
 
 __all__ = ["ObservationPickPolicy", "ScriptedPickPolicy", "choose_kappa"]
 
@@ -135,6 +135,7 @@ class ScriptedPickPolicy:
         self.palm_target = None  # the palm's target height [m], integrated from our own commands
         self.palm0 = None
         self.palm_lift0 = None
+        self.t_from, self.k_from = 0.0, 0.0  # Grip I: the curvature ramp starts here
         return self.kappa
 
     def _a_kappa(self, kappa):
@@ -151,9 +152,9 @@ class ScriptedPickPolicy:
             bottom = self.palm0 + float(obs[sl["box_position"]][1]) * L - 0.5 * env.box_height
             self.grasp_height = bottom + self.depth * L + env.r_tip
 
-    def _kappa_now(self, t, obs):
-        """Curvature command at time ``t`` after the lift began (Grip I hook for closed-loop variants)."""
-        return self.kappa
+    def _probe(self, t, obs):
+        """Grip I hook: a curvature command while still probing, or None once the plan is made."""
+        return None
 
     def __call__(self, obs):
         env = self.env
@@ -163,11 +164,13 @@ class ScriptedPickPolicy:
         self.t += env.dt
         vz = 0.0
         if self.grasp_height is None:  # Grip I: ramp, settle, lift
-            t_lift = self.ramp_time + self.settle_time
-            if t < t_lift:
-                k = self.kappa * min(1.0, t / self.ramp_time) if self.ramp_time > 0 else self.kappa
+            k = self._probe(t, obs)
+            if k is not None:
+                t_lift = math.inf
             else:
-                k = self._kappa_now(t - t_lift, obs)
+                t_lift = self.t_from + self.ramp_time + self.settle_time
+                w = min(1.0, (t - self.t_from) / self.ramp_time) if self.ramp_time > 0 else 1.0
+                k = self.k_from + w * (self.kappa - self.k_from)
         else:  # Grip III: open the claw, descend around the box, curl under it, lift
             t_down = self.open_time + max(0.0, self.palm0 - self.grasp_height) / (env.palm_speed * self.lift_speed * 2)
             if t < self.open_time:
@@ -197,41 +200,54 @@ class ScriptedPickPolicy:
 class ObservationPickPolicy(ScriptedPickPolicy):
     """Honest scripted pick: sees only the observation and the env's configuration.
 
-    Unlike the oracle :class:`ScriptedPickPolicy` it does not know the episode's box
-    mass, width or friction: it grips with one curvature ``kappa`` chosen for the
-    whole randomised range (Grip III: one carrying depth ``depth``), and while
-    lifting it curls further by ``kappa_step`` whenever the observed box lags the
-    palm (``box_position`` sinking by more than ``slip`` finger lengths since the
-    lift began), down to ``kappa_min``.  The configuration it reads (finger
-    length, control step, palm speed and range, curvature range, target height,
-    box height, tip radius, observation layout) is what a controller author sets
-    when making the env, not hidden state.
+    Unlike the oracle :class:`ScriptedPickPolicy` it does not know the episode's
+    box.  Grip I: it curls the fingers slowly (``probe_rate`` per second) until
+    the observation shows both fingers touching the box, reads the box width
+    off the observed fingertip positions, and takes the elastica's gentlest
+    holding curvature for that width and the randomisation's heaviest box and
+    lowest friction (``box_mass_range``, ``friction_range``: the env's
+    configuration, what a learner's training distribution also holds), with
+    ``safety`` on the friction; then it ramps there, lifts and holds like the
+    oracle.  Grip III: one curvature ``kappa`` and carrying depth ``depth`` for
+    the whole range.  The configuration it reads (finger length and stiffness,
+    control step, palm speed and range, curvature range, target height, box
+    height, tip radius, observation layout) is set by whoever makes the env,
+    not hidden state.
     """
 
-    def __init__(self, kappa: float | None = None, depth: float = 0.58, kappa_step: float = 0.25,
-                 kappa_min: float | None = None, slip: float = 0.01, **kwargs):
-        super().__init__(**kwargs)
-        self.kappa_fixed = kappa
+    def __init__(self, kappa: float = -4.5, depth: float = 0.58, probe_rate: float = 5.0, safety: float = 1.0,
+                 **kwargs):
+        super().__init__(safety=safety, **kwargs)
+        self.kappa_fixed = float(kappa)
         self.depth_fixed = float(depth)
-        self.kappa_step = float(kappa_step)
-        self.kappa_min = kappa_min
-        self.slip = float(slip)
+        self.probe_rate = float(probe_rate)
 
     def _plan(self, env):
         self.details = {}
-        self._rel0 = None
+        self.probing = env.grip == "I"
         if env.grip == "I":
-            k = -6.0 if self.kappa_fixed is None else float(self.kappa_fixed)
-            return k, None
-        k = -4.5 if self.kappa_fixed is None else float(self.kappa_fixed)
-        return k, self.depth_fixed
+            return math.nan, None  # chosen once the fingers touch the box
+        return self.kappa_fixed, self.depth_fixed
 
-    def _kappa_now(self, t, obs):
-        rel = float(obs[self.env.obs_slices["box_position"]][1])
-        if self._rel0 is None:
-            self._rel0 = rel
-        elif rel < self._rel0 - self.slip:
-            lo = self.env.kappa_range[0] if self.kappa_min is None else float(self.kappa_min)
-            self.kappa = max(self.kappa - self.kappa_step, lo)
-            self._rel0 = rel
-        return self.kappa
+    def _probe(self, t, obs):
+        if not self.probing:
+            return None
+        env = self.env
+        sl, L = env.obs_slices, env.length
+        lo, hi = env.kappa_range
+        k_now = lo + 0.5 * (float(obs[sl["kappa_command"]][0]) + 1.0) * (hi - lo)
+        force = obs[sl["contact_force"]]
+        if t > 0 and force[0] > 0 and force[2] > 0 or k_now <= lo:
+            tips = obs[sl["tip_position"]]
+            width = (abs(float(tips[0])) + abs(float(tips[2]))) * L - 2.0 * env.r_tip
+            width = min(max(width, 0.2 * L), 1.9 * L)
+            p = PhysicalParams(length=L, EI=env.EI, rho=env.rho, g=env.g, m=0.5 * env.box_mass_range[1],
+                               b=width, mu_s=env.friction_range[0], gamma=0.8 * L).dimensionless()
+            b_eff = (width + 2.0 * env.r_tip) / L
+            self.kappa, self.details = choose_kappa("I", p.replace(b=min(b_eff, 1.9)), safety=self.safety)
+            self.details["width"] = width
+            self.kappa = min(self.kappa, k_now)  # never open again
+            self.probing = False
+            self.t_from, self.k_from = t, k_now
+            return None
+        return max(k_now - self.probe_rate * env.dt, lo) if t > 0 else 0.0
