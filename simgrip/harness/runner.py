@@ -301,7 +301,10 @@ class _Local:
         with _sigint_ignored():
             self.cluster = LocalCluster(
                 n_workers=workers, threads_per_worker=1, processes=True, host="127.0.0.1",
-                dashboard_address=None, worker_dashboard_address=None, silence_logs=50,
+                # the scheduler always serves HTTP (/health, /metrics): on 127.0.0.1 and a free port, so that
+                # a busy 8787 (another cluster) neither fails the start nor warns; no dashboard on it
+                dashboard_address="127.0.0.1:0", scheduler_kwargs={"dashboard": False},
+                worker_dashboard_address=None, silence_logs=50,
             )
             self.client = Client(self.cluster, set_as_default=False)
 
