@@ -59,11 +59,14 @@ __all__ = [
 
 
 def __getattr__(name: str):
-    """``from simgrip import elastica`` / ``discrete``: the reference solvers, imported lazily (SciPy)."""
-    if name in ("elastica", "discrete"):
-        import importlib
+    """``from simgrip import elastica``: the BVP module; ``discrete``: the whole reference package
+    (``solve_discrete``, ``solve_chain``, ...); both imported lazily (SciPy)."""
+    import importlib
 
-        return importlib.import_module(f"simgrip.reference.{name}")
+    if name == "elastica":
+        return importlib.import_module("simgrip.reference.elastica")
+    if name == "discrete":
+        return importlib.import_module("simgrip.reference")
     raise AttributeError(f"module 'simgrip' has no attribute {name!r}")
 
 

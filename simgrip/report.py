@@ -77,19 +77,17 @@ def elastica_record(sol, min_eigenvalue: float | None = None) -> dict:
 def solve_record(grip: str, params: DimensionlessParams, profile, *, K: int = 128) -> dict:
     """Solve the elastica BVP and the paper's discrete stability problem; return the record.
 
-    ``min_eigenvalue`` is the smallest eigenvalue of ``E^T L E`` of the paper's
-    nodal scheme with ``K`` elements, started from the BVP solution (Grip III
-    takes the first ``K' in [K, 2K]`` that puts ``gamma`` closest to a node).
+    ``min_eigenvalue`` is :func:`simgrip.reference.stability_eigenvalue` of the
+    paper's nodal scheme with ``K`` elements at the BVP solution: the smallest
+    eigenvalue of the projected Hessian in the ``L^2`` metric (over ``rho g l``),
+    the same normalisation as the hinge chain's.
     """
-    from simgrip.reference import discrete, elastica
+    from simgrip.reference import DiscreteError, elastica, stability_eigenvalue
 
     sol = elastica.solve(grip, params, profile)
-    if grip == "III":  # the nodal scheme puts the contact on node round(gamma K): pick K with gamma on a node
-        K = min(range(K, 2 * K + 1), key=lambda k: (abs(params.gamma * k - round(params.gamma * k)), k))
     try:
-        disc = discrete.discrete_from_continuous(sol, grip, params, profile, K)
-        lam = disc.min_eigenvalue if disc.success else math.nan
-    except discrete.DiscreteError:
+        lam = stability_eigenvalue(sol, K)
+    except DiscreteError:
         lam = math.nan
     return elastica_record(sol, lam)
 

@@ -6,7 +6,7 @@ touches, so the settled state depends on the start: the problem the paper
 poses (contact at ``gamma``, centreline at ``X(gamma) = b/2``) is the one that
 starts from the hinge chain's own equilibrium with the contact at
 ``params.gamma``.  :func:`start_angles` solves for that start
-(:func:`simgrip.reference.discrete.solve_chain`) and :func:`build_scene` passes
+(:func:`simgrip.reference.solve_chain`) and :func:`build_scene` passes
 it to the model layer; everything that compares a simulation with the
 reference (``compare``, the harness, the figures, the tests) builds its
 scenes here.
@@ -34,7 +34,7 @@ def start_angles(grip: str, params: PhysicalParams | DimensionlessParams, profil
     """
     if check_grip(grip) != "III":
         return None
-    from simgrip.reference.discrete import DiscreteError, solve_chain
+    from simgrip.reference import DiscreteError, solve_chain
 
     dimless = params.dimensionless() if isinstance(params, PhysicalParams) else params
     try:

@@ -19,7 +19,7 @@ from hypothesis import strategies as st
 
 from simgrip import STANDARD, Concentrated, Uniform
 from simgrip.chain import chain_springs
-from simgrip.reference.discrete import (
+from simgrip.reference import (
     GRADIENT_TOL,
     ChainEquilibrium,
     DiscreteError,
@@ -130,12 +130,12 @@ def test_grip_names_are_normalised_and_results_typed():
 
 
 def test_newton_failure_raises(monkeypatch):
-    import simgrip.reference.discrete as d
+    import simgrip.reference.minimiser as d
 
     def never(prob, x0, **kw):
-        return d._Result(np.asarray(x0, float), 0.0, 1.0, 1, False, "forced failure")
+        return d.NewtonResult(np.asarray(x0, float), 0.0, 1.0, 1, False, "forced failure")
 
-    monkeypatch.setattr(d, "_newton", never)
+    monkeypatch.setattr(d, "newton", never)
     with pytest.raises(DiscreteError, match="did not converge"):
         solve_chain("I", STANDARD, -4.0, 16)
     with pytest.raises(DiscreteError):
@@ -144,18 +144,18 @@ def test_newton_failure_raises(monkeypatch):
 
 def test_homotopy_fallback_reaches_the_same_state(monkeypatch):
     """If Newton fails from the constrained arc, the arc-to-target homotopy takes over."""
-    import simgrip.reference.discrete as d
+    import simgrip.reference.minimiser as d
 
     direct = solve_chain("III", STANDARD, Uniform(-8.0), 32)
-    real, calls = d._newton, []
+    real, calls = d.newton, []
 
     def flaky(prob, x0, **kw):
         calls.append(kw)
         if len(calls) == 1:
-            return d._Result(np.asarray(x0, float), 0.0, 1.0, 1, False, "forced failure")
+            return d.NewtonResult(np.asarray(x0, float), 0.0, 1.0, 1, False, "forced failure")
         return real(prob, x0, **kw)
 
-    monkeypatch.setattr(d, "_newton", flaky)
+    monkeypatch.setattr(d, "newton", flaky)
     via = solve_chain("III", STANDARD, Uniform(-8.0), 32)
     assert len(calls) > 3 and via.success
     np.testing.assert_allclose(via.link_angles, direct.link_angles, atol=1e-11)
@@ -232,15 +232,19 @@ def test_solutions_are_stationary_with_their_multiplier(grip):
     assert np.max(np.abs(t.gradient)) < 1e-11 * np.max(np.abs(t.hessian))
     for r in (sol, eq):
         assert r.success and r.gradient_norm <= GRADIENT_TOL
-    # the O(K) inertia-bisection eigenvalue equals the dense projected one (eqs. 29-31);
+    # the O(K) inertia-bisection eigenvalue equals the dense projected one (eqs. 29-31) in the
+    # L^2 metric of each scheme's quadrature: trapezoid weights on the nodes, ds per link;
     # grad X = dE/d(-N1), so the constraint gradient comes from two energy evaluations
-    for r, f, args in ((sol, discrete_energy, (sol.theta,)), (eq, chain_energy, (eq.link_angles,))):
+    trapezoid = np.full(40, 1 / 40)
+    trapezoid[-1] = 1 / 80
+    for r, f, args, w in ((sol, discrete_energy, (sol.theta,), trapezoid),
+                          (eq, chain_energy, (eq.link_angles,), np.full(40, 1 / 40))):
         kw = {"contact_moment": 0.3} if f is chain_energy else {}
         L = f(grip, STANDARD, prof, 40, *args, N1=r.N1, **kw).hessian
         a = None
         if grip != "free":
             a = f(grip, STANDARD, prof, 40, *args, N1=0.0, **kw).gradient - f(grip, STANDARD, prof, 40, *args, N1=1.0, **kw).gradient
-        assert r.min_eigenvalue == pytest.approx(min_eigenvalue(L, a), abs=1e-13 * np.max(np.abs(L)))
+        assert r.min_eigenvalue == pytest.approx(min_eigenvalue(L, a, weights=w), abs=1e-13 * np.max(np.abs(L)) / w.min())
     if grip != "free":
         np.testing.assert_allclose(sol.contact[0], STANDARD.b / 2, atol=1e-14)
         np.testing.assert_allclose(eq.contact[0], STANDARD.b / 2, atol=1e-14)
@@ -395,10 +399,15 @@ def test_min_eigenvalue_projects_on_the_constraint_tangent():
 def test_free_rod_eigenvalue_is_the_hessian_eigenvalue():
     sol = solve_discrete("free", STANDARD, -3.0, 32)
     H = discrete_energy("free", STANDARD, -3.0, 32, sol.theta).hessian
-    assert sol.min_eigenvalue == pytest.approx(np.linalg.eigvalsh(H)[0], rel=1e-12)
-    # the raw eigenvalue scales like ds; its continuum version does not
+    w = np.full(32, 1 / 32)
+    w[-1] = 1 / 64
+    r = 1 / np.sqrt(w)
+    assert sol.min_eigenvalue == pytest.approx(np.linalg.eigvalsh(r[:, None] * H * r[None, :])[0], rel=1e-12)
+    # the paper's (Euclidean) eigenvalue scales like ds; the reported one does not
     fine = solve_discrete("free", STANDARD, -3.0, 64)
-    assert fine.min_eigenvalue_continuum == pytest.approx(sol.min_eigenvalue_continuum, rel=0.02)
+    assert fine.min_eigenvalue == pytest.approx(sol.min_eigenvalue, rel=0.02)
+    H64 = discrete_energy("free", STANDARD, -3.0, 64, fine.theta).hessian
+    assert min_eigenvalue(H64) == pytest.approx(min_eigenvalue(H) / 2, rel=0.02)
 
 
 SWEEPS = {
@@ -417,7 +426,7 @@ def test_paper_branches_are_stable(scheme, grip):
     for k in kappas:
         sol = SOLVERS[scheme](grip, STANDARD, Uniform(k), K, guess=prev, gamma=gamma)
         assert sol.success
-        lams.append(sol.min_eigenvalue_continuum)
+        lams.append(sol.min_eigenvalue)
         prev = sol
     assert min(lams) > 5.0, lams
     if grip != "III":
@@ -502,7 +511,7 @@ def test_tip_couple_equals_shifted_rest_angles(grip, kappa):
     """A tip couple C on the last link is exactly a shift of every rest angle by C/(D k_j):
     sum_j k_j/2 (q_j - r_j)^2 - C sum_j q_j = sum_j k_j/2 (q_j - r_j - C/k_j)^2 + const."""
     from simgrip.chain import ChainSprings, chain_springs
-    from simgrip.reference.discrete import solve_chain
+    from simgrip.reference import solve_chain
     from simgrip.params import STANDARD
     from simgrip.profiles import Uniform
 

@@ -269,7 +269,7 @@ def test_feasible_windows_at_the_standard_case(grip_sweeps):
     each refined edge one condition is exactly marginal."""
     from scipy.optimize import brentq
 
-    from simgrip.reference.elastica import _margin
+    from simgrip.reference.capacity import margin as _margin
 
     mu = STANDARD.mu_s
     for grip, (ks, sols) in grip_sweeps.items():
@@ -450,6 +450,6 @@ def test_fallback_false_only_tries_the_warm_start(monkeypatch):
 
     near = solve("I", STANDARD, Uniform(-5.0))
     assert solve("I", STANDARD, Uniform(-5.1), guess=near, fallback=False).success
-    monkeypatch.setattr(elastica, "_from", lambda *a, **k: None)  # the warm start fails
+    monkeypatch.setattr(elastica, "solve_from", lambda *a, **k: None)  # the warm start fails
     with pytest.raises(ElasticaError, match="fallback=False"):
         solve("I", STANDARD, Uniform(-5.1), guess=near, fallback=False)

@@ -6,7 +6,7 @@ The methods (see :mod:`simgrip.harness.bench` for what is compared how):
     :func:`simgrip.settle.settle` (Newton, or ``method="dynamics"``) on a
     freshly built scene (build included; ``build_s`` alone);
 ``minimiser``
-    :func:`simgrip.reference.discrete.solve_chain`: the exact equilibrium of
+    :func:`simgrip.reference.solve_chain`: the exact equilibrium of
     the same hinge chain with the same contact couple;
 ``bvp``
     :func:`simgrip.reference.elastica.solve` of the same state (the error
@@ -69,7 +69,7 @@ def reference(grip, params, prof, *, gamma=None, contact_moment=0.0, tol=REF_TOL
 
 def chain(grip, params, prof, n, *, gamma=None, contact_moment=0.0):
     """The hinge chain's exact equilibrium with the simulation's contact couple (and Grip III ``gamma``)."""
-    from simgrip.reference.discrete import solve_chain
+    from simgrip.reference import solve_chain
 
     return solve_chain(grip, params, prof, n, gamma=gamma, contact_moment=contact_moment)
 

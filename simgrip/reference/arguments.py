@@ -1,0 +1,76 @@
+"""Checks of the arguments of the reference solvers' public entry points.
+
+Each public function of :mod:`simgrip.reference` checks and converts its inputs
+once, with these helpers, and hands plain floats, ints and
+:class:`~simgrip.profiles.CurvatureProfile` objects to the internal functions,
+which do not check them again.  Every failure is a ``ValueError`` naming the
+parameter.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+from simgrip.params import DimensionlessParams, _finite
+
+__all__ = ["check_count", "check_gamma", "check_gravity", "check_params", "check_tip_load", "check_tol"]
+
+
+def check_params(params) -> DimensionlessParams:
+    """``params`` itself if it is a :class:`~simgrip.params.DimensionlessParams`."""
+    if not isinstance(params, DimensionlessParams):
+        raise ValueError(f"params must be a DimensionlessParams, got {type(params).__name__}")
+    return params
+
+
+def check_count(name: str, value) -> int:
+    """An element or link count: an integer >= 2."""
+    try:
+        v = int(value)
+    except (TypeError, ValueError):
+        raise ValueError(f"{name} must be an integer >= 2, got {value!r}") from None
+    if v != value or v < 2:
+        raise ValueError(f"{name} must be an integer >= 2, got {value!r}")
+    return v
+
+
+def check_gamma(gamma, params: DimensionlessParams) -> float:
+    """The Grip III contact arc length: ``params.gamma`` when ``None``, else a float in (0, 1)."""
+    if gamma is None:
+        return params.gamma
+    g = _finite("gamma", gamma)
+    if not 0.0 < g < 1.0:
+        raise ValueError(f"gamma must lie in (0, 1), got {gamma!r}")
+    return g
+
+
+def check_gravity(gravity) -> float:
+    """A factor >= 0 on the rod's own weight (``True``/``False`` read as 1/0)."""
+    try:
+        g = float(gravity)
+    except (TypeError, ValueError):
+        raise ValueError(f"gravity must be a real factor >= 0, got {gravity!r}") from None
+    if not (math.isfinite(g) and g >= 0):
+        raise ValueError(f"gravity must be a finite factor >= 0, got {gravity!r}")
+    return g
+
+
+def check_tip_load(tip_load) -> tuple[float, float]:
+    """An extra tip force ``(E1, E2)``: a pair of finite floats."""
+    try:
+        t = np.asarray(tip_load, dtype=float)
+    except (TypeError, ValueError):
+        raise ValueError(f"tip_load must be a pair of real numbers, got {tip_load!r}") from None
+    if t.shape != (2,) or not np.all(np.isfinite(t)):
+        raise ValueError(f"tip_load must be a pair of finite numbers, got {tip_load!r}")
+    return float(t[0]), float(t[1])
+
+
+def check_tol(tol) -> float:
+    """A ``solve_bvp`` tolerance in ``[1e-13, 1e-2]``."""
+    tol = _finite("tol", tol)
+    if not 1e-13 <= tol <= 1e-2:
+        raise ValueError(f"tol must lie in [1e-13, 1e-2], got {tol!r}")
+    return tol
