@@ -1,9 +1,9 @@
 """``PickEnv``: pick a box with two soft fingers by commanding their curvature.
 
-A thin Gymnasium layer over :func:`simgrip.sim.scene.build_scene`: the two fingers
-(hinge chains whose stiffness ``EI/ds`` and rest angles ``kappa0 ds`` come from
-:func:`simgrip.chain.chain_springs`) are built by the scene builder and attached
-under the palm of ``models/pick_scene.xml``.  The pneumatic actuation is the
+A thin Gymnasium layer over the pick model of :mod:`simgrip.envs.pick_model`: the
+two fingers (hinge chains whose stiffness ``EI/ds`` and rest angles ``kappa0 ds``
+come from :func:`simgrip.chain.chain_springs`) are built by simgrip's finger
+builder under the palm of ``models/pick_scene.xml``.  The pneumatic actuation is the
 intrinsic curvature: each control step moves the actual curvature towards its
 command with a first-order lag and writes the new rest angles into
 ``model.qpos_spring`` (no recompilation).
@@ -20,16 +20,14 @@ import numpy as np
 from gymnasium import spaces
 from gymnasium.error import ResetNeeded
 
-from simgrip.chain import chain_springs, check_links
-from simgrip.models import model_path
+from simgrip.chain import check_links
+from simgrip.envs.pick_model import build_pick_model
 from simgrip.params import DimensionlessParams, PhysicalParams
-from simgrip.profiles import Uniform
 from simgrip.sim.checks import PhysicsError, check_invalid_state, clear_warnings, invalid_state
 
 __all__ = ["PickEnv", "BoxParams", "OBS_LAYOUT", "obs_layout"]
 
 GRIP_ALIASES = {"I": "I", "i": "I", "pinch": "I", "III": "III", "iii": "III", "cradle": "III"}
-PREFIX = "hand_"
 _COS_TILT = math.cos(math.radians(30.0))  # knocked over beyond this tilt
 
 
@@ -126,7 +124,7 @@ class PickEnv(gym.Env):
     ## Description
 
     A palm carries two mirrored soft fingers (planar hinge chains, ``n_links``
-    links each, built by :func:`simgrip.sim.scene.build_scene`).  The pneumatic
+    links each, built by :func:`simgrip.sim.fingers.add_fingers`).  The pneumatic
     pressure is modelled by the fingers' intrinsic curvature
     :math:`\bar\kappa_0 = \ell\kappa_0` (uniform along the finger), which follows
     its command with a first-order lag of time constant ``kappa_tau``.  The

@@ -1,0 +1,158 @@
+"""The MuJoCo model of the pick environment, built on simgrip's own fingers and contact pairs.
+
+``models/pick_scene.xml`` holds the world around the fingers (options, table,
+box on a free joint, palm, light, cameras).  :func:`build_pick_model` loads it
+with :class:`mujoco.MjSpec` and adds, in code:
+
+* the palm's vertical slide joint and its position servo (a stiff, critically
+  damped spring: a mocap body has no velocity, so fingers carried by one could
+  not drag the box up by friction);
+* the two mirrored fingers under the palm, built by
+  :func:`simgrip.sim.fingers.add_fingers` (the same hinge chain as every
+  simgrip scene: stiffness ``EI/ds``, rest angles from
+  :func:`simgrip.chain.chain_springs`), with hinge damping and armature, link
+  capsules and tip spheres of radius ``r_tip``;
+* for the cradle grip (III), a narrow pedestal under the box;
+* the explicit contact pairs (:func:`simgrip.sim.contacts.add_pair`): each
+  finger's tip and links (but the last, whose end is the tip sphere) with the
+  box (condim 4: torsional friction ``spin_friction * mu``), the palm slab
+  with the box, the box with the table (and pedestal).
+
+Addresses are looked up once (:class:`PickModel`); the fingers' through
+:func:`simgrip.sim.fingers.index_fingers`.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import mujoco
+import numpy as np
+
+from simgrip.chain import chain_springs
+from simgrip.models import model_path
+from simgrip.profiles import Uniform
+from simgrip.sim.contacts import add_pair
+from simgrip.sim.fingers import FingerIndex, add_fingers, check_finger_links, index_fingers
+
+__all__ = ["FINGER_PREFIX", "PEDESTAL_HEIGHT", "PickModel", "build_pick_model"]
+
+#: Prefix of the fingers' names in the pick model.
+FINGER_PREFIX = "hand_"
+#: Height of the cradle grip's pedestal [m] (its half width is 6 mm).
+PEDESTAL_HEIGHT = 0.04
+#: Palm mass [kg] and servo stiffness [N/m].
+PALM_MASS = 0.2
+PALM_KP = 4000.0
+#: Contact softness of every pair of the pick scene.
+PICK_SOLREF = (0.005, 1.0)
+PICK_SOLIMP = (0.95, 0.99, 0.001, 0.5, 2.0)
+
+
+@dataclass
+class PickModel:
+    """The compiled pick model and the addresses the environment reads.
+
+    Attributes
+    ----------
+    spec : mujoco.MjSpec
+    model : mujoco.MjModel
+    fingers : FingerIndex
+        The two fingers (``n`` links each).
+    palm_qpos, palm_dof : int
+        The palm's slide joint.
+    box_qpos, box_dof, box_body, box_geom : int
+        The box's free joint (7 qpos, 6 dofs), body and geom.
+    finger_pairs : ndarray
+        Ids of the finger-box pairs (their friction is the episode's box friction).
+    pedestal_height : float
+        Height of the box's support above the table [m] (0 for Grip I).
+    unit_rest : ndarray (n,)
+        Rest angles of a finger per unit of uniform curvature (rest angles are linear in ``kappa_bar``).
+    """
+
+    spec: mujoco.MjSpec
+    model: mujoco.MjModel
+    fingers: FingerIndex
+    palm_qpos: int
+    palm_dof: int
+    box_qpos: int
+    box_dof: int
+    box_body: int
+    box_geom: int
+    finger_pairs: np.ndarray
+    pedestal_height: float
+    unit_rest: np.ndarray
+
+
+def build_pick_model(grip: str, *, n_links: int, length: float, EI: float, rho: float, g: float, r_tip: float,
+                     box_size, box_mass_max: float, friction: float, spin_friction: float, timestep: float,
+                     impratio: float, damping_time: float, armature: float) -> PickModel:
+    """Build and compile the pick scene of ``grip`` (``"I"`` or ``"III"``); SI units.
+
+    ``box_size`` is the box's initial full size ``(x, y, z)`` [m] (the
+    environment resizes it per episode); ``box_mass_max`` [kg] sizes the palm
+    servo's damping (critical with the heaviest box); ``friction`` is the
+    initial finger-box friction.  ``damping_time`` [s] and ``armature``
+    [kg m^2] go to every finger hinge.
+    """
+    n = check_finger_links(n_links, parent_depth=1, name="n_links")
+    spec = mujoco.MjSpec.from_file(str(model_path("pick_scene.xml")))
+    spec.option.timestep = timestep
+    spec.option.impratio = impratio
+    spec.option.gravity = [0.0, 0.0, -g]
+    palm = spec.body("palm")
+    _add_palm_servo(spec, palm, PALM_MASS + 2.0 * rho * length + box_mass_max)
+    add_fingers(spec, palm, chain_springs(Uniform(0.0), n), fingers=2, length=length, EI=EI, rho=rho,
+                r_link=r_tip, r_tip=r_tip, damping_time=damping_time, armature=armature, prefix=FINGER_PREFIX)
+    hx, hy, hz = (0.5 * float(v) for v in box_size)
+    spec.geom("box").size = [hx, hy, hz]
+    pedestal = PEDESTAL_HEIGHT if grip == "III" else 0.0
+    if pedestal:
+        spec.worldbody.add_geom(name="pedestal", type=mujoco.mjtGeom.mjGEOM_BOX, size=[0.006, hy, 0.5 * pedestal],
+                                pos=[0, 0, 0.5 * pedestal], contype=0, conaffinity=0, rgba=[0.45, 0.4, 0.35, 1])
+    finger_pairs = _add_pairs(spec, n, friction, spin_friction, pedestal > 0.0)
+    model = spec.compile()
+
+    def joint(name):
+        return mujoco.mj_name2id(model, mujoco.mjtObj.mjOBJ_JOINT, name)
+
+    palm_z, box_free = joint("palm_z"), joint("box_free")
+    return PickModel(
+        spec=spec, model=model, fingers=index_fingers(model, 2, n, FINGER_PREFIX),
+        palm_qpos=int(model.jnt_qposadr[palm_z]), palm_dof=int(model.jnt_dofadr[palm_z]),
+        box_qpos=int(model.jnt_qposadr[box_free]), box_dof=int(model.jnt_dofadr[box_free]),
+        box_body=mujoco.mj_name2id(model, mujoco.mjtObj.mjOBJ_BODY, "box"),
+        box_geom=mujoco.mj_name2id(model, mujoco.mjtObj.mjOBJ_GEOM, "box"),
+        finger_pairs=np.array([mujoco.mj_name2id(model, mujoco.mjtObj.mjOBJ_PAIR, p) for p in finger_pairs]),
+        pedestal_height=pedestal, unit_rest=chain_springs(Uniform(1.0), n).rest,
+    )
+
+
+def _add_palm_servo(spec, palm, moving_mass: float) -> None:
+    """The palm's vertical slide ``palm_z`` and the servo ``palm_servo`` (critically damped for ``moving_mass`` [kg])."""
+    palm.gravcomp = 1.0
+    palm.add_joint(name="palm_z", type=mujoco.mjtJoint.mjJNT_SLIDE, axis=[0, 0, 1])
+    palm.explicitinertial = True
+    palm.mass = PALM_MASS
+    palm.inertia = [1e-4, 1e-4, 1e-4]
+    servo = spec.add_actuator(name="palm_servo", target="palm_z", trntype=mujoco.mjtTrn.mjTRN_JOINT)
+    servo.set_to_position(kp=PALM_KP, kv=2.0 * math.sqrt(PALM_KP * moving_mass))
+
+
+def _add_pairs(spec, n: int, mu: float, spin: float, pedestal: bool) -> list[str]:
+    """Every contact pair of the pick scene; returns the names of the finger-box pairs."""
+    soft = dict(solref=PICK_SOLREF, solimp=PICK_SOLIMP)
+    names = []
+    for f in range(2):
+        geoms = [f"{FINGER_PREFIX}f{f}_tip"] + [f"{FINGER_PREFIX}f{f}_geom{i}" for i in range(n - 1)]
+        pairs = [f"pair_f{f}_tip"] + [f"pair_f{f}_link{i}" for i in range(n - 1)]
+        for geom, name in zip(geoms, pairs):
+            add_pair(spec, name, geom, "box", mu, condim=4, spin=spin * mu, **soft)
+        names += pairs
+    add_pair(spec, "pair_palm_box", "palm_slab", "box", 0.5, spin=spin * 0.5, **soft)
+    add_pair(spec, "pair_box_table", "box", "table", 0.6, spin=spin * 0.6, **soft)
+    if pedestal:
+        add_pair(spec, "pair_box_pedestal", "box", "pedestal", 0.6, spin=spin * 0.6, **soft)
+    return names
