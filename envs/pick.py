@@ -24,6 +24,7 @@ from simgrip.chain import check_links
 from simgrip.envs.pick_model import build_pick_model
 from simgrip.params import DimensionlessParams, PhysicalParams
 from simgrip.sim.checks import PhysicsError, check_invalid_state, clear_warnings, invalid_state
+from simgrip.sim.gl import make_renderer
 
 __all__ = ["PickEnv", "BoxParams", "OBS_LAYOUT", "obs_layout"]
 
@@ -740,7 +741,7 @@ class PickEnv(gym.Env):
             gym.logger.warn("render() called without a render_mode; pass render_mode='rgb_array' to gymnasium.make")
             return None
         if self._renderer is None:
-            self._renderer = mujoco.Renderer(self.model, height=self.height, width=self.width)
+            self._renderer = make_renderer(self.model, self.height, self.width)  # headless: EGL, then OSMesa
         self._renderer.update_scene(self.data, camera=self.camera)
         return self._renderer.render().copy()
 

@@ -2,8 +2,8 @@
 
 Both run the scripted elastica controller (:class:`simgrip.envs.scripted.ScriptedPickPolicy`)
 in :class:`simgrip.envs.pick.PickEnv` and write through :func:`simgrip.io.atomic_write`.
-Rendering is offscreen: on a machine without a display set ``MUJOCO_GL=osmesa``
-(or ``egl``) and ``PYOPENGL_PLATFORM`` to the same before MuJoCo is imported.
+Rendering is offscreen; on a machine without a display the backend is chosen by
+:func:`simgrip.sim.gl.choose_backend` (``MUJOCO_GL`` if set, else EGL, then OSMesa).
 """
 
 from __future__ import annotations

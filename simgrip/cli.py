@@ -184,12 +184,10 @@ def _cmd_compare(args) -> str:
 
 
 def _cmd_render(args):
-    import os
-
-    if "MUJOCO_GL" not in os.environ and not os.environ.get("DISPLAY"):
-        os.environ["MUJOCO_GL"] = "osmesa"  # headless, CPU only
-        os.environ.setdefault("PYOPENGL_PLATFORM", "osmesa")
     from simgrip.envs.rendering import render_grip_png, render_pick_gif
+    from simgrip.sim.gl import choose_backend
+
+    choose_backend()  # headless: EGL, then OSMesa (RenderingUnavailable, exit 1, says what it tried)
 
     seed = _seed(args.seed)
     render_grip_png(args.png, grip=args.grip, seed=seed)
