@@ -95,24 +95,27 @@ def _bool(name, value) -> bool:
 
 def obs_layout(shape_points: int = 8, per_finger: bool = False) -> list[tuple[str, int]]:
     """``(name, size)`` of the observation's blocks, in order (see :class:`PickEnv`)."""
-    nk = 2 if per_finger else 1
-    return [
+    # One command drives both fingers unless per_finger: the scene is then mirror-symmetric, finger 1 is
+    # finger 0's mirror image (to ~1e-9) and the box moves along z only, so those entries are left out.
+    nf = 2 if per_finger else 1
+    blocks = [
         ("palm_height", 1),
-        ("kappa_command", nk),
-        ("kappa_actual", nk),
-        ("finger_shape", 2 * shape_points),
-        ("tip_position", 4),
-        ("box_position", 2),
-        ("box_tilt", 1),
-        ("box_velocity", 2),
-        ("box_spin", 1),
+        ("kappa_command", nf),
+        ("kappa_actual", nf),
+        ("finger_shape", nf * shape_points),
+        ("tip_position", 2 * nf),
+        ("box_position", nf),
+        ("box_tilt", nf - 1),
+        ("box_velocity", nf),
+        ("box_spin", nf - 1),
         ("box_lift", 1),
-        ("contact_force", 4),
+        ("contact_force", 2 * nf),
         ("hold", 1),
     ]
+    return [(name, size) for name, size in blocks if size]
 
 
-#: Layout of the default observation (``shape_points = 8``, ``per_finger = False``): 35 entries.
+#: Layout of the default observation (``shape_points = 8``, ``per_finger = False``): 19 entries.
 OBS_LAYOUT = obs_layout(8)
 
 #: The box's spin is observed as ``omega_y * SPIN_TIME`` (rad per 0.1 s).
@@ -183,31 +186,35 @@ class PickEnv(gym.Env):
 
     ## Observation space
 
-    ``Box(low, high, (19 + 2 shape_points + 2 per_finger,), float64)``: 35
-    entries by default, every one of them varies during an episode (the
-    out-of-plane coordinates are left out).  Lengths are in finger lengths
-    ``l`` (``length``), velocities in ``l`` per second, angles in radians,
-    forces in units of the mean box weight ``W = g * mean(box_mass_range)``
-    (a constant of the env, not the episode's box).  Positions and velocities
-    are relative to the palm (finger roots), in world axes; finger 1 is the
-    mirror image of finger 0 (its tip has ``x < 0``).  Values are clipped to
-    the bounds listed, which normal use does not reach.  ``obs_layout`` holds
-    the ``(name, size)`` blocks and ``obs_slices`` their slices.
+    ``Box(low, high, (11 + K,), float64)`` with ``K = shape_points``: 19
+    entries by default; ``(21 + 2 K,)`` (37) with ``per_finger=True``.  Every
+    entry varies during an episode.  One command drives both fingers unless
+    ``per_finger``: the scene is then mirror-symmetric (finger 1 is finger 0's
+    mirror image to ~1e-9, the box moves along ``z`` only), so finger 1 and the
+    box's ``x``, tilt and spin are left out; with ``per_finger`` they are in
+    (the rows marked pf).  Nothing out of the plane is observed.  Lengths are
+    in finger lengths ``l`` (``length``), velocities in ``l`` per second,
+    angles in radians, forces in units of the mean box weight ``W = g *
+    mean(box_mass_range)`` (a constant of the env, not the episode's box).
+    Positions and velocities are relative to the palm (finger roots), in
+    world axes.  Values are clipped to the bounds listed, which normal use does
+    not reach.  ``obs_layout`` holds the ``(name, size)`` blocks and
+    ``obs_slices`` their slices.
 
     | index (default) | name | size | meaning | unit | bounds |
     |-----------------|------|------|---------|------|--------|
     | 0 | ``palm_height`` | 1 | palm (finger roots) above the table | l | [0, 10] |
-    | 1 | ``kappa_command`` | 1 (2) | curvature command, in action units (the action that gives it) | - | [-2, 2] |
-    | 2 | ``kappa_actual`` | 1 (2) | actual curvature after the lag, in action units | - | [-2, 2] |
-    | 3:19 | ``finger_shape`` | 2K | tangent angle (each finger in its own frame, counter-clockwise positive, 0 along a straight finger) at ``K = shape_points`` arc lengths ``s/l = (k+1/2)/K``, interpolated between link midpoints (independent of ``n_links``); finger 0 then finger 1 | rad | [-B, B], ``B = max(20, 2 max abs kappa_range)`` |
-    | 19:23 | ``tip_position`` | 4 | fingertip ``(x, z)`` relative to the palm, finger 0 then 1 | l | [-5, 5] |
-    | 23:25 | ``box_position`` | 2 | box centre ``(x, z)`` relative to the palm | l | [-10, 10] |
-    | 25 | ``box_tilt`` | 1 | box rotation about ``y`` (its ``z`` axis towards ``+x`` is positive) | rad | [-pi, pi] |
-    | 26:28 | ``box_velocity`` | 2 | box centre velocity ``(v_x, v_z)`` relative to the palm | l/s | [-100, 100] |
-    | 28 | ``box_spin`` | 1 | box angular velocity about ``y`` times 0.1 s (``SPIN_TIME``) | rad | [-100, 100] |
-    | 29 | ``box_lift`` | 1 | box height gained since the start of the episode, in units of ``target_height`` (1 = at the target) | - | [-20, 20] |
-    | 30:34 | ``contact_force`` | 4 | ``log(1 + F/W)`` of the box's contact force on each finger: normal, then friction magnitude; finger 0, then 1 | - | [0, 20] |
-    | 34 | ``hold`` | 1 | time held at the target, in units of ``hold_time`` (success at 1) | - | [0, 1] |
+    | 1 | ``kappa_command`` | 1 (pf 2) | curvature command, in action units (the action that gives it) | - | [-2, 2] |
+    | 2 | ``kappa_actual`` | 1 (pf 2) | actual curvature after the lag, in action units | - | [-2, 2] |
+    | 3:11 | ``finger_shape`` | K (pf 2K) | tangent angle (each finger in its own frame, counter-clockwise positive, 0 along a straight finger) at ``K`` arc lengths ``s/l = (k+1/2)/K``, interpolated between link midpoints (independent of ``n_links``); finger 0 (then finger 1) | rad | [-B, B], ``B = max(20, 2 max abs kappa_range)`` |
+    | 11:13 | ``tip_position`` | 2 (pf 4) | fingertip ``(x, z)`` relative to the palm; finger 0 (then finger 1, its tip at ``x < 0``) | l | [-5, 5] |
+    | 13 | ``box_position`` | 1 (pf 2) | box centre ``z`` (pf: ``(x, z)``) relative to the palm | l | [-10, 10] |
+    | pf | ``box_tilt`` | (pf 1) | box rotation about ``y`` (its ``z`` axis towards ``+x`` is positive) | rad | [-pi, pi] |
+    | 14 | ``box_velocity`` | 1 (pf 2) | box centre velocity ``v_z`` (pf: ``(v_x, v_z)``) relative to the palm | l/s | [-100, 100] |
+    | pf | ``box_spin`` | (pf 1) | box angular velocity about ``y`` times 0.1 s (``SPIN_TIME``) | rad | [-100, 100] |
+    | 15 | ``box_lift`` | 1 | box height gained since the start of the episode, in units of ``target_height`` (1 = at the target) | - | [-20, 20] |
+    | 16:18 | ``contact_force`` | 2 (pf 4) | ``log(1 + F/W)`` of the box's contact force on finger 0 (then finger 1): normal, friction magnitude | - | [0, 20] |
+    | 18 | ``hold`` | 1 | time held at the target, in units of ``hold_time`` (success at 1) | - | [0, 1] |
 
     ## Rewards
 
@@ -285,8 +292,10 @@ class PickEnv(gym.Env):
       height gained, a bounded squeeze penalty on the side contacts only, no
       success bonus after the end: ``step`` after termination raises);
       observations in finger lengths and box weights with the out-of-plane and
-      duplicated entries dropped (42 -> 35); every constructor argument
-      validated; pickling and ``copy.deepcopy`` continue the episode exactly.
+      mirrored entries dropped (42 -> 19, 37 with ``per_finger``); every constructor argument
+      validated; pickling and ``copy.deepcopy`` continue the episode exactly;
+      ``target_height`` raised from 3 cm to 6 cm (cradle 8 cm), above what curling
+      the fingers alone lifts the box.
       v0 is retired: ``gym.make("simgrip/Pick-v0")`` raises Gymnasium's
       ``DeprecatedEnv`` pointing to v1.
     * v0: initial version.
@@ -411,18 +420,24 @@ class PickEnv(gym.Env):
             "box_tilt": (-math.pi, math.pi), "box_velocity": (-100, 100), "box_spin": (-100, 100),
             "box_lift": (-20, 20), "contact_force": (0, 20), "hold": (0, 1),
         }
-        self.obs_layout = obs_layout(self.shape_points, self.per_finger)
-        lows, highs = [], []
-        self.obs_slices, start = {}, 0
-        for name, size in self.obs_layout:
+        # _get_obs computes the per-finger layout; without per_finger it keeps finger 0 and the box's z
+        full, lows, highs, index = obs_layout(self.shape_points, True), [], [], {}
+        for name, size in full:
+            index[name] = list(range(len(lows), len(lows) + size))
             lows += [bounds[name][0]] * size
             highs += [bounds[name][1]] * size
-            self.obs_slices[name] = slice(start, start + size)
-            start += size
+        self.obs_layout = obs_layout(self.shape_points, self.per_finger)
+        keep = {"box_position": [1], "box_velocity": [1]}  # (x, z) -> z
+        pick, self.obs_slices = [], {}
+        for name, size in self.obs_layout:
+            self.obs_slices[name] = slice(len(pick), len(pick) + size)
+            pick += [index[name][k] for k in keep.get(name, range(size))] if not self.per_finger else index[name]
+        self._obs_pick = None if self.per_finger else np.array(pick)
         self._obs_low = np.array(lows, dtype=np.float64)
         self._obs_high = np.array(highs, dtype=np.float64)
+        if self._obs_pick is not None:
+            self._obs_low, self._obs_high = self._obs_low[self._obs_pick], self._obs_high[self._obs_pick]
         self.observation_space = spaces.Box(self._obs_low, self._obs_high, dtype=np.float64)
-        self._nk = 2 if self.per_finger else 1
         self._force_unit = self.g * float(np.mean(self.box_mass_range))
         self._renderer = None
         self.box = BoxParams(np.mean(self.box_width_range), np.mean(self.box_mass_range), np.mean(self.friction_range))
@@ -585,7 +600,7 @@ class PickEnv(gym.Env):
 
     def _action_units(self, kappa):
         lo, hi = self.kappa_range
-        return 2.0 * (kappa[:self._nk] - lo) / (hi - lo) - 1.0
+        return 2.0 * (kappa - lo) / (hi - lo) - 1.0
 
     def _get_obs(self, forces):
         d = self.data
@@ -609,6 +624,8 @@ class PickEnv(gym.Env):
              math.log1p(forces[3] / fu),
              min(self._hold / self.hold_time, 1.0) if self.hold_time > 0 else 0.0),
         ))
+        if self._obs_pick is not None:
+            obs = obs[self._obs_pick]
         np.maximum(obs, self._obs_low, out=obs)
         np.minimum(obs, self._obs_high, out=obs)
         return obs

@@ -149,7 +149,7 @@ class ScriptedPickPolicy:
         self.palm_target = self.palm0 = float(obs[sl["palm_height"]][0]) * L
         if self.depth is not None:
             # box centre relative to the palm -> its lower edge above the table
-            bottom = self.palm0 + float(obs[sl["box_position"]][1]) * L - 0.5 * env.box_height
+            bottom = self.palm0 + float(obs[sl["box_position"]][-1]) * L - 0.5 * env.box_height  # (x,) z
             self.grasp_height = bottom + self.depth * L + env.r_tip
 
     def _probe(self, t, obs):
@@ -236,10 +236,10 @@ class ObservationPickPolicy(ScriptedPickPolicy):
         sl, L = env.obs_slices, env.length
         lo, hi = env.kappa_range
         k_now = lo + 0.5 * (float(obs[sl["kappa_command"]][0]) + 1.0) * (hi - lo)
-        force = obs[sl["contact_force"]]
-        if t > 0 and force[0] > 0 and force[2] > 0 or k_now <= lo:
-            tips = obs[sl["tip_position"]]
-            width = (abs(float(tips[0])) + abs(float(tips[2]))) * L - 2.0 * env.r_tip
+        normals = obs[sl["contact_force"]][0::2]  # per finger: normal, friction (finger 1 only if per_finger)
+        if t > 0 and np.all(normals > 0) or k_now <= lo:
+            tip_x = np.abs(obs[sl["tip_position"]][0::2])
+            width = 2.0 * float(np.mean(tip_x)) * L - 2.0 * env.r_tip
             width = min(max(width, 0.2 * L), 1.9 * L)
             p = PhysicalParams(length=L, EI=env.EI, rho=env.rho, g=env.g, m=0.5 * env.box_mass_range[1],
                                b=width, mu_s=env.friction_range[0], gamma=0.8 * L).dimensionless()
