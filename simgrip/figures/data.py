@@ -5,7 +5,7 @@
 without rendering it.  Sweeps are continuations (each solve warm-started from
 the last success; a failed point becomes NaN instead of aborting the sweep);
 load capacities come from :mod:`simgrip.reference.capacity`; stability from the
-discrete problem's projected Hessian (:mod:`simgrip.reference.discrete`).
+discrete problem's projected Hessian (:func:`simgrip.reference.discrete_from_continuous`).
 
 Conventions: dimensionless units (lengths over ``l``, forces on the rod over
 ``rho g l``), the finger's base at the origin, ``x`` along ``E1``, ``z`` up.
@@ -34,8 +34,8 @@ _K_DISCRETE = 60       # elements of the discrete stability problem (gamma K int
 _N_SHAPE = 101         # points per stored centreline
 _TOL = 1e-8            # solve_bvp tolerance (8 digits: far below what a plot resolves)
 _TOL_LOAD = 1e-6       # tolerance of the load search's many probe solves (plot accuracy)
+_XTOL_LOAD = 1e-4      # the largest load M to this (a plot resolves 1e-3 of M_max at best)
 _M_MAX = 200.0         # largest load tried by the load-capacity search
-_JUMP = 0.2            # tip displacement between continuation steps taken as a branch jump
 _KAPPA_RANGE = {"I": (0.0, -6.0), "II": (0.0, 6.0), "III": (0.0, -10.0)}
 _ALPHAS_SHAPES = (1.0, 1.5, 2.0, 2.5, 3.0)
 
@@ -97,35 +97,11 @@ def _sweep_arrays(sols, grip: str, params: DimensionlessParams) -> dict:
     return out
 
 
-def _solve(grip, params, profile, guess=None, *, gravity=True, tol=_TOL, fallback=True):
-    """:func:`simgrip.reference.elastica.solve` at ``tol``; ``None`` when it fails."""
+def _sweep(grip, params, profiles, *, gravity=True):
+    """:func:`simgrip.reference.elastica.sweep` at :data:`_TOL`; failed points are ``None``."""
     from simgrip.reference import elastica
 
-    try:
-        return elastica.solve(grip, params, profile, gravity=gravity, guess=guess, tol=tol, fallback=fallback)
-    except (elastica.ElasticaError, ArithmeticError, np.linalg.LinAlgError):
-        return None
-
-
-def _warm_solve(grip, params, profile, guess):
-    """One Newton run of ``solve_bvp`` from ``guess``, without the solver's fallback strategies.
-
-    Deterministic and fast; ``None`` when it does not converge (e.g. past a fold,
-    where a full solve would search for a distant branch).
-    """
-    return _solve(grip, params, profile, guess, tol=_TOL_LOAD, fallback=False)
-
-
-def _sweep(grip, params, profiles, *, gravity=True, start=None):
-    """Continuation along ``profiles`` (each solve warm-started from the last success);
-    failed points are ``None`` instead of aborting the whole sweep."""
-    out, prev = [], start
-    for prof in profiles:
-        sol = _solve(grip, params, prof, prev, gravity=gravity)
-        out.append(sol)
-        if sol is not None:
-            prev = sol
-    return out
+    return elastica.sweep(grip, params, profiles, gravity=gravity, tol=_TOL, failures="skip")
 
 
 def _kappa_sweep(grip, params, kappas):
@@ -145,104 +121,30 @@ def _alpha_sweep(grip, params, alphas, kappa_max=6.0, gravity=True):
     return sols[len(ramp):], profiles
 
 
-def _margin(sol, grip, mu) -> float:
-    """Feasibility margin, >= 0 iff the grip holds (the captions' criteria):
-    ``min(mu_s n - |f|, n)``, and for Grip III also ``h_gamma - h`` (tip below contact)."""
-    terms = [mu * sol.normal_force - abs(sol.friction_force), sol.normal_force]
-    if grip == "III":
-        terms.append(float(sol.contact[1]) - float(sol.tip[1]))
-    return float(min(terms))
+def _loads(grip, params, profiles, guesses):
+    """Largest load held at ``params.mu_s`` along ``profiles`` (:func:`simgrip.reference.capacity.track_largest_load`).
 
-
-def _largest_load(grip, params, profile, base, *, start=None, M_max=_M_MAX, iterations=10):
-    """Largest load ``M`` held at ``params.mu_s`` (the contact force depends on ``M``).
-
-    Continuation in ``M`` upwards from 0, starting from ``base`` (a solution of the
-    same grip and profile), until the first feasible -> infeasible transition, the
-    end of the solution branch (a fold: no nearby solution, or a jump of the tip
-    to another branch, i.e. the finger snaps through) or ``M_max``; the transition
-    is then located by bisection.  Returns ``(M, reason)``: ``M`` is 0.0 when no
-    load is held, ``inf`` when ``M_max`` is still held, NaN when even ``M = 0``
-    cannot be solved; ``reason`` is ``"friction"`` (the margin crosses zero),
-    ``"fold"`` (the branch ends: the finger snaps through), ``"limit"`` or ``"none"``.
-
-    ``start = (M, solution)`` (the last feasible point of a neighbouring profile,
-    as returned in the third item) starts the march there instead of at 0 when
-    that load is still held: one search per point of a sweep then takes a few
-    probes instead of a march from 0.  Returns ``(M, reason, (M_ok, sol_ok))``.
+    Returns ``(M, reason)`` arrays; a failed point is NaN with reason ``"failed"``.
     """
-    mu = params.mu_s
+    from simgrip.reference.capacity import track_largest_load
 
-    def probe(M, guess):
-        s = _warm_solve(grip, params.replace(M=M), profile, guess)
-        if s is not None and np.hypot(*(np.asarray(s.tip) - np.asarray(guess.tip))) > _JUMP:
-            return None
-        return s
-
-    s0 = None
-    if start is not None and start[1] is not None and start[0] > 0:
-        s0 = _warm_solve(grip, params.replace(M=start[0]), profile, start[1])
-        if s0 is not None and _margin(s0, grip, mu) >= 0:
-            M, sol = float(start[0]), s0
-        else:
-            s0 = None
-    if s0 is None:
-        s0 = _solve(grip, params.replace(M=0.0), profile, base, tol=_TOL_LOAD)
-        if s0 is None:
-            return math.nan, "none", None
-        M, sol = 0.0, s0
-    ok_M, ok_sol = (M, s0) if _margin(s0, grip, mu) >= 0 else (None, None)
-    bad_M = reason = None
-    while M < M_max:
-        Mn = min(M_max, M + max(0.5, 0.25 * M))
-        sn = probe(Mn, sol)
-        if sn is not None and _margin(sn, grip, mu) >= 0:
-            ok_M, ok_sol = Mn, sn
-        elif ok_M is not None:
-            bad_M, reason = Mn, "fold" if sn is None else "friction"
-            break
-        if sn is None:  # branch ends before any feasible load
-            return 0.0, "none", None
-        M, sol = Mn, sn
-    if ok_M is None:
-        return 0.0, "none", None
-    if bad_M is None:
-        return math.inf, "limit", (ok_M, ok_sol)
-    lo, hi, g = ok_M, bad_M, ok_sol
-    for _ in range(iterations):
-        mid = 0.5 * (lo + hi)
-        sm = probe(mid, g)
-        if sm is not None and _margin(sm, grip, mu) >= 0:
-            lo, g = mid, sm
-        else:
-            hi, reason = mid, "fold" if sm is None else "friction"
-    return lo, reason, (lo, g)
-
-
-def _track_loads(grip, params, profiles, bases):
-    """:func:`_largest_load` along a sweep, each search started from the previous one's result."""
-    out, start = [], None
-    for prof, base in zip(profiles, bases):
-        if base is None:
-            out.append((math.nan, "none"))
-            continue
-        M, reason, start = _largest_load(grip, params, prof, base, start=start)
-        out.append((M, reason))
-    return out
+    caps = track_largest_load(grip, params, profiles, guesses, failures="skip", M_max=_M_MAX, xtol=_XTOL_LOAD,
+                              tol=_TOL_LOAD)
+    return np.array([c.M for c in caps]), np.array([c.reason for c in caps])
 
 
 def _min_eigenvalues(grip, params, profiles, guesses, K=_K_DISCRETE, gravity=True) -> np.ndarray:
     """Smallest eigenvalue of ``E^T L E`` (paper Section 4) of the discrete problem with
     ``K`` elements, started from the continuous solutions ``guesses`` (NaN where a solve fails)."""
-    from simgrip.reference import discrete
+    from simgrip.reference import DiscreteError, discrete_from_continuous
 
     out = np.full(len(profiles), np.nan)
     for i, (prof, g) in enumerate(zip(profiles, guesses)):
         if g is None:
             continue
         try:
-            d = discrete.discrete_from_continuous(g, grip, params, prof, K)
-        except (discrete.DiscreteError, ArithmeticError, np.linalg.LinAlgError):
+            d = discrete_from_continuous(g, grip, params, prof, K)
+        except (DiscreteError, ArithmeticError, np.linalg.LinAlgError):
             continue
         if d.success:
             out[i] = float(d.min_eigenvalue)
@@ -315,9 +217,7 @@ def _data_alpha(grip, params):
     if grip == "III":
         # load capacity: the largest |N2| = M the grip holds at mu_s (caption of Fig. 15)
         data["alpha_capacity"] = alphas
-        res = _track_loads(grip, params, profiles, sols)
-        data["capacity"] = np.array([r[0] for r in res])
-        data["capacity_reason"] = np.array([r[1] for r in res])
+        data["capacity"], data["capacity_reason"] = _loads(grip, params, profiles, sols)
     else:
         # load capacity: the largest friction force mu_s N at the standard load M
         data["alpha_capacity"] = alphas
@@ -328,7 +228,7 @@ def _data_alpha(grip, params):
     if uni is None:
         data["uniform_capacity"] = math.nan
     elif grip == "III":
-        data["uniform_capacity"] = _largest_load(grip, params, Uniform(kap), uni)[0]
+        data["uniform_capacity"] = float(_loads(grip, params, [Uniform(kap)], [uni])[0][0])
     else:
         data["uniform_capacity"] = params.mu_s * uni.normal_force
     return data
@@ -350,9 +250,8 @@ def _data_fig16(params):
         data[f"least_mu_{grip}"] = lm
         sel = np.arange(0, len(kappas), _LOAD_EVERY)
         data[f"kappa_load_{grip}"] = kappas[sel]
-        res = _track_loads(grip, p1, [Uniform(float(kappas[i])) for i in sel], [sols[i] for i in sel])
-        data[f"max_load_{grip}"] = np.array([r[0] for r in res])
-        data[f"max_load_reason_{grip}"] = np.array([r[1] for r in res])
+        data[f"max_load_{grip}"], data[f"max_load_reason_{grip}"] = _loads(
+            grip, p1, [Uniform(float(kappas[i])) for i in sel], [sols[i] for i in sel])
     return data
 
 
