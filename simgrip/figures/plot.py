@@ -170,33 +170,60 @@ def _plot_fig06(data, overlay=None):
     return fig
 
 
-def _plot_grip_sweep(data, overlay=None):
-    grip = data["grip"]
-    num = {"I": 7, "II": 8, "III": 9}[grip]
-    sign = GRIP_SIGN[grip]
-    k = np.asarray(data["kappa"])
-    xk = sign * k  # plot against |kappa| with the paper's orientation (-kappa for I/III)
-    xlabel = rf"$-{_KBAR}$" if sign < 0 else rf"${_KBAR}$"
-    xfun = lambda kk: sign * kk  # noqa: E731
-    label = (overlay or {}).get("label", "simulation")
-    fig, (a, b, c) = _new_figure(3)
+#: Panels (b) and (c) of Figs. 7-9 per grip kind: title, the reference curves ``(key, colour, label)`` and the
+#: overlay's points ``(key, marker, colour, label)``.
+_FRICTION_PANEL = {
+    "III": (r"(b) friction $|f|$ needed vs $\mu_s n$ available",
+            (("required", "tab:blue", r"$|f|/\rho g\ell$ needed"),
+             ("available", "tab:orange", r"$\mu_s n/\rho g\ell$ available")),
+            (("f", "o", "tab:blue", "$|f|$"), ("mu_n", "s", "tab:orange", r"$\mu_s n$"))),
+    "I/II": (r"(b) friction $|F_f|$ needed vs $\mu_s N$ available",
+             (("required", "tab:blue", r"$|F_f|/\rho g\ell = M$ needed"),
+              ("available", "tab:orange", r"$\mu_s N/\rho g\ell$ available")),
+             (("muN", "s", "tab:orange", r"$\mu_s N$"),)),
+}
+_HEIGHT_PANEL = {
+    "III": (r"(c) heights $h$ and $h_\gamma$",
+            (("h", "tab:purple", r"$h$ (tip)"), ("h_gamma", "tab:brown", r"$h_\gamma$ (contact $s=\gamma$)")),
+            (("h", "o", "tab:purple", "$h$"), ("h_gamma", "s", "tab:brown", r"$h_\gamma$"))),
+    "I/II": (r"(c) tip height $h$", (("h", "tab:purple", r"$h$ (tip)"),), (("h", "o", "tab:purple", "$h$"),)),
+}
 
-    # (a) shapes
+
+def _feasible_background(ax, xk, data, grip):
+    """Shade the feasible region; Grip III: hatch where friction suffices but the tip is above the contact (23)."""
+    _shade(ax, xk, data["feasible"])
+    if grip == "III":
+        _hatch(ax, xk, np.asarray(data["friction_ok"]) & ~np.asarray(data["tip_below_contact"]))
+
+
+def _curves_panel(ax, spec, xk, data, overlay, xfun, label):
+    """Reference curves and the overlay's points of one panel (``spec``: see :data:`_FRICTION_PANEL`)."""
+    title, curves, points = spec
+    for key, color, lab in curves:
+        ax.plot(xk, data[key], color=color, label=lab)
+    ax.set_title(title, fontsize=10)
+    if overlay is not None:
+        for key, marker, color, lab in points:
+            _overlay_points(ax, overlay, key, xfun, f"{label}: {lab}", marker, color)
+
+
+def _shapes_panel(a, data, overlay, label, grip, sign):
+    """Panel (a) of Figs. 7-9: the pair of fingers at a few curvatures (thick where feasible)."""
+    k = np.asarray(data["kappa"])
     _shape_axes(a, "(a) deformed shapes (thick, f: feasible)")
     idx = _shape_indices(len(k), _N_SHAPES[grip])
     colors = _cmap(len(idx))
     for j, i in enumerate(idx):
         if not data["success"][i]:
             continue
-        x, z = data["shape_x"][i], data["shape_z"][i]
         feas = bool(data["feasible"][i])
-        _draw_pair(a, x, z, colors[j], label=rf"${_KBAR} = {k[i]:.3g}$" + (" (f)" if feas else ""),
-                   lw=2.4 if feas else 1.2)
+        _draw_pair(a, data["shape_x"][i], data["shape_z"][i], colors[j],
+                   label=rf"${_KBAR} = {k[i]:.3g}$" + (" (f)" if feas else ""), lw=2.4 if feas else 1.2)
         if grip == "III":
             a.plot([data["x_gamma"][i], -data["x_gamma"][i]], [data["h_gamma"][i]] * 2, "v",
                    color=colors[j], ms=4)
-    half = data["b"] / 2.0
-    for xv in (half, -half):
+    for xv in (data["b"] / 2.0, -data["b"] / 2.0):
         a.axvline(xv, color="0.5", lw=0.8, ls="--")
     if overlay is not None:
         _overlay_shapes(a, overlay, label)
@@ -208,28 +235,25 @@ def _plot_grip_sweep(data, overlay=None):
     # (extend the data limits, not the view limits: the equal aspect adjusts the data limits)
     a.update_datalim([(0.0, lo - rows if sign < 0 else hi + rows)])
     a.autoscale_view()
-    if sign < 0:
-        a.legend(fontsize=6.5, loc="lower center", ncol=2, columnspacing=0.8, handlelength=1.6)
-    else:
-        a.legend(fontsize=6.5, loc="upper center", ncol=2, columnspacing=0.8, handlelength=1.6)
+    a.legend(fontsize=6.5, loc="lower center" if sign < 0 else "upper center", ncol=2, columnspacing=0.8,
+             handlelength=1.6)
+
+
+def _plot_grip_sweep(data, overlay=None):
+    grip = data["grip"]
+    kind = "III" if grip == "III" else "I/II"
+    num = {"I": 7, "II": 8, "III": 9}[grip]
+    sign = GRIP_SIGN[grip]
+    xk = sign * np.asarray(data["kappa"])  # plot against |kappa| with the paper's orientation (-kappa for I/III)
+    xlabel = rf"$-{_KBAR}$" if sign < 0 else rf"${_KBAR}$"
+    xfun = lambda kk: sign * kk  # noqa: E731
+    label = (overlay or {}).get("label", "simulation")
+    fig, (a, b, c) = _new_figure(3)
+    _shapes_panel(a, data, overlay, label, grip, sign)
 
     # (b) friction needed vs available
-    _shade(b, xk, data["feasible"])
-    if grip == "III":  # friction suffices but condition (23) fails: the tip is above the contact
-        _hatch(b, xk, np.asarray(data["friction_ok"]) & ~np.asarray(data["tip_below_contact"]))
-    if grip == "III":
-        b.plot(xk, data["required"], color="tab:blue", label=r"$|f|/\rho g\ell$ needed")
-        b.plot(xk, data["available"], color="tab:orange", label=r"$\mu_s n/\rho g\ell$ available")
-        b.set_title(r"(b) friction $|f|$ needed vs $\mu_s n$ available", fontsize=10)
-        if overlay is not None:
-            _overlay_points(b, overlay, "f", xfun, f"{label}: $|f|$", "o", "tab:blue")
-            _overlay_points(b, overlay, "mu_n", xfun, rf"{label}: $\mu_s n$", "s", "tab:orange")
-    else:
-        b.plot(xk, data["required"], color="tab:blue", label=r"$|F_f|/\rho g\ell = M$ needed")
-        b.plot(xk, data["available"], color="tab:orange", label=r"$\mu_s N/\rho g\ell$ available")
-        b.set_title(r"(b) friction $|F_f|$ needed vs $\mu_s N$ available", fontsize=10)
-        if overlay is not None:
-            _overlay_points(b, overlay, "muN", xfun, rf"{label}: $\mu_s N$", "s", "tab:orange")
+    _feasible_background(b, xk, data, grip)
+    _curves_panel(b, _FRICTION_PANEL[kind], xk, data, overlay, xfun, label)
     if overlay is not None:
         _overlay_verdict(b, overlay, xfun, grip)
     b.axhline(0.0, color="0.6", lw=0.6)
@@ -242,20 +266,8 @@ def _plot_grip_sweep(data, overlay=None):
     b.legend(fontsize=7, loc="upper left")
 
     # (c) heights
-    _shade(c, xk, data["feasible"])
-    if grip == "III":
-        _hatch(c, xk, np.asarray(data["friction_ok"]) & ~np.asarray(data["tip_below_contact"]))
-    c.plot(xk, data["h"], color="tab:purple", label=r"$h$ (tip)")
-    if grip == "III":
-        c.plot(xk, data["h_gamma"], color="tab:brown", label=r"$h_\gamma$ (contact $s=\gamma$)")
-        c.set_title(r"(c) heights $h$ and $h_\gamma$", fontsize=10)
-        if overlay is not None:
-            _overlay_points(c, overlay, "h", xfun, f"{label}: $h$", "o", "tab:purple")
-            _overlay_points(c, overlay, "h_gamma", xfun, rf"{label}: $h_\gamma$", "s", "tab:brown")
-    else:
-        c.set_title(r"(c) tip height $h$", fontsize=10)
-        if overlay is not None:
-            _overlay_points(c, overlay, "h", xfun, f"{label}: $h$", "o", "tab:purple")
+    _feasible_background(c, xk, data, grip)
+    _curves_panel(c, _HEIGHT_PANEL[kind], xk, data, overlay, xfun, label)
     c.set_xlabel(xlabel)
     c.set_ylabel(r"height $/\ell$ ($z$ up)")
     c.legend(fontsize=7, loc="lower right" if grip == "III" else "best")
