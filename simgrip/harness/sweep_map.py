@@ -12,8 +12,9 @@ more axes are swept, a cell stands for every point with those two values:
 * **no verdict**: at least one point without an answer (not settled, or the
   BVP failed) and no disagreement.
 
-The BVP's feasibility boundary is the 0.5 contour of the fraction of
-BVP-feasible points in each cell (a line between cells where it changes).
+The BVP's feasibility boundary is drawn along the cell borders where the
+BVP's verdict changes (in a cell standing for several points: whether most
+of them are BVP-feasible).
 matplotlib is imported here only, when the map is drawn.
 """
 
@@ -88,6 +89,23 @@ def _edges(v) -> np.ndarray:
     return np.concatenate([[v[0] - (mid[0] - v[0])], mid, [v[-1] + (v[-1] - mid[-1])]])
 
 
+def _boundary(frac, xe, ye) -> list:
+    """Cell-border segments between cells where the BVP's verdict (majority of the cell) changes."""
+    feas = frac >= 0.5
+    known = ~np.isnan(frac)
+    segs = []
+    ny, nx = frac.shape
+    for i in range(ny):
+        for j in range(nx - 1):
+            if known[i, j] and known[i, j + 1] and feas[i, j] != feas[i, j + 1]:
+                segs.append([(xe[j + 1], ye[i]), (xe[j + 1], ye[i + 1])])
+    for i in range(ny - 1):
+        for j in range(nx):
+            if known[i, j] and known[i + 1, j] and feas[i, j] != feas[i + 1, j]:
+                segs.append([(xe[j], ye[i + 1]), (xe[j + 1], ye[i + 1])])
+    return segs
+
+
 def write_map(path, grid, rows) -> None:
     """Draw the map of ``rows`` (the sweep's table, grid order) and write it to ``path`` as PNG, atomically."""
     import matplotlib
@@ -105,16 +123,13 @@ def write_map(path, grid, rows) -> None:
     ax.pcolormesh(_edges(xs), _edges(ys), cat, cmap=ListedColormap(_COLOURS), vmin=-0.5,
                   vmax=len(CATEGORIES) - 0.5, shading="flat")
     handles = [Patch(color=c, label=k) for c, k in zip(_COLOURS, CATEGORIES)]
-    fin = np.nan_to_num(frac, nan=0.5)
-    if len(xs) > 1 and len(ys) > 1 and np.nanmin(frac) < 0.5 < np.nanmax(frac):
-        ax.contour(xs, ys, fin, levels=[0.5], colors="k", linewidths=1.5)
-        handles.append(matplotlib.lines.Line2D([], [], color="k", label="BVP feasibility boundary"))
-    elif len(xs) > 1 and len(ys) == 1:
-        flips = [0.5 * (xs[j] + xs[j + 1]) for j in range(len(xs) - 1) if (fin[0, j] >= 0.5) != (fin[0, j + 1] >= 0.5)]
-        for x in flips:
-            ax.axvline(x, color="k", linewidth=1.5)
-        if flips:
-            handles.append(matplotlib.lines.Line2D([], [], color="k", label="BVP feasibility boundary"))
+    segments = _boundary(frac, _edges(xs), _edges(ys))
+    if segments:
+        from matplotlib.collections import LineCollection
+        from matplotlib.lines import Line2D
+
+        ax.add_collection(LineCollection(segments, colors="k", linewidths=2.0))
+        handles.append(Line2D([], [], color="k", linewidth=2.0, label="BVP feasibility boundary"))
     ax.set_xlabel(_LABELS[plotted[0]] if plotted else "")
     ax.set_ylabel(_LABELS[plotted[1]] if len(plotted) > 1 else "")
     if len(plotted) < 2:

@@ -35,7 +35,7 @@ PARTIAL = ".partial"
 _BOOL = ("held", "feasible", "bvp_feasible", "agree")
 _TEXT = ("status", "message", "bvp_message")
 #: Saved points are written at least this often (seconds) while results arrive ...
-FLUSH_SECONDS = 2.0
+FLUSH_SECONDS = 1.0
 #: ... or when this many are waiting.
 FLUSH_POINTS = 256
 
