@@ -181,14 +181,16 @@ def _env_table(env) -> list[str]:
 
 def summary_md(res, load_avg) -> str:
     """``summary.md``: ratios, every row, the sweep, the env throughput and the skipping table."""
+    where = f"jobs = {res.jobs}" if res.jobs is not None else "on an existing Dask cluster"
     L = [f"# simgrip bench{' (quick)' if res.quick else ''}", "",
-         f"jobs = {res.jobs}, {os.cpu_count()} cores, load average {load_avg}, {res.elapsed_s:.0f} s in all. "
+         f"{where}, {os.cpu_count()} cores, load average {load_avg}, {res.elapsed_s:.0f} s in all. "
          "Timings are medians; errors are against the converged BVP (tol 1e-10) of the same state.", ""]
     L += _ratio_tables(res)
     L += [""] + _rows_table(res)
     L += _sweep_text(res.sweep)
     L += _env_table(res.env)
     L += ["", "## What skipping buys", "", skips_md(res.skips)]
-    L += ["Reproduce: `simgrip bench" + (" --quick" if res.quick else "") + f" --jobs {res.jobs}` "
+    jobs = f" --jobs {res.jobs}" if res.jobs is not None else " --scheduler ADDRESS"
+    L += ["Reproduce: `simgrip bench" + (" --quick" if res.quick else "") + f"{jobs}` "
           "(or `python -c \"from simgrip.harness.bench import run_bench; run_bench('bench_out')\"`).", ""]
     return "\n".join(L)
