@@ -545,9 +545,9 @@ def test_newton_settle_is_bounded_by_max_steps():
     assert st.converged and st.newton_iterations <= 1000
     # max_steps is the budget of the whole settle, with a clear error when spent
     with pytest.raises(SettleError, match="budget"):
-        settle(sc, max_steps=50)
-    st = settle(sc, max_steps=50, allow_unconverged=True)
-    assert not st.converged and st.newton_iterations <= 50
+        settle(sc, max_steps=st.newton_iterations - 1)
+    st = settle(sc, max_steps=2, allow_unconverged=True)
+    assert not st.converged and st.newton_iterations <= 2
 
 
 def test_dynamics_settle_is_bounded_by_max_steps():
@@ -575,9 +575,31 @@ def test_settle_runs_single_threaded_blas_and_restores_it(monkeypatch):
         return lstsq(*a, **k)
 
     monkeypatch.setattr(np.linalg, "lstsq", spy)
-    settle(build_scene("free", STANDARD, Uniform(-4.0), 8))
+    settle(build_scene("I", STANDARD, Uniform(-6.0), 8))
     assert seen and set(seen) == {1}
     assert get() == before
+
+
+def _same_grip_state(a, b, tol=1e-9):
+    """Same hold/drop, finger shape and contact forces (the workpiece's height on its face is
+    where the closing path put it: the ramp slides the tip along the face, the chain start
+    places the workpiece at the tip)."""
+    assert a.held == b.held
+    assert np.max(np.abs(a.joint_angles - b.joint_angles)) < tol
+    assert abs(a.N1 - b.N1) < 1e-7 and abs(a.N2 - b.N2) < 1e-7
+
+
+@pytest.mark.parametrize("grip,kappa,n", [("I", -6.0, 16), ("I", -4.0, 32), ("II", 5.0, 32)])
+def test_chain_start_equals_the_ramped_closing(monkeypatch, grip, kappa, n):
+    """Grips I/II from the hinge chain's equilibrium reach the staged ramp's state in a few iterations."""
+    import simgrip.settle.closing as S
+
+    fast = settle(build_scene(grip, STANDARD, Uniform(kappa), n))
+    monkeypatch.setattr(S, "CHAIN_START", False)
+    monkeypatch.setattr(S, "_close_predicted", lambda *a, **k: False)
+    ramp = settle(build_scene(grip, STANDARD, Uniform(kappa), n))
+    _same_grip_state(fast, ramp)
+    assert fast.newton_iterations < 0.3 * ramp.newton_iterations
 
 
 @pytest.mark.parametrize("grip,kappa,n", [("I", -6.0, 16), ("I", -4.0, 32), ("II", 5.0, 32)])
@@ -589,6 +611,7 @@ def test_predicted_closing_equals_the_ramped_closing(monkeypatch, grip, kappa, n
     """
     import simgrip.settle.closing as S
 
+    monkeypatch.setattr(S, "CHAIN_START", False)
     fast = settle(build_scene(grip, STANDARD, Uniform(kappa), n))
     monkeypatch.setattr(S, "_close_predicted", lambda *a, **k: False)
     ramp = settle(build_scene(grip, STANDARD, Uniform(kappa), n))
@@ -598,8 +621,8 @@ def test_predicted_closing_equals_the_ramped_closing(monkeypatch, grip, kappa, n
     assert fast.newton_iterations < 0.6 * ramp.newton_iterations
 
 
-def test_predicted_closing_falls_back_to_the_ramp(monkeypatch):
-    """An unusable prediction (here: the chain solver fails) leaves the staged ramp in charge."""
+def test_closing_falls_back_to_the_ramp(monkeypatch):
+    """An unusable chain start and prediction (here: the chain solver fails) leave the staged ramp in charge."""
     import simgrip.reference.hinge_chain as D
 
     ref = settle(build_scene("I", STANDARD, Uniform(-6.0), 16))
@@ -610,17 +633,19 @@ def test_predicted_closing_falls_back_to_the_ramp(monkeypatch):
     monkeypatch.setattr(D, "solve_chain", boom)
     st = settle(build_scene("I", STANDARD, Uniform(-6.0), 16))
     assert st.held and st.newton_iterations > ref.newton_iterations
-    assert np.max(np.abs(st.qpos - ref.qpos)) < 1e-9
+    _same_grip_state(st, ref)
 
 
-def test_predicted_closing_hands_a_folding_path_to_the_ramp(monkeypatch):
+def test_closing_hands_a_folding_path_to_the_chain(monkeypatch):
     """Stress case whose ramp fails at its last stage (the closing falls back to the chain's grip
-    equilibrium): the predictor must not reach the end where the ramp cannot, or the answer changes."""
+    equilibrium): chain start, predictor and ramp all end at the same state."""
     import simgrip.settle.closing as S
 
     sc = _stress_scene("I", 20.04, -8.05, 18.76, 0.215, 0.688, 7)
     fast = settle(sc)
+    monkeypatch.setattr(S, "CHAIN_START", False)
+    pred = settle(sc)
     monkeypatch.setattr(S, "_close_predicted", lambda *a, **k: False)
     ramp = settle(sc)
-    assert fast.held == ramp.held
-    assert np.max(np.abs(fast.qpos - ramp.qpos)) < 1e-9
+    assert pred.held == ramp.held and np.max(np.abs(pred.qpos - ramp.qpos)) < 1e-9
+    _same_grip_state(fast, ramp)

@@ -27,13 +27,15 @@ import time
 import mujoco
 import numpy as np
 
+from simgrip.settle.chain_model import eligible
+from simgrip.settle.chain_newton import ChainNewton
 from simgrip.settle.closing import close_grip, finger_alone, place_on_chain, release
 from simgrip.settle.dynamics import DYN_TOL, settle_dynamics
 from simgrip.settle.naive import naive_relax, naive_settle
 from simgrip.settle.newton import Newton, SOLVE_ITERS, read_newton
 from simgrip.settle.state import FingerContact, SettledState, SettleError, finger_tip
 from simgrip.settle.statics import (RestResidual, configure_statics, dof_scales, restore_options, save_options,
-                                    static_residual)
+                                    static_residual, sync_scene)
 from simgrip.sim.checks import clear_warnings
 from simgrip.sim.scene import Scene, set_curvature
 from simgrip.threads import blas_threads
@@ -63,6 +65,9 @@ RESIDUAL_FLOOR_MAX = 1e-6
 #: Default total Newton iteration budget of one settle (``max_steps``): closing, release and
 #: the finger-alone settle together.
 NEWTON_BUDGET = 2000
+#: One-finger scenes use the chain-coordinate Newton (:mod:`.chain_newton`, ``O(n)`` per
+#: iteration); False forces MuJoCo's finite-difference Jacobian (:mod:`.newton`) everywhere.
+CHAIN_SOLVE = True
 
 
 def _check_settle_args(scene, tol, max_steps):
@@ -148,7 +153,7 @@ def _settle(
     m, d = scene.model, scene.data
     saved = save_options(m)
     clear_warnings(d)
-    run = Newton(scene)
+    run = ChainNewton(scene) if (CHAIN_SOLVE and eligible(scene)) else Newton(scene)
     run.budget = max_steps  # every Newton iteration of this settle counts against max_steps
     per = min(SOLVE_ITERS, max_steps)  # one solve's share
     held = scene.has_workpiece
@@ -209,7 +214,7 @@ def _settle(
         restore_options(m, saved)
         d.qfrc_applied[:] = 0.0
         d.qvel[:] = 0.0
-        mujoco.mj_forward(m, d)
+        sync_scene(scene)
     return state
 
 

@@ -27,6 +27,9 @@ from simgrip.sim.scene import BOX_HEIGHT, Scene, set_curvature
 
 __all__ = ["close_grip", "finger_alone", "hold_workpiece", "place_on_chain", "place_workpiece", "release"]
 
+#: Grips I/II start from the hinge chain's equilibrium (:func:`start_on_chain`) where it is valid;
+#: False: always the staged closing.
+CHAIN_START = True
 #: Curvature ramp stages while closing on the held workpiece.
 CLOSE_STAGES = 8
 #: Newton iterations allowed to one continuation stage while closing (a failing stage is halved).
@@ -95,11 +98,11 @@ def release(scene: Scene, run: Newton, tol: float, max_steps: int) -> tuple[bool
 
 def place_on_chain(scene: Scene, run: Newton) -> bool:
     """Fallback start for Grips I/II: the hinge chain's equilibrium, workpiece at the tip."""
-    from simgrip.reference.discrete import DiscreteError, solve_chain
+    from simgrip.reference import DiscreteError, hinge_chain
 
     try:
         # the tip a hair inside the face so that MuJoCo reports the contact
-        ch = solve_chain(scene.grip, scene.params.replace(b=scene.params.b - 2e-6), scene.profile, scene.n)
+        ch = hinge_chain.solve_chain(scene.grip, scene.params.replace(b=scene.params.b - 2e-6), scene.profile, scene.n)
     except DiscreteError as exc:
         raise SettleError(f"no starting shape for grip {scene.grip}: {exc}") from exc
     d = scene.data
@@ -124,12 +127,48 @@ def touch(scene: Scene, run: Newton) -> None:
     mujoco.mj_forward(scene.model, d)
 
 
+def start_on_chain(scene: Scene, run: Newton) -> bool | None:
+    """Grips I/II: start from the hinge chain's grip equilibrium, the workpiece at the tip.
+
+    The MuJoCo finger is the hinge chain (:mod:`simgrip.settle.chain_model`), so
+    the chain's equilibrium with the tip on the face and the workpiece's weight
+    as friction (:func:`simgrip.reference.solve_chain`) is the held state up to
+    MuJoCo's contact (penetration, the tip radius's couple), which the release
+    then polishes.  Valid when the free finger at full curvature reaches the
+    face (else False: no contact, as :func:`close_grip` decides) and the
+    chain's equilibrium exists, is stable (positive projected Hessian) and
+    pushes on the face (``N1 > 0``); otherwise None and the staged closing runs.
+    """
+    from simgrip.reference import DiscreteError, hinge_chain
+
+    p = scene.params
+    try:
+        free = hinge_chain.solve_chain("free", p, scene.profile, scene.n)
+        if free.tip[0] > 0.5 * p.b:
+            return False
+        # the tip a hair inside the face so that MuJoCo reports the contact
+        ch = hinge_chain.solve_chain(scene.grip, p.replace(b=p.b - 2e-6), scene.profile, scene.n)
+    except (DiscreteError, ValueError):
+        return None
+    if not (ch.success and ch.N1 > 0.0 and ch.min_eigenvalue > 0.0):
+        return None
+    scene.data.qpos[scene.joint_qpos] = ch.joint_angles[None, :]
+    run.N, run.normal_active = np.zeros(0), []
+    place_workpiece(scene, float(ch.tip[1]) * scene.length)
+    return True
+
+
 def close_grip(scene: Scene, run: Newton, tol: float, max_steps: int) -> bool:
-    """Grips I/II closing: curl (contact off) to first touch, place and hold the box, ramp.
+    """Grips I/II closing: the chain start where valid, else curl (contact off) to first touch,
+    place and hold the box, ramp.
 
     Returns False when the finger cannot reach the workpiece (its free tip never
     comes back to ``X = b/2``).
     """
+    if CHAIN_START:
+        started = start_on_chain(scene, run)
+        if started is not None:
+            return started
     m = scene.model
     target = scene.profile
     half = 0.5 * scene.params.b
@@ -212,7 +251,7 @@ def _close_predicted(scene: Scene, run: Newton, target, t: float, z0: float, tol
     every tip pair carrying a positive normal force; otherwise the scene and the
     Newton state are restored and False returned (the MuJoCo ramp then runs).
     """
-    from simgrip.reference.discrete import DiscreteError, solve_chain
+    from simgrip.reference import DiscreteError, hinge_chain
 
     m, d = scene.model, scene.data
     margin = 0.5 * BOX_HEIGHT - 0.1
@@ -232,7 +271,7 @@ def _close_predicted(scene: Scene, run: Newton, target, t: float, z0: float, tol
     ch, step, lam0 = None, None, None
     for s in stages[:k + 1]:
         try:
-            ch = solve_chain(scene.grip, params, target.scaled(s), scene.n, guess=phi)
+            ch = hinge_chain.solve_chain(scene.grip, params, target.scaled(s), scene.n, guess=phi)
         except (DiscreteError, ValueError):
             return False
         if not (ch.success and ch.N1 > 0.0 and ch.min_eigenvalue > 0.0 and abs(float(ch.tip[1]) - z0) < margin):

@@ -34,7 +34,7 @@ import numpy as np
 
 from simgrip.settle.state import SettledState, SettleError, read_state
 from simgrip.settle.statics import (CONTACT_STIFFNESS, Statics, Stick, check_warnings, normal_force,
-                                    pair_contacts)
+                                    pair_contacts, sync_scene)
 from simgrip.sim.scene import Scene
 
 __all__ = ["FLOOR_ULPS", "Newton", "PEN_MAX", "SOLVE_ITERS", "read_newton"]
@@ -511,7 +511,7 @@ class Newton:
 
 def read_newton(scene: Scene, run: Newton, t0: float, held: bool, converged: bool) -> SettledState:
     """The settled state of the static solve: MuJoCo's contacts plus the sticking friction forces."""
-    mujoco.mj_forward(scene.model, scene.data)
+    sync_scene(scene)
     fric = run.friction_forces() if (run.sticks and held) else np.zeros(0)
     if not held:
         run.sticks, run.sliding = [], {}

@@ -27,7 +27,7 @@ from simgrip.sim.scene import Scene
 from simgrip.settle.state import SettleError
 
 __all__ = ["CONTACT_IMPEDANCE", "CONTACT_STIFFNESS", "RestResidual", "Statics", "Stick", "dof_scales",
-           "static_residual"]
+           "static_residual", "sync_scene"]
 
 #: Contact impedance during settle (MuJoCo's maximum is 0.9999).
 CONTACT_IMPEDANCE = 0.9999
@@ -253,3 +253,17 @@ def contact_world_force(m, d, i) -> np.ndarray:
     mujoco.mj_contactForce(m, d, i, f)
     frame = np.asarray(d.contact.frame[i]).reshape(3, 3)
     return -(frame.T @ f[:3])
+
+
+def sync_scene(scene: Scene) -> None:
+    """Bring the scene's data to its qpos: ``mj_forward``, or positions only without contact pairs.
+
+    A contact-free chain needs only kinematics (``mj_kinematics``, ``mj_comPos``);
+    ``mj_forward`` would factor the dense mass matrix of the serial chain, ``O(n^3)``.
+    """
+    m, d = scene.model, scene.data
+    if m.npair == 0 or (int(m.opt.disableflags) & int(mujoco.mjtDisableBit.mjDSBL_CONTACT)):
+        mujoco.mj_kinematics(m, d)
+        mujoco.mj_comPos(m, d)
+    else:
+        mujoco.mj_forward(m, d)

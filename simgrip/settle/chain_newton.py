@@ -1,0 +1,300 @@
+"""Newton-KKT in the chain's own coordinates: ``O(n)`` per iteration, exact Jacobian.
+
+Same equations, contact set, friction bookkeeping and acceptance as
+:class:`~simgrip.settle.newton.Newton` (which it extends), but the inner Newton
+iteration runs on :class:`~simgrip.settle.chain_model.ChainModel`: the forces
+and their exact Jacobian in link angles (tridiagonal), bordered by the
+workpiece dof, the contact and stick rows and the auxiliary unknowns of the
+low-rank constraint curvature, solved by :func:`~simgrip.settle.banded.solve_bordered`.
+Contact rows are ``dist + N / K_c = 0`` (length units); the line search and
+the convergence test use the residual in MuJoCo's dofs (hinge moments are
+suffix sums of the link-angle forces).
+
+MuJoCo stays the judge: the contact set is MuJoCo's (``mj_geomDistance``),
+``K_c`` is read back from MuJoCo's contact force at each converged solve, and
+the reported residual is MuJoCo's force balance at the final state.  Without
+contacts that balance is evaluated in ``O(n)`` (``mj_passive`` and ``mj_rne``
+at rest: springs and gravity are all there is) so that nothing in a free-rod
+settle costs more than ``O(n)``.
+"""
+
+from __future__ import annotations
+
+import math
+
+import mujoco
+import numpy as np
+
+from simgrip.settle.banded import solve_bordered
+from simgrip.settle.chain_model import ChainModel
+from simgrip.settle.newton import FLOOR_ULPS, PEN_MAX, Newton
+from simgrip.settle.state import SettleError
+from simgrip.settle.statics import pair_contacts, sync_scene
+from simgrip.sim.scene import Scene
+
+__all__ = ["ChainNewton"]
+
+#: The analytic contact rows are polished to this many ulps of ``K_c l`` when one step gets there.
+CHAIN_FLOOR_ULPS = 2.0
+
+
+class ChainNewton(Newton):
+    """:class:`Newton` with the inner iteration in link angles (one-finger scenes, see ``eligible``)."""
+
+    def __init__(self, scene: Scene):
+        super().__init__(scene)
+        self.model = ChainModel(scene)
+        #: MuJoCo's contact distance minus the analytic one (round-off, over l), per pair
+        self.dist_shift = np.zeros(len(self.pairs))
+
+    def _update_kc(self, q) -> bool:
+        """Read MuJoCo's contact stiffness and its contact distances' round-off at ``q``."""
+        moved = super()._update_kc(q)  # MuJoCo's balance at q is now in the scratch data
+        sd, cm = self.st.d, self.model
+        phi, w = cm.split(q)
+        da = cm.pair_distances(phi, cm.nodes(phi), w)
+        for p in self.normal_active:
+            cons = pair_contacts(sd, *self.pairs[p])
+            if cons:
+                self.dist_shift[p] = min(float(sd.contact.dist[c]) for c in cons) / self.scene.length - da[p]
+        return moved
+
+    # -- MuJoCo's balance without the O(n^3) mass matrix when there is no contact ------------
+    def _contacts_active(self) -> bool:
+        return self._contacts_on() if hasattr(self, "_flags") else bool(self.pairs)
+
+    def rest_forces(self, q) -> np.ndarray:
+        """MuJoCo's static imbalance at ``q`` (dimensional); ``O(n)`` when contacts are off."""
+        m = self.scene.model
+        off = int(m.opt.disableflags) & int(mujoco.mjtDisableBit.mjDSBL_CONTACT)
+        if self.pairs and not off:
+            return self.st.forces(q)
+        d = self.st.d
+        d.qpos[:] = q
+        d.qvel[:] = 0.0
+        d.qfrc_applied[:] = self.scene.data.qfrc_applied
+        mujoco.mj_kinematics(m, d)
+        mujoco.mj_comPos(m, d)
+        mujoco.mj_passive(m, d)
+        mujoco.mj_rne(m, d, 0, d.qfrc_bias)
+        self.st.calls += 1
+        return d.qfrc_applied + d.qfrc_passive - d.qfrc_bias
+
+    def full_residual(self, q) -> np.ndarray:
+        m = self.scene.model
+        if self.pairs and not (int(m.opt.disableflags) & int(mujoco.mjtDisableBit.mjDSBL_CONTACT)):
+            return super().full_residual(q)
+        return self.rest_forces(q) / self.st.fscale
+
+    def _commit(self, q) -> None:
+        d = self.scene.data
+        d.qpos[:] = q
+        d.qvel[:] = 0.0
+        sync_scene(self.scene)
+
+    # -- the analytic residual ------------------------------------------------------------
+    def _system(self, phi, w, N, lam, stick_act, with_jacobian: bool):
+        """Residual pieces (and the bordered Jacobian) at ``(phi, w)`` for the current sets."""
+        cm = self.model
+        n, nw = cm.n, self.nw_free
+        nodes = cm.nodes(phi)
+        F, diag, off = cm.internal(phi)
+        Fw = cm.workpiece_force()
+        act = self.normal_active
+        pterms = [cm.pair_term(p, phi, nodes, w) for p in act]
+        sterms = [cm.stick_term(s, phi, nodes, w) for s in self.sticks] if self.sticks else []
+        mu = {i: float(self.scene.model.pair_friction[self._pair_of(s)][0]) for i, s in enumerate(self.sticks)}
+        coef = []  # (term, multiplier) pairs of the force
+        for k, t in enumerate(pterms):
+            coef.append((t, N[k]))
+        for j, i in enumerate(stick_act):
+            coef.append((sterms[i], lam[j]))
+        slide = []  # (stick term, index of its pair's N, sign mu)
+        for i, sign in self.sliding.items():
+            p = self._pair_of(self.sticks[i])
+            if p in act:
+                k = act.index(p)
+                slide.append((sterms[i], k, sign * mu[i]))
+                coef.append((sterms[i], sign * mu[i] * N[k]))
+        for t, c in coef:
+            F = F + c * t.grad[:n]
+            Fw = Fw + (c * t.grad[n] if cm.nw else 0.0)
+        gn = np.array([t.value + self.dist_shift[p] + N[k] / self.kc_dl[p] for k, (t, p) in enumerate(zip(pterms, act))])
+        gs = np.array([sterms[i].value for i in stick_act])
+        R = np.concatenate([cm.to_q(F), [Fw] if nw else [], gn, gs])
+        if not with_jacobian:
+            return R, None
+        # border: [w (nw), aux z (sum of ranks), N (len act), lambda (len stick_act)]
+        for t, c in coef:
+            diag = diag + c * t.diag
+        ranks = [t.S.shape[0] for t, _ in coef]
+        nz, nn, ns = sum(ranks), len(act), len(stick_act)
+        k = nw + nz + nn + ns
+        P = np.zeros((n, k))
+        Q = np.zeros((k, n))
+        E = np.zeros((k, k))
+        col = nw
+        for (t, c), r in zip(coef, ranks):
+            if r:
+                P[:, col:col + r] = c * t.U[:n]
+                Q[col:col + r] = t.S @ t.U[:n].T
+                E[col:col + r, col:col + r] = -np.eye(r)
+                if nw:
+                    E[0, col:col + r] = c * t.U[n]
+                    E[col:col + r, 0] = t.S @ t.U[n]
+            col += r
+        for j, t in enumerate(pterms):
+            a = nw + nz + j
+            P[:, a] = t.grad[:n]
+            Q[a] = t.grad[:n]
+            E[a, a] = 1.0 / self.kc_dl[act[j]]
+            if nw:
+                E[0, a] = t.grad[n]
+                E[a, 0] = t.grad[n]
+        for t, kk, smu in slide:
+            a = nw + nz + kk
+            P[:, a] += smu * t.grad[:n]
+            if nw:
+                E[0, a] += smu * t.grad[n]
+        for j, i in enumerate(stick_act):
+            a = nw + nz + nn + j
+            t = sterms[i]
+            P[:, a] = t.grad[:n]
+            Q[a] = t.grad[:n]
+            if nw:
+                E[0, a] = t.grad[n]
+                E[a, 0] = t.grad[n]
+        rhs_phi = -F
+        rhs_b = np.zeros(k)
+        if nw:
+            rhs_b[0] = -Fw
+        rhs_b[nw + nz:nw + nz + nn] = -gn
+        rhs_b[nw + nz + nn:] = -gs
+        return R, (diag, off, P, Q, E, rhs_phi, rhs_b, nz)
+
+    def _step(self, jac):
+        diag, off, P, Q, E, r1, r2, nz = jac
+        dphi, y = solve_bordered(diag, off, P, Q, E, r1, r2)
+        nw = self.nw_free
+        dw = float(y[0]) if nw else 0.0
+        nn = len(self.normal_active)
+        return dphi, dw, y[nw + nz:nw + nz + nn], y[nw + nz + nn:]
+
+    # -- Newton -------------------------------------------------------------------------
+    def _newton(self, q, idx, tol, max_iter, contacts):
+        sc = self.scene
+        m = sc.model
+        cm = self.model
+        self.nw_free = 1 if (cm.nw and cm.wd in set(int(i) for i in idx)) else 0
+        L, W = sc.length, sc.force_scale
+        self.kc_dl = self.kc * L / W
+        N = self.N.copy() / W
+        stick_act = [i for i in range(len(self.sticks)) if i not in self.sliding]
+        if self.lam.size != len(self.sticks):
+            self.lam = np.zeros(len(self.sticks))
+        lam = self.lam[stick_act].copy() / W
+        phi, w = cm.split(q)
+        nf = cm.n + self.nw_free
+        def read_kc(ph, ww):  # MuJoCo's contact stiffness at an accepted state (one mj_inverse)
+            if contacts and self.normal_active:
+                self._update_kc(cm.join(q, ph, ww))
+                self.kc_dl = self.kc * L / W
+
+        read_kc(phi, w)
+        if (N.size and not np.all(N)) or (lam.size and not np.all(lam)):
+            N, lam = self._estimate_multipliers(phi, w, N, lam, stick_act)
+
+        def state_q(ph, ww):
+            return cm.join(q, ph, ww)
+
+        def finish(conv, why, qq, NN, ll):
+            self.N = NN * W
+            self.lam[stick_act] = ll * W
+            return conv, why, qq
+
+        polished = False
+        while True:
+            if self.sticks:
+                self._reanchor(state_q(phi, w))
+            R, jac = self._system(phi, w, N, lam, stick_act, True)
+            if not np.all(np.isfinite(R)):
+                raise SettleError("settle diverged (non-finite residual)")
+            res = float(np.max(np.abs(R))) if R.size else 0.0
+            res_f = float(np.max(np.abs(R[:nf])))
+            res_c = float(np.max(np.abs(R[nf:] * self._row_scale(len(N), len(stick_act))))) if R.size > nf else 0.0
+            if res_f < tol and res_c < max(tol, self.noise_floor()):
+                # the analytic contact rows resolve ~1 ulp of K_c l, far below MuJoCo's distance
+                # round-off (the floor): one more step when they are above a few ulps and improving
+                if polished or res_c < max(tol, CHAIN_FLOOR_ULPS / FLOOR_ULPS * self.noise_floor()):
+                    break
+                polished = True
+            if self.iterations >= max_iter:
+                if self.budget is not None and self.iterations >= self.budget:
+                    return finish(False, f"Newton iteration budget max_steps={self.budget} spent", state_q(phi, w), N, lam)
+                return finish(False, "max_iter", state_q(phi, w), N, lam)
+            self.iterations += 1
+            try:
+                dphi, dw, dN, dl = self._step(jac)
+            except (np.linalg.LinAlgError, ValueError):
+                if polished:
+                    break
+                return finish(False, "stalled", state_q(phi, w), N, lam)
+            merit = float(np.linalg.norm(R))
+            d0 = cm.pair_distances(phi, cm.nodes(phi), w) if contacts else None
+            inact = [p for p in range(len(self.pairs)) if p not in self.normal_active] if contacts else []
+            step, accepted = 1.0, False
+            for _ in range(50):
+                ph, ww = phi + step * dphi, w + step * dw
+                Nn, ln = N + step * dN, lam + step * dl
+                Rn, _ = self._system(ph, ww, Nn, ln, stick_act, False)
+                ok = bool(np.all(np.isfinite(Rn)))
+                if ok and inact:  # pairs not yet touching: no tunnelling (move at most half their gap)
+                    dn = cm.pair_distances(ph, cm.nodes(ph), ww)
+                    ok = all(dn[p] > -PEN_MAX or d0[p] <= 0 for p in inact) and all(
+                        d0[p] - dn[p] <= max(0.5 * d0[p], 0.0) + PEN_MAX for p in inact if d0[p] > 0)
+                mn = float(np.linalg.norm(Rn)) if ok else math.inf
+                if ok and (mn < (1.0 - 1e-4 * step) * merit or (
+                        float(np.max(np.abs(Rn))) < 0.5 * res and mn < max(2.0 * merit, 1e-3 * tol ** 0.5))):
+                    accepted = True
+                    break
+                step *= 0.5
+            if not accepted:
+                if polished:  # already within the floor: the polishing step is round-off bound
+                    break
+                return finish(False, "stalled", state_q(phi, w), N, lam)
+            phi, w, N, lam = ph, ww, Nn, ln
+            read_kc(phi, w)
+            if contacts:  # a pair that starts touching joins the set at once
+                dn = cm.pair_distances(phi, cm.nodes(phi), w)
+                newp = [p for p in range(len(self.pairs)) if p not in self.normal_active and dn[p] < 0.0]
+                if newp:
+                    self.normal_active = self.normal_active + newp
+                    N = np.append(N, np.zeros(len(newp)))
+        return finish(True, "ok", state_q(phi, w), N, lam)
+
+    def _estimate_multipliers(self, phi, w, N, lam, stick_act):
+        """Least-squares multipliers at a fixed state: ``min |F + G_n' N + G_s' lambda|`` (hinge rows in q).
+
+        New contacts and sticks start at zero force; the first Newton step would
+        otherwise spend itself on the whole load.  Normal forces are kept >= 0.
+        """
+        cm = self.model
+        n, nw = cm.n, self.nw_free
+        nodes = cm.nodes(phi)
+        F, _, _ = cm.internal(phi)
+        b = np.concatenate([cm.to_q(F), [cm.workpiece_force()] if nw else []])
+        cols = [cm.pair_term(p, phi, nodes, w).grad for p in self.normal_active]
+        cols += [cm.stick_term(self.sticks[i], phi, nodes, w).grad for i in stick_act]
+        if not cols:
+            return N, lam
+        A = np.stack([np.concatenate([cm.to_q(c[:n]), c[n:n + nw]]) for c in cols], 1)
+        x, *_ = np.linalg.lstsq(A, -b, rcond=1e-12)
+        nn = len(self.normal_active)
+        if not np.all(np.isfinite(x)) or np.any(x[:nn] < 0.0):
+            return N, lam
+        return x[:nn], x[nn:]
+
+    def _row_scale(self, nn, ns) -> np.ndarray:
+        """Contact rows (length units) -> force units ``K_c`` (the acceptance of :class:`Newton`)."""
+        return np.concatenate([self.kc_dl[self.normal_active][:nn], np.ones(ns)])
+
