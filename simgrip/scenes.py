@@ -6,7 +6,7 @@ touches, so the settled state depends on the start: the problem the paper
 poses (contact at ``gamma``, centreline at ``X(gamma) = b/2``) is the one that
 starts from the hinge chain's own equilibrium with the contact at
 ``params.gamma``.  :func:`start_angles` solves for that start
-(:func:`simgrip.reference.solve_chain`) and :func:`build_scene` passes
+(:func:`simgrip.reference.cradle_start_angles`) and :func:`build_scene` passes
 it to the model layer; everything that compares a simulation with the
 reference (``compare``, the harness, the figures, the tests) builds its
 scenes here.
@@ -34,14 +34,10 @@ def start_angles(grip: str, params: PhysicalParams | DimensionlessParams, profil
     """
     if check_grip(grip) != "III":
         return None
-    from simgrip.reference import DiscreteError, solve_chain
+    from simgrip.reference import cradle_start_angles
 
     dimless = params.dimensionless() if isinstance(params, PhysicalParams) else params
-    try:
-        return solve_chain("III", dimless, as_profile(profile), n_links).joint_angles
-    except DiscreteError as exc:
-        raise ValueError(f"gamma: no Grip III hinge-chain equilibrium with the contact at gamma = "
-                         f"{dimless.gamma:g} for this kappa profile ({exc})") from exc
+    return cradle_start_angles(dimless, as_profile(profile), n_links)
 
 
 def build_scene(grip: str, params: PhysicalParams | DimensionlessParams, profile, n_links: int, **kw):

@@ -10,34 +10,28 @@ import pytest
 
 from simgrip import STANDARD, Uniform
 from simgrip.chain import chain_springs
-from simgrip.models import available, model_path
 from simgrip.params import DimensionlessParams
+from simgrip.sim.fingers import MAX_BODY_DEPTH
 from simgrip.sim.scene import Scene, build_scene, finger_state, set_curvature, set_joint_angles
+from simgrip.sim.workpiece import cradle_contact
 
 KAPPA = {"free": -4.0, "I": -6.0, "II": 5.0, "III": -6.0}
 N = 12
 
 
-def _warnings(d) -> list[str]:
-    return [mujoco.mjtWarning(i).name for i in range(len(d.warning)) if d.warning[i].number > 0]
+# Every scene compiling and running without MuJoCo warnings: tests/test_models.py.
 
 
 @pytest.mark.parametrize("grip", ["free", "I", "II", "III"])
-@pytest.mark.parametrize("fingers", [1, 2])
-@pytest.mark.parametrize("render", [False, True])
-def test_every_scene_compiles_and_steps_without_warnings(grip, fingers, render):
-    sc = build_scene(grip, STANDARD, Uniform(KAPPA[grip]), N, fingers=fingers, render=render)
-    assert isinstance(sc, Scene)
-    mujoco.mj_step(sc.model, sc.data, 50)
-    assert _warnings(sc.data) == []
-    assert np.all(np.isfinite(sc.data.qpos))
-
-
-def test_models_ship_the_static_parts():
-    names = available()
-    for part in ("defaults.xml", "palm.xml", "workpiece.xml", "dressing.xml"):
-        assert part in names
-        assert model_path(part).is_file()
+def test_scene_holds_what_the_builder_made(grip):
+    sc = build_scene(grip, STANDARD, Uniform(KAPPA[grip]), N, fingers=2)
+    assert isinstance(sc, Scene) and sc.grip == grip and sc.n == N and sc.fingers == 2
+    assert sc.joint_qpos.shape == (2, N) and sc.link_body.shape == (2, N)
+    assert sc.has_workpiece == (grip != "free")
+    if grip in ("I", "II"):
+        assert np.all(sc.tip_geom >= 0)
+    else:
+        assert np.all(sc.tip_geom == -1)
 
 
 def test_chain_springs_masses_and_hinge_axis():
@@ -175,3 +169,27 @@ def test_invalid_input_names_the_parameter(kwargs, name):
 def test_invalid_params_are_rejected_before_building():
     with pytest.raises(ValueError, match="D"):
         build_scene("free", DimensionlessParams(D=float("nan")), Uniform(0.0), N)
+
+
+def test_links_beyond_mujocos_body_depth_are_refused_before_building():
+    with pytest.raises(ValueError, match=f"links must be at most {MAX_BODY_DEPTH}"):
+        build_scene("I", STANDARD, Uniform(-5.5), 100_000)
+
+
+def test_a_grip_i_box_too_narrow_for_the_tip_names_b():
+    with pytest.raises(ValueError, match=r"^b must exceed 2 r_tip") as info:
+        build_scene("I", STANDARD.replace(b=0.001), Uniform(-4.0), N)
+    assert "III" not in str(info.value) and "initial_angles" not in str(info.value)
+
+
+def test_grip_iii_needs_gamma_beyond_half_the_box():
+    with pytest.raises(ValueError, match="b/2 must be below gamma"):
+        build_scene("III", STANDARD.replace(b=1.7, gamma=0.8), Uniform(-6.0), N)
+
+
+def test_grip_iii_default_start_puts_the_corner_at_gamma():
+    """Without initial_angles the start is geometric (no solver) and the contact is at gamma, X = b/2."""
+    sc = build_scene("III", STANDARD, Uniform(-6.0), 64)
+    s, _, point = cradle_contact(finger_state(sc)[0], sc.springs, STANDARD.b, STANDARD.gamma)
+    assert s == pytest.approx(STANDARD.gamma, abs=1.0 / 64)  # the polyline crosses within a link of gamma
+    assert point[0] == pytest.approx(STANDARD.b / 2, abs=1e-12)
