@@ -130,3 +130,21 @@ def test_a_hang_is_a_named_failure_in_any_thread():
             t.start()
             t.join()
         assert out[where]["outcome"] == "failed" and out[where]["error_type"] == "Timeout", out[where]
+
+
+def test_runs_on_an_existing_dask_cluster(tmp_path):
+    """``--scheduler``: the same outcomes on a cluster reached by address (workers in threads here)."""
+    from distributed import LocalCluster
+
+    from simgrip.harness.runner import RunnerOptions
+
+    kw = dict(cases=6, seed=2, timeout_s=60.0, max_links=16)
+    local = run_stress(tmp_path / "local", jobs=1, progress=False, **kw)
+    with LocalCluster(n_workers=1, threads_per_worker=1, processes=False, dashboard_address="127.0.0.1:0",
+                      scheduler_kwargs={"dashboard": False}) as cluster:
+        remote = run_stress(tmp_path / "remote", options=RunnerOptions(scheduler=cluster.scheduler_address,
+                                                                       progress=False), **kw)
+    strip = ("time_s",)
+    assert [{k: v for k, v in c.items() if k not in strip} for c in remote.cases] == \
+           [{k: v for k, v in c.items() if k not in strip} for c in local.cases]
+    assert remote.jobs is None and local.jobs == 1
