@@ -381,21 +381,6 @@ def test_gravity_free_uniform_chain_is_an_inscribed_regular_polygon(kappa, n):
 # ---------------------------------------------------------------------------- stability
 
 
-def test_min_eigenvalue_projects_on_the_constraint_tangent():
-    L = np.diag([1.0, -1.0, 3.0])
-    assert min_eigenvalue(L) == pytest.approx(-1.0)
-    assert min_eigenvalue(L, np.array([0.0, 2.0, 0.0])) == pytest.approx(1.0)
-    assert min_eigenvalue(L, np.array([5.0, 0.0, 0.0])) == pytest.approx(-1.0)
-    rng = np.random.default_rng(1)
-    A = rng.normal(size=(6, 6))
-    L = A + A.T
-    a = rng.normal(size=6)
-    from scipy.linalg import null_space
-
-    E = null_space(a[None, :])
-    assert min_eigenvalue(L, a) == pytest.approx(np.linalg.eigvalsh(E.T @ L @ E)[0], rel=1e-12)
-
-
 def test_free_rod_eigenvalue_is_the_hessian_eigenvalue():
     sol = solve_discrete("free", STANDARD, -3.0, 32)
     H = discrete_energy("free", STANDARD, -3.0, 32, sol.theta).hessian

@@ -367,22 +367,6 @@ def test_concentrating_curvature_does_not_improve_the_grip(concentrated_sweeps):
 
 
 @pytest.mark.slow
-def test_grip_III_carries_the_most_load():
-    ks = {"I": [-5.0, -6.0], "II": [4.5, 5.0, 5.5, 6.0], "III": [-4.0, -5.0]}
-    best = {g: max(max_load(g, STANDARD, Uniform(k)) for k in kk) for g, kk in ks.items()}
-    assert best["III"] > best["I"] and best["III"] > best["II"]
-    assert math.isfinite(best["III"])
-
-
-def test_max_load_is_the_feasibility_boundary():
-    """At the returned M the grip is marginal: mu_s N = M (Grip I)."""
-    M = max_load("I", STANDARD, Uniform(-5.0))
-    sol = solve("I", STANDARD.replace(M=M), Uniform(-5.0))
-    assert STANDARD.mu_s * sol.N1 == pytest.approx(M, abs=1e-6)
-    assert least_mu("I", STANDARD, Uniform(-5.0)) == pytest.approx(STANDARD.M / solve("I", STANDARD, Uniform(-5.0)).N1)
-    assert least_mu("I", STANDARD, Uniform(-1.0)) == math.inf
-
-
 # --------------------------------------------------------------------------- warm starts, errors
 
 

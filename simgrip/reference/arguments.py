@@ -15,7 +15,7 @@ import numpy as np
 
 from simgrip.params import DimensionlessParams, _finite
 
-__all__ = ["check_count", "check_gamma", "check_gravity", "check_params", "check_tip_load", "check_tol"]
+__all__ = ["check_count", "check_failures", "check_gamma", "check_gravity", "check_params", "check_tip_load", "check_tol"]
 
 
 def check_params(params) -> DimensionlessParams:
@@ -74,3 +74,10 @@ def check_tol(tol) -> float:
     if not 1e-13 <= tol <= 1e-2:
         raise ValueError(f"tol must lie in [1e-13, 1e-2], got {tol!r}")
     return tol
+
+
+def check_failures(failures) -> str:
+    """What a sweep does with a point that fails: ``"raise"`` or ``"skip"``."""
+    if failures not in ("raise", "skip"):
+        raise ValueError(f"failures must be 'raise' or 'skip', got {failures!r}")
+    return failures

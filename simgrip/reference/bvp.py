@@ -230,23 +230,12 @@ def _tip_system(P: BvpProblem):
         Jp[1, 0] = sn
         return J, Jp
 
-    def bc(ya, yb, p=None):
-        r = [ya[0], ya[2], ya[3], yb[1] - P.C]
-        if con:
-            r.append(yb[2] - P.target)
-        return np.array(r)
-
-    def bc_jac(ya, yb, p=None):
-        nb = 5 if con else 4
-        A, B = np.zeros((nb, 4)), np.zeros((nb, 4))
-        A[0, 0] = A[1, 2] = A[2, 3] = 1.0
-        B[3, 1] = 1.0
-        if not con:
-            return A, B
-        B[4, 2] = 1.0
-        return A, B, np.zeros((nb, 1))
-
-    return fun, bc, fun_jac, bc_jac
+    # clamp theta = X = Y = 0; tip moment m(1) = C; [contact X(1) = target]
+    A, B, c = _clamp_rows(4, con)
+    B[3, 1], c[3] = 1.0, P.C
+    if con:
+        B[4, 2], c[4] = 1.0, P.target
+    return _with_bc(fun, fun_jac, A, B, c, con)
 
 
 def _two_segment_system(P: BvpProblem):
@@ -279,25 +268,35 @@ def _two_segment_system(P: BvpProblem):
         Jp[1, 0] = ga * sa
         return J, Jp
 
+    # clamp theta = X = Y = 0; moment-free tip; continuity of phi, X, Y at gamma and the moment
+    # jump m(gamma+) - m(gamma-) = -C; [contact X(gamma) = target]
+    A, B, c = _clamp_rows(8, con)
+    B[3, 5] = 1.0
+    for i in range(4):
+        A[4 + i, 4 + i], B[4 + i, i] = 1.0, -1.0
+    c[5] = -P.C
+    if con:
+        B[8, 2], c[8] = 1.0, P.target
+    return _with_bc(fun, fun_jac, A, B, c, con)
+
+
+def _clamp_rows(n: int, con: bool):
+    """``A, B, c`` of linear boundary conditions ``A ya + B yb = c`` with the clamp rows filled."""
+    nb = n + 1 if con else n
+    A, B, c = np.zeros((nb, n)), np.zeros((nb, n)), np.zeros(nb)
+    A[0, 0] = A[1, 2] = A[2, 3] = 1.0
+    return A, B, c
+
+
+def _with_bc(fun, fun_jac, A, B, c, con: bool):
+    """``fun, bc, fun_jac, bc_jac`` with the linear boundary conditions ``A ya + B yb = c``."""
+    dp = np.zeros((c.size, 1))
+
     def bc(ya, yb, p=None):
-        r = [ya[0], ya[2], ya[3], yb[5],  # clamp; moment-free tip
-             ya[4] - yb[0], ya[5] - yb[1] + P.C, ya[6] - yb[2], ya[7] - yb[3]]  # m(gamma+) - m(gamma-) = -C
-        if con:
-            r.append(yb[2] - P.target)
-        return np.array(r)
+        return A @ ya + B @ yb - c
 
     def bc_jac(ya, yb, p=None):
-        nb = 9 if con else 8
-        A, B = np.zeros((nb, 8)), np.zeros((nb, 8))
-        A[0, 0] = A[1, 2] = A[2, 3] = 1.0
-        B[3, 5] = 1.0
-        for i in range(4):
-            A[4 + i, 4 + i] = 1.0
-            B[4 + i, i] = -1.0
-        if not con:
-            return A, B
-        B[8, 2] = 1.0
-        return A, B, np.zeros((nb, 1))
+        return (A, B, dp) if con else (A, B)
 
     return fun, bc, fun_jac, bc_jac
 

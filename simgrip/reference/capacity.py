@@ -20,7 +20,7 @@ from scipy.optimize import brentq
 
 from simgrip.params import DimensionlessParams, _finite, check_grip
 from simgrip.profiles import as_profile
-from simgrip.reference.arguments import check_tol
+from simgrip.reference.arguments import check_failures, check_tol
 from simgrip.reference.bvp import BvpProblem
 from simgrip.reference.continuation import MAX_JUMP, continue_along, linear_path
 from simgrip.reference.elastica import (
@@ -166,8 +166,7 @@ def track_largest_load(
     :class:`~simgrip.reference.elastica.ElasticaError`.  Other keywords are those
     of :func:`~simgrip.reference.elastica.solve` (``gravity``, ``gamma``, ...).
     """
-    if failures not in ("raise", "skip"):
-        raise ValueError(f"failures must be 'raise' or 'skip', got {failures!r}")
+    check_failures(failures)
     profiles = [as_profile(p) for p in profiles]
     if guesses is not None and len(guesses) != len(profiles):
         raise ValueError(f"guesses must hold one entry per profile ({len(profiles)}), got {len(guesses)}")

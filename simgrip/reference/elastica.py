@@ -31,7 +31,7 @@ import numpy as np
 
 from simgrip.params import DimensionlessParams, _finite, check_grip
 from simgrip.profiles import CurvatureProfile, Uniform, as_profile
-from simgrip.reference.arguments import check_gamma, check_params, check_tip_load, check_tol
+from simgrip.reference.arguments import check_failures, check_gamma, check_params, check_tip_load, check_tol
 from simgrip.reference.bvp import BvpProblem, BvpSolution, grip_problem
 from simgrip.reference.continuation import cold_start, continue_along, linear_path, solve_from
 
@@ -337,8 +337,7 @@ def sweep(
     returned list and the next point is warm-started from the last success.
     Keyword arguments go to :func:`solve`.
     """
-    if failures not in ("raise", "skip"):
-        raise ValueError(f"failures must be 'raise' or 'skip', got {failures!r}")
+    check_failures(failures)
     out: list = []
     prev = start
     for prof in profiles:

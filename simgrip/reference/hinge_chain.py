@@ -48,6 +48,7 @@ from simgrip.profiles import as_profile
 from simgrip.reference.arguments import check_count, check_gamma, check_gravity, check_params
 from simgrip.reference.minimiser import (
     DiscreteEnergy,
+    DiscreteEquilibrium,
     DiscreteError,
     EnergyTerms,
     angles_from_guess,
@@ -61,7 +62,7 @@ __all__ = ["ChainEquilibrium", "chain_energy", "cradle_start_angles", "solve_cha
 
 
 @dataclass(frozen=True)
-class ChainEquilibrium:
+class ChainEquilibrium(DiscreteEquilibrium):
     """Settled state of the hinge chain.
 
     Attributes
@@ -79,17 +80,9 @@ class ChainEquilibrium:
     tip : ndarray (2,)
     contact : ndarray (2,) or None
         Tip for I/II, the material point at ``gamma`` for III, None for free.
-    N1, N2 : float
-        Force of the workpiece on the rod at the contact over ``rho g l``
-        (``N1`` is the multiplier, ``N2 = -M``).
-    energy : float
-        Chain potential including ``-N1 X`` and ``-M_c phi_m``.
-    min_eigenvalue : float
-        Smallest eigenvalue of the Hessian projected on the constraint tangent
-        space, in the ``L^2`` metric (weight ``ds`` per link), over ``rho g l``;
-        converges at second order to that of the continuous second variation
-        (:mod:`simgrip.reference.stability`).  ``> 0``: stable.
-    gradient_norm, iterations, success
+    N1, N2, energy, min_eigenvalue, gradient_norm, iterations, success
+        See :class:`~simgrip.reference.minimiser.DiscreteEquilibrium`; the
+        eigenvalue's metric is ``ds`` per link.
     gamma : float or None
         Grip III contact arc length used.
     contact_moment : float
@@ -107,13 +100,6 @@ class ChainEquilibrium:
     nodes: np.ndarray
     tip: np.ndarray
     contact: np.ndarray | None
-    N1: float
-    N2: float
-    energy: float
-    min_eigenvalue: float
-    gradient_norm: float
-    iterations: int
-    success: bool
     gamma: float | None = None
     contact_moment: float = 0.0
     gravity: float = 1.0

@@ -46,6 +46,7 @@ from simgrip.reference.stability import tri_factor, tri_solve, tridiagonal_min_e
 __all__ = [
     "GRADIENT_TOL",
     "DiscreteEnergy",
+    "DiscreteEquilibrium",
     "DiscreteError",
     "EnergyTerms",
     "NewtonResult",
@@ -418,12 +419,44 @@ def energy_terms(prob: DiscreteEnergy, x, N1: float, hessian: bool) -> EnergyTer
     return EnergyTerms(val, grad, hess)
 
 
-def equilibrium_fields(prob: DiscreteEnergy, res: NewtonResult, M: float) -> dict:
-    """The fields both result types share: forces, energy, stability eigenvalue, convergence.
+@dataclass(frozen=True, kw_only=True)
+class DiscreteEquilibrium:
+    """What every discrete equilibrium reports (the nodal scheme's and the hinge chain's).
 
-    ``min_eigenvalue`` is the smallest eigenvalue of the projected Hessian in the
-    ``L^2`` metric of ``prob.metric`` (see :mod:`simgrip.reference.stability`).
+    Attributes
+    ----------
+    N1, N2 : float
+        Force of the workpiece on the rod at the contact, ``E1`` and ``E2``
+        components over ``rho g l`` (``N1`` is the multiplier, ``N2 = -M``); 0 for
+        the free rod.
+    energy : float
+        The potential ``V0 - N1 X(s_c)`` at the converged multiplier (the paper's
+        ``V_dis``; the chain's includes ``-M_c phi`` of a contact couple).
+    min_eigenvalue : float
+        Smallest eigenvalue of the Hessian of the Lagrangian on the constraint's
+        tangent space (free rod: of the Hessian) in the ``L^2`` metric of the
+        scheme's quadrature, over ``rho g l``.  It converges at second order to
+        the smallest eigenvalue of the continuous second variation; ``> 0``:
+        stable (:mod:`simgrip.reference.stability`).
+    gradient_norm : float
+        Final relative gradient norm of the Lagrangian (at most :data:`GRADIENT_TOL`).
+    iterations : int
+        Newton iterations.
+    success : bool
+        Always ``True`` for a returned state (a failure raises :class:`DiscreteError`).
     """
+
+    N1: float
+    N2: float
+    energy: float
+    min_eigenvalue: float
+    gradient_norm: float
+    iterations: int
+    success: bool
+
+
+def equilibrium_fields(prob: DiscreteEnergy, res: NewtonResult, M: float) -> dict:
+    """The fields of :class:`DiscreteEquilibrium` for the converged ``res`` of ``prob`` (load ``M``)."""
     if prob.constrained:
         N1, N2, a = -res.chi, -M, prob.c_gradient(res.x)
     else:

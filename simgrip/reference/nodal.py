@@ -63,6 +63,7 @@ from simgrip.profiles import as_profile
 from simgrip.reference.arguments import check_count, check_gamma, check_gravity, check_params
 from simgrip.reference.minimiser import (
     DiscreteEnergy,
+    DiscreteEquilibrium,
     EnergyTerms,
     NewtonResult,
     angles_from_guess,
@@ -76,7 +77,7 @@ __all__ = ["DiscreteSolution", "discrete_energy", "discrete_from_continuous", "s
 
 
 @dataclass(frozen=True)
-class DiscreteSolution:
+class DiscreteSolution(DiscreteEquilibrium):
     """Equilibrium of the paper's nodal scheme (eqs. 25-33).
 
     Attributes
@@ -92,21 +93,9 @@ class DiscreteSolution:
         ``(x[K], y[K])``.
     contact : ndarray (2,) or None
         Contact point (the tip for I/II, node ``I`` for III, None for free).
-    N1, N2 : float
-        Force of the workpiece on the rod at the contact, ``E1`` and ``E2``
-        components over ``rho g l`` (``N1`` is the multiplier; ``N2 = -M``); 0 for
-        the free rod.
-    energy : float
-        ``V_dis`` including the ``-N1 X`` term.
-    min_eigenvalue : float
-        Smallest eigenvalue of the Hessian of ``V_dis`` on the constraint's tangent
-        space (free rod: of the Hessian) in the ``L^2`` metric (trapezoid weights),
-        over ``rho g l``; converges at second order to that of the continuous second
-        variation (:mod:`simgrip.reference.stability`).  ``> 0``: stable.
-    gradient_norm : float
-        Final relative gradient norm of the Lagrangian.
-    iterations : int
-    success : bool
+    N1, N2, energy, min_eigenvalue, gradient_norm, iterations, success
+        See :class:`~simgrip.reference.minimiser.DiscreteEquilibrium`; the
+        eigenvalue's metric is the trapezoid rule on the nodes.
     gamma : float or None
         Grip III: the contact arc length actually used, ``I ds``.
     gravity : float
@@ -122,13 +111,6 @@ class DiscreteSolution:
     y: np.ndarray
     tip: np.ndarray
     contact: np.ndarray | None
-    N1: float
-    N2: float
-    energy: float
-    min_eigenvalue: float
-    gradient_norm: float
-    iterations: int
-    success: bool
     gamma: float | None = None
     gravity: float = 1.0
 
