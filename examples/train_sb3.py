@@ -147,10 +147,12 @@ def plot_curves(out: Path, window: int = 100) -> Path | None:
     if not curves:
         return None
     fig, axes = plt.subplots(1, 2, figsize=(10, 3.8), constrained_layout=True)
+    plotted = 0
     for path in curves:
         data = np.genfromtxt(path, delimiter=",", names=True)
         if data.size < 2:
             continue
+        plotted += 1
         succ = np.atleast_1d(data["success"]).astype(float)
         k = min(window, succ.size)
         avg = np.convolve(succ, np.ones(k) / k, mode="valid")
@@ -162,7 +164,8 @@ def plot_curves(out: Path, window: int = 100) -> Path | None:
         ax.set_ylabel(f"training success rate (last {window} episodes)")
         ax.set_ylim(-0.02, 1.02)
         ax.grid(alpha=0.3)
-        ax.legend()
+        if plotted:
+            ax.legend()
     axes[0].set_xscale("log")
     target = out / "curves.png"
     with atomic_write(target, "wb") as fh:
