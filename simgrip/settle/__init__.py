@@ -29,7 +29,7 @@ import numpy as np
 
 from simgrip.settle.chain_model import eligible
 from simgrip.settle.chain_newton import ChainNewton
-from simgrip.settle.closing import close_grip, finger_alone, place_on_chain, release
+from simgrip.settle.closing import close_grip, finger_alone, place_on_chain, release, start_free
 from simgrip.settle.dynamics import DYN_TOL, settle_dynamics
 from simgrip.settle.naive import naive_relax, naive_settle
 from simgrip.settle.newton import Newton, SOLVE_ITERS, read_newton
@@ -39,7 +39,7 @@ from simgrip.settle.statics import (RestResidual, configure_statics, dof_scales,
 from simgrip.sim.checks import clear_warnings
 from simgrip.sim.scene import Scene, set_curvature
 from simgrip.threads import blas_threads
-from simgrip.validity import check_condition_23
+from simgrip.validity import check_condition_23, check_grip_shape
 
 __all__ = [
     "DEFAULT_TOL",
@@ -167,6 +167,9 @@ def _settle(
             mujoco.mj_forward(m, d)
             held = warm_start.held and scene.has_workpiece
         if method == "dynamics":
+            if not scene.has_workpiece and warm_start is None:
+                start_free(scene)  # a free finger from its chain equilibrium: the dynamics checks it is at rest
+                mujoco.mj_forward(m, d)
             state = settle_dynamics(scene, tol, max_steps, warm_start, close, allow_unconverged, t0)
             state.tolerance = tol
             if state.converged and not state.residual <= tol:  # converged means residual <= tol
@@ -175,6 +178,7 @@ def _settle(
                     raise SettleError(f"dynamic settle did not converge (static residual {state.residual:.3g} above "
                                       f"the tolerance {tol:.3g} after {state.steps} steps)")
             check_condition_23(scene, state)
+            check_grip_shape(scene, state)
             state.rest = scene.springs.rest.copy()
             return state
         configure_statics(scene)
@@ -192,6 +196,8 @@ def _settle(
             if held:
                 held, converged, why = release(scene, run, tol, per)
         else:
+            if not scene.has_workpiece and warm_start is None:
+                start_free(scene)
             converged, why = run.solve(tol, per, frozen=wdofs)
         if scene.has_workpiece and not held and not run.spent():
             # dropped: a release without an equilibrium (Newton stalls as the workpiece falls) is a
@@ -209,6 +215,7 @@ def _settle(
                 raise SettleError(f"settle did not converge (static residual {state.residual:.3g} above the "
                                   f"tolerance {state.tolerance:.3g} after {run.iterations} Newton iterations)")
         check_condition_23(scene, state)
+        check_grip_shape(scene, state)
         state.rest = scene.springs.rest.copy()
     finally:
         restore_options(m, saved)

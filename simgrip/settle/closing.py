@@ -25,7 +25,8 @@ from simgrip.settle.newton import Newton
 from simgrip.settle.state import SettleError, finger_tip
 from simgrip.sim.scene import BOX_HEIGHT, Scene, set_curvature
 
-__all__ = ["close_grip", "finger_alone", "hold_workpiece", "place_on_chain", "place_workpiece", "release"]
+__all__ = ["close_grip", "finger_alone", "hold_workpiece", "place_on_chain", "place_workpiece", "release",
+           "start_free", "start_on_chain"]
 
 #: Grips I/II start from the hinge chain's equilibrium (:func:`start_on_chain`) where it is valid;
 #: False: always the staged closing.
@@ -50,9 +51,31 @@ def hold_workpiece(scene: Scene, on: bool) -> None:
         d.qfrc_applied[dof] = weight if (on and name == "z") else 0.0
 
 
+def start_free(scene: Scene) -> bool:
+    """Put every finger at the hinge chain's free equilibrium (the MuJoCo finger alone is that chain).
+
+    The static solve then only polishes (one or two iterations) and a soft rod
+    (small ``D``: gravity far above the springs, where Newton from the straight
+    finger stalls) settles like any other.  False (state unchanged) when the
+    chain solver fails.
+    """
+    from simgrip.reference import DiscreteError, hinge_chain
+
+    try:
+        ch = hinge_chain.solve_chain("free", scene.params, scene.profile, scene.n)
+    except (DiscreteError, ValueError):
+        return False
+    if not ch.success:
+        return False
+    scene.data.qpos[scene.joint_qpos] = ch.joint_angles[None, :]
+    scene.data.qvel[:] = 0.0
+    return True
+
+
 def finger_alone(scene, run, tol, max_steps):
-    """The workpiece is gone: park it (held, no contact) and settle the finger."""
+    """The workpiece is gone: park it (held, no contact) and settle the finger (from the chain's free state)."""
     m = scene.model
+    start_free(scene)
     hold_workpiece(scene, True)
     run.sticks, run.sliding, run.lam = [], {}, np.zeros(0)
     run.normal_active, run.N = [], np.zeros(0)

@@ -32,7 +32,7 @@ import time
 import mujoco
 import numpy as np
 
-from simgrip.settle.closing import hold_workpiece
+from simgrip.settle.closing import hold_workpiece, start_free
 from simgrip.settle.state import SettledState, SettleError, read_state
 from simgrip.settle.statics import CONTACT_IMPEDANCE, RestResidual, check_warnings, dof_scales
 from simgrip.sim.scene import Scene, set_curvature
@@ -299,9 +299,11 @@ def _settle_dynamics_once(scene: Scene, tol: float, max_steps: int, warm_start, 
             if why in ("lost contact", "slipped"):
                 held, converged = False, True
     if not (scene.has_workpiece and held) and converged:
-        if scene.has_workpiece:  # park the workpiece, settle the finger alone
+        if scene.has_workpiece:  # park the workpiece, settle the finger alone (from the chain's free state)
             dyn.hold(True)
             m.opt.disableflags = flags | contact_off
+            if start_free(scene):
+                mujoco.mj_forward(m, d)
         converged, why = dyn.run(tol, vtol, max_steps)
     if not converged and not allow_unconverged:
         raise SettleError(f"dynamic settle did not converge ({why} after {dyn.steps} steps)")

@@ -94,6 +94,8 @@ class SettledState:
     timestep: float = 0.0
     #: Grip III condition (23): no link beyond the contact reaches the workpiece's bottom face.
     tip_clear: bool = True
+    #: Grips I/II: the state has the shape of the grip asked for (:func:`simgrip.validity.check_grip_shape`).
+    grip_matched: bool = True
     #: Conditions the state violates that the solve itself does not enforce (e.g. condition (23)).
     warnings: list = field(default_factory=list)
     #: Hinge rest angles (``springs.rest``) the state was settled with (a dynamic warm start ramps from them).
