@@ -148,7 +148,7 @@ def _rows_table(res) -> list[str]:
         t = fmt(r.get("time_s"), inf="never (no static state)")
         if r.get("lower_bound"):
             t = f"> {fmt(r.get('time_min_s'))}"
-        method = r["method"] if r["n"] else f"{r['method']} tol {r['tol']:.0e}"
+        method = f"{r['method']} tol {r['tol']:.0e}" if not r["n"] and r.get("tol") else r["method"]
         L.append(f"| {r['grip']} | {r['n'] or '–'} | {method} | {t} | {fmt(r.get('steps'))} | "
                  f"{fmt(r.get('tip_err'), '.2e')} | {fmt(r.get('force_err'), '.2e')} | {r.get('note') or ''} |")
     return L
