@@ -70,4 +70,4 @@ def __getattr__(name: str):
     raise AttributeError(f"module 'simgrip' has no attribute {name!r}")
 
 
-import simgrip.envs  # noqa: E402,F401  registers simgrip/Pick-v0 and simgrip/PickCradle-v0 (lazy entry points)
+import simgrip.envs  # noqa: E402,F401  registers simgrip/Pick-v1 and simgrip/PickCradle-v1 (lazy entry points)

@@ -517,6 +517,15 @@ def test_step_after_the_end_raises_until_reset():
     _, r, term, *_ = env.step(np.array([-1.0, 1.0]))
     assert not term
     env.close()
+    wrapped = gym.make("simgrip/Pick-v1")  # through Gymnasium's wrappers (OrderEnforcing, PassiveEnvChecker)
+    with pytest.raises(gym.error.ResetNeeded):
+        wrapped.step(np.zeros(2))
+    wrapped.reset(seed=0)
+    while not wrapped.step(np.array([-1.0, 1.0]))[2]:
+        pass
+    with pytest.raises(gym.error.ResetNeeded):
+        wrapped.step(np.zeros(2))
+    wrapped.close()
 
 
 def test_diverged_physics_raises_physics_error():
