@@ -41,58 +41,6 @@ class BoxParams:
     friction: float
 
 
-def _range(name, value, lo=-math.inf, hi=math.inf, positive=True, strict=False):
-    try:
-        a, b = (float(v) for v in value)
-    except (TypeError, ValueError):
-        raise ValueError(f"{name} must be a (low, high) pair of numbers, got {value!r}") from None
-    if not (math.isfinite(a) and math.isfinite(b)) or a > b or (strict and a == b):
-        rel = "<" if strict else "<="
-        raise ValueError(f"{name} must be a finite (low, high) pair with low {rel} high, got {value!r}")
-    if positive and a <= 0:
-        raise ValueError(f"{name} must be positive, got {value!r}")
-    if a < lo or b > hi:
-        raise ValueError(f"{name} must lie within [{lo}, {hi}], got {value!r}")
-    return (a, b)
-
-
-def _num(name, value, *, positive=True) -> float:
-    """``value`` as a finite float, > 0 (``positive``) or >= 0; ValueError naming ``name`` otherwise."""
-    what = "a positive number" if positive else "a number >= 0"
-    if isinstance(value, (bool, np.bool_)):
-        raise ValueError(f"{name} must be {what}, got {value!r}")
-    try:
-        v = float(value)
-    except (TypeError, ValueError):
-        raise ValueError(f"{name} must be {what}, got {value!r}") from None
-    if not (math.isfinite(v) and (v > 0 if positive else v >= 0)):
-        raise ValueError(f"{name} must be {what}, got {value!r}")
-    return v
-
-
-def _pos(name, value) -> float:
-    return _num(name, value, positive=True)
-
-
-def _int(name, value, low: int) -> int:
-    """``value`` as an int >= ``low`` (integral floats accepted, bools refused); ValueError naming ``name``."""
-    ok = not isinstance(value, (bool, np.bool_))
-    try:
-        v = int(value)
-        ok = ok and v == value
-    except (TypeError, ValueError, OverflowError):
-        ok = False
-    if not ok or v < low:
-        raise ValueError(f"{name} must be an integer >= {low}, got {value!r}")
-    return v
-
-
-def _bool(name, value) -> bool:
-    if not isinstance(value, (bool, np.bool_)):
-        raise ValueError(f"{name} must be True or False, got {value!r}")
-    return bool(value)
-
-
 def obs_layout(shape_points: int = 8, per_finger: bool = False) -> list[tuple[str, int]]:
     """``(name, size)`` of the observation's blocks, in order (see :class:`PickEnv`)."""
     # One command drives both fingers unless per_finger: the scene is then mirror-symmetric, finger 1 is
