@@ -60,7 +60,7 @@ def measure_throughput(steps: int = 2000, *, grip: str = "I", seed: int = 0, rep
     env = PickEnv(grip=grip, **dict(env_kwargs or {}))
     m, d = env.model, env.data
     fs = env.frame_skip
-    idx = env._spring_idx
+    idx = env.joint_qpos.ravel()  # the finger hinges' rest angles live at these qpos_spring entries
     spec = mujoco.mjtState.mjSTATE_INTEGRATION
     size = mujoco.mj_stateSize(m, spec)
     start, end = np.empty(size), np.empty(size)
