@@ -98,6 +98,7 @@ def _settle(
     close: bool = True,
     allow_unconverged: bool = False,
     method: str = "newton",
+    contact: str | None = None,
 ) -> SettledState:
     """Drive ``scene`` to static equilibrium (see the module docstring).
 
@@ -125,6 +126,15 @@ def _settle(
         sticking constraints.  ``"dynamics"``: over-damped MuJoCo dynamics
         with MuJoCo's own contact and friction (see :class:`Dyn` and the
         module docstring); ``steps`` counts physics steps.
+    contact : {"point", "surface"}, optional
+        Where the sticking friction acts.  ``"point"`` (default for
+        ``"newton"``): on the finger's centreline, the paper's point contact, so
+        the settled state converges at second order to the point-contact BVP
+        (``contact_moment`` ~ 0).  ``"surface"``: at MuJoCo's contact point on
+        the geoms' surface, which adds the finite-radius couple (``-r_tip F_f``
+        for Grips I/II, ``~r_link f`` for III; compare against the
+        couple-aware reference with ``contact_moment``).  ``"dynamics"`` is
+        always ``"surface"`` (MuJoCo's own friction).
 
     Returns
     -------
@@ -140,6 +150,10 @@ def _settle(
     """
     if method not in ("newton", "dynamics"):
         raise ValueError(f"method must be 'newton' or 'dynamics', got {method!r}")
+    if contact is None:
+        contact = "point" if method == "newton" else "surface"
+    if contact not in ("point", "surface") or (method == "dynamics" and contact != "surface"):
+        raise ValueError(f"contact must be 'point' or 'surface' ('surface' for method='dynamics'), got {contact!r}")
     if tol is None:
         # dynamics: MuJoCo's sticking friction creeps (~1e-5 of the weight), so a
         # scene with a workpiece stops at DYN_TOL; without contact it goes as far as Newton.
@@ -155,6 +169,7 @@ def _settle(
     clear_warnings(d)
     run = ChainNewton(scene) if (CHAIN_SOLVE and eligible(scene)) else Newton(scene)
     run.budget = max_steps  # every Newton iteration of this settle counts against max_steps
+    run.friction_at = "centreline" if contact == "point" else "surface"
     per = min(SOLVE_ITERS, max_steps)  # one solve's share
     held = scene.has_workpiece
     converged, why = True, "ok"

@@ -24,6 +24,7 @@ import numpy as np
 from simgrip.settle.newton import Newton
 from simgrip.settle.state import SettleError, finger_tip
 from simgrip.sim.scene import BOX_HEIGHT, Scene, set_curvature
+from simgrip.sim.workpiece import hold_workpiece, place_workpiece
 
 __all__ = ["close_grip", "finger_alone", "hold_workpiece", "place_on_chain", "place_workpiece", "release",
            "start_free", "start_on_chain"]
@@ -41,14 +42,6 @@ CLOSE_STAGE_ITERS = 40
 #: stage's by more than :data:`FOLD_KINK` times the latter (a fold or branch jump of the path).
 FOLD_MARGIN = 0.5
 FOLD_KINK = 0.5
-
-
-def hold_workpiece(scene: Scene, on: bool) -> None:
-    """Hold the workpiece: its weight cancelled by ``qfrc_applied`` (its dofs are also frozen)."""
-    d = scene.data
-    weight = scene.workpiece_mass * scene.physical.g
-    for name, dof in zip(scene.workpiece_joints, scene.workpiece_dof):
-        d.qfrc_applied[dof] = weight if (on and name == "z") else 0.0
 
 
 def start_free(scene: Scene) -> bool:
@@ -332,15 +325,3 @@ def _close_predicted(scene: Scene, run: Newton, target, t: float, z0: float, tol
     set_curvature(scene, profile)
     mujoco.mj_forward(m, d)
     return False
-
-
-def place_workpiece(scene: Scene, z: float) -> None:
-    """Put the workpiece's centre at height ``z`` [m] (joint or, when fixed, body position), forward."""
-    m, d = scene.model, scene.data
-    body_z = float(m.body_pos[scene.workpiece_body][2])
-    for name, qa in zip(scene.workpiece_joints, scene.workpiece_qpos):
-        d.qpos[qa] = z - body_z if name == "z" else 0.0
-    if not scene.free_workpiece:
-        m.body_pos[scene.workpiece_body][2] = z
-    d.qvel[:] = 0.0
-    mujoco.mj_forward(m, d)

@@ -36,6 +36,7 @@ from simgrip.settle.closing import hold_workpiece, start_free
 from simgrip.settle.state import SettledState, SettleError, read_state
 from simgrip.settle.statics import CONTACT_IMPEDANCE, RestResidual, check_warnings, dof_scales
 from simgrip.sim.scene import Scene, set_curvature
+from simgrip.sim.workpiece import lower_onto_fingers, slip_coordinate
 
 __all__ = ["DYN_TOL", "Dyn", "settle_dynamics"]
 
@@ -165,31 +166,6 @@ class Dyn:
             self.step()
 
 
-def _slip_coordinate(scene: Scene) -> float:
-    """Tangential position (over l) of the contact on the workpiece: tip height minus workpiece height."""
-    d = scene.data
-    if scene.grip in ("I", "II"):
-        return float(d.geom_xpos[scene.tip_geom[0]][2] - d.xpos[scene.workpiece_body][2]) / scene.length
-    return 0.0
-
-
-def _lower_onto(scene: Scene) -> None:
-    """Lower a hovering workpiece (placement round-off) until its nearest pair touches (1e-9 l deep)."""
-    m, d = scene.model, scene.data
-    wz = [qa for name, qa in zip(scene.workpiece_joints, scene.workpiece_qpos) if name == "z"]
-    if not wz or m.npair == 0:
-        return
-    L = scene.length
-    for _ in range(3):
-        mujoco.mj_kinematics(m, d)
-        gap = min(mujoco.mj_geomDistance(m, d, int(m.pair_geom1[i]), int(m.pair_geom2[i]), L, None)
-                  for i in range(m.npair))
-        if gap < 0.0:
-            break
-        d.qpos[wz[0]] -= gap + 1e-9 * L
-    mujoco.mj_forward(m, d)
-
-
 def _finger_pairs_touching(scene: Scene) -> bool:
     d = scene.data
     mine = set(int(g) for f in range(scene.fingers) for g in scene.contact_geoms[f])
@@ -258,7 +234,7 @@ def _settle_dynamics_once(scene: Scene, tol: float, max_steps: int, warm_start, 
             dyn.hold(False)
             converged, why = dyn.run(tol, vtol, max_steps)
         elif held and converged:
-            s0 = _slip_coordinate(scene)
+            s0 = slip_coordinate(scene)
             z0 = float(d.xpos[scene.workpiece_body][2])
             # let go gently: the holding force fades out over DYN_RELEASE_STEPS steps, so the
             # workpiece never moves more than a contact radius in one step (no tunnelling)
@@ -274,7 +250,7 @@ def _settle_dynamics_once(scene: Scene, tol: float, max_steps: int, warm_start, 
                     d.qfrc_applied[wz] = weight * (1.0 - i / DYN_RELEASE_STEPS)
                     dyn.step()  # 20 steps: counted, and run() below stops at the budget
             else:
-                _lower_onto(scene)
+                lower_onto_fingers(scene)
             dyn.hold(False)
             if warm_start is not None and warm_start.rest is not None and warm_start.rest.shape == (scene.n,):
                 # warm start: ramp the rest angles from the previous state's (loaded, friction on)
@@ -291,7 +267,7 @@ def _settle_dynamics_once(scene: Scene, tol: float, max_steps: int, warm_start, 
                 fell = (z0 - float(d.xpos[scene.workpiece_body][2])) / scene.length > DYN_DROP_SLIP
                 if fell and not _finger_pairs_touching(scene):
                     return "lost contact"
-                if scene.grip in ("I", "II") and abs(_slip_coordinate(scene) - s0) > DYN_DROP_SLIP:
+                if scene.grip in ("I", "II") and abs(slip_coordinate(scene) - s0) > DYN_DROP_SLIP:
                     return "slipped"
                 return None
 

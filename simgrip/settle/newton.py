@@ -33,8 +33,8 @@ import mujoco
 import numpy as np
 
 from simgrip.settle.state import SettledState, SettleError, read_state
-from simgrip.settle.statics import (CONTACT_STIFFNESS, Statics, Stick, check_warnings, normal_force,
-                                    pair_contacts, sync_scene)
+from simgrip.settle.statics import (CONTACT_STIFFNESS, Statics, Stick, centreline_point, check_warnings,
+                                    normal_force, pair_contacts, sync_scene)
 from simgrip.sim.scene import Scene
 
 __all__ = ["FLOOR_ULPS", "Newton", "PEN_MAX", "SOLVE_ITERS", "read_newton"]
@@ -85,6 +85,9 @@ class Newton:
         self.sticks: list[Stick] = []
         self.lam = np.zeros(0)
         self.sliding: dict = {}
+        #: Where sticking friction acts: ``"centreline"`` (the paper's point contact) or ``"surface"``
+        #: (MuJoCo's contact point on the geoms' surface: the finite-radius couple).
+        self.friction_at = "centreline"
         #: Total Newton iterations allowed (all solves together); None: unlimited.
         self.budget: int | None = None
 
@@ -390,7 +393,11 @@ class Newton:
         ft = np.zeros(6)
         for s in self.sticks:
             mujoco.mj_geomDistance(m, sd, s.geoms[0], s.geoms[1], self.scene.length, ft)
-            s.reanchor(sd, 0.5 * (ft[:3] + ft[3:]))
+            s.reanchor(sd, self._anchor(sd, s.geoms[0], 0.5 * (ft[:3] + ft[3:])))
+
+    def _anchor(self, d, geom, point) -> np.ndarray:
+        """Where the sticking friction acts: the contact ``point``, or (point contact) the finger's centreline there."""
+        return centreline_point(self.scene.model, d, geom, point) if self.friction_at == "centreline" else point
 
     def _constraint_curvature(self, q, N, lam, stick_act) -> np.ndarray:
         """FD of ``G_n' N + G_s' lambda`` over q (geometric stiffness of the constraints)."""
@@ -446,7 +453,7 @@ class Newton:
             if best is None:
                 continue
             _, i, g1, g2 = best
-            p = np.array(sd.contact.pos[i])
+            p = self._anchor(sd, g1, np.array(sd.contact.pos[i]))
             bf, bw = int(m.geom_bodyid[g1]), int(m.geom_bodyid[g2])
             normal = np.array(sd.contact.frame[i][:3])
             t = np.cross(np.array([0.0, 1.0, 0.0]), normal)  # in-plane tangent
@@ -522,13 +529,13 @@ def read_newton(scene: Scene, run: Newton, t0: float, held: bool, converged: boo
     normals = run.normals_of_sticks() if run.sticks else np.zeros(0)
 
     def friction(f):
-        force, mu = np.zeros(3), math.nan
+        forces, mu = [], math.nan
         for k, s in enumerate(run.sticks):
             if s.finger == f and k < fric.size:
-                force += fric[k] * s.tangent(sd)
+                forces.append((fric[k] * s.tangent(sd), s.points(sd)[0]))
                 if math.isnan(mu) and normals[k] > 0:
                     mu = abs(float(fric[k])) / float(normals[k])
-        return force, mu
+        return forces, mu
 
     return read_state(scene, sd, held=held, method="newton", residual=float(np.max(np.abs(full))),
                       converged=converged, steps=run.iterations, newton_iterations=run.iterations,

@@ -18,6 +18,7 @@ import numpy as np
 from simgrip.chain import link_positions
 from simgrip.sim.checks import PhysicsError
 from simgrip.sim.scene import Scene
+from simgrip.sim.workpiece import workpiece_pose
 
 __all__ = ["SettleError", "FingerContact", "SettledState", "finger_tip", "read_state", "workpiece_pose"]
 
@@ -147,18 +148,13 @@ class SettledState:
         return self.contact.required_mu if self.contact else 0.0
 
 
-def workpiece_pose(scene: Scene):
-    """Workpiece ``(x, z, angle)`` (over l, rad) from the scene's data, or None without one."""
-    if not scene.has_workpiece:
-        return None
-    d, L = scene.data, scene.length
-    x = d.xpos[scene.workpiece_body]
-    rot = d.xmat[scene.workpiece_body].reshape(3, 3)
-    return np.array([x[0] / L, x[2] / L, math.atan2(rot[0, 2], rot[0, 0])])
+def finger_contact(scene: Scene, f: int, Fw, point, pen: float, nodes, phi, mu_contact: float,
+                   m0: float | None = None) -> FingerContact:
+    """Theory-frame reading of the workpiece's world force ``Fw`` on finger ``f`` acting at ``point``.
 
-
-def finger_contact(scene: Scene, f: int, Fw, point, pen: float, nodes, phi, mu_contact: float) -> FingerContact:
-    """Theory-frame reading of the workpiece's world force ``Fw`` on finger ``f`` acting at ``point``."""
+    ``m0``: the forces' moment about the finger's base in its frame (over ``rho g l^2``) when they
+    act at several points; the couple about the contact's centreline point is ``m0 - c x F``.
+    """
     L, W, n = scene.length, scene.force_scale, scene.n
     F = np.array([scene.mirror[f] * Fw[0], Fw[2]]) / W
     p2 = np.array([scene.mirror[f] * point[0], point[2]]) / L
@@ -180,6 +176,7 @@ def finger_contact(scene: Scene, f: int, Fw, point, pen: float, nodes, phi, mu_c
         e2 = np.array([-e1[1], e1[0]])
         normal, friction = float(F @ e2), float(F @ e1)
     arm = p2 - cpoint
+    moment = float(arm[0] * F[1] - arm[1] * F[0]) if m0 is None else float(m0 - (cpoint[0] * F[1] - cpoint[1] * F[0]))
     return FingerContact(
         N1=float(F[0]),
         N2=float(F[1]),
@@ -188,7 +185,7 @@ def finger_contact(scene: Scene, f: int, Fw, point, pen: float, nodes, phi, mu_c
         gamma=float(gamma),
         point=np.array(cpoint),
         theta=theta,
-        moment=float(arm[0] * F[1] - arm[1] * F[0]),
+        moment=moment,
         penetration=pen,
         required_mu=abs(friction) / normal if normal > 0 else math.inf,
         required_mu_contact=mu_contact,
@@ -237,11 +234,13 @@ def read_state(scene: Scene, d, *, held: bool, method: str, residual: float, con
         if not cons:
             continue
         Fw, point, wsum, pen, fn, ft = np.zeros(3), np.zeros(3), 0.0, 0.0, 0.0, np.zeros(2)
+        applied = []  # (world force on the finger, world point) of every force of this contact
         for i in cons:
             fc = np.zeros(6)
             mujoco.mj_contactForce(m, d, i, fc)
             fw = -(np.asarray(d.contact.frame[i]).reshape(3, 3).T @ fc[:3])  # on the finger (geom1)
             Fw += fw
+            applied.append((fw, np.asarray(d.contact.pos[i])))
             w = max(float(np.linalg.norm(fw)), 1e-300)
             point += w * np.asarray(d.contact.pos[i])
             wsum += w
@@ -250,11 +249,16 @@ def read_state(scene: Scene, d, *, held: bool, method: str, residual: float, con
             ft += fc[1:3]
         point /= wsum
         if friction is not None:
-            extra_f, mu = friction(f)
-            Fw += extra_f
+            stuck, mu = friction(f)
+            for fw, at in stuck:
+                Fw += fw
+                applied.append((fw, at))
         else:
             mu = float(np.linalg.norm(ft)) / fn if fn > 0 else math.inf
-        contacts.append(finger_contact(scene, f, Fw, point, pen, nodes, phi, mu))
+        # moment about the origin in the finger's frame (x mirrored, z up), over rho g l^2
+        mir = scene.mirror[f]
+        m0 = sum((mir * at[0] * fw[2] - at[2] * mir * fw[0]) for fw, at in applied) / (L * scene.force_scale)
+        contacts.append(finger_contact(scene, f, Fw, point, pen, nodes, phi, mu, m0))
         pen_max = max(pen_max, pen)
     return SettledState(
         grip=scene.grip, links=n, fingers=scene.fingers, joint_angles=q, link_angles=phi, nodes=nodes,

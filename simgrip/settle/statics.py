@@ -23,11 +23,12 @@ import mujoco
 import numpy as np
 
 from simgrip.sim.checks import active_warnings
+from simgrip.sim.contacts import normal_force, pair_contacts
 from simgrip.sim.scene import Scene
 from simgrip.settle.state import SettleError
 
 __all__ = ["CONTACT_IMPEDANCE", "CONTACT_STIFFNESS", "RestResidual", "Statics", "Stick", "dof_scales",
-           "static_residual", "sync_scene"]
+           "static_residual", "sync_scene", "centreline_point"]
 
 #: Contact impedance during settle (MuJoCo's maximum is 0.9999).
 CONTACT_IMPEDANCE = 0.9999
@@ -237,24 +238,6 @@ def check_warnings(d) -> None:
         raise SettleError(f"settle diverged (MuJoCo warnings {', '.join(warn)})")
 
 
-def pair_contacts(d, g1: int, g2: int) -> list[int]:
-    return [i for i in range(d.ncon) if {int(d.contact.geom1[i]), int(d.contact.geom2[i])} == {g1, g2}]
-
-
-def normal_force(m, d, i) -> float:
-    f = np.zeros(6)
-    mujoco.mj_contactForce(m, d, i, f)
-    return float(f[0])
-
-
-def contact_world_force(m, d, i) -> np.ndarray:
-    """World force that geom1 (finger) receives from geom2 (workpiece) in contact ``i``."""
-    f = np.zeros(6)
-    mujoco.mj_contactForce(m, d, i, f)
-    frame = np.asarray(d.contact.frame[i]).reshape(3, 3)
-    return -(frame.T @ f[:3])
-
-
 def sync_scene(scene: Scene) -> None:
     """Bring the scene's data to its qpos: ``mj_forward``, or positions only without contact pairs.
 
@@ -267,3 +250,14 @@ def sync_scene(scene: Scene) -> None:
         mujoco.mj_comPos(m, d)
     else:
         mujoco.mj_forward(m, d)
+
+
+def centreline_point(m, d, geom: int, point) -> np.ndarray:
+    """The point of a finger geom's centreline nearest ``point``: a sphere's centre, a capsule's axis."""
+    c = np.array(d.geom_xpos[geom])
+    if int(m.geom_type[geom]) == int(mujoco.mjtGeom.mjGEOM_CAPSULE):
+        axis = np.asarray(d.geom_xmat[geom]).reshape(3, 3)[:, 2]
+        half = float(m.geom_size[geom][1])
+        c = c + min(max(float(axis @ (np.asarray(point) - c)), -half), half) * axis
+    return c
+
