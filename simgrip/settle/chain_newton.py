@@ -29,7 +29,8 @@ from simgrip.settle.banded import solve_bordered
 from simgrip.settle.chain_model import ChainModel
 from simgrip.settle.newton import FLOOR_ULPS, PEN_MAX, Newton
 from simgrip.settle.state import SettleError
-from simgrip.settle.statics import pair_contacts, sync_scene
+from simgrip.settle.statics import sync_scene
+from simgrip.sim.contacts import pair_contacts
 from simgrip.sim.scene import Scene
 
 __all__ = ["ChainNewton"]

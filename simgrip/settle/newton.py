@@ -34,7 +34,8 @@ import numpy as np
 
 from simgrip.settle.state import SettledState, SettleError, read_state
 from simgrip.settle.statics import (CONTACT_STIFFNESS, Statics, Stick, centreline_point, check_warnings,
-                                    normal_force, pair_contacts, sync_scene)
+                                    sync_scene)
+from simgrip.sim.contacts import normal_force, pair_contacts
 from simgrip.sim.scene import Scene
 
 __all__ = ["FLOOR_ULPS", "Newton", "PEN_MAX", "SOLVE_ITERS", "read_newton"]

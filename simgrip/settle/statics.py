@@ -23,7 +23,6 @@ import mujoco
 import numpy as np
 
 from simgrip.sim.checks import active_warnings
-from simgrip.sim.contacts import normal_force, pair_contacts
 from simgrip.sim.scene import Scene
 from simgrip.settle.state import SettleError
 

@@ -15,7 +15,7 @@ from __future__ import annotations
 import mujoco
 import numpy as np
 
-__all__ = ["SCENE_SOLIMP", "SCENE_SOLREF", "add_pair", "contact_world_force", "normal_force", "pair_contacts"]
+__all__ = ["SCENE_SOLIMP", "SCENE_SOLREF", "add_pair", "normal_force", "pair_contacts"]
 
 #: Contact softness of the scenes' finger-workpiece pairs (stiff: penetration ~1e-5 l at rest).
 SCENE_SOLREF = (0.002, 1.0)
@@ -49,11 +49,3 @@ def normal_force(model: mujoco.MjModel, data: mujoco.MjData, i: int) -> float:
     f = np.zeros(6)
     mujoco.mj_contactForce(model, data, i, f)
     return float(f[0])
-
-
-def contact_world_force(model: mujoco.MjModel, data: mujoco.MjData, i: int) -> np.ndarray:
-    """World force [N] that geom1 of contact ``i`` receives from geom2."""
-    f = np.zeros(6)
-    mujoco.mj_contactForce(model, data, i, f)
-    frame = np.asarray(data.contact.frame[i]).reshape(3, 3)
-    return -(frame.T @ f[:3])
