@@ -21,6 +21,11 @@ from gymnasium import spaces
 from gymnasium.error import ResetNeeded
 
 from simgrip.chain import check_links
+from simgrip.envs.arguments import check_bool as _bool
+from simgrip.envs.arguments import check_int as _int
+from simgrip.envs.arguments import check_number as _num
+from simgrip.envs.arguments import check_positive as _pos
+from simgrip.envs.arguments import check_range as _range
 from simgrip.envs.pick_model import build_pick_model
 from simgrip.params import DimensionlessParams, PhysicalParams
 from simgrip.sim.checks import PhysicsError, check_invalid_state, clear_warnings, invalid_state
