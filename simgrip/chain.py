@@ -46,7 +46,7 @@ def check_links(n) -> int:
     """Return ``n`` as an int, or raise ``ValueError`` naming ``links`` if it is unusable."""
     try:
         ni = int(n)
-    except (TypeError, ValueError):
+    except (TypeError, ValueError, OverflowError):  # OverflowError: int(inf)
         raise ValueError(f"links must be an integer >= {MIN_LINKS}, got {n!r}") from None
     if ni != n or ni < MIN_LINKS:
         raise ValueError(f"links must be an integer >= {MIN_LINKS}, got {n!r}")
