@@ -36,7 +36,7 @@ import numpy as np
 
 from simgrip.profiles import CurvatureProfile, as_profile
 
-__all__ = ["ChainSprings", "chain_springs", "MIN_LINKS", "check_links", "link_positions"]
+__all__ = ["ChainSprings", "chain_springs", "springs_of", "MIN_LINKS", "check_links", "link_positions"]
 
 #: Fewest links a finger may have (one clamp hinge plus one interior hinge).
 MIN_LINKS = 2
@@ -85,8 +85,11 @@ def chain_springs(profile: CurvatureProfile | float, n: int) -> ChainSprings:
     See the module docstring for the derivation; ``rest[0]`` integrates the
     curvature over ``[0, ds/2]`` and ``rest[j]`` over ``[(j-1/2) ds, (j+1/2) ds]``.
     """
-    n = check_links(n)
-    prof = as_profile(profile)
+    return springs_of(as_profile(profile), check_links(n))
+
+
+def springs_of(prof: CurvatureProfile, n: int) -> ChainSprings:
+    """:func:`chain_springs` for an already checked profile and link count (no checks)."""
     ds = 1.0 / n
     nodes = np.arange(n) * ds
     lo = np.maximum(nodes - 0.5 * ds, 0.0)

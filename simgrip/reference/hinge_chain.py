@@ -42,7 +42,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from simgrip.chain import ChainSprings, chain_springs, check_links, link_positions
+from simgrip.chain import ChainSprings, check_links, link_positions, springs_of
 from simgrip.params import DimensionlessParams, _finite, check_grip
 from simgrip.profiles import as_profile
 from simgrip.reference.arguments import check_count, check_gamma, check_gravity, check_params
@@ -115,15 +115,6 @@ class ChainEquilibrium(DiscreteEquilibrium):
             return None
         return min(int(math.floor(self.gamma * self.n)), self.n - 1)
 
-    @property
-    def contact_theta(self) -> float | None:
-        """Tangent angle at the contact (the carrying link's angle); None for the free rod."""
-        if self.contact is None:
-            return None
-        if self.grip == "III":
-            return float(self.link_angles[self.contact_link])
-        return float(self.link_angles[-1])
-
     def theta_at(self, s) -> np.ndarray:
         """Link angles, read as samples at link midpoints, interpolated linearly (``theta(0) = 0``)."""
         sm = np.concatenate([[0.0], (np.arange(self.n) + 0.5) / self.n, [1.0]])
@@ -161,7 +152,7 @@ def _chain_problem(grip, params, springs: ChainSprings, gamma, contact_moment, g
 
 def _springs_for(profile, n, springs):
     if springs is None:
-        return chain_springs(profile, n)
+        return springs_of(profile, n)
     if not isinstance(springs, ChainSprings) or springs.n != n:
         raise ValueError(f"springs must be a ChainSprings with n = {n}")
     return springs

@@ -40,7 +40,7 @@ sits at ``I ds`` (reported as ``solution.gamma``), an ``O(ds)`` shift.
 
 The scheme is the standard symmetric three-point scheme with a half-cell
 Neumann end: ``O(ds^2)`` in the tip/contact position, the angles and the
-contact force (measured in ``tests/test_nodal.py``).  The stability eigenvalue
+contact force (measured in ``tests/test_discrete.py``).  The stability eigenvalue
 is normalised with the trapezoid weights (see :mod:`simgrip.reference.stability`);
 :func:`stability_eigenvalue` evaluates it at an elastica solution.
 
@@ -118,15 +118,6 @@ class DiscreteSolution(DiscreteEquilibrium):
     def ds(self) -> float:
         return 1.0 / self.K
 
-    @property
-    def contact_theta(self) -> float | None:
-        """Tangent angle at the contact (None for the free rod)."""
-        if self.contact is None:
-            return None
-        if self.grip == "III":
-            return float(self.theta[int(round(self.gamma * self.K))])
-        return float(self.theta[-1])
-
     def theta_at(self, s) -> np.ndarray:
         """Piecewise-linear interpolation of the nodal angles."""
         return np.interp(s, self.s, self.theta)
@@ -150,8 +141,11 @@ def _nodal_problem(grip, params, prof, K, gamma, gravity=1.0):
         c0 = wt[0] - 0.5 * params.b
     elif grip == "III":
         I = int(round(gamma * K))
-        if I < 1:
-            raise ValueError(f"K = {K} is too coarse for gamma = {gamma!r} (the contact node would be the clamp)")
+        if I * ds <= 0.5 * params.b:
+            raise ValueError(
+                f"K = {K} is too coarse for gamma = {gamma!r}: the contact node round(gamma K) = {I} sits at "
+                f"s = {I * ds:g}, which cannot reach X = b/2 = {0.5 * params.b:g}"
+            )
         wc = np.zeros(K + 1)
         wc[:I] = ds
         wc[0] = wc[I] = 0.5 * ds
