@@ -59,8 +59,9 @@ def _stability(state, grip, params, profile) -> float:
 def settled_record(state, params: DimensionlessParams, profile=None) -> dict:
     """Record of a settled state in the fields of :func:`simgrip.report.elastica_record`.
 
-    Adds ``wall_time_s``, ``steps``, ``held``, ``penetration`` (over ``l``),
-    ``residual``, ``links``, ``method`` and ``warnings``.  ``feasible`` is the
+    Adds ``wall_time_s`` (the settle alone), ``steps``, ``held``, ``penetration`` (over ``l``),
+    ``residual``, ``links`` (the finest used), ``method``, ``warnings``, ``extrapolated`` and
+    ``error_estimate`` (``settle(..., target_error=E)``: tip over ``l``, forces relative; else None).  ``feasible`` is the
     simulation's verdict: the workpiece is held (and, Grip III, no part of the
     rod beyond the contact reaches the workpiece: condition (23)).  ``min_eigenvalue`` is the hinge chain's stability
     eigenvalue at this shape when ``profile`` is given.
@@ -87,6 +88,8 @@ def settled_record(state, params: DimensionlessParams, profile=None) -> dict:
         "converged": bool(state.converged),
         "method": state.method,
         "warnings": list(state.warnings),
+        "extrapolated": bool(state.extrapolated),
+        "error_estimate": state.error_estimate,
         "params": {"D": params.D, "M": params.M, "b": params.b, "mu_s": params.mu_s, "gamma": params.gamma},
     }
     if grip == "III" and c is not None:

@@ -14,6 +14,7 @@ Keys common to every grip: ``grip``, ``tip`` ``[x, z]``, ``normal_force``,
 from __future__ import annotations
 
 import math
+import time
 
 import numpy as np
 
@@ -80,16 +81,21 @@ def solve_record(grip: str, params: DimensionlessParams, profile, *, K: int = 12
     ``min_eigenvalue`` is :func:`simgrip.reference.stability_eigenvalue` of the
     paper's nodal scheme with ``K`` elements at the BVP solution: the smallest
     eigenvalue of the projected Hessian in the ``L^2`` metric (over ``rho g l``),
-    the same normalisation as the hinge chain's.
+    the same normalisation as the hinge chain's.  ``wall_time_s`` is the BVP solve alone
+    (no start-up, no stability check), comparable with ``simulate``'s settle time.
     """
     from simgrip.reference import DiscreteError, elastica, stability_eigenvalue
 
+    t0 = time.perf_counter()
     sol = elastica.solve(grip, params, profile)
+    wall = time.perf_counter() - t0
     try:
         lam = stability_eigenvalue(sol, K)
     except DiscreteError:
         lam = math.nan
-    return elastica_record(sol, lam)
+    rec = elastica_record(sol, lam)
+    rec["wall_time_s"] = wall
+    return rec
 
 
 def _fmt(value) -> str:

@@ -34,6 +34,7 @@ from simgrip.settle.dynamics import DYN_TOL, settle_dynamics
 from simgrip.settle.naive import naive_relax, naive_settle
 from simgrip.settle.newton import Newton, SOLVE_ITERS, read_newton
 from simgrip.settle.state import FingerContact, SettledState, SettleError, finger_tip
+from simgrip.settle.target import check_target_error, settle_to_error
 from simgrip.settle.statics import (RestResidual, configure_statics, dof_scales, restore_options, save_options,
                                     static_residual, sync_scene)
 from simgrip.sim.checks import clear_warnings
@@ -84,9 +85,16 @@ def _check_settle_args(scene, tol, max_steps):
     return tol, int(max_steps)
 
 
-def settle(scene: Scene, **kw) -> SettledState:  # signature and docstring: _settle's (functools.wraps below)
+def settle(scene: Scene, *, target_error=None, **kw) -> SettledState:  # docstring: _settle's (functools.wraps)
     with blas_threads(1):  # small dense Newton systems: multithreaded OpenBLAS only spins (simgrip.threads)
-        return _settle(scene, **kw)
+        if target_error is None:
+            return _settle(scene, **kw)
+        if not isinstance(scene, Scene):
+            raise ValueError(f"scene must be a simgrip.sim.scene.Scene, got {type(scene).__name__}")
+        e = check_target_error(target_error, scene.grip)
+        if kw.get("warm_start") is not None:
+            raise ValueError("target_error: warm_start is not supported (each resolution settles from scratch)")
+        return settle_to_error(scene, e, _settle, **kw)
 
 
 def _settle(
@@ -126,6 +134,10 @@ def _settle(
         sticking constraints.  ``"dynamics"``: over-damped MuJoCo dynamics
         with MuJoCo's own contact and friction (see :class:`Dyn` and the
         module docstring); ``steps`` counts physics steps.
+    target_error : float, optional
+        Settle to this error instead of at the scene's ``n``: three resolutions,
+        Richardson extrapolation and an error estimate (:mod:`.target`; free rod
+        and Grips I/II; ``links`` of the result is the finest used).
     contact : {"point", "surface"}, optional
         Where the sticking friction acts.  ``"point"`` (default for
         ``"newton"``): on the finger's centreline, the paper's point contact, so

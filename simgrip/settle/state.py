@@ -95,6 +95,10 @@ class SettledState:
     timestep: float = 0.0
     #: Grip III condition (23): no link beyond the contact reaches the workpiece's bottom face.
     tip_clear: bool = True
+    #: ``settle(..., target_error=E)``: tip and contact forces are Richardson-extrapolated (:mod:`.target`).
+    extrapolated: bool = False
+    #: Estimated error of the extrapolated values: ``{"tip": over l, "force": relative}``; None otherwise.
+    error_estimate: dict | None = None
     #: Grips I/II: the state has the shape of the grip asked for (:func:`simgrip.validity.check_grip_shape`).
     grip_matched: bool = True
     #: Conditions the state violates that the solve itself does not enforce (e.g. condition (23)).
