@@ -38,8 +38,8 @@ EXIT_USAGE = 2
 EXIT_INTERRUPTED = 130  # 128 + SIGINT, what shells report for a Ctrl-C
 #: Most nodes of solve's discrete stability check: its error falls as 1/K^2, ~1e-8 relative here, in about 2 s.
 MAX_K = 16384
-#: Links above which simulate/compare say on stderr that the settle takes a while.
-SLOW_LINKS = 256
+#: Links above which simulate/compare say on stderr that the settle takes a while (~3 s at 512 links).
+SLOW_LINKS = 512
 #: Output options and whether each names a folder (True) or a file (False), checked before any work.
 OUTPUT_OPTIONS = {"out": ("--out", True), "png": ("--png", False), "gif": ("--gif", False)}
 
@@ -89,6 +89,9 @@ def build_parser() -> argparse.ArgumentParser:
             help="settle method: newton (static solve, residual 1e-10) or dynamics "
             "(over-damped MuJoCo dynamics with MuJoCo's own friction) [default newton]",
         )
+        p.add_argument("--target-error", type=float, default=None,
+                       help="settle to this error (tip over l, forces relative) by Richardson extrapolation over "
+                       "resolutions it chooses (free, I, II; --links is then ignored)")
 
     p = sub.add_parser("bench", help="run time against error, naive vs settle vs minimiser vs BVP, what skipping buys")
     from simgrip.harness import bench as _bench  # light: matplotlib/mujoco are imported inside its functions
@@ -145,7 +148,7 @@ def _links(value) -> int:
             f"already below the contact tolerance; see simgrip.params)"
         )
     if n > SLOW_LINKS:
-        print(f"simgrip: {n} links per finger: building and settling may take minutes", file=sys.stderr, flush=True)
+        print(f"simgrip: {n} links per finger: building and settling take several seconds", file=sys.stderr, flush=True)
     return n
 
 
@@ -170,7 +173,8 @@ def _cmd_simulate(args) -> dict:
 
     grip = check_grip(args.grip)
     params, profile, links = _params(args), _profile(args, grip), _links(args.links)
-    return settled_record(simulate(grip, params, profile, links, method=args.method), params, profile)
+    return settled_record(simulate(grip, params, profile, links, method=args.method, target_error=args.target_error),
+                          params, profile)
 
 
 def _cmd_compare(args) -> str:
@@ -179,7 +183,8 @@ def _cmd_compare(args) -> str:
     from simgrip.report import format_comparison
 
     grip = check_grip(args.grip)
-    result = compare(grip, _params(args), _profile(args, grip), _links(args.links), method=args.method)
+    result = compare(grip, _params(args), _profile(args, grip), _links(args.links), method=args.method,
+                     target_error=args.target_error)
     return json.dumps(to_jsonable(result), allow_nan=False) if args.json else format_comparison(result)
 
 
