@@ -59,13 +59,11 @@ _SIM_LABEL = "MuJoCo chain, n = {links}"
 
 
 def _sim_scene(grip, params, kappa, links, gravity):
-    import mujoco
-
     from simgrip.scenes import build_scene
 
     scene = build_scene(grip, params, Uniform(float(kappa)), links)
-    if not gravity:
-        scene.model.opt.disableflags |= int(mujoco.mjtDisableBit.mjDSBL_GRAVITY)
+    if not gravity:  # the model's own gravity vector: what MuJoCo and the settle's statics both read
+        scene.model.opt.gravity[:] = 0.0
     return scene
 
 
@@ -203,7 +201,7 @@ def simulation_overlay(name, *, links: int = 16, params: DimensionlessParams | N
       the simulated shape: the box is not a collider for the finger's tip);
       ``"N1"``, ``"N2"``, ``"n"``, ``"f_signed"``, ``"gamma"``,
       ``"contact_moment"`` (and ``"x_gamma"`` for Grip III) the raw contact;
-    * Fig. 6: ``"a"`` (gravity off, ``mjDSBL_GRAVITY``) and ``"b"`` (gravity
+    * Fig. 6: ``"a"`` (gravity off: the model's gravity set to 0) and ``"b"`` (gravity
       on), each with ``"tip_x"``, ``"tip_z"``, ``"shapes"``.
 
     Shapes are the chain's ``links + 1`` nodes, finger 0's frame (``x`` along
