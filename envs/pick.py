@@ -536,9 +536,9 @@ class PickEnv(gym.Env):
             for (g1, g2), adr, n_x in zip(geoms, adrs, nx):
                 f = fog[g2] if g1 == bg else (fog[g1] if g2 == bg else -1)
                 if f >= 0:
-                    fn = float(ef[adr])
+                    fn, t1, t2 = ef[adr:adr + 3].tolist()
                     out[2 * f] += fn
-                    out[2 * f + 1] += math.hypot(ef[adr + 1], ef[adr + 2])
+                    out[2 * f + 1] += math.hypot(t1, t2)
                     out[4 + f] += fn * abs(n_x)
             return out
         cf = self._cf
@@ -550,10 +550,6 @@ class PickEnv(gym.Env):
                 out[2 * f + 1] += math.hypot(cf[1], cf[2])
                 out[4 + f] += float(cf[0]) * abs(n_x)
         return out
-
-    def _action_units(self, kappa):
-        lo, hi = self.kappa_range
-        return 2.0 * (kappa - lo) / (hi - lo) - 1.0
 
     def _get_obs(self, forces):
         d = self.data
@@ -567,8 +563,10 @@ class PickEnv(gym.Env):
         t0, t1 = self._tips
         tilt = math.atan2(2.0 * (qx * qz + qw * qy), 1.0 - 2.0 * (qx * qx + qy * qy))
         fu = self._force_unit
+        lo, hi = self.kappa_range  # curvatures in action units (the action that commands them)
+        units = [2.0 * (k - lo) / (hi - lo) - 1.0 for k in self._kappa_cmd.tolist() + self._kappa.tolist()]
         obs = np.concatenate((
-            (palm_z * inv_l,), self._action_units(self._kappa_cmd), self._action_units(self._kappa),
+            (palm_z * inv_l,), units,
             (qpos[self._fq].reshape(2, self.n) @ self._shape_matrix_t).ravel(),
             (xpos[t0, 0] * inv_l, (xpos[t0, 2] - palm_z) * inv_l, xpos[t1, 0] * inv_l, (xpos[t1, 2] - palm_z) * inv_l,
              bx * inv_l, (bz - palm_z) * inv_l, tilt, vx * inv_l, (vz - palm_v) * inv_l, wy * SPIN_TIME,
@@ -651,7 +649,8 @@ class PickEnv(gym.Env):
         cmd[0], cmd[1] = k0, k1
         # pneumatic lag: exact first-order response over one control step, rest angles held within it
         kap = self._kappa
-        kap += self._lag_alpha * (cmd - kap)
+        c0, c1 = kap.tolist()
+        kap[0], kap[1] = c0 + self._lag_alpha * (k0 - c0), c1 + self._lag_alpha * (k1 - c1)
         self._set_kappa(kap)
         self._palm_target = min(max(self._palm_target + a[-1] * self.palm_speed * self.dt,
                                     self.palm_range[0]), self.palm_range[1])
