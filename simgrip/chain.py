@@ -42,14 +42,14 @@ __all__ = ["ChainSprings", "chain_springs", "springs_of", "MIN_LINKS", "check_li
 MIN_LINKS = 2
 
 
-def check_links(n) -> int:
-    """Return ``n`` as an int, or raise ``ValueError`` naming ``links`` if it is unusable."""
+def check_links(n, name: str = "links") -> int:
+    """Return ``n`` as an int, or raise ``ValueError`` naming ``name`` if it is not an integer >= 2."""
     try:
         ni = int(n)
     except (TypeError, ValueError, OverflowError):  # OverflowError: int(inf)
-        raise ValueError(f"links must be an integer >= {MIN_LINKS}, got {n!r}") from None
+        raise ValueError(f"{name} must be an integer >= {MIN_LINKS}, got {n!r}") from None
     if ni != n or ni < MIN_LINKS:
-        raise ValueError(f"links must be an integer >= {MIN_LINKS}, got {n!r}")
+        raise ValueError(f"{name} must be an integer >= {MIN_LINKS}, got {n!r}")
     return ni
 
 

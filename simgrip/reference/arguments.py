@@ -13,9 +13,11 @@ import math
 
 import numpy as np
 
-from simgrip.params import DimensionlessParams, _finite
+from simgrip.chain import check_links
+from simgrip.params import DimensionlessParams, _finite, check_grip
+from simgrip.profiles import CurvatureProfile, as_profile
 
-__all__ = ["check_count", "check_failures", "check_gamma", "check_gravity", "check_params", "check_tip_load", "check_tol"]
+__all__ = ["check_count", "check_discrete", "check_failures", "check_gamma", "check_gravity", "check_params", "check_tip_load", "check_tol"]
 
 
 def check_params(params) -> DimensionlessParams:
@@ -26,14 +28,8 @@ def check_params(params) -> DimensionlessParams:
 
 
 def check_count(name: str, value) -> int:
-    """An element or link count: an integer >= 2."""
-    try:
-        v = int(value)
-    except (TypeError, ValueError):
-        raise ValueError(f"{name} must be an integer >= 2, got {value!r}") from None
-    if v != value or v < 2:
-        raise ValueError(f"{name} must be an integer >= 2, got {value!r}")
-    return v
+    """An element or link count named ``name``: an integer >= 2."""
+    return check_links(value, name)
 
 
 def check_gamma(gamma, params: DimensionlessParams) -> float:
@@ -81,3 +77,11 @@ def check_failures(failures) -> str:
     if failures not in ("raise", "skip"):
         raise ValueError(f"failures must be 'raise' or 'skip', got {failures!r}")
     return failures
+
+
+def check_discrete(grip, params, profile, count_name: str, count, gamma, gravity
+                   ) -> tuple[str, DimensionlessParams, CurvatureProfile, int, float, float]:
+    """The common arguments of the discrete solvers: ``(grip, params, profile, count, gamma, gravity)``."""
+    grip, params = check_grip(grip), check_params(params)
+    return (grip, params, as_profile(profile), check_count(count_name, count),
+            check_gamma(gamma, params), check_gravity(gravity))

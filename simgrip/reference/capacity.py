@@ -18,7 +18,7 @@ from typing import Sequence
 
 from scipy.optimize import brentq
 
-from simgrip.params import DimensionlessParams, _finite, check_grip
+from simgrip.params import DimensionlessParams, _positive, check_grip
 from simgrip.profiles import as_profile
 from simgrip.reference.arguments import check_failures, check_tol
 from simgrip.reference.bvp import BvpProblem
@@ -188,13 +188,6 @@ def track_largest_load(
         if cap.solution is not None:
             start = cap
     return out
-
-
-def _positive(name: str, value) -> float:
-    v = _finite(name, value)
-    if v <= 0:
-        raise ValueError(f"{name} must be positive, got {value!r}")
-    return v
 
 
 class _Search:

@@ -43,9 +43,8 @@ from dataclasses import dataclass
 import numpy as np
 
 from simgrip.chain import ChainSprings, check_links, link_positions, springs_of
-from simgrip.params import DimensionlessParams, _finite, check_grip
-from simgrip.profiles import as_profile
-from simgrip.reference.arguments import check_count, check_gamma, check_gravity, check_params
+from simgrip.params import DimensionlessParams, _finite
+from simgrip.reference.arguments import check_discrete
 from simgrip.reference.minimiser import (
     DiscreteEnergy,
     DiscreteEquilibrium,
@@ -178,12 +177,10 @@ def chain_energy(
     ``- M_c phi_m``.  ``gravity`` scales the rod's weight (1 = physical; 0 for
     gravity-free checks); ``springs`` overrides :func:`simgrip.chain.chain_springs`.
     """
-    grip = check_grip(grip)
-    params = check_params(params)
-    n = check_count("n", n)
-    sp = _springs_for(as_profile(profile), n, springs)
+    grip, params, prof, n, gam, grav = check_discrete(grip, params, profile, "n", n, gamma, gravity)
+    sp = _springs_for(prof, n, springs)
     cm = _finite("contact_moment", contact_moment)
-    prob, _, _ = _chain_problem(grip, params, sp, check_gamma(gamma, params), cm, check_gravity(gravity))
+    prob, _, _ = _chain_problem(grip, params, sp, gam, cm, grav)
     return energy_terms(prob, link_angles, N1, hessian)
 
 
@@ -230,14 +227,9 @@ def solve_chain(
     DiscreteError
         Newton failed to converge.
     """
-    grip = check_grip(grip)
-    params = check_params(params)
-    n = check_count("n", n)
-    prof = as_profile(profile)
-    gam = check_gamma(gamma, params)
+    grip, params, prof, n, gam, prob_gravity = check_discrete(grip, params, profile, "n", n, gamma, gravity)
     sp = _springs_for(prof, n, springs)
     cm = _finite("contact_moment", contact_moment)
-    prob_gravity = check_gravity(gravity)
     prob, unit_rest, m = _chain_problem(grip, params, sp, gam, cm, prob_gravity)
     smid = (np.arange(n) + 0.5) / n
     g0 = angles_from_guess(guess, smid, n, "n link angles")

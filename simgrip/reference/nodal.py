@@ -59,8 +59,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from simgrip.params import DimensionlessParams, check_grip
-from simgrip.profiles import as_profile
-from simgrip.reference.arguments import check_count, check_gamma, check_gravity, check_params
+from simgrip.reference.arguments import check_count, check_discrete
 from simgrip.reference.minimiser import (
     DiscreteEnergy,
     DiscreteEquilibrium,
@@ -164,14 +163,11 @@ def discrete_energy(grip, params, profile, K, theta, N1=0.0, *, gamma=None, grav
     then dropped; it must be 0).  Returns :class:`EnergyTerms` (value, gradient
     and, if ``hessian``, the Hessian ``L``).
     """
-    grip = check_grip(grip)
-    params = check_params(params)
-    K = check_count("K", K)
-    prof = as_profile(profile)
+    grip, params, prof, K, gam, grav = check_discrete(grip, params, profile, "K", K, gamma, gravity)
     th = np.asarray(theta, dtype=float)
     if th.shape == (K + 1,):
         th = th[1:]
-    prob, _, _, _ = _nodal_problem(grip, params, prof, K, check_gamma(gamma, params), check_gravity(gravity))
+    prob, _, _, _ = _nodal_problem(grip, params, prof, K, gam, grav)
     return energy_terms(prob, th, N1, hessian)
 
 
@@ -204,12 +200,7 @@ def solve_discrete(grip, params, profile, K, *, guess=None, gamma=None, gravity=
     DiscreteError
         Newton failed to converge.
     """
-    grip = check_grip(grip)
-    params = check_params(params)
-    K = check_count("K", K)
-    prof = as_profile(profile)
-    gam = check_gamma(gamma, params)
-    grav = check_gravity(gravity)
+    grip, params, prof, K, gam, grav = check_discrete(grip, params, profile, "K", K, gamma, gravity)
     prob, unit_rest, s, I = _nodal_problem(grip, params, prof, K, gam, grav)
     g0 = angles_from_guess(guess, s, K + 1, "K or K+1 nodal angles")
     if g0 is not None:
