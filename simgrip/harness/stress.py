@@ -31,9 +31,13 @@ are reported as flags rather than returned quietly:
     the centreline crosses itself (a rod curled beyond a full turn passes
     through itself: the chain has no self-collision), :func:`self_intersects`;
 ``tip_touches_workpiece``
-    Grip III: the tip (with the link radius) touches the box,
-    :func:`tip_touches_workpiece`; also ``tip_above_contact`` (the paper's
-    condition 23 violated);
+    Grip III: the rod beyond the contact reaches the box's bottom face (the
+    settle's own check, :func:`simgrip.validity.check_condition_23`: MuJoCo has
+    no contact pair there); also ``tip_above_contact`` (the tip higher than
+    the contact: the paper's condition 23 violated);
+``wrong_grip``
+    Grips I/II: the finger settled in the other grip's shape
+    (:func:`simgrip.validity.check_grip_shape`);
 ``beyond_full_turn``
     some link has turned through a full turn or more (``|phi| >= 2 pi``);
 ``penetration``
@@ -67,7 +71,6 @@ __all__ = [
     "make_cases",
     "run_case",
     "self_intersects",
-    "tip_touches_workpiece",
     "invalid_state_flags",
     "PENETRATION_TOL",
     "CASE_TIMEOUT_S",
@@ -126,47 +129,18 @@ def self_intersects(nodes) -> bool:
     return bool(np.any((d1 * d2 < 0) & (d3 * d4 < 0)))
 
 
-def _point_box_distance(p, centre, half, angle) -> float:
-    """Signed distance from a point (x, z) to a rectangle (negative inside)."""
-    c, s = math.cos(angle), math.sin(angle)
-    d = np.asarray(p, float) - np.asarray(centre, float)
-    local = np.array([c * d[0] + s * d[1], -s * d[0] + c * d[1]])
-    q = np.abs(local) - np.asarray(half, float)
-    outside = float(np.linalg.norm(np.maximum(q, 0.0)))
-    inside = float(min(max(q[0], q[1]), 0.0))
-    return outside + inside
-
-
-def tip_touches_workpiece(scene, state, finger: int = 0) -> bool:
-    """Grip III: does the finger's tip (a ball of the link radius) touch the workpiece's box?
-
-    Uses the box's half sizes and the settled workpiece pose (in the finger's
-    frame, dimensionless).  Always ``False`` for other grips.
-    """
-    if scene.grip != "III" or state.workpiece_pose is None:
-        return False
-    L = scene.length
-    half = np.array([scene.box_half[0], scene.box_half[2]]) / L
-    x, z, ang = state.workpiece_pose
-    centre = np.array([scene.mirror[finger] * x, z])
-    tip = np.asarray(state.tip[finger], float)
-    return _point_box_distance(tip, centre, half, scene.mirror[finger] * ang) <= scene.r_link
-
-
 def invalid_state_flags(scene, state, *, penetration_tol: float = PENETRATION_TOL) -> dict:
     """Physically invalid features of a settled state: name -> bool (see the module docstring)."""
     flags = {
         "self_intersection": any(self_intersects(state.nodes[f]) for f in range(state.fingers)),
         "penetration": bool(state.penetration > penetration_tol),
-        "tip_touches_workpiece": False,
+        "tip_touches_workpiece": not state.tip_clear,  # the settle's own check (simgrip.validity)
         "tip_above_contact": False,
         "beyond_full_turn": bool(np.max(np.abs(state.link_angles)) >= 2 * math.pi),
+        "wrong_grip": not state.grip_matched,
     }
-    if scene.grip == "III" and state.held:
-        flags["tip_touches_workpiece"] = any(tip_touches_workpiece(scene, state, f) for f in range(state.fingers))
-        c = state.contact
-        if c is not None:
-            flags["tip_above_contact"] = bool(state.tip[0][1] >= c.point[1])
+    if scene.grip == "III" and state.held and state.contact is not None:
+        flags["tip_above_contact"] = bool(state.tip[0][1] >= state.contact.point[1])
     return flags
 
 
