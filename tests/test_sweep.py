@@ -245,7 +245,7 @@ def test_a_worker_killed_mid_sweep_loses_and_doubles_nothing(cli_cluster, tmp_pa
 
 def test_resume_after_ctrl_c_recomputes_nothing_saved(tmp_path):
     out = tmp_path / "r"
-    cmd = [sys.executable, "-m", "simgrip.cli", "sweep", "I", "--kappa", "-8", "-3", "40", "--links", str(LINKS),
+    cmd = [sys.executable, "-m", "simgrip.cli", "sweep", "I", "--kappa", "-7", "-3", "30", "--links", str(LINKS),
            "--out", str(out), "--jobs", "1", "--no-progress"]
     proc = subprocess.Popen(cmd, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
     try:
@@ -267,19 +267,19 @@ def test_resume_after_ctrl_c_recomputes_nothing_saved(tmp_path):
     for f in (out / PARTIAL).glob("batch-*.csv"):
         for r in read_csv(f):
             saved[r["index"]] = r
-    assert 0 < len(saved) < 40
+    assert 0 < len(saved) < 30
 
-    grid = make_grid("I", kappa=(-8, -3, 40), links=LINKS)
+    grid = make_grid("I", kappa=(-7, -3, 30), links=LINKS)
     # without --resume the unfinished sweep is refused, naming --resume; a different grid is refused too
     with pytest.raises(ValueError, match="--resume"):
         run_sweep(grid, out=out, options=ONE)
     with pytest.raises(ValueError, match="different sweep"):
-        run_sweep(make_grid("I", kappa=(-8, -3, 41), links=LINKS), out=out, options=ONE, resume=True)
+        run_sweep(make_grid("I", kappa=(-7, -3, 31), links=LINKS), out=out, options=ONE, resume=True)
     computed = []
     res = run_sweep(grid, out=out, options=ONE, resume=True, on_record=lambda r: computed.append(r["index"]))
     assert not set(computed) & set(saved)  # nothing saved was recomputed ...
-    assert sorted(computed + list(saved)) == list(range(40))  # ... and nothing is missing
-    assert res.resumed == len(saved) and res.computed == 40 - len(saved)
+    assert sorted(computed + list(saved)) == list(range(30))  # ... and nothing is missing
+    assert res.resumed == len(saved) and res.computed == 30 - len(saved)
     for i, r in saved.items():
         assert res.rows[i] == {"index": i, **{c: r[c] for c in COLUMNS}}  # saved rows, times included
     # the resumed rows are the points' own answers
@@ -288,5 +288,40 @@ def test_resume_after_ctrl_c_recomputes_nothing_saved(tmp_path):
         assert same_results([res.rows[i]], [fresh])
     assert not (out / PARTIAL).exists()
     meta = json.loads((out / "sweep.json").read_text())
-    assert meta["counts"]["resumed"] == len(saved) and meta["counts"]["points"] == 40
+    assert meta["counts"]["resumed"] == len(saved) and meta["counts"]["points"] == 30
     assert all(math.isfinite(r["kappa"]) for r in read_csv(out / "sweep.csv"))
+
+
+def test_scheduler_gone_leaves_a_resumable_sweep(tmp_path):
+    from simgrip.harness.cli_cluster import dask_cli_cluster
+    from simgrip.harness.runner import RunnerError
+
+    grid = make_grid("I", kappa=(-7, -3, 3), M=(2, 8, 2), links=LINKS)
+    out = tmp_path / "g"
+    with dask_cli_cluster(1) as (address, scheduler_file, worker):
+        sched = [int(p) for p in os.listdir("/proc") if p.isdigit() and _cmdline_has(int(p), b"scheduler", scheduler_file)]
+        assert len(sched) == 1
+        got = []
+
+        def on_record(rec):
+            got.append(rec["index"])
+            if len(got) == 1:
+                os.kill(sched[0], signal.SIGKILL)
+
+        with pytest.raises(RunnerError):
+            run_sweep(grid, out=out, options=RunnerOptions(scheduler=address, progress=False), batch_size=1,
+                      on_record=on_record)
+    assert not (out / "sweep.csv").exists()
+    saved = [r["index"] for f in (out / PARTIAL).glob("batch-*.csv") for r in read_csv(f)]
+    assert sorted(saved) == sorted(got) and len(saved) >= 1
+    res = run_sweep(grid, out=out, options=ONE, resume=True)
+    assert res.resumed == len(saved) and res.computed == grid.size - len(saved)
+    assert same_results(res.rows, run_sweep(grid, options=ONE).rows)
+
+
+def _cmdline_has(pid: int, word: bytes, scheduler_file: str) -> bool:
+    try:
+        cmd = Path(f"/proc/{pid}/cmdline").read_bytes()
+    except OSError:
+        return False
+    return word in cmd and scheduler_file.encode() in cmd and b"worker" not in cmd

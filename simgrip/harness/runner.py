@@ -348,6 +348,7 @@ class _Remote:
         from distributed import Client
 
         where = options.scheduler if options.scheduler is not None else f"scheduler file {options.scheduler_file}"
+        self.where = where
         try:
             if options.scheduler is not None:
                 self.client = Client(options.scheduler, timeout=CONNECT_TIMEOUT_S, set_as_default=False)
@@ -372,6 +373,28 @@ class _Remote:
 
 
 def _run_dask(fn, items, options, batch_size, on_result, bar) -> list:
+    with _quiet_dask_logs():
+        return _run_dask_quietly(fn, items, options, batch_size, on_result, bar)
+
+
+@contextlib.contextmanager
+def _quiet_dask_logs():
+    """distributed logs a lost scheduler or worker with tracebacks; the runner says it once (RunnerError)."""
+    import logging
+
+    loggers = [logging.getLogger(name) for name in ("distributed", "distributed.client", "distributed.nanny",
+                                                     "distributed.scheduler", "distributed.worker")]
+    saved = [lg.level for lg in loggers]
+    for lg in loggers:
+        lg.setLevel(logging.CRITICAL)
+    try:
+        yield
+    finally:
+        for lg, level in zip(loggers, saved):
+            lg.setLevel(level)
+
+
+def _run_dask_quietly(fn, items, options, batch_size, on_result, bar) -> list:
     from distributed import KilledWorker, as_completed
 
     interrupted = False
@@ -395,7 +418,9 @@ def _run_dask(fn, items, options, batch_size, on_result, bar) -> list:
                     raise RunnerError(f"a batch killed {type(exc).__name__}: {exc}") from None
                 raise exc.with_traceback(fut.traceback())
             if fut.status != "finished":
-                raise RunnerError(f"the Dask cluster lost a batch ({fut.status}); scheduler gone or workers failing")
+                where = f"at {env.where} " if isinstance(env, _Remote) else ""
+                raise RunnerError(f"the Dask cluster {where}went away (scheduler gone or its workers lost: a batch "
+                                  f"was {fut.status})")
             try:
                 chunk = fut.result()
             except Exception as exc:  # cancelled/lost: the cluster's failure, not fn's

@@ -19,6 +19,7 @@ from __future__ import annotations
 import csv
 import io
 import json
+import math
 import os
 import shutil
 import time
@@ -34,7 +35,7 @@ __all__ = ["PARTIAL", "PartialStore", "counts", "format_csv", "read_csv", "same_
 PARTIAL = ".partial"
 _BOOL = ("held", "feasible", "bvp_feasible", "agree")
 _TEXT = ("status", "message", "bvp_message")
-#: Saved points are written at least this often (seconds) while results arrive ...
+#: Saved points are written at least this often (seconds) while results arrive (the first at once) ...
 FLUSH_SECONDS = 1.0
 #: ... or when this many are waiting.
 FLUSH_POINTS = 256
@@ -103,7 +104,7 @@ class PartialStore:
         self.dir = Path(out) / PARTIAL
         self.spec = spec
         self.buffer: list[dict] = []
-        self.last_flush = time.monotonic()
+        self.last_flush = -math.inf  # the first point is saved at once: resumable from the start
         self.saved = 0
 
     def exists(self) -> bool:
