@@ -78,22 +78,20 @@ def _sweep_arrays(sols, grip: str, params: DimensionlessParams) -> dict:
     shapes = [_resample(s) for s in sols]
     out["shape_x"] = np.array([p[0] for p in shapes]).reshape(n, _N_SHAPE)
     out["shape_z"] = np.array([p[1] for p in shapes]).reshape(n, _N_SHAPE)
-    out["solver_feasible"] = np.array([bool(getattr(s, "feasible", False)) and o for s, o in zip(sols, ok)])
-    mu = params.mu_s
-    with np.errstate(invalid="ignore"):
-        if grip in ("I", "II"):
-            out["N"] = out["N1"]
-            out["required"] = np.abs(out["N2"])          # |F_f| = M
-            out["available"] = mu * out["N1"]            # mu_s N
-            out["feasible"] = ok & (out["N1"] > 0) & (out["required"] <= out["available"])
-            out["least_mu"] = np.where(out["N1"] > 0, out["required"] / out["N1"], np.nan)
-        elif grip == "III":
-            out["required"] = np.abs(out["f"])           # |f|
-            out["available"] = mu * out["n"]             # mu_s n
-            out["tip_below_contact"] = ok & (out["h"] < out["h_gamma"])
-            out["friction_ok"] = ok & (out["n"] > 0) & (out["required"] <= out["available"])
-            out["feasible"] = out["friction_ok"] & out["tip_below_contact"]
-            out["least_mu"] = np.where(out["n"] > 0, out["required"] / out["n"], np.nan)
+    # the verdicts are the solver's (ElasticaSolution.feasibility): the criteria live in one place
+    verdict = lambda key: np.array([o and bool(s.feasibility.get(key, True)) for s, o in zip(sols, ok)])  # noqa: E731
+    out["feasible"] = out["solver_feasible"] = np.array([o and bool(s.feasible) for s, o in zip(sols, ok)])
+    least_mu = np.array([s.required_mu if o else np.nan for s, o in zip(sols, ok)])
+    out["least_mu"] = np.where(verdict("contact"), least_mu, np.nan)  # gaps: no normal force
+    if grip in ("I", "II"):
+        out["N"] = out["N1"]
+        out["required"] = np.abs(out["N2"])          # |F_f| = M
+        out["available"] = params.mu_s * out["N1"]   # mu_s N
+    elif grip == "III":
+        out["required"] = np.abs(out["f"])           # |f|
+        out["available"] = params.mu_s * out["n"]    # mu_s n
+        out["tip_below_contact"] = verdict("tip_clear")
+        out["friction_ok"] = verdict("contact") & verdict("friction")
     return out
 
 
