@@ -92,6 +92,21 @@ def test_settle_is_much_faster_than_a_naive_simulation():
     assert naive["steps"] > 1000 * st.newton_iterations
 
 
+@pytest.mark.parametrize("method", ["newton", "dynamics"])
+@pytest.mark.parametrize("D,kappa", [(1e-3, 0.0), (0.01, 0.0), (0.01, -3.0), (0.03, 6.0)])
+def test_soft_free_rods_settle_at_every_accepted_D(D, kappa, method):
+    """``simgrip simulate free --kappa 0 --D 0.01`` raised SettleError with both methods (issue 12, item 7):
+    gravity far above the springs stalls Newton from the straight finger; the chain's free equilibrium
+    (the MuJoCo finger is that chain) is polished instead.  D = 1e-3 is the smallest the parameters accept."""
+    from simgrip.params import DimensionlessParams
+
+    p = DimensionlessParams(D=D)
+    st = settle(build_scene("free", p, Uniform(kappa), 32), method=method)
+    assert st.converged and st.residual <= 1e-10
+    ch = solve_chain("free", p, Uniform(kappa), 32)
+    np.testing.assert_allclose(st.link_angles[0], ch.link_angles, atol=1e-9)
+
+
 # ---------------------------------------------------------------------------
 # Grips I and II
 

@@ -224,6 +224,9 @@ def _settle(
                 held, converged, why = release(scene, run, tol, per)
         else:
             if not scene.has_workpiece and warm_start is None:
+                # a free finger starts from the hinge chain's free (energy-minimising) equilibrium, the
+                # MuJoCo finger's own: Newton only polishes, a soft rod (gravity far above the springs)
+                # settles like any other, and a bistable rod takes the same branch with both methods
                 start_free(scene)
             converged, why = run.solve(tol, per, frozen=wdofs)
         if scene.has_workpiece and not held and not run.spent():

@@ -159,11 +159,11 @@ def start_on_chain(scene: Scene, run: Newton) -> bool | None:
 
     p = scene.params
     try:
-        free = hinge_chain.solve_chain("free", p, scene.profile, scene.n)
-        if free.tip[0] > 0.5 * p.b:
-            return False
         # the tip a hair inside the face so that MuJoCo reports the contact
         ch = hinge_chain.solve_chain(scene.grip, p.replace(b=p.b - 2e-6), scene.profile, scene.n)
+        free = hinge_chain.solve_chain("free", p, scene.profile, scene.n, guess=ch.link_angles)
+        if free.tip[0] > 0.5 * p.b:
+            return False
     except (DiscreteError, ValueError):
         return None
     if not (ch.success and ch.N1 > 0.0 and ch.min_eigenvalue > 0.0):
