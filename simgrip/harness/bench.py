@@ -200,6 +200,9 @@ def run_bench(
     result = BenchResult(rows=rows, ratios=ratios(rows), skips=skip_rows, sweep=sweep_rec, env=env,
                          jobs=workers, quick=bool(quick), elapsed_s=time.perf_counter() - t_start)
     result.files = _write(out, result)
+    from simgrip.harness.bench_settle import write_settle_targets  # the settle's issue-9 targets, one run
+
+    result.ratios["settle_targets"] = write_settle_targets(out, quick=quick)["checks"]
     return result
 
 
