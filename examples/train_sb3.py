@@ -7,20 +7,23 @@ PyTorch; a CPU build of PyTorch is enough).
 
 For each algorithm: ``algo("MlpPolicy", env)`` with Stable-Baselines3's default
 hyperparameters on one environment, trained until ``--steps`` environment steps
-or ``--minutes`` of wall-clock time, whichever comes first (the training stops
-at the end of the step that crosses the budget).  Then the deterministic
+or ``--minutes`` of the ``--clock``, whichever comes first (the training stops
+at the end of the step that crosses the budget).  ``--clock cpu`` (default)
+counts the process's CPU time, which is what one core gives in that many
+minutes whatever else the machine runs; ``--clock wall`` counts wall-clock
+time.  Then the deterministic
 policy runs ``--eval-episodes`` episodes on held-out seeds (``--eval-seed``,
 ``--eval-seed + 1``, ...; training episodes are drawn from ``--seed``).
 
 Writes into ``--out`` (created if needed, files written whole):
 
 * ``<algo>_curve.csv``: one row per training episode: ``episode, timesteps,
-  wall_s, return, length, success``;
+  wall_s, cpu_s, episode_return, length, success``;
 * ``<algo>_eval.json``: ``{"algo", "env", "timesteps", "wall_s", "episodes",
   "success_rate", "mean_return", ...}`` (also printed on one line);
 * ``<algo>_model.zip``: the trained policy;
 * ``curves.png``: success rate of the training episodes (moving average over
-  100 episodes) against environment steps and against wall-clock minutes, for
+  100 episodes) against environment steps and against CPU minutes, for
   every ``*_curve.csv`` in ``--out`` (so two runs into one folder share a plot).
 
 ``--threads`` sets PyTorch's intra-op threads (default 1: one core per
@@ -93,7 +96,7 @@ def evaluate(model, env_id: str, episodes: int, seed0: int) -> dict:
 
 
 def train(algo: str, env_id: str, *, steps: int, minutes: float, seed: int, out: Path,
-          eval_episodes: int, eval_seed: int) -> dict:
+          eval_episodes: int, eval_seed: int, clock: str = "cpu") -> dict:
     """Train ``algo`` with library defaults within the budget, write its curve, model and evaluation."""
     from stable_baselines3 import PPO, SAC
     from stable_baselines3.common.callbacks import BaseCallback
@@ -101,8 +104,9 @@ def train(algo: str, env_id: str, *, steps: int, minutes: float, seed: int, out:
 
     cls = {"ppo": PPO, "sac": SAC}[algo]
     rows = []
-    t_start = time.perf_counter()
+    t_start, c_start = time.perf_counter(), time.process_time()
     budget = 60.0 * minutes
+    spent = (lambda: time.process_time() - c_start) if clock == "cpu" else (lambda: time.perf_counter() - t_start)
 
     class Budget(BaseCallback):
         """Record every finished training episode; stop when the wall-clock budget is spent."""
@@ -111,25 +115,27 @@ def train(algo: str, env_id: str, *, steps: int, minutes: float, seed: int, out:
             for info in self.locals.get("infos", ()):
                 ep = info.get("episode")
                 if ep is not None:
-                    rows.append((len(rows), self.num_timesteps, time.perf_counter() - t_start, float(ep["r"]),
-                                 int(ep["l"]), int(bool(info.get("is_success", False)))))
-            return time.perf_counter() - t_start < budget
+                    rows.append((len(rows), self.num_timesteps, round(time.perf_counter() - t_start, 3),
+                                 round(time.process_time() - c_start, 3), float(ep["r"]), int(ep["l"]),
+                                 int(bool(info.get("is_success", False)))))
+            return spent() < budget
 
     env = make_vec_env(env_id, n_envs=1, seed=seed)
     model = cls("MlpPolicy", env, seed=seed, verbose=0)
     model.learn(total_timesteps=steps, callback=Budget())
-    wall = time.perf_counter() - t_start
+    wall, cpu = time.perf_counter() - t_start, time.process_time() - c_start
     env.close()
 
     buf = io.StringIO()
     w = csv.writer(buf)
-    w.writerow(["episode", "timesteps", "wall_s", "return", "length", "success"])
+    w.writerow(["episode", "timesteps", "wall_s", "cpu_s", "episode_return", "length", "success"])
     w.writerows(rows)
     with atomic_write(out / f"{algo}_curve.csv") as fh:
         fh.write(buf.getvalue())
     with atomic_write(out / f"{algo}_model.zip", "wb") as fh:
         model.save(fh)
-    result = {"algo": algo.upper(), "env": env_id, "timesteps": int(model.num_timesteps), "wall_s": round(wall, 1),
+    result = {"algo": algo.upper(), "env": env_id, "timesteps": int(model.num_timesteps), "wall_s": round(wall, 1), "cpu_s": round(cpu, 1),
+              "clock": clock, "budget_minutes": minutes,
               "train_episodes": len(rows), "seed": seed, "hyperparameters": "Stable-Baselines3 defaults"}
     result.update(evaluate(model, env_id, eval_episodes, eval_seed))
     write_json(out / f"{algo}_eval.json", result)
@@ -158,8 +164,8 @@ def plot_curves(out: Path, window: int = 100) -> Path | None:
         avg = np.convolve(succ, np.ones(k) / k, mode="valid")
         label = path.name.split("_")[0].upper()
         axes[0].plot(np.atleast_1d(data["timesteps"])[k - 1:], avg, label=label)
-        axes[1].plot(np.atleast_1d(data["wall_s"])[k - 1:] / 60.0, avg, label=label)
-    for ax, xlabel in zip(axes, ("environment steps", "wall-clock minutes")):
+        axes[1].plot(np.atleast_1d(data["cpu_s"])[k - 1:] / 60.0, avg, label=label)
+    for ax, xlabel in zip(axes, ("environment steps", "CPU minutes (one core)")):
         ax.set_xlabel(xlabel)
         ax.set_ylabel(f"training success rate (last {window} episodes)")
         ax.set_ylim(-0.02, 1.02)
@@ -178,7 +184,9 @@ def main(argv=None) -> int:
     p = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     p.add_argument("--algo", nargs="+", choices=ALGOS, default=list(ALGOS), help="algorithms, trained one after the other")
     p.add_argument("--env", default="simgrip/Pick-v1", help="registered env id (default simgrip/Pick-v1)")
-    p.add_argument("--minutes", type=_positive(float), default=15.0, help="wall-clock budget per algorithm (default 15)")
+    p.add_argument("--minutes", type=_positive(float), default=15.0, help="time budget per algorithm (default 15)")
+    p.add_argument("--clock", choices=("cpu", "wall"), default="cpu",
+                   help="what --minutes counts: the process's CPU time (default) or wall-clock time")
     p.add_argument("--steps", type=_positive(int), default=10_000_000, help="environment-step budget per algorithm")
     p.add_argument("--seed", type=_non_negative_int, default=0, help="training seed (default 0)")
     p.add_argument("--eval-episodes", type=_positive(int), default=50, help="held-out evaluation episodes (default 50)")
@@ -201,7 +209,7 @@ def main(argv=None) -> int:
     torch.set_num_threads(args.threads)
     for algo in args.algo:
         result = train(algo, args.env, steps=args.steps, minutes=args.minutes, seed=args.seed, out=out,
-                       eval_episodes=args.eval_episodes, eval_seed=args.eval_seed)
+                       eval_episodes=args.eval_episodes, eval_seed=args.eval_seed, clock=args.clock)
         print(json.dumps(result), flush=True)
     plot_curves(out)
     return 0
