@@ -179,9 +179,6 @@ def _settle(
     m, d = scene.model, scene.data
     saved = save_options(m)
     clear_warnings(d)
-    run = ChainNewton(scene) if (CHAIN_SOLVE and eligible(scene)) else Newton(scene)
-    run.budget = max_steps  # every Newton iteration of this settle counts against max_steps
-    run.friction_at = "centreline" if contact == "point" else "surface"
     per = min(SOLVE_ITERS, max_steps)  # one solve's share
     held = scene.has_workpiece
     converged, why = True, "ok"
@@ -208,6 +205,9 @@ def _settle(
             check_grip_shape(scene, state)
             state.rest = scene.springs.rest.copy()
             return state
+        run = ChainNewton(scene) if (CHAIN_SOLVE and eligible(scene)) else Newton(scene)
+        run.budget = max_steps  # every Newton iteration of this settle counts against max_steps
+        run.friction_at = "centreline" if contact == "point" else "surface"
         configure_statics(scene)
         wdofs = tuple(int(x) for x in scene.workpiece_dof)
         if scene.has_workpiece and held:
