@@ -27,9 +27,9 @@ figures stop:
   not a bending finger, and neither the chain nor a contact grip resolves it.
   Above: the rod's own weight moves the tip by ``1/(8 D) l = 1.25e-7 l``, below
   the settle's contact tolerance (1e-4 l), so the finger is rigid for every
-  purpose; and the stiffness-to-weight ratio of the chain, ``D n^2`` (``~1e12``
-  at ``n = MAX_LINKS``), would leave fewer than 4 significant digits of the
-  load response in double precision.
+  purpose; and the stiffness-to-weight ratio of the chain, ``D n^2`` (``1e12``
+  at ``n = MAX_LINKS``), leaves only about 4 significant digits of the load
+  response in double precision.
 * ``M`` in ``[0, M_MAX] = [0, 1e4]``.  Forces of size ``M`` carry round-off
   ``M * 2.2e-16``; the settle's force residual is 1e-10 (forces over
   ``rho g l``), which must stay above it with margin: ``M <= 1e4`` keeps four
@@ -44,15 +44,17 @@ figures stop:
   shape closes on itself at ``2 pi`` (self-contact is not modelled, so beyond
   that the rod passes through itself); 100 (a curl radius of ``l/100``, 16
   turns) is kept as the numerical limit: the chain's rest angle per hinge,
-  ``kappa_bar / n``, stays below 0.1 rad at ``n = MAX_LINKS``.
+  ``kappa_bar / n``, stays at 0.1 rad at ``n = MAX_LINKS``.
 * ``alpha`` (concentrated profile, eq. 34) in ``[0, ALPHA_MAX] = [0, 100]``:
   ``(4 s (1 - s))^alpha ~ exp(-4 alpha (s - 1/2)^2)`` has width
   ``1/sqrt(8 alpha) = 0.035 l`` at 100, about one link of the default chain;
   sharper is a kink the chain and the BVP mesh cannot resolve.
-* links per finger in ``[2, MAX_LINKS] = [2, 1024]``.  The chain is second
-  order: its error at 1024 links is ``(32/1024)^2 = 1e-3`` of that at 32
-  (normal force ~5e-6 relative, tip ~1e-6 l), below the contact tolerance,
-  so more links buy nothing, while the settle's cost grows faster than ``n``.
+* links per finger in ``[2, MAX_LINKS] = [2, 1000]``.  MuJoCo nests bodies
+  at most 1023 deep (:data:`simgrip.sim.fingers.MAX_BODY_DEPTH`), which caps
+  a serial chain just above; and the chain is second order, so its error at
+  1000 links is ``(32/1000)^2 = 1e-3`` of that at 32 (normal force ~5e-6
+  relative, tip ~1e-6 l), below the contact tolerance: more links would buy
+  nothing.
 """
 
 from __future__ import annotations
@@ -91,8 +93,8 @@ MU_MAX = 100.0
 KAPPA_LIMIT = 100.0
 #: Largest concentration exponent of eq. (34): peak width 1/sqrt(8 alpha) = 0.035 l.
 ALPHA_MAX = 100.0
-#: Most links per finger: discretisation error (32/n)^2 of n = 32's is below the contact tolerance.
-MAX_LINKS = 1024
+#: Most links per finger: under MuJoCo's body depth (1023); error (32/n)^2 of n = 32's, below the contact tolerance.
+MAX_LINKS = 1000
 
 
 def check_grip(grip: str) -> str:
@@ -128,6 +130,11 @@ def _nonnegative(name: str, value) -> float:
     if v < 0.0:
         raise ValueError(f"{name} must be non-negative, got {v!r}")
     return v
+
+
+def _ratio(num: float, den: float) -> float:
+    """``num / den`` for ``num >= 0``, ``den >= 0``; ``inf`` when ``den`` underflowed to 0 (validation names it)."""
+    return num / den if den > 0.0 else (math.inf if num > 0.0 else 0.0)
 
 
 def _within(name: str, value, lo: float, hi: float, why: str = "") -> float:
@@ -269,8 +276,8 @@ class PhysicalParams:
         """The paper's dimensionless groups ``D, M, b/l, mu_s, gamma/l``."""
         w = self.rho * self.g * self.length  # weight of the rod [N], the force scale
         return DimensionlessParams(
-            D=self.EI / (w * self.length * self.length),
-            M=self.m / (self.rho * self.length),
+            D=_ratio(self.EI, w * self.length * self.length),
+            M=_ratio(self.m, self.rho * self.length),
             b=self.b / self.length,
             mu_s=self.mu_s,
             gamma=self.gamma / self.length,
