@@ -43,7 +43,7 @@ class ChainNewton(Newton):
     """:class:`Newton` with the inner iteration in link angles (one-finger scenes, see ``eligible``)."""
 
     def __init__(self, scene: Scene):
-        super().__init__(scene)
+        super().__init__(scene, scene.data)  # the scene's own MjData as scratch (the solve owns its state)
         self.model = ChainModel(scene)
         #: MuJoCo's contact distance minus the analytic one (round-off, over l), per pair
         self.dist_shift = np.zeros(len(self.pairs))

@@ -74,9 +74,9 @@ class Newton:
     force tiny steps along the face).
     """
 
-    def __init__(self, scene: Scene):
+    def __init__(self, scene: Scene, data=None):
         self.scene = scene
-        self.st = Statics(scene)
+        self.st = Statics(scene, data)
         self.iterations = 0
         m = scene.model
         self.pairs = [(int(m.pair_geom1[i]), int(m.pair_geom2[i])) for i in range(m.npair)]
