@@ -232,18 +232,23 @@ class ChainModel:
 
     def pair_distances(self, phi, nodes, w) -> np.ndarray:
         """All pairs' signed distances (vectorised; same geometry as :meth:`pair_term`)."""
-        out = np.zeros(len(self.pairs))
-        for p, (i, sphere) in enumerate(self.pair_link):
-            g2 = self.pairs[p][1]
-            c = self.geom_point(g2, w)
-            if sphere:
-                out[p] = nodes[i + 1][0] - (c[0] + self.m.geom_size[g2][0] / self.L) - self.radius[p]
-            else:
-                a, b = nodes[i], nodes[i + 1]
-                seg = b - a
-                u = min(max(float((c - a) @ seg) / float(seg @ seg), 0.0), 1.0)
-                out[p] = float(np.hypot(*(c - a - u * seg))) - self.radius[p]
-        return out
+        if not self.pairs:
+            return np.zeros(0)
+        if not hasattr(self, "_pl"):
+            m, L = self.m, self.L
+            self._pl = np.array([i for i, _ in self.pair_link])
+            self._sph = np.array([sp for _, sp in self.pair_link])
+            g2 = np.array([g for _, g in self.pairs])
+            self._gp = np.stack([m.geom_pos[g2][:, 0], m.geom_pos[g2][:, 2]], 1) / L
+            self._hx = m.geom_size[g2][:, 0] / L
+            self._rad = np.array(self.radius)
+        c = self.workpiece_origin(w)[None, :] + self._gp
+        a, b = nodes[self._pl], nodes[self._pl + 1]
+        seg = b - a
+        u = np.clip(np.einsum("ij,ij->i", c - a, seg) / np.einsum("ij,ij->i", seg, seg), 0.0, 1.0)
+        caps = np.hypot(*(c - a - u[:, None] * seg).T) - self._rad
+        face = b[:, 0] - (c[:, 0] + self._hx) - self._rad  # tip sphere (the end of its link) on the face
+        return np.where(self._sph, face, caps)
 
     def stick_term(self, s, phi, nodes, w) -> Term:
         """Sticking constraint ``t . (p_f - p_w) + offset`` (over l) of a :class:`Stick`."""
