@@ -58,6 +58,8 @@ BATCHES_PER_WORKER = 4
 CONNECT_TIMEOUT_S = 10.0
 #: Seconds allowed to close the local cluster after an interrupt before its processes are killed.
 CLOSE_TIMEOUT_S = 1.0
+#: Seconds allowed to close it after a normal end (a busy machine needs several).
+CLOSE_GRACEFUL_S = 15.0
 
 
 class RunnerError(RuntimeError):
@@ -329,16 +331,23 @@ class _Local:
                 with contextlib.suppress(Exception):
                     nanny.close_gracefully(reason="simgrip interrupted")
             _kill(self.spawned())
-        closer = threading.Thread(target=self._close, daemon=True)
+        timeout = CLOSE_TIMEOUT_S if interrupted else CLOSE_GRACEFUL_S
+        closer = threading.Thread(target=self._close, args=(timeout,), daemon=True)
         closer.start()
-        closer.join(CLOSE_TIMEOUT_S if interrupted else 30.0)
+        closer.join(2 * timeout)
         _kill(self.spawned())  # whatever is still alive (a worker stuck in C code, a restarted one)
+        if closer.is_alive() or getattr(getattr(self.cluster, "status", None), "name", "") != "closed":
+            # its processes are gone: distributed's own exit handler must not wait for it again (10 s)
+            with contextlib.suppress(Exception):
+                from distributed.deploy.spec import SpecCluster
 
-    def _close(self) -> None:
+                SpecCluster._instances.discard(self.cluster)
+
+    def _close(self, timeout: float) -> None:
         with contextlib.suppress(Exception):
-            self.client.close(timeout=CLOSE_TIMEOUT_S)
+            self.client.close(timeout=timeout)
         with contextlib.suppress(Exception):
-            self.cluster.close(timeout=CLOSE_TIMEOUT_S)
+            self.cluster.close(timeout=timeout)
 
 
 class _Remote:
