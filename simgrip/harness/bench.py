@@ -19,7 +19,8 @@ A task that raises becomes a row with the error in its note.
 
 Files written (atomically) to ``out_dir``, which is checked before any work:
 ``bench.csv``, ``bench.json``, ``pareto.png`` (:mod:`simgrip.harness.plots`),
-``summary.md``, ``skips.md`` (:mod:`simgrip.harness.tables`), ``sweep.json``.
+``summary.md``, ``skips.md`` (:mod:`simgrip.harness.tables`), ``sweep.json``, and the
+settle's targets ``settle_targets.json``/``.md`` (:mod:`simgrip.harness.bench_settle`).
 
 Command line: ``simgrip bench [--quick] [--out DIR] [--repeats R]`` and the
 runner's options (``--jobs``, ``--scheduler``, ``--scheduler-file``,
@@ -84,6 +85,8 @@ class BenchResult:
         The Fig. 7 sweep timing (simulation warm, cold, BVP).
     env : dict
         Gymnasium env throughput per grip (:func:`simgrip.envs.throughput.measure_throughput`).
+    settle_targets : dict
+        The settle's speed and accuracy targets, name -> met (:mod:`simgrip.harness.bench_settle`).
     files : dict
         name -> path of every file written.
     jobs, quick, elapsed_s
@@ -94,6 +97,7 @@ class BenchResult:
     skips: list
     sweep: dict
     env: dict = field(default_factory=dict)
+    settle_targets: dict = field(default_factory=dict)
     files: dict = field(default_factory=dict)
     jobs: int | None = 1
     quick: bool = False
@@ -199,10 +203,10 @@ def run_bench(
     workers = 1 if options.in_process else (None if options.remote else options.local_workers)
     result = BenchResult(rows=rows, ratios=ratios(rows), skips=skip_rows, sweep=sweep_rec, env=env,
                          jobs=workers, quick=bool(quick), elapsed_s=time.perf_counter() - t_start)
-    result.files = _write(out, result)
     from simgrip.harness.bench_settle import write_settle_targets  # the settle's issue-9 targets, one run
 
-    result.ratios["settle_targets"] = write_settle_targets(out, quick=quick)["checks"]
+    result.settle_targets = write_settle_targets(out, quick=quick)["checks"]
+    result.files = {**_write(out, result), **{name: out / name for name in ("settle_targets.json", "settle_targets.md")}}
     return result
 
 
