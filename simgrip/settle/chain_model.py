@@ -146,6 +146,40 @@ class ChainModel:
         off = self.k[1:].copy()
         return F, diag, off
 
+    def free_equilibrium(self, phi0, tol: float = 1e-12, max_iter: int = 50):
+        """The finger alone (no contact) at equilibrium, by Newton from ``phi0``; None if it fails.
+
+        The tridiagonal Jacobian of :meth:`internal` is exact, so a start near the
+        equilibrium (e.g. the grip's shape) converges in a few ``O(n)`` steps; a
+        backtracking line search on ``|F|`` guards the rest.  Not checked for
+        stability: callers use it near a known stable branch.
+        """
+        from scipy.linalg import solve_banded
+
+        phi = np.array(phi0, dtype=float)
+        F, diag, off = self.internal(phi)
+        res = float(np.max(np.abs(self.to_q(F))))
+        for _ in range(max_iter):
+            if res < tol:
+                return phi
+            ab = np.zeros((3, self.n))
+            ab[0, 1:], ab[1], ab[2, :-1] = off, diag, off
+            try:
+                d = solve_banded((1, 1), ab, -F, check_finite=False)
+            except (np.linalg.LinAlgError, ValueError):
+                return None
+            step = 1.0
+            for _ls in range(30):
+                Fn, dn, on = self.internal(phi + step * d)
+                rn = float(np.max(np.abs(self.to_q(Fn))))
+                if rn < res or rn < tol:
+                    break
+                step *= 0.5
+            else:
+                return None
+            phi, F, diag, off, res = phi + step * d, Fn, dn, on, rn
+        return phi if res < tol else None
+
     def workpiece_force(self) -> float:
         """Weight plus applied force on the workpiece's z dof (0 without one)."""
         if not self.nw:

@@ -161,8 +161,13 @@ def start_on_chain(scene: Scene, run: Newton) -> bool | None:
     try:
         # the tip a hair inside the face so that MuJoCo reports the contact
         ch = hinge_chain.solve_chain(scene.grip, p.replace(b=p.b - 2e-6), scene.profile, scene.n)
-        free = hinge_chain.solve_chain("free", p, scene.profile, scene.n, guess=ch.link_angles)
-        if free.tip[0] > 0.5 * p.b:
+        # the free finger's equilibrium next to the grip's: Newton in link angles when the solve has the
+        # chain model (O(n), from the grip shape), else the chain solver
+        model = getattr(run, "model", None)
+        phi = model.free_equilibrium(ch.link_angles) if model is not None else None
+        if phi is None:
+            phi = hinge_chain.solve_chain("free", p, scene.profile, scene.n, guess=ch.link_angles).link_angles
+        if float(np.sum(np.cos(phi))) / scene.n > 0.5 * p.b:
             return False
     except (DiscreteError, ValueError):
         return None
