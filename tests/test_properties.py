@@ -199,7 +199,7 @@ def _state(data, grip_values=("free", "I", "II", "III")):
     return grip, kw, kappa
 
 
-@_settings(50)
+@_settings(30)
 @seed(SEED)
 @given(data=st.data())
 def test_elastica_solve_any_state(data):
