@@ -21,7 +21,9 @@ Writes into ``--out`` (created if needed, files written whole):
   wall_s, cpu_s, episode_return, length, success``;
 * ``<algo>_eval.json``: ``{"algo", "env", "timesteps", "wall_s", "episodes",
   "success_rate", "mean_return", ...}`` (also printed on one line);
-* ``<algo>_model.zip``: the trained policy;
+* ``<algo>_model.zip``: the trained policy (with ``--checkpoint-minutes M`` also
+  ``<algo>_model_<k M>min.zip`` every ``M`` budget minutes, and the curve so far;
+  their held-out results go into ``<algo>_eval.json``);
 * ``curves.png``: success rate of the training episodes (moving average over
   100 episodes) against environment steps and against CPU minutes, for
   every ``*_curve.csv`` in ``--out`` (so two runs into one folder share a plot).
@@ -95,8 +97,22 @@ def evaluate(model, env_id: str, episodes: int, seed0: int) -> dict:
             "mean_length": float(np.mean(lengths)), "eval_seeds": [seed0, seed0 + episodes - 1]}
 
 
+def _write_curve(path: Path, rows) -> None:
+    buf = io.StringIO()
+    w = csv.writer(buf)
+    w.writerow(["episode", "timesteps", "wall_s", "cpu_s", "episode_return", "length", "success"])
+    w.writerows(rows)
+    with atomic_write(path) as fh:
+        fh.write(buf.getvalue())
+
+
+def _save(model, path: Path) -> None:
+    with atomic_write(path, "wb") as fh:
+        model.save(fh)
+
+
 def train(algo: str, env_id: str, *, steps: int, minutes: float, seed: int, out: Path,
-          eval_episodes: int, eval_seed: int, clock: str = "cpu") -> dict:
+          eval_episodes: int, eval_seed: int, clock: str = "cpu", checkpoint_minutes: float | None = None) -> dict:
     """Train ``algo`` with library defaults within the budget, write its curve, model and evaluation."""
     from stable_baselines3 import PPO, SAC
     from stable_baselines3.common.callbacks import BaseCallback
@@ -108,10 +124,19 @@ def train(algo: str, env_id: str, *, steps: int, minutes: float, seed: int, out:
     budget = 60.0 * minutes
     spent = (lambda: time.process_time() - c_start) if clock == "cpu" else (lambda: time.perf_counter() - t_start)
 
+    checkpoints = []
+
     class Budget(BaseCallback):
-        """Record every finished training episode; stop when the wall-clock budget is spent."""
+        """Record every finished training episode; checkpoint; stop when the budget is spent."""
 
         def _on_step(self) -> bool:
+            if checkpoint_minutes and spent() >= 60.0 * checkpoint_minutes * (len(checkpoints) + 1):
+                # the curve so far and the policy, so that a run stopped early can still be evaluated
+                path = out / f"{algo}_model_{checkpoint_minutes * (len(checkpoints) + 1):g}min.zip"
+                _save(self.model, path)
+                _write_curve(out / f"{algo}_curve.csv", rows)
+                checkpoints.append({"minutes": round(checkpoint_minutes * (len(checkpoints) + 1), 6),
+                                    "timesteps": int(self.num_timesteps), "file": path.name})
             for info in self.locals.get("infos", ()):
                 ep = info.get("episode")
                 if ep is not None:
@@ -126,18 +151,18 @@ def train(algo: str, env_id: str, *, steps: int, minutes: float, seed: int, out:
     wall, cpu = time.perf_counter() - t_start, time.process_time() - c_start
     env.close()
 
-    buf = io.StringIO()
-    w = csv.writer(buf)
-    w.writerow(["episode", "timesteps", "wall_s", "cpu_s", "episode_return", "length", "success"])
-    w.writerows(rows)
-    with atomic_write(out / f"{algo}_curve.csv") as fh:
-        fh.write(buf.getvalue())
-    with atomic_write(out / f"{algo}_model.zip", "wb") as fh:
-        model.save(fh)
+    _write_curve(out / f"{algo}_curve.csv", rows)
+    _save(model, out / f"{algo}_model.zip")
     result = {"algo": algo.upper(), "env": env_id, "timesteps": int(model.num_timesteps), "wall_s": round(wall, 1), "cpu_s": round(cpu, 1),
               "clock": clock, "budget_minutes": minutes,
               "train_episodes": len(rows), "seed": seed, "hyperparameters": "Stable-Baselines3 defaults"}
     result.update(evaluate(model, env_id, eval_episodes, eval_seed))
+    for cp in checkpoints:  # the held-out success of each checkpoint: how soon the target was reached
+        cp_model = cls.load(out / cp["file"])
+        cp.update({k: v for k, v in evaluate(cp_model, env_id, eval_episodes, eval_seed).items()
+                   if k in ("success_rate", "mean_return")})
+    if checkpoints:
+        result["checkpoints"] = checkpoints
     write_json(out / f"{algo}_eval.json", result)
     return result
 
@@ -164,7 +189,8 @@ def plot_curves(out: Path, window: int = 100) -> Path | None:
         avg = np.convolve(succ, np.ones(k) / k, mode="valid")
         label = path.name.split("_")[0].upper()
         axes[0].plot(np.atleast_1d(data["timesteps"])[k - 1:], avg, label=label)
-        axes[1].plot(np.atleast_1d(data["cpu_s"])[k - 1:] / 60.0, avg, label=label)
+        clock = "cpu_s" if "cpu_s" in data.dtype.names else "wall_s"
+        axes[1].plot(np.atleast_1d(data[clock])[k - 1:] / 60.0, avg, label=label)
     for ax, xlabel in zip(axes, ("environment steps", "CPU minutes (one core)")):
         ax.set_xlabel(xlabel)
         ax.set_ylabel(f"training success rate (last {window} episodes)")
@@ -187,6 +213,9 @@ def main(argv=None) -> int:
     p.add_argument("--minutes", type=_positive(float), default=15.0, help="time budget per algorithm (default 15)")
     p.add_argument("--clock", choices=("cpu", "wall"), default="cpu",
                    help="what --minutes counts: the process's CPU time (default) or wall-clock time")
+    p.add_argument("--checkpoint-minutes", type=_positive(float), default=None,
+                   help="also save the policy (and the curve so far) every so many budget minutes, "
+                        "and evaluate each checkpoint at the end")
     p.add_argument("--steps", type=_positive(int), default=10_000_000, help="environment-step budget per algorithm")
     p.add_argument("--seed", type=_non_negative_int, default=0, help="training seed (default 0)")
     p.add_argument("--eval-episodes", type=_positive(int), default=50, help="held-out evaluation episodes (default 50)")
@@ -209,7 +238,8 @@ def main(argv=None) -> int:
     torch.set_num_threads(args.threads)
     for algo in args.algo:
         result = train(algo, args.env, steps=args.steps, minutes=args.minutes, seed=args.seed, out=out,
-                       eval_episodes=args.eval_episodes, eval_seed=args.eval_seed, clock=args.clock)
+                       eval_episodes=args.eval_episodes, eval_seed=args.eval_seed, clock=args.clock,
+                       checkpoint_minutes=args.checkpoint_minutes)
         print(json.dumps(result), flush=True)
     plot_curves(out)
     return 0
