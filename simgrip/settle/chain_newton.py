@@ -35,6 +35,9 @@ from simgrip.sim.scene import Scene
 
 __all__ = ["ChainNewton"]
 
+#: Newton iterations one solve may take (exact Jacobian: a solve needing more is failing, e.g. a
+#: workpiece falling with no equilibrium to reach).
+CHAIN_SOLVE_ITERS = 60
 #: The analytic contact rows are polished to this many ulps of ``K_c l`` when one step gets there.
 CHAIN_FLOOR_ULPS = 2.0
 
@@ -214,6 +217,7 @@ class ChainNewton(Newton):
             return conv, why, qq
 
         polished = False
+        max_iter = min(max_iter, self.iterations + CHAIN_SOLVE_ITERS)
         while True:
             if self.sticks:
                 self._reanchor(state_q(phi, w))
@@ -229,6 +233,9 @@ class ChainNewton(Newton):
                 if polished or res_c < max(tol, CHAIN_FLOOR_ULPS / FLOOR_ULPS * self.noise_floor()):
                     break
                 polished = True
+            if contacts and self.nw_free and not self.normal_active and abs(cm.workpiece_force()) > 0.0:
+                # a free workpiece with no contact left carries its weight alone: no equilibrium (a drop)
+                return finish(False, "stalled", state_q(phi, w), N, lam)
             if self.iterations >= max_iter:
                 if self.budget is not None and self.iterations >= self.budget:
                     return finish(False, f"Newton iteration budget max_steps={self.budget} spent", state_q(phi, w), N, lam)
