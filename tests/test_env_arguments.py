@@ -1,0 +1,85 @@
+"""Env arguments (:mod:`simgrip.envs.arguments`): every constructor argument is checked by name;
+pickled and deep-copied envs continue exactly like the original."""
+
+import gymnasium as gym
+import numpy as np
+import pytest
+
+import simgrip.envs  # noqa: F401  (registers the ids)
+from simgrip.envs import ENV_IDS
+from simgrip.envs.pick import PickEnv
+
+
+# -------------------------------------------------------- arguments (issue 12)
+BAD_ARGUMENTS = {
+    "n_links": [0, 2.5, "12", None, True],
+    "length": [0, -0.1, float("nan"), float("inf"), "x", None],
+    "EI": [0, float("nan")], "rho": [-1, float("inf")], "g": [0, float("nan")],
+    "box_width_range": [(0.05, 0.01), (0.05, float("nan")), 0.05, (0.1, 0.3)],
+    "box_mass_range": [(-0.01, 0.02), ("a", "b")], "friction_range": [(0, 1), None],
+    "box_height": [0, float("nan")], "box_depth": [-1, "deep"],
+    "per_finger": ["yes", 1, None],
+    "kappa_range": [(0, 0), (1, -1), (float("-inf"), 0)],
+    "kappa_tau": [-0.1, float("nan"), "slow"],
+    "palm_speed": [0, float("nan")], "palm_range": [(0.2, 0.1), (0, 0.2)], "palm_start": [(0.01, 0.02), (0.3, 0.4)],
+    "target_height": [0, float("nan")], "hold_time": [-1, float("nan"), float("inf")],
+    "w_lift": [-1, float("nan")], "w_success": [float("inf")], "w_squeeze": [-0.1, "x"], "w_drop": [float("nan")],
+    "squeeze_margin": [0, float("nan")], "drop_distance": [0, float("inf")],
+    "timestep": [0, float("nan"), -0.002], "frame_skip": [0, 2.5, float("nan"), True],
+    "settle_time": [float("nan"), -1, float("inf")],
+    "finger_damping_time": [float("nan"), -0.01, float("inf")],
+    "shape_points": [1, 3.5, float("nan")], "r_tip": [0, float("nan")], "spin_friction": [-1, float("nan")],
+    "impratio": [0, float("nan")], "finger_armature": [-1, float("nan")],
+    "width": [0, 10.5, float("nan")], "height": [-1, "tall"], "camera": ["nope", 3, ""],
+}
+
+
+@pytest.mark.parametrize("name", sorted(BAD_ARGUMENTS))
+def test_every_constructor_argument_is_validated_by_name(name):
+    for value in BAD_ARGUMENTS[name]:
+        with pytest.raises(ValueError, match=rf"\b{name}\b"):
+            PickEnv(**{name: value})
+
+
+def test_every_constructor_argument_has_bad_values_listed():
+    import inspect
+
+    params = set(inspect.signature(PickEnv.__init__).parameters) - {"self", "grip", "render_mode"}
+    assert params == set(BAD_ARGUMENTS)
+
+
+def test_nan_damping_and_settle_time_rejected_before_any_step():
+    with pytest.raises(ValueError, match="finger_damping_time"):
+        gym.make("simgrip/Pick-v1", finger_damping_time=float("nan"))
+    with pytest.raises(ValueError, match="settle_time"):
+        gym.make("simgrip/Pick-v1", settle_time=float("nan"))
+
+
+# ----------------------------------------------------------- pickling (issue 12)
+@pytest.mark.parametrize("how", ["pickle", "deepcopy"])
+@pytest.mark.parametrize("env_id", ENV_IDS)
+def test_copied_env_continues_exactly_like_the_original(how, env_id):
+    import copy
+    import pickle
+
+    env = gym.make(env_id)
+    env.reset(seed=4)
+    rng = np.random.default_rng(0)
+    for _ in range(25):
+        env.step(rng.uniform(-1, 1, 2))
+    twin = pickle.loads(pickle.dumps(env)) if how == "pickle" else copy.deepcopy(env)
+    actions = rng.uniform(-1, 1, size=(60, 2))
+    for k, a in enumerate(actions):
+        o1, r1, t1, u1, i1 = env.step(a)
+        o2, r2, t2, u2, i2 = twin.step(a)
+        np.testing.assert_array_equal(o1, o2)
+        assert (r1, t1, u1) == (r2, t2, u2)
+        if t1 or u1:
+            break
+    # the copy is independent: stepping it does not move the original, and the RNG goes on alike
+    assert twin.unwrapped.model is not env.unwrapped.model
+    o1, _ = env.reset()
+    o2, _ = twin.reset()
+    np.testing.assert_array_equal(o1, o2)
+    env.close()
+    twin.close()

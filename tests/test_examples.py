@@ -1,0 +1,50 @@
+"""The examples: scripted and random baselines print JSON summaries; train_sb3 runs (when SB3 is installed)."""
+
+import json
+
+import pytest
+
+
+def _example(name):
+    import importlib.util
+    from pathlib import Path
+
+    path = Path(__file__).resolve().parents[1] / "examples" / f"{name}.py"
+    spec = importlib.util.spec_from_file_location(f"example_{name}", path)
+    module = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(module)
+    return module
+
+
+@pytest.mark.parametrize("name, argv", [
+    ("scripted_pick", ["--policy", "oracle"]), ("scripted_pick", ["--policy", "observation"]), ("random_policy", []),
+])
+def test_examples_print_a_json_summary(name, argv, capsys):
+    summary = _example(name).main(["--episodes", "2", "--seed", "7", "--json", *argv])
+    out = json.loads(capsys.readouterr().out.strip())
+    assert out == summary
+    assert set(out) == {"episodes", "success_rate", "mean_return"} and out["episodes"] == 2
+    if name == "scripted_pick":
+        assert out["success_rate"] == 1.0
+
+
+def test_random_policy_documents_only_its_options():
+    module = _example("random_policy")
+    doc = module.__doc__
+    for option in ("--episodes", "--seed", "--env", "--json"):
+        assert option in doc
+    import re
+
+    assert set(re.findall(r"--[a-z][a-z-]*", doc)) == {"--episodes", "--seed", "--env", "--json"}
+    with pytest.raises(SystemExit):
+        module.main(["--vector", "4"])
+
+
+def test_train_sb3_smoke(tmp_path, capsys):
+    pytest.importorskip("stable_baselines3")
+    module = _example("train_sb3")
+    module.main(["--algo", "sac", "--steps", "120", "--eval-episodes", "1", "--out", str(tmp_path)])
+    res = json.loads(capsys.readouterr().out.strip().splitlines()[-1])
+    assert res["algo"] == "SAC" and res["timesteps"] >= 120 and res["episodes"] == 1
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["curves.png", "sac_curve.csv", "sac_eval.json",
+                                                           "sac_model.zip"]

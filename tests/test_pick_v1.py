@@ -1,0 +1,250 @@
+"""PickEnv v1: the reward ranks success above every failure, the episode's end is guarded, the
+observation is well scaled with no constant or mirrored entries."""
+
+import gymnasium as gym
+import numpy as np
+import pytest
+
+import simgrip.envs  # noqa: F401  (registers the ids)
+from simgrip.envs.pick import PickEnv
+from simgrip.envs.scripted import ScriptedPickPolicy
+
+
+# ---------------------------------------------------------------- reward (v1)
+def _return(actions_fn, seed, env_id="simgrip/Pick-v1", **kwargs):
+    """Roll one episode; ``actions_fn(t, obs, env)`` gives the action. Returns (return, last info, steps, terms)."""
+    env = gym.make(env_id, **kwargs)
+    obs, info = env.reset(seed=seed)
+    total, terms, t = 0.0, np.zeros(4), 0
+    while True:
+        obs, r, term, trunc, info = env.step(actions_fn(t, obs, env.unwrapped))
+        parts = np.array([info["reward_lift"], info["reward_success"], info["reward_squeeze"], info["reward_drop"]])
+        assert r == pytest.approx(parts.sum(), abs=1e-12)  # the terms in info are the reward
+        total += r
+        terms += parts
+        t += 1
+        if term or trunc:
+            break
+    env.close()
+    return total, info, t, terms
+
+
+class _Hover:
+    """The oracle's grip, but the palm stops 3 cm short of the target: the box hovers below it, never succeeds."""
+
+    def __call__(self, t, obs, env):
+        if t == 0:
+            self.pol = ScriptedPickPolicy(extra_lift=-0.03)
+            self.pol.reset(env)
+        return self.pol(obs)
+
+
+class _Drop:
+    """The oracle's grip and lift, then the fingers open halfway up."""
+
+    def __call__(self, t, obs, env):
+        if t == 0:
+            self.pol = ScriptedPickPolicy()
+            self.pol.reset(env)
+        a = self.pol(obs)
+        if obs[env.obs_slices["box_lift"]][0] > 0.5 or getattr(self, "opened", False):
+            self.opened = True
+            a[0] = 1.0
+        return a
+
+
+def _press_on_top(t, obs, env):
+    """Straight fingers, palm driven down onto the box top."""
+    return np.array([1.0, -1.0], dtype=np.float32)
+
+
+def test_reward_ranks_success_above_every_way_of_not_succeeding():
+    from simgrip.envs.scripted import ObservationPickPolicy
+
+    env = PickEnv()
+    w_lift, w_success, w_squeeze, w_drop = env.w_lift, env.w_success, env.w_squeeze, env.w_drop
+    T = gym.spec("simgrip/Pick-v1").max_episode_steps
+    assert w_squeeze * T <= w_drop  # dropping never pays more than going on squeezing
+    assert w_success - w_squeeze * T > 0  # any success beats the best failure (hovering: at most w_lift)
+
+    successes, failures = {}, {}
+    for seed in (0, 1, 2):
+        pol = ScriptedPickPolicy()
+        honest = ObservationPickPolicy()
+
+        def oracle(t, obs, env, pol=pol):
+            if t == 0:
+                pol.reset(env)
+            return pol(obs)
+
+        def observed(t, obs, env, pol=honest):
+            if t == 0:
+                pol.reset(env)
+            return pol(obs)
+
+        successes[f"oracle{seed}"] = _return(oracle, seed)
+        successes[f"observation{seed}"] = _return(observed, seed)
+        successes[f"full_squeeze_lift{seed}"] = _return(lambda t, o, e: np.array([-1.0, 1.0]), seed)
+        failures[f"hover{seed}"] = _return(_Hover(), seed)
+        failures[f"drop{seed}"] = _return(_Drop(), seed)
+        failures[f"nothing{seed}"] = _return(lambda t, o, e: np.array([1.0, 0.0]), seed)
+        failures[f"full_squeeze_no_lift{seed}"] = _return(lambda t, o, e: np.array([-1.0, 0.0]), seed)
+        failures[f"press_on_top{seed}"] = _return(_press_on_top, seed)
+        failures[f"random{seed}"] = _return(lambda t, o, e, rng=np.random.default_rng(seed): rng.uniform(-1, 1, 2),
+                                            seed)
+    for name, (ret, info, steps, terms) in successes.items():
+        assert info["is_success"], name
+        assert ret >= w_lift + w_success - w_squeeze * steps - 1e-9, name
+        assert terms[0] == pytest.approx(w_lift * 1.0), name  # progress paid once: sums to w_lift at the target
+    for name, (ret, info, steps, terms) in failures.items():
+        assert not info["is_success"], name
+        assert ret < w_lift, name
+        assert terms[0] <= w_lift * (1 + 1e-12), name
+    best_failure = max(r for r, *_ in failures.values())
+    worst_success = min(r for r, *_ in successes.values())
+    assert worst_success > best_failure + 0.5 * w_success, (worst_success, best_failure)
+    # hovering below the target earns its progress but no more: not per step
+    for seed in (0, 1, 2):
+        ret, info, steps, terms = failures[f"hover{seed}"]
+        assert steps == T and 0.3 * w_lift < terms[0] < w_lift
+    # dropping the box takes its progress back and costs w_drop: worse than doing nothing
+    for seed in (0, 1, 2):
+        ret, info, steps, terms = failures[f"drop{seed}"]
+        assert info["dropped"] and steps < T
+        assert terms[0] == pytest.approx(0.0, abs=1e-12) and terms[3] == -w_drop
+        assert ret < failures[f"nothing{seed}"][0] - 0.5 * w_drop
+    # the gentle oracle grip pays less squeeze than the full curl
+    assert successes["oracle0"][3][2] > successes["full_squeeze_lift0"][3][2]
+
+
+def test_squeeze_penalty_counts_only_side_contacts_and_is_bounded():
+    env = PickEnv()
+    env.reset(seed=0)
+    pressed = []
+    for t in range(40):
+        obs, r, term, trunc, info = env.step(_press_on_top(t, None, env))
+        pressed.append((info["normal_force"].sum(), info["side_force"].sum(), info["reward_squeeze"]))
+        assert not term
+    normal, side, squeeze = np.array(pressed).T
+    assert normal.max() > 5 * env.box.mass * env.g  # the fingers press hard on the top...
+    assert side.max() < 0.05 * normal.max()  # ...which is not a squeeze
+    assert squeeze.min() > -0.01 * env.w_squeeze
+    env.reset(seed=0)
+    for _ in range(40):
+        _, r, *_, info = env.step(np.array([-1.0, 0.0]))  # full curl: squeezes the sides hard
+        assert -env.w_squeeze <= info["reward_squeeze"] <= 0.0
+    assert info["reward_squeeze"] < -0.5 * env.w_squeeze
+    env.close()
+
+
+def test_step_after_the_end_raises_until_reset():
+    env = PickEnv()
+    with pytest.raises(gym.error.ResetNeeded):
+        env.step(np.zeros(2))  # before the first reset
+    env.reset(seed=0)
+    t = 0
+    while True:
+        _, r, term, trunc, info = env.step(np.array([-1.0, 1.0]))
+        t += 1
+        if term:
+            break
+        assert t < 200
+    assert info["is_success"] and info["reward_success"] == env.w_success
+    with pytest.raises(gym.error.ResetNeeded):
+        env.step(np.array([-1.0, 1.0]))  # no second success bonus
+    env.reset(seed=0)
+    _, r, term, *_ = env.step(np.array([-1.0, 1.0]))
+    assert not term
+    env.close()
+    wrapped = gym.make("simgrip/Pick-v1")  # through Gymnasium's wrappers (OrderEnforcing, PassiveEnvChecker)
+    with pytest.raises(gym.error.ResetNeeded):
+        wrapped.step(np.zeros(2))
+    wrapped.reset(seed=0)
+    while not wrapped.step(np.array([-1.0, 1.0]))[2]:
+        pass
+    with pytest.raises(gym.error.ResetNeeded):
+        wrapped.step(np.zeros(2))
+    wrapped.close()
+
+
+def test_diverged_physics_raises_physics_error():
+    from simgrip.sim.checks import PhysicsError
+
+    env = PickEnv()
+    env.reset(seed=0)
+    env.data.qvel[env.box_dof] = np.nan
+    with pytest.raises(PhysicsError, match="step diverged"):
+        env.step(np.zeros(2))
+    with pytest.raises(gym.error.ResetNeeded):
+        env.step(np.zeros(2))
+    env.reset(seed=0)
+    env.step(np.zeros(2))
+    env.close()
+
+
+# ----------------------------------------------------------- observation (v1)
+@pytest.mark.parametrize("per_finger", [False, True])
+def test_observation_has_no_constant_entries_and_is_in_finger_lengths(per_finger):
+    from simgrip.envs.scripted import ObservationPickPolicy
+
+    env = PickEnv(per_finger=per_finger)
+    rows = []
+    for seed in range(4):
+        obs, info = env.reset(seed=seed)
+        pol = ObservationPickPolicy()
+        pol.reset(env, info)
+        rng = np.random.default_rng(seed)
+        rows.append(obs)
+        for t in range(200):
+            a = pol(obs) if seed % 2 == 0 else rng.uniform(-1, 1, env.action_space.shape)
+            obs, r, term, trunc, info = env.step(a)
+            rows.append(obs)
+            assert env.observation_space.contains(obs)
+            if term:
+                break
+    rows = np.array(rows)
+    names = [name for name, size in env.obs_layout for _ in range(size)]
+    spread = rows.std(axis=0)
+    constant = [(int(i), names[i]) for i in np.flatnonzero(spread < 1e-6)]
+    assert not constant, constant
+    # well scaled for a network: no entry's spread exceeds ~20 units
+    big = [(names[i], float(spread[i])) for i in np.flatnonzero(spread > 20)]
+    assert not big, big
+    # lengths in finger lengths: the palm and tips match the simulation state divided by the length
+    sl, L, d = env.obs_slices, env.length, env.data
+    assert obs[sl["palm_height"]][0] == pytest.approx(d.qpos[env.palm_qpos] / L)
+    tip0 = d.geom_xpos[env.tip_geom[0]]
+    np.testing.assert_allclose(obs[sl["tip_position"]][:2], [tip0[0] / L, (tip0[2] - d.qpos[env.palm_qpos]) / L])
+    assert np.all(np.abs(obs[sl["tip_position"]]) <= 1.0 + 1e-9)  # the tips are within one finger length
+    box_z = d.qpos[env.box_qpos + 2]
+    assert obs[sl["box_position"]][-1] == pytest.approx((box_z - d.qpos[env.palm_qpos]) / L)
+    assert obs[sl["box_lift"]][0] == pytest.approx((box_z - env._z0) / env.target_height)
+    env.close()
+
+
+def test_symmetric_layout_leaves_out_only_mirrored_entries():
+    """Without per_finger, finger 1 mirrors finger 0 and the box stays on the axis: the 37-entry
+    per-finger observation of the same run carries nothing the 19 entries do not."""
+    env2 = PickEnv(per_finger=True)
+    env1 = PickEnv()
+    rng = np.random.default_rng(3)
+    o1, _ = env1.reset(seed=3)
+    o2, _ = env2.reset(seed=3)
+    s1, s2 = env1.obs_slices, env2.obs_slices
+    for _ in range(80):
+        a = rng.uniform(-1, 1, 2)
+        o1, r1, t1, *_ = env1.step(a)
+        o2, r2, t2, *_ = env2.step(np.array([a[0], a[0], a[1]]))
+        assert r1 == pytest.approx(r2, abs=1e-6)
+        K = env1.shape_points
+        np.testing.assert_allclose(o2[s2["finger_shape"]][K:], o2[s2["finger_shape"]][:K], atol=1e-6)
+        np.testing.assert_allclose(o2[s2["tip_position"]][2:] * [-1, 1], o2[s2["tip_position"]][:2], atol=1e-6)
+        np.testing.assert_allclose(o2[s2["contact_force"]][2:], o2[s2["contact_force"]][:2], atol=1e-6)
+        assert abs(o2[s2["box_position"]][0]) < 1e-6 and abs(o2[s2["box_tilt"]][0]) < 1e-6
+        for name, sl in s1.items():
+            idx = range(sl.stop - sl.start)
+            sub = o2[s2[name]]
+            mine = sub[[1]] if name in ("box_position", "box_velocity") else sub[list(idx)]
+            np.testing.assert_allclose(o1[sl], mine, atol=1e-6, err_msg=name)
+        if t1:
+            break
