@@ -1,0 +1,24 @@
+"""Env throughput against raw mj_step: figures reported, arguments checked (no timing asserted)."""
+
+from __future__ import annotations
+
+import pytest
+
+from simgrip.envs.throughput import measure_throughput
+
+
+@pytest.mark.parametrize("clock", ["wall", "cpu"])
+def test_throughput_reports_every_figure(clock):
+    r = measure_throughput(steps=40, repeats=1, chunk=10, clock=clock)
+    assert r["clock"] == clock and r["steps"] == 40 and r["chunks"] >= 4
+    for key in ("env_steps_per_s", "raw_physics_steps_per_s", "raw_nstep_physics_steps_per_s"):
+        assert r[key] > 0
+    assert r["env_physics_steps_per_s"] == pytest.approx(r["env_steps_per_s"] * r["frame_skip"])
+    assert r["overhead_percent"] > -100 and r["overhead_vs_nstep_percent"] > -100
+
+
+@pytest.mark.parametrize("kwargs, name", [(dict(steps=0), "steps"), (dict(chunk=0), "chunk"),
+                                          (dict(repeats=0), "repeats"), (dict(clock="sundial"), "clock")])
+def test_bad_arguments_are_named(kwargs, name):
+    with pytest.raises(ValueError, match=name):
+        measure_throughput(**kwargs)
