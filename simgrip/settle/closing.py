@@ -143,7 +143,7 @@ def touch(scene: Scene, run: Newton) -> None:
     mujoco.mj_forward(scene.model, d)
 
 
-def start_on_chain(scene: Scene, run: Newton) -> bool | None:
+def start_on_chain(scene: Scene, run: Newton | None) -> bool | None:
     """Grips I/II: start from the hinge chain's grip equilibrium, the workpiece at the tip.
 
     The MuJoCo finger is the hinge chain (:mod:`simgrip.settle.chain_model`), so
@@ -174,7 +174,8 @@ def start_on_chain(scene: Scene, run: Newton) -> bool | None:
     if not (ch.success and ch.N1 > 0.0 and ch.min_eigenvalue > 0.0):
         return None
     scene.data.qpos[scene.joint_qpos] = ch.joint_angles[None, :]
-    run.N, run.normal_active = np.zeros(0), []
+    if run is not None:
+        run.N, run.normal_active = np.zeros(0), []
     place_workpiece(scene, float(ch.tip[1]) * scene.length)
     return True
 

@@ -32,7 +32,8 @@ import time
 import mujoco
 import numpy as np
 
-from simgrip.settle.closing import hold_workpiece, start_free
+from simgrip.settle import closing
+from simgrip.settle.closing import hold_workpiece, start_free, start_on_chain
 from simgrip.settle.state import SettledState, SettleError, read_state
 from simgrip.settle.statics import CONTACT_IMPEDANCE, RestResidual, check_warnings, dof_scales
 from simgrip.sim.scene import Scene, set_curvature
@@ -243,7 +244,16 @@ def _settle_dynamics_once(scene: Scene, tol: float, max_steps: int, warm_start, 
     dim = m.pair_dim.copy()
     closed = False
     if scene.has_workpiece and held:
-        if scene.grip in ("I", "II") and warm_start is None and close:
+        started = start_on_chain(scene, None) if (scene.grip in ("I", "II") and warm_start is None and close
+                                                   and closing.CHAIN_START) else None
+        if started is not None:
+            # the hinge chain's grip equilibrium, workpiece at the tip (as the static settle): the
+            # dynamics releases it from there (a finger that cannot reach the face settles alone)
+            mujoco.mj_forward(m, d)
+            dyn.hold(True)
+            held = bool(started) and _finger_pairs_touching(scene)
+            closed = True
+        elif scene.grip in ("I", "II") and warm_start is None and close:
             # ramp the curvature with contact on, the workpiece held and frictionless
             target = scene.profile
             dyn.hold(True)
@@ -281,8 +291,10 @@ def _settle_dynamics_once(scene: Scene, tol: float, max_steps: int, warm_start, 
                 wz = [dof for name, dof in zip(scene.workpiece_joints, scene.workpiece_dof) if name == "z"]
                 weight = scene.workpiece_mass * scene.physical.g
                 for i in range(1, DYN_RELEASE_STEPS + 1):
+                    if dyn.steps >= max_steps:
+                        break
                     d.qfrc_applied[wz] = weight * (1.0 - i / DYN_RELEASE_STEPS)
-                    dyn.step()  # 20 steps: counted, and run() below stops at the budget
+                    dyn.step()
             else:
                 lower_onto_fingers(scene)
             dyn.hold(False)
