@@ -22,10 +22,8 @@ Scenes (``grip``):
 With ``fingers=2`` the workpiece (weight ``2 m g``) is free in the plane; with
 ``fingers=1`` and a workpiece (the *symmetric reduction*) it has half the mass
 and slides in ``z`` only; with ``free_workpiece=False`` it is fixed.  The
-finite contact radii make the workpiece apply a couple at the contact
-(``-r_tip F_f`` at the tip of Grips I/II, ``r_link f`` at ``gamma`` for Grip
-III); the settled state measures it (``FingerContact.moment``) and the
-references take it as ``contact_moment``.  The radii are kept small (2e-3 l).
+contact geoms have small radii (2e-3 l): a force acting on a geom's surface
+acts that far off the centreline (how the settle reads it: :mod:`simgrip.settle`).
 """
 
 from __future__ import annotations
