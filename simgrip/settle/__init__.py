@@ -1,17 +1,29 @@
 """Drive a scene to static equilibrium, fast, and read the settled state.
 
-:func:`settle` is the entry point: by default a static solve of MuJoCo's own
-force balance (:mod:`.newton`, with the Grip I/II closing and release of
-:mod:`.closing`), or ``method="dynamics"``, an over-damped MuJoCo simulation
-(:mod:`.dynamics`).  Both return a :class:`SettledState` (:mod:`.state`) whose
-``residual`` is MuJoCo's static residual (:mod:`.statics`) and whose
-``converged`` means ``residual <= tolerance``.  :func:`naive_settle` (:mod:`.naive`)
-is the plain-dynamics baseline they are measured against.
+:func:`settle` is the entry point.  The default is a static solve of MuJoCo's
+own force balance: for one-finger scenes Newton in the chain's own
+coordinates (:mod:`.chain_newton` on :mod:`.chain_model`: exact forces and
+Jacobian, tridiagonal in the link angles and bordered by the contact and stick
+rows, ``O(n)`` per iteration, :mod:`.banded`), otherwise Newton on MuJoCo's
+finite-difference Jacobian (:mod:`.newton`).  Grips I/II start from the hinge
+chain's grip equilibrium and a free finger from its free one (:mod:`.closing`),
+so Newton only polishes.  ``method="dynamics"`` is an over-damped MuJoCo
+simulation (:mod:`.dynamics`); ``target_error`` settles at several resolutions
+and extrapolates (:mod:`.target`).  Both methods return a
+:class:`SettledState` (:mod:`.state`) whose ``residual`` is MuJoCo's static
+residual (:mod:`.statics`) and whose ``converged`` means ``residual <=
+tolerance``; :func:`naive_settle` (:mod:`.naive`) is the plain-dynamics baseline.
 
-Grips: I/II close on the workpiece and release it under friction (dropped when
-the friction cone is violated); III starts from the shape the scene was built
-with (corner on the rod) and settles at the simulation's own ``gamma``; a warm
-start (:func:`settle_sweep`) releases from the previous equilibrium.
+Contact: by default the sticking friction acts on the finger's centreline
+(``contact="point"``, the paper's point contact: the settled state converges at
+second order to the point-contact BVP); ``contact="surface"`` puts it at
+MuJoCo's contact point (the finite-radius couple), as the dynamics does.
+
+Grips: I/II release the workpiece under friction (dropped when the friction
+cone is violated; a state in the other grip's shape is reported not held,
+:mod:`simgrip.validity`); III starts from the shape the scene was built with
+(corner on the rod) and settles at the simulation's own ``gamma``; a warm start
+(:func:`settle_sweep`) releases from the previous equilibrium.
 
 Budgets: ``max_steps`` bounds the Newton iterations of the whole settle
 (default :data:`NEWTON_BUDGET`) or the physics steps of the dynamic settle; a

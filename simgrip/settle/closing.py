@@ -1,6 +1,12 @@
 """Grips I/II: close the finger on the workpiece, then release it under friction.
 
-Closing: the finger curls with contact off until its tip reaches ``X = b/2``
+Start (:func:`start_on_chain`): the hinge chain's grip equilibrium with the
+workpiece at the tip, wherever it is valid (the free finger reaches the face,
+the equilibrium exists, is stable and pushes on the face); a free finger starts
+from the chain's free equilibrium (:func:`start_free`).  The MuJoCo finger is
+that chain, so the static solve only polishes.
+
+Staged closing (where the chain start is not valid): the finger curls with contact off until its tip reaches ``X = b/2``
 (secant on the curvature factor); the workpiece is placed there and held
 (weight cancelled, frictionless) while the curvature goes to its final value by
 continuation, halving failed increments (:func:`close_grip`).  The stages up to

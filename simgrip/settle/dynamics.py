@@ -9,18 +9,22 @@ Everything is chosen from the model:
 * **Damping and step**: hinge damping ``D = h K`` (stiffness-proportional: the
   over-damped flow is preconditioned by the spring matrix, so the number of
   steps does not grow with ``n``); ``h = 1 / omega_min`` of the hinge chain with
-  its physical inertia.  The workpiece has no stiffness: damping ``3 m / h``
+  its physical inertia (power iteration on ``K^{-1} M``: ``K`` is diagonal in
+  hinge coordinates, one ``mj_mulM`` per iteration).  The workpiece has no stiffness: damping ``3 m / h``
   (Grip III raises it so a falling workpiece moves at most
   :data:`DYN_FALL_STEP` contact radii per step).
 * **Contacts**: elliptic cone, ``impratio =`` :data:`DYN_IMPRATIO` (MuJoCo's
   sticking friction creeps at a speed ~ 1/impratio and leaves ~1e-5 of the
   weight unbalanced, hence :data:`DYN_TOL`); a state penetrating more than
   :data:`DYN_PEN_LIMIT` restarts with half the step.
-* **Closing** (I/II): contact on, frictionless, workpiece held, rest angles
-  ramped at <= :data:`DYN_CLOSE_RATE` rad of total rotation per step; the
-  holding force then fades out over :data:`DYN_RELEASE_STEPS` steps.
+* **Start** (I/II): the hinge chain's grip equilibrium, the workpiece held at
+  the tip (as the static solve); where that start is not valid, a closing
+  with contact on, frictionless, rest angles ramped at <=
+  :data:`DYN_CLOSE_RATE` rad of total rotation per step.  The holding force
+  then fades out over :data:`DYN_RELEASE_STEPS` steps.
 * **Stop**: the static residual at rest below ``tol`` and velocities below
-  :data:`DYN_VTOL`.  Drop: the tip slips :data:`DYN_DROP_SLIP` along the face
+  :data:`DYN_VTOL`, tested every :data:`DYN_BATCH` steps (one ``mj_step`` call
+  between tests; the residual only once the velocity is small).  Drop: the tip slips :data:`DYN_DROP_SLIP` along the face
   (I/II) or the workpiece falls out of contact; then the finger settles alone.
 """
 
