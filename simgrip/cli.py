@@ -337,8 +337,13 @@ def _clean_after_interrupt(folders: list[Path], created: list[Path]) -> None:
 
 
 @contextlib.contextmanager
-def _sigterm_as_interrupt():
-    """Within the block, SIGTERM raises ``KeyboardInterrupt`` like Ctrl-C (main thread only)."""
+def _signals_as_interrupt():
+    """Within the block, SIGINT and SIGTERM raise ``KeyboardInterrupt`` (main thread only).
+
+    SIGINT gets Python's own handler even when the process started with SIGINT
+    ignored (as commands started in the background by a non-interactive shell
+    are, e.g. under ``timeout -s INT``): an interrupt must always stop the run.
+    """
     if threading.current_thread() is not threading.main_thread():
         yield
         return
@@ -346,11 +351,13 @@ def _sigterm_as_interrupt():
     def _raise(signum, frame):
         raise KeyboardInterrupt
 
-    previous = signal.signal(signal.SIGTERM, _raise)
+    previous = {sig: signal.signal(sig, handler) for sig, handler in
+                ((signal.SIGINT, signal.default_int_handler), (signal.SIGTERM, _raise))}
     try:
         yield
     finally:
-        signal.signal(signal.SIGTERM, previous)
+        for sig, handler in previous.items():
+            signal.signal(sig, handler)
 
 
 def _command_name(argv: list[str]) -> str:
@@ -376,7 +383,7 @@ def main(argv=None) -> int:
     prefix = f"simgrip {command}" if command else "simgrip"
     folders: list[Path] = []
     created: list[Path] = []
-    with _sigterm_as_interrupt():
+    with _signals_as_interrupt():
         try:
             try:
                 parser = build_parser()

@@ -1,0 +1,138 @@
+"""One Ctrl-C stops everything: the command, its worker processes, and leaves no partial file.
+
+Each case starts a real ``simgrip`` command with ``--jobs 2`` in its own
+session, waits until its worker processes are up (and ~2 s at least), sends
+SIGINT (to the process, or to its whole process group as a terminal's Ctrl-C
+does) or SIGTERM, and checks:
+
+* it exits within :data:`EXIT_WITHIN_S` with status 130;
+* stderr is the one line ``simgrip <command>: interrupted`` (no traceback);
+* no process of its session is left (found through ``/proc``: the session id
+  of every process, so workers re-parented to init are found too);
+* ``--out`` holds no partial file: no temporary file of
+  :func:`simgrip.io.atomic_write`, and every result file present is whole.
+"""
+
+from __future__ import annotations
+
+import json
+import os
+import signal
+import subprocess
+import sys
+import time
+from pathlib import Path
+
+import pytest
+
+from simgrip.io import TEMP_PREFIX
+
+pytestmark = pytest.mark.skipif(not Path("/proc/self/stat").exists(), reason="needs /proc (Linux)")
+
+#: Seconds from the signal to the exit of the command and all its workers.
+EXIT_WITHIN_S = 5.0
+#: Seconds the command runs before the signal (at least; workers must be up too).
+RUN_BEFORE_S = 2.0
+#: Seconds allowed for the workers to start on a loaded machine.
+START_WITHIN_S = 60.0
+
+COMMANDS = {
+    "bench": ["bench", "--quick"],
+    "stress": ["stress", "--cases", "50"],
+    "figures": ["figures"],
+}
+
+
+def _stat(pid: int) -> list[str] | None:
+    """Fields of /proc/PID/stat after the command name (state is [0], ppid [1], pgrp [2], session [3])."""
+    try:
+        text = Path(f"/proc/{pid}/stat").read_text()
+    except OSError:
+        return None
+    return text[text.rindex(")") + 2:].split()
+
+
+def session_processes(sid: int) -> dict[int, str]:
+    """Live (non-zombie) processes of session ``sid``: pid -> state."""
+    found = {}
+    for entry in os.listdir("/proc"):
+        if entry.isdigit():
+            st = _stat(int(entry))
+            if st is not None and int(st[3]) == sid and st[0] not in ("Z", "X"):
+                found[int(entry)] = st[0]
+    return found
+
+
+def assert_no_partial_files(out: Path) -> None:
+    for path in out.rglob("*"):
+        if path.is_dir():
+            continue
+        assert not path.name.startswith(TEMP_PREFIX), f"partial file left: {path}"
+        assert not path.name.endswith(".tmp"), f"temporary file left: {path}"
+        data = path.read_bytes()
+        assert data, f"empty result file: {path}"
+        if path.suffix == ".json":
+            json.loads(data)
+        elif path.suffix == ".png":
+            assert data.endswith(b"IEND\xaeB`\x82"), f"truncated PNG: {path}"
+        elif path.suffix == ".csv":
+            assert data.endswith(b"\n"), f"truncated CSV: {path}"
+
+
+@pytest.mark.parametrize(
+    "command, how",
+    [
+        ("bench", "SIGINT"),
+        ("stress", "SIGINT"),
+        ("figures", "SIGINT"),
+        ("stress", "Ctrl-C"),  # SIGINT to the whole process group, as a terminal sends it
+        ("bench", "SIGTERM"),
+    ],
+)
+def test_interrupt_stops_the_command_and_its_workers(tmp_path, command, how):
+    out = tmp_path / "out"
+    argv = [sys.executable, "-m", "simgrip.cli", *COMMANDS[command], "--jobs", "2", "--no-progress", "--out", str(out)]
+    env = dict(os.environ, PYTHONUNBUFFERED="1")
+    proc = subprocess.Popen(argv, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True, env=env,
+                            cwd=tmp_path, start_new_session=True)
+    try:
+        started = time.monotonic()
+        while True:  # wait for the workers (two processes besides the command), and RUN_BEFORE_S at least
+            elapsed = time.monotonic() - started
+            workers = len(session_processes(proc.pid)) - 1
+            if proc.poll() is not None:
+                pytest.fail(f"simgrip {command} ended before the signal: rc {proc.returncode}")
+            if workers >= 2 and elapsed >= RUN_BEFORE_S:
+                break
+            if elapsed > START_WITHIN_S:
+                pytest.fail(f"simgrip {command}: {workers} worker processes after {START_WITHIN_S} s")
+            time.sleep(0.1)
+        time.sleep(0.5)  # let the workers take up their tasks
+        sent = time.monotonic()
+        if how == "Ctrl-C":
+            os.killpg(proc.pid, signal.SIGINT)
+        else:
+            proc.send_signal(signal.SIGTERM if how == "SIGTERM" else signal.SIGINT)
+        try:
+            stdout, stderr = proc.communicate(timeout=EXIT_WITHIN_S)
+        except subprocess.TimeoutExpired:
+            pytest.fail(f"simgrip {command} still running {EXIT_WITHIN_S} s after {how}")
+        while session_processes(proc.pid) and time.monotonic() - sent < EXIT_WITHIN_S:
+            time.sleep(0.05)
+        took = time.monotonic() - sent
+        left = session_processes(proc.pid)
+    finally:
+        if proc.poll() is None:
+            proc.kill()
+        proc.communicate()  # reap it and close the pipes
+        for pid in session_processes(proc.pid):  # only processes of the session this test started
+            try:
+                os.kill(pid, signal.SIGKILL)
+            except ProcessLookupError:
+                pass
+    assert proc.returncode == 130, stderr
+    assert took < EXIT_WITHIN_S, f"{took:.1f} s"
+    assert not left, f"processes left after {how}: {left}"
+    lines = [line for line in stderr.splitlines() if line.strip()]
+    assert lines == [f"simgrip {command}: interrupted"], stderr
+    assert_no_partial_files(out)
