@@ -104,6 +104,8 @@ def _fmt(value) -> str:
     if isinstance(value, bool) or value is None:
         return str(value)
     if isinstance(value, float):
+        if math.isinf(value):  # e.g. required_mu when the normal force is not positive
+            return "unbounded" if value > 0 else "-unbounded"
         return f"{value:.8g}"
     return str(value)
 
