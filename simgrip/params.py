@@ -21,18 +21,21 @@ Every group is validated on construction; a value outside its range raises
 double-precision numerics stop meaning anything, not where the paper's
 figures stop:
 
-* ``D`` in ``[D_MIN, D_MAX] = [1e-3, 1e6]``.  Below: the heavy rod's bending
-  boundary layer at the clamp has length ``~ sqrt(D) l``, under one link of
-  the default 32-link chain at ``D = 1e-3``; the finger is a hanging string,
-  not a bending finger, and neither the chain nor a contact grip resolves it.
-  Above: the rod's own weight moves the tip by ``1/(8 D) l = 1.25e-7 l``, below
-  the settle's contact tolerance (1e-4 l), so the finger is rigid for every
-  purpose; and the stiffness-to-weight ratio of the chain, ``D n^2`` (``1e12``
-  at ``n = MAX_LINKS``), leaves only about 4 significant digits of the load
-  response in double precision.
+* ``D`` in ``[D_MIN, D_MAX] = [1e-2, 1e3]``.  Below: the heavy rod's bending
+  boundary layer at the clamp, of length ``~ sqrt(D) l``, is 0.1 l at
+  ``D = 1e-2``, three links of the default 32-link chain; a softer finger is
+  a hanging string that needs ``n >> 1/sqrt(D)`` links, and the elastica
+  BVP, started from the straight rod, converges to a spurious branch near
+  ``D = 2e-3`` (free rod, ``kappa = 0``).  Above: the rod's own weight moves
+  its tip by ``l/(8 D) = 1.25e-4 l`` at ``D = 1e3``, the contact tolerance
+  (1e-4 l), so a stiffer finger is rigid to the model's resolution; and the
+  spring forces, ``~ D n |q|``, carry round-off ``D n pi 2.2e-16``, which
+  reaches the settle's absolute force residual (1e-10, in ``rho g l``) at
+  ``D n ~ 1.4e5``: beyond, the Newton settle stalls (at ``D = 1e3`` today
+  above ~140 links; a residual relative to the spring forces would lift it).
 * ``M`` in ``[0, M_MAX] = [0, 1e4]``.  Forces of size ``M`` carry round-off
   ``M * 2.2e-16``; the settle's force residual is 1e-10 (forces over
-  ``rho g l``), which must stay above it with margin: ``M <= 1e4`` keeps four
+  ``rho g l``), which must stay above it with margin: ``M <= 1e4`` keeps two
   orders.  (``M = 1e300`` overflowed in the reference's stability test.)
 * ``b`` in ``(0, 2)`` (``b/2 < l``: a straight finger reaches ``X = l``).
 * ``mu_s`` in ``[0, MU_MAX] = [0, 100]``.  Real material pairs have
@@ -81,10 +84,10 @@ __all__ = [
 GRIPS = ("free", "I", "II", "III")
 
 # Bounds of the parameter space; the module docstring says why each is where it is.
-#: Softest rod: its clamp boundary layer (~ sqrt(D) l) is one link of the default chain.
-D_MIN = 1e-3
-#: Stiffest rod: self-weight deflection 1/(8 D) l below the contact tolerance; conditioning D n^2.
-D_MAX = 1e6
+#: Softest rod: its clamp boundary layer (~ sqrt(D) l = 0.1 l) spans three links of the default chain.
+D_MIN = 1e-2
+#: Stiffest rod: self-weight deflection l/(8 D) at the contact tolerance; spring-force round-off at the residual.
+D_MAX = 1e3
 #: Heaviest workpiece per finger (in rod weights): round-off M * 2.2e-16 stays 1e4 below the settle residual.
 M_MAX = 1e4
 #: Largest static friction coefficient.
@@ -153,7 +156,7 @@ class DimensionlessParams:
     Parameters
     ----------
     D : float
-        Bending stiffness ``EI / (rho g l^3)``, in ``[D_MIN, D_MAX] = [1e-3, 1e6]``.
+        Bending stiffness ``EI / (rho g l^3)``, in ``[D_MIN, D_MAX] = [1e-2, 1e3]``.
     M : float
         Workpiece mass per finger ``m / (rho l)``, in ``[0, M_MAX] = [0, 1e4]``.
     b : float

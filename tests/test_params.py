@@ -81,7 +81,7 @@ def test_unknown_grip_is_named(grip):
 
 @pytest.mark.parametrize(
     "field, value",
-    [("D", 1e-4), ("D", 1e7), ("M", 1e300), ("M", 2e4), ("mu_s", 1e3)],
+    [("D", 1e-3), ("D", 1e4), ("M", 1e300), ("M", 2e4), ("mu_s", 1e3)],
 )
 def test_the_parameter_space_ends_with_a_named_error(field, value):
     with pytest.raises(ValueError, match=rf"^{field} must lie in \["):
@@ -108,4 +108,4 @@ def test_physical_params_out_of_range_name_the_group_and_its_fields(kw, name):
 
 def test_to_physical_overflow_is_a_named_error():
     with pytest.raises(ValueError, match="EI"):
-        DimensionlessParams(D=1e6).to_physical(length=1e300)
+        DimensionlessParams(D=1e3).to_physical(length=1e300)
