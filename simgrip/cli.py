@@ -133,6 +133,8 @@ def _profile(args, grip: str):
         return Uniform(args.kappa)
     if kind == "concentrated":
         sign = args.sign if args.sign is not None else (1 if grip == "II" else -1)
+        if sign not in (-1, 1):
+            raise ValueError(f"sign (p of eq. 34) must be -1 or +1, got {sign!r}")
         return Concentrated(kappa_max=args.kappa_max, alpha=args.alpha, p=sign)
     raise ValueError(f"profile must be 'uniform' or 'concentrated', got {args.profile!r}")
 
