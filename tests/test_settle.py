@@ -19,6 +19,7 @@ import numpy as np
 import pytest
 
 from simgrip import STANDARD, Uniform
+from simgrip.params import D_MIN
 from simgrip.reference import elastica
 from simgrip.chain import ChainSprings, chain_springs
 from simgrip.reference import solve_chain
@@ -93,11 +94,11 @@ def test_settle_is_much_faster_than_a_naive_simulation():
 
 
 @pytest.mark.parametrize("method", ["newton", "dynamics"])
-@pytest.mark.parametrize("D,kappa", [(1e-3, 0.0), (0.01, 0.0), (0.01, -3.0), (0.03, 6.0)])
+@pytest.mark.parametrize("D,kappa", [(D_MIN, 0.0), (D_MIN, -3.0), (D_MIN, 6.0), (0.03, 6.0)])
 def test_soft_free_rods_settle_at_every_accepted_D(D, kappa, method):
     """``simgrip simulate free --kappa 0 --D 0.01`` raised SettleError with both methods (issue 12, item 7):
     gravity far above the springs stalls Newton from the straight finger; the chain's free equilibrium
-    (the MuJoCo finger is that chain) is polished instead.  D = 1e-3 is the smallest the parameters accept."""
+    (the MuJoCo finger is that chain) is polished instead.  ``D_MIN`` is the smallest the parameters accept."""
     from simgrip.params import DimensionlessParams
 
     p = DimensionlessParams(D=D)
