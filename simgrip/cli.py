@@ -28,7 +28,17 @@ import sys
 import threading
 from pathlib import Path
 
-from simgrip.params import MAX_LINKS, DimensionlessParams, check_grip
+from simgrip.params import (
+    ALPHA_MAX,
+    D_MAX,
+    D_MIN,
+    KAPPA_LIMIT,
+    M_MAX,
+    MAX_LINKS,
+    MU_MAX,
+    DimensionlessParams,
+    check_grip,
+)
 from simgrip.profiles import Concentrated, Uniform
 
 __all__ = ["main", "build_parser"]
@@ -55,15 +65,15 @@ class _Parser(argparse.ArgumentParser):
 def _add_state_options(p: argparse.ArgumentParser, grips=("free", "I", "II", "III")) -> None:
     p.add_argument("grip", help=f"one of {', '.join(grips)}")
     g = p.add_argument_group("rod, workpiece and curvature (dimensionless)")
-    g.add_argument("--kappa", type=float, default=None, help="uniform intrinsic curvature kappa_bar = l*kappa0 (required for --profile uniform)")
-    g.add_argument("--D", type=float, default=1.0, help="bending stiffness EI/(rho g l^3) [default 1]")
-    g.add_argument("--M", type=float, default=5.0, help="workpiece mass per finger m/(rho l) [default 5]")
-    g.add_argument("--b", type=float, default=0.6, help="workpiece width b/l [default 0.6]")
-    g.add_argument("--mu", type=float, default=1.0, help="static friction coefficient mu_s [default 1]")
-    g.add_argument("--gamma", type=float, default=0.8, help="Grip III contact arc length gamma/l [default 0.8]")
+    g.add_argument("--kappa", type=float, default=None, help=f"uniform intrinsic curvature kappa_bar = l*kappa0, |kappa| <= {KAPPA_LIMIT:g} (required for --profile uniform)")
+    g.add_argument("--D", type=float, default=1.0, help=f"bending stiffness EI/(rho g l^3), {D_MIN:g}..{D_MAX:g} [default 1]")
+    g.add_argument("--M", type=float, default=5.0, help=f"workpiece mass per finger m/(rho l), 0..{M_MAX:g} [default 5]")
+    g.add_argument("--b", type=float, default=0.6, help="workpiece width b/l, 0 < b < 2 [default 0.6]")
+    g.add_argument("--mu", type=float, default=1.0, help=f"static friction coefficient mu_s, 0..{MU_MAX:g} [default 1]")
+    g.add_argument("--gamma", type=float, default=0.8, help="Grip III contact arc length gamma/l, 0 < gamma < 1 [default 0.8]")
     g.add_argument("--profile", default="uniform", help="curvature profile: uniform or concentrated (eq. 34)")
-    g.add_argument("--kappa-max", type=float, default=6.0, help="peak |kappa_bar| of the concentrated profile [default 6]")
-    g.add_argument("--alpha", type=float, default=2.0, help="concentration exponent of eq. (34) [default 2]")
+    g.add_argument("--kappa-max", type=float, default=6.0, help=f"peak |kappa_bar| of the concentrated profile, 0..{KAPPA_LIMIT:g} [default 6]")
+    g.add_argument("--alpha", type=float, default=2.0, help=f"concentration exponent of eq. (34), 0..{ALPHA_MAX:g} [default 2]")
     g.add_argument("--sign", type=int, default=None, help="sign p of eq. (34): -1 curls down, +1 up [default: +1 for Grip II, else -1]")
     p.add_argument("--json", action="store_true", help="print one JSON object instead of a table")
 
@@ -83,7 +93,7 @@ def build_parser() -> argparse.ArgumentParser:
     ):
         p = sub.add_parser(name, help=text)
         _add_state_options(p)
-        p.add_argument("--links", type=int, default=32, help="links per finger [default 32]")
+        p.add_argument("--links", type=int, default=32, help=f"links per finger, 2..{MAX_LINKS} [default 32]")
         p.add_argument(
             "--method", default="newton",
             help="settle method: newton (static solve, residual 1e-10) or dynamics "
