@@ -22,10 +22,12 @@ away (scheduler gone, a batch killing its workers again and again) raises
 
 Interrupts: Ctrl-C (SIGINT) or SIGTERM during :func:`run_tasks` cancels what is
 pending, kills the local cluster's worker processes, closes the cluster and
-re-raises :class:`KeyboardInterrupt` (within ~2 s).  Worker processes of the
-local cluster ignore SIGINT themselves, so a Ctrl-C at a terminal (sent to the
-whole process group) is handled once, by this process.  The runner writes no
-files.
+re-raises :class:`KeyboardInterrupt` (within ~2 s), also while the cluster is
+still starting.  Worker processes of the local cluster start with SIGINT
+blocked, so a Ctrl-C at a terminal (sent to the whole process group) is handled
+once, by this process.  Scripts that start a local cluster need the
+``if __name__ == "__main__":`` guard (worker processes are spawned and import
+the main module).  The runner writes no files.
 """
 
 from __future__ import annotations
@@ -238,18 +240,55 @@ def _sigterm_as_interrupt():
         signal.signal(signal.SIGTERM, old)
 
 
-@contextlib.contextmanager
-def _sigint_ignored():
-    """Ignore SIGINT while worker processes are spawned: they inherit it (across exec) and so
-    leave a terminal's Ctrl-C to this process, which stops them."""
-    if threading.current_thread() is not threading.main_thread():
-        yield
-        return
-    old = signal.signal(signal.SIGINT, signal.SIG_IGN)
+def _in_blocked_thread(make):
+    """``make()`` run in a helper thread with SIGINT blocked; this thread waits, interruptibly.
+
+    Threads and processes that ``make`` starts inherit the blocked mask (across
+    exec too): the cluster's worker processes leave a terminal's Ctrl-C (sent to
+    the whole process group) to this process, which stops them; and this
+    thread, not blocking it, raises KeyboardInterrupt at once, even while the
+    cluster is still starting.
+    """
+    box = {}
+
+    def target():
+        if hasattr(signal, "pthread_sigmask"):
+            signal.pthread_sigmask(signal.SIG_BLOCK, {signal.SIGINT})
+        try:
+            box["value"] = make()
+        except BaseException as exc:  # handed to the waiting thread
+            box["error"] = exc
+
+    helper = threading.Thread(target=target, name="simgrip-cluster-start", daemon=True)
+    helper.start()
+    while helper.is_alive():
+        helper.join(0.05)
+    if "error" in box:
+        raise box["error"]
+    return box["value"]
+
+
+def _start_local(workers: int):
+    """``(LocalCluster, Client)``: ``workers`` processes of one thread on 127.0.0.1, no dashboard."""
+    import dask
+    from distributed import Client, LocalCluster
+
+    # distributed's nannies set MALLOC_TRIM_THRESHOLD_=65536 in their workers: glibc then trims (and stops
+    # adapting its mmap threshold) so often that a settle costs ~10 % more CPU (measured: 30 vs 27 ms per
+    # point at n = 32); the workers keep glibc's adaptive default, and the single-threaded BLAS variables
+    with dask.config.set({"distributed.nanny.pre-spawn-environ.MALLOC_TRIM_THRESHOLD_": None}):
+        cluster = LocalCluster(
+            n_workers=workers, threads_per_worker=1, processes=True, host="127.0.0.1",
+            # the scheduler always serves HTTP (/health, /metrics): on 127.0.0.1 and a free port, so
+            # that a busy 8787 (another cluster) neither fails the start nor warns; no dashboard on it
+            dashboard_address="127.0.0.1:0", scheduler_kwargs={"dashboard": False},
+            worker_dashboard_address=None, silence_logs=50,
+        )
     try:
-        yield
-    finally:
-        signal.signal(signal.SIGINT, old)
+        return cluster, Client(cluster, set_as_default=False)
+    except BaseException:
+        cluster.close(timeout=CLOSE_TIMEOUT_S)
+        raise
 
 
 def _children() -> dict[int, int]:
@@ -294,26 +333,44 @@ def _kill(pids) -> None:
 
 
 class _Local:
-    """A LocalCluster + Client for one call; :meth:`stop` closes it, :meth:`kill` kills its processes."""
+    """A LocalCluster + Client for one call; :meth:`stop` closes it (and kills its processes if need be)."""
 
     def __init__(self, workers: int):
-        from distributed import Client, LocalCluster
+        import sys
 
-        import dask
+        # multiprocessing starts its resource tracker with the first worker and then UNBLOCKS SIGINT in the
+        # spawning thread (resource_tracker.ensure_running): start it first, so the workers' block holds
+        from multiprocessing import resource_tracker
 
+        resource_tracker.ensure_running()
         self.before = descendants()
-        # distributed's nannies set MALLOC_TRIM_THRESHOLD_=65536 in their workers: glibc then trims (and stops
-        # adapting its mmap threshold) so often that a settle costs ~10 % more CPU (measured: 30 vs 27 ms per
-        # point at n = 32); the workers keep glibc's adaptive default, and the single-threaded BLAS variables
-        with _sigint_ignored(), dask.config.set({"distributed.nanny.pre-spawn-environ.MALLOC_TRIM_THRESHOLD_": None}):
-            self.cluster = LocalCluster(
-                n_workers=workers, threads_per_worker=1, processes=True, host="127.0.0.1",
-                # the scheduler always serves HTTP (/health, /metrics): on 127.0.0.1 and a free port, so that
-                # a busy 8787 (another cluster) neither fails the start nor warns; no dashboard on it
-                dashboard_address="127.0.0.1:0", scheduler_kwargs={"dashboard": False},
-                worker_dashboard_address=None, silence_logs=50,
-            )
-            self.client = Client(self.cluster, set_as_default=False)
+        spec = sys.modules.get("distributed.deploy.spec")
+        self.known = {id(c) for c in spec.SpecCluster._instances} if spec else set()
+        try:
+            self.cluster, self.client = _in_blocked_thread(lambda: _start_local(workers))
+        except BaseException:  # Ctrl-C or a failure while starting: no worker may outlive it
+            self._abandon()
+            raise
+
+    def _abandon(self) -> None:
+        """After a failed start: close what was started (briefly), kill its processes, and keep distributed's
+        exit handler from waiting for it again."""
+        import sys
+
+        spec = sys.modules.get("distributed.deploy.spec")
+        started = [c for c in (list(spec.SpecCluster._instances) if spec else []) if id(c) not in self.known]
+
+        def close():
+            for c in started:
+                with contextlib.suppress(Exception):
+                    c.close(timeout=CLOSE_TIMEOUT_S)
+
+        closer = threading.Thread(target=close, daemon=True)
+        closer.start()
+        closer.join(CLOSE_TIMEOUT_S)
+        _kill(self.spawned())
+        for c in started:
+            spec.SpecCluster._instances.discard(c)
 
     def spawned(self) -> set[int]:
         """Processes started since the cluster was (its workers), except multiprocessing's resource
