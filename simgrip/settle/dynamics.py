@@ -73,7 +73,7 @@ DYN_RELEASE_STEPS = 20
 #: rod (a soft Grip III finger lets the corner slide down slowly: measured 0.015 l per 1000 steps).
 DYN_DROP_FALL = 0.2
 #: Physics steps per ``mj_step`` call between two stop tests (velocity, drop watch) once nothing is held.
-DYN_BATCH = 4
+DYN_BATCH = 16
 #: Tangential slip (over l) of the tip on the workpiece after release that counts as a drop.
 DYN_DROP_SLIP = 0.02
 
