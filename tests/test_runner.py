@@ -20,12 +20,12 @@ from pathlib import Path
 
 import pytest
 
+from simgrip.harness.dask_cluster import descendants
 from simgrip.harness.runner import (
     RunnerError,
     RunnerOptions,
     add_runner_arguments,
     default_batch_size,
-    descendants,
     run_tasks,
     runner_options,
 )
@@ -253,9 +253,9 @@ def test_dask_cli_cluster(cli_cluster):
 def test_unreachable_scheduler_is_a_runner_error(monkeypatch):
     import socket
 
-    from simgrip.harness import runner
+    from simgrip.harness import dask_cluster
 
-    monkeypatch.setattr(runner, "CONNECT_TIMEOUT_S", 1.0)
+    monkeypatch.setattr(dask_cluster, "CONNECT_TIMEOUT_S", 1.0)
 
     with socket.socket() as s:  # a free port nobody listens on
         s.bind(("127.0.0.1", 0))

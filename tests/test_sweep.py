@@ -22,7 +22,8 @@ import numpy as np
 import pytest
 
 from simgrip.cli import main
-from simgrip.harness.runner import RunnerOptions, descendants
+from simgrip.harness.dask_cluster import descendants
+from simgrip.harness.runner import RunnerOptions
 from simgrip.harness.sweep import run_sweep
 from simgrip.harness.sweep_grid import AXES, make_grid, parse_axis
 from simgrip.harness.sweep_point import COLUMNS, evaluate_point

@@ -8,7 +8,8 @@ to spread independent work (settles, solves, figures) over processes:
   ``jobs`` worker processes (one thread each) on 127.0.0.1 with no dashboard,
   started for the call and closed after it; or an existing cluster reached by
   ``scheduler`` (address, e.g. ``tcp://127.0.0.1:8786``) or ``scheduler_file``
-  (``dask scheduler --scheduler-file``), which is left running.
+  (``dask scheduler --scheduler-file``), which is left running
+  (:mod:`simgrip.harness.dask_cluster` starts, reaches and stops them).
 
 Items are grouped into contiguous batches, one Dask task per batch, so that the
 scheduler's per-task overhead (~ms) stays small against the work; results come
@@ -56,12 +57,6 @@ __all__ = [
 MAX_BATCH = 32
 #: Default batches per worker (load balance: the last batches of a run finish at different times).
 BATCHES_PER_WORKER = 4
-#: Seconds allowed to reach a remote scheduler.
-CONNECT_TIMEOUT_S = 10.0
-#: Seconds allowed to close the local cluster after an interrupt before its processes are killed.
-CLOSE_TIMEOUT_S = 1.0
-#: Seconds allowed to close it after a normal end (a busy machine needs several).
-CLOSE_GRACEFUL_S = 15.0
 
 
 class RunnerError(RuntimeError):
@@ -240,236 +235,20 @@ def _sigterm_as_interrupt():
         signal.signal(signal.SIGTERM, old)
 
 
-def _in_blocked_thread(make):
-    """``make()`` run in a helper thread with SIGINT blocked; this thread waits, interruptibly.
-
-    Threads and processes that ``make`` starts inherit the blocked mask (across
-    exec too): the cluster's worker processes leave a terminal's Ctrl-C (sent to
-    the whole process group) to this process, which stops them; and this
-    thread, not blocking it, raises KeyboardInterrupt at once, even while the
-    cluster is still starting.
-    """
-    box = {}
-
-    def target():
-        if hasattr(signal, "pthread_sigmask"):
-            signal.pthread_sigmask(signal.SIG_BLOCK, {signal.SIGINT})
-        try:
-            box["value"] = make()
-        except BaseException as exc:  # handed to the waiting thread
-            box["error"] = exc
-
-    helper = threading.Thread(target=target, name="simgrip-cluster-start", daemon=True)
-    helper.start()
-    while helper.is_alive():
-        helper.join(0.05)
-    if "error" in box:
-        raise box["error"]
-    return box["value"]
-
-
-def _start_local(workers: int):
-    """``(LocalCluster, Client)``: ``workers`` processes of one thread on 127.0.0.1, no dashboard."""
-    import dask
-    from distributed import Client, LocalCluster
-
-    # distributed's nannies set MALLOC_TRIM_THRESHOLD_=65536 in their workers: glibc then trims (and stops
-    # adapting its mmap threshold) so often that a settle costs ~10 % more CPU (measured: 30 vs 27 ms per
-    # point at n = 32); the workers keep glibc's adaptive default, and the single-threaded BLAS variables
-    with dask.config.set({"distributed.nanny.pre-spawn-environ.MALLOC_TRIM_THRESHOLD_": None}):
-        cluster = LocalCluster(
-            n_workers=workers, threads_per_worker=1, processes=True, host="127.0.0.1",
-            # the scheduler always serves HTTP (/health, /metrics): on 127.0.0.1 and a free port, so
-            # that a busy 8787 (another cluster) neither fails the start nor warns; no dashboard on it
-            dashboard_address="127.0.0.1:0", scheduler_kwargs={"dashboard": False},
-            worker_dashboard_address=None, silence_logs=50,
-        )
-    try:
-        return cluster, Client(cluster, set_as_default=False)
-    except BaseException:
-        cluster.close(timeout=CLOSE_TIMEOUT_S)
-        raise
-
-
-def _children() -> dict[int, int]:
-    """``{pid: ppid}`` of every process (from /proc; empty where there is none)."""
-    out = {}
-    try:
-        names = os.listdir("/proc")
-    except OSError:  # pragma: no cover - not Linux
-        return out
-    for name in names:
-        if not name.isdigit():
-            continue
-        try:
-            with open(f"/proc/{name}/stat", "rb") as fh:
-                stat = fh.read().decode(errors="replace")
-            out[int(name)] = int(stat.rsplit(")", 1)[1].split()[1])
-        except (OSError, IndexError, ValueError):
-            continue
-    return out
-
-
-def descendants(pid: int | None = None) -> set[int]:
-    """Process ids of every descendant of ``pid`` (default: this process), from /proc."""
-    pid = os.getpid() if pid is None else pid
-    table = _children()
-    kids: dict[int, list[int]] = {}
-    for c, p in table.items():
-        kids.setdefault(p, []).append(c)
-    out, todo = set(), [pid]
-    while todo:
-        for c in kids.get(todo.pop(), ()):
-            if c not in out:
-                out.add(c)
-                todo.append(c)
-    return out
-
-
-def _kill(pids) -> None:
-    for pid in pids:
-        with contextlib.suppress(ProcessLookupError, PermissionError):
-            os.kill(pid, signal.SIGKILL)
-
-
-class _Local:
-    """A LocalCluster + Client for one call; :meth:`stop` closes it (and kills its processes if need be)."""
-
-    def __init__(self, workers: int):
-        import sys
-
-        # multiprocessing starts its resource tracker with the first worker and then UNBLOCKS SIGINT in the
-        # spawning thread (resource_tracker.ensure_running): start it first, so the workers' block holds
-        from multiprocessing import resource_tracker
-
-        resource_tracker.ensure_running()
-        self.before = descendants()
-        spec = sys.modules.get("distributed.deploy.spec")
-        self.known = {id(c) for c in spec.SpecCluster._instances} if spec else set()
-        try:
-            self.cluster, self.client = _in_blocked_thread(lambda: _start_local(workers))
-        except BaseException:  # Ctrl-C or a failure while starting: no worker may outlive it
-            self._abandon()
-            raise
-
-    def _abandon(self) -> None:
-        """After a failed start: close what was started (briefly), kill its processes, and keep distributed's
-        exit handler from waiting for it again."""
-        import sys
-
-        spec = sys.modules.get("distributed.deploy.spec")
-        started = [c for c in (list(spec.SpecCluster._instances) if spec else []) if id(c) not in self.known]
-
-        def close():
-            for c in started:
-                with contextlib.suppress(Exception):
-                    c.close(timeout=CLOSE_TIMEOUT_S)
-
-        closer = threading.Thread(target=close, daemon=True)
-        closer.start()
-        closer.join(CLOSE_TIMEOUT_S)
-        _kill(self.spawned())
-        for c in started:
-            spec.SpecCluster._instances.discard(c)
-
-    def spawned(self) -> set[int]:
-        """Processes started since the cluster was (its workers), except multiprocessing's resource
-        tracker (shared by the whole process; killing it only makes multiprocessing warn)."""
-        out = set()
-        for pid in descendants() - self.before:
-            try:
-                with open(f"/proc/{pid}/cmdline", "rb") as fh:
-                    if b"resource_tracker" in fh.read():
-                        continue
-            except OSError:
-                continue
-            out.add(pid)
-        return out
-
-    def stop(self, interrupted: bool) -> None:
-        if interrupted:
-            # no restarts: the nannies are told the workers may go away, then the workers are killed
-            for nanny in list(self.cluster.workers.values()):
-                with contextlib.suppress(Exception):
-                    nanny.close_gracefully(reason="simgrip interrupted")
-            _kill(self.spawned())
-        timeout = CLOSE_TIMEOUT_S if interrupted else CLOSE_GRACEFUL_S
-        closer = threading.Thread(target=self._close, args=(timeout,), daemon=True)
-        closer.start()
-        closer.join(2 * timeout)
-        _kill(self.spawned())  # whatever is still alive (a worker stuck in C code, a restarted one)
-        if closer.is_alive() or getattr(getattr(self.cluster, "status", None), "name", "") != "closed":
-            # its processes are gone: distributed's own exit handler must not wait for it again (10 s)
-            with contextlib.suppress(Exception):
-                from distributed.deploy.spec import SpecCluster
-
-                SpecCluster._instances.discard(self.cluster)
-
-    def _close(self, timeout: float) -> None:
-        with contextlib.suppress(Exception):
-            self.client.close(timeout=timeout)
-        with contextlib.suppress(Exception):
-            self.cluster.close(timeout=timeout)
-
-
-class _Remote:
-    """A Client of an existing cluster; :meth:`stop` cancels this call's work and disconnects."""
-
-    def __init__(self, options: RunnerOptions):
-        from distributed import Client
-
-        where = options.scheduler if options.scheduler is not None else f"scheduler file {options.scheduler_file}"
-        self.where = where
-        try:
-            if options.scheduler is not None:
-                self.client = Client(options.scheduler, timeout=CONNECT_TIMEOUT_S, set_as_default=False)
-            else:
-                self.client = Client(scheduler_file=options.scheduler_file, timeout=CONNECT_TIMEOUT_S,
-                                     set_as_default=False)
-        except (OSError, TimeoutError) as exc:
-            raise RunnerError(f"cannot reach the Dask scheduler at {where}: {exc}") from None
-        self.futures = []
-
-    def stop(self, interrupted: bool) -> None:
-        def close():
-            with contextlib.suppress(Exception):
-                if interrupted and self.futures:
-                    self.client.cancel(self.futures, force=True)
-            with contextlib.suppress(Exception):
-                self.client.close(timeout=CLOSE_TIMEOUT_S)
-
-        closer = threading.Thread(target=close, daemon=True)
-        closer.start()
-        closer.join(2 * CLOSE_TIMEOUT_S)
-
-
 def _run_dask(fn, items, options, batch_size, on_result, bar) -> list:
-    with _quiet_dask_logs():
+    from simgrip.harness.dask_cluster import quiet_dask_logs
+
+    with quiet_dask_logs():
         return _run_dask_quietly(fn, items, options, batch_size, on_result, bar)
-
-
-@contextlib.contextmanager
-def _quiet_dask_logs():
-    """distributed logs a lost scheduler or worker with tracebacks; the runner says it once (RunnerError)."""
-    import logging
-
-    loggers = [logging.getLogger(name) for name in ("distributed", "distributed.client", "distributed.nanny",
-                                                     "distributed.scheduler", "distributed.worker")]
-    saved = [lg.level for lg in loggers]
-    for lg in loggers:
-        lg.setLevel(logging.CRITICAL)
-    try:
-        yield
-    finally:
-        for lg, level in zip(loggers, saved):
-            lg.setLevel(level)
 
 
 def _run_dask_quietly(fn, items, options, batch_size, on_result, bar) -> list:
     from distributed import KilledWorker, as_completed
 
+    from simgrip.harness.dask_cluster import LocalDask, RemoteDask
+
     interrupted = False
-    env = _Remote(options) if options.remote else _Local(options.local_workers)
+    env = RemoteDask(options.scheduler, options.scheduler_file) if options.remote else LocalDask(options.local_workers)
     try:
         client = env.client
         if batch_size is None:
@@ -478,18 +257,18 @@ def _run_dask_quietly(fn, items, options, batch_size, on_result, bar) -> list:
         starts = list(range(0, len(items), batch_size))
         futures = [client.submit(_run_batch, fn, items[s:s + batch_size], pure=False, key=f"simgrip-batch-{s}-{_token()}")
                    for s in starts]
-        if isinstance(env, _Remote):
-            env.futures = futures
+        env.futures = futures
         start_of = {f.key: s for f, s in zip(futures, starts)}
         out = [None] * len(items)
         for fut in as_completed(futures, loop=client.loop):
             if fut.status == "error":
                 exc = fut.exception()
-                if isinstance(exc, KilledWorker):
-                    raise RunnerError(f"a batch killed {type(exc).__name__}: {exc}") from None
+                if isinstance(exc, KilledWorker):  # the scheduler gave up: the batch crashed workers again and again
+                    raise RunnerError(f"a batch killed its worker process each time it ran (a crash or out of memory "
+                                      f"in the task): {exc}") from None
                 raise exc.with_traceback(fut.traceback())
             if fut.status != "finished":
-                where = f"at {env.where} " if isinstance(env, _Remote) else ""
+                where = f"at {env.where} " if options.remote else ""
                 raise RunnerError(f"the Dask cluster {where}went away (scheduler gone or its workers lost: a batch "
                                   f"was {fut.status})")
             try:
@@ -504,11 +283,8 @@ def _run_dask_quietly(fn, items, options, batch_size, on_result, bar) -> list:
             bar.update(len(chunk))
             fut.release()
         return out
-    except KeyboardInterrupt:
+    except BaseException:  # Ctrl-C, fn failed or the cluster did: stop the rest now
         interrupted = True
-        raise
-    except BaseException:
-        interrupted = True  # fn failed or the cluster did: stop the rest now
         raise
     finally:
         env.stop(interrupted)

@@ -69,7 +69,7 @@ def _warm(points, options, workers):
 def profile_sweep(grid, *, workers: int = 2, batch_size: int | None = None, progress: bool = False,
                   cli_cluster: bool = True) -> dict:
     """Measure the runs of the module docstring on ``grid``; returns a JSON-able dict."""
-    from simgrip.harness.runner import _Local
+    from simgrip.harness.dask_cluster import LocalDask
 
     if isinstance(workers, bool) or not isinstance(workers, int) or workers < 1:
         raise ValueError(f"workers must be a positive integer, got {workers!r}")
@@ -86,7 +86,7 @@ def profile_sweep(grid, *, workers: int = 2, batch_size: int | None = None, prog
         return _entry(name, t, rows, ref, n, k, task, cluster_start_s=start_s)
 
     t0 = time.perf_counter()
-    one = _Local(1)
+    one = LocalDask(1)
     try:
         d1 = on_cluster(1, time.perf_counter() - t0, RunnerOptions(scheduler=one.cluster.scheduler_address,
                                                                    progress=progress), "dask_1_worker")
@@ -100,7 +100,7 @@ def profile_sweep(grid, *, workers: int = 2, batch_size: int | None = None, prog
     runs.append(d1)
 
     t0 = time.perf_counter()
-    loc = _Local(workers)
+    loc = LocalDask(workers)
     try:
         runs.append(on_cluster(workers, time.perf_counter() - t0, RunnerOptions(
             scheduler=loc.cluster.scheduler_address, progress=progress), f"local_{workers}_workers"))
