@@ -326,3 +326,14 @@ def _cmdline_has(pid: int, word: bytes, scheduler_file: str) -> bool:
     except OSError:
         return False
     return word in cmd and scheduler_file.encode() in cmd and b"worker" not in cmd
+
+
+def test_profile_runs_every_way_with_identical_rows():
+    from simgrip.harness.sweep_profile import format_profile, profile_sweep
+
+    prof = profile_sweep(make_grid("I", kappa=(-7, -5, 2), links=LINKS), workers=2, cli_cluster=False)
+    assert [r["run"] for r in prof["runs"]] == ["loop", "dask_1_worker", "local_2_workers"]
+    assert all(r["identical_to_loop"] for r in prof["runs"])
+    assert all(r["points_per_s"] > 0 and math.isfinite(r["runner_overhead_per_point_s"]) for r in prof["runs"])
+    assert "overhead_vs_loop_fraction" in prof["runs"][1] and "points/s" in format_profile(prof)
+    json.dumps(prof, allow_nan=False)

@@ -233,7 +233,7 @@ def cli_sweep(args):
     c = res.counts
     print(f"{c['points']} points ({res.computed} computed, {res.resumed} resumed): {c['settled']} settled, "
           f"{c['unsettled']} unsettled, {c['rejected']} rejected, {c['error']} failed; "
-          f"{c['feasible']} held, {c['agree']} agree with the BVP, {c['disagree']} disagree; "
+          f"{c['feasible']} held and feasible, {c['agree']} agree with the BVP, {c['disagree']} disagree; "
           f"{res.wall_time_s:.1f} s", file=sys.stderr)
     return None
 

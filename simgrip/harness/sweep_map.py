@@ -4,9 +4,9 @@ Each cell of the map is one pair of values of the first two swept axes
 (:attr:`SweepGrid.swept`; one axis gives a strip, none a single cell).  When
 more axes are swept, a cell stands for every point with those two values:
 
-* **held** / **dropped**: the simulation holds (drops) the workpiece at every
-  one of them and the BVP agrees (the simulation's ``feasible`` against
-  ``bvp_feasible``);
+* **held** / **dropped**: the simulation holds the workpiece (drops it, or for
+  Grip III violates condition (23)) at every one of them and the BVP agrees
+  (the simulation's ``feasible`` against ``bvp_feasible``);
 * **mixed**: both occur, always in agreement with the BVP;
 * **disagree**: at least one point where simulation and BVP disagree;
 * **no verdict**: at least one point without an answer (not settled, or the
@@ -32,6 +32,9 @@ __all__ = ["CATEGORIES", "cell_categories", "write_map"]
 #: Cell categories, in the colour order of the map.
 CATEGORIES = ("held", "dropped", "mixed", "disagree", "no verdict")
 _COLOURS = ("#2b8a3e", "#c92a2a", "#f59f00", "#7048e8", "#adb5bd")
+_LEGEND = {"held": "held (BVP agrees)", "dropped": "dropped / infeasible (BVP agrees)",
+           "mixed": "both, over the other axes", "disagree": "simulation and BVP disagree",
+           "no verdict": "no verdict (failed point)"}
 _LABELS = {"kappa": r"$\bar\kappa_0$", "D": "D", "M": "M", "mu": r"$\mu_s$", "b": "b / l", "gamma": r"$\gamma$ / l"}
 
 
@@ -122,7 +125,7 @@ def write_map(path, grid, rows) -> None:
     ax = fig.add_subplot()
     ax.pcolormesh(_edges(xs), _edges(ys), cat, cmap=ListedColormap(_COLOURS), vmin=-0.5,
                   vmax=len(CATEGORIES) - 0.5, shading="flat")
-    handles = [Patch(color=c, label=k) for c, k in zip(_COLOURS, CATEGORIES)]
+    handles = [Patch(color=c, label=_LEGEND[k]) for c, k in zip(_COLOURS, CATEGORIES)]
     segments = _boundary(frac, _edges(xs), _edges(ys))
     if segments:
         from matplotlib.collections import LineCollection
