@@ -14,7 +14,8 @@ once, which is not a per-point cost); cluster start-up is timed apart.
 * ``local_N_workers``: a local cluster of ``N`` workers (what ``--jobs N`` starts);
 * ``dask_cli_N_workers``: ``dask scheduler`` + ``dask worker --nworkers N``
   started from the command line on 127.0.0.1 (:mod:`simgrip.harness.cli_cluster`),
-  reached with ``--scheduler``.
+  reached with ``--scheduler``;
+* ``given_cluster``: the cluster named by ``--scheduler``/``--scheduler-file``, if any.
 
 ``runner_overhead_*`` is measured within each run and is less sensitive to a
 busy machine than a comparison of two runs: wall time times workers minus the
@@ -67,8 +68,12 @@ def _warm(points, options, workers):
 
 
 def profile_sweep(grid, *, workers: int = 2, batch_size: int | None = None, progress: bool = False,
-                  cli_cluster: bool = True) -> dict:
-    """Measure the runs of the module docstring on ``grid``; returns a JSON-able dict."""
+                  cli_cluster: bool = True, remote: RunnerOptions | None = None) -> dict:
+    """Measure the runs of the module docstring on ``grid``; returns a JSON-able dict.
+
+    ``remote`` (options naming an existing cluster, ``--scheduler``) adds a run
+    ``given_cluster`` on it.
+    """
     from simgrip.harness.dask_cluster import LocalDask
 
     if isinstance(workers, bool) or not isinstance(workers, int) or workers < 1:
@@ -113,6 +118,15 @@ def profile_sweep(grid, *, workers: int = 2, batch_size: int | None = None, prog
         with dask_cli_cluster(workers) as (address, _, _):
             runs.append(on_cluster(workers, time.perf_counter() - t0, RunnerOptions(scheduler=address, progress=progress),
                                    f"dask_cli_{workers}_workers"))
+    if remote is not None and remote.remote:
+        from simgrip.harness.dask_cluster import RemoteDask
+
+        probe = RemoteDask(remote.scheduler, remote.scheduler_file)
+        try:
+            k = max(1, len(probe.client.scheduler_info()["workers"]))
+        finally:
+            probe.stop(False)
+        runs.append(on_cluster(k, 0.0, remote, "given_cluster"))
     return {"grid": grid.spec(), "points": n, "batch_size": bs, "settle_s_per_point": t_loop / n, "runs": runs}
 
 
@@ -143,7 +157,8 @@ def cli_profile(args, grid, options: RunnerOptions):
 
     out = check_output_dir(args.out, "--out")
     workers = options.jobs if options.jobs is not None and options.jobs > 1 else 2
-    prof = profile_sweep(grid, workers=workers, batch_size=args.batch_size, progress=options.progress)
+    prof = profile_sweep(grid, workers=workers, batch_size=args.batch_size, progress=options.progress,
+                         remote=options if options.remote else None)
     from simgrip.harness.sweep import versions
 
     prof["versions"] = versions()
