@@ -114,7 +114,7 @@ class Dyn:
         self.m, self.d = m, d
         self.fscale, self.lscale = dof_scales(scene)
         self.vscale = self.lscale / math.sqrt(scene.length / scene.physical.g)
-        self.rest_residual = RestResidual(scene)
+        self.rest_residual = RestResidual(scene, data=d)  # on the scene's data, velocities restored
         self.steps = 0
         self.calls = 0
         k = m.jnt_stiffness[m.dof_jntid].copy()
@@ -158,7 +158,9 @@ class Dyn:
 
     def residual(self) -> float:
         """Static residual at rest: ``qfrc_smooth + qfrc_constraint`` at ``qvel = 0`` (MuJoCo's friction included)."""
+        qvel = self.d.qvel.copy()
         r = self.rest_residual.vector(self.d.qpos, self.d.qfrc_applied)
+        self.d.qvel[:] = qvel
         self.calls += 1
         if self.held_q is not None:
             r[np.asarray(self.scene.workpiece_dof, dtype=int)] = 0.0

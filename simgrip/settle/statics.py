@@ -160,11 +160,12 @@ class RestResidual:
 
     ``mj_forward``'s balance (the dynamic settles' stop test).  ``dofs``
     restricts the max; ``applied`` is the ``qfrc_applied`` to use (default 0).
+    ``data``: evaluate on this MjData (default a new one); it is left at rest.
     """
 
-    def __init__(self, scene: Scene, dofs=None):
+    def __init__(self, scene: Scene, dofs=None, data=None):
         self.m = scene.model
-        self.d = mujoco.MjData(self.m)
+        self.d = mujoco.MjData(self.m) if data is None else data
         self.scale = dof_scales(scene)[0]
         self.dofs = None if dofs is None else np.asarray(dofs, int)
         self.calls = 0
