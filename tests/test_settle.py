@@ -108,6 +108,34 @@ def test_soft_free_rods_settle_at_every_accepted_D(D, kappa, method):
     np.testing.assert_allclose(st.link_angles[0], ch.link_angles, atol=1e-9)
 
 
+def _gravity_off(scene, how):
+    import mujoco
+
+    if how == "vector":
+        scene.model.opt.gravity[:] = 0.0
+    else:
+        scene.model.opt.disableflags |= int(mujoco.mjtDisableBit.mjDSBL_GRAVITY)
+    return scene
+
+
+@pytest.mark.parametrize("how", ["vector", "flag"])
+@pytest.mark.parametrize("method", ["newton", "dynamics"])
+@pytest.mark.parametrize("kappa", [-4.0, 6.0])
+def test_gravity_off_either_way_settles_to_the_gravity_free_chain(how, method, kappa):
+    """A zeroed ``opt.gravity`` and ``mjDSBL_GRAVITY`` both switch gravity off, as MuJoCo applies it:
+    the settle (its start and its chain statics) gives the gravity-free chain's equilibrium, ``kappa ds``
+    per hinge -- the straight-start bug gave "0 Newton iterations" failures (Fig. 6a overlay)."""
+    sc = _gravity_off(build_scene("free", STANDARD, Uniform(kappa), 32), how)
+    st = settle(sc, method=method)
+    assert st.converged and st.residual <= 1e-10
+    ch = solve_chain("free", STANDARD, Uniform(kappa), 32, gravity=0.0)
+    np.testing.assert_allclose(st.link_angles[0], ch.link_angles, atol=1e-9)
+    if method == "newton":  # it starts AT the gravity-free chain equilibrium: nothing left to polish
+        assert st.newton_iterations == 0
+    sag = solve_chain("free", STANDARD, Uniform(kappa), 32)
+    assert np.max(np.abs(sag.link_angles - ch.link_angles)) > 1e-2  # gravity matters at this D
+
+
 # ---------------------------------------------------------------------------
 # Grips I and II
 

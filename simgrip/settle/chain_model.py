@@ -47,13 +47,30 @@ import numpy as np
 
 from simgrip.sim.scene import Scene
 
-__all__ = ["ChainModel", "Term", "eligible"]
+__all__ = ["ChainModel", "Term", "eligible", "gravity_factor", "model_gravity"]
 
 _EZ = np.array([0.0, 1.0])
 
 
 def _perp(v):
     return np.array([-v[1], v[0]])
+
+
+def model_gravity(m) -> float:
+    """Downward gravity [m/s^2] as MuJoCo applies it: ``-opt.gravity[2]``, or 0 under ``mjDSBL_GRAVITY``."""
+    if int(m.opt.disableflags) & int(mujoco.mjtDisableBit.mjDSBL_GRAVITY):
+        return 0.0
+    return -float(m.opt.gravity[2])
+
+
+def gravity_factor(scene: Scene) -> float:
+    """The scene's gravity over the physical ``g`` it was built with (1 physical, 0 gravity free).
+
+    Read from the compiled model as MuJoCo applies it (:func:`model_gravity`):
+    both a zeroed ``opt.gravity`` and the ``mjDSBL_GRAVITY`` flag switch it off.
+    This is the ``gravity`` factor of :func:`simgrip.reference.solve_chain`.
+    """
+    return model_gravity(scene.model) / scene.physical.g
 
 
 def eligible(scene: Scene) -> bool:
@@ -88,7 +105,7 @@ class ChainModel:
         bodies = np.asarray(scene.link_body[0], int)
         self.link_index = {int(b): i for i, b in enumerate(bodies)}
         self.ds = float(m.body_pos[bodies[1]][0]) / L
-        g = -float(m.opt.gravity[2])
+        g = model_gravity(m)
         mass = m.body_mass[bodies]
         arm = m.body_ipos[bodies][:, 0] / L
         beyond = np.concatenate([np.cumsum(mass[::-1])[::-1][1:], [0.0]])

@@ -27,6 +27,7 @@ from __future__ import annotations
 import mujoco
 import numpy as np
 
+from simgrip.settle.chain_model import gravity_factor
 from simgrip.settle.newton import Newton
 from simgrip.settle.state import SettleError, finger_tip
 from simgrip.sim.scene import BOX_HEIGHT, Scene, set_curvature
@@ -61,7 +62,7 @@ def start_free(scene: Scene) -> bool:
     from simgrip.reference import DiscreteError, hinge_chain
 
     try:
-        ch = hinge_chain.solve_chain("free", scene.params, scene.profile, scene.n)
+        ch = hinge_chain.solve_chain("free", scene.params, scene.profile, scene.n, gravity=gravity_factor(scene))
     except (DiscreteError, ValueError):
         return False
     if not ch.success:
@@ -124,7 +125,8 @@ def place_on_chain(scene: Scene, run: Newton) -> bool:
 
     try:
         # the tip a hair inside the face so that MuJoCo reports the contact
-        ch = hinge_chain.solve_chain(scene.grip, scene.params.replace(b=scene.params.b - 2e-6), scene.profile, scene.n)
+        ch = hinge_chain.solve_chain(scene.grip, scene.params.replace(b=scene.params.b - 2e-6), scene.profile, scene.n,
+                                     gravity=gravity_factor(scene))
     except DiscreteError as exc:
         raise SettleError(f"no starting shape for grip {scene.grip}: {exc}") from exc
     d = scene.data
@@ -166,13 +168,15 @@ def start_on_chain(scene: Scene, run: Newton | None) -> bool | None:
     p = scene.params
     try:
         # the tip a hair inside the face so that MuJoCo reports the contact
-        ch = hinge_chain.solve_chain(scene.grip, p.replace(b=p.b - 2e-6), scene.profile, scene.n)
+        ch = hinge_chain.solve_chain(scene.grip, p.replace(b=p.b - 2e-6), scene.profile, scene.n,
+                                     gravity=gravity_factor(scene))
         # the free finger's equilibrium next to the grip's: Newton in link angles when the solve has the
         # chain model (O(n), from the grip shape), else the chain solver
         model = getattr(run, "model", None)
         phi = model.free_equilibrium(ch.link_angles) if model is not None else None
         if phi is None:
-            phi = hinge_chain.solve_chain("free", p, scene.profile, scene.n, guess=ch.link_angles).link_angles
+            phi = hinge_chain.solve_chain("free", p, scene.profile, scene.n, guess=ch.link_angles,
+                                          gravity=gravity_factor(scene)).link_angles
         if float(np.sum(np.cos(phi))) / scene.n > 0.5 * p.b:
             return False
     except (DiscreteError, ValueError):
@@ -299,7 +303,8 @@ def _close_predicted(scene: Scene, run: Newton, target, t: float, z0: float, tol
     ch, step, lam0 = None, None, None
     for s in stages[:k + 1]:
         try:
-            ch = hinge_chain.solve_chain(scene.grip, params, target.scaled(s), scene.n, guess=phi)
+            ch = hinge_chain.solve_chain(scene.grip, params, target.scaled(s), scene.n, guess=phi,
+                                         gravity=gravity_factor(scene))
         except (DiscreteError, ValueError):
             return False
         if not (ch.success and ch.N1 > 0.0 and ch.min_eigenvalue > 0.0 and abs(float(ch.tip[1]) - z0) < margin):

@@ -43,8 +43,10 @@ from __future__ import annotations
 import math
 import time
 
+import mujoco
 import numpy as np
 
+from simgrip.settle.chain_model import gravity_factor
 from simgrip.settle.state import SettledState, SettleError
 
 __all__ = ["MIN_TARGET_ERROR", "check_target_error", "settle_to_error"]
@@ -77,7 +79,7 @@ def _chain_quantities(scene, n, held: bool, guess=None):
 
     grip = scene.grip if held else "free"
     try:
-        ch = solve_chain(grip, scene.params, scene.profile, n, guess=guess)
+        ch = solve_chain(grip, scene.params, scene.profile, n, guess=guess, gravity=gravity_factor(scene))
     except (DiscreteError, ValueError):
         return None
     if not ch.success:
@@ -110,6 +112,10 @@ def settle_to_error(scene, target_error: float, settle_one, **kw) -> SettledStat
             sc = build_scene(scene.grip, scene.physical, scene.profile, n, fingers=scene.fingers,
                              free_workpiece=scene.free_workpiece, r_tip=scene.r_tip, r_link=scene.r_link,
                              r_corner=scene.r_corner)
+            # the scene's gravity as the caller set it (a zeroed vector or the disable flag)
+            sc.model.opt.gravity[:] = scene.model.opt.gravity
+            bit = int(mujoco.mjtDisableBit.mjDSBL_GRAVITY)
+            sc.model.opt.disableflags = (int(sc.model.opt.disableflags) & ~bit) | (int(scene.model.opt.disableflags) & bit)
             cache[n] = settle_one(sc, **kw)
         return cache[n]
 
