@@ -1,0 +1,368 @@
+"""K-finger grippers: identical fingers spaced evenly around a vertical palm axis, a workpiece free in 3-D.
+
+:func:`build_gripper` builds the scene with :class:`mujoco.MjSpec` from the
+same parts as the planar scene (:mod:`simgrip.sim.scene`): the root options
+and default classes (``models/defaults.xml``), the hinge chains of
+:func:`simgrip.sim.fingers.add_fingers` (same springs and rest angles,
+:mod:`simgrip.chain`) and the explicit contact pairs of
+:mod:`simgrip.sim.contacts`.
+
+Geometry (lengths over ``l``; the palm axis is the world ``z`` axis):
+
+* Finger ``k`` (``k = 0 .. K-1``) is clamped at the origin, pointing
+  horizontally along the azimuth ``a_k = yaw + 2 pi k / K``; it bends in its
+  own vertical plane (hinges about the root body's ``-y``), so each finger
+  reads exactly like the planar finger in its own frame ``E1 = (cos a_k,
+  sin a_k, 0)``, ``E2 = z``.
+* The workpiece is free in 3-D (one free joint, 6 dof) and weighs
+  ``K m g`` (``M`` keeps the paper's meaning: workpiece mass per finger):
+
+  - ``"box"`` (``K = 2`` or ``4``): faces at ``b/2 - r_tip`` from the axis
+    facing the fingers, one finger centred on each face (``K = 2``: depth
+    :data:`~simgrip.sim.workpiece.BOX_DEPTH` across, as the planar box);
+  - ``"cylinder"`` (any ``K >= 2``): vertical axis, radius ``b/2 - r_tip``;
+  - ``"sphere"`` (any ``K >= 2``): radius ``b/2 - r_tip``.
+
+  As in the planar scene a touching tip sphere (radius ``r_tip``) has its
+  centre, the rod's end, at distance ``b/2`` from the workpiece's axis
+  (sphere: from its centre); box and cylinder are :data:`BOX_HEIGHT` tall so
+  that the tip meets a vertical face.  The whole scene (fingers and
+  workpiece) is rotated by ``yaw`` about the palm axis.
+* Contact: one pair per finger, its tip sphere with the workpiece (Grips I,
+  II); no other pair can occur in these grips.
+
+The builder runs no solver: the fingers start at ``initial_angles`` (default
+straight) and the workpiece's centre level with their tips;
+:func:`simgrip.settle.gripper.settle_gripper` starts from the hinge chain's
+grip equilibrium.  Grip III (cradle) is not built for K fingers.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import mujoco
+import numpy as np
+
+from simgrip.chain import ChainSprings, chain_springs, link_positions
+from simgrip.models import model_path
+from simgrip.params import DimensionlessParams, PhysicalParams, check_grip
+from simgrip.profiles import CurvatureProfile, as_profile
+from simgrip.sim.contacts import add_pair
+from simgrip.sim.fingers import FingerIndex, add_fingers, check_finger_links, index_fingers
+from simgrip.sim.workpiece import BOX_DEPTH, BOX_HEIGHT
+
+__all__ = ["GRIPPER_GRIPS", "WORKPIECES", "GripperScene", "build_gripper", "check_gripper", "set_finger_angles"]
+
+#: Workpiece shapes of a K-finger gripper.
+WORKPIECES = ("box", "cylinder", "sphere")
+#: Grips a K-finger gripper is built for.
+GRIPPER_GRIPS = ("I", "II")
+#: Default tip sphere radius over ``l`` (as the planar scene's).
+DEFAULT_R_TIP = 2e-3
+#: Default link capsule radius over ``l``.
+DEFAULT_R_LINK = 2e-3
+
+_WORKPIECE_GEOM = "workpiece_geom"
+
+
+@dataclass
+class GripperScene:
+    """A compiled K-finger scene and the addresses needed to read it.
+
+    Attributes
+    ----------
+    spec, model, data : MuJoCo objects
+    grip : {"I", "II"}
+    workpiece : {"box", "cylinder", "sphere"}
+    params : DimensionlessParams
+    physical : PhysicalParams
+        SI parameters the model is built in (dimensionless ones with ``l = rho = g = 1``).
+    profile : CurvatureProfile
+    n : int
+        Links per finger.
+    fingers : int
+        ``K``.
+    springs : ChainSprings
+        Dimensionless springs of one finger (every finger has the same).
+    index : FingerIndex
+        The fingers' joint, body and geom addresses, shape (K, n).
+    azimuths : ndarray (K,)
+        Azimuth of each finger's plane [rad] (``yaw + 2 pi k / K``).
+    yaw : float
+        Rotation of the whole scene about the palm axis [rad].
+    workpiece_body, workpiece_geom : int
+    workpiece_qpos : ndarray (7,)
+        qpos addresses of the free joint (position, then quaternion).
+    workpiece_dof : ndarray (6,)
+        dof addresses (translation in the world frame, then rotation in the body frame).
+    size : ndarray (3,)
+        Box half sizes; cylinder ``(radius, half height, 0)``; sphere ``(radius, 0, 0)`` [m].
+    r_tip, r_link : float
+        Radii over ``l``.
+    """
+
+    spec: mujoco.MjSpec
+    model: mujoco.MjModel
+    data: mujoco.MjData
+    grip: str
+    workpiece: str
+    params: DimensionlessParams
+    physical: PhysicalParams
+    profile: CurvatureProfile
+    n: int
+    fingers: int
+    springs: ChainSprings
+    index: FingerIndex
+    azimuths: np.ndarray
+    yaw: float
+    workpiece_body: int
+    workpiece_geom: int
+    workpiece_qpos: np.ndarray
+    workpiece_dof: np.ndarray
+    size: np.ndarray
+    r_tip: float
+    r_link: float
+
+    @property
+    def joint_qpos(self) -> np.ndarray:
+        """qpos addresses of the hinges, (K, n)."""
+        return self.index.joint_qpos
+
+    @property
+    def joint_dof(self) -> np.ndarray:
+        """dof addresses of the hinges, (K, n)."""
+        return self.index.joint_dof
+
+    @property
+    def tip_geom(self) -> np.ndarray:
+        """Tip sphere geom ids, (K,)."""
+        return self.index.tip_geom
+
+    @property
+    def length(self) -> float:
+        """``l`` [m]."""
+        return self.physical.length
+
+    @property
+    def force_scale(self) -> float:
+        """``rho g l`` [N]."""
+        return self.physical.force_scale
+
+    @property
+    def moment_scale(self) -> float:
+        """``rho g l^2`` [N m]."""
+        return self.physical.force_scale * self.physical.length
+
+    @property
+    def workpiece_mass(self) -> float:
+        """Mass of the workpiece [kg]: ``K m``."""
+        return self.physical.m * self.fingers
+
+    def frame(self, k: int) -> np.ndarray:
+        """Finger ``k``'s frame as rows ``(E1, E3, E2)`` in world coordinates.
+
+        ``E1`` horizontal, away from the palm axis in the finger's plane; ``E3``
+        horizontal, normal to the plane (the hinge axis is ``-E3``); ``E2 = z`` up.
+        A world vector ``v`` reads ``frame(k) @ v = (along E1, out of plane, up)``.
+        """
+        a = float(self.azimuths[k])
+        return np.array([[math.cos(a), math.sin(a), 0.0], [-math.sin(a), math.cos(a), 0.0], [0.0, 0.0, 1.0]])
+
+
+# ---------------------------------------------------------------------------
+# input checks
+
+
+def _check_params(params) -> tuple[DimensionlessParams, PhysicalParams]:
+    if isinstance(params, PhysicalParams):
+        return params.dimensionless(), params
+    if isinstance(params, DimensionlessParams):
+        return params, params.to_physical(length=1.0, rho=1.0, g=1.0)
+    raise ValueError(f"params must be PhysicalParams or DimensionlessParams, got {type(params).__name__}")
+
+
+def _check_radius(name, value) -> float:
+    try:
+        v = float(value)
+    except (TypeError, ValueError):
+        raise ValueError(f"{name} must be a real number, got {value!r}") from None
+    if not (math.isfinite(v) and 0.0 < v <= 0.05):
+        raise ValueError(f"{name} must lie in (0, 0.05] (over l), got {value!r}")
+    return v
+
+
+def check_gripper(grip, fingers, workpiece) -> tuple[str, int, str]:
+    """``(grip, K, workpiece)`` normalised, or ValueError naming the bad one.
+
+    ``fingers`` is an integer ``>= 2``; ``workpiece`` one of :data:`WORKPIECES`;
+    a box takes ``K = 2`` or ``4`` (one finger centred on each of two or four faces);
+    ``grip`` one of :data:`GRIPPER_GRIPS`.
+    """
+    g = check_grip(grip)
+    if g not in GRIPPER_GRIPS:
+        raise ValueError(f"grip must be one of {GRIPPER_GRIPS} for a K-finger gripper (Grip III and the free rod "
+                         f"are built by simgrip.sim.scene), got {grip!r}")
+    if isinstance(fingers, bool) or not isinstance(fingers, (int, np.integer)) or fingers < 2:
+        raise ValueError(f"fingers must be an integer >= 2, got {fingers!r}")
+    if not isinstance(workpiece, str) or workpiece.strip().lower() not in WORKPIECES:
+        raise ValueError(f"workpiece must be one of {WORKPIECES}, got {workpiece!r}")
+    w = workpiece.strip().lower()
+    if w == "box" and int(fingers) not in (2, 4):
+        raise ValueError(f"fingers must be 2 or 4 for workpiece 'box' (one finger centred on each face), "
+                         f"got fingers = {fingers!r}; a cylinder or sphere takes any fingers >= 2")
+    return g, int(fingers), w
+
+
+# ---------------------------------------------------------------------------
+# builder
+
+
+def build_gripper(
+    grip: str,
+    params: PhysicalParams | DimensionlessParams,
+    profile,
+    n_links: int,
+    *,
+    fingers: int = 3,
+    workpiece: str = "cylinder",
+    yaw: float = 0.0,
+    r_tip: float = DEFAULT_R_TIP,
+    r_link: float = DEFAULT_R_LINK,
+    initial_angles=None,
+) -> GripperScene:
+    """Build and compile a K-finger gripper holding a workpiece (see the module docstring).
+
+    Parameters
+    ----------
+    grip : {"I", "II"}
+        Palm down (tip pinch) or palm up.
+    params : PhysicalParams or DimensionlessParams
+        ``M`` is the workpiece mass per finger; ``b`` the workpiece's width
+        (box), diameter (cylinder, sphere) through the tip centres.
+    profile : CurvatureProfile, float or callable
+        Intrinsic curvature ``kappa_bar(s_bar)`` of every finger.
+    n_links : int
+        Links per finger.
+    fingers : int
+        ``K >= 2`` (box: 2 or 4).
+    workpiece : {"box", "cylinder", "sphere"}
+    yaw : float
+        Rotation of the whole scene about the palm axis [rad].
+    r_tip, r_link : float
+        Tip sphere and link capsule radii over ``l``; ``K`` tip spheres must fit
+        around the circle of radius ``b/2`` (ValueError naming ``fingers``).
+    initial_angles : array (n,) or (K, n), optional
+        Joint angles of the start shape [rad]; default straight.  The
+        workpiece's centre starts level with finger 0's tip.
+
+    Returns
+    -------
+    GripperScene
+    """
+    grip, K, shape = check_gripper(grip, fingers, workpiece)
+    dimless, phys = _check_params(params)
+    prof = as_profile(profile)
+    n = check_finger_links(n_links)
+    r_tip = _check_radius("r_tip", r_tip)
+    r_link = _check_radius("r_link", r_link)
+    try:
+        yaw = float(yaw)
+    except (TypeError, ValueError):
+        raise ValueError(f"yaw must be a real number (radians), got {yaw!r}") from None
+    if not math.isfinite(yaw):
+        raise ValueError(f"yaw must be finite, got {yaw!r}")
+    if 2.0 * r_tip >= 2.0 * (0.5 * dimless.b) * math.sin(math.pi / K):
+        raise ValueError(f"fingers = {K}: the tip spheres (radius {r_tip:g} l) overlap on the circle of diameter "
+                         f"b = {dimless.b:g} l")
+    if not 0.5 * dimless.b - r_tip > 0.0:
+        raise ValueError(f"b must exceed 2 r_tip = {2 * r_tip:g}, got b = {dimless.b:g}")
+    springs = chain_springs(prof, n)
+    q0 = _start(initial_angles, K, n)
+
+    L = phys.length
+    spec = mujoco.MjSpec.from_file(str(model_path("defaults.xml")))
+    spec.modelname = f"simgrip_gripper_{grip}_{K}{shape}_{n}"
+    spec.option.gravity = [0.0, 0.0, -phys.g]
+    add_fingers(spec, spec.worldbody, springs, fingers=K, length=L, EI=phys.EI, rho=phys.rho, r_link=r_link * L,
+                r_tip=r_tip * L)
+    azimuths = yaw + 2.0 * math.pi * np.arange(K) / K
+    for k in range(K):  # add_fingers mirrors finger 1; here every root turns to its own azimuth
+        spec.body(f"f{k}_link0").quat = _yaw_quat(float(azimuths[k]))
+    size = _workpiece_size(shape, K, 0.5 * dimless.b - r_tip, L)
+    z0 = float(link_positions(np.cumsum(q0[0]), springs.ds)[-1, 1]) * L
+    _add_workpiece(spec, shape, size, phys.m * K, z0, yaw)
+    for k in range(K):
+        add_pair(spec, f"pair_f{k}_tip", f"f{k}_tip", _WORKPIECE_GEOM, phys.mu_s)
+
+    model = spec.compile()
+    index = index_fingers(model, K, n)
+    wb = mujoco.mj_name2id(model, mujoco.mjtObj.mjOBJ_BODY, "workpiece_body")
+    wj = int(model.body_jntadr[wb])
+    scene = GripperScene(
+        spec=spec, model=model, data=mujoco.MjData(model), grip=grip, workpiece=shape, params=dimless,
+        physical=phys, profile=prof, n=n, fingers=K, springs=springs, index=index, azimuths=azimuths, yaw=yaw,
+        workpiece_body=wb, workpiece_geom=mujoco.mj_name2id(model, mujoco.mjtObj.mjOBJ_GEOM, _WORKPIECE_GEOM),
+        workpiece_qpos=np.arange(model.jnt_qposadr[wj], model.jnt_qposadr[wj] + 7),
+        workpiece_dof=np.arange(model.jnt_dofadr[wj], model.jnt_dofadr[wj] + 6),
+        size=size, r_tip=r_tip, r_link=r_link,
+    )
+    set_finger_angles(scene, q0)
+    return scene
+
+
+def _start(initial_angles, K: int, n: int) -> np.ndarray:
+    if initial_angles is None:
+        return np.zeros((K, n))
+    q = np.asarray(initial_angles, dtype=float)
+    if q.shape not in ((n,), (K, n)) or not np.all(np.isfinite(q)):
+        raise ValueError(f"initial_angles must be {n} or {K}x{n} finite joint angles, got shape {q.shape}")
+    return np.array(np.broadcast_to(q, (K, n)))
+
+
+def _yaw_quat(a: float) -> list[float]:
+    return [math.cos(0.5 * a), 0.0, 0.0, math.sin(0.5 * a)]
+
+
+def _workpiece_size(shape: str, K: int, r: float, L: float) -> np.ndarray:
+    """Geom size [m] of the workpiece whose surface lies ``r`` (over l) from its axis (centre)."""
+    if shape == "box":
+        across = r if K == 4 else 0.5 * BOX_DEPTH
+        return np.array([r, across, 0.5 * BOX_HEIGHT]) * L
+    if shape == "cylinder":
+        return np.array([r, 0.5 * BOX_HEIGHT, 0.0]) * L
+    return np.array([r, 0.0, 0.0]) * L
+
+
+def _add_workpiece(spec, shape: str, size, mass: float, z0: float, yaw: float) -> None:
+    """The workpiece body on a free joint, its geom and the solid's inertia, centred on the palm axis at ``z0``."""
+    body = spec.worldbody.add_body(name="workpiece_body", pos=[0.0, 0.0, z0], quat=_yaw_quat(yaw))
+    body.add_freejoint(name="workpiece_free")
+    body.explicitinertial = True
+    body.mass = mass
+    body.ipos = [0.0, 0.0, 0.0]
+    cls = spec.find_default("workpiece")
+    if shape == "box":
+        hx, hy, hz = size
+        inertia = [mass / 3.0 * (hy**2 + hz**2), mass / 3.0 * (hx**2 + hz**2), mass / 3.0 * (hx**2 + hy**2)]
+        kind, gsize = mujoco.mjtGeom.mjGEOM_BOX, list(size)
+    elif shape == "cylinder":
+        r, h = size[0], size[1]
+        side = mass * (3.0 * r**2 + 4.0 * h**2) / 12.0
+        inertia = [side, side, 0.5 * mass * r**2]
+        kind, gsize = mujoco.mjtGeom.mjGEOM_CYLINDER, [r, h, 0.0]
+    else:
+        r = size[0]
+        inertia = [0.4 * mass * r**2] * 3
+        kind, gsize = mujoco.mjtGeom.mjGEOM_SPHERE, [r, 0.0, 0.0]
+    body.inertia = inertia
+    body.add_geom(cls, name=_WORKPIECE_GEOM, type=kind, size=gsize)
+
+
+def set_finger_angles(scene: GripperScene, angles) -> None:
+    """Set every finger's hinge angles [rad] (shape (n,) or (K, n)), zero velocities, forward."""
+    q = np.broadcast_to(np.asarray(angles, dtype=float), (scene.fingers, scene.n))
+    scene.data.qpos[scene.joint_qpos] = q
+    scene.data.qvel[:] = 0.0
+    mujoco.mj_forward(scene.model, scene.data)
