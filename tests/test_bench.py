@@ -160,3 +160,18 @@ def test_bad_out_is_refused_before_any_work(tmp_path, capsys, monkeypatch):
         assert "--out" in capsys.readouterr().err
     with pytest.raises(ValueError, match="out_dir"):
         run_bench(tmp_path / "file", quick=True, jobs=1, progress=False)
+
+
+def test_error_targeted_settle_is_a_series_of_the_pareto_plot(bench):
+    """Issue 9: ``settle(target_error=E)`` beside the minimiser and the BVP; its error meets the target
+    within the factor 3 that its estimate is held to (tests/test_settle_target.py)."""
+    from simgrip.harness.methods import TARGET_ERRORS
+
+    res, out = bench
+    for grip in ("free", "I"):
+        rows = [r for r in res.rows if r["grip"] == grip and r["method"] == "settle_target"]
+        assert sorted(r["target_error"] for r in rows) == sorted(TARGET_ERRORS)
+        for r in rows:
+            assert r["converged"] and r["extrapolated"] and r["time_s"] > 0
+            assert r["tip_err"] <= 3 * r["target_error"], r
+    assert "settle_target" in (out / "summary.md").read_text()

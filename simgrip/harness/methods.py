@@ -40,7 +40,7 @@ from simgrip.harness.timing import contact_force, errors, median_time
 from simgrip.params import DimensionlessParams
 from simgrip.profiles import Uniform
 
-__all__ = ["STANDARD_CASES", "BVP_TOLS", "REF_TOL", "MATCH_FRACTION", "MAX_EXTRAPOLATION", "bench_task",
+__all__ = ["STANDARD_CASES", "BVP_TOLS", "TARGET_ERRORS", "REF_TOL", "MATCH_FRACTION", "MAX_EXTRAPOLATION", "bench_task",
            "reference", "chain", "start_state", "naive_to_matched_error"]
 
 #: Curvature of each grip's standard case (feasible at the standard parameters).
@@ -48,6 +48,8 @@ STANDARD_CASES = {"free": -4.0, "I": -6.0, "II": 6.0, "III": -4.0}
 #: Tolerances of the BVP's own error-vs-time curve; the last one is the reference.
 BVP_TOLS = (1e-3, 1e-4, 1e-6, 1e-8, 1e-10)
 REF_TOL = 1e-10
+#: Error targets of the error-targeted settle's curve (``settle(target_error=...)``).
+TARGET_ERRORS = (1e-3, 1e-4, 1e-5, 1e-6)
 #: Matched error: the naive run is done when its tip is within this fraction of
 #: the discretisation error of the chain's exact equilibrium.
 MATCH_FRACTION = 0.01
@@ -144,6 +146,35 @@ def _bvp_curve(grip, params, prof, repeats, base) -> list[dict]:
     return rows
 
 
+def _target_curve(grip, params, prof, repeats, base) -> list[dict]:
+    """``settle(target_error=E)`` at each of :data:`TARGET_ERRORS`, errors against the converged BVP (``n = 0`` rows).
+
+    The reference is the point-contact BVP (the settle's default contact); Grip III has no error target.
+    """
+    from simgrip.scenes import build_scene
+    from simgrip.settle import SettleError, settle
+
+    if grip == "III":
+        return []
+    ref = reference(grip, params, prof)
+    rows = []
+    for target in TARGET_ERRORS:
+        try:
+            st, tmed, tmin = median_time(lambda: settle(build_scene(grip, params, prof, 8), target_error=target),
+                                         repeats)
+        except (SettleError, ValueError) as exc:
+            rows.append({**base, "method": "settle_target", "target_error": target, "tol": target, "converged": False,
+                         "note": f"{type(exc).__name__}: {exc}"})
+            continue
+        te, fe = errors(grip, st.tip[0], contact_force(st), ref)
+        rows.append({**base, "method": "settle_target", "target_error": target, "tol": target, "time_s": tmed,
+                     "time_min_s": tmin, "repeats": repeats, "steps": int(st.steps), "links": int(st.links),
+                     "converged": bool(st.converged), "tip_err": te, "force_err": fe, "residual": st.residual,
+                     "error_estimate": st.error_estimate, "extrapolated": bool(st.extrapolated),
+                     "note": "" if (st.held or grip == "free") else "workpiece dropped"})
+    return rows
+
+
 def _settle_row(st, method, ref, chn, grip, extra, timing) -> dict:
     te, fe = errors(grip, st.tip[0], contact_force(st), ref)
     dmt, dmf = errors(grip, st.tip[0], contact_force(st), chn)
@@ -163,7 +194,7 @@ def bench_task(grip: str, n: int, repeats: int, naive_budget_s: float, params: D
     tol = DEFAULT_TOL
     base = {"grip": grip, "kappa": kappa, "n": n, "tol": tol}
     if n == 0:
-        return _bvp_curve(grip, params, prof, repeats, base)
+        return _bvp_curve(grip, params, prof, repeats, base) + _target_curve(grip, params, prof, repeats, base)
     rows = []
 
     settle_only = []  # the settle alone (build excluded): compared with the naive run from its head start

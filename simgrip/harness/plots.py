@@ -40,6 +40,9 @@ def _curve(res, grip, method):
     if method == "bvp":
         rows = (r for r in res.rows if r["grip"] == grip and r["method"] == "bvp" and r["n"] == 0)
         return sorted(rows, key=lambda r: -r["tol"])
+    if method == "settle_target":
+        rows = (r for r in res.rows if r["grip"] == grip and r["method"] == method and r.get("time_s"))
+        return sorted(rows, key=lambda r: -r["target_error"])
     rows = (r for r in res.rows if r["grip"] == grip and r["method"] == method and r.get("time_s"))
     return sorted(rows, key=lambda r: r["n"])
 
@@ -56,12 +59,14 @@ def pareto_plot(res, cases: dict, path: Path) -> None:
     grips = [g for g in ("free", "I", "II", "III") if any(r["grip"] == g for r in res.rows)]
     fig = _figure(4.0 * len(grips), 3.8)
     axes = fig.subplots(1, len(grips), squeeze=False)[0]
-    style = {"settle": ("o-", "C0"), "naive": ("s--", "C3"), "minimiser": ("^-", "C2"), "bvp": ("d:", "C1")}
+    style = {"settle": ("o-", "C0"), "settle_target": ("*-", "C4"), "naive": ("s--", "C3"), "minimiser": ("^-", "C2"),
+             "bvp": ("d:", "C1")}
     for ax, g in zip(axes, grips):
         for meth, (ls, col) in style.items():
             rs = [r for r in _curve(res, g, meth) if r.get("tip_err") is not None]
             pts = [r for r in rs if math.isfinite(r["time_s"]) and not r.get("lower_bound")]
-            lab = "BVP, tol 1e-3 … 1e-10 (reference at the floor)" if meth == "bvp" else meth
+            lab = {"bvp": "BVP, tol 1e-3 … 1e-10 (reference at the floor)",
+                   "settle_target": "settle(target_error = 1e-3 … 1e-6)"}.get(meth, meth)
             if pts:
                 ax.loglog([r["time_s"] for r in pts], [max(r["tip_err"], ERROR_FLOOR) for r in pts], ls, color=col,
                           label=lab, ms=4)

@@ -149,6 +149,8 @@ def _rows_table(res) -> list[str]:
         if r.get("lower_bound"):
             t = f"> {fmt(r.get('time_min_s'))}"
         method = f"{r['method']} tol {r['tol']:.0e}" if not r["n"] and r.get("tol") else r["method"]
+        if r.get("target_error") is not None:
+            method = f"{r['method']} {r['target_error']:.0e} ({r.get('links', '?')} links)"
         L.append(f"| {r['grip']} | {r['n'] or '–'} | {method} | {t} | {fmt(r.get('steps'))} | "
                  f"{fmt(r.get('tip_err'), '.2e')} | {fmt(r.get('force_err'), '.2e')} | {r.get('note') or ''} |")
     return L
