@@ -185,15 +185,17 @@ def plot_curves(out: Path, window: int = 100) -> Path | None:
             continue
         plotted += 1
         succ = np.atleast_1d(data["success"]).astype(float)
-        k = min(window, succ.size)
-        avg = np.convolve(succ, np.ones(k) / k, mode="valid")
+        # trailing mean over the last `window` episodes (fewer at the start)
+        c = np.concatenate(([0.0], np.cumsum(succ)))
+        i = np.arange(1, succ.size + 1)
+        avg = (c[i] - c[np.maximum(i - window, 0)]) / np.minimum(i, window)
         label = path.name.split("_")[0].upper()
-        axes[0].plot(np.atleast_1d(data["timesteps"])[k - 1:], avg, label=label)
+        axes[0].plot(np.atleast_1d(data["timesteps"]), avg, label=label)
         clock = "cpu_s" if "cpu_s" in data.dtype.names else "wall_s"
-        axes[1].plot(np.atleast_1d(data[clock])[k - 1:] / 60.0, avg, label=label)
+        axes[1].plot(np.atleast_1d(data[clock]) / 60.0, avg, label=label)
     for ax, xlabel in zip(axes, ("environment steps", "CPU minutes (one core)")):
         ax.set_xlabel(xlabel)
-        ax.set_ylabel(f"training success rate (last {window} episodes)")
+        ax.set_ylabel(f"training success (last {window} episodes)")
         ax.set_ylim(-0.02, 1.02)
         ax.grid(alpha=0.3)
         if plotted:
