@@ -74,6 +74,8 @@ DYN_RELEASE_STEPS = 20
 DYN_DROP_FALL = 0.2
 #: Physics steps per ``mj_step`` call between two stop tests (velocity, drop watch) once nothing is held.
 DYN_BATCH = 16
+#: Velocity (as DYN_VTOL) below which the Grip III fall guard's extra damping is lifted.
+DYN_GUARD_V = 1e-3
 #: Tangential slip (over l) of the tip on the workpiece after release that counts as a drop.
 DYN_DROP_SLIP = 0.02
 
@@ -133,6 +135,8 @@ class Dyn:
         m.opt.disableflags |= int(mujoco.mjtDisableBit.mjDSBL_REFSAFE)
         m.dof_damping[:] = DYN_DAMPING * h * k
         wd = np.asarray(scene.workpiece_dof, dtype=int)
+        #: damping factor of the Grip III fall guard (1: none); :meth:`run` lifts it near rest (:meth:`_guard`)
+        self.slow = 1.0
         if wd.size:
             dw = DYN_WORKPIECE_DAMPING / h
             if scene.grip == "III":
@@ -143,6 +147,7 @@ class Dyn:
                 dw *= slow
                 # the finger slowed alike: a sliding corner must not see the rod spring away
                 m.dof_damping[:] *= slow
+                self.slow = slow
             m.dof_damping[wd] = dw * scene.workpiece_mass
             for j, name in zip(wd, scene.workpiece_joints):
                 if name == "ry":  # rotation: inertia about y instead of mass
@@ -150,6 +155,9 @@ class Dyn:
                     e[j] = 1.0
                     mujoco.mj_mulM(m, d, col, e)  # the rotation's inertia M[j, j]
                     m.dof_damping[j] = DYN_WORKPIECE_DAMPING * float(col[j]) / h
+        self.damping_guard = m.dof_damping.copy()
+        self.damping_plain = m.dof_damping / self.slow
+        self.guard_on = self.slow > 1.0
         if m.npair:
             m.pair_solref[:] = [DYN_TIMECONST * h, 1.0]
             m.pair_solimp[:, 0] = CONTACT_IMPEDANCE
@@ -185,15 +193,32 @@ class Dyn:
             raise SettleError("dynamic settle diverged (non-finite state)")
         check_warnings(d)
 
+    def _guard(self, v: float) -> None:
+        """Grip III fall guard with hysteresis: its extra damping (``slow``) on while anything moves
+        faster than ``10 DYN_GUARD_V``, off below ``DYN_GUARD_V`` (near rest the plain over-damped flow,
+        ``D = h K``, converges in a step count independent of the guard: a slowly moving workpiece
+        cannot tunnel; one that speeds up again gets the guard back before it moves a contact radius)."""
+        on = self.guard_on
+        if on and v < DYN_GUARD_V:
+            self.m.dof_damping[:] = self.damping_plain
+            self.guard_on = False
+        elif not on and v > 10.0 * DYN_GUARD_V:
+            self.m.dof_damping[:] = self.damping_guard
+            self.guard_on = True
+
     def hold(self, on: bool) -> None:
         hold_workpiece(self.scene, on)
         self.held_q = np.array(self.d.qpos[self.scene.workpiece_qpos]) if on else None
 
     def run(self, tol, vtol, budget, watch=None) -> tuple[bool, str]:
         """Step until residual < tol and velocity < vtol; ``watch()`` returning a reason stops early."""
+        start = self.steps
         while True:
+            v = self.velocity()
+            if self.slow > 1.0 and self.held_q is None and self.steps > start:  # after a first batch
+                self._guard(v)
             # the residual (one more forward pass) only once at rest: halves the cost of a step
-            if self.velocity() < vtol:
+            if v < vtol:
                 r = self.residual()
                 if not math.isfinite(r):
                     raise SettleError("dynamic settle diverged (non-finite residual)")
