@@ -11,8 +11,11 @@ Everything is chosen from the model:
   steps does not grow with ``n``); ``h = 1 / omega_min`` of the hinge chain with
   its physical inertia (power iteration on ``K^{-1} M``: ``K`` is diagonal in
   hinge coordinates, one ``mj_mulM`` per iteration).  The workpiece has no stiffness: damping ``3 m / h``
-  (Grip III raises it so a falling workpiece moves at most
-  :data:`DYN_FALL_STEP` contact radii per step).
+  (Grip III raises it, and the finger's with it, so a falling workpiece moves
+  at most :data:`DYN_FALL_STEP` contact radii per step; this fall guard is
+  lifted while everything moves slower than :data:`DYN_GUARD_V`, one step per
+  stop test, and comes back above ten times that: near rest the plain
+  over-damped flow converges in a fixed number of steps).
 * **Contacts**: elliptic cone, ``impratio =`` :data:`DYN_IMPRATIO` (MuJoCo's
   sticking friction creeps at a speed ~ 1/impratio and leaves ~1e-5 of the
   weight unbalanced, hence :data:`DYN_TOL`); a state penetrating more than
@@ -231,7 +234,10 @@ class Dyn:
             if self.steps >= budget:
                 return False, "max_steps"
             # between checks: DYN_BATCH steps in one call (the stop test costs nothing in between)
-            self.step(1 if self.held_q is not None else min(DYN_BATCH, budget - self.steps))
+            # (one step per test while the fall guard is lifted: a workpiece that starts to fall
+            # gets it back before it moves a contact radius)
+            one = self.held_q is not None or (self.slow > 1.0 and not self.guard_on)
+            self.step(1 if one else min(DYN_BATCH, budget - self.steps))
 
 
 def _finger_pairs_touching(scene: Scene) -> bool:
