@@ -1,0 +1,447 @@
+"""The dynamic settle of a K-finger gripper (:mod:`simgrip.sim.gripper`) and its settled state.
+
+The same over-damped MuJoCo dynamics as the planar ``settle(method="dynamics")``
+(:mod:`simgrip.settle.dynamics`, whose constants it uses): ``mjINT_DISCRETE``,
+time step ``h = 1/omega_min`` of the hinge chains, hinge damping ``h K``,
+elliptic cone with ``impratio`` :data:`~simgrip.settle.dynamics.DYN_IMPRATIO`,
+contact time constant :data:`~simgrip.settle.dynamics.DYN_TIMECONST` ``h``.
+The workpiece's free joint is damped ``3 m / h`` in translation and ``3 I / h``
+in rotation (its principal inertia; the rotational dofs are in its body frame).
+
+* **Start**: every finger at the hinge chain's grip equilibrium
+  (:func:`simgrip.reference.solve_chain`, the tip a hair inside ``X = b/2``),
+  the workpiece's centre level with the tips, held.  Each finger of a box
+  (``K`` = 2, 4) or cylinder is then exactly the planar problem; a sphere's
+  tips start on its equator (contact normal horizontal) and the release lets
+  it find its inclined contact.  A finger that cannot reach ``X = b/2`` at
+  full curvature leaves the workpiece unheld; a chain equilibrium that does
+  not exist, is unstable or does not push on the face raises
+  :class:`SettleError` (the planar settle's staged closing is not provided here).
+* **Release**: the holding force fades out over
+  :data:`~simgrip.settle.dynamics.DYN_RELEASE_STEPS` steps; the dynamics then
+  runs until the static residual at rest is below ``tol`` and the velocities
+  below :data:`~simgrip.settle.dynamics.DYN_VTOL` (tested between batches of
+  :data:`~simgrip.settle.dynamics.DYN_BATCH` steps).  A tip that slides
+  :data:`~simgrip.settle.dynamics.DYN_DROP_SLIP` over the workpiece's surface
+  (in the workpiece's frame) or a workpiece that falls
+  :data:`~simgrip.settle.dynamics.DYN_DROP_FALL` is dropped: it is parked
+  (held, contact off) and the fingers settle alone from the chain's free shape.
+* **Penetration**: a settled state penetrating
+  :data:`~simgrip.settle.dynamics.DYN_PEN_LIMIT` or more is settled again with
+  half the step (at most three times).
+
+The static residual is ``qfrc_smooth + qfrc_constraint`` at ``qvel = 0``
+over ``rho g l^2`` (hinges, workpiece rotation) and ``rho g l`` (workpiece
+translation): the workpiece's translation rows are its force balance
+(contact forces plus weight) and its rotation rows its moment balance.
+:class:`GripperState` reports one :class:`FingerRecord` per finger, read in
+the finger's own frame like the planar finger.
+"""
+
+from __future__ import annotations
+
+import math
+import time
+from dataclasses import dataclass, field
+
+import mujoco
+import numpy as np
+
+from simgrip.chain import link_positions
+from simgrip.settle.dynamics import (DYN_BATCH, DYN_DAMPING, DYN_DROP_FALL, DYN_DROP_SLIP, DYN_IMPRATIO,
+                                     DYN_PEN_LIMIT, DYN_RELEASE_STEPS, DYN_STEP, DYN_TIMECONST, DYN_TOL, DYN_VTOL,
+                                     DYN_WORKPIECE_DAMPING, lowest_frequency)
+from simgrip.settle.state import SettleError
+from simgrip.settle.statics import CONTACT_IMPEDANCE, check_warnings, restore_options, save_options
+from simgrip.sim.checks import clear_warnings
+from simgrip.sim.gripper import GripperScene
+
+__all__ = ["FingerRecord", "GripperState", "settle_gripper"]
+
+#: Default physics-step budget of one settle.
+GRIPPER_MAX_STEPS = 20_000
+
+
+@dataclass
+class FingerRecord:
+    """The workpiece's contact on one finger, in the finger's frame (over ``l`` and ``rho g l``).
+
+    ``N1`` (along ``E1``, away from the palm axis), ``N2`` (up) and ``N3``
+    (out of the finger's plane) are the force on the rod.  ``normal`` is its
+    component along the contact normal (pointing from the workpiece into the
+    tip, so ``> 0`` pushes), ``friction`` its component along the in-plane
+    tangent ``t = n x E3`` (for a vertical face ``t = E2``: ``friction =
+    N2``); ``contact_angle`` is the normal's elevation ``atan2(n_2, n_1)``
+    (0 on a vertical face).  ``tip`` is the rod's end ``(X, Y)`` from the
+    hinge angles, ``point`` MuJoCo's contact point ``(X, Y, out of plane)``;
+    ``moment`` the couple (about ``E3``, over ``rho g l^2``) the force exerts
+    about the tip because it acts on the tip sphere's surface (pass it as
+    ``contact_moment`` to the references); ``required_mu`` is ``|tangential|
+    / normal``.
+    """
+
+    N1: float
+    N2: float
+    N3: float
+    normal: float
+    friction: float
+    contact_angle: float
+    tip: np.ndarray
+    point: np.ndarray
+    moment: float
+    penetration: float
+    required_mu: float
+
+
+@dataclass
+class GripperState:
+    """A settled K-finger gripper, dimensionless (lengths over ``l``, forces over ``rho g l``).
+
+    ``records`` holds one :class:`FingerRecord` per finger (empty when the
+    workpiece was dropped); ``force_balance`` is the workpiece's net force
+    (contacts plus weight, world frame, over ``rho g l``) and
+    ``moment_balance`` its net moment about its centre (over ``rho g l^2``),
+    both zero at equilibrium; ``workpiece_position`` its centre over ``l``
+    and ``workpiece_quat`` its orientation.
+    """
+
+    grip: str
+    workpiece: str
+    fingers: int
+    links: int
+    joint_angles: np.ndarray
+    link_angles: np.ndarray
+    tip: np.ndarray
+    records: list
+    held: bool
+    converged: bool
+    residual: float
+    tolerance: float
+    velocity: float
+    penetration: float
+    force_balance: np.ndarray
+    moment_balance: np.ndarray
+    workpiece_position: np.ndarray
+    workpiece_quat: np.ndarray
+    steps: int
+    timestep: float
+    wall_time_s: float
+    qpos: np.ndarray = field(repr=False)
+
+
+# ---------------------------------------------------------------------------
+# the dynamics
+
+
+class _Dyn:
+    """Over-damped MuJoCo dynamics of a gripper scene (options set here, restored by the caller)."""
+
+    def __init__(self, scene: GripperScene, step_factor: float):
+        m, d = scene.model, scene.data
+        self.scene, self.m, self.d = scene, m, d
+        self.steps = 0
+        hinge = scene.joint_dof.ravel()
+        wdof = scene.workpiece_dof
+        self.fscale = np.full(m.nv, scene.moment_scale)
+        self.fscale[wdof[:3]] = scene.force_scale
+        self.vscale = np.ones(m.nv)
+        self.vscale[wdof[:3]] = scene.length
+        self.vscale /= math.sqrt(scene.length / scene.physical.g)
+        k = m.jnt_stiffness[m.dof_jntid].copy()
+        mujoco.mj_kinematics(m, d)
+        mujoco.mj_comPos(m, d)
+        mujoco.mj_crb(m, d)
+        h = step_factor * DYN_STEP / lowest_frequency(m, d, k, hinge)
+        self.h = h
+        m.opt.integrator = mujoco.mjtIntegrator.mjINT_DISCRETE
+        m.opt.timestep = h
+        m.opt.cone = mujoco.mjtCone.mjCONE_ELLIPTIC
+        m.opt.impratio = DYN_IMPRATIO
+        m.opt.noslip_iterations = 0
+        m.opt.disableflags |= int(mujoco.mjtDisableBit.mjDSBL_REFSAFE)
+        m.dof_damping[:] = DYN_DAMPING * h * k
+        wb = scene.workpiece_body
+        m.dof_damping[wdof[:3]] = DYN_WORKPIECE_DAMPING * float(m.body_mass[wb]) / h
+        m.dof_damping[wdof[3:]] = DYN_WORKPIECE_DAMPING * np.asarray(m.body_inertia[wb]) / h
+        m.pair_solref[:] = [DYN_TIMECONST * h, 1.0]
+        m.pair_solimp[:, 0] = CONTACT_IMPEDANCE
+        m.pair_solimp[:, 1] = CONTACT_IMPEDANCE
+        self.scratch = mujoco.MjData(m)
+        self.held_q: np.ndarray | None = None
+
+    def residual_vector(self) -> np.ndarray:
+        """Static balance at rest per dof, scaled (``qfrc_smooth + qfrc_constraint`` at ``qvel = 0``)."""
+        s = self.scratch
+        s.qpos[:] = self.d.qpos
+        s.qvel[:] = 0.0
+        s.qfrc_applied[:] = self.d.qfrc_applied
+        mujoco.mj_forward(self.m, s)
+        r = (s.qfrc_smooth + s.qfrc_constraint) / self.fscale
+        if self.held_q is not None:
+            r[self.scene.workpiece_dof] = 0.0
+        return r
+
+    def velocity(self) -> float:
+        v = np.abs(np.array(self.d.qvel)) / self.vscale
+        if self.held_q is not None:
+            v[self.scene.workpiece_dof] = 0.0
+        return float(np.max(v))
+
+    def hold(self, on: bool) -> None:
+        """Hold the workpiece where it is (pose reset after each step, weight cancelled) or let go."""
+        sc, d = self.scene, self.d
+        d.qfrc_applied[:] = 0.0
+        if on:
+            d.qfrc_applied[sc.workpiece_dof[2]] = sc.workpiece_mass * sc.physical.g
+        self.held_q = np.array(d.qpos[sc.workpiece_qpos]) if on else None
+
+    def step(self, k: int = 1) -> None:
+        sc, d = self.scene, self.d
+        mujoco.mj_step(self.m, d, k)
+        self.steps += k
+        if self.held_q is not None:
+            d.qpos[sc.workpiece_qpos] = self.held_q
+            d.qvel[sc.workpiece_dof] = 0.0
+        if not (np.all(np.isfinite(d.qpos)) and np.all(np.isfinite(d.qvel))):
+            raise SettleError("gripper settle diverged (non-finite state)")
+        check_warnings(d)
+
+    def run(self, tol: float, budget: int, watch=None) -> tuple[bool, str]:
+        """Step until the residual is below ``tol`` and the velocity below DYN_VTOL; ``watch()`` may stop it."""
+        while True:
+            if self.velocity() < DYN_VTOL:
+                r = float(np.max(np.abs(self.residual_vector())))
+                if not math.isfinite(r):
+                    raise SettleError("gripper settle diverged (non-finite residual)")
+                if r < tol:
+                    return True, "ok"
+            if watch is not None:
+                why = watch()
+                if why:
+                    return False, why
+            if self.steps >= budget:
+                return False, "max_steps"
+            self.step(1 if self.held_q is not None else min(DYN_BATCH, budget - self.steps))
+
+
+def _chain(scene: GripperScene, grip: str, b: float | None = None, guess=None):
+    from simgrip.reference import DiscreteError, solve_chain
+
+    p = scene.params if b is None else scene.params.replace(b=b)
+    gravity = -float(scene.model.opt.gravity[2]) / scene.physical.g
+    try:
+        return solve_chain(grip, p, scene.profile, scene.n, guess=guess, gravity=gravity)
+    except (DiscreteError, ValueError):
+        return None
+
+
+def _tips_on_workpiece(scene: GripperScene) -> np.ndarray:
+    """Every tip's centre in the workpiece's body frame [m], (K, 3)."""
+    d = scene.data
+    wb = scene.workpiece_body
+    rot = np.asarray(d.xmat[wb]).reshape(3, 3)
+    return (np.asarray(d.geom_xpos[scene.tip_geom]) - np.asarray(d.xpos[wb])) @ rot
+
+
+def _touching(scene: GripperScene) -> bool:
+    d = scene.data
+    tips = set(int(g) for g in scene.tip_geom)
+    return any(int(d.contact.geom1[i]) in tips and int(d.contact.geom2[i]) == scene.workpiece_geom
+               for i in range(d.ncon))
+
+
+def settle_gripper(scene: GripperScene, *, tol: float = DYN_TOL, max_steps: int = GRIPPER_MAX_STEPS,
+                   allow_unconverged: bool = False) -> GripperState:
+    """Settle a K-finger gripper by over-damped dynamics (see the module docstring).
+
+    Parameters
+    ----------
+    scene : GripperScene
+    tol : float
+        Static residual tolerance (over ``rho g l^2`` / ``rho g l``); default
+        :data:`~simgrip.settle.dynamics.DYN_TOL` (MuJoCo's sticking friction creeps below it).
+    max_steps : int
+        Physics steps allowed to the whole settle (restarts included).
+    allow_unconverged : bool
+        Return ``converged=False`` instead of raising :class:`SettleError`.
+
+    Returns
+    -------
+    GripperState
+    """
+    if not isinstance(scene, GripperScene):
+        raise ValueError(f"scene must be a simgrip.sim.gripper.GripperScene, got {type(scene).__name__}")
+    try:
+        tol = float(tol)
+    except (TypeError, ValueError):
+        raise ValueError(f"tol must be a real number, got {tol!r}") from None
+    if not (math.isfinite(tol) and tol > 0):
+        raise ValueError(f"tol must be positive and finite, got {tol!r}")
+    if isinstance(max_steps, bool) or not isinstance(max_steps, (int, np.integer)) or max_steps < 1:
+        raise ValueError(f"max_steps must be a positive integer, got {max_steps!r}")
+    t0 = time.perf_counter()
+    m, d = scene.model, scene.data
+    saved = save_options(m)
+    clear_warnings(d)
+    q_start = _start(scene)
+    reach = q_start is not None
+    if not reach:
+        q_start = np.array(d.qpos)
+    steps, factor = 0, 1.0
+    try:
+        for attempt in range(4):
+            d.qpos[:] = q_start
+            d.qvel[:] = 0.0
+            d.qfrc_applied[:] = 0.0
+            mujoco.mj_forward(m, d)
+            dyn = _Dyn(scene, factor)
+            held, converged, why = _settle_once(scene, dyn, tol, int(max_steps) - steps, reach)
+            steps += dyn.steps
+            state = _read(scene, dyn, held, converged, steps, t0, tol)
+            if (state.penetration < DYN_PEN_LIMIT or attempt == 3 or steps >= max_steps
+                    or not state.converged):
+                break
+            factor *= 0.5
+        if not state.converged and not allow_unconverged:
+            raise SettleError(f"gripper settle did not converge ({why} after {steps} steps, residual "
+                              f"{state.residual:.3g}, tolerance {tol:.3g})")
+    finally:
+        restore_options(m, saved)
+        d.qfrc_applied[:] = 0.0
+        d.qvel[:] = 0.0
+        mujoco.mj_forward(m, d)
+    return state
+
+
+def _start(scene: GripperScene) -> np.ndarray | None:
+    """qpos of the start: fingers at the chain's grip equilibrium, workpiece centred level with the tips.
+
+    None when the free finger does not reach ``X = b/2`` (nothing to hold).
+    """
+    p = scene.params
+    ch = _chain(scene, scene.grip, b=p.b - 2e-6)  # the tip a hair inside the face: MuJoCo sees the contact
+    free = _chain(scene, "free", guess=None if ch is None else ch.link_angles)
+    if free is not None and float(np.sum(np.cos(free.link_angles))) / scene.n > 0.5 * p.b:
+        return None
+    if ch is None or not (ch.success and ch.N1 > 0.0 and ch.min_eigenvalue > 0.0):
+        raise SettleError(f"no start for grip {scene.grip}: the hinge chain has no stable equilibrium pushing on "
+                          f"the workpiece (b = {p.b:g})")
+    q = np.array(scene.data.qpos)
+    q[scene.joint_qpos] = ch.joint_angles[None, :]
+    wq = scene.workpiece_qpos
+    q[wq[:3]] = [0.0, 0.0, float(ch.tip[1]) * scene.length]
+    q[wq[3:]] = [math.cos(0.5 * scene.yaw), 0.0, 0.0, math.sin(0.5 * scene.yaw)]
+    return q
+
+
+def _settle_once(scene: GripperScene, dyn: _Dyn, tol: float, budget: int, reach: bool) -> tuple[bool, bool, str]:
+    """Release the held workpiece and settle; ``(held, converged, reason)``.
+
+    ``reach``: the fingers start on the workpiece (else they settle alone).
+    """
+    m, d = scene.model, scene.data
+    converged, why = True, "ok"
+    held = reach and _touching(scene)
+    if held:
+        wb = scene.workpiece_body
+        z0 = float(d.xpos[wb][2])
+        dyn.hold(True)
+        dyn.held_q = None  # the weight fades out; the pose is free from the first step
+        weight = scene.workpiece_mass * scene.physical.g
+        for i in range(1, DYN_RELEASE_STEPS + 1):
+            if dyn.steps >= budget:
+                break
+            d.qfrc_applied[scene.workpiece_dof[2]] = weight * (1.0 - i / DYN_RELEASE_STEPS)
+            dyn.step()
+        dyn.hold(False)
+        on = _tips_on_workpiece(scene)
+
+        def watch():
+            fall = (z0 - float(d.xpos[wb][2])) / scene.length
+            if fall > DYN_DROP_FALL or (fall > DYN_DROP_SLIP and not _touching(scene)):
+                return "lost contact"
+            slip = np.max(np.linalg.norm(_tips_on_workpiece(scene) - on, axis=1)) / scene.length
+            return "slipped" if slip > DYN_DROP_SLIP else None
+
+        converged, why = dyn.run(tol, budget, watch)
+        if why in ("lost contact", "slipped"):
+            held, converged = False, True
+    if not held and converged:
+        # park the workpiece (held, contact off) and settle the fingers alone from the chain's free shape
+        dyn.hold(True)
+        m.opt.disableflags |= int(mujoco.mjtDisableBit.mjDSBL_CONTACT)
+        free = _chain(scene, "free")
+        if free is not None:
+            d.qpos[scene.joint_qpos] = free.joint_angles[None, :]
+            d.qvel[:] = 0.0
+        converged, why = dyn.run(tol, budget)
+    return held, converged, why
+
+
+def _read(scene: GripperScene, dyn: _Dyn, held: bool, converged: bool, steps: int, t0: float,
+          tol: float) -> GripperState:
+    """The settled state at rest (``qvel = 0``) from MuJoCo's contact forces."""
+    m, d = scene.model, scene.data
+    L, W = scene.length, scene.force_scale
+    r = dyn.residual_vector()
+    residual = float(np.max(np.abs(r)))
+    velocity = dyn.velocity()
+    d.qvel[:] = 0.0
+    mujoco.mj_forward(m, d)
+    q = np.array(d.qpos[scene.joint_qpos])
+    phi = np.cumsum(q, axis=1)
+    tips = np.stack([link_positions(p, 1.0 / scene.n)[-1] for p in phi])
+    wb = scene.workpiece_body
+    centre = np.array(d.xpos[wb])
+    records, pen_max = [], 0.0
+    total_f = np.zeros(3)
+    total_m = np.zeros(3)
+    for k in range(scene.fingers if held else 0):
+        cons = [i for i in range(d.ncon)
+                if int(d.contact.geom1[i]) == scene.tip_geom[k] and int(d.contact.geom2[i]) == scene.workpiece_geom]
+        if not cons:
+            continue
+        F, Fn, point, nvec, pen, wsum = np.zeros(3), 0.0, np.zeros(3), np.zeros(3), 0.0, 0.0
+        for i in cons:
+            fc = np.zeros(6)
+            mujoco.mj_contactForce(m, d, i, fc)
+            frame = np.asarray(d.contact.frame[i]).reshape(3, 3)
+            fw = -(frame.T @ fc[:3])  # on the tip (geom1); the frame's normal points from geom1 to geom2
+            pos = np.asarray(d.contact.pos[i])
+            F += fw
+            Fn += fc[0]
+            w = max(float(np.linalg.norm(fw)), 1e-300)
+            point += w * pos
+            nvec += w * (-frame[0])  # from the workpiece into the tip
+            wsum += w
+            pen = max(pen, -float(d.contact.dist[i]) / L)
+            total_f -= fw
+            total_m += np.cross(pos - centre, -fw)
+        point /= wsum
+        R = scene.frame(k)
+        Fk = R @ F / W
+        nk = R @ (nvec / np.linalg.norm(nvec))
+        # in-plane unit normal (E1, E2) and tangent t = n x E3 = (-n2, n1)
+        n2d = np.array([nk[0], nk[2]]) / math.hypot(nk[0], nk[2])
+        t2d = np.array([-n2d[1], n2d[0]])
+        F2d = np.array([Fk[0], Fk[2]])
+        normal, friction = float(F2d @ n2d), float(F2d @ t2d)
+        pk = R @ point / L
+        arm = np.array([pk[0], pk[2]]) - tips[k]
+        tangential = math.sqrt(max(float(Fk @ Fk) - normal**2, 0.0))
+        records.append(FingerRecord(
+            N1=float(Fk[0]), N2=float(Fk[2]), N3=float(Fk[1]), normal=normal, friction=friction,
+            contact_angle=float(math.atan2(n2d[1], n2d[0])), tip=tips[k].copy(),
+            point=np.array([pk[0], pk[2], pk[1]]), moment=float(arm[0] * F2d[1] - arm[1] * F2d[0]),
+            penetration=pen, required_mu=tangential / normal if normal > 0 else math.inf))
+        pen_max = max(pen_max, pen)
+    weight = scene.workpiece_mass * scene.physical.g
+    total_f[2] -= weight
+    return GripperState(
+        grip=scene.grip, workpiece=scene.workpiece, fingers=scene.fingers, links=scene.n, joint_angles=q,
+        link_angles=phi, tip=tips, records=records, held=held, converged=bool(converged and residual <= tol),
+        residual=residual, tolerance=tol, velocity=velocity, penetration=pen_max,
+        force_balance=total_f / W if held else np.zeros(3),
+        moment_balance=total_m / (W * L) if held else np.zeros(3),
+        workpiece_position=centre / L, workpiece_quat=np.array(d.xquat[wb]), steps=steps, timestep=dyn.h,
+        wall_time_s=time.perf_counter() - t0, qpos=np.array(d.qpos))
