@@ -123,6 +123,27 @@ def test_dynamics_is_fast_at_n32_grip_i(dyn_states):
     assert dyn_states["I", 32].timestep > 0
 
 
+def test_dynamics_grip_iii_settles_in_few_steps(dyn_states):
+    # the fall guard's extra damping (~20 x h K at the standard case) is lifted near rest: the
+    # over-damped flow D = h K contracts every mode by about 1/2 per step (320 steps with the guard)
+    for n in (16, 32):
+        assert dyn_states["III", n].steps < 100
+
+
+@pytest.mark.parametrize("grip,D,kappa", [("III", 0.06, -6.0), ("II", 0.06, 5.0)])
+def test_dynamics_soft_drops_come_to_rest_as_newton_says(grip, D, kappa):
+    """Issue 9: these two ran into SettleError after 20,000 steps (the workpiece crept down the soft
+    rod); both methods now agree: dropped, the finger at the chain's free equilibrium."""
+    from simgrip.params import DimensionlessParams
+
+    p = DimensionlessParams(D=D)
+    st = settle(build_scene(grip, p, Uniform(kappa), 32), method="dynamics")
+    nw = settle(build_scene(grip, p, Uniform(kappa), 32))
+    assert st.converged and not st.held and not nw.held
+    free = solve_chain("free", p, Uniform(kappa), 32)
+    np.testing.assert_allclose(st.link_angles[0], free.link_angles, atol=1e-5)
+
+
 def test_dynamics_warm_started_sweep_matches_cold():
     sc = build_scene("I", STANDARD, Uniform(-6.0), 16)
     sweep = settle_sweep(sc, [Uniform(k) for k in (-6.0, -7.0)], method="dynamics")
