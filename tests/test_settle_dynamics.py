@@ -123,6 +123,17 @@ def test_dynamics_is_fast_at_n32_grip_i(dyn_states):
     assert dyn_states["I", 32].timestep > 0
 
 
+@pytest.mark.parametrize("grip,kappa", [("II", 5.5), ("II", 6.0), ("I", -8.0)])
+def test_dynamics_holds_where_newton_holds_far_inside_the_cone(grip, kappa):
+    """Stress run: Grip II at kappa 5.5-6 (standard parameters, margin ~0.6) was dropped by the dynamics.
+    The chain start already carries the weight by friction; fading a holding force out on top of it
+    pushed the workpiece up off the tip.  Same tolerances as above (penetration-limited)."""
+    st = settle(build_scene(grip, STANDARD, Uniform(kappa), 16), method="dynamics")
+    nw = settle(build_scene(grip, STANDARD, Uniform(kappa), 16), contact="surface")
+    assert st.held and nw.held and st.converged
+    assert st.N1 == pytest.approx(nw.N1, rel=5 * st.penetration)
+
+
 def test_dynamics_grip_iii_settles_in_few_steps(dyn_states):
     # the fall guard's extra damping (~20 x h K at the standard case) is lifted near rest: the
     # over-damped flow D = h K contracts every mode by about 1/2 per step (320 steps with the guard)

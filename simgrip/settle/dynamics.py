@@ -292,7 +292,10 @@ def _settle_dynamics_once(scene: Scene, tol: float, max_steps: int, warm_start, 
             mujoco.mj_forward(m, d)
             dyn.hold(True)
             held = bool(started) and _finger_pairs_touching(scene)
-            closed = True
+            # loaded start: the chain's friction already carries the weight, so the workpiece is
+            # let go at once (fading a holding force out would push it off the tip: up to twice
+            # its weight upwards in the first step)
+            closed = False
         elif scene.grip in ("I", "II") and warm_start is None and close:
             # ramp the curvature with contact on, the workpiece held and frictionless
             target = scene.profile
