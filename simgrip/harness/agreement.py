@@ -42,6 +42,8 @@ def agreement_case(case: dict) -> dict:
     params = DimensionlessParams(D=case["D"], M=case["M"], b=case["b"], mu_s=case["mu_s"])
     prof = stress_profile(case["profile"], case["kappa"], case.get("alpha", 0.0))
     rec = {k: case[k] for k in ("id", "grip", "D", "kappa", "M", "mu_s", "b", "n", "profile", "alpha")}
+    # the stress run's invalid-state flags of the Newton state (self-intersection, beyond a full turn, ...)
+    rec["flags"] = sorted(k for k, v in (case.get("flags") or {}).items() if v)
     out, margins, times = {}, {}, {}
     for method in ("newton", "dynamics"):
         t0 = time.perf_counter()
@@ -68,7 +70,11 @@ def method_agreement(cases, *, jobs: int = 1) -> dict:
     """:func:`agreement_case` over the settled stress cases with a workpiece; counts and the disagreements.
 
     ``disagree_above_margin`` lists the disagreements whose held state is more
-    than :data:`MARGIN` inside the friction cone (or whose margin is unknown).
+    than :data:`MARGIN` inside the friction cone (or whose margin is unknown);
+    ``disagree_above_margin_unflagged`` those whose Newton state carries no
+    invalid-state flag of the stress run (a self-intersecting rod, one turned
+    beyond a full turn, the wrong grip's shape: states where the two methods
+    may reach different branches).
     """
     todo = [c for c in cases if c.get("outcome") == "settled" and c["grip"] != "free"]
     if jobs > 1:
@@ -81,6 +87,7 @@ def method_agreement(cases, *, jobs: int = 1) -> dict:
     uns = [r for r in recs if r["newton"].startswith("unsettled") or r["dynamics"].startswith("unsettled")]
     return {"cases": len(recs), "agree": len(recs) - len(dis), "disagree": len(dis),
             "disagree_above_margin": big, "disagree_within_margin": [r for r in dis if r not in big],
+            "disagree_above_margin_unflagged": [r for r in big if not r["flags"]],
             "unsettled": uns, "slowest_dynamics_s": max((r["time_dynamics_s"] for r in recs), default=0.0),
             "slowest_newton_s": max((r["time_newton_s"] for r in recs), default=0.0), "records": recs}
 
@@ -100,9 +107,9 @@ def main(argv=None) -> int:  # pragma: no cover - manual run
     if a.out:
         write_json(a.out, res)
     summary = {k: v for k, v in res.items() if k != "records"}
-    for key in ("disagree_above_margin", "disagree_within_margin", "unsettled"):
+    for key in ("disagree_above_margin", "disagree_within_margin", "disagree_above_margin_unflagged", "unsettled"):
         summary[key] = [{k: r[k] for k in ("id", "grip", "D", "kappa", "M", "mu_s", "b", "n", "newton", "dynamics",
-                                            "margin")} for r in res[key]]
+                                            "margin", "flags")} for r in res[key]]
     print(json.dumps(summary, indent=1, default=str))
     return 0
 
