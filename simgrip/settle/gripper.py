@@ -77,9 +77,10 @@ class FingerRecord:
     ``moment`` the couple (about ``E3``, over ``rho g l^2``) the force exerts
     about the tip because it acts on the tip sphere's surface (pass it as
     ``contact_moment`` to the references); ``required_mu`` is ``|tangential|
-    / normal``.
+    / normal``; ``finger`` the finger's index.
     """
 
+    finger: int
     N1: float
     N2: float
     N3: float
@@ -97,8 +98,8 @@ class FingerRecord:
 class GripperState:
     """A settled K-finger gripper, dimensionless (lengths over ``l``, forces over ``rho g l``).
 
-    ``records`` holds one :class:`FingerRecord` per finger (empty when the
-    workpiece was dropped); ``force_balance`` is the workpiece's net force
+    ``records`` holds one :class:`FingerRecord` per finger touching the
+    workpiece (empty when it was dropped); ``force_balance`` is the workpiece's net force
     (contacts plus weight, world frame, over ``rho g l``) and
     ``moment_balance`` its net moment about its centre (over ``rho g l^2``),
     both zero at equilibrium; ``workpiece_position`` its centre over ``l``
@@ -430,7 +431,7 @@ def _read(scene: GripperScene, dyn: _Dyn, held: bool, converged: bool, steps: in
         arm = np.array([pk[0], pk[2]]) - tips[k]
         tangential = math.sqrt(max(float(Fk @ Fk) - normal**2, 0.0))
         records.append(FingerRecord(
-            N1=float(Fk[0]), N2=float(Fk[2]), N3=float(Fk[1]), normal=normal, friction=friction,
+            finger=k, N1=float(Fk[0]), N2=float(Fk[2]), N3=float(Fk[1]), normal=normal, friction=friction,
             contact_angle=float(math.atan2(n2d[1], n2d[0])), tip=tips[k].copy(),
             point=np.array([pk[0], pk[2], pk[1]]), moment=float(arm[0] * F2d[1] - arm[1] * F2d[0]),
             penetration=pen, required_mu=tangential / normal if normal > 0 else math.inf))
