@@ -95,13 +95,19 @@ def build_parser() -> argparse.ArgumentParser:
         _add_state_options(p)
         p.add_argument("--links", type=int, default=32, help=f"links per finger, 2..{MAX_LINKS} [default 32]")
         p.add_argument(
-            "--method", default="newton",
+            "--method", default=None,
             help="settle method: newton (static solve, residual 1e-10) or dynamics "
             "(over-damped MuJoCo dynamics with MuJoCo's own friction) [default newton]",
         )
         p.add_argument("--target-error", type=float, default=None,
                        help="settle to this error (tip over l, forces relative) by Richardson extrapolation over "
                        "resolutions it chooses (free, I, II; --links is then ignored)")
+        if name == "simulate":
+            p.add_argument("--fingers", type=int, default=None,
+                           help="K >= 2 fingers around the palm axis holding a workpiece free in 3-D (Grips I, II; "
+                           "settled by dynamics); --json gains 'fingers', one record per finger")
+            p.add_argument("--workpiece", default=None,
+                           help="with --fingers: box (K = 2 or 4), cylinder or sphere (diameter b) [default cylinder]")
 
     p = sub.add_parser("bench", help="run time against error, naive vs settle vs minimiser vs BVP, what skipping buys")
     from simgrip.harness import bench as _bench  # light: matplotlib/mujoco are imported inside its functions
@@ -185,7 +191,19 @@ def _cmd_simulate(args) -> dict:
 
     grip = check_grip(args.grip)
     params, profile, links = _params(args), _profile(args, grip), _links(args.links)
-    return settled_record(simulate(grip, params, profile, links, method=args.method, target_error=args.target_error),
+    if args.fingers is not None or args.workpiece is not None:
+        from simgrip.gripper import gripper_record, simulate_gripper
+
+        if args.method not in (None, "dynamics") or args.target_error is not None:
+            raise ValueError("method: a K-finger gripper (--fingers) settles by dynamics only (no --method newton, "
+                             "no --target-error)")
+        if args.fingers is None:
+            raise ValueError("fingers: --workpiece needs --fingers K")
+        state = simulate_gripper(grip, params, profile, links, fingers=args.fingers,
+                                 workpiece=args.workpiece or "cylinder")
+        return gripper_record(state, params, profile)
+    return settled_record(simulate(grip, params, profile, links, method=args.method or "newton",
+                                   target_error=args.target_error),
                           params, profile)
 
 
@@ -195,7 +213,7 @@ def _cmd_compare(args) -> str:
     from simgrip.report import format_comparison
 
     grip = check_grip(args.grip)
-    result = compare(grip, _params(args), _profile(args, grip), _links(args.links), method=args.method,
+    result = compare(grip, _params(args), _profile(args, grip), _links(args.links), method=args.method or "newton",
                      target_error=args.target_error)
     return json.dumps(to_jsonable(result), allow_nan=False) if args.json else format_comparison(result)
 

@@ -1,0 +1,115 @@
+"""K-finger grippers end to end: build the scene, settle it, and its record (``simgrip simulate --fingers K``).
+
+:func:`simulate_gripper` builds :func:`simgrip.sim.gripper.build_gripper` and
+settles it with :func:`simgrip.settle.gripper.settle_gripper`;
+:func:`gripper_record` turns the settled state into the fields of the planar
+``simulate`` record (:func:`simgrip.compare.settled_record`), those of the
+first finger at the top level, plus ``fingers``: one record per finger.
+"""
+
+from __future__ import annotations
+
+import math
+
+from simgrip.params import DimensionlessParams
+from simgrip.profiles import as_profile
+
+__all__ = ["gripper_record", "simulate_gripper"]
+
+
+def simulate_gripper(grip: str, params: DimensionlessParams, profile, links: int, *, fingers: int, workpiece: str,
+                     yaw: float = 0.0, **settle_kw):
+    """Build the K-finger gripper and settle it; returns its :class:`~simgrip.settle.gripper.GripperState`.
+
+    Extra keywords go to :func:`~simgrip.settle.gripper.settle_gripper`.
+    """
+    from simgrip.settle.gripper import settle_gripper
+    from simgrip.sim.gripper import build_gripper
+
+    scene = build_gripper(grip, params, as_profile(profile), links, fingers=fingers, workpiece=workpiece, yaw=yaw)
+    return settle_gripper(scene, **settle_kw)
+
+
+def _finger(state, k: int) -> dict:
+    """Finger ``k``'s record; zero forces and no contact when it does not touch the workpiece."""
+    rec = next((r for r in state.records if r.finger == k), None)
+    if rec is None:
+        return {"normal_force": 0.0, "friction_force": 0.0, "N1": 0.0, "N2": 0.0, "N3": 0.0,
+                "tip": [float(state.tip[k][0]), float(state.tip[k][1])], "contact": None, "contact_angle": None,
+                "contact_moment": 0.0, "required_mu": 0.0, "penetration": 0.0}
+    return {
+        "normal_force": float(rec.normal),
+        "friction_force": float(rec.friction),
+        "N1": float(rec.N1),
+        "N2": float(rec.N2),
+        "N3": float(rec.N3),
+        "tip": [float(rec.tip[0]), float(rec.tip[1])],
+        "contact": [float(v) for v in rec.point],
+        "contact_angle": float(rec.contact_angle),
+        "contact_moment": float(rec.moment),
+        "required_mu": float(rec.required_mu),
+        "penetration": float(rec.penetration),
+    }
+
+
+def _stability(state, params: DimensionlessParams, profile) -> float:
+    """Smallest eigenvalue of the hinge chain's projected Hessian at finger 0's settled shape (NaN if none)."""
+    from simgrip import reference as discrete
+
+    try:
+        if state.held and state.records:
+            r = state.records[0]
+            p = params.replace(b=params.b * math.cos(r.contact_angle))  # the tip's X on an inclined contact
+            ch = discrete.solve_chain(state.grip, p, profile, state.links, contact_moment=r.moment,
+                                      guess=state.link_angles[0])
+        else:
+            ch = discrete.solve_chain("free", params, profile, state.links, guess=state.link_angles[0])
+        return float(ch.min_eigenvalue)
+    except (discrete.DiscreteError, ValueError):
+        return math.nan
+
+
+def gripper_record(state, params: DimensionlessParams, profile=None) -> dict:
+    """JSON-ready record of a settled gripper (dimensionless).
+
+    Top level: the planar ``simulate`` record's fields for finger 0
+    (``tip``, ``normal_force``, ``friction_force``, ``required_mu``, ``N1``,
+    ``N2``; zeros when dropped), ``held`` and ``feasible`` for the workpiece,
+    the settle's ``steps``, ``residual``, ``penetration``, ``wall_time_s``;
+    then ``fingers``: one record per finger (``normal_force``,
+    ``friction_force``, ``N1``, ``N2``, ``N3``, ``tip``, ``contact`` (X, Y,
+    out of plane), ``contact_angle``, ``contact_moment``, ``required_mu``,
+    ``penetration``; zero forces and ``contact`` None for a finger off the
+    workpiece), ``workpiece``, ``workpiece_position`` and the
+    workpiece's ``force_balance`` / ``moment_balance``.
+    """
+    first = state.records[0] if state.records else None
+    return {
+        "source": "simulation",
+        "grip": state.grip,
+        "links": int(state.links),
+        "tip": [float(state.tip[0][0]), float(state.tip[0][1])],
+        "normal_force": float(first.normal) if first else 0.0,
+        "friction_force": float(first.friction) if first else 0.0,
+        "required_mu": float(first.required_mu) if first else 0.0,
+        "feasible": bool(state.held),
+        "min_eigenvalue": None if profile is None else _stability(state, params, as_profile(profile)),
+        "N1": float(first.N1) if first else 0.0,
+        "N2": float(first.N2) if first else 0.0,
+        "held": bool(state.held),
+        "wall_time_s": float(state.wall_time_s),
+        "steps": int(state.steps),
+        "penetration": float(state.penetration),
+        "residual": float(state.residual),
+        "converged": bool(state.converged),
+        "method": "dynamics",
+        "warnings": [],
+        "extrapolated": False,
+        "error_estimate": None,
+        "params": {"D": params.D, "M": params.M, "b": params.b, "mu_s": params.mu_s, "gamma": params.gamma},
+        "workpiece": state.workpiece,
+        "fingers": [_finger(state, k) for k in range(state.fingers)],
+        "workpiece_position": [float(v) for v in state.workpiece_position],
+        "force_balance": [float(v) for v in state.force_balance],
+        "moment_balance": [float(v) for v in state.moment_balance],
+    }

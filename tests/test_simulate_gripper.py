@@ -1,0 +1,68 @@
+"""simgrip.gripper (simulate_gripper, gripper_record) and ``simgrip simulate --fingers K --workpiece SHAPE``."""
+
+from __future__ import annotations
+
+import json
+
+import pytest
+
+from simgrip import STANDARD, Uniform
+from simgrip.cli import main
+from simgrip.gripper import gripper_record, simulate_gripper
+from simgrip.settle.dynamics import DYN_TOL
+
+
+def test_record_has_the_planar_fields_and_one_record_per_finger(capsys):
+    assert main(["simulate", "I", "--kappa", "-6", "--links", "12", "--json", "--fingers", "3",
+                 "--workpiece", "cylinder"]) == 0
+    rec = json.loads(capsys.readouterr().out)
+    planar = {"source", "grip", "links", "tip", "normal_force", "friction_force", "required_mu", "feasible",
+              "min_eigenvalue", "N1", "N2", "held", "wall_time_s", "steps", "penetration", "residual", "converged",
+              "method", "params"}
+    assert planar <= set(rec)
+    assert rec["held"] and rec["feasible"] and rec["method"] == "dynamics" and rec["workpiece"] == "cylinder"
+    assert len(rec["fingers"]) == 3
+    first = rec["fingers"][0]
+    # the top level is finger 0
+    for key in ("normal_force", "friction_force", "N1", "N2", "tip", "required_mu"):
+        assert rec[key] == first[key]
+    for f in rec["fingers"]:
+        assert set(f) >= {"normal_force", "friction_force", "tip", "contact"}
+        assert f["normal_force"] == pytest.approx(first["normal_force"], abs=1e-9)  # symmetric grip
+    # the weight K M is carried: the friction forces on the rods sum to -K M
+    assert sum(f["friction_force"] for f in rec["fingers"]) == pytest.approx(-3 * STANDARD.M, abs=DYN_TOL)
+    assert rec["min_eigenvalue"] > 0
+
+
+def test_the_python_path_is_the_cli_path():
+    st = simulate_gripper("II", STANDARD, Uniform(5.0), 12, fingers=4, workpiece="box")
+    rec = gripper_record(st, STANDARD)
+    assert rec["min_eigenvalue"] is None and len(rec["fingers"]) == 4 and rec["held"]
+    assert rec["N1"] == st.records[0].N1 and rec["fingers"][3]["N1"] == st.records[3].N1
+
+
+def test_dropped_workpiece_keeps_one_record_per_finger():
+    st = simulate_gripper("I", STANDARD.replace(mu_s=0.3), Uniform(-6.0), 12, fingers=3, workpiece="cylinder")
+    rec = gripper_record(st, STANDARD.replace(mu_s=0.3), Uniform(-6.0))
+    assert not rec["held"] and not rec["feasible"] and len(rec["fingers"]) == 3
+    assert all(f["normal_force"] == 0.0 and f["contact"] is None for f in rec["fingers"])
+    assert rec["min_eigenvalue"] > 0  # the free finger's
+
+
+@pytest.mark.parametrize("args, name", [
+    (["--fingers", "3", "--workpiece", "box"], "fingers"),
+    (["--fingers", "1"], "fingers"),
+    (["--fingers", "3", "--workpiece", "cone"], "workpiece"),
+    (["--workpiece", "sphere"], "fingers"),
+    (["--fingers", "3", "--method", "newton"], "method"),
+    (["--fingers", "3", "--target-error", "1e-3"], "method"),
+])
+def test_bad_gripper_options_exit_2_naming_them(capsys, args, name):
+    assert main(["simulate", "I", "--kappa", "-6", "--links", "8"] + args) == 2
+    err = capsys.readouterr().err
+    assert name in err and "Traceback" not in err
+
+
+def test_grip_iii_with_fingers_is_refused(capsys):
+    assert main(["simulate", "III", "--kappa", "-6", "--links", "8", "--fingers", "4", "--workpiece", "box"]) == 2
+    assert "grip" in capsys.readouterr().err
