@@ -8,6 +8,7 @@ module                    holds
 ``bvp``                   the elastica ODE systems and boundary conditions (free rod, Grips I-III)
 ``continuation``          warm starts, natural continuation and cold starts of ``solve_bvp``
 ``elastica``              :func:`solve`, :func:`sweep`, :class:`ElasticaSolution`
+``inclined``              a tip on a sphere off its equator (:func:`solve_inclined`)
 ``capacity``              feasibility margin, least friction coefficient, largest load
 ``minimiser``             the discrete energy both schemes share and its constrained Newton
 ``nodal``                 the paper's nodal scheme (:func:`solve_discrete`)
@@ -27,6 +28,7 @@ from simgrip.reference.capacity import (
     track_largest_load,
 )
 from simgrip.reference.elastica import FINE_POINTS, ElasticaError, ElasticaSolution, kappa_sweep, solve, sweep
+from simgrip.reference.inclined import InclinedContact, solve_inclined
 from simgrip.reference.hinge_chain import ChainEquilibrium, chain_energy, cradle_start_angles, solve_chain
 from simgrip.reference.minimiser import GRADIENT_TOL, DiscreteError, EnergyTerms
 from simgrip.reference.nodal import (
@@ -47,6 +49,7 @@ __all__ = [
     "EnergyTerms",
     "FINE_POINTS",
     "GRADIENT_TOL",
+    "InclinedContact",
     "LoadCapacity",
     "chain_energy",
     "cradle_start_angles",
@@ -62,6 +65,7 @@ __all__ = [
     "solve",
     "solve_chain",
     "solve_discrete",
+    "solve_inclined",
     "stability_eigenvalue",
     "sweep",
     "track_largest_load",
