@@ -113,11 +113,17 @@ def test_build_gripper_input_checks():
         args.update(kw)
         return build_gripper("I", STANDARD, Uniform(-6), args.pop("n", N), **args)
 
-    for kw, name in [(dict(yaw=math.nan), "yaw"), (dict(yaw="x"), "yaw"), (dict(r_tip=0.0), "r_tip"),
-                     (dict(r_link=1.0), "r_link"), (dict(n=1), "links"), (dict(initial_angles=np.zeros(3)),
-                                                                           "initial_angles"),
-                     (dict(fingers=1000), "fingers")]:  # 1000 tip spheres do not fit around b/2 = 0.3
+    cases = [
+        (dict(yaw=math.nan), "yaw"), (dict(yaw="x"), "yaw"), (dict(r_tip=0.0), "r_tip"), (dict(r_link=1.0), "r_link"),
+        (dict(n=1), "links"), (dict(initial_angles=np.zeros(3)), "initial_angles"),
+        (dict(fingers=1000), "fingers"),  # 1000 tip spheres do not fit around b/2 = 0.3
+        (dict(contact_angle=0.1), "contact_angle"),  # a cylinder's surface is vertical
+        (dict(workpiece="sphere", contact_angle=math.pi / 2), "contact_angle"),
+        (dict(workpiece="sphere", contact_angle=math.nan), "contact_angle"),
+    ]
+    for kw, name in cases:
         with pytest.raises(ValueError, match=name):
             build(**kw)
     with pytest.raises(ValueError, match="params"):
         build_gripper("I", {"D": 1}, -6, N)
+    assert build(workpiece="sphere", contact_angle=-0.3).contact_angle == -0.3

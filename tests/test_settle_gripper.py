@@ -39,6 +39,7 @@ from simgrip.scenes import build_scene
 from simgrip.settle import SettleError, settle
 from simgrip.settle.dynamics import DYN_PEN_LIMIT, DYN_TOL
 from simgrip.settle.gripper import GripperState, settle_gripper
+from simgrip.reference.inclined import solve_inclined
 from simgrip.sim.gripper import build_gripper
 
 KAPPA = {"I": -6.0, "II": 5.0}
@@ -65,33 +66,35 @@ def _chain_at(grip, tip_x, moment, springs=None, M=STANDARD.M, guess=None):
                        contact_moment=moment, guess=guess)
 
 
-@pytest.fixture(scope="module")
-def sensitivity():
-    """Per grip: how far a static residual of ``tol`` on any row may move ``N1`` and the tip height.
+def _sensitivity(grip, b=STANDARD.b):
+    """How far a static residual of 1 on any row may move ``N1`` and the tip height: ``(s_n, s_y)``.
 
     A generalised force ``tau`` on hinge ``i`` is a shift ``tau / k_i`` of its rest angle; a vertical
     force ``tau`` on the workpiece changes the friction a finger carries by at most ``tau``.  The bound
-    is the l1 norm of the chain's response to a unit force on every row (finite differences).
+    is the l1 norm of the chain's response to a unit force on every row (finite differences), with
+    the tip at ``X = b/2``.
     """
-    out = {}
-    for grip in KAPPA:
-        sp = chain_springs(Uniform(KAPPA[grip]), N)
-        base = _chain_at(grip, 0.5 * STANDARD.b, 0.0)
-        eps = 1e-6
-        dn, dy = [], []
-        for i in range(N):
-            rest = sp.rest.copy()
-            rest[i] += eps / (STANDARD.D * sp.stiffness[i])
-            ch = _chain_at(grip, 0.5 * STANDARD.b, 0.0, springs=ChainSprings(n=N, ds=sp.ds, stiffness=sp.stiffness,
-                                                                            rest=rest, nodes=sp.nodes),
-                           guess=base.link_angles)
-            dn.append((ch.N1 - base.N1) / eps)
-            dy.append((ch.tip[1] - base.tip[1]) / eps)
-        ch = _chain_at(grip, 0.5 * STANDARD.b, 0.0, M=STANDARD.M + eps, guess=base.link_angles)
+    sp = chain_springs(Uniform(KAPPA[grip]), N)
+    base = _chain_at(grip, 0.5 * b, 0.0)
+    eps = 1e-6
+    dn, dy = [], []
+    for i in range(N):
+        rest = sp.rest.copy()
+        rest[i] += eps / (STANDARD.D * sp.stiffness[i])
+        ch = _chain_at(grip, 0.5 * b, 0.0, springs=ChainSprings(n=N, ds=sp.ds, stiffness=sp.stiffness, rest=rest,
+                                                               nodes=sp.nodes), guess=base.link_angles)
         dn.append((ch.N1 - base.N1) / eps)
         dy.append((ch.tip[1] - base.tip[1]) / eps)
-        out[grip] = (float(np.sum(np.abs(dn))), float(np.sum(np.abs(dy))))
-    return out
+    ch = _chain_at(grip, 0.5 * b, 0.0, M=STANDARD.M + eps, guess=base.link_angles)
+    dn.append((ch.N1 - base.N1) / eps)
+    dy.append((ch.tip[1] - base.tip[1]) / eps)
+    return float(np.sum(np.abs(dn))), float(np.sum(np.abs(dy)))
+
+
+@pytest.fixture(scope="module")
+def sensitivity():
+    """Per grip: :func:`_sensitivity` of the planar problem (tip at ``X = b/2``)."""
+    return {grip: _sensitivity(grip) for grip in KAPPA}
 
 
 @pytest.mark.parametrize("grip", ["I", "II"])
@@ -228,3 +231,49 @@ def test_settle_restores_the_model_and_checks_its_arguments():
         settle_gripper(sc, max_steps=5)
     st = settle_gripper(sc, max_steps=5, allow_unconverged=True)
     assert not st.converged
+
+
+@pytest.mark.parametrize("grip, beta", [("I", -0.3), ("I", 0.2), ("II", -0.2)])
+def test_sphere_fingers_match_the_inclined_contact_elastica(grip, beta):
+    """A sphere held off its equator (simgrip.reference.inclined) at the simulation's own contact angle.
+
+    Each finger is the hinge chain with its tip at its own ``X`` (the rod's problem is Grip I/II at
+    width ``b cos beta``, the friction carrying ``M``) to the stop test's residual; against the
+    elastica to the second-order bound at n = 16, the normal and friction forces included.
+    """
+    st = settle_gripper(build_gripper(grip, STANDARD, Uniform(KAPPA[grip]), N, fingers=3, workpiece="sphere",
+                                      contact_angle=beta))
+    assert st.held and st.converged and len(st.records) == 3
+    s_n, s_y = _sensitivity(grip, 2 * st.records[0].tip[0])
+    for rec in st.records:
+        b_sim = rec.contact_angle
+        assert abs(b_sim - beta) < 0.01  # the contact stays near its start (measured: it moves ~1e-3 rad at release)
+        ch = _chain_at(grip, rec.tip[0], rec.moment)
+        assert abs(rec.N1 - ch.N1) <= DYN_TOL * s_n and abs(rec.tip[1] - ch.tip[1]) <= DYN_TOL * s_y
+        assert abs(rec.N2 + STANDARD.M) <= DYN_TOL and abs(rec.N3) <= DYN_TOL
+        # the reader's normal and friction are (N1, N2) in the contact frame
+        c, s = math.cos(b_sim), math.sin(b_sim)
+        assert rec.normal == pytest.approx(rec.N1 * c + rec.N2 * s, abs=1e-12)
+        assert rec.friction == pytest.approx(-rec.N1 * s + rec.N2 * c, abs=1e-12)
+        ref = solve_inclined(grip, STANDARD, Uniform(KAPPA[grip]), b_sim, contact_moment=rec.moment)
+        assert abs(rec.normal / ref.normal_force - 1) < BVP_N_REL
+        assert abs(rec.friction / ref.friction_force - 1) < BVP_N_REL
+        assert abs(rec.required_mu / ref.required_mu - 1) < 2 * BVP_N_REL  # a ratio of two such forces
+        assert abs(rec.tip[1] - ref.tip[1]) < BVP_TIP
+        # the tip centre on the sphere (radius b/2 through the tip centres), up to the penetration
+        assert abs(rec.tip[0] - ref.tip[0]) <= 2 * rec.penetration + BVP_TIP * abs(math.tan(b_sim))
+    assert abs(st.workpiece_position[2] - ref.centre_height) < BVP_TIP
+    assert np.max(np.abs(st.force_balance)) <= st.residual * (1 + 1e-9) + 1e-12
+
+
+@pytest.mark.parametrize("grip, beta", [("I", -0.1), ("II", -0.2)])
+def test_sphere_held_iff_the_inclined_cone_holds(grip, beta):
+    probe = settle_gripper(build_gripper(grip, STANDARD, Uniform(KAPPA[grip]), N, fingers=3, workpiece="sphere",
+                                         contact_angle=beta))
+    rec = probe.records[0]
+    need = solve_inclined(grip, STANDARD, Uniform(KAPPA[grip]), rec.contact_angle,
+                          contact_moment=rec.moment).required_mu
+    for factor, held in ((1.02, True), (0.98, False)):
+        st = settle_gripper(build_gripper(grip, STANDARD.replace(mu_s=need * factor), Uniform(KAPPA[grip]), N,
+                                          fingers=3, workpiece="sphere", contact_angle=beta))
+        assert st.held is held and st.converged, factor

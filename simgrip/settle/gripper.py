@@ -315,14 +315,20 @@ def settle_gripper(scene: GripperScene, *, tol: float = DYN_TOL, max_steps: int 
 
 
 def _start(scene: GripperScene) -> np.ndarray | None:
-    """qpos of the start: fingers at the chain's grip equilibrium, workpiece centred level with the tips.
+    """qpos of the start: fingers at the chain's grip equilibrium, workpiece centred on the palm axis.
 
-    None when the free finger does not reach ``X = b/2`` (nothing to hold).
+    Box and cylinder: centred level with the tips.  Sphere: the tips at
+    ``X = (b/2) cos beta``, the centre ``(b/2) sin beta`` below them
+    (``beta = scene.contact_angle``).
+
+    None when the free finger does not reach that ``X`` (nothing to hold).
     """
     p = scene.params
-    ch = _chain(scene, scene.grip, b=p.b - 2e-6)  # the tip a hair inside the face: MuJoCo sees the contact
+    beta = scene.contact_angle  # sphere: the tip at X = (b/2) cos(beta) on the sphere; 0 for vertical faces
+    # the tip a hair inside the surface: MuJoCo sees the contact
+    ch = _chain(scene, scene.grip, b=p.b * math.cos(beta) - 2e-6)
     free = _chain(scene, "free", guess=None if ch is None else ch.link_angles)
-    if free is not None and float(np.sum(np.cos(free.link_angles))) / scene.n > 0.5 * p.b:
+    if free is not None and float(np.sum(np.cos(free.link_angles))) / scene.n > 0.5 * p.b * math.cos(beta):
         return None
     if ch is None or not (ch.success and ch.N1 > 0.0 and ch.min_eigenvalue > 0.0):
         raise SettleError(f"no start for grip {scene.grip}: the hinge chain has no stable equilibrium pushing on "
@@ -330,7 +336,7 @@ def _start(scene: GripperScene) -> np.ndarray | None:
     q = np.array(scene.data.qpos)
     q[scene.joint_qpos] = ch.joint_angles[None, :]
     wq = scene.workpiece_qpos
-    q[wq[:3]] = [0.0, 0.0, float(ch.tip[1]) * scene.length]
+    q[wq[:3]] = [0.0, 0.0, (float(ch.tip[1]) - 0.5 * p.b * math.sin(beta)) * scene.length]
     q[wq[3:]] = [math.cos(0.5 * scene.yaw), 0.0, 0.0, math.sin(0.5 * scene.yaw)]
     return q
 

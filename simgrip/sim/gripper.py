@@ -101,6 +101,8 @@ class GripperScene:
         Box half sizes; cylinder ``(radius, half height, 0)``; sphere ``(radius, 0, 0)`` [m].
     r_tip, r_link : float
         Radii over ``l``.
+    contact_angle : float
+        Sphere: elevation of the start's contact normal [rad] (0 for box and cylinder).
     """
 
     spec: mujoco.MjSpec
@@ -124,6 +126,7 @@ class GripperScene:
     size: np.ndarray
     r_tip: float
     r_link: float
+    contact_angle: float = 0.0
 
     @property
     def joint_qpos(self) -> np.ndarray:
@@ -228,6 +231,7 @@ def build_gripper(
     fingers: int = 3,
     workpiece: str = "cylinder",
     yaw: float = 0.0,
+    contact_angle: float = 0.0,
     r_tip: float = DEFAULT_R_TIP,
     r_link: float = DEFAULT_R_LINK,
     initial_angles=None,
@@ -250,6 +254,12 @@ def build_gripper(
     workpiece : {"box", "cylinder", "sphere"}
     yaw : float
         Rotation of the whole scene about the palm axis [rad].
+    contact_angle : float
+        Sphere only: elevation ``beta`` [rad] of the contact normal (sphere
+        centre to tip, in each finger's plane) at the start, ``|beta| < pi/2``;
+        the settle starts the tips at ``X = (b/2) cos beta`` on the sphere
+        (friction then keeps the contact near there).  0 (the equator) for
+        box and cylinder.
     r_tip, r_link : float
         Tip sphere and link capsule radii over ``l``; ``K`` tip spheres must fit
         around the circle of radius ``b/2`` (ValueError naming ``fingers``).
@@ -273,6 +283,7 @@ def build_gripper(
         raise ValueError(f"yaw must be a real number (radians), got {yaw!r}") from None
     if not math.isfinite(yaw):
         raise ValueError(f"yaw must be finite, got {yaw!r}")
+    beta = _check_contact_angle(contact_angle, shape)
     if 2.0 * r_tip >= 2.0 * (0.5 * dimless.b) * math.sin(math.pi / K):
         raise ValueError(f"fingers = {K}: the tip spheres (radius {r_tip:g} l) overlap on the circle of diameter "
                          f"b = {dimless.b:g} l")
@@ -306,10 +317,22 @@ def build_gripper(
         workpiece_body=wb, workpiece_geom=mujoco.mj_name2id(model, mujoco.mjtObj.mjOBJ_GEOM, _WORKPIECE_GEOM),
         workpiece_qpos=np.arange(model.jnt_qposadr[wj], model.jnt_qposadr[wj] + 7),
         workpiece_dof=np.arange(model.jnt_dofadr[wj], model.jnt_dofadr[wj] + 6),
-        size=size, r_tip=r_tip, r_link=r_link,
+        size=size, r_tip=r_tip, r_link=r_link, contact_angle=beta,
     )
     set_finger_angles(scene, q0)
     return scene
+
+
+def _check_contact_angle(value, shape: str) -> float:
+    try:
+        beta = float(value)
+    except (TypeError, ValueError):
+        raise ValueError(f"contact_angle must be a real number (radians), got {value!r}") from None
+    if not (math.isfinite(beta) and abs(beta) < 0.5 * math.pi):
+        raise ValueError(f"contact_angle must lie in (-pi/2, pi/2), got {value!r}")
+    if shape != "sphere" and beta != 0.0:
+        raise ValueError(f"contact_angle must be 0 for workpiece {shape!r} (its surface is vertical), got {value!r}")
+    return beta
 
 
 def _start(initial_angles, K: int, n: int) -> np.ndarray:
