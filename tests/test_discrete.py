@@ -88,7 +88,7 @@ def assert_second_order(levels, errors, what):
 
 
 @pytest.mark.parametrize("solver, name", [(solve_discrete, "K"), (solve_chain, "n")])
-@pytest.mark.parametrize("bad", [1, 0, -3, 2.5, "8", None, float("inf"), float("nan")])
+@pytest.mark.parametrize("bad", [1, 0, -3, 2.5, "8", None, float("inf"), float("-inf"), float("nan")])
 def test_bad_counts_name_the_parameter(solver, name, bad):
     with pytest.raises(ValueError, match=rf"\b{name}\b"):
         solver("I", STANDARD, -3.0, bad)

@@ -54,11 +54,16 @@ from scipy.integrate import solve_bvp
 
 from simgrip.profiles import Concentrated, CurvatureProfile, Uniform
 
-__all__ = ["Blend", "BvpProblem", "BvpSolution", "TOL_MID", "antiderivative", "grip_problem", "run_bvp", "system"]
+__all__ = ["Blend", "BvpProblem", "ElasticaError", "BvpSolution", "TOL_MID", "antiderivative", "grip_problem", "run_bvp", "system"]
 
 TOL_MID = 1e-6  # tolerance of intermediate continuation steps
 _MAX_NODES = 6000  # per solve_bvp run at the final tolerance (tol 1e-8 needs ~1000)
 _MAX_NODES_MID = 1000  # per run at the intermediate tolerance
+
+
+class ElasticaError(RuntimeError):
+    """The elastica BVP could not be solved, even by continuation (also reachable
+    as ``simgrip.elastica.ElasticaError``)."""
 
 
 class Blend(CurvatureProfile):

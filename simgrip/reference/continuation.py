@@ -23,15 +23,43 @@ import numpy as np
 from scipy.optimize import brentq
 
 from simgrip.profiles import Uniform
-from simgrip.reference.bvp import TOL_MID, Blend, BvpProblem, BvpSolution, run_bvp
+from simgrip.reference.bvp import TOL_MID, Blend, BvpProblem, BvpSolution, ElasticaError, run_bvp
 
-__all__ = ["MAX_JUMP", "cold_start", "continue_along", "linear_path", "solve_from"]
+__all__ = ["MAX_BVP_RUNS", "MAX_JUMP", "Budget", "cold_start", "continue_along", "linear_path", "solve_from"]
 
 MAX_JUMP = 0.75  # radians: largest change of theta accepted in one step along a branch
 _H_MIN = 2.0**-12  # smallest continuation step (fraction of the path)
 _MAX_TRIES = 80  # solve_bvp runs allowed to one continuation
 _GUESS_NODES = 301  # largest mesh handed to solve_bvp as a starting guess
 _JUMP_GRID = np.linspace(0.0, 1.0, 41)
+_H_MIN_SCOUT = 2.0**-7  # smallest step of the first cold-start strategy (it has fallbacks)
+
+#: Most ``solve_bvp`` runs one :func:`~simgrip.reference.elastica.solve` may spend
+#: (each run is itself bounded by ``bvp._MAX_NODES`` mesh nodes); past it the
+#: solve raises :class:`~simgrip.reference.bvp.ElasticaError` rather than search on.
+MAX_BVP_RUNS = 200
+
+
+class Budget:
+    """The ``solve_bvp`` runs left to one solve: :meth:`run` spends one, and raises
+    :class:`ElasticaError` once ``limit`` runs are spent."""
+
+    def __init__(self, limit: int = MAX_BVP_RUNS):
+        self.limit, self.used = int(limit), 0
+
+    def run(self, P: BvpProblem, x, y, p, tol: float) -> BvpSolution | None:
+        """:func:`~simgrip.reference.bvp.run_bvp`, counted."""
+        if self.used >= self.limit:
+            raise ElasticaError(
+                f"elastica BVP gave up after {self.used} solve_bvp runs (the limit per solve, MAX_BVP_RUNS = "
+                f"{self.limit}): no continuation path converged"
+            )
+        self.used += 1
+        return run_bvp(P, x, y, p, tol)
+
+
+def _budget(budget: Budget | None) -> Budget:
+    return Budget() if budget is None else budget
 
 
 def _mesh_guess(raw: BvpSolution, P: BvpProblem) -> tuple[np.ndarray, np.ndarray, np.ndarray | None]:
@@ -59,14 +87,31 @@ def _mesh_guess(raw: BvpSolution, P: BvpProblem) -> tuple[np.ndarray, np.ndarray
     return x, y, p
 
 
-def solve_from(raw: BvpSolution, P: BvpProblem, tol: float) -> BvpSolution | None:
+def polish(r: BvpSolution, tol: float, budget: Budget | None = None) -> BvpSolution | None:
+    """Tighten a converged solution ``r`` to tolerance ``tol`` a decade at a time.
+
+    One jump from ``TOL_MID`` to ``tol`` can make ``solve_bvp`` refine a coarse
+    mesh where the residual sits at its round-off floor (stiff rods, large contact
+    forces) until it hits the node limit, seconds per try; a decade at a time each
+    run starts from a mesh already fitted to the previous tolerance.
+    """
+    budget = _budget(budget)
+    t = max(tol, TOL_MID)
+    while r is not None and t > tol:
+        t = max(t / 10.0, tol)
+        r = budget.run(r.prob, r.x, r.y, r.p if r.prob.constrained else None, t)
+    return r
+
+
+def solve_from(raw: BvpSolution, P: BvpProblem, tol: float, budget: Budget | None = None) -> BvpSolution | None:
     """Solve ``P`` from the guess ``raw``: first at the loose intermediate tolerance
-    (a failure is cheap there), then polished to ``tol``."""
+    (a failure is cheap there), then polished to ``tol`` (:func:`polish`)."""
+    budget = _budget(budget)
     x, y, p = _mesh_guess(raw, P)
-    r = run_bvp(P, x, y, p, max(tol, TOL_MID))
+    r = budget.run(P, x, y, p, max(tol, TOL_MID))
     if r is None or tol >= TOL_MID:
         return r
-    return run_bvp(P, r.x, r.y, r.p if P.constrained else None, tol)
+    return polish(r, tol, budget)
 
 
 def _theta_jump(a: BvpSolution, b: BvpSolution) -> float:
@@ -82,13 +127,16 @@ def continue_along(
     max_jump: float | None = None,
     h_min: float = _H_MIN,
     max_tries: int = _MAX_TRIES,
+    budget: Budget | None = None,
 ) -> BvpSolution | None:
     """Natural-parameter continuation along ``path(w)``, ``w: 0 -> 1``, from ``raw``
     (a solution at ``w = 0``); adaptive step, halved on failure.  Returns the
     solution at ``w = 1`` (at tolerance ``tol``) or ``None``.  With ``max_jump``,
     a step whose ``theta`` moves by more than that many radians counts as a
     failure: the solver has left the branch (natural continuation cannot pass
-    a fold, so the path then fails, as it should)."""
+    a fold, so the path then fails, as it should).  At most ``max_tries`` steps
+    (tried or taken); every ``solve_bvp`` run is charged to ``budget``."""
+    budget = _budget(budget)
     w = 0.0
     tries = 0
     while w < 1.0:
@@ -97,7 +145,7 @@ def continue_along(
             return None
         h = min(h, 1.0 - w)
         wn = 1.0 if 1.0 - (w + h) < 1e-12 else w + h
-        r = solve_from(raw, path(wn), TOL_MID if wn < 1.0 else tol)
+        r = solve_from(raw, path(wn), TOL_MID, budget)
         if r is not None and max_jump is not None and _theta_jump(raw, r) > max_jump:
             r = None
         if r is None:
@@ -107,7 +155,8 @@ def continue_along(
             continue
         raw, w = r, wn
         h *= 2.0
-    return raw
+    # The end point is polished once: a polish that fails is not cured by smaller steps.
+    return polish(raw, tol, budget) if tol < TOL_MID else raw
 
 
 def linear_path(P0: BvpProblem, P1: BvpProblem) -> Callable[[float], BvpProblem] | None:
@@ -171,7 +220,7 @@ def _scaled(P: BvpProblem, lam: float, curvature: bool = True, loads: bool = Tru
     )
 
 
-def _arc(P: BvpProblem) -> BvpSolution | None:
+def _arc(P: BvpProblem, budget: Budget) -> BvpSolution | None:
     """The unloaded circular arc that puts the contact exactly at ``X = P.target``.
 
     Uniform curvature ``sigma k`` with ``sin(k g) / k = target`` (``g`` the contact
@@ -194,74 +243,84 @@ def _arc(P: BvpProblem) -> BvpSolution | None:
         return np.vstack((0.0 * s, 0.0 * s, np.sin(kap * s) / kap, (1.0 - np.cos(kap * s)) / kap))
 
     y = np.vstack((arc(gam * x), arc(gam + (1.0 - gam) * x))) if P.two_seg else arc(x)
-    return run_bvp(P0, x, y, np.array([0.0]), TOL_MID)
+    return budget.run(P0, x, y, np.array([0.0]), TOL_MID)
 
 
-def _to_target(base: BvpSolution, Pc: BvpProblem, tol: float) -> BvpSolution | None:
+def _to_target(base: BvpSolution, Pc: BvpProblem, tol: float, budget: Budget) -> BvpSolution | None:
     """Move the contact's width target from where ``base`` has it to ``Pc.target``."""
     X0 = float(base.contact_state()[2])
     start = _dc_replace(base.prob, target=X0, N1=0.0)
     # ``base`` solves ``start`` exactly (N1 = base.N1 at X = X0).
     base = BvpSolution(start, base.x, base.y, np.array([base.N1]), base.sol, base.rms, base.message)
-    return continue_along(lambda w: _dc_replace(Pc, target=(1.0 - w) * X0 + w * Pc.target), base, tol)
+    return continue_along(lambda w: _dc_replace(Pc, target=(1.0 - w) * X0 + w * Pc.target), base, tol,
+                          budget=budget)
 
 
-def _cold_grip_from_arcs(P: BvpProblem, tol: float) -> BvpSolution | None:
+def _cold_grip_from_arcs(P: BvpProblem, tol: float, budget: Budget) -> BvpSolution | None:
     """Strategy 1 (grips): the unloaded arc through the contact, curling the grip's
     way, then the profile (unloaded), then the loads.  Strategy 1b: the arc, then
     the loads, then the profile (heavy loads on a soft rod straighten it; curling it
     first and unwinding it under load meets folds).  As a last resort both again
-    from an arc curling the other way."""
+    from an arc curling the other way.  Their steps stop at ``_H_MIN_SCOUT``: a
+    path that meets a fold fails after a few halvings, not a dozen, and the
+    next strategy takes over."""
+    kw = dict(h_min=_H_MIN_SCOUT, budget=budget)
     for sigma in (P.sigma, -P.sigma):
-        arc = _arc(_dc_replace(P, sigma=sigma))
+        arc = _arc(_dc_replace(P, sigma=sigma), budget)
         if arc is None:
             return None
         unloaded = _scaled(P, 0.0, curvature=False)
-        raw = continue_along(linear_path(arc.prob, unloaded), arc, TOL_MID)
+        raw = continue_along(linear_path(arc.prob, unloaded), arc, TOL_MID, **kw)
         if raw is not None:
-            raw = continue_along(lambda lam: _scaled(P, lam, curvature=False), raw, tol)
+            raw = continue_along(lambda lam: _scaled(P, lam, curvature=False), raw, tol, **kw)
             if raw is not None:
                 return raw
         loaded = _dc_replace(P, profile=arc.prob.profile)
-        raw = continue_along(linear_path(arc.prob, loaded), arc, TOL_MID)
+        raw = continue_along(linear_path(arc.prob, loaded), arc, TOL_MID, **kw)
         if raw is not None:
-            raw = continue_along(linear_path(loaded, P), raw, tol)
+            raw = continue_along(linear_path(loaded, P), raw, tol, **kw)
             if raw is not None:
                 return raw
     return None
 
 
-def cold_start(P: BvpProblem, tol: float) -> BvpSolution | None:
-    """Solve ``P`` from nothing by continuation from an exactly known solution."""
+def cold_start(P: BvpProblem, tol: float, budget: Budget | None = None) -> BvpSolution | None:
+    """Solve ``P`` from nothing by continuation from an exactly known solution;
+    every ``solve_bvp`` run is charged to ``budget``."""
+    budget = _budget(budget)
     free = _dc_replace(P, target=None, N1=0.0 if P.constrained else P.N1)
     straight = _straight(P)
     if P.constrained:
-        raw = _cold_grip_from_arcs(P, tol)
+        raw = _cold_grip_from_arcs(P, tol, budget)
         if raw is not None:
             return raw
 
     # Strategy 2: curvature and loads together from the straight rod, then width.
-    raw = continue_along(lambda lam: _scaled(free, lam), straight, tol if not P.constrained else TOL_MID)
+    raw = continue_along(lambda lam: _scaled(free, lam), straight, tol if not P.constrained else TOL_MID,
+                         budget=budget)
     if raw is not None:
         if not P.constrained:
             return raw
-        out = _to_target(raw, P, tol)
+        out = _to_target(raw, P, tol, budget)
         if out is not None:
             return out
     if not P.constrained:
         # Strategy 3 (free): loads first, then curvature.
-        raw = continue_along(lambda lam: _scaled(free, lam, curvature=False), straight, TOL_MID, h=0.25)
+        raw = continue_along(lambda lam: _scaled(free, lam, curvature=False), straight, TOL_MID, h=0.25,
+                             budget=budget)
         if raw is None:
             return None
-        return continue_along(lambda lam: _scaled(free, lam, loads=False) if lam > 0 else raw.prob, raw, tol)
+        return continue_along(lambda lam: _scaled(free, lam, loads=False) if lam > 0 else raw.prob, raw, tol,
+                              budget=budget)
     # Strategy 3 (grips): loads without curvature, then width, then curvature.
     flat = _scaled(P, 0.0, loads=False)
     raw = continue_along(
-        lambda lam: _scaled(_dc_replace(flat, target=None, N1=0.0), lam, curvature=False), straight, TOL_MID
+        lambda lam: _scaled(_dc_replace(flat, target=None, N1=0.0), lam, curvature=False), straight, TOL_MID,
+        budget=budget,
     )
     if raw is None:
         return None
-    raw = _to_target(raw, flat, tol)
+    raw = _to_target(raw, flat, tol, budget)
     if raw is None:
         return None
-    return continue_along(lambda lam: _dc_replace(P, profile=P.profile.scaled(lam)), raw, tol)
+    return continue_along(lambda lam: _dc_replace(P, profile=P.profile.scaled(lam)), raw, tol, budget=budget)

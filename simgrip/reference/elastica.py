@@ -32,8 +32,8 @@ import numpy as np
 from simgrip.params import DimensionlessParams, _finite, check_grip
 from simgrip.profiles import CurvatureProfile, Uniform, as_profile
 from simgrip.reference.arguments import check_failures, check_gamma, check_params, check_tip_load, check_tol
-from simgrip.reference.bvp import BvpProblem, BvpSolution, grip_problem
-from simgrip.reference.continuation import cold_start, continue_along, linear_path, solve_from
+from simgrip.reference.bvp import BvpProblem, BvpSolution, ElasticaError, grip_problem
+from simgrip.reference.continuation import Budget, cold_start, continue_along, linear_path, solve_from
 
 __all__ = [
     "ElasticaError",
@@ -57,10 +57,6 @@ def __getattr__(name: str):
 
         return getattr(capacity, name)
     raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
-
-
-class ElasticaError(RuntimeError):
-    """The elastica BVP could not be solved, even by continuation."""
 
 
 @dataclass(frozen=True, eq=False)
@@ -226,19 +222,22 @@ def check_guess(guess) -> BvpSolution | None:
 def solve_problem(P: BvpProblem, guess: BvpSolution | None, tol: float, fallback: bool = True) -> BvpSolution | None:
     """Warm start from ``guess`` (direct, then continuation), then cold; ``None`` if all fail.
 
-    With ``fallback=False`` and a guess, only the direct warm start is tried.
+    With ``fallback=False`` and a guess, only the direct warm start is tried.  The
+    whole search spends at most :data:`~simgrip.reference.continuation.MAX_BVP_RUNS`
+    ``solve_bvp`` runs: past that it raises :class:`ElasticaError`.
     """
+    budget = Budget()
     raw = None
     if guess is not None:
-        raw = solve_from(guess, P, tol)
+        raw = solve_from(guess, P, tol, budget)
         if raw is None and not fallback:
             return None
         if raw is None:
             path = linear_path(guess.prob, P)
             if path is not None:
-                raw = continue_along(path, guess, tol, h=0.5)
+                raw = continue_along(path, guess, tol, h=0.5, budget=budget)
     if raw is None:
-        raw = cold_start(P, tol)
+        raw = cold_start(P, tol, budget)
     return raw
 
 
