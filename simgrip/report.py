@@ -111,28 +111,134 @@ def _fmt(value) -> str:
 
 
 def format_table(record: dict) -> str:
-    """A two-column, human-readable table of a record."""
+    """A two-column, human-readable table of a record: five significant digits,
+    ``-`` for a missing value (``None``), ``unbounded`` for an infinite one."""
+
+    def cell(v) -> str:
+        if v is None:
+            return "-"
+        if isinstance(v, float) and math.isfinite(v):
+            return f"{v:.5g}"
+        if isinstance(v, (list, tuple)):
+            return "[" + ", ".join(cell(x) for x in v) + "]"
+        return _fmt(v)
+
     keys = [k for k in _ORDER if k in record] + [k for k in record if k not in _ORDER and k != "params"]
     width = max(len(k) for k in keys)
-    lines = [f"{k:<{width}}  {_fmt(record[k])}" for k in keys]
+    lines = [f"{k:<{width}}  {cell(record[k])}" for k in keys]
     if "params" in record:
-        lines.append(f"{'params':<{width}}  " + ", ".join(f"{k}={_fmt(v)}" for k, v in record["params"].items()))
+        lines.append(f"{'params':<{width}}  " + ", ".join(f"{k}={cell(v)}" for k, v in record["params"].items()))
     return "\n".join(lines)
 
 
 def format_comparison(result: dict) -> str:
-    """Simulation, reference and their difference side by side (from :func:`simgrip.compare.compare`)."""
-    sim, ref, diff = result["simulation"], result["reference"], result["difference"]
-    keys = [k for k in _ORDER if k in sim or k in ref] + [
-        k for k in sim if k not in _ORDER and k not in ("params", "profile")
-    ]
-    keys = [k for k in keys if k not in ("source",)]
-    width = max(len(k) for k in keys)
-    rows = [f"{'':<{width}}  {'simulation':>26}  {'reference':>26}  {'difference':>26}"]
-    for k in keys:
-        cells = [_fmt(sim.get(k, "")), _fmt(ref.get(k, "")), _fmt(diff.get(k, ""))]
-        rows.append(f"{k:<{width}}  " + "  ".join(f"{c:>26}" for c in cells))
-    return "\n".join(rows)
+    """Simulation, reference and their difference side by side (from :func:`simgrip.compare.compare`).
+
+    Physical quantities first, five significant digits, ``-`` where a side has no
+    value.  The difference column is absolute for lengths (``ℓ``) and relative for
+    forces and ``μ`` (absolute where the reference is 0).  ``N1``/``N2`` appear for
+    Grip III only (for Grips I/II they are the normal and friction forces again).
+    Diagnostics (method, steps, time, residuals, ...) go on footer lines; any key
+    not placed in a row goes there too, so nothing of the record is lost.
+    """
+    sim, ref = result["simulation"], result["reference"]
+
+    def num(v, digits=5, fmt="#") -> str:
+        if v is None:
+            return "-"
+        if isinstance(v, bool):
+            return "yes" if v else "no"
+        if isinstance(v, float):
+            if math.isnan(v):
+                return "nan"
+            if math.isinf(v):
+                return "unbounded" if v > 0 else "-unbounded"
+            return f"{v:{fmt}.{digits}g}".rstrip(".")
+        if isinstance(v, (list, tuple)):
+            return "[" + ", ".join(num(x, digits, fmt) for x in v) + "]" if v else "none"
+        return str(v)
+
+    def rel(a, b) -> str:
+        if not all(isinstance(v, (int, float)) and not isinstance(v, bool) and math.isfinite(v) for v in (a, b)):
+            return ""
+        d = float(a) - float(b)
+        if d == 0.0:
+            return "0"
+        pct = 100.0 * d / abs(b) if b != 0.0 else 0.0
+        if abs(pct) < 1e-4:  # reference 0, or a round-off difference: absolute only
+            return f"{d:+.2g}"
+        return f"{d:+.2g} ({pct:+.0f} %)" if abs(pct) >= 10 else f"{d:+.2g} ({pct:+.2g} %)"
+
+    def absdiff(a, b) -> str:
+        if not all(isinstance(v, (int, float)) and not isinstance(v, bool) and math.isfinite(v) for v in (a, b)):
+            return ""
+        d = float(a) - float(b)
+        return "0" if d == 0.0 else f"{d:+.2g}"
+
+    def vec(key, i):
+        return lambda r: (r.get(key) or [None, None])[i]
+
+    grip = sim.get("grip", ref.get("grip"))
+    three = grip == "III"
+    rows: list[tuple[str, object, object, str]] = []
+    used = {"source", "grip", "params", "profile"}
+
+    def row(label, get, diff=None, keys=()):
+        a, b = get(sim), get(ref)
+        used.update(keys)
+        if a is None and b is None:
+            return
+        rows.append((label, a, b, "" if diff is None else diff(a, b)))
+
+    row("tip x", vec("tip", 0), absdiff, ("tip",))
+    row("tip y", vec("tip", 1), absdiff)
+    if three:
+        row("contact x", vec("contact", 0), absdiff, ("contact",))
+        row("contact y", vec("contact", 1), absdiff)
+        row("gamma", lambda r: r.get("gamma"), absdiff, ("gamma",))
+    row("normal force", lambda r: r.get("normal_force"), rel, ("normal_force", "n"))
+    row("friction force", lambda r: r.get("friction_force"), rel, ("friction_force", "f"))
+    used.update(("N1", "N2"))
+    if three:
+        row("N1", lambda r: r.get("N1"), rel)
+        row("N2", lambda r: r.get("N2"), rel)
+    row("required mu", lambda r: r.get("required_mu"), rel, ("required_mu",))
+    row("feasible", lambda r: r.get("feasible"), None, ("feasible",))
+    if three:
+        row("tip clear", lambda r: r.get("tip_clear"), None, ("tip_clear",))
+    row("held", lambda r: r.get("held"), None, ("held",))
+    row("min eigenvalue", lambda r: r.get("min_eigenvalue"), rel, ("min_eigenvalue",))
+
+    width = max(len(r[0]) for r in rows)
+    cols = [max(10, *(len(num(r[i])) for r in rows)) for i in (1, 2)]
+    lines = []
+    prof = sim.get("profile", ref.get("profile"))
+    p = sim.get("params") or ref.get("params") or {}
+    head = f"Grip {grip}" + (f", {prof}" if prof else "")
+    if p:
+        head += ", " + ", ".join(f"{k}={num(v, fmt='')}" for k, v in p.items() if three or k != "gamma")
+    if sim.get("links") is not None:
+        head += f", {sim['links']} links"
+    used.add("links")
+    lines.append(head)
+    lines.append(f"{'':<{width}}  {'simulation':>{cols[0]}}  {'reference':>{cols[1]}}  difference (sim - ref)")
+    for label, a, b, d in rows:
+        lines.append(f"{label:<{width}}  {num(a):>{cols[0]}}  {num(b):>{cols[1]}}  {d}".rstrip())
+
+    warnings = sim.get("warnings")
+    used.add("warnings")
+    for w in warnings or []:
+        lines.append(f"WARNING: {w}")
+
+    def footer(name, rec):
+        items = [f"time {num(v, 2, '')} s" if k == "wall_time_s" else f"{k.replace('_', ' ')} {num(v, 2, '')}"
+                 for k, v in rec.items() if k not in used and v is not None]
+        if name == "simulation":
+            items.append("warnings " + ("none" if not warnings else str(len(warnings))))
+        return f"{name}: " + ", ".join(items) if items else ""
+
+    lines.extend(x for x in (footer("simulation", sim), footer("reference", ref)) if x)
+    return "\n".join(lines)
 
 
 def difference(a: dict, b: dict) -> dict:
