@@ -134,6 +134,21 @@ def test_dynamics_holds_where_newton_holds_far_inside_the_cone(grip, kappa):
     assert st.N1 == pytest.approx(nw.N1, rel=5 * st.penetration)
 
 
+def test_dynamics_drop_is_confirmed_at_half_the_step():
+    """Stress case 301: a heavy workpiece on a soft finger starts a growing two-step oscillation of the
+    contact at h = 1/omega_min and is thrown off the tip; at h/2 it holds, as Newton says (margin 0.4)."""
+    from simgrip.harness.stress_cases import stress_profile
+    from simgrip.params import DimensionlessParams
+
+    p = DimensionlessParams(D=0.047019033657647105, M=3.520487155765295, b=0.9036905963160098,
+                            mu_s=3.0996078049733544)
+    prof = stress_profile("wiggle", -5.4611229076981544, 0.3391074314713478)
+    st = settle(build_scene("I", p, prof, 59), method="dynamics")
+    nw = settle(build_scene("I", p, prof, 59), contact="surface")
+    assert st.held and nw.held and st.converged
+    assert st.N1 == pytest.approx(nw.N1, rel=5 * st.penetration)
+
+
 def test_dynamics_grip_iii_settles_in_few_steps(dyn_states):
     # the fall guard's extra damping (~20 x h K at the standard case) is lifted near rest: the
     # over-damped flow D = h K contracts every mode by about 1/2 per step (320 steps with the guard)

@@ -249,21 +249,31 @@ def _finger_pairs_touching(scene: Scene) -> bool:
 
 def settle_dynamics(scene: Scene, tol: float, max_steps: int, warm_start, close: bool,
                      allow_unconverged: bool, t0: float) -> SettledState:
-    """Over-damped settle; the time step halves (from the start) while penetration >= DYN_PEN_LIMIT."""
+    """Over-damped settle; the time step halves (from the start) while penetration >= DYN_PEN_LIMIT,
+    and once when the workpiece drops: a drop counts when it happens at two time steps ``h`` and
+    ``h/2`` (a heavy workpiece on a soft finger can start a growing two-step oscillation of the contact
+    at ``h = 1/omega_min`` that throws it off the tip; at ``h/2`` it holds)."""
     d = scene.data
     q0 = d.qpos.copy()
+    flags0 = int(scene.model.opt.disableflags)  # a drop leaves contact off (the finger settles alone)
     steps = calls = 0
     factor = 1.0
+    retried_drop = False
     for _attempt in range(4):
         # max_steps is the budget of the whole settle: a restart gets what the earlier attempts left
-        state = _settle_dynamics_once(scene, tol, max_steps - steps, warm_start, close, allow_unconverged, t0, factor)
+        state, dropped = _settle_dynamics_once(scene, tol, max_steps - steps, warm_start, close, allow_unconverged,
+                                               t0, factor)
         steps += state.steps
         calls += state.forward_calls
-        if state.penetration < DYN_PEN_LIMIT or _attempt == 3 or steps >= max_steps or not state.converged:
+        retry_drop = dropped and not retried_drop
+        retried_drop = retried_drop or dropped
+        if (state.penetration < DYN_PEN_LIMIT and not retry_drop) or _attempt == 3 or steps >= max_steps or (
+                not state.converged):
             break
         d.qpos[:] = q0
         d.qvel[:] = 0.0
         d.qfrc_applied[:] = 0.0
+        scene.model.opt.disableflags = flags0
         mujoco.mj_forward(scene.model, d)
         factor *= 0.5
     state.steps, state.forward_calls = steps, calls
@@ -282,7 +292,7 @@ def _settle_dynamics_once(scene: Scene, tol: float, max_steps: int, warm_start, 
     contact_off = int(mujoco.mjtDisableBit.mjDSBL_CONTACT)
     flags = int(m.opt.disableflags)
     dim = m.pair_dim.copy()
-    closed = False
+    closed = dropped = False
     if scene.has_workpiece and held:
         started = start_on_chain(scene, None) if (scene.grip in ("I", "II") and warm_start is None and close
                                                    and closing.CHAIN_START) else None
@@ -362,7 +372,7 @@ def _settle_dynamics_once(scene: Scene, tol: float, max_steps: int, warm_start, 
 
             converged, why = dyn.run(tol, vtol, max_steps, watch)
             if why in ("lost contact", "slipped"):
-                held, converged = False, True
+                held, converged, dropped = False, True, True
     if not (scene.has_workpiece and held) and converged:
         if scene.has_workpiece:  # park the workpiece, settle the finger alone (from the chain's free state)
             dyn.hold(True)
@@ -372,7 +382,7 @@ def _settle_dynamics_once(scene: Scene, tol: float, max_steps: int, warm_start, 
         converged, why = dyn.run(tol, vtol, max_steps)
     if not converged and not allow_unconverged:
         raise SettleError(f"dynamic settle did not converge ({why} after {dyn.steps} steps)")
-    return read_dynamics(scene, dyn, t0, held, converged)
+    return read_dynamics(scene, dyn, t0, held, converged), dropped
 
 
 def read_dynamics(scene: Scene, dyn: Dyn, t0: float, held: bool, converged: bool) -> SettledState:
