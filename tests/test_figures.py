@@ -38,8 +38,10 @@ def test_names_are_normalised_and_checked(tmp_path):
     assert figures.figure_key(7) == figures.figure_key("fig7") == figures.figure_key("FIG07") == "fig07"
     with pytest.raises(ValueError, match="fig10"):
         figures.figure_data("fig10")
-    with pytest.raises(ValueError, match="unknown figure"):
+    with pytest.raises(ValueError, match="which: unknown figure 'fig99'"):
         figures.make_figures(tmp_path, which=["fig99"], progress=False)
+    with pytest.raises(ValueError, match="which"):
+        figures.make_figures(tmp_path, which=3.5, progress=False)
     with pytest.raises(ValueError, match="jobs"):
         figures.make_figures(tmp_path, which=CHEAP, jobs=0, progress=False)
 

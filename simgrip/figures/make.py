@@ -63,7 +63,12 @@ def make_figures(out_dir, *, which=None, jobs: int | None = None, progress: bool
     if which is None:
         names = list(FIGURES)
     else:
-        names = [figure_key(w) for w in ([which] if isinstance(which, (str, int)) else which)]
+        try:
+            names = [figure_key(w) for w in ([which] if isinstance(which, (str, int)) else which)]
+        except TypeError:  # not iterable
+            raise ValueError(f"which must be a figure name or number or a list of them, got {which!r}") from None
+        except ValueError as exc:
+            raise ValueError(f"which: {exc}") from None
     names = list(dict.fromkeys(names))
     options = RunnerOptions(jobs=jobs, progress=progress) if options is None else options
     links = check_links(links)
