@@ -42,7 +42,7 @@ import numpy as np
 from simgrip.settle.chain_model import eligible
 from simgrip.settle.chain_newton import ChainNewton
 from simgrip.settle.closing import close_grip, finger_alone, place_on_chain, release, start_free
-from simgrip.settle.dynamics import DYN_TOL, settle_dynamics
+from simgrip.settle.dynamics import DYN_TOL, dynamics_tolerance, settle_dynamics
 from simgrip.settle.naive import naive_relax, naive_settle
 from simgrip.settle.newton import Newton, SOLVE_ITERS, read_newton
 from simgrip.settle.state import FingerContact, SettledState, SettleError, finger_tip
@@ -127,7 +127,8 @@ def _settle(
     scene : Scene
     tol : float, optional
         Static residual tolerance (generalised forces over ``rho g l^2`` / ``rho g l``);
-        default :data:`DEFAULT_TOL` (Newton) or :data:`DYN_TOL` (dynamics).
+        default :data:`DEFAULT_TOL` (Newton) or, with a workpiece, ``max(DYN_TOL, 2e-6 M)``
+        (dynamics: MuJoCo's friction creep floor, :func:`.dynamics.dynamics_tolerance`).
     max_steps : int, optional
         Newton iterations (default :data:`NEWTON_BUDGET`, one solve at most
         :data:`SOLVE_ITERS`) or physics steps (dynamics, default 20000)
@@ -180,8 +181,9 @@ def _settle(
         raise ValueError(f"contact must be 'point' or 'surface' ('surface' for method='dynamics'), got {contact!r}")
     if tol is None:
         # dynamics: MuJoCo's sticking friction creeps (~1e-5 of the weight), so a
-        # scene with a workpiece stops at DYN_TOL; without contact it goes as far as Newton.
-        tol = DEFAULT_TOL if method == "newton" or not scene.has_workpiece else DYN_TOL
+        # scene with a workpiece stops at its creep floor (dynamics_tolerance: DYN_TOL, more for a heavy
+        # workpiece); without contact it goes as far as Newton.
+        tol = DEFAULT_TOL if method == "newton" or not scene.has_workpiece else dynamics_tolerance(scene)
     if max_steps is None:
         max_steps = NEWTON_BUDGET if method == "newton" else 20_000
     tol, max_steps = _check_settle_args(scene, tol, max_steps)

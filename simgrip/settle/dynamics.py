@@ -46,7 +46,7 @@ from simgrip.settle.statics import CONTACT_IMPEDANCE, RestResidual, check_warnin
 from simgrip.sim.scene import Scene, set_curvature
 from simgrip.sim.workpiece import lower_onto_fingers, slip_coordinate
 
-__all__ = ["DYN_TOL", "Dyn", "settle_dynamics"]
+__all__ = ["DYN_TOL", "DYN_TOL_PER_WEIGHT", "Dyn", "dynamics_tolerance", "settle_dynamics"]
 
 #: Time step over ``1 / omega_min`` (lowest hinge mode with the physical inertia).
 DYN_STEP = 1.0
@@ -60,8 +60,13 @@ DYN_FALL_STEP = 0.3
 DYN_TIMECONST = 1e-2
 #: Friction-to-normal impedance ratio: MuJoCo's sticking friction creeps at a speed ~ 1/impratio.
 DYN_IMPRATIO = 1e4
-#: Default static residual tolerance of the dynamic settle (the creep floor is ~2e-6).
+#: Default static residual tolerance of the dynamic settle (the creep floor is ~2e-6 at the
+#: standard workpiece weight M = 5).
 DYN_TOL = 1e-5
+#: The creep floor is a fixed fraction of the force the friction carries, i.e. of the workpiece's
+#: weight ``M`` (over rho g l): measured 4e-7 M (standard case) to 9e-7 M (M = 33, D = 70); the
+#: default tolerance is ``max(DYN_TOL, DYN_TOL_PER_WEIGHT M)`` (:func:`dynamics_tolerance`).
+DYN_TOL_PER_WEIGHT = 2e-6
 #: Velocity tolerance (rad or l per sqrt(l/g)).
 DYN_VTOL = 1e-6
 #: Closing ramp: largest change of the total rest rotation per physics step [rad] (one step moves
@@ -81,6 +86,16 @@ DYN_BATCH = 16
 DYN_GUARD_V = 1e-3
 #: Tangential slip (over l) of the tip on the workpiece after release that counts as a drop.
 DYN_DROP_SLIP = 0.02
+
+
+def dynamics_tolerance(scene: Scene) -> float:
+    """Default static residual tolerance of the dynamic settle of ``scene`` with a workpiece.
+
+    MuJoCo's sticking friction creeps and leaves a fraction of the friction force
+    unbalanced at rest, so the floor scales with the weight it carries:
+    ``max(DYN_TOL, DYN_TOL_PER_WEIGHT * M)`` (``M`` the workpiece's weight over ``rho g l``).
+    """
+    return max(DYN_TOL, DYN_TOL_PER_WEIGHT * float(scene.params.M))
 
 
 def lowest_frequency(m, d, k, sprung, iters: int = 50, rtol: float = 1e-12) -> float:
