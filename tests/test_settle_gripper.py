@@ -8,7 +8,7 @@ planar one-finger dynamic settle and the BVP.
 Tolerances:
 
 * the stop test bounds every row of the static residual at rest by ``tol``
-  (``DYN_TOL``; hinges over rho g l^2, the workpiece's translation over
+  (``tolerance``: ``max(DYN_TOL, 2e-6 K M)``, MuJoCo's friction creep; hinges over rho g l^2, the workpiece's translation over
   rho g l).  A settled finger is therefore the hinge chain's equilibrium
   (:func:`simgrip.reference.solve_chain`, the MuJoCo finger's own statics) at
   the finger's own tip ``X`` and tip couple, up to the response of the chain
@@ -37,7 +37,7 @@ from simgrip.chain import ChainSprings, chain_springs
 from simgrip.reference import elastica, solve_chain
 from simgrip.scenes import build_scene
 from simgrip.settle import SettleError, settle
-from simgrip.settle.dynamics import DYN_PEN_LIMIT, DYN_TOL
+from simgrip.settle.dynamics import DYN_PEN_LIMIT
 from simgrip.settle.gripper import GripperState, settle_gripper
 from simgrip.reference.inclined import solve_inclined
 from simgrip.sim.gripper import build_gripper
@@ -108,17 +108,17 @@ def test_every_finger_is_the_planar_finger(planar, grippers, sensitivity, grip, 
     within the stop test's residual times the chain's sensitivity.
     """
     st, pl = grippers[grip, K, shape], planar[grip]
-    assert isinstance(st, GripperState) and st.held and st.converged and st.residual < DYN_TOL
+    assert isinstance(st, GripperState) and st.held and st.converged and st.residual <= st.tolerance
     assert len(st.records) == K and st.velocity < 1e-6 and st.penetration < DYN_PEN_LIMIT
     s_n, s_y = sensitivity[grip]
     ch = _chain_at(grip, pl.tip[0, 0], pl.contact.moment)
-    assert abs(pl.N1 - ch.N1) <= DYN_TOL * s_n and abs(pl.tip[0, 1] - ch.tip[1]) <= DYN_TOL * s_y
+    assert abs(pl.N1 - ch.N1) <= pl.tolerance * s_n and abs(pl.tip[0, 1] - ch.tip[1]) <= pl.tolerance * s_y
     for rec in st.records:
         ch = _chain_at(grip, rec.tip[0], rec.moment)
-        assert abs(rec.N1 - ch.N1) <= DYN_TOL * s_n
-        assert abs(rec.tip[1] - ch.tip[1]) <= DYN_TOL * s_y
-        assert abs(rec.N2 - pl.N2) <= 2 * DYN_TOL
-        assert abs(rec.N3) <= DYN_TOL  # nothing out of the finger's plane
+        assert abs(rec.N1 - ch.N1) <= st.tolerance * s_n
+        assert abs(rec.tip[1] - ch.tip[1]) <= st.tolerance * s_y
+        assert abs(rec.N2 - pl.N2) <= st.tolerance + pl.tolerance
+        assert abs(rec.N3) <= st.tolerance  # nothing out of the finger's plane
         # the tip's centre sits the penetration inside X = b/2
         assert rec.tip[0] == pytest.approx(0.5 * STANDARD.b - rec.penetration, abs=1e-3 * rec.penetration)
         # on a vertical surface the contact normal is E1 and the friction E2
@@ -126,7 +126,7 @@ def test_every_finger_is_the_planar_finger(planar, grippers, sensitivity, grip, 
         turn = abs(rec.contact_angle) * (abs(rec.N1) + abs(rec.N2)) + 1e-12  # the in-plane rotation by that angle
         assert abs(rec.normal - rec.N1) <= turn and abs(rec.friction - rec.N2) <= turn
     # the weight is shared: sum of the vertical forces on the rods is -K M
-    assert abs(sum(r.N2 for r in st.records) + K * STANDARD.M) <= DYN_TOL
+    assert abs(sum(r.N2 for r in st.records) + K * STANDARD.M) <= st.tolerance
 
 
 @pytest.mark.parametrize("grip", ["I", "II"])
@@ -136,7 +136,7 @@ def test_every_finger_matches_the_bvp(grippers, grip, K, shape):
     for rec in st.records:
         ref = elastica.solve(grip, STANDARD, Uniform(KAPPA[grip]), contact_moment=rec.moment)
         assert abs(rec.N1 / ref.N1 - 1) < BVP_N_REL
-        assert abs(rec.friction - ref.friction_force) <= 2 * DYN_TOL
+        assert abs(rec.friction - ref.friction_force) <= st.tolerance
         assert abs(rec.tip[1] - ref.tip[1]) < BVP_TIP
         assert abs(rec.tip[0] - 0.5 * STANDARD.b) <= 2 * rec.penetration  # on the surface, up to MuJoCo's softness
         assert abs(rec.required_mu / ref.required_mu - 1) < BVP_N_REL
@@ -150,12 +150,12 @@ def test_workpiece_force_and_moment_balance(grippers, sensitivity, grip, K, shap
         st = settle_gripper(build_gripper(grip, STANDARD, Uniform(KAPPA[grip]), N, fingers=K, workpiece=shape))
     assert st.held and st.converged
     # the reader's contact forces plus the weight are the residual's translation rows
-    assert np.max(np.abs(st.force_balance)) <= st.residual * (1 + 1e-9) + 1e-12
-    assert np.linalg.norm(st.moment_balance) <= math.sqrt(3) * DYN_TOL
+    assert np.max(np.abs(st.force_balance)) <= st.residual + 1e-12 * (1 + st.fingers * STANDARD.M)  # round-off
+    assert np.linalg.norm(st.moment_balance) <= math.sqrt(3) * st.tolerance
     # centred and level: every finger pushes alike
     assert np.max(np.abs(st.workpiece_position[:2])) <= st.penetration
     spread = max(r.N1 for r in st.records) - min(r.N1 for r in st.records)
-    assert spread <= 2 * DYN_TOL * sensitivity[grip][0]
+    assert spread <= 2 * st.tolerance * sensitivity[grip][0]
 
 
 @pytest.mark.parametrize("grip", ["I", "II"])
@@ -194,11 +194,11 @@ def test_invariant_under_rotation_about_the_palm_axis(grippers, sensitivity, K, 
     s_n, s_y = sensitivity[grip]
     assert len(a.records) == len(b.records) == K
     for ra, rb in zip(a.records, b.records):
-        assert abs(ra.N1 - rb.N1) <= 2 * DYN_TOL * s_n and abs(ra.N2 - rb.N2) <= 2 * DYN_TOL
-        assert abs(ra.tip[1] - rb.tip[1]) <= 2 * DYN_TOL * s_y
+        assert abs(ra.N1 - rb.N1) <= (a.tolerance + b.tolerance) * s_n and abs(ra.N2 - rb.N2) <= a.tolerance + b.tolerance
+        assert abs(ra.tip[1] - rb.tip[1]) <= (a.tolerance + b.tolerance) * s_y
         assert abs(ra.contact_angle - rb.contact_angle) <= 1e-6
     # the workpiece turned with the scene: same height, orientation yawed by 0.7
-    assert a.workpiece_position[2] == pytest.approx(b.workpiece_position[2], abs=2 * DYN_TOL * s_y)
+    assert a.workpiece_position[2] == pytest.approx(b.workpiece_position[2], abs=(a.tolerance + b.tolerance) * s_y)
     turn = 2 * math.atan2(b.workpiece_quat[3], b.workpiece_quat[0]) - 2 * math.atan2(a.workpiece_quat[3],
                                                                                     a.workpiece_quat[0])
     assert turn == pytest.approx(0.7, abs=1e-6)
@@ -247,10 +247,11 @@ def test_sphere_fingers_match_the_inclined_contact_elastica(grip, beta):
     s_n, s_y = _sensitivity(grip, 2 * st.records[0].tip[0])
     for rec in st.records:
         b_sim = rec.contact_angle
-        assert abs(b_sim - beta) < 0.01  # the contact stays near its start (measured: it moves ~1e-3 rad at release)
+        # the contact sticks where it started: the sphere sinks by about the penetration
+        assert abs(b_sim - beta) <= 2 * rec.penetration / (0.5 * STANDARD.b)
         ch = _chain_at(grip, rec.tip[0], rec.moment)
-        assert abs(rec.N1 - ch.N1) <= DYN_TOL * s_n and abs(rec.tip[1] - ch.tip[1]) <= DYN_TOL * s_y
-        assert abs(rec.N2 + STANDARD.M) <= DYN_TOL and abs(rec.N3) <= DYN_TOL
+        assert abs(rec.N1 - ch.N1) <= st.tolerance * s_n and abs(rec.tip[1] - ch.tip[1]) <= st.tolerance * s_y
+        assert abs(rec.N2 + STANDARD.M) <= st.tolerance and abs(rec.N3) <= st.tolerance
         # the reader's normal and friction are (N1, N2) in the contact frame
         c, s = math.cos(b_sim), math.sin(b_sim)
         assert rec.normal == pytest.approx(rec.N1 * c + rec.N2 * s, abs=1e-12)
@@ -263,7 +264,7 @@ def test_sphere_fingers_match_the_inclined_contact_elastica(grip, beta):
         # the tip centre on the sphere (radius b/2 through the tip centres), up to the penetration
         assert abs(rec.tip[0] - ref.tip[0]) <= 2 * rec.penetration + BVP_TIP * abs(math.tan(b_sim))
     assert abs(st.workpiece_position[2] - ref.centre_height) < BVP_TIP
-    assert np.max(np.abs(st.force_balance)) <= st.residual * (1 + 1e-9) + 1e-12
+    assert np.max(np.abs(st.force_balance)) <= st.residual + 1e-12 * (1 + st.fingers * STANDARD.M)  # round-off
 
 
 @pytest.mark.parametrize("grip, beta", [("I", -0.1), ("II", -0.2)])

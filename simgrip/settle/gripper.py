@@ -17,9 +17,10 @@ in rotation (its principal inertia; the rotational dofs are in its body frame).
   full curvature leaves the workpiece unheld; a chain equilibrium that does
   not exist, is unstable or does not push on the face raises
   :class:`SettleError` (the planar settle's staged closing is not provided here).
-* **Release**: the holding force fades out over
-  :data:`~simgrip.settle.dynamics.DYN_RELEASE_STEPS` steps; the dynamics then
-  runs until the static residual at rest is below ``tol`` and the velocities
+* **Release**: the chains' start shape already carries the weight by
+  friction, so the workpiece is let go at once; the dynamics then
+  runs until the static residual at rest is below ``tol`` (default
+  :func:`gripper_tolerance`, scaled by the weight ``K M``) and the velocities
   below :data:`~simgrip.settle.dynamics.DYN_VTOL` (tested between batches of
   :data:`~simgrip.settle.dynamics.DYN_BATCH` steps).  A tip that slides
   :data:`~simgrip.settle.dynamics.DYN_DROP_SLIP` over the workpiece's surface
@@ -49,17 +50,20 @@ import numpy as np
 
 from simgrip.chain import link_positions
 from simgrip.settle.dynamics import (DYN_BATCH, DYN_DAMPING, DYN_DROP_FALL, DYN_DROP_SLIP, DYN_IMPRATIO,
-                                     DYN_PEN_LIMIT, DYN_RELEASE_STEPS, DYN_STEP, DYN_TIMECONST, DYN_TOL, DYN_VTOL,
+                                     DYN_PEN_LIMIT, DYN_STEP, DYN_TIMECONST, DYN_TOL, DYN_VTOL,
                                      DYN_WORKPIECE_DAMPING, lowest_frequency)
 from simgrip.settle.state import SettleError
 from simgrip.settle.statics import CONTACT_IMPEDANCE, check_warnings, restore_options, save_options
 from simgrip.sim.checks import clear_warnings
 from simgrip.sim.gripper import GripperScene
 
-__all__ = ["FingerRecord", "GripperState", "settle_gripper"]
+__all__ = ["GRIPPER_TOL_PER_WEIGHT", "FingerRecord", "GripperState", "gripper_tolerance", "settle_gripper"]
 
 #: Default physics-step budget of one settle.
 GRIPPER_MAX_STEPS = 20_000
+#: Default tolerance per unit of workpiece weight (``K M``, over rho g l): five times the creep
+#: floor measured in the planar dynamic settle (:func:`gripper_tolerance`).
+GRIPPER_TOL_PER_WEIGHT = 2e-6
 
 
 @dataclass
@@ -251,16 +255,26 @@ def _touching(scene: GripperScene) -> bool:
                for i in range(d.ncon))
 
 
-def settle_gripper(scene: GripperScene, *, tol: float = DYN_TOL, max_steps: int = GRIPPER_MAX_STEPS,
+def gripper_tolerance(scene: GripperScene) -> float:
+    """Default static residual tolerance: ``max(DYN_TOL, GRIPPER_TOL_PER_WEIGHT * K * M)``.
+
+    MuJoCo's sticking friction creeps and leaves a fixed fraction of the force it carries
+    unbalanced at rest (measured ~4e-7 of the weight in the planar settle), and here the
+    friction carries the whole workpiece, ``K M`` (over rho g l).
+    """
+    return max(DYN_TOL, GRIPPER_TOL_PER_WEIGHT * scene.fingers * float(scene.params.M))
+
+
+def settle_gripper(scene: GripperScene, *, tol: float | None = None, max_steps: int = GRIPPER_MAX_STEPS,
                    allow_unconverged: bool = False) -> GripperState:
     """Settle a K-finger gripper by over-damped dynamics (see the module docstring).
 
     Parameters
     ----------
     scene : GripperScene
-    tol : float
+    tol : float, optional
         Static residual tolerance (over ``rho g l^2`` / ``rho g l``); default
-        :data:`~simgrip.settle.dynamics.DYN_TOL` (MuJoCo's sticking friction creeps below it).
+        :func:`gripper_tolerance` (MuJoCo's sticking friction creeps below it).
     max_steps : int
         Physics steps allowed to the whole settle (restarts included).
     allow_unconverged : bool
@@ -272,6 +286,8 @@ def settle_gripper(scene: GripperScene, *, tol: float = DYN_TOL, max_steps: int 
     """
     if not isinstance(scene, GripperScene):
         raise ValueError(f"scene must be a simgrip.sim.gripper.GripperScene, got {type(scene).__name__}")
+    if tol is None:
+        tol = gripper_tolerance(scene)
     try:
         tol = float(tol)
     except (TypeError, ValueError):
@@ -352,14 +368,9 @@ def _settle_once(scene: GripperScene, dyn: _Dyn, tol: float, budget: int, reach:
     if held:
         wb = scene.workpiece_body
         z0 = float(d.xpos[wb][2])
-        dyn.hold(True)
-        dyn.held_q = None  # the weight fades out; the pose is free from the first step
-        weight = scene.workpiece_mass * scene.physical.g
-        for i in range(1, DYN_RELEASE_STEPS + 1):
-            if dyn.steps >= budget:
-                break
-            d.qfrc_applied[scene.workpiece_dof[2]] = weight * (1.0 - i / DYN_RELEASE_STEPS)
-            dyn.step()
+        # loaded start: the chains' shape already carries the weight by friction, so the workpiece is
+        # let go at once (fading a holding force out on top would push it up off the tips; the planar
+        # dynamic settle found the same)
         dyn.hold(False)
         on = _tips_on_workpiece(scene)
 
