@@ -12,8 +12,10 @@ in rotation (its principal inertia; the rotational dofs are in its body frame).
   (:func:`simgrip.reference.solve_chain`, the tip a hair inside ``X = b/2``),
   the workpiece's centre level with the tips, held.  Each finger of a box
   (``K`` = 2, 4) or cylinder is then exactly the planar problem; a sphere's
-  tips start on its equator (contact normal horizontal) and the release lets
-  it find its inclined contact.  A finger that cannot reach ``X = b/2`` at
+  tips start at ``X = (b/2) cos beta`` (``beta`` the scene's
+  ``contact_angle``, the contact normal's elevation), which is the planar
+  problem at width ``b cos beta`` (:mod:`simgrip.reference.inclined`), and
+  friction keeps them there.  A finger that cannot reach ``X = b/2`` at
   full curvature leaves the workpiece unheld; a chain equilibrium that does
   not exist, is unstable or does not push on the face raises
   :class:`SettleError` (the planar settle's staged closing is not provided here).
