@@ -10,7 +10,7 @@ in rotation (its principal inertia; the rotational dofs are in its body frame).
 
 * **Start**: every finger at the hinge chain's grip equilibrium
   (:func:`simgrip.reference.solve_chain`, the tip a hair inside ``X = b/2``),
-  the workpiece's centre level with the tips, held.  Each finger of a box
+  the workpiece centred on the palm axis, level with the tips.  Each finger of a box
   (``K`` = 2, 4) or cylinder is then exactly the planar problem; a sphere's
   tips start at ``X = (b/2) cos beta`` (``beta`` the scene's
   ``contact_angle``, the contact normal's elevation), which is the planar
