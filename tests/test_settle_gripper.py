@@ -184,6 +184,21 @@ def test_out_of_reach_is_not_held():
     np.testing.assert_allclose(st.link_angles, np.vstack([free.link_angles] * 3), atol=1e-5)
 
 
+def test_a_finger_that_would_pull_does_not_hold():
+    # soft fingers, narrow heavy box: the hinge chain with its tip at X = b/2 under the weight pulls on
+    # the face (N1 < 0, as the BVP: infeasible); the planar dynamic settle drops it too
+    from simgrip.params import DimensionlessParams
+
+    p = DimensionlessParams(D=0.17, M=9.51, b=0.135, mu_s=1.27)
+    assert solve_chain("I", p, Uniform(-2.73), 10).N1 < 0
+    assert not settle(build_scene("I", p, Uniform(-2.73), 10), method="dynamics").held
+    for K, shape in ((4, "box"), (3, "cylinder")):
+        st = settle_gripper(build_gripper("I", p, Uniform(-2.73), 10, fingers=K, workpiece=shape))
+        assert not st.held and st.converged and st.records == []
+        free = solve_chain("free", p, Uniform(-2.73), 10)
+        np.testing.assert_allclose(st.link_angles, np.vstack([free.link_angles] * K), atol=1e-5)
+
+
 @pytest.mark.parametrize("K, shape", [(3, "cylinder"), (4, "box"), (3, "sphere")])
 def test_invariant_under_rotation_about_the_palm_axis(grippers, sensitivity, K, shape):
     grip = "I"

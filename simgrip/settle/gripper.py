@@ -16,8 +16,9 @@ in rotation (its principal inertia; the rotational dofs are in its body frame).
   ``contact_angle``, the contact normal's elevation), which is the planar
   problem at width ``b cos beta`` (:mod:`simgrip.reference.inclined`), and
   friction keeps them there.  A finger that cannot reach ``X = b/2`` at
-  full curvature leaves the workpiece unheld; a chain equilibrium that does
-  not exist, is unstable or does not push on the face raises
+  full curvature, or whose loaded equilibrium would pull on the surface
+  (``N1 <= 0``), leaves the workpiece unheld; a chain equilibrium that does
+  not exist or is unstable raises
   :class:`SettleError` (the planar settle's staged closing is not provided here).
 * **Release**: the chains' start shape already carries the weight by
   friction, so the workpiece is let go at once; the dynamics then
@@ -339,7 +340,8 @@ def _start(scene: GripperScene) -> np.ndarray | None:
     ``X = (b/2) cos beta``, the centre ``(b/2) sin beta`` below them
     (``beta = scene.contact_angle``).
 
-    None when the free finger does not reach that ``X`` (nothing to hold).
+    None when the free finger does not reach that ``X``, or when the chain's equilibrium there pulls
+    on the workpiece (``N1 <= 0``): nothing to hold.
     """
     p = scene.params
     beta = scene.contact_angle  # sphere: the tip at X = (b/2) cos(beta) on the sphere; 0 for vertical faces
@@ -348,9 +350,11 @@ def _start(scene: GripperScene) -> np.ndarray | None:
     free = _chain(scene, "free", guess=None if ch is None else ch.link_angles)
     if free is not None and float(np.sum(np.cos(free.link_angles))) / scene.n > 0.5 * p.b * math.cos(beta):
         return None
-    if ch is None or not (ch.success and ch.N1 > 0.0 and ch.min_eigenvalue > 0.0):
-        raise SettleError(f"no start for grip {scene.grip}: the hinge chain has no stable equilibrium pushing on "
-                          f"the workpiece (b = {p.b:g})")
+    if ch is None or not (ch.success and ch.min_eigenvalue > 0.0):
+        raise SettleError(f"no start for grip {scene.grip}: the hinge chain has no stable equilibrium with its tip "
+                          f"on the workpiece (b = {p.b:g})")
+    if not ch.N1 > 0.0:
+        return None  # the loaded finger would have to pull on the workpiece: it cannot hold it
     q = np.array(scene.data.qpos)
     q[scene.joint_qpos] = ch.joint_angles[None, :]
     wq = scene.workpiece_qpos
