@@ -149,6 +149,20 @@ def test_dynamics_drop_is_confirmed_at_half_the_step():
     assert st.N1 == pytest.approx(nw.N1, rel=5 * st.penetration)
 
 
+def test_dynamics_drop_stands_when_half_the_step_finds_no_rest():
+    """Stress case 185 (Newton: dropped): dropped at h; at h/2 the workpiece creeps without coming to
+    rest, so the drop found at h stands (it ran into SettleError after 20,000 steps)."""
+    from simgrip.harness.stress_cases import stress_profile
+    from simgrip.params import DimensionlessParams
+
+    p = DimensionlessParams(D=23.007131811614286, M=32.70052154548466, b=0.235918826200068,
+                            mu_s=0.12503840796246268)
+    prof = stress_profile("step", 8.980936512351036, 6.964660443365574)
+    st = settle(build_scene("II", p, prof, 14), method="dynamics")
+    assert st.converged and not st.held and not settle(build_scene("II", p, prof, 14)).held
+    np.testing.assert_allclose(st.link_angles[0], solve_chain("free", p, prof, 14).link_angles, atol=1e-5)
+
+
 def test_dynamics_grip_iii_settles_in_few_steps(dyn_states):
     # the fall guard's extra damping (~20 x h K at the standard case) is lifted near rest: the
     # over-damped flow D = h K contracts every mode by about 1/2 per step (320 steps with the guard)

@@ -84,6 +84,9 @@ DYN_DROP_FALL = 0.2
 DYN_BATCH = 16
 #: Velocity (as DYN_VTOL) below which the Grip III fall guard's extra damping is lifted.
 DYN_GUARD_V = 1e-3
+#: Physics steps allowed to the h/2 rerun that confirms a drop (a state that does not come to rest
+#: in them keeps the drop found at h).
+DYN_DROP_RETRY_STEPS = 2000
 #: Tangential slip (over l) of the tip on the workpiece after release that counts as a drop.
 DYN_DROP_SLIP = 0.02
 
@@ -262,6 +265,14 @@ def _finger_pairs_touching(scene: Scene) -> bool:
     return any((int(d.contact.geom1[i]) in mine and int(d.contact.geom2[i]) in wg) for i in range(d.ncon))
 
 
+def _put_back(scene: Scene, state: SettledState) -> None:
+    """Put the scene's data back at a settled state (at rest)."""
+    d = scene.data
+    d.qpos[:] = state.qpos
+    d.qvel[:] = 0.0
+    mujoco.mj_forward(scene.model, d)
+
+
 def settle_dynamics(scene: Scene, tol: float, max_steps: int, warm_start, close: bool,
                      allow_unconverged: bool, t0: float) -> SettledState:
     """Over-damped settle; the time step halves (from the start) while penetration >= DYN_PEN_LIMIT,
@@ -274,13 +285,30 @@ def settle_dynamics(scene: Scene, tol: float, max_steps: int, warm_start, close:
     steps = calls = 0
     factor = 1.0
     retried_drop = False
+    first_drop = None
     for _attempt in range(4):
         # max_steps is the budget of the whole settle: a restart gets what the earlier attempts left
-        state, dropped = _settle_dynamics_once(scene, tol, max_steps - steps, warm_start, close, allow_unconverged,
-                                               t0, factor)
+        budget = max_steps - steps
+        if first_drop is not None:
+            budget = min(budget, DYN_DROP_RETRY_STEPS)
+        try:
+            state, dropped = _settle_dynamics_once(scene, tol, budget, warm_start, close,
+                                                   allow_unconverged or first_drop is not None, t0, factor)
+        except SettleError:
+            if first_drop is None:
+                raise
+            state, dropped = first_drop, True  # diverged at h/2: the drop at h stands
+            _put_back(scene, state)
+            break
         steps += state.steps
         calls += state.forward_calls
+        if first_drop is not None and not state.converged:  # no rest at h/2 within its budget: the drop stands
+            state, dropped = first_drop, True
+            _put_back(scene, state)
+            break
         retry_drop = dropped and not retried_drop
+        if retry_drop:
+            first_drop = state
         retried_drop = retried_drop or dropped
         if (state.penetration < DYN_PEN_LIMIT and not retry_drop) or _attempt == 3 or steps >= max_steps or (
                 not state.converged):
