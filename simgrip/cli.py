@@ -108,6 +108,9 @@ def build_parser() -> argparse.ArgumentParser:
                            "settled by dynamics); --json gains 'fingers', one record per finger")
             p.add_argument("--workpiece", default=None,
                            help="with --fingers: box (K = 2 or 4), cylinder or sphere (diameter b) [default cylinder]")
+            p.add_argument("--contact-angle", type=float, default=None,
+                           help="with --workpiece sphere: elevation of the contact normal at the start, radians in "
+                           "(-pi/2, pi/2) (0: the equator) [default 0]")
 
     p = sub.add_parser("bench", help="run time against error, naive vs settle vs minimiser vs BVP, what skipping buys")
     from simgrip.harness import bench as _bench  # light: matplotlib/mujoco are imported inside its functions
@@ -191,16 +194,17 @@ def _cmd_simulate(args) -> dict:
 
     grip = check_grip(args.grip)
     params, profile, links = _params(args), _profile(args, grip), _links(args.links)
-    if args.fingers is not None or args.workpiece is not None:
+    if args.fingers is not None or args.workpiece is not None or args.contact_angle is not None:
         from simgrip.gripper import gripper_record, simulate_gripper
 
         if args.method not in (None, "dynamics") or args.target_error is not None:
             raise ValueError("method: a K-finger gripper (--fingers) settles by dynamics only (no --method newton, "
                              "no --target-error)")
         if args.fingers is None:
-            raise ValueError("fingers: --workpiece needs --fingers K")
+            raise ValueError("fingers: --workpiece and --contact-angle need --fingers K")
         state = simulate_gripper(grip, params, profile, links, fingers=args.fingers,
-                                 workpiece=args.workpiece or "cylinder")
+                                 workpiece=args.workpiece or "cylinder",
+                                 contact_angle=args.contact_angle or 0.0)
         return gripper_record(state, params, profile)
     return settled_record(simulate(grip, params, profile, links, method=args.method or "newton",
                                    target_error=args.target_error),

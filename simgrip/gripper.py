@@ -18,15 +18,17 @@ __all__ = ["gripper_record", "simulate_gripper"]
 
 
 def simulate_gripper(grip: str, params: DimensionlessParams, profile, links: int, *, fingers: int, workpiece: str,
-                     yaw: float = 0.0, **settle_kw):
+                     yaw: float = 0.0, contact_angle: float = 0.0, **settle_kw):
     """Build the K-finger gripper and settle it; returns its :class:`~simgrip.settle.gripper.GripperState`.
 
-    Extra keywords go to :func:`~simgrip.settle.gripper.settle_gripper`.
+    ``yaw`` and ``contact_angle`` go to :func:`~simgrip.sim.gripper.build_gripper`, extra
+    keywords to :func:`~simgrip.settle.gripper.settle_gripper`.
     """
     from simgrip.settle.gripper import settle_gripper
     from simgrip.sim.gripper import build_gripper
 
-    scene = build_gripper(grip, params, as_profile(profile), links, fingers=fingers, workpiece=workpiece, yaw=yaw)
+    scene = build_gripper(grip, params, as_profile(profile), links, fingers=fingers, workpiece=workpiece, yaw=yaw,
+                          contact_angle=contact_angle)
     return settle_gripper(scene, **settle_kw)
 
 

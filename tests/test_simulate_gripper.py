@@ -53,8 +53,11 @@ def test_dropped_workpiece_keeps_one_record_per_finger():
     (["--fingers", "1"], "fingers"),
     (["--fingers", "3", "--workpiece", "cone"], "workpiece"),
     (["--workpiece", "sphere"], "fingers"),
+    (["--contact-angle", "0.1"], "fingers"),
     (["--fingers", "3", "--method", "newton"], "method"),
     (["--fingers", "3", "--target-error", "1e-3"], "method"),
+    (["--fingers", "3", "--contact-angle", "0.2"], "contact_angle"),  # a cylinder's surface is vertical
+    (["--fingers", "3", "--workpiece", "sphere", "--contact-angle", "2"], "contact_angle"),
 ])
 def test_bad_gripper_options_exit_2_naming_them(capsys, args, name):
     assert main(["simulate", "I", "--kappa", "-6", "--links", "8"] + args) == 2
@@ -65,3 +68,11 @@ def test_bad_gripper_options_exit_2_naming_them(capsys, args, name):
 def test_grip_iii_with_fingers_is_refused(capsys):
     assert main(["simulate", "III", "--kappa", "-6", "--links", "8", "--fingers", "4", "--workpiece", "box"]) == 2
     assert "grip" in capsys.readouterr().err
+
+
+def test_sphere_contact_angle_from_the_command_line(capsys):
+    assert main(["simulate", "I", "--kappa", "-6", "--links", "12", "--json", "--fingers", "3",
+                 "--workpiece", "sphere", "--contact-angle", "-0.2"]) == 0
+    rec = json.loads(capsys.readouterr().out)
+    assert rec["held"] and len(rec["fingers"]) == 3
+    assert all(abs(f["contact_angle"] + 0.2) < 1e-3 for f in rec["fingers"])
