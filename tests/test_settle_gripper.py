@@ -318,3 +318,16 @@ def test_every_finger_converges_at_second_order_to_the_bvp(grip):
     errs = np.array(errs)  # (resolution, finger, quantity)
     orders = np.log2(errs[:-1] / errs[1:])
     np.testing.assert_allclose(orders, 2.0, atol=0.15)
+
+
+def test_si_parameters_give_the_dimensionless_state():
+    # built in SI (l = 0.1 m, rho = 0.05 kg/m, g = 9.81): every step scales with the model, so the
+    # dimensionless state is the one built with l = rho = g = 1, to round-off
+    si = settle_gripper(build_gripper("I", STANDARD.to_physical(length=0.1, rho=0.05, g=9.81), Uniform(-6.0), N,
+                                      fingers=3, workpiece="cylinder"))
+    one = settle_gripper(build_gripper("I", STANDARD, Uniform(-6.0), N, fingers=3, workpiece="cylinder"))
+    assert si.held and si.steps == one.steps
+    for a, b in zip(si.records, one.records):
+        assert a.N1 == pytest.approx(b.N1, rel=1e-9) and a.N2 == pytest.approx(b.N2, rel=1e-9)
+        np.testing.assert_allclose(a.tip, b.tip, atol=1e-12)
+    np.testing.assert_allclose(si.workpiece_position, one.workpiece_position, atol=1e-12)
