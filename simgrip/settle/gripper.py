@@ -53,20 +53,17 @@ import numpy as np
 
 from simgrip.chain import link_positions
 from simgrip.settle.dynamics import (DYN_BATCH, DYN_DAMPING, DYN_DROP_FALL, DYN_DROP_SLIP, DYN_IMPRATIO,
-                                     DYN_PEN_LIMIT, DYN_STEP, DYN_TIMECONST, DYN_TOL, DYN_VTOL,
+                                     DYN_PEN_LIMIT, DYN_STEP, DYN_TIMECONST, DYN_TOL, DYN_TOL_PER_WEIGHT, DYN_VTOL,
                                      DYN_WORKPIECE_DAMPING, lowest_frequency)
 from simgrip.settle.state import SettleError
 from simgrip.settle.statics import CONTACT_IMPEDANCE, check_warnings, restore_options, save_options
 from simgrip.sim.checks import clear_warnings
 from simgrip.sim.gripper import GripperScene
 
-__all__ = ["GRIPPER_TOL_PER_WEIGHT", "FingerRecord", "GripperState", "gripper_tolerance", "settle_gripper"]
+__all__ = ["FingerRecord", "GripperState", "gripper_tolerance", "settle_gripper"]
 
 #: Default physics-step budget of one settle.
 GRIPPER_MAX_STEPS = 20_000
-#: Default tolerance per unit of workpiece weight (``K M``, over rho g l): five times the creep
-#: floor measured in the planar dynamic settle (:func:`gripper_tolerance`).
-GRIPPER_TOL_PER_WEIGHT = 2e-6
 
 
 @dataclass
@@ -259,13 +256,13 @@ def _touching(scene: GripperScene) -> bool:
 
 
 def gripper_tolerance(scene: GripperScene) -> float:
-    """Default static residual tolerance: ``max(DYN_TOL, GRIPPER_TOL_PER_WEIGHT * K * M)``.
+    """Default static residual tolerance: ``max(DYN_TOL, DYN_TOL_PER_WEIGHT * K * M)``.
 
-    MuJoCo's sticking friction creeps and leaves a fixed fraction of the force it carries
-    unbalanced at rest (measured ~4e-7 of the weight in the planar settle), and here the
-    friction carries the whole workpiece, ``K M`` (over rho g l).
+    As the planar dynamic settle's (:func:`simgrip.settle.dynamics.dynamics_tolerance`): MuJoCo's
+    sticking friction creeps and leaves a fixed fraction of the force it carries unbalanced at
+    rest; here the friction carries the whole workpiece, ``K M`` (over rho g l).
     """
-    return max(DYN_TOL, GRIPPER_TOL_PER_WEIGHT * scene.fingers * float(scene.params.M))
+    return max(DYN_TOL, DYN_TOL_PER_WEIGHT * scene.fingers * float(scene.params.M))
 
 
 def settle_gripper(scene: GripperScene, *, tol: float | None = None, max_steps: int = GRIPPER_MAX_STEPS,
