@@ -136,6 +136,22 @@ def test_gravity_off_either_way_settles_to_the_gravity_free_chain(how, method, k
     assert np.max(np.abs(sag.link_angles - ch.link_angles)) > 1e-2  # gravity matters at this D
 
 
+def test_long_turned_chain_is_held_at_its_round_off_floor():
+    """Stress case 234 (n = 116, wiggle): the contact row stopped at 3e-14 l, above 64 ulps but within
+    the chain's round-off bound (``Newton.floor_ulps``: ~n (1 + Phi/2) ulps); the polishing step then
+    stalled and the release called it a drop, though the state holds with a 0.87 friction margin
+    (as the surface-contact settle and the dynamics say)."""
+    from simgrip.harness.stress_cases import stress_profile
+    from simgrip.params import DimensionlessParams
+
+    p = DimensionlessParams(D=19.95991394694117, M=19.295094441622496, b=0.03434253929182887,
+                            mu_s=2.612757038651426)
+    prof = stress_profile("wiggle", -4.42001348733902, 7.430889517068863)
+    st = settle(build_scene("I", p, prof, 116))
+    assert st.held and st.converged and st.residual <= st.tolerance <= 1e-6
+    assert st.contact.required_mu < 0.2 * p.mu_s
+
+
 # ---------------------------------------------------------------------------
 # Grips I and II
 

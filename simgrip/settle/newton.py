@@ -21,7 +21,8 @@ force; the friction cone ``|lambda| <= mu N`` decides hold or slip.
 differences of ``G' multipliers``; the KKT step is least squares (sticking
 leaves the sliding direction singular) with a backtracking line search on the
 residual and a tunnelling guard for pairs not yet touching.  Contact-law rows
-are accepted at their round-off floor (:data:`FLOOR_ULPS` ulps of ``K_c l``).
+are accepted at their round-off floor (:data:`FLOOR_ULPS` ulps of ``K_c l``, more for a long,
+much-turned chain: :meth:`Newton.floor_ulps`).
 """
 
 from __future__ import annotations
@@ -263,7 +264,20 @@ class Newton:
         if not self.normal_active:
             return 0.0
         kc = float(np.max(self.kc[self.normal_active]))
-        return FLOOR_ULPS * np.finfo(float).eps * kc * self.scene.length / self.scene.force_scale
+        return self.floor_ulps() * np.finfo(float).eps * kc * self.scene.length / self.scene.force_scale
+
+    def floor_ulps(self) -> float:
+        """Round-off of a contact distance in ulps of ``l``: :data:`FLOOR_ULPS`, or the chain's bound if larger.
+
+        A node of an ``n``-link chain is a sum of ``n`` link vectors ``ds (cos phi_k, sin phi_k)``
+        with ``phi_k`` a running sum of hinge angles: the angle sums carry up to ``k eps |phi|``,
+        which moves the node by up to ``sum_k ds k eps Phi ~ n eps Phi l / 2``, and the vector sum
+        adds up to ``n eps l`` (``Phi = max |phi_k|``, read at the scene's current state).
+        """
+        sc = self.scene
+        phi = np.cumsum(np.asarray(sc.data.qpos)[np.asarray(sc.joint_qpos)], axis=-1)
+        big = float(np.max(np.abs(phi))) if phi.size else 0.0
+        return max(FLOOR_ULPS, sc.n * (1.0 + 0.5 * big))
 
     def _update_kc(self, q) -> bool:
         """Read MuJoCo's contact stiffness at ``q``; True if it moved enough to matter."""
