@@ -105,7 +105,7 @@ def gripper_record(state, params: DimensionlessParams, profile=None) -> dict:
         "residual": float(state.residual),
         "converged": bool(state.converged),
         "method": "dynamics",
-        "warnings": [],
+        "warnings": list(state.warnings),
         "extrapolated": False,
         "error_estimate": None,
         "params": {"D": params.D, "M": params.M, "b": params.b, "mu_s": params.mu_s, "gamma": params.gamma},

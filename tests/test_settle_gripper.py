@@ -331,3 +331,17 @@ def test_si_parameters_give_the_dimensionless_state():
         assert a.N1 == pytest.approx(b.N1, rel=1e-9) and a.N2 == pytest.approx(b.N2, rel=1e-9)
         np.testing.assert_allclose(a.tip, b.tip, atol=1e-12)
     np.testing.assert_allclose(si.workpiece_position, one.workpiece_position, atol=1e-12)
+
+
+def test_a_state_in_the_other_grips_shape_is_not_held():
+    # soft Grip II fingers that settle with their tips below the palm (Grip I's shape): not held,
+    # as the planar settle reports it (simgrip.validity.check_grip_shape)
+    from simgrip.params import DimensionlessParams
+
+    p = DimensionlessParams(D=0.142, M=3.3, b=0.762, mu_s=0.894)
+    pl = settle(build_scene("II", p, Uniform(9.83), 6), method="dynamics")
+    assert not pl.held and not pl.grip_matched
+    st = settle_gripper(build_gripper("II", p, Uniform(9.83), 6, fingers=3, workpiece="cylinder"))
+    assert not st.held and not st.grip_matched and st.converged
+    assert any("wrong grip" in w for w in st.warnings)
+    assert np.all(st.tip[:, 1] < 0)

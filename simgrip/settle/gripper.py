@@ -59,6 +59,7 @@ from simgrip.settle.state import SettleError
 from simgrip.settle.statics import CONTACT_IMPEDANCE, check_warnings, restore_options, save_options
 from simgrip.sim.checks import clear_warnings
 from simgrip.sim.gripper import GripperScene
+from simgrip.validity import check_grip_shape
 
 __all__ = ["FingerRecord", "GripperState", "gripper_tolerance", "settle_gripper"]
 
@@ -107,7 +108,9 @@ class GripperState:
     (contacts plus weight, world frame, over ``rho g l``) and
     ``moment_balance`` its net moment about its centre (over ``rho g l^2``),
     both zero at equilibrium; ``workpiece_position`` its centre over ``l``
-    and ``workpiece_quat`` its orientation.
+    and ``workpiece_quat`` its orientation.  A held state with a tip on the
+    other grip's side of the palm is reported not held, as the planar settle
+    does (:func:`simgrip.validity.check_grip_shape`: ``grip_matched``, ``warnings``).
     """
 
     grip: str
@@ -132,6 +135,10 @@ class GripperState:
     timestep: float
     wall_time_s: float
     qpos: np.ndarray = field(repr=False)
+    #: Every finger's tip on its grip's side of the palm (:func:`simgrip.validity.check_grip_shape`).
+    grip_matched: bool = True
+    #: Conditions the state violates that the settle does not enforce (e.g. the other grip's shape).
+    warnings: list = field(default_factory=list)
 
 
 # ---------------------------------------------------------------------------
@@ -315,6 +322,7 @@ def settle_gripper(scene: GripperScene, *, tol: float | None = None, max_steps: 
             held, converged, why = _settle_once(scene, dyn, tol, int(max_steps) - steps, reach)
             steps += dyn.steps
             state = _read(scene, dyn, held, converged, steps, t0, tol)
+            check_grip_shape(scene, state)
             if (state.penetration < DYN_PEN_LIMIT or attempt == 3 or steps >= max_steps
                     or not state.converged):
                 break
