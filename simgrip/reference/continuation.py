@@ -8,9 +8,15 @@ workpiece from above-outside), blends the profile into the requested one, then
 ramps gravity and loads in (fallbacks: loads before profile; the other curl;
 the straight rod with curvature and loads ramped together, then the width
 target moved from where the free rod puts it to ``b/2``).  The free rod ramps
-curvature and loads from the straight rod.  Each step is first solved at a
-loose tolerance (cheap failures), then polished to the requested one; meshes
-handed on are thinned so they do not grow along sweeps.
+curvature and loads from the straight rod.  Steps are solved at a loose
+tolerance (cheap failures); the end point of a path is polished to the requested
+one a decade at a time (:func:`polish`); meshes handed on are thinned so they do
+not grow along sweeps.
+
+The work is bounded: each ``solve_bvp`` run by its node limit
+(``bvp._MAX_NODES``), each continuation by ``max_tries`` steps and ``h_min``,
+and one whole solve by :data:`MAX_BVP_RUNS` runs (a :class:`Budget`), past which
+it raises :class:`~simgrip.reference.bvp.ElasticaError` instead of searching on.
 """
 
 from __future__ import annotations

@@ -293,7 +293,9 @@ def solve(
     ValueError
         Unknown ``grip`` or invalid inputs.
     ElasticaError
-        When neither the warm start nor the continuation strategies converge.
+        When neither the warm start nor the continuation strategies converge, or
+        when they have spent :data:`~simgrip.reference.continuation.MAX_BVP_RUNS`
+        ``solve_bvp`` runs (the bound on one solve's work).
 
     Examples
     --------
