@@ -32,6 +32,7 @@ from simgrip.reference import (
 )
 
 from simgrip.reference import elastica as _elastica
+from simgrip.reference.arguments import MAX_COUNT
 
 LEVELS = (16, 32, 64, 128)
 ORDER_BAND = (1.8, 2.2)
@@ -88,7 +89,8 @@ def assert_second_order(levels, errors, what):
 
 
 @pytest.mark.parametrize("solver, name", [(solve_discrete, "K"), (solve_chain, "n")])
-@pytest.mark.parametrize("bad", [1, 0, -3, 2.5, "8", None, float("inf"), float("-inf"), float("nan")])
+@pytest.mark.parametrize("bad", [1, 0, -3, 2.5, "8", None, True, float("inf"), float("-inf"), float("nan"), 1e300,
+                                 MAX_COUNT + 1])
 def test_bad_counts_name_the_parameter(solver, name, bad):
     with pytest.raises(ValueError, match=rf"\b{name}\b"):
         solver("I", STANDARD, -3.0, bad)
