@@ -175,7 +175,7 @@ def _env_table(env) -> list[str]:
     L = ["", "## Gymnasium pick environment throughput", "",
          "| env | env steps/s | physics steps/s (env) | raw mj_step steps/s | overhead |", "|---|---|---|---|---|"]
     for grip, e in env.items():
-        L.append(f"| {'Pick-v0' if grip == 'I' else 'PickCradle-v0'} | {fmt(e['env_steps_per_s'])} | "
+        L.append(f"| {'Pick-v1' if grip == 'I' else 'PickCradle-v1'} | {fmt(e['env_steps_per_s'])} | "
                  f"{fmt(e['env_physics_steps_per_s'])} | {fmt(e['raw_physics_steps_per_s'])} | "
                  f"{e['overhead_percent']:.1f} % |")
     return L
