@@ -26,12 +26,15 @@ from simgrip.envs.arguments import check_int as _int
 from simgrip.envs.arguments import check_number as _num
 from simgrip.envs.arguments import check_positive as _pos
 from simgrip.envs.arguments import check_range as _range
+from simgrip.envs.pick_contacts import BoxContactForces
 from simgrip.envs.pick_model import build_pick_model
+from simgrip.envs.pick_observation import OBS_LAYOUT, PickObservation, obs_layout
+from simgrip.envs.pick_reward import pick_reward, progress
 from simgrip.params import DimensionlessParams, PhysicalParams
 from simgrip.sim.checks import PhysicsError, check_invalid_state, clear_warnings, invalid_state
 from simgrip.sim.gl import make_renderer
 
-__all__ = ["PickEnv", "BoxParams", "OBS_LAYOUT", "obs_layout"]
+__all__ = ["PickEnv", "BoxParams", "OBS_LAYOUT", "obs_layout"]  # the last two from pick_observation
 
 GRIP_ALIASES = {"I": "I", "i": "I", "pinch": "I", "III": "III", "iii": "III", "cradle": "III"}
 _COS_TILT = math.cos(math.radians(30.0))  # knocked over beyond this tilt
@@ -44,35 +47,6 @@ class BoxParams:
     width: float
     mass: float
     friction: float
-
-
-def obs_layout(shape_points: int = 8, per_finger: bool = False) -> list[tuple[str, int]]:
-    """``(name, size)`` of the observation's blocks, in order (see :class:`PickEnv`)."""
-    # One command drives both fingers unless per_finger: the scene is then mirror-symmetric, finger 1 is
-    # finger 0's mirror image (to ~1e-9) and the box moves along z only, so those entries are left out.
-    nf = 2 if per_finger else 1
-    blocks = [
-        ("palm_height", 1),
-        ("kappa_command", nf),
-        ("kappa_actual", nf),
-        ("finger_shape", nf * shape_points),
-        ("tip_position", 2 * nf),
-        ("box_position", nf),
-        ("box_tilt", nf - 1),
-        ("box_velocity", nf),
-        ("box_spin", nf - 1),
-        ("box_lift", 1),
-        ("contact_force", 2 * nf),
-        ("hold", 1),
-    ]
-    return [(name, size) for name, size in blocks if size]
-
-
-#: Layout of the default observation (``shape_points = 8``, ``per_finger = False``): 19 entries.
-OBS_LAYOUT = obs_layout(8)
-
-#: The box's spin is observed as ``omega_y * SPIN_TIME`` (rad per 0.1 s).
-SPIN_TIME = 0.1
 
 
 class PickEnv(gym.Env):
@@ -364,34 +338,15 @@ class PickEnv(gym.Env):
             raise ValueError(f"camera must be one of {cams}, got {self.camera!r}")
         na = 3 if self.per_finger else 2
         self.action_space = spaces.Box(-1.0, 1.0, (na,), dtype=np.float32)
-        lo, hi = self.kappa_range
-        k_bound = max(2.0, abs(2.0 * (0.0 - lo) / (hi - lo) - 1.0))  # the fingers start straight (kappa = 0)
-        a_bound = max(20.0, 2.0 * max(abs(lo), abs(hi)))
-        bounds = {
-            "palm_height": (0, 10), "kappa_command": (-k_bound, k_bound), "kappa_actual": (-k_bound, k_bound),
-            "finger_shape": (-a_bound, a_bound), "tip_position": (-5, 5), "box_position": (-10, 10),
-            "box_tilt": (-math.pi, math.pi), "box_velocity": (-100, 100), "box_spin": (-100, 100),
-            "box_lift": (-20, 20), "contact_force": (0, 20), "hold": (0, 1),
-        }
-        # _get_obs computes the per-finger layout; without per_finger it keeps finger 0 and the box's z
-        full, lows, highs, index = obs_layout(self.shape_points, True), [], [], {}
-        for name, size in full:
-            index[name] = list(range(len(lows), len(lows) + size))
-            lows += [bounds[name][0]] * size
-            highs += [bounds[name][1]] * size
-        self.obs_layout = obs_layout(self.shape_points, self.per_finger)
-        keep = {"box_position": [1], "box_velocity": [1]}  # (x, z) -> z
-        pick, self.obs_slices = [], {}
-        for name, size in self.obs_layout:
-            self.obs_slices[name] = slice(len(pick), len(pick) + size)
-            pick += [index[name][k] for k in keep.get(name, range(size))] if not self.per_finger else index[name]
-        self._obs_pick = None if self.per_finger else np.array(pick)
-        self._obs_low = np.array(lows, dtype=np.float64)
-        self._obs_high = np.array(highs, dtype=np.float64)
-        if self._obs_pick is not None:
-            self._obs_low, self._obs_high = self._obs_low[self._obs_pick], self._obs_high[self._obs_pick]
-        self.observation_space = spaces.Box(self._obs_low, self._obs_high, dtype=np.float64)
         self._force_unit = self.g * float(np.mean(self.box_mass_range))
+        self._observe = PickObservation(
+            n_links=self.n, shape_points=self.shape_points, per_finger=self.per_finger, kappa_range=self.kappa_range,
+            length=self.length, target_height=self.target_height, hold_time=self.hold_time,
+            force_unit=self._force_unit, palm_qpos=self.palm_qpos, palm_dof=self.palm_dof, box_qpos=self.box_qpos,
+            box_dof=self.box_dof, tips=(int(self.fingers.tip_geom[0]), int(self.fingers.tip_geom[1])),
+            hinge_qpos=self._fq)
+        self.obs_layout, self.obs_slices = self._observe.layout, self._observe.slices
+        self.observation_space = spaces.Box(self._observe.low, self._observe.high, dtype=np.float64)
         self._renderer = None
         self.box = BoxParams(np.mean(self.box_width_range), np.mean(self.box_mass_range), np.mean(self.friction_range))
         self._reset_state()
@@ -423,16 +378,7 @@ class PickEnv(gym.Env):
         hinges = pm.fingers.hinge_qpos
         self._fq = (hinges,) if hinges is not None else (pm.fingers.joint_qpos,)
         self._bind_spring_view()
-        self._tips = (int(pm.fingers.tip_geom[0]), int(pm.fingers.tip_geom[1]))
-        self._fog_list = pm.fingers.finger_of_geom.tolist()
-        self._elliptic = self.model.opt.cone == mujoco.mjtCone.mjCONE_ELLIPTIC
-        self._cf = np.zeros(6)
-        # shape sampling: tangent angles at s/l = (k+1/2)/K, interpolated between link midpoints, from the
-        # link angles (cumulative hinge angles)
-        s_link = (np.arange(n) + 0.5) / n
-        s_k = (np.arange(self.shape_points) + 0.5) / self.shape_points
-        interp = np.array([np.interp(s_k, s_link, e) for e in np.eye(n)]).T
-        self._shape_matrix_t = np.ascontiguousarray((interp @ np.tril(np.ones((n, n)))).T)  # q -> theta(s_k)
+        self._contact_forces = BoxContactForces(self.model, self.box_geom, pm.fingers.finger_of_geom)
 
     @property
     def joint_qpos(self) -> np.ndarray:
@@ -515,71 +461,8 @@ class PickEnv(gym.Env):
         else:  # pragma: no cover - the builder always makes them contiguous
             self._spring_view = None
 
-    def _contact_forces(self) -> list:
-        """Forces of the box on each finger [N]: ``[normal_0, friction_0, normal_1, friction_1, side_0, side_1]``.
-
-        ``side_f`` is the horizontal (squeezing) component of finger ``f``'s normal forces; a finger pressing on
-        the box's top adds to its normal force but not to its side force.
-        """
-        m, d = self.model, self.data
-        out = [0.0, 0.0, 0.0, 0.0, 0.0, 0.0]
-        if d.ncon == 0:
-            return out
-        fog, bg = self._fog_list, self.box_geom
-        con = d.contact
-        geoms = con.geom.tolist()
-        nx = con.frame[:, 0].tolist()  # x component of each contact normal
-        if self._elliptic:
-            # elliptic cones: a contact's constraint rows are its contact-frame force (normal, t1, t2, ...)
-            adrs = con.efc_address.tolist()
-            ef = d.efc_force
-            for (g1, g2), adr, n_x in zip(geoms, adrs, nx):
-                f = fog[g2] if g1 == bg else (fog[g1] if g2 == bg else -1)
-                if f >= 0:
-                    fn, t1, t2 = ef[adr:adr + 3].tolist()
-                    out[2 * f] += fn
-                    out[2 * f + 1] += math.hypot(t1, t2)
-                    out[4 + f] += fn * abs(n_x)
-            return out
-        cf = self._cf
-        for i, ((g1, g2), n_x) in enumerate(zip(geoms, nx)):
-            f = fog[g2] if g1 == bg else (fog[g1] if g2 == bg else -1)
-            if f >= 0:
-                mujoco.mj_contactForce(m, d, i, cf)
-                out[2 * f] += float(cf[0])
-                out[2 * f + 1] += math.hypot(cf[1], cf[2])
-                out[4 + f] += float(cf[0]) * abs(n_x)
-        return out
-
     def _get_obs(self, forces):
-        d = self.data
-        qpos, qvel, xpos = d.qpos, d.qvel, d.geom_xpos
-        inv_l = 1.0 / self.length
-        palm_z = float(qpos[self.palm_qpos])
-        palm_v = float(qvel[self.palm_dof])
-        bq, bd = self.box_qpos, self.box_dof
-        bx, _, bz, qw, qx, qy, qz = qpos[bq:bq + 7].tolist()
-        vx, _, vz, _, wy, _ = qvel[bd:bd + 6].tolist()
-        t0, t1 = self._tips
-        tilt = math.atan2(2.0 * (qx * qz + qw * qy), 1.0 - 2.0 * (qx * qx + qy * qy))
-        fu = self._force_unit
-        lo, hi = self.kappa_range  # curvatures in action units (the action that commands them)
-        units = [2.0 * (k - lo) / (hi - lo) - 1.0 for k in self._kappa_cmd.tolist() + self._kappa.tolist()]
-        obs = np.concatenate((
-            (palm_z * inv_l,), units,
-            (qpos[self._fq].reshape(2, self.n) @ self._shape_matrix_t).ravel(),
-            (xpos[t0, 0] * inv_l, (xpos[t0, 2] - palm_z) * inv_l, xpos[t1, 0] * inv_l, (xpos[t1, 2] - palm_z) * inv_l,
-             bx * inv_l, (bz - palm_z) * inv_l, tilt, vx * inv_l, (vz - palm_v) * inv_l, wy * SPIN_TIME,
-             (bz - self._z0) / self.target_height,
-             math.log1p(forces[0] / fu), math.log1p(forces[1] / fu), math.log1p(forces[2] / fu),
-             math.log1p(forces[3] / fu),
-             min(self._hold / self.hold_time, 1.0) if self.hold_time > 0 else 0.0),
-        ))
-        if self._obs_pick is not None:
-            obs = obs[self._obs_pick]
-        np.maximum(obs, self._obs_low, out=obs)
-        np.minimum(obs, self._obs_high, out=obs)
-        return obs
+        return self._observe(self.data, forces, self._kappa_cmd, self._kappa, self._z0, self._hold)
 
     # --------------------------------------------------------------- API
     def reset(self, *, seed=None, options=None):
@@ -616,7 +499,7 @@ class PickEnv(gym.Env):
         self._z0 = float(d.qpos[self.box_qpos + 2])
         self._xy0 = np.array(d.qpos[self.box_qpos:self.box_qpos + 2])
         self._needs_reset = False
-        forces = self._contact_forces()
+        forces = self._contact_forces(self.model, self.data)
         info = {
             "box_width": width, "box_mass": mass, "box_friction": mu, "palm_height": palm_z,
             "dimensionless": self.dimensionless(),
@@ -662,7 +545,7 @@ class PickEnv(gym.Env):
             self._needs_reset = True
             raise PhysicsError(f"step diverged ({why})")
 
-        forces = self._contact_forces()
+        forces = self._contact_forces(self.model, self.data)
         bx, by, box_z, _, qx, qy, _ = d.qpos[self.box_qpos:self.box_qpos + 7].tolist()
         gain = box_z - self._z0
         rel = box_z - float(d.qpos[self.palm_qpos])
@@ -680,29 +563,21 @@ class PickEnv(gym.Env):
             self._hold = 0.0
         success = self._hold >= self.hold_time - 1e-9
         lost = (dropped or knocked) and not success
-        # progress: potential phi = clip(gain / target, 0, 1), zero once the box is lost
-        phi = 0.0 if lost else min(max(gain / self.target_height, 0.0), 1.0)
-        r_lift = self.w_lift * (phi - self._phi)
+        phi = progress(gain, self.target_height, lost)
+        reward, info = pick_reward(phi=phi, phi_prev=self._phi, success=success, lost=lost, side_forces=(s0, s1),
+                                   box_mass=self.box.mass, g=self.g, friction=self.box.friction, w_lift=self.w_lift,
+                                   w_success=self.w_success, w_squeeze=self.w_squeeze, w_drop=self.w_drop,
+                                   squeeze_margin=self.squeeze_margin)
         self._phi = phi
-        # squeeze beyond what holds the box, side contacts only, bounded per step
-        weight = self.box.mass * self.g
-        allow = self.squeeze_margin * weight / (2.0 * self.box.friction)
-        x0 = max(s0 - allow, 0.0) / weight
-        x1 = max(s1 - allow, 0.0) / weight
-        r_squeeze = -0.5 * self.w_squeeze * (x0 / (1.0 + x0) + x1 / (1.0 + x1))
-        r_success = self.w_success if success else 0.0
-        r_drop = -self.w_drop if lost else 0.0
         terminated = bool(success or lost)
         self._needs_reset = terminated
-        reward = r_lift + r_success + r_squeeze + r_drop
         obs = self._get_obs(forces)
-        info = {
-            "reward_lift": r_lift, "reward_success": r_success, "reward_squeeze": r_squeeze,
-            "reward_drop": r_drop, "is_success": success, "dropped": dropped and not success,
+        info.update({
+            "is_success": success, "dropped": dropped and not success,
             "knocked_over": knocked and not success, "box_lift": gain,
             "normal_force": np.array((n0, n1)), "friction_force": np.array((f0, f1)),
             "side_force": np.array((s0, s1)), "hold_time": self._hold,
-        }
+        })
         return obs, reward, terminated, False, info
 
     def render(self):

@@ -1,0 +1,71 @@
+"""The box's contact forces on each finger of the pick model.
+
+:class:`BoxContactForces` sums, over the contacts between the box and a
+finger's geoms, the normal force, the friction force's magnitude and the
+normal force's horizontal (squeezing) component.  With elliptic friction cones
+(the pick model's) a contact's constraint rows in ``data.efc_force`` are its
+contact-frame force (normal, tangent 1, tangent 2, ...) and are read directly;
+otherwise each contact's force comes from :func:`mujoco.mj_contactForce`.
+"""
+
+from __future__ import annotations
+
+import math
+
+import mujoco
+import numpy as np
+
+__all__ = ["BoxContactForces"]
+
+
+class BoxContactForces:
+    """Forces of the box on each finger [N], read from a MuJoCo state.
+
+    Parameters
+    ----------
+    model : mujoco.MjModel
+    box_geom : int
+        Geom id of the box.
+    finger_of_geom : array of int
+        For each geom of the model, the finger (0 or 1) it belongs to, or -1.
+    """
+
+    def __init__(self, model, box_geom: int, finger_of_geom):
+        self.box_geom = int(box_geom)
+        self._fog_list = np.asarray(finger_of_geom).tolist()
+        self._elliptic = model.opt.cone == mujoco.mjtCone.mjCONE_ELLIPTIC
+        self._cf = np.zeros(6)
+
+    def __call__(self, model, data) -> list:
+        """``[normal_0, friction_0, normal_1, friction_1, side_0, side_1]`` [N].
+
+        ``side_f`` is the horizontal (squeezing) component of finger ``f``'s normal forces; a finger pressing on
+        the box's top adds to its normal force but not to its side force.
+        """
+        out = [0.0, 0.0, 0.0, 0.0, 0.0, 0.0]
+        if data.ncon == 0:
+            return out
+        fog, bg = self._fog_list, self.box_geom
+        con = data.contact
+        geoms = con.geom.tolist()
+        nx = con.frame[:, 0].tolist()  # x component of each contact normal
+        if self._elliptic:
+            adrs = con.efc_address.tolist()
+            ef = data.efc_force
+            for (g1, g2), adr, n_x in zip(geoms, adrs, nx):
+                f = fog[g2] if g1 == bg else (fog[g1] if g2 == bg else -1)
+                if f >= 0:
+                    fn, t1, t2 = ef[adr:adr + 3].tolist()
+                    out[2 * f] += fn
+                    out[2 * f + 1] += math.hypot(t1, t2)
+                    out[4 + f] += fn * abs(n_x)
+            return out
+        cf = self._cf
+        for i, ((g1, g2), n_x) in enumerate(zip(geoms, nx)):
+            f = fog[g2] if g1 == bg else (fog[g1] if g2 == bg else -1)
+            if f >= 0:
+                mujoco.mj_contactForce(model, data, i, cf)
+                out[2 * f] += float(cf[0])
+                out[2 * f + 1] += math.hypot(cf[1], cf[2])
+                out[4 + f] += float(cf[0]) * abs(n_x)
+        return out

@@ -1,0 +1,156 @@
+"""The pick environment's observation: its layout, bounds and normalisation.
+
+:func:`obs_layout` names the observation's blocks; :class:`PickObservation`
+holds what turns a MuJoCo state into the observation vector of
+:class:`simgrip.envs.pick.PickEnv` (its docstring's table says what each entry
+means).  The observation is computed in the per-finger layout and, when one
+command drives both fingers, reduced to finger 0 and the box's ``z`` by one
+index array; lengths are divided by the finger length, forces by the mean box
+weight, and every entry is clipped to its bound.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+__all__ = ["OBS_LAYOUT", "SPIN_TIME", "PickObservation", "obs_layout"]
+
+#: The box's spin is observed as ``omega_y * SPIN_TIME`` (rad per 0.1 s).
+SPIN_TIME = 0.1
+
+
+def obs_layout(shape_points: int = 8, per_finger: bool = False) -> list[tuple[str, int]]:
+    """``(name, size)`` of the observation's blocks, in order (see :class:`~simgrip.envs.pick.PickEnv`)."""
+    # One command drives both fingers unless per_finger: the scene is then mirror-symmetric, finger 1 is
+    # finger 0's mirror image (to ~1e-9) and the box moves along z only, so those entries are left out.
+    nf = 2 if per_finger else 1
+    blocks = [
+        ("palm_height", 1),
+        ("kappa_command", nf),
+        ("kappa_actual", nf),
+        ("finger_shape", nf * shape_points),
+        ("tip_position", 2 * nf),
+        ("box_position", nf),
+        ("box_tilt", nf - 1),
+        ("box_velocity", nf),
+        ("box_spin", nf - 1),
+        ("box_lift", 1),
+        ("contact_force", 2 * nf),
+        ("hold", 1),
+    ]
+    return [(name, size) for name, size in blocks if size]
+
+
+#: Layout of the default observation (``shape_points = 8``, ``per_finger = False``): 19 entries.
+OBS_LAYOUT = obs_layout(8)
+
+
+def _bounds(kappa_range, shape_points: int, per_finger: bool):
+    """Layout, slices, the index array reducing the per-finger layout (or None), lower and upper bounds."""
+    lo, hi = kappa_range
+    k_bound = max(2.0, abs(2.0 * (0.0 - lo) / (hi - lo) - 1.0))  # the fingers start straight (kappa = 0)
+    a_bound = max(20.0, 2.0 * max(abs(lo), abs(hi)))
+    bounds = {
+        "palm_height": (0, 10), "kappa_command": (-k_bound, k_bound), "kappa_actual": (-k_bound, k_bound),
+        "finger_shape": (-a_bound, a_bound), "tip_position": (-5, 5), "box_position": (-10, 10),
+        "box_tilt": (-math.pi, math.pi), "box_velocity": (-100, 100), "box_spin": (-100, 100),
+        "box_lift": (-20, 20), "contact_force": (0, 20), "hold": (0, 1),
+    }
+    # the observation is computed in the per-finger layout; without per_finger it keeps finger 0 and the box's z
+    full, lows, highs, index = obs_layout(shape_points, True), [], [], {}
+    for name, size in full:
+        index[name] = list(range(len(lows), len(lows) + size))
+        lows += [bounds[name][0]] * size
+        highs += [bounds[name][1]] * size
+    layout = obs_layout(shape_points, per_finger)
+    keep = {"box_position": [1], "box_velocity": [1]}  # (x, z) -> z
+    pick, slices = [], {}
+    for name, size in layout:
+        slices[name] = slice(len(pick), len(pick) + size)
+        pick += [index[name][k] for k in keep.get(name, range(size))] if not per_finger else index[name]
+    pick = None if per_finger else np.array(pick)
+    low, high = np.array(lows, dtype=np.float64), np.array(highs, dtype=np.float64)
+    if pick is not None:
+        low, high = low[pick], high[pick]
+    return layout, slices, pick, low, high
+
+
+class PickObservation:
+    """Turns the state of a pick model into the environment's observation vector.
+
+    Parameters
+    ----------
+    n_links, shape_points, per_finger, kappa_range, length, target_height, hold_time
+        As :class:`~simgrip.envs.pick.PickEnv`'s arguments (``length`` [m],
+        ``target_height`` [m], ``hold_time`` [s]).
+    force_unit : float
+        Forces are observed as ``log(1 + F / force_unit)`` [N].
+    palm_qpos, palm_dof, box_qpos, box_dof : int
+        Addresses of the palm slide and the box's free joint.
+    tips : tuple of int
+        Geom ids of the two tip spheres.
+    hinge_qpos : index
+        qpos index of the fingers' hinges, finger 0 then finger 1 (``2 * n_links``).
+
+    Attributes
+    ----------
+    layout, slices, low, high
+        ``(name, size)`` blocks, their slices and the bounds of the observation.
+    """
+
+    def __init__(self, *, n_links, shape_points, per_finger, kappa_range, length, target_height, hold_time,
+                 force_unit, palm_qpos, palm_dof, box_qpos, box_dof, tips, hinge_qpos):
+        self.layout, self.slices, self._pick, self.low, self.high = _bounds(kappa_range, shape_points, per_finger)
+        self.n = n_links
+        self.kappa_range = kappa_range
+        self.length = length
+        self.target_height = target_height
+        self.hold_time = hold_time
+        self.force_unit = force_unit
+        self.palm_qpos, self.palm_dof, self.box_qpos, self.box_dof = palm_qpos, palm_dof, box_qpos, box_dof
+        self.tips = tips
+        self.hinge_qpos = hinge_qpos
+        # shape sampling: tangent angles at s/l = (k+1/2)/K, interpolated between link midpoints, from the
+        # link angles (cumulative hinge angles)
+        n = n_links
+        s_link = (np.arange(n) + 0.5) / n
+        s_k = (np.arange(shape_points) + 0.5) / shape_points
+        interp = np.array([np.interp(s_k, s_link, e) for e in np.eye(n)]).T
+        self._shape_matrix_t = np.ascontiguousarray((interp @ np.tril(np.ones((n, n)))).T)  # q -> theta(s_k)
+
+    def __call__(self, data, forces, kappa_cmd, kappa, z0: float, hold: float) -> np.ndarray:
+        """The observation of ``data``.
+
+        ``forces`` are :class:`~simgrip.envs.pick_contacts.BoxContactForces`' ``[normal_0, friction_0,
+        normal_1, friction_1, ...]`` [N]; ``kappa_cmd``, ``kappa`` the commanded and actual curvatures (2,);
+        ``z0`` the box's starting height [m]; ``hold`` the time held at the target [s].
+        """
+        qpos, qvel, xpos = data.qpos, data.qvel, data.geom_xpos
+        inv_l = 1.0 / self.length
+        palm_z = float(qpos[self.palm_qpos])
+        palm_v = float(qvel[self.palm_dof])
+        bq, bd = self.box_qpos, self.box_dof
+        bx, _, bz, qw, qx, qy, qz = qpos[bq:bq + 7].tolist()
+        vx, _, vz, _, wy, _ = qvel[bd:bd + 6].tolist()
+        t0, t1 = self.tips
+        tilt = math.atan2(2.0 * (qx * qz + qw * qy), 1.0 - 2.0 * (qx * qx + qy * qy))
+        fu = self.force_unit
+        lo, hi = self.kappa_range  # curvatures in action units (the action that commands them)
+        units = [2.0 * (k - lo) / (hi - lo) - 1.0 for k in kappa_cmd.tolist() + kappa.tolist()]
+        obs = np.concatenate((
+            (palm_z * inv_l,), units,
+            (qpos[self.hinge_qpos].reshape(2, self.n) @ self._shape_matrix_t).ravel(),
+            (xpos[t0, 0] * inv_l, (xpos[t0, 2] - palm_z) * inv_l, xpos[t1, 0] * inv_l, (xpos[t1, 2] - palm_z) * inv_l,
+             bx * inv_l, (bz - palm_z) * inv_l, tilt, vx * inv_l, (vz - palm_v) * inv_l, wy * SPIN_TIME,
+             (bz - z0) / self.target_height,
+             math.log1p(forces[0] / fu), math.log1p(forces[1] / fu), math.log1p(forces[2] / fu),
+             math.log1p(forces[3] / fu),
+             min(hold / self.hold_time, 1.0) if self.hold_time > 0 else 0.0),
+        ))
+        if self._pick is not None:
+            obs = obs[self._pick]
+        np.maximum(obs, self.low, out=obs)
+        np.minimum(obs, self.high, out=obs)
+        return obs

@@ -1,0 +1,54 @@
+"""The pick environment's reward terms (see the Rewards table of :class:`simgrip.envs.pick.PickEnv`).
+
+``reward = lift + success + squeeze + drop``: progress paid as height gained (a
+potential difference), a one-off success bonus, a bounded penalty for
+squeezing the box's sides beyond what holds it, and a one-off drop penalty.
+:func:`pick_reward` returns the sum and the terms (for ``info``).
+"""
+
+from __future__ import annotations
+
+__all__ = ["pick_reward", "progress"]
+
+
+def progress(gain: float, target_height: float, lost: bool) -> float:
+    """The progress potential ``phi = clip(gain / target_height, 0, 1)``, 0 once the box is lost (gain [m])."""
+    return 0.0 if lost else min(max(gain / target_height, 0.0), 1.0)
+
+
+def pick_reward(*, phi: float, phi_prev: float, success: bool, lost: bool, side_forces, box_mass: float,
+                g: float, friction: float, w_lift: float, w_success: float, w_squeeze: float, w_drop: float,
+                squeeze_margin: float) -> tuple[float, dict]:
+    """One step's reward and its terms.
+
+    Parameters
+    ----------
+    phi, phi_prev : float
+        Progress (:func:`progress`) after and before the step.
+    success, lost : bool
+        The step ends the episode with a success, or with the box dropped or knocked over.
+    side_forces : (float, float)
+        Horizontal (squeezing) component of each finger's normal forces on the box [N].
+    box_mass, g, friction
+        The episode's box mass [kg], gravity [m/s^2] and finger-box friction.
+    w_lift, w_success, w_squeeze, w_drop, squeeze_margin
+        The weights and the squeeze allowance (times the least normal force that holds the box).
+
+    Returns
+    -------
+    (float, dict)
+        The reward and ``{"reward_lift", "reward_success", "reward_squeeze", "reward_drop"}``.
+    """
+    r_lift = w_lift * (phi - phi_prev)
+    # squeeze beyond what holds the box, side contacts only, bounded per step
+    s0, s1 = side_forces
+    weight = box_mass * g
+    allow = squeeze_margin * weight / (2.0 * friction)
+    x0 = max(s0 - allow, 0.0) / weight
+    x1 = max(s1 - allow, 0.0) / weight
+    r_squeeze = -0.5 * w_squeeze * (x0 / (1.0 + x0) + x1 / (1.0 + x1))
+    r_success = w_success if success else 0.0
+    r_drop = -w_drop if lost else 0.0
+    reward = r_lift + r_success + r_squeeze + r_drop
+    return reward, {"reward_lift": r_lift, "reward_success": r_success, "reward_squeeze": r_squeeze,
+                    "reward_drop": r_drop}
