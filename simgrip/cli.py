@@ -123,7 +123,7 @@ def build_parser() -> argparse.ArgumentParser:
     _stress.add_arguments(p)
 
     p = sub.add_parser("sweep", help="design map: settled simulation beside the elastica BVP over a grid (Dask)")
-    from simgrip.harness import sweep as _sweep  # light: Dask, MuJoCo and matplotlib are imported when it runs
+    from simgrip.sweep import run as _sweep  # light: Dask, MuJoCo and matplotlib are imported when it runs
 
     _sweep.add_arguments(p)
 
@@ -254,7 +254,7 @@ def _cmd_stress(args) -> dict:
 
 
 def _cmd_sweep(args):
-    from simgrip.harness.sweep import cli_sweep
+    from simgrip.sweep.run import cli_sweep
 
     return cli_sweep(args)
 

@@ -148,7 +148,7 @@ def test_far_extrapolations_are_only_lower_bounds(bench):
 
 def test_bad_out_is_refused_before_any_work(tmp_path, capsys, monkeypatch):
     from simgrip.cli import main
-    from simgrip.harness import runner
+    from simgrip.parallel import runner
 
     def never(*a, **k):
         raise AssertionError("work started before --out was checked")

@@ -1,4 +1,4 @@
-"""The one parallel runner (simgrip.harness.runner) on a real dask.distributed cluster.
+"""The one parallel runner (simgrip.parallel.runner) on a real dask.distributed cluster.
 
 Covers: item order and batch-size independence, the in-process loop without
 Dask, exceptions from the task, a worker killed mid-run (its batch is
@@ -20,8 +20,8 @@ from pathlib import Path
 
 import pytest
 
-from simgrip.harness.dask_cluster import descendants
-from simgrip.harness.runner import (
+from simgrip.parallel.dask_cluster import descendants
+from simgrip.parallel.runner import (
     RunnerError,
     RunnerOptions,
     add_runner_arguments,
@@ -156,7 +156,7 @@ def test_default_batch_size():
 def test_jobs_1_is_a_plain_loop_without_dask():
     code = textwrap.dedent("""
         import sys
-        from simgrip.harness.runner import RunnerOptions, run_tasks
+        from simgrip.parallel.runner import RunnerOptions, run_tasks
         seen = []
         out = run_tasks(abs, [-1, 2, -3], options=RunnerOptions(jobs=1, progress=False),
                         on_result=lambda i, r: seen.append((i, r)))
@@ -217,7 +217,7 @@ def test_a_killed_worker_loses_no_item(tmp_path):
 
 @pytest.fixture(scope="module")
 def cli_cluster():
-    from simgrip.harness.cli_cluster import dask_cli_cluster
+    from simgrip.parallel.cli_cluster import dask_cli_cluster
 
     env = {"PYTHONPATH": os.pathsep.join([str(HERE), os.environ.get("PYTHONPATH", "")])}
     with dask_cli_cluster(2, env=env) as (address, scheduler_file, worker):
@@ -253,7 +253,7 @@ def test_dask_cli_cluster(cli_cluster):
 def test_unreachable_scheduler_is_a_runner_error(monkeypatch):
     import socket
 
-    from simgrip.harness import dask_cluster
+    from simgrip.parallel import dask_cluster
 
     monkeypatch.setattr(dask_cluster, "CONNECT_TIMEOUT_S", 1.0)
 
@@ -271,7 +271,7 @@ def test_unreachable_scheduler_is_a_runner_error(monkeypatch):
 SCRIPT = """
 import os, sys, time
 from pathlib import Path
-from simgrip.harness.runner import RunnerOptions, run_tasks
+from simgrip.parallel.runner import RunnerOptions, run_tasks
 
 def busy(item):
     x, folder = item

@@ -100,7 +100,7 @@ def test_small_runs_spread_over_the_box():
 
 def test_bad_inputs_and_out_are_refused_before_any_work(tmp_path, capsys, monkeypatch):
     from simgrip.cli import main
-    from simgrip.harness import runner
+    from simgrip.parallel import runner
 
     def never(*a, **k):
         raise AssertionError("work started before the inputs were checked")
@@ -136,7 +136,7 @@ def test_runs_on_an_existing_dask_cluster(tmp_path):
     """``--scheduler``: the same outcomes on a cluster reached by address (workers in threads here)."""
     from distributed import LocalCluster
 
-    from simgrip.harness.runner import RunnerOptions
+    from simgrip.parallel.runner import RunnerOptions
 
     kw = dict(cases=6, seed=2, timeout_s=60.0, max_links=16)
     local = run_stress(tmp_path / "local", jobs=1, progress=False, **kw)

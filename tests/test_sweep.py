@@ -22,12 +22,12 @@ import numpy as np
 import pytest
 
 from simgrip.cli import main
-from simgrip.harness.dask_cluster import descendants
-from simgrip.harness.runner import RunnerOptions
-from simgrip.harness.sweep import run_sweep
-from simgrip.harness.sweep_grid import AXES, make_grid, parse_axis
-from simgrip.harness.sweep_point import COLUMNS, evaluate_point
-from simgrip.harness.sweep_store import PARTIAL, read_csv, same_results
+from simgrip.parallel.dask_cluster import descendants
+from simgrip.parallel.runner import RunnerOptions
+from simgrip.sweep.run import run_sweep
+from simgrip.sweep.grid import AXES, make_grid, parse_axis
+from simgrip.sweep.point import COLUMNS, evaluate_point
+from simgrip.sweep.store import PARTIAL, read_csv, same_results
 
 LINKS = 8
 ONE = RunnerOptions(jobs=1, progress=False)
@@ -189,7 +189,7 @@ def test_local_cluster_equals_the_loop(reference):
 
 @pytest.fixture(scope="module")
 def cli_cluster():
-    from simgrip.harness.cli_cluster import dask_cli_cluster
+    from simgrip.parallel.cli_cluster import dask_cli_cluster
 
     with dask_cli_cluster(2) as running:
         yield running
@@ -294,8 +294,8 @@ def test_resume_after_ctrl_c_recomputes_nothing_saved(tmp_path):
 
 
 def test_scheduler_gone_leaves_a_resumable_sweep(tmp_path):
-    from simgrip.harness.cli_cluster import dask_cli_cluster
-    from simgrip.harness.runner import RunnerError
+    from simgrip.parallel.cli_cluster import dask_cli_cluster
+    from simgrip.parallel.runner import RunnerError
 
     grid = make_grid("I", kappa=(-7, -3, 3), M=(2, 8, 2), links=LINKS)
     out = tmp_path / "g"
@@ -329,7 +329,7 @@ def _cmdline_has(pid: int, word: bytes, scheduler_file: str) -> bool:
 
 
 def test_profile_runs_every_way_with_identical_rows():
-    from simgrip.harness.sweep_profile import format_profile, profile_sweep
+    from simgrip.sweep.profile import format_profile, profile_sweep
 
     prof = profile_sweep(make_grid("I", kappa=(-7, -5, 2), links=LINKS), workers=2, cli_cluster=False)
     assert [r["run"] for r in prof["runs"]] == ["loop", "dask_1_worker", "local_2_workers"]

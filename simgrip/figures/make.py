@@ -1,6 +1,6 @@
 """Compute, draw and write the figures as PNG files (``simgrip figures``).
 
-Each figure is one task of :func:`simgrip.harness.runner.run_tasks` (the
+Each figure is one task of :func:`simgrip.parallel.runner.run_tasks` (the
 slowest first); a figure's numbers do not depend on the others, so the files do
 not depend on ``jobs``.  The output folder is checked before any work.
 """
@@ -48,7 +48,7 @@ def make_figures(out_dir, *, which=None, jobs: int | None = None, progress: bool
         (:func:`simgrip.figures.simulation_overlay`, label ``"MuJoCo chain, n = <links>"``).
     links : int
         Links per finger of the simulated chain (default 16).
-    options : simgrip.harness.runner.RunnerOptions, optional
+    options : simgrip.parallel.runner.RunnerOptions, optional
         How to run (e.g. on an existing Dask cluster); replaces ``jobs`` and ``progress``.
 
     Returns
@@ -57,7 +57,7 @@ def make_figures(out_dir, *, which=None, jobs: int | None = None, progress: bool
         The files written, in the order of ``which``.
     """
     from simgrip.chain import check_links
-    from simgrip.harness.runner import RunnerOptions, run_tasks
+    from simgrip.parallel.runner import RunnerOptions, run_tasks
     from simgrip.io import check_output_dir
 
     if which is None:
@@ -82,7 +82,7 @@ def make_figures(out_dir, *, which=None, jobs: int | None = None, progress: bool
 
 def add_arguments(p) -> None:
     """Add the options of ``simgrip figures`` to an argparse parser."""
-    from simgrip.harness.runner import add_runner_arguments
+    from simgrip.parallel.runner import add_runner_arguments
 
     p.add_argument("--out", default="figures", help="output folder [default ./figures]")
     p.add_argument("--which", nargs="+", default=None, help="figures to make, e.g. 7 9 16 [default: all]")
@@ -94,7 +94,7 @@ def add_arguments(p) -> None:
 
 def cli_figures(args) -> list[Path]:
     """Run ``simgrip figures`` from parsed arguments; returns the files (the CLI checked ``--out`` first)."""
-    from simgrip.harness.runner import runner_options
+    from simgrip.parallel.runner import runner_options
 
     return make_figures(args.out, which=args.which, simulate=not args.no_simulate, links=args.links,
                         options=runner_options(args))

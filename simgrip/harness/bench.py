@@ -12,7 +12,7 @@ and the Gymnasium environment's overhead over raw ``mj_step``.
 
 How it runs: every task (one grip at one ``n``, the sweep, one skipping row)
 is independent and deterministic, one task of
-:func:`simgrip.harness.runner.run_tasks`; the errors written do not depend on
+:func:`simgrip.parallel.runner.run_tasks`; the errors written do not depend on
 ``jobs`` (the naive run's budget is a step count, not a wall time); wall times
 do (concurrent processes share cores), and ``jobs`` is written next to them.
 A task that raises becomes a row with the error in its note.
@@ -162,11 +162,11 @@ def run_bench(
         (default 0.5 quick, 10 full), so the results do not depend on ``jobs``.
     grips, skips, sweep
         What to run (all by default).
-    options : simgrip.harness.runner.RunnerOptions, optional
+    options : simgrip.parallel.runner.RunnerOptions, optional
         How to run (e.g. on an existing Dask cluster); replaces ``jobs`` and ``progress``.
     """
     from simgrip.envs.throughput import measure_throughput
-    from simgrip.harness.runner import RunnerOptions, run_tasks
+    from simgrip.parallel.runner import RunnerOptions, run_tasks
 
     _check_positive("repeats", repeats)
     options = RunnerOptions(jobs=jobs, progress=progress) if options is None else options
@@ -242,7 +242,7 @@ def _write(out: Path, res: BenchResult) -> dict:
 
 def add_arguments(p) -> None:
     """Add the options of ``simgrip bench`` (and the runner's) to an argparse parser."""
-    from simgrip.harness.runner import add_runner_arguments
+    from simgrip.parallel.runner import add_runner_arguments
 
     p.add_argument("--quick", action="store_true", help="n in {8, 16, 32}, one repeat, short naive budgets")
     p.add_argument("--out", default="bench_out", help="output folder [default bench_out]")
@@ -252,7 +252,7 @@ def add_arguments(p) -> None:
 
 def cli_bench(args) -> dict:
     """Run the bench from parsed arguments; returns a small record for the CLI (which checked ``--out`` first)."""
-    from simgrip.harness.runner import runner_options
+    from simgrip.parallel.runner import runner_options
 
     res = run_bench(args.out, quick=args.quick, repeats=args.repeats, options=runner_options(args))
     return {"out": str(args.out), "files": sorted(str(p) for p in res.files.values()),

@@ -2,7 +2,7 @@
 
 :func:`run_stress` builds and settles many scenes over the whole parameter box
 (:mod:`simgrip.harness.stress_cases`: a grid and low-discrepancy draws, any
-prefix spread over the box), one task of :func:`simgrip.harness.runner.run_tasks`
+prefix spread over the box), one task of :func:`simgrip.parallel.runner.run_tasks`
 per case; each case is self-contained, so its outcome does not depend on ``jobs``.
 
 Each case ends as exactly one of
@@ -332,11 +332,11 @@ def run_stress(
         Use only this many grid cases (the first in their spread-out order).
     max_links : int
         Largest ``n`` (256 by default; smaller for quick runs).
-    options : simgrip.harness.runner.RunnerOptions, optional
+    options : simgrip.parallel.runner.RunnerOptions, optional
         How to run (e.g. on an existing Dask cluster); replaces ``jobs`` and ``progress``.
     """
     from simgrip.harness.plots import stability_map
-    from simgrip.harness.runner import RunnerOptions, run_tasks
+    from simgrip.parallel.runner import RunnerOptions, run_tasks
 
     options = RunnerOptions(jobs=jobs, progress=progress) if options is None else options
     todo = make_cases(cases, seed, grid_cases, max_links)
@@ -378,7 +378,7 @@ def _category(c) -> str:
 
 def add_arguments(p) -> None:
     """Add the options of ``simgrip stress`` (and the runner's) to an argparse parser."""
-    from simgrip.harness.runner import add_runner_arguments
+    from simgrip.parallel.runner import add_runner_arguments
 
     p.add_argument("--cases", type=int, default=500, help="number of cases [default 500]")
     p.add_argument("--seed", type=int, default=0, help="seed of the random cases [default 0]")
@@ -388,7 +388,7 @@ def add_arguments(p) -> None:
 
 def cli_stress(args) -> dict:
     """Run the stress test from parsed arguments; returns the counts and the failures (the CLI checked ``--out`` first)."""
-    from simgrip.harness.runner import runner_options
+    from simgrip.parallel.runner import runner_options
 
     res = run_stress(args.out, cases=args.cases, seed=args.seed, options=runner_options(args))
     return {"out": str(args.out), "counts": res.counts,

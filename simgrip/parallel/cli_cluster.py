@@ -1,7 +1,7 @@
 """A ``dask scheduler`` + ``dask worker`` cluster started from the dask command line, on 127.0.0.1 only.
 
 What a user does to run ``simgrip sweep --scheduler ...`` on their own
-machines, done here for the scale measurement (:mod:`simgrip.harness.sweep_profile`)
+machines, done here for the scale measurement (:mod:`simgrip.sweep.profile`)
 and the tests: the scheduler and the workers (and their nannies) listen on
 127.0.0.1 with no dashboard.  ``--host`` alone is not enough: ``dask scheduler``
 and ``dask worker`` also serve HTTP (health, metrics) on all interfaces even

@@ -1,4 +1,4 @@
-"""The Dask clusters of the runner (:mod:`simgrip.harness.runner`): start, reach and stop them, and own their processes.
+"""The Dask clusters of the runner (:mod:`simgrip.parallel.runner`): start, reach and stop them, and own their processes.
 
 * :class:`LocalDask`: a ``LocalCluster`` of single-threaded worker processes on
   127.0.0.1 (no dashboard; the scheduler's HTTP server on 127.0.0.1 and a free
@@ -209,7 +209,7 @@ class RemoteDask:
     def __init__(self, scheduler: str | None = None, scheduler_file: str | None = None):
         from distributed import Client
 
-        from simgrip.harness.runner import RunnerError
+        from simgrip.parallel.runner import RunnerError
 
         self.where = scheduler if scheduler is not None else f"scheduler file {scheduler_file}"
         try:

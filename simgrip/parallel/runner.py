@@ -9,7 +9,7 @@ to spread independent work (settles, solves, figures) over processes:
   started for the call and closed after it; or an existing cluster reached by
   ``scheduler`` (address, e.g. ``tcp://127.0.0.1:8786``) or ``scheduler_file``
   (``dask scheduler --scheduler-file``), which is left running
-  (:mod:`simgrip.harness.dask_cluster` starts, reaches and stops them).
+  (:mod:`simgrip.parallel.dask_cluster` starts, reaches and stops them).
 
 Items are grouped into contiguous batches, one Dask task per batch, so that the
 scheduler's per-task overhead (~ms) stays small against the work; results come
@@ -236,7 +236,7 @@ def _sigterm_as_interrupt():
 
 
 def _run_dask(fn, items, options, batch_size, on_result, bar) -> list:
-    from simgrip.harness.dask_cluster import quiet_dask_logs
+    from simgrip.parallel.dask_cluster import quiet_dask_logs
 
     with quiet_dask_logs():
         return _run_dask_quietly(fn, items, options, batch_size, on_result, bar)
@@ -245,7 +245,7 @@ def _run_dask(fn, items, options, batch_size, on_result, bar) -> list:
 def _run_dask_quietly(fn, items, options, batch_size, on_result, bar) -> list:
     from distributed import KilledWorker, as_completed
 
-    from simgrip.harness.dask_cluster import LocalDask, RemoteDask
+    from simgrip.parallel.dask_cluster import LocalDask, RemoteDask
 
     interrupted = False
     env = RemoteDask(options.scheduler, options.scheduler_file) if options.remote else LocalDask(options.local_workers)

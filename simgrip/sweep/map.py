@@ -24,7 +24,7 @@ import io
 
 import numpy as np
 
-from simgrip.harness.sweep_grid import AXES
+from simgrip.sweep.grid import AXES
 from simgrip.io import atomic_write
 
 __all__ = ["CATEGORIES", "cell_categories", "write_map"]

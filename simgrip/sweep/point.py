@@ -13,7 +13,7 @@ library's public functions (:func:`simgrip.compare.simulate`,
 Columns (:data:`COLUMNS`, dimensionless: lengths over ``l``, forces over
 ``rho g l``):
 
-* the parameters, :data:`simgrip.harness.sweep_grid.AXES`;
+* the parameters, :data:`simgrip.sweep.grid.AXES`;
 * ``status`` (settled / unsettled / rejected / error), ``held`` (the
   simulation holds the workpiece), ``feasible`` (held and, Grip III, condition
   (23): the simulation's hold/drop verdict), ``normal_force``, ``required_mu``
@@ -31,7 +31,7 @@ from __future__ import annotations
 
 import math
 
-from simgrip.harness.sweep_grid import AXES, SweepPoint
+from simgrip.sweep.grid import AXES, SweepPoint
 
 __all__ = ["COLUMNS", "TIME_COLUMNS", "STATUSES", "evaluate_point"]
 

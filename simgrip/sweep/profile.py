@@ -13,7 +13,7 @@ once, which is not a per-point cost); cluster start-up is timed apart.
   worker: ``overhead_vs_loop_*`` compares it with the loop;
 * ``local_N_workers``: a local cluster of ``N`` workers (what ``--jobs N`` starts);
 * ``dask_cli_N_workers``: ``dask scheduler`` + ``dask worker --nworkers N``
-  started from the command line on 127.0.0.1 (:mod:`simgrip.harness.cli_cluster`),
+  started from the command line on 127.0.0.1 (:mod:`simgrip.parallel.cli_cluster`),
   reached with ``--scheduler``;
 * ``given_cluster``: the cluster named by ``--scheduler``/``--scheduler-file``, if any.
 
@@ -22,7 +22,7 @@ busy machine than a comparison of two runs: wall time times workers minus the
 time spent inside the tasks (timed on the workers), per point.
 
 Points/s per worker times the workers gives the rate of a bigger cluster as
-long as the scheduler keeps up (batches of :data:`~simgrip.harness.runner.MAX_BATCH`
+long as the scheduler keeps up (batches of :data:`~simgrip.parallel.runner.MAX_BATCH`
 points make a few hundred tasks/s enough for ~10^4 points/s).
 """
 
@@ -31,9 +31,9 @@ from __future__ import annotations
 import sys
 import time
 
-from simgrip.harness.runner import RunnerOptions, default_batch_size, run_tasks
-from simgrip.harness.sweep_point import evaluate_point
-from simgrip.harness.sweep_store import same_results
+from simgrip.parallel.runner import RunnerOptions, default_batch_size, run_tasks
+from simgrip.sweep.point import evaluate_point
+from simgrip.sweep.store import same_results
 
 __all__ = ["profile_sweep", "cli_profile", "format_profile"]
 
@@ -74,7 +74,7 @@ def profile_sweep(grid, *, workers: int = 2, batch_size: int | None = None, prog
     ``remote`` (options naming an existing cluster, ``--scheduler``) adds a run
     ``given_cluster`` on it.
     """
-    from simgrip.harness.dask_cluster import LocalDask
+    from simgrip.parallel.dask_cluster import LocalDask
 
     if isinstance(workers, bool) or not isinstance(workers, int) or workers < 1:
         raise ValueError(f"workers must be a positive integer, got {workers!r}")
@@ -112,14 +112,14 @@ def profile_sweep(grid, *, workers: int = 2, batch_size: int | None = None, prog
     finally:
         loc.stop(False)
     if cli_cluster:
-        from simgrip.harness.cli_cluster import dask_cli_cluster
+        from simgrip.parallel.cli_cluster import dask_cli_cluster
 
         t0 = time.perf_counter()
         with dask_cli_cluster(workers) as (address, _, _):
             runs.append(on_cluster(workers, time.perf_counter() - t0, RunnerOptions(scheduler=address, progress=progress),
                                    f"dask_cli_{workers}_workers"))
     if remote is not None and remote.remote:
-        from simgrip.harness.dask_cluster import RemoteDask
+        from simgrip.parallel.dask_cluster import RemoteDask
 
         probe = RemoteDask(remote.scheduler, remote.scheduler_file)
         try:
@@ -159,7 +159,7 @@ def cli_profile(args, grid, options: RunnerOptions):
     workers = options.jobs if options.jobs is not None and options.jobs > 1 else 2
     prof = profile_sweep(grid, workers=workers, batch_size=args.batch_size, progress=options.progress,
                          remote=options if options.remote else None)
-    from simgrip.harness.sweep import versions
+    from simgrip.sweep.run import versions
 
     prof["versions"] = versions()
     write_json(Path(out) / "profile.json", prof)

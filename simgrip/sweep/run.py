@@ -1,9 +1,9 @@
 """Design sweeps: the settled simulation and the elastica BVP over a grid of designs (``simgrip sweep``).
 
-For every point of a :class:`~simgrip.harness.sweep_grid.SweepGrid` (the full
+For every point of a :class:`~simgrip.sweep.grid.SweepGrid` (the full
 grid of ``kappa, D, M, mu, b, gamma``) a worker settles the MuJoCo fingers and
-solves the BVP (:func:`~simgrip.harness.sweep_point.evaluate_point`); the
-points run through the one parallel runner (:func:`simgrip.harness.runner.run_tasks`):
+solves the BVP (:func:`~simgrip.sweep.point.evaluate_point`); the
+points run through the one parallel runner (:func:`simgrip.parallel.runner.run_tasks`):
 in-process (``jobs=1``), on a local Dask cluster, or on an existing one
 (``--scheduler``), batched so that Dask's per-task overhead stays small.  Every
 point is settled from scratch, like ``simgrip simulate`` at the same values:
@@ -15,10 +15,10 @@ batches.  Hence the rows (all columns but ``wall_time_s``) are the same for
 any runner and batch size.
 
 With an output folder the sweep writes ``sweep.csv`` (one row per point, grid
-order, :data:`~simgrip.harness.sweep_point.COLUMNS`), ``sweep.json``
-(arguments, versions, counts) and ``map.png`` (:mod:`~simgrip.harness.sweep_map`),
+order, :data:`~simgrip.sweep.point.COLUMNS`), ``sweep.json``
+(arguments, versions, counts) and ``map.png`` (:mod:`~simgrip.sweep.map`),
 each atomically, after saving finished points in ``.partial/`` as they arrive
-(:mod:`~simgrip.harness.sweep_store`): an interrupted sweep is completed by
+(:mod:`~simgrip.sweep.store`): an interrupted sweep is completed by
 ``resume=True`` (``--resume``) without recomputing saved points.  Dask
 recomputes the batch of a worker that dies, so no point is lost or doubled.
 """
@@ -31,10 +31,10 @@ import time
 from dataclasses import dataclass, field
 from pathlib import Path
 
-from simgrip.harness.runner import RunnerOptions, add_runner_arguments, run_tasks, runner_options
-from simgrip.harness.sweep_grid import SweepGrid, make_grid
-from simgrip.harness.sweep_point import COLUMNS, evaluate_point
-from simgrip.harness.sweep_store import PARTIAL, PartialStore, counts, write_csv
+from simgrip.parallel.runner import RunnerOptions, add_runner_arguments, run_tasks, runner_options
+from simgrip.sweep.grid import SweepGrid, make_grid
+from simgrip.sweep.point import COLUMNS, evaluate_point
+from simgrip.sweep.store import PARTIAL, PartialStore, counts, write_csv
 
 __all__ = ["SweepResult", "run_sweep", "add_arguments", "cli_sweep", "versions"]
 
@@ -47,10 +47,10 @@ class SweepResult:
     ----------
     grid : SweepGrid
     rows : list of dict
-        One record per point in grid order, keys :data:`~simgrip.harness.sweep_point.COLUMNS`
+        One record per point in grid order, keys :data:`~simgrip.sweep.point.COLUMNS`
         (plus ``index``).
     counts : dict
-        Points per status, held, feasible, agreeing, ... (:func:`~simgrip.harness.sweep_store.counts`).
+        Points per status, held, feasible, agreeing, ... (:func:`~simgrip.sweep.store.counts`).
     computed, resumed : int
         Points computed by this call and points taken from an interrupted run's saved results.
     wall_time_s : float
@@ -94,7 +94,7 @@ def run_sweep(grid: SweepGrid, *, out=None, options: RunnerOptions = RunnerOptio
     Parameters
     ----------
     grid : SweepGrid
-        The sweep (:func:`~simgrip.harness.sweep_grid.make_grid`).
+        The sweep (:func:`~simgrip.sweep.grid.make_grid`).
     out : path, optional
         Output folder (checked, and created, before any work; ``ValueError``
         naming ``--out`` when it cannot be written).  Without it nothing is
@@ -159,7 +159,7 @@ def _write(out: Path, result: SweepResult, options: RunnerOptions, batch_size, d
     paths = {"csv": out / "sweep.csv", "json": out / "sweep.json"}
     write_csv(paths["csv"], result.rows)
     if draw:
-        from simgrip.harness.sweep_map import write_map
+        from simgrip.sweep.map import write_map
 
         paths["map"] = out / "map.png"
         write_map(paths["map"], result.grid, result.rows)
@@ -215,7 +215,7 @@ def cli_sweep(args):
     if args.batch_size is not None and args.batch_size < 1:
         raise ValueError(f"batch-size must be a positive integer, got {args.batch_size!r}")
     if args.profile:
-        from simgrip.harness.sweep_profile import cli_profile
+        from simgrip.sweep.profile import cli_profile
 
         return cli_profile(args, grid, options)
     try:

@@ -1,7 +1,7 @@
 """A sweep's files: the CSV table, and the partial results that make an interrupted sweep resumable.
 
 ``sweep.csv`` holds one row per point with the columns of
-:data:`simgrip.harness.sweep_point.COLUMNS`; floats are written with ``repr``
+:data:`simgrip.sweep.point.COLUMNS`; floats are written with ``repr``
 (they read back bit for bit), flags as ``true``/``false``, a missing value as
 an empty field.  :func:`read_csv` reads it back (no pandas needed).
 
@@ -26,7 +26,7 @@ import time
 import uuid
 from pathlib import Path
 
-from simgrip.harness.sweep_point import COLUMNS, STATUSES
+from simgrip.sweep.point import COLUMNS, STATUSES
 from simgrip.io import atomic_write, write_json
 
 __all__ = ["PARTIAL", "PartialStore", "counts", "format_csv", "read_csv", "same_results", "write_csv"]
