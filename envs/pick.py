@@ -31,7 +31,7 @@ from simgrip.envs.pick_model import build_pick_model
 from simgrip.envs.pick_observation import OBS_LAYOUT, PickObservation, obs_layout
 from simgrip.envs.pick_reward import pick_reward, progress
 from simgrip.params import DimensionlessParams, PhysicalParams
-from simgrip.sim.checks import PhysicsError, check_invalid_state, clear_warnings, invalid_state
+from simgrip.sim.checks import PhysicsError, StateCheck, check_invalid_state
 from simgrip.sim.gl import make_renderer
 
 __all__ = ["PickEnv", "BoxParams", "OBS_LAYOUT", "obs_layout"]  # the last two from pick_observation
@@ -445,6 +445,7 @@ class PickEnv(gym.Env):
         state = self.__dict__.copy()
         state["_renderer"] = None
         state["_spring_view"] = None
+        state["_check"] = None
         if isinstance(state.get("spec"), mujoco.MjSpec):  # the builder's MjSpec cannot be pickled
             state["spec"] = None
         return state
@@ -454,7 +455,9 @@ class PickEnv(gym.Env):
         self._bind_spring_view()
 
     def _bind_spring_view(self):
-        """Point ``_spring_view`` at the fingers' rest angles inside ``model.qpos_spring`` (when contiguous)."""
+        """Point ``_spring_view`` at the fingers' rest angles inside ``model.qpos_spring`` (when contiguous), and
+        ``_check`` (the state check of every step) at ``data``."""
+        self._check = StateCheck(self.data)
         flat = self._spring_idx
         if np.array_equal(flat, np.arange(flat[0], flat[0] + flat.size)):
             self._spring_view = self.model.qpos_spring[flat[0]:flat[0] + flat.size].reshape(2, self.n)
@@ -538,9 +541,9 @@ class PickEnv(gym.Env):
         self._palm_target = min(max(self._palm_target + a[-1] * self.palm_speed * self.dt,
                                     self.palm_range[0]), self.palm_range[1])
         d.ctrl[0] = self._palm_target
-        clear_warnings(d)
+        self._check.clear()
         mujoco.mj_step(m, d, nstep=self.frame_skip)
-        why = invalid_state(d)
+        why = self._check()
         if why is not None:
             self._needs_reset = True
             raise PhysicsError(f"step diverged ({why})")

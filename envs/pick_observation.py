@@ -92,7 +92,7 @@ class PickObservation:
     tips : tuple of int
         Geom ids of the two tip spheres.
     hinge_qpos : index
-        qpos index of the fingers' hinges, finger 0 then finger 1 (``2 * n_links``).
+        qpos index of the fingers' hinges, finger 0 then finger 1 (``2 * n_links``; a slice reads a view).
 
     Attributes
     ----------
@@ -112,6 +112,9 @@ class PickObservation:
         self.palm_qpos, self.palm_dof, self.box_qpos, self.box_dof = palm_qpos, palm_dof, box_qpos, box_dof
         self.tips = tips
         self.hinge_qpos = hinge_qpos
+        self._inv_l = 1.0 / length
+        self._shape_end = 5 + 2 * shape_points
+        self._size = self._shape_end + 16  # the per-finger layout
         # shape sampling: tangent angles at s/l = (k+1/2)/K, interpolated between link midpoints, from the
         # link angles (cumulative hinge angles)
         n = n_links
@@ -127,28 +130,33 @@ class PickObservation:
         normal_1, friction_1, ...]`` [N]; ``kappa_cmd``, ``kappa`` the commanded and actual curvatures (2,);
         ``z0`` the box's starting height [m]; ``hold`` the time held at the target [s].
         """
-        qpos, qvel, xpos = data.qpos, data.qvel, data.geom_xpos
-        inv_l = 1.0 / self.length
+        qpos, xpos = data.qpos, data.geom_xpos
+        inv_l = self._inv_l
         palm_z = float(qpos[self.palm_qpos])
-        palm_v = float(qvel[self.palm_dof])
+        palm_v = float(data.qvel[self.palm_dof])
         bq, bd = self.box_qpos, self.box_dof
         bx, _, bz, qw, qx, qy, qz = qpos[bq:bq + 7].tolist()
-        vx, _, vz, _, wy, _ = qvel[bd:bd + 6].tolist()
-        t0, t1 = self.tips
+        vx, _, vz, _, wy, _ = data.qvel[bd:bd + 6].tolist()
+        x0, _, z0_tip = xpos[self.tips[0]].tolist()
+        x1, _, z1_tip = xpos[self.tips[1]].tolist()
         tilt = math.atan2(2.0 * (qx * qz + qw * qy), 1.0 - 2.0 * (qx * qx + qy * qy))
         fu = self.force_unit
         lo, hi = self.kappa_range  # curvatures in action units (the action that commands them)
-        units = [2.0 * (k - lo) / (hi - lo) - 1.0 for k in kappa_cmd.tolist() + kappa.tolist()]
-        obs = np.concatenate((
-            (palm_z * inv_l,), units,
-            (qpos[self.hinge_qpos].reshape(2, self.n) @ self._shape_matrix_t).ravel(),
-            (xpos[t0, 0] * inv_l, (xpos[t0, 2] - palm_z) * inv_l, xpos[t1, 0] * inv_l, (xpos[t1, 2] - palm_z) * inv_l,
-             bx * inv_l, (bz - palm_z) * inv_l, tilt, vx * inv_l, (vz - palm_v) * inv_l, wy * SPIN_TIME,
-             (bz - z0) / self.target_height,
-             math.log1p(forces[0] / fu), math.log1p(forces[1] / fu), math.log1p(forces[2] / fu),
-             math.log1p(forces[3] / fu),
-             min(hold / self.hold_time, 1.0) if self.hold_time > 0 else 0.0),
-        ))
+        c0, c1 = kappa_cmd.tolist()
+        k0, k1 = kappa.tolist()
+        obs = np.empty(self._size)
+        n_shape = self._shape_end - 5
+        np.matmul(qpos[self.hinge_qpos].reshape(2, self.n), self._shape_matrix_t,
+                  out=obs[5:self._shape_end].reshape(2, n_shape // 2))
+        obs[:5] = (palm_z * inv_l, 2.0 * (c0 - lo) / (hi - lo) - 1.0, 2.0 * (c1 - lo) / (hi - lo) - 1.0,
+                   2.0 * (k0 - lo) / (hi - lo) - 1.0, 2.0 * (k1 - lo) / (hi - lo) - 1.0)
+        obs[self._shape_end:] = (
+            x0 * inv_l, (z0_tip - palm_z) * inv_l, x1 * inv_l, (z1_tip - palm_z) * inv_l,
+            bx * inv_l, (bz - palm_z) * inv_l, tilt, vx * inv_l, (vz - palm_v) * inv_l, wy * SPIN_TIME,
+            (bz - z0) / self.target_height,
+            math.log1p(forces[0] / fu), math.log1p(forces[1] / fu), math.log1p(forces[2] / fu),
+            math.log1p(forces[3] / fu),
+            min(hold / self.hold_time, 1.0) if self.hold_time > 0 else 0.0)
         if self._pick is not None:
             obs = obs[self._pick]
         np.maximum(obs, self.low, out=obs)
