@@ -17,7 +17,7 @@ from typing import Iterator
 import mujoco
 import numpy as np
 
-__all__ = ["PhysicsError", "active_warnings", "check_invalid_state", "clear_warnings", "invalid_state"]
+__all__ = ["PhysicsError", "StateCheck", "active_warnings", "check_invalid_state", "clear_warnings", "invalid_state"]
 
 
 class PhysicsError(RuntimeError):
@@ -42,6 +42,29 @@ def invalid_state(data: mujoco.MjData) -> str | None:
     if not math.isfinite(float(data.qpos.sum()) + float(data.qvel.sum())):
         return "non-finite qpos or qvel"
     return None
+
+
+class StateCheck:
+    """:func:`clear_warnings` and :func:`invalid_state` of one ``data`` for a hot loop (an env step).
+
+    Binds numpy views of the warning counters, ``qpos`` and ``qvel`` once; the tests are those of
+    :func:`invalid_state`.  Views do not survive pickling: make a new ``StateCheck`` for a copied ``data``.
+    """
+
+    def __init__(self, data: mujoco.MjData):
+        self._data = data
+        self._number = data.warning.number
+        self._qpos, self._qvel = data.qpos, data.qvel
+
+    def clear(self) -> None:
+        """Reset the warning counters."""
+        self._number.fill(0)
+
+    def __call__(self) -> str | None:
+        """Why the state is not valid, or ``None`` when it is (see :func:`invalid_state`)."""
+        if self._number.any() or not math.isfinite(float(self._qpos.sum()) + float(self._qvel.sum())):
+            return invalid_state(self._data)
+        return None
 
 
 @contextlib.contextmanager
