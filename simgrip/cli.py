@@ -99,6 +99,10 @@ def build_parser() -> argparse.ArgumentParser:
             help="settle method: newton (static solve, residual 1e-10) or dynamics "
             "(over-damped MuJoCo dynamics with MuJoCo's own friction) [default newton]",
         )
+        p.add_argument("--contact", default=None,
+                       help="where sticking friction acts: point (the finger's centreline, the paper's point "
+                       "contact; default for newton) or surface (MuJoCo's contact point on the tip sphere, whose "
+                       "radius adds a couple; the reference then carries it; the only choice for dynamics)")
         p.add_argument("--target-error", type=float, default=None,
                        help="settle to this error (tip over l, forces relative) by Richardson extrapolation over "
                        "resolutions it chooses (free, I, II; --links is then ignored)")
@@ -197,9 +201,9 @@ def _cmd_simulate(args) -> dict:
     if args.fingers is not None or args.workpiece is not None or args.contact_angle is not None:
         from simgrip.gripper import gripper_record, simulate_gripper
 
-        if args.method not in (None, "dynamics") or args.target_error is not None:
+        if args.method not in (None, "dynamics") or args.target_error is not None or args.contact is not None:
             raise ValueError("method: a K-finger gripper (--fingers) settles by dynamics only (no --method newton, "
-                             "no --target-error)")
+                             "no --target-error, no --contact)")
         if args.fingers is None:
             raise ValueError("fingers: --workpiece and --contact-angle need --fingers K")
         state = simulate_gripper(grip, params, profile, links, fingers=args.fingers,
@@ -207,7 +211,7 @@ def _cmd_simulate(args) -> dict:
                                  contact_angle=args.contact_angle or 0.0)
         return gripper_record(state, params, profile)
     return settled_record(simulate(grip, params, profile, links, method=args.method or "newton",
-                                   target_error=args.target_error),
+                                   target_error=args.target_error, contact=args.contact),
                           params, profile)
 
 
@@ -218,7 +222,7 @@ def _cmd_compare(args) -> str:
 
     grip = check_grip(args.grip)
     result = compare(grip, _params(args), _profile(args, grip), _links(args.links), method=args.method or "newton",
-                     target_error=args.target_error)
+                     target_error=args.target_error, contact=args.contact)
     return json.dumps(to_jsonable(result), allow_nan=False) if args.json else format_comparison(result)
 
 

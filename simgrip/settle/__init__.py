@@ -104,6 +104,13 @@ def settle(scene: Scene, *, target_error=None, **kw) -> SettledState:  # docstri
         if not isinstance(scene, Scene):
             raise ValueError(f"scene must be a simgrip.sim.scene.Scene, got {type(scene).__name__}")
         e = check_target_error(target_error, scene.grip)
+        if kw.get("method") == "dynamics":
+            raise ValueError("method: target_error extrapolates the static settle (method='newton'); the dynamic "
+                             "settle's error is floored by MuJoCo's friction creep, not by ds")
+        if kw.get("contact") == "surface":
+            raise ValueError("contact: target_error extrapolates the point-contact settle (method='newton', "
+                             "contact='point'), whose error expansion in ds is derived; the finite-radius "
+                             "surface contact adds a couple that does not vanish with ds")
         if kw.get("warm_start") is not None:
             raise ValueError("target_error: warm_start is not supported (each resolution settles from scratch)")
         return settle_to_error(scene, e, _settle, **kw)
