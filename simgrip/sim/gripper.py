@@ -46,11 +46,11 @@ import mujoco
 import numpy as np
 
 from simgrip.chain import ChainSprings, chain_springs, link_positions
-from simgrip.models import model_path
 from simgrip.params import DimensionlessParams, PhysicalParams, check_grip
 from simgrip.profiles import CurvatureProfile, as_profile
 from simgrip.sim.contacts import add_pair
 from simgrip.sim.fingers import FingerIndex, add_fingers, check_finger_links, index_fingers
+from simgrip.sim.scene import FingerScene, check_params, check_positive, root_spec, set_joint_angles
 from simgrip.sim.workpiece import BOX_DEPTH, BOX_HEIGHT
 
 __all__ = ["GRIPPER_GRIPS", "WORKPIECES", "GripperScene", "build_gripper", "check_gripper", "set_finger_angles"]
@@ -68,8 +68,11 @@ _WORKPIECE_GEOM = "workpiece_geom"
 
 
 @dataclass
-class GripperScene:
+class GripperScene(FingerScene):
     """A compiled K-finger scene and the addresses needed to read it.
+
+    ``joint_qpos``, ``joint_dof`` (K, n) and the scales ``length``,
+    ``force_scale``, ``moment_scale`` read as in the planar scene (:class:`FingerScene`).
 
     Attributes
     ----------
@@ -129,34 +132,9 @@ class GripperScene:
     contact_angle: float = 0.0
 
     @property
-    def joint_qpos(self) -> np.ndarray:
-        """qpos addresses of the hinges, (K, n)."""
-        return self.index.joint_qpos
-
-    @property
-    def joint_dof(self) -> np.ndarray:
-        """dof addresses of the hinges, (K, n)."""
-        return self.index.joint_dof
-
-    @property
     def tip_geom(self) -> np.ndarray:
         """Tip sphere geom ids, (K,)."""
         return self.index.tip_geom
-
-    @property
-    def length(self) -> float:
-        """``l`` [m]."""
-        return self.physical.length
-
-    @property
-    def force_scale(self) -> float:
-        """``rho g l`` [N]."""
-        return self.physical.force_scale
-
-    @property
-    def moment_scale(self) -> float:
-        """``rho g l^2`` [N m]."""
-        return self.physical.force_scale * self.physical.length
 
     @property
     def workpiece_mass(self) -> float:
@@ -176,24 +154,6 @@ class GripperScene:
 
 # ---------------------------------------------------------------------------
 # input checks
-
-
-def _check_params(params) -> tuple[DimensionlessParams, PhysicalParams]:
-    if isinstance(params, PhysicalParams):
-        return params.dimensionless(), params
-    if isinstance(params, DimensionlessParams):
-        return params, params.to_physical(length=1.0, rho=1.0, g=1.0)
-    raise ValueError(f"params must be PhysicalParams or DimensionlessParams, got {type(params).__name__}")
-
-
-def _check_radius(name, value) -> float:
-    try:
-        v = float(value)
-    except (TypeError, ValueError):
-        raise ValueError(f"{name} must be a real number, got {value!r}") from None
-    if not (math.isfinite(v) and 0.0 < v <= 0.05):
-        raise ValueError(f"{name} must lie in (0, 0.05] (over l), got {value!r}")
-    return v
 
 
 def check_gripper(grip, fingers, workpiece) -> tuple[str, int, str]:
@@ -272,11 +232,11 @@ def build_gripper(
     GripperScene
     """
     grip, K, shape = check_gripper(grip, fingers, workpiece)
-    dimless, phys = _check_params(params)
+    dimless, phys = check_params(params)
     prof = as_profile(profile)
     n = check_finger_links(n_links)
-    r_tip = _check_radius("r_tip", r_tip)
-    r_link = _check_radius("r_link", r_link)
+    r_tip = check_positive("r_tip", r_tip, 0.05)
+    r_link = check_positive("r_link", r_link, 0.05)
     try:
         yaw = float(yaw)
     except (TypeError, ValueError):
@@ -293,9 +253,7 @@ def build_gripper(
     q0 = _start(initial_angles, K, n)
 
     L = phys.length
-    spec = mujoco.MjSpec.from_file(str(model_path("defaults.xml")))
-    spec.modelname = f"simgrip_gripper_{grip}_{K}{shape}_{n}"
-    spec.option.gravity = [0.0, 0.0, -phys.g]
+    spec = root_spec(f"simgrip_gripper_{grip}_{K}{shape}_{n}", phys.g)
     add_fingers(spec, spec.worldbody, springs, fingers=K, length=L, EI=phys.EI, rho=phys.rho, r_link=r_link * L,
                 r_tip=r_tip * L)
     azimuths = yaw + 2.0 * math.pi * np.arange(K) / K
@@ -385,7 +343,4 @@ def _add_workpiece(spec, shape: str, size, mass: float, z0: float, yaw: float) -
 
 def set_finger_angles(scene: GripperScene, angles) -> None:
     """Set every finger's hinge angles [rad] (shape (n,) or (K, n)), zero velocities, forward."""
-    q = np.broadcast_to(np.asarray(angles, dtype=float), (scene.fingers, scene.n))
-    scene.data.qpos[scene.joint_qpos] = q
-    scene.data.qvel[:] = 0.0
-    mujoco.mj_forward(scene.model, scene.data)
+    set_joint_angles(scene, angles)

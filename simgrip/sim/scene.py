@@ -48,6 +48,7 @@ __all__ = [
     "DEFAULT_R_CORNER",
     "DEFAULT_R_LINK",
     "DEFAULT_R_TIP",
+    "FingerScene",
     "Scene",
     "build_scene",
     "finger_state",
@@ -63,8 +64,45 @@ DEFAULT_R_LINK = 2e-3
 DEFAULT_R_CORNER = 1e-3
 
 
+class FingerScene:
+    """What every compiled scene of fingers reads the same way: hinge addresses and the scales.
+
+    A base of :class:`Scene` and :class:`simgrip.sim.gripper.GripperScene`; it
+    reads their ``index`` (:class:`FingerIndex`) and ``physical``
+    (:class:`PhysicalParams`) fields.
+    """
+
+    index: FingerIndex
+    physical: PhysicalParams
+
+    @property
+    def joint_qpos(self) -> np.ndarray:
+        """qpos addresses of the hinges, (fingers, n)."""
+        return self.index.joint_qpos
+
+    @property
+    def joint_dof(self) -> np.ndarray:
+        """dof addresses of the hinges, (fingers, n)."""
+        return self.index.joint_dof
+
+    @property
+    def length(self) -> float:
+        """``l`` [m]."""
+        return self.physical.length
+
+    @property
+    def force_scale(self) -> float:
+        """``rho g l`` [N]."""
+        return self.physical.force_scale
+
+    @property
+    def moment_scale(self) -> float:
+        """``rho g l^2`` [N m]."""
+        return self.physical.force_scale * self.physical.length
+
+
 @dataclass
-class Scene:
+class Scene(FingerScene):
     """A compiled simgrip scene and everything needed to read it.
 
     Attributes
@@ -134,17 +172,6 @@ class Scene:
     r_corner: float
     mirror: np.ndarray
 
-    # -- the fingers' addresses (from ``index``) -----------------------------
-    @property
-    def joint_qpos(self) -> np.ndarray:
-        """qpos addresses of the hinges, (fingers, n)."""
-        return self.index.joint_qpos
-
-    @property
-    def joint_dof(self) -> np.ndarray:
-        """dof addresses of the hinges, (fingers, n)."""
-        return self.index.joint_dof
-
     @property
     def link_body(self) -> np.ndarray:
         """Body ids of the links, (fingers, n)."""
@@ -154,22 +181,6 @@ class Scene:
     def tip_geom(self) -> np.ndarray:
         """Tip sphere geom ids, (fingers,); -1 where the scene has no tip contact."""
         return self.index.tip_geom if self.grip in ("I", "II") else np.full(self.fingers, -1)
-
-    # -- scales -------------------------------------------------------------
-    @property
-    def length(self) -> float:
-        """``l`` [m]."""
-        return self.physical.length
-
-    @property
-    def force_scale(self) -> float:
-        """``rho g l`` [N]."""
-        return self.physical.force_scale
-
-    @property
-    def moment_scale(self) -> float:
-        """``rho g l^2`` [N m]."""
-        return self.physical.force_scale * self.physical.length
 
     @property
     def hinge_stiffness(self) -> np.ndarray:
@@ -191,7 +202,8 @@ class Scene:
 # input checks
 
 
-def _check_params(params) -> tuple[DimensionlessParams, PhysicalParams]:
+def check_params(params) -> tuple[DimensionlessParams, PhysicalParams]:
+    """``(dimensionless, physical)`` of ``params``; ``DimensionlessParams`` are realised with ``l = rho = g = 1``."""
     if isinstance(params, PhysicalParams):
         return params.dimensionless(), params
     if isinstance(params, DimensionlessParams):
@@ -199,7 +211,8 @@ def _check_params(params) -> tuple[DimensionlessParams, PhysicalParams]:
     raise ValueError(f"params must be PhysicalParams or DimensionlessParams, got {type(params).__name__}")
 
 
-def _check_positive(name, value, upper) -> float:
+def check_positive(name, value, upper) -> float:
+    """``value`` as a float in ``(0, upper]`` (over ``l``); ValueError naming ``name`` otherwise."""
     try:
         v = float(value)
     except (TypeError, ValueError):
@@ -283,15 +296,15 @@ def build_scene(
     Scene
     """
     grip = check_grip(grip)
-    dimless, phys = _check_params(params)
+    dimless, phys = check_params(params)
     prof = as_profile(profile)
     n = check_finger_links(n_links)
     if fingers not in (1, 2) or isinstance(fingers, bool):
         raise ValueError(f"fingers must be 1 or 2, got {fingers!r}")
-    r_tip = _check_positive("r_tip", r_tip, 0.05)
-    r_link = _check_positive("r_link", r_link, 0.05)
-    r_corner = _check_positive("r_corner", r_corner, 0.05)
-    contact_window = _check_positive("contact_window", contact_window, 1.0)
+    r_tip = check_positive("r_tip", r_tip, 0.05)
+    r_link = check_positive("r_link", r_link, 0.05)
+    r_corner = check_positive("r_corner", r_corner, 0.05)
+    contact_window = check_positive("contact_window", contact_window, 1.0)
     springs = chain_springs(prof, n)
     q0 = _start_angles(grip, dimless, prof, n, initial_angles)
     place = _placement(grip, q0, springs, dimless, phys, r_tip, r_link, r_corner, contact_window,
@@ -320,11 +333,17 @@ def build_scene(
     return scene
 
 
+def root_spec(name: str, g: float) -> mujoco.MjSpec:
+    """A new spec named ``name``: options and default classes of ``models/defaults.xml``, gravity ``g`` [m/s^2] down ``z``."""
+    spec = mujoco.MjSpec.from_file(str(model_path("defaults.xml")))
+    spec.modelname = name
+    spec.option.gravity = [0.0, 0.0, -g]
+    return spec
+
+
 def _root(grip: str, n: int, phys: PhysicalParams) -> mujoco.MjSpec:
     """The scene's root spec: options and default classes of ``models/defaults.xml``, gravity, contact switch."""
-    spec = mujoco.MjSpec.from_file(str(model_path("defaults.xml")))
-    spec.modelname = f"simgrip_{grip}_{n}"
-    spec.option.gravity = [0.0, 0.0, -phys.g]
+    spec = root_spec(f"simgrip_{grip}_{n}", phys.g)
     if grip == "free":
         spec.option.disableflags |= int(mujoco.mjtDisableBit.mjDSBL_CONTACT)
     return spec
