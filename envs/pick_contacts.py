@@ -51,13 +51,15 @@ class BoxContactForces:
         nx = con.frame[:, 0].tolist()  # x component of each contact normal
         if self._elliptic:
             adrs = con.efc_address.tolist()
-            ef = data.efc_force
+            ef = None
             for (g1, g2), adr, n_x in zip(geoms, adrs, nx):
                 f = fog[g2] if g1 == bg else (fog[g1] if g2 == bg else -1)
                 if f >= 0:
-                    fn, t1, t2 = ef[adr:adr + 3].tolist()
+                    if ef is None:
+                        ef = data.efc_force.tolist()  # one conversion for all contacts
+                    fn = ef[adr]
                     out[2 * f] += fn
-                    out[2 * f + 1] += math.hypot(t1, t2)
+                    out[2 * f + 1] += math.hypot(ef[adr + 1], ef[adr + 2])
                     out[4 + f] += fn * abs(n_x)
             return out
         cf = self._cf
