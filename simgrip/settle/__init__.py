@@ -86,6 +86,11 @@ CHAIN_SOLVE = True
 def _check_settle_args(scene, tol, max_steps):
     if not isinstance(scene, Scene):
         raise ValueError(f"scene must be a simgrip.sim.scene.Scene, got {type(scene).__name__}")
+    return check_tol_steps(tol, max_steps)
+
+
+def check_tol_steps(tol, max_steps) -> tuple[float, int]:
+    """``(tol, max_steps)`` of a settle as a positive finite float and a positive int; ValueError naming the bad one."""
     try:
         tol = float(tol)
     except (TypeError, ValueError):

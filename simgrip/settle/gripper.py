@@ -52,6 +52,7 @@ import mujoco
 import numpy as np
 
 from simgrip.chain import link_positions
+from simgrip.settle import check_tol_steps
 from simgrip.settle.dynamics import (DYN_BATCH, DYN_DAMPING, DYN_DROP_FALL, DYN_DROP_SLIP, DYN_IMPRATIO,
                                      DYN_PEN_LIMIT, DYN_STEP, DYN_TIMECONST, DYN_TOL, DYN_TOL_PER_WEIGHT, DYN_VTOL,
                                      DYN_WORKPIECE_DAMPING, lowest_frequency)
@@ -295,14 +296,7 @@ def settle_gripper(scene: GripperScene, *, tol: float | None = None, max_steps: 
         raise ValueError(f"scene must be a simgrip.sim.gripper.GripperScene, got {type(scene).__name__}")
     if tol is None:
         tol = gripper_tolerance(scene)
-    try:
-        tol = float(tol)
-    except (TypeError, ValueError):
-        raise ValueError(f"tol must be a real number, got {tol!r}") from None
-    if not (math.isfinite(tol) and tol > 0):
-        raise ValueError(f"tol must be positive and finite, got {tol!r}")
-    if isinstance(max_steps, bool) or not isinstance(max_steps, (int, np.integer)) or max_steps < 1:
-        raise ValueError(f"max_steps must be a positive integer, got {max_steps!r}")
+    tol, max_steps = check_tol_steps(tol, max_steps)
     t0 = time.perf_counter()
     m, d = scene.model, scene.data
     saved = save_options(m)
