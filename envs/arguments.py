@@ -6,7 +6,7 @@ import math
 
 import numpy as np
 
-__all__ = ["check_bool", "check_int", "check_number", "check_positive", "check_range"]
+__all__ = ["check_action", "check_bool", "check_int", "check_number", "check_positive", "check_range"]
 
 
 def check_range(name, value, lo=-math.inf, hi=math.inf, positive=True, strict=False) -> tuple[float, float]:
@@ -63,3 +63,18 @@ def check_bool(name, value) -> bool:
     if not isinstance(value, (bool, np.bool_)):
         raise ValueError(f"{name} must be True or False, got {value!r}")
     return bool(value)
+
+
+def check_action(action, shape: tuple) -> list:
+    """``action`` as a list of floats clipped to ``[-1, 1]``; ValueError on a wrong shape or non-finite values."""
+    try:
+        a = np.asarray(action, dtype=np.float64)
+    except (TypeError, ValueError):
+        raise ValueError(f"action must be an array of {shape[0]} numbers, got {action!r}") from None
+    if a.shape != shape:
+        raise ValueError(f"action must have shape {shape}, got {a.shape}")
+    vals = a.tolist()
+    for v in vals:
+        if not math.isfinite(v):
+            raise ValueError(f"action must be finite (no NaN or inf), got {action!r}")
+    return [-1.0 if v < -1.0 else (1.0 if v > 1.0 else v) for v in vals]

@@ -7,6 +7,13 @@ builder under the palm of ``models/pick_scene.xml``.  The pneumatic actuation is
 intrinsic curvature: each control step moves the actual curvature towards its
 command with a first-order lag and writes the new rest angles into
 ``model.qpos_spring`` (no recompilation).
+
+The pieces live beside it: the observation's layout, bounds and normalisation
+in :mod:`simgrip.envs.pick_observation`, the box-finger contact forces in
+:mod:`simgrip.envs.pick_contacts`, the reward terms in
+:mod:`simgrip.envs.pick_reward`; this module holds the environment's
+arguments, episode bookkeeping (lift, hold, drop, knock-over) and the
+Gymnasium API.
 """
 
 from __future__ import annotations
@@ -21,6 +28,7 @@ from gymnasium import spaces
 from gymnasium.error import ResetNeeded
 
 from simgrip.chain import check_links
+from simgrip.envs.arguments import check_action
 from simgrip.envs.arguments import check_bool as _bool
 from simgrip.envs.arguments import check_int as _int
 from simgrip.envs.arguments import check_number as _num
@@ -509,24 +517,10 @@ class PickEnv(gym.Env):
         }
         return self._get_obs(forces), info
 
-    def _check_action(self, action) -> list:
-        """The action as a list of floats clipped to [-1, 1]; ValueError on a wrong shape or non-finite values."""
-        try:
-            a = np.asarray(action, dtype=np.float64)
-        except (TypeError, ValueError):
-            raise ValueError(f"action must be an array of {self.action_space.shape[0]} numbers, got {action!r}") from None
-        if a.shape != self.action_space.shape:
-            raise ValueError(f"action must have shape {self.action_space.shape}, got {a.shape}")
-        vals = a.tolist()
-        for v in vals:
-            if not math.isfinite(v):
-                raise ValueError(f"action must be finite (no NaN or inf), got {action!r}")
-        return [-1.0 if v < -1.0 else (1.0 if v > 1.0 else v) for v in vals]
-
     def step(self, action):
         if self._needs_reset:
             raise ResetNeeded("step() called before reset() or after the episode terminated; call reset()")
-        a = self._check_action(action)
+        a = check_action(action, self.action_space.shape)
         m, d = self.model, self.data
         lo, hi = self.kappa_range
         k0 = lo + 0.5 * (a[0] + 1.0) * (hi - lo)

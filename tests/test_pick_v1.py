@@ -2,6 +2,7 @@
 observation is well scaled with no constant or mirrored entries."""
 
 import gymnasium as gym
+import mujoco
 import numpy as np
 import pytest
 
@@ -179,6 +180,30 @@ def test_diverged_physics_raises_physics_error():
         env.step(np.zeros(2))
     env.reset(seed=0)
     env.step(np.zeros(2))
+    env.close()
+
+
+
+@pytest.mark.parametrize("how", ["pickle", "deepcopy"])
+def test_state_check_of_a_copied_env_reads_the_copy(how):
+    import copy
+    import pickle
+
+    from simgrip.sim.checks import PhysicsError, StateCheck, invalid_state
+
+    env = PickEnv()
+    env.reset(seed=0)
+    twin = pickle.loads(pickle.dumps(env)) if how == "pickle" else copy.deepcopy(env)
+    twin.data.qvel[twin.box_dof] = np.nan
+    with pytest.raises(PhysicsError, match="non-finite"):
+        twin.step(np.zeros(2))
+    env.step(np.zeros(2))  # the original's data is untouched
+    check = StateCheck(env.data)
+    assert check() is None
+    env.data.warning[mujoco.mjtWarning.mjWARN_BADQACC].number = 1
+    assert check() == invalid_state(env.data) and "mjWARN_BADQACC" in check()
+    check.clear()
+    assert check() is None and invalid_state(env.data) is None
     env.close()
 
 
