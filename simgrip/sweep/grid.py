@@ -19,7 +19,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from simgrip.chain import check_links
-from simgrip.params import DimensionlessParams, check_grip
+from simgrip.params import DimensionlessParams, _finite, check_grip
 from simgrip.profiles import Uniform
 
 __all__ = ["AXES", "DEFAULTS", "SweepGrid", "SweepPoint", "parse_axis", "make_grid"]
@@ -35,13 +35,8 @@ SWEEP_GRIPS = ("I", "II", "III")
 
 
 def _number(name: str, what: str, value) -> float:
-    try:
-        v = float(value)
-    except (TypeError, ValueError):
-        raise ValueError(f"{name}: {what} must be a number, got {value!r}") from None
-    if not math.isfinite(v):
-        raise ValueError(f"{name}: {what} must be finite, got {value!r}")
-    return v
+    """``value`` as a finite float; ValueError naming the axis and the part (``the value``, ``START``, ...)."""
+    return _finite(f"{name}: {what}", value)
 
 
 def parse_axis(name: str, values) -> tuple[float, ...]:
