@@ -150,6 +150,22 @@ def _within(name: str, value, lo: float, hi: float, why: str = "") -> float:
     return v
 
 
+def _within_reach(b, gamma, length: float, si: bool) -> tuple[float, float]:
+    """``(b, gamma)`` as floats with ``0 < b/2 < length`` and ``0 < gamma < length``, or ``ValueError`` naming one.
+
+    ``si``: the values are in metres and ``length`` is ``l`` [m]; else they are over ``l`` (``length = 1``).
+    """
+    reach, unit = (f"length = {length!r} m", " m") if si else ("l", " (over l)")
+    b = _positive("b", b)
+    if b / 2.0 >= length:
+        raise ValueError(f"b (workpiece width) = {b!r}{unit}: the workpiece is wider than the fingers can reach "
+                         f"(need b/2 < {reach})")
+    gamma = _finite("gamma", gamma)
+    if not 0.0 < gamma < length:
+        raise ValueError(f"gamma (contact arc length) must lie in (0, {reach}), got {gamma!r}{unit}")
+    return b, gamma
+
+
 @dataclass(frozen=True)
 class DimensionlessParams:
     """The paper's dimensionless groups for one finger and its share of the workpiece.
@@ -183,18 +199,10 @@ class DimensionlessParams:
                                               "tolerance; see simgrip.params"))
         object.__setattr__(self, "M", _within("M", _nonnegative("M", self.M), 0.0, M_MAX,
                                               "heavier drowns the rod's weight in round-off; see simgrip.params"))
-        b = _positive("b", self.b)
-        if b / 2.0 >= 1.0:
-            raise ValueError(
-                f"b (workpiece width over finger length) = {b!r}: the workpiece is wider than "
-                "the fingers can reach (need b/2 < l)"
-            )
-        object.__setattr__(self, "b", b)
         object.__setattr__(self, "mu_s", _within("mu_s", _nonnegative("mu_s", self.mu_s), 0.0, MU_MAX,
                                                  "no real material pair; never friction-limited"))
-        gamma = _finite("gamma", self.gamma)
-        if not 0.0 < gamma < 1.0:
-            raise ValueError(f"gamma (contact arc length over l) must lie in (0, 1), got {gamma!r}")
+        b, gamma = _within_reach(self.b, self.gamma, 1.0, si=False)
+        object.__setattr__(self, "b", b)
         object.__setattr__(self, "gamma", gamma)
 
     def replace(self, **changes) -> "DimensionlessParams":
@@ -258,15 +266,8 @@ class PhysicalParams:
             object.__setattr__(self, name, _positive(name, getattr(self, name)))
         object.__setattr__(self, "m", _nonnegative("m", self.m))
         object.__setattr__(self, "mu_s", _nonnegative("mu_s", self.mu_s))
-        b = _positive("b", self.b)
-        if b / 2.0 >= self.length:
-            raise ValueError(
-                f"b = {b!r} m: the workpiece is wider than the fingers can reach (need b/2 < length = {self.length!r} m)"
-            )
+        b, gamma = _within_reach(self.b, self.gamma, self.length, si=True)
         object.__setattr__(self, "b", b)
-        gamma = _finite("gamma", self.gamma)
-        if not 0.0 < gamma < self.length:
-            raise ValueError(f"gamma must lie in (0, length) = (0, {self.length!r}) m, got {gamma!r}")
         object.__setattr__(self, "gamma", gamma)
         try:  # the model's range is stated in dimensionless groups
             self.dimensionless()
