@@ -80,12 +80,7 @@ def settled_record(state, params: DimensionlessParams, profile=None) -> dict:
         "min_eigenvalue": None if profile is None else _stability(state, grip, params, as_profile(profile)),
         "N1": float(state.N1),
         "N2": float(state.N2),
-        "held": bool(state.held),
-        "wall_time_s": float(state.wall_time_s),
-        "steps": int(state.steps),
-        "penetration": float(state.penetration),
-        "residual": float(state.residual),
-        "converged": bool(state.converged),
+        **settle_fields(state),
         "method": state.method,
         "warnings": list(state.warnings),
         "extrapolated": bool(state.extrapolated),
@@ -103,6 +98,18 @@ def settled_record(state, params: DimensionlessParams, profile=None) -> dict:
     elif c is not None:
         rec["contact_moment"] = float(c.moment)
     return rec
+
+
+def settle_fields(state) -> dict:
+    """The fields every simulation record shares: held, wall time [s], steps, penetration [m], residual, converged."""
+    return {
+        "held": bool(state.held),
+        "wall_time_s": float(state.wall_time_s),
+        "steps": int(state.steps),
+        "penetration": float(state.penetration),
+        "residual": float(state.residual),
+        "converged": bool(state.converged),
+    }
 
 
 def reference_for(state, params: DimensionlessParams, profile):

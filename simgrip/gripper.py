@@ -11,6 +11,7 @@ from __future__ import annotations
 
 import math
 
+from simgrip.compare import settle_fields
 from simgrip.params import DimensionlessParams
 from simgrip.profiles import as_profile
 
@@ -98,12 +99,7 @@ def gripper_record(state, params: DimensionlessParams, profile=None) -> dict:
         "min_eigenvalue": None if profile is None else _stability(state, params, as_profile(profile)),
         "N1": float(first.N1) if first else 0.0,
         "N2": float(first.N2) if first else 0.0,
-        "held": bool(state.held),
-        "wall_time_s": float(state.wall_time_s),
-        "steps": int(state.steps),
-        "penetration": float(state.penetration),
-        "residual": float(state.residual),
-        "converged": bool(state.converged),
+        **settle_fields(state),
         "method": "dynamics",
         "warnings": list(state.warnings),
         "extrapolated": False,
