@@ -146,7 +146,7 @@ class PickObservation:
         k0, k1 = kappa.tolist()
         obs = np.empty(self._size)
         n_shape = self._shape_end - 5
-        np.matmul(qpos[self.hinge_qpos].reshape(2, self.n), self._shape_matrix_t,
+        np.dot(qpos[self.hinge_qpos].reshape(2, self.n), self._shape_matrix_t,
                   out=obs[5:self._shape_end].reshape(2, n_shape // 2))
         obs[:5] = (palm_z * inv_l, 2.0 * (c0 - lo) / (hi - lo) - 1.0, 2.0 * (c1 - lo) / (hi - lo) - 1.0,
                    2.0 * (k0 - lo) / (hi - lo) - 1.0, 2.0 * (k1 - lo) / (hi - lo) - 1.0)
