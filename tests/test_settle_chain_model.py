@@ -23,17 +23,21 @@ from simgrip.settle.statics import configure_statics
 H = 1e-6
 
 
-def _perturbed(grip, kappa, n, seed=0):
-    sc = build_scene(grip, STANDARD, Uniform(kappa), n)
+def _perturbed(grip, kappa, n, seed=0, fingers=1):
+    """A scene off equilibrium: link angles and (two fingers) the workpiece's x, z and turn moved."""
+    sc = build_scene(grip, STANDARD, Uniform(kappa), n, fingers=fingers)
     configure_statics(sc)
     cm = ChainModel(sc)
     q = sc.data.qpos.copy()
-    q[cm.jq] += 0.05 * np.random.default_rng(seed).standard_normal(cm.n)
+    rng = np.random.default_rng(seed)
+    q[cm.jq] += 0.05 * rng.standard_normal(cm.n)
+    if cm.nw == 3:
+        q[cm.wq] += 0.02 * rng.standard_normal(3) * cm.wscale
     return sc, cm, q
 
 
 def _x(cm, phi, w):
-    return np.append(phi, w) if cm.nw else phi.copy()
+    return np.append(phi, w)
 
 
 def _fd_check(cm, term_at, x0):
@@ -53,9 +57,10 @@ def _fd_check(cm, term_at, x0):
     np.testing.assert_allclose(Ha, Hfd, atol=1e-7 * max(1.0, np.max(np.abs(Hfd))))
 
 
+@pytest.mark.parametrize("fingers", [1, 2])
 @pytest.mark.parametrize("grip,kappa", [("free", -3.0), ("I", -6.0), ("III", -6.0)])
-def test_forces_equal_mujocos_and_their_jacobian_is_exact(grip, kappa):
-    sc, cm, q = _perturbed(grip, kappa, 12)
+def test_forces_equal_mujocos_and_their_jacobian_is_exact(grip, kappa, fingers):
+    sc, cm, q = _perturbed(grip, kappa, 12, fingers=fingers)
     run = Newton(sc)
     m = sc.model
     flags = int(m.opt.disableflags)
@@ -65,8 +70,7 @@ def test_forces_equal_mujocos_and_their_jacobian_is_exact(grip, kappa):
     phi, w = cm.split(q)
     F, diag, off = cm.internal(phi)
     np.testing.assert_allclose(cm.to_q(F), r[cm.jd], atol=1e-13)
-    if cm.nw:
-        assert cm.workpiece_force() == pytest.approx(r[cm.wd], abs=1e-13)
+    np.testing.assert_allclose(cm.workpiece_force(), r[cm.wd], atol=1e-13)
     J = np.zeros((cm.n, cm.n))
     for k in range(cm.n):
         e = np.zeros(cm.n)
@@ -76,26 +80,29 @@ def test_forces_equal_mujocos_and_their_jacobian_is_exact(grip, kappa):
     np.testing.assert_allclose(T, J, atol=1e-7 * np.max(np.abs(T)))
 
 
+@pytest.mark.parametrize("fingers", [1, 2])
 @pytest.mark.parametrize("grip,kappa", [("I", -6.0), ("III", -6.0), ("III", -4.0)])
-def test_contact_distances_and_their_derivatives(grip, kappa):
-    sc, cm, q = _perturbed(grip, kappa, 12, seed=1)
+def test_contact_distances_and_their_derivatives(grip, kappa, fingers):
+    """Two fingers: the workpiece turned, so the face normals and corners turn (workpiece rows exact too)."""
+    sc, cm, q = _perturbed(grip, kappa, 12, seed=1, fingers=fingers)
     phi, w = cm.split(q)
     run = Newton(sc)
     np.testing.assert_allclose(cm.pair_distances(phi, cm.nodes(phi), w), run._dists(q) / sc.length, atol=1e-14)
     for p in range(len(cm.pairs)):  # interior contacts and end caps alike
         def term_at(x, p=p):
-            ph, ww = x[:cm.n], (x[cm.n] if cm.nw else 0.0)
+            ph, ww = x[:cm.n], x[cm.n:]
             return cm.pair_term(p, ph, cm.nodes(ph), ww)
 
         _fd_check(cm, term_at, _x(cm, phi, w))
 
 
+@pytest.mark.parametrize("fingers", [1, 2])
 @pytest.mark.parametrize("grip,kappa", [("I", -6.0), ("III", -6.0)])
-def test_stick_constraints_and_their_derivatives(grip, kappa):
-    """Sticks (fixed tangent for I/II, turning with the link for III) from a settled grip."""
+def test_stick_constraints_and_their_derivatives(grip, kappa, fingers):
+    """Sticks (tangent turning with the workpiece for I/II, with the link for III) from a settled grip."""
     from simgrip.settle import settle
 
-    sc = build_scene(grip, STANDARD, Uniform(kappa), 12)
+    sc = build_scene(grip, STANDARD, Uniform(kappa), 12, fingers=fingers)
     settle(sc)
     configure_statics(sc)
     run = Newton(sc)
@@ -104,10 +111,12 @@ def test_stick_constraints_and_their_derivatives(grip, kappa):
     cm = ChainModel(sc)
     q = sc.data.qpos.copy()
     q[cm.jq] += 0.01
+    if cm.nw == 3:
+        q[cm.wq] += np.array([0.01, -0.01, 0.03]) * cm.wscale
     phi, w = cm.split(q)
     for s in run.sticks:
         def term_at(x, s=s):
-            ph, ww = x[:cm.n], (x[cm.n] if cm.nw else 0.0)
+            ph, ww = x[:cm.n], x[cm.n:]
             return cm.stick_term(s, ph, cm.nodes(ph), ww)
 
         _fd_check(cm, term_at, _x(cm, phi, w))

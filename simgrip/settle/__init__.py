@@ -1,11 +1,11 @@
 """Drive a scene to static equilibrium, fast, and read the settled state.
 
 :func:`settle` is the entry point.  The default is a static solve of MuJoCo's
-own force balance: for one-finger scenes Newton in the chain's own
-coordinates (:mod:`.chain_newton` on :mod:`.chain_model`: exact forces and
-Jacobian, tridiagonal in the link angles and bordered by the contact and stick
-rows, ``O(n)`` per iteration, :mod:`.banded`), otherwise Newton on MuJoCo's
-finite-difference Jacobian (:mod:`.newton`).  Grips I/II start from the hinge
+own force balance by Newton in the chains' own coordinates
+(:mod:`.chain_newton` on :mod:`.chain_model`: exact forces and Jacobian,
+tridiagonal in the link angles of one or both fingers and bordered by the
+workpiece's dofs and the contact and stick rows, ``O(n)`` per iteration,
+:mod:`.banded`).  Grips I/II start from the hinge
 chain's grip equilibrium and a free finger from its free one (:mod:`.closing`),
 so Newton only polishes.  ``method="dynamics"`` is an over-damped MuJoCo
 simulation (:mod:`.dynamics`); ``target_error`` settles at several resolutions

@@ -1,40 +1,53 @@
-"""The statics of a one-finger scene in the chain's own coordinates, with exact derivatives.
+"""The statics of a one- or two-finger scene in the chains' own coordinates, with exact derivatives.
 
-Unknowns: the link angles ``phi_0 .. phi_{n-1}`` (MuJoCo's hinge angles are
-``q_j = phi_j - phi_{j-1}``) and the workpiece's height ``w`` when it slides in
-``z``.  Everything is dimensionless (lengths over ``l``, forces over ``rho g l``,
-moments over ``rho g l^2``) and read from the compiled model, so it is the
-MuJoCo chain itself, not a copy of the theory:
+Unknowns: the link angles ``phi_0 .. phi_{n-1}`` of each finger, finger after
+finger (MuJoCo's hinge angles are ``q_j = phi_j - phi_{j-1}``), and the
+workpiece's dofs ``y``: its height ``w`` when it slides in ``z`` (one finger,
+the symmetric reduction) or ``(x, z, ry)`` (two fingers: slides over ``l``, the
+turn in radians).  Everything is dimensionless (lengths over ``l``, forces over
+``rho g l``, moments over ``rho g l^2``) and read from the compiled model, so it
+is the MuJoCo chain itself, not a copy of the theory:
 
 * springs ``V_s = sum_j k_j/2 (q_j - r_j)^2`` (``jnt_stiffness``,
   ``qpos_spring``): force ``-dV_s/dphi_i = s_{i+1} - s_i`` with hinge moments
   ``s_j = k_j (q_j - r_j)``; Hessian tridiagonal (``k_i + k_{i+1}`` on the
-  diagonal, ``-k_{i+1}`` beside it);
+  diagonal, ``-k_{i+1}`` beside it), with no coupling between two fingers;
 * gravity ``V_g = sum_k c_k sin(phi_k)`` with ``c_k = g (m_k a_k + ds sum_{i>k}
   m_i)`` (``a_k`` the centre of mass along link ``k``): diagonal Hessian;
 * a generalised force ``Q_q`` on the hinges is ``Q_q_j = sum_{i >= j} F_i`` of the
-  link-angle force ``F`` (``phi = cumsum(q)``); the residual is reported in ``q``.
+  link-angle force ``F`` (``phi = cumsum(q)`` per finger); the residual is reported in ``q``.
+
+Each finger works in its own frame: finger 1 is finger 0 mirrored in ``x``, so
+its links read exactly like finger 0's.  In finger ``f``'s frame (mirror
+``m = +-1``) a workpiece point at body-local ``(a, c)`` sits at ``O + R(alpha)
+(m a, c)`` with ``O = (m (x0 + y_x), z0 + y_z)`` and ``alpha = m y_ry`` (the
+``ry`` hinge turns about ``-y``); ``R`` the rotation, ``perp(u) = (-u_z, u_x)``.
 
 Contact and stick terms are all of one form, ``f = v . (p - c)`` with ``p`` a
 point fixed on link ``i`` (``node_i + a_x t_i + a_z n_i``, ``t_i = (cos, sin)``,
-``n_i = (-sin, cos)``), ``c`` a point on the workpiece (``dc/dw = e_z``) and
-``v`` either fixed in the world or turning with link ``i``.  With
-``dp/dphi_k = ds n_k`` (``k < i``), ``dp/dphi_i = perp(p - node_i)``::
+``n_i = (-sin, cos)``), ``c = O + R(alpha) c_loc`` on the workpiece
+(``dc/dy = dO/dy + dalpha/dy perp(R c_loc)``, ``d2c/dy2 = -dalpha dalpha' R c_loc``)
+and ``v`` turning with link ``i`` (``R(phi_i) v_loc``) or with the workpiece
+(``R(alpha) v_loc``: the box's face normal, a stick's tangent on the box).
+With ``dp/dphi_k = ds n_k`` (``k < i``), ``dp/dphi_i = perp(p - node_i)``::
 
     df/dphi_k = v . ds n_k                (k < i)
-    df/dphi_i = v . perp(p - node_i) [+ perp(v) . (p - c)]
-    df/dw     = -v . e_z
+    df/dphi_i = v . perp(p - node_i) [link v: + perp(v) . (p - c)]
+    df/dy     = -v . dc/dy               [workpiece v: + dalpha/dy perp(v) . (p - c)]
     d2f/dphi_k^2  = -v . ds t_k           (k < i)
-    d2f/dphi_i^2  = -v . (p - node_i)     [turning v: + 2 v.(p - node_i) - v.(p - c)]
-    d2f/dphi_k dphi_i = perp(v) . ds n_k, d2f/dphi_i dw = -perp(v) . e_z   (turning v only)
+    d2f/dphi_i^2  = -v . (p - node_i)     [link v: + 2 v.(p - node_i) - v.(p - c)]
 
-so its Hessian is a diagonal plus an "arrow" on index ``i``, written as the
-rank-2 term ``U S U'`` with ``U = [e_i, h]``, ``S = [[0, 1], [1, 0]]``.  A
-capsule end cap (Grip III corner beyond a node) is ``f = |c - p|``: gradient
-``e . de/dx``, Hessian ``(1/|e|) u u' + diag(e . d2e)`` with ``u = e_perp . de/dx``.
-These are the sphere--face (Grips I/II) and capsule--capsule (Grip III)
-distances of MuJoCo's collision functions, and the sticking constraints of
-:class:`~simgrip.settle.statics.Stick`.
+The rest of the Hessian is low rank (``U S U'``, rank <= 3).  Link ``v``: an
+"arrow" on index ``i`` (``d2f/dphi_k dphi_i = perp(v) . ds n_k``, ``d2f/dphi_i dy
+= -perp(v) . dc/dy``) plus ``d2f/dy2 = (v . R c_loc) dalpha dalpha'``:
+``U = [e_i, h, dalpha]``.  Workpiece ``v``: ``d2f/dphi_k dy = dalpha_y perp(v) .
+dp/dphi_k``, ``d2f/dy2 = -(v . (p - O)) dalpha dalpha' - (dalpha w' + w dalpha')``
+(``w = perp(v) . dO/dy``): ``U = [g, dalpha]`` with ``g = (perp(v) . dp/dphi, -w)``.
+A capsule end cap (Grip III corner beyond a node) is ``f = |c - p|``: gradient
+``e . de/dx``, Hessian ``(1/|e|) u u' + diag(e . d2e) - (e . R c_loc) dalpha dalpha'``
+with ``u = e_perp . de/dx``.  These are the sphere--face (Grips I/II) and
+capsule--capsule (Grip III) distances of MuJoCo's collision functions, and the
+sticking constraints of :class:`~simgrip.settle.statics.Stick`.
 """
 
 from __future__ import annotations
@@ -49,11 +62,13 @@ from simgrip.sim.scene import Scene
 
 __all__ = ["ChainModel", "Term", "eligible", "gravity_factor", "model_gravity"]
 
-_EZ = np.array([0.0, 1.0])
-
-
 def _perp(v):
     return np.array([-v[1], v[0]])
+
+
+def _rot(a) -> np.ndarray:
+    c, s = math.cos(a), math.sin(a)
+    return np.array([[c, -s], [s, c]])
 
 
 def model_gravity(m) -> float:
@@ -74,13 +89,13 @@ def gravity_factor(scene: Scene) -> float:
 
 
 def eligible(scene: Scene) -> bool:
-    """The chain-coordinate solve covers one-finger scenes whose workpiece slides in z or is fixed."""
-    return scene.fingers == 1 and tuple(scene.workpiece_joints) in ((), ("z",)) and scene.mirror[0] == 1.0
+    """The chain-coordinate solve covers one- and two-finger scenes (workpiece fixed, in ``z``, or ``x, z, ry``)."""
+    return tuple(scene.workpiece_joints) in ((), ("z",), ("x", "z", "ry")) and scene.mirror[0] == 1.0
 
 
 @dataclass
 class Term:
-    """A scalar function of ``x = (phi, w)``: value, gradient, diagonal + low-rank Hessian."""
+    """A scalar function of ``x = (phi, y)``: value, gradient, diagonal + low-rank Hessian."""
 
     value: float
     grad: np.ndarray  # (n + nw,)
@@ -89,82 +104,119 @@ class Term:
     S: np.ndarray  # (r, r)
 
 
+_SWAP = np.array([[0.0, 1.0], [1.0, 0.0]])
+
+
 class ChainModel:
-    """Analytic statics of a one-finger scene (see the module docstring)."""
+    """Analytic statics of a one- or two-finger scene (see the module docstring)."""
 
     def __init__(self, scene: Scene):
         m = scene.model
         self.scene, self.m = scene, m
         L, W = scene.length, scene.force_scale
         self.L, self.W = L, W
-        n = scene.n
-        self.n = n
-        self.jq = np.asarray(scene.joint_qpos[0], int)
-        self.jd = np.asarray(scene.joint_dof[0], int)
+        self.fingers = nf = scene.fingers
+        self.nl = nl = scene.n
+        self.n = n = nf * nl  #: all link angles, finger after finger
+        self.jq = np.asarray(scene.joint_qpos, int).reshape(-1)
+        self.jd = np.asarray(scene.joint_dof, int).reshape(-1)
         self.k = m.jnt_stiffness[m.dof_jntid[self.jd]] / (W * L)
-        bodies = np.asarray(scene.link_body[0], int)
-        self.link_index = {int(b): i for i, b in enumerate(bodies)}
-        self.ds = float(m.body_pos[bodies[1]][0]) / L
+        bodies = np.asarray(scene.link_body, int).reshape(nf, nl)
+        self.link_index = {int(b): (f, i) for f in range(nf) for i, b in enumerate(bodies[f])}
+        self.mir = np.asarray(scene.mirror, float)
+        self.ds = float(m.body_pos[bodies[0, 1]][0]) / L
         g = model_gravity(m)
-        mass = m.body_mass[bodies]
-        arm = m.body_ipos[bodies][:, 0] / L
-        beyond = np.concatenate([np.cumsum(mass[::-1])[::-1][1:], [0.0]])
-        self.c = g * (mass * arm + self.ds * beyond) * L / (W * L)
-        self.nw = 1 if tuple(scene.workpiece_joints) == ("z",) else 0
-        self.wq = int(scene.workpiece_qpos[0]) if self.nw else -1
-        self.wd = int(scene.workpiece_dof[0]) if self.nw else -1
+        c = []
+        for f in range(nf):
+            mass = m.body_mass[bodies[f]]
+            arm = m.body_ipos[bodies[f]][:, 0] / L
+            beyond = np.concatenate([np.cumsum(mass[::-1])[::-1][1:], [0.0]])
+            c.append(g * (mass * arm + self.ds * beyond) / W)
+        self.c = np.concatenate(c)
+        self.first = np.zeros(n, bool)
+        self.first[::nl] = True
+        self.last = np.zeros(n, bool)
+        self.last[nl - 1::nl] = True
+        self.wnames = tuple(scene.workpiece_joints)
+        self.nw = len(self.wnames)
+        self.wq = np.asarray(scene.workpiece_qpos, int)
+        self.wd = np.asarray(scene.workpiece_dof, int)
         self.weight = float(m.body_mass[scene.workpiece_body]) * g / W if scene.has_workpiece else 0.0
+        #: the workpiece dofs' scale: slides over l, the hinge in radians
+        self.wscale = np.array([1.0 if nm == "ry" else L for nm in self.wnames])
+        if scene.has_workpiece:
+            p = m.body_pos[scene.workpiece_body] / L
+            self.w0 = np.array([p[0], p[2]])
         self.pairs = [(int(m.pair_geom1[i]), int(m.pair_geom2[i])) for i in range(m.npair)]
-        #: for each pair: (link index of geom1, is the tip sphere) and the radii to subtract
+        #: for each pair: (finger, link index of geom1, is the tip sphere) and the radii to subtract
         self.pair_link, self.radius = [], []
         for g1, g2 in self.pairs:
             sphere = int(m.geom_type[g1]) == int(mujoco.mjtGeom.mjGEOM_SPHERE)
-            self.pair_link.append((self.link_index[int(m.geom_bodyid[g1])], sphere))
+            self.pair_link.append((*self.link_index[int(m.geom_bodyid[g1])], sphere))
             self.radius.append((m.geom_size[g1][0] + (0.0 if sphere else m.geom_size[g2][0])) / L)
 
     # -- kinematics -------------------------------------------------------------
-    def split(self, q) -> tuple[np.ndarray, float]:
-        """Link angles and the workpiece height coordinate (over l) from MuJoCo's ``qpos``."""
-        phi = np.cumsum(np.asarray(q)[self.jq])
-        w = float(q[self.wq]) / self.L if self.nw else 0.0
-        return phi, w
+    def split(self, q) -> tuple[np.ndarray, np.ndarray]:
+        """Link angles (finger after finger) and the workpiece dofs (slides over l, hinge in rad) from ``qpos``."""
+        phi = np.cumsum(np.asarray(q)[self.jq].reshape(self.fingers, self.nl), axis=1).reshape(-1)
+        return phi, np.asarray(q)[self.wq] / self.wscale
 
-    def join(self, q, phi, w) -> np.ndarray:
-        """``q`` with the link angles ``phi`` and the workpiece height ``w`` (over l) written in."""
+    def join(self, q, phi, y) -> np.ndarray:
+        """``q`` with the link angles ``phi`` and the workpiece dofs ``y`` written in."""
         qq = np.array(q, dtype=float)
-        qq[self.jq] = np.diff(phi, prepend=0.0)
+        qq[self.jq] = np.diff(np.asarray(phi).reshape(self.fingers, self.nl), axis=1, prepend=0.0).reshape(-1)
         if self.nw:
-            qq[self.wq] = w * self.L
+            qq[self.wq] = np.atleast_1d(y) * self.wscale
         return qq
 
     def nodes(self, phi) -> np.ndarray:
-        ds = self.ds
-        return np.vstack([np.zeros(2), np.cumsum(ds * np.stack([np.cos(phi), np.sin(phi)], 1), 0)])
+        """Nodes (x, z) over l of every finger in its own frame (finger 1 mirrored in x): (fingers, nl + 1, 2)."""
+        ph = np.asarray(phi).reshape(self.fingers, self.nl)
+        seg = self.ds * np.stack([np.cos(ph), np.sin(ph)], 2)
+        return np.concatenate([np.zeros((self.fingers, 1, 2)), np.cumsum(seg, 1)], 1)
 
-    def workpiece_origin(self, w) -> np.ndarray:
-        """World (x, z) over l of the workpiece body at height coordinate ``w``."""
-        sc = self.scene
-        p = self.m.body_pos[sc.workpiece_body] / self.L
-        return np.array([p[0], p[2] + w])
+    def pose(self, f, y):
+        """Workpiece origin ``O`` and angle ``alpha`` in finger ``f``'s frame, and their derivatives in ``y``.
 
-    def geom_point(self, g, w) -> np.ndarray:
-        """Centre (x, z) over l of a workpiece geom (the body does not turn)."""
-        gp = self.m.geom_pos[g] / self.L
-        return self.workpiece_origin(w) + np.array([gp[0], gp[2]])
+        Returns ``O (2,)``, ``alpha``, ``dO (nw, 2)``, ``dalpha (nw,)``.  A body point
+        at local ``(a, c)`` sits at ``O + R(alpha) (m a, c)`` (``m`` the finger's mirror).
+        """
+        mf = self.mir[f]
+        y = np.atleast_1d(np.asarray(y, float))
+        O = np.array([mf * self.w0[0], self.w0[1]])
+        alpha = 0.0
+        dO = np.zeros((self.nw, 2))
+        da = np.zeros(self.nw)
+        for j, nm in enumerate(self.wnames):
+            if nm == "x":
+                O[0] += mf * y[j]
+                dO[j, 0] = mf
+            elif nm == "z":
+                O[1] += y[j]
+                dO[j, 1] = 1.0
+            else:  # hinge about -y: turns (x, z) counter-clockwise by y in the world, mirrored in the finger's frame
+                alpha = mf * y[j]
+                da[j] = mf
+        return O, alpha, dO, da
+
+    def local(self, f, v3) -> np.ndarray:
+        """A workpiece-local 3-vector (x, y, z) as the finger frame's unturned (x, z) over 1."""
+        return np.array([self.mir[f] * v3[0], v3[2]])
 
     # -- internal forces --------------------------------------------------------
     def internal(self, phi) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-        """Spring and gravity force on the link angles, and its tridiagonal Jacobian (diag, off)."""
-        q = np.diff(phi, prepend=0.0)
-        s = self.k * (q - self.m.qpos_spring[self.jq])
-        F = np.append(s[1:], 0.0) - s - self.c * np.cos(phi)
-        kk = np.append(self.k[1:], 0.0)
+        """Spring and gravity force on the link angles, and its tridiagonal Jacobian (diag, off; 0 between fingers)."""
+        q = np.where(self.first, phi, phi - np.roll(phi, 1))
+        s = self.k * (q - self.m.qpos_spring[self.jq])  # read each time: the rest angles are edited
+        sn = np.where(self.last, 0.0, np.roll(s, -1))
+        kk = np.where(self.last, 0.0, np.roll(self.k, -1))
+        F = sn - s - self.c * np.cos(phi)
         diag = -(self.k + kk) + self.c * np.sin(phi)
-        off = self.k[1:].copy()
+        off = kk[:-1].copy()
         return F, diag, off
 
     def free_equilibrium(self, phi0, tol: float = 1e-12, max_iter: int = 50):
-        """The finger alone (no contact) at equilibrium, by Newton from ``phi0``; None if it fails.
+        """The fingers alone (no contact) at equilibrium, by Newton from ``phi0``; None if it fails.
 
         The tridiagonal Jacobian of :meth:`internal` is exact, so a start near the
         equilibrium (e.g. the grip's shape) converges in a few ``O(n)`` steps; a
@@ -197,123 +249,164 @@ class ChainModel:
             phi, F, diag, off, res = phi + step * d, Fn, dn, on, rn
         return phi if res < tol else None
 
-    def workpiece_force(self) -> float:
-        """Weight plus applied force on the workpiece's z dof (0 without one)."""
-        if not self.nw:
-            return 0.0
-        return -self.weight + float(self.scene.data.qfrc_applied[self.wd]) / self.W
+    def workpiece_force(self) -> np.ndarray:
+        """Weight plus applied force (moment for ``ry``) on each workpiece dof (over rho g l, rho g l^2)."""
+        out = np.zeros(self.nw)
+        qa = self.scene.data.qfrc_applied
+        for j, nm in enumerate(self.wnames):
+            out[j] = float(qa[self.wd[j]]) / (self.W * (self.L if nm == "ry" else 1.0))
+            if nm == "z":
+                out[j] -= self.weight
+        return out
 
     def to_q(self, F) -> np.ndarray:
-        """Link-angle force -> hinge force (suffix sums)."""
-        return np.cumsum(F[::-1])[::-1]
+        """Link-angle force -> hinge force (suffix sums within each finger)."""
+        return np.cumsum(np.asarray(F).reshape(self.fingers, self.nl)[:, ::-1], axis=1)[:, ::-1].reshape(-1)
 
     # -- terms ------------------------------------------------------------------
-    def dot_term(self, phi, nodes, i, p, c, v, turning: bool) -> Term:
-        """``f = v . (p - c)``: ``p`` on link ``i``, ``c`` on the workpiece, ``v`` fixed or turning with link ``i``."""
-        n, nw, ds = self.n, self.nw, self.ds
-        nk = np.stack([-np.sin(phi[:i]), np.cos(phi[:i])], 1)
-        tk = np.stack([np.cos(phi[:i]), np.sin(phi[:i])], 1)
-        rel = p - nodes[i]
-        grad = np.zeros(n + nw)
-        grad[:i] = ds * (nk @ v)
-        grad[i] = float(v @ _perp(rel))
-        diag = np.zeros(n)
-        diag[:i] = -ds * (tk @ v)
-        diag[i] = -float(v @ rel)
-        if nw:
-            grad[n] = -float(v[1])
-        if not turning:
-            return Term(float(v @ (p - c)), grad, diag, np.zeros((n + nw, 0)), np.zeros((0, 0)))
-        pv = _perp(v)
-        grad[i] += float(pv @ (p - c))
-        diag[i] += 2.0 * float(v @ rel) - float(v @ (p - c))
-        h = np.zeros(n + nw)
-        h[:i] = ds * (nk @ pv)
-        if nw:
-            h[n] = -float(pv[1])
-        U = np.zeros((n + nw, 2))
-        U[i, 0] = 1.0
-        U[:, 1] = h
-        return Term(float(v @ (p - c)), grad, diag, U, np.array([[0.0, 1.0], [1.0, 0.0]]))
+    def _link(self, phi, f, i):
+        """Global index of link ``i`` of finger ``f`` and its predecessors' normals and tangents."""
+        g0 = f * self.nl
+        ph = phi[g0:g0 + i]
+        return g0, np.stack([-np.sin(ph), np.cos(ph)], 1), np.stack([np.cos(ph), np.sin(ph)], 1)
 
-    def norm_term(self, phi, nodes, i, p, c) -> Term:
-        """``f = |c - p|``: ``p`` on link ``i``, ``c`` on the workpiece."""
+    def dot_term(self, phi, nodes, f, i, p, c_loc, y, v_loc, kind: str) -> Term:
+        """``f = v . (p - c)``: ``p`` on link ``i`` of finger ``f``, ``c = O + R(alpha) c_loc`` on the workpiece.
+
+        ``kind``: ``"link"`` (``v = R(phi_i) v_loc`` turns with the link) or
+        ``"work"`` (``v = R(alpha) v_loc`` turns with the workpiece).
+        """
         n, nw, ds = self.n, self.nw, self.ds
-        e = c - p
+        O, alpha, dO, da = self.pose(f, y)
+        Rc = _rot(alpha) @ c_loc
+        c = O + Rc
+        dc = dO + da[:, None] * _perp(Rc)[None, :]
+        g0, nk, tk = self._link(phi, f, i)
+        gi = g0 + i
+        rel = p - nodes[f, i]
+        v = (_rot(phi[gi]) if kind == "link" else _rot(alpha)) @ v_loc
+        pv = _perp(v)
+        grad = np.zeros(n + nw)
+        grad[g0:gi] = ds * (nk @ v)
+        grad[gi] = float(v @ _perp(rel))
+        grad[n:] = -(dc @ v)
+        diag = np.zeros(n)
+        diag[g0:gi] = -ds * (tk @ v)
+        diag[gi] = -float(v @ rel)
+        value = float(v @ (p - c))
+        if kind == "link":
+            grad[gi] += float(pv @ (p - c))
+            diag[gi] += 2.0 * float(v @ rel) - float(v @ (p - c))
+            U = np.zeros((n + nw, 3))
+            U[gi, 0] = 1.0
+            U[g0:gi, 1] = ds * (nk @ pv)
+            U[n:, 1] = -(dc @ pv)
+            U[n:, 2] = da
+            S = np.array([[0.0, 1.0, 0.0], [1.0, 0.0, 0.0], [0.0, 0.0, float(v @ Rc)]])
+            return Term(value, grad, diag, U, S)
+        if not np.any(da):
+            return Term(value, grad, diag, np.zeros((n + nw, 0)), np.zeros((0, 0)))
+        grad[n:] += da * float(pv @ (p - c))
+        U = np.zeros((n + nw, 2))
+        U[g0:gi, 0] = ds * (nk @ pv)
+        U[gi, 0] = float(pv @ _perp(rel))
+        U[n:, 0] = -(dO @ pv)
+        U[n:, 1] = da
+        S = np.array([[0.0, 1.0], [1.0, -float(v @ (p - O))]])
+        return Term(value, grad, diag, U, S)
+
+    def norm_term(self, phi, nodes, f, i, p, c_loc, y) -> Term:
+        """``f = |c - p|``: ``p`` on link ``i`` of finger ``f``, ``c = O + R(alpha) c_loc`` on the workpiece."""
+        n, nw, ds = self.n, self.nw, self.ds
+        O, alpha, dO, da = self.pose(f, y)
+        Rc = _rot(alpha) @ c_loc
+        e = O + Rc - p
         rho = float(np.hypot(*e))
         eh = e / rho
         ep = _perp(eh)
-        nk = np.stack([-np.sin(phi[:i]), np.cos(phi[:i])], 1)
-        tk = np.stack([np.cos(phi[:i]), np.sin(phi[:i])], 1)
-        rel = p - nodes[i]
+        g0, nk, tk = self._link(phi, f, i)
+        gi = g0 + i
+        rel = p - nodes[f, i]
         de = np.zeros((n + nw, 2))  # d e / d x
-        de[:i] = -ds * nk
-        de[i] = -_perp(rel)
-        if nw:
-            de[n] = _EZ
+        de[g0:gi] = -ds * nk
+        de[gi] = -_perp(rel)
+        de[n:] = dO + da[:, None] * _perp(Rc)[None, :]
         diag = np.zeros(n)
-        diag[:i] = ds * (tk @ eh)
-        diag[i] = float(eh @ rel)
-        return Term(rho, de @ eh, diag, (de @ ep)[:, None], np.array([[1.0 / rho]]))
+        diag[g0:gi] = ds * (tk @ eh)
+        diag[gi] = float(eh @ rel)
+        U = np.zeros((n + nw, 2))
+        U[:, 0] = de @ ep
+        U[n:, 1] = da
+        return Term(rho, de @ eh, diag, U, np.array([[1.0 / rho, 0.0], [0.0, -float(eh @ Rc)]]))
 
     # -- contacts ---------------------------------------------------------------
-    def pair_term(self, p, phi, nodes, w) -> Term:
+    def _geom_local(self, f, g) -> np.ndarray:
+        return self.local(f, self.m.geom_pos[g] / self.L)
+
+    def pair_term(self, p, phi, nodes, y) -> Term:
         """Signed distance of contact pair ``p`` (MuJoCo's geometry) as a :class:`Term`."""
-        i, sphere = self.pair_link[p]
+        f, i, sphere = self.pair_link[p]
         g1, g2 = self.pairs[p]
         R = self.radius[p]
-        if sphere:  # tip sphere on the box's outer face x = face (box not turning)
-            c = self.geom_point(g2, w)
-            face = c[0] + self.m.geom_size[g2][0] / self.L
-            t = self.dot_term(phi, nodes, i, nodes[i + 1], np.array([face, 0.0]), np.array([1.0, 0.0]), False)
+        c_loc = self._geom_local(f, g2)
+        if sphere:  # tip sphere on the box's outer face (turning with the workpiece)
+            face = c_loc + np.array([self.m.geom_size[g2][0] / self.L, 0.0])
+            t = self.dot_term(phi, nodes, f, i, nodes[f, i + 1], face, y, np.array([1.0, 0.0]), "work")
             t.value -= R
             return t
-        c = self.geom_point(g2, w)  # corner capsule axis (along y)
-        a, b = nodes[i], nodes[i + 1]
-        tvec = np.array([math.cos(phi[i]), math.sin(phi[i])])
+        O, alpha, _, _ = self.pose(f, y)  # corner capsule axis (along y)
+        c = O + _rot(alpha) @ c_loc
+        a, b = nodes[f, i], nodes[f, i + 1]
+        gi = f * self.nl + i
+        tvec = np.array([math.cos(phi[gi]), math.sin(phi[gi])])
         u = float((c - a) @ tvec)
         if u <= 0.0 or u >= self.ds:
-            t = self.norm_term(phi, nodes, i, a if u <= 0.0 else b, c)
+            t = self.norm_term(phi, nodes, f, i, a if u <= 0.0 else b, c_loc, y)
         else:
-            nvec = _perp(tvec)
-            sigma = 1.0 if float((c - a) @ nvec) >= 0.0 else -1.0
-            t = self.dot_term(phi, nodes, i, a, c, -sigma * nvec, True)
+            sigma = 1.0 if float((c - a) @ _perp(tvec)) >= 0.0 else -1.0
+            t = self.dot_term(phi, nodes, f, i, a, c_loc, y, np.array([0.0, -sigma]), "link")
         t.value -= R
         return t
 
-    def pair_distances(self, phi, nodes, w) -> np.ndarray:
+    def pair_distances(self, phi, nodes, y) -> np.ndarray:
         """All pairs' signed distances (vectorised; same geometry as :meth:`pair_term`)."""
         if not self.pairs:
             return np.zeros(0)
         if not hasattr(self, "_pl"):
             m, L = self.m, self.L
-            self._pl = np.array([i for i, _ in self.pair_link])
-            self._sph = np.array([sp for _, sp in self.pair_link])
-            g2 = np.array([g for _, g in self.pairs])
-            self._gp = np.stack([m.geom_pos[g2][:, 0], m.geom_pos[g2][:, 2]], 1) / L
-            self._hx = m.geom_size[g2][:, 0] / L
+            self._pf = np.array([f for f, _, _ in self.pair_link])
+            self._pl = np.array([i for _, i, _ in self.pair_link])
+            self._sph = np.array([sp for _, _, sp in self.pair_link])
+            self._gl = np.array([self._geom_local(f, g) for (f, _, _), (_, g) in zip(self.pair_link, self.pairs)])
+            self._hx = np.array([m.geom_size[g][0] / L for _, g in self.pairs])
             self._rad = np.array(self.radius)
-        c = self.workpiece_origin(w)[None, :] + self._gp
-        a, b = nodes[self._pl], nodes[self._pl + 1]
+        O = np.empty((len(self.pairs), 2))
+        A = np.empty(len(self.pairs))
+        for f in range(self.fingers):
+            Of, af, _, _ = self.pose(f, y)
+            O[self._pf == f], A[self._pf == f] = Of, af
+        ca, sa = np.cos(A), np.sin(A)
+        rot = lambda u: np.stack([ca * u[:, 0] - sa * u[:, 1], sa * u[:, 0] + ca * u[:, 1]], 1)  # noqa: E731
+        c = O + rot(self._gl)
+        a, b = nodes[self._pf, self._pl], nodes[self._pf, self._pl + 1]
         seg = b - a
         u = np.clip(np.einsum("ij,ij->i", c - a, seg) / np.einsum("ij,ij->i", seg, seg), 0.0, 1.0)
         caps = np.hypot(*(c - a - u[:, None] * seg).T) - self._rad
-        face = b[:, 0] - (c[:, 0] + self._hx) - self._rad  # tip sphere (the end of its link) on the face
+        nrm = np.stack([ca, sa], 1)  # the face normal, turned with the workpiece
+        face = np.einsum("ij,ij->i", nrm, b - O) - (np.einsum("ij,ij->i", nrm, rot(self._gl)) + self._hx) - self._rad
         return np.where(self._sph, face, caps)
 
-    def stick_term(self, s, phi, nodes, w) -> Term:
+    def stick_term(self, s, phi, nodes, y) -> Term:
         """Sticking constraint ``t . (p_f - p_w) + offset`` (over l) of a :class:`Stick`."""
-        i = self.link_index[s.body_f]
+        f, i = self.link_index[s.body_f]
         L = self.L
-        ti = np.array([math.cos(phi[i]), math.sin(phi[i])])
-        ni = _perp(ti)
-        pf = nodes[i] + (s.local_f[0] * ti + s.local_f[2] * ni) / L
-        pw = self.workpiece_origin(w) + np.array([s.local_w[0], s.local_w[2]]) / L
-        turning = s.t_body == s.body_f
-        if turning:
-            v = s.t_local[0] * ti + s.t_local[2] * ni
+        gi = f * self.nl + i
+        ti = np.array([math.cos(phi[gi]), math.sin(phi[gi])])
+        pf = nodes[f, i] + (s.local_f[0] * ti + s.local_f[2] * _perp(ti)) / L
+        pw_loc = self.local(f, s.local_w / L)
+        if s.t_body == s.body_f:
+            t = self.dot_term(phi, nodes, f, i, pf, pw_loc, y, np.array([s.t_local[0], s.t_local[2]]), "link")
         else:
-            v = np.array([s.t_local[0], s.t_local[2]])
-        t = self.dot_term(phi, nodes, i, pf, pw, v, turning)
+            t = self.dot_term(phi, nodes, f, i, pf, pw_loc, y, self.local(f, s.t_local), "work")
         t.value += s.offset / L
         return t

@@ -6,6 +6,9 @@ iteration runs on :class:`~simgrip.settle.chain_model.ChainModel`: the forces
 and their exact Jacobian in link angles (tridiagonal), bordered by the
 workpiece dof, the contact and stick rows and the auxiliary unknowns of the
 low-rank constraint curvature, solved by :func:`~simgrip.settle.banded.solve_bordered`.
+Two fingers stack their link angles into one tridiagonal (no coupling between
+the fingers) and share the border: the workpiece's ``x, z, ry`` and both
+fingers' contact and stick rows.
 Contact rows are ``dist + N / K_c = 0`` (length units); the line search and
 the convergence test use the residual in MuJoCo's dofs (hinge moments are
 suffix sums of the link-angle forces).
@@ -43,7 +46,7 @@ CHAIN_FLOOR_ULPS = 2.0
 
 
 class ChainNewton(Newton):
-    """:class:`Newton` with the inner iteration in link angles (one-finger scenes, see ``eligible``)."""
+    """:class:`Newton` with the inner iteration in link angles (one- and two-finger scenes, see ``eligible``)."""
 
     def __init__(self, scene: Scene):
         super().__init__(scene, scene.data)  # the scene's own MjData as scratch (the solve owns its state)
@@ -100,10 +103,11 @@ class ChainNewton(Newton):
     def _system(self, phi, w, N, lam, stick_act, with_jacobian: bool):
         """Residual pieces (and the bordered Jacobian) at ``(phi, w)`` for the current sets."""
         cm = self.model
-        n, nw = cm.n, self.nw_free
+        n, yf = cm.n, self.yf
+        nw = yf.size
         nodes = cm.nodes(phi)
         F, diag, off = cm.internal(phi)
-        Fw = cm.workpiece_force()
+        Fw = cm.workpiece_force()[yf]
         act = self.normal_active
         pterms = [cm.pair_term(p, phi, nodes, w) for p in act]
         sterms = [cm.stick_term(s, phi, nodes, w) for s in self.sticks] if self.sticks else []
@@ -122,13 +126,13 @@ class ChainNewton(Newton):
                 coef.append((sterms[i], sign * mu[i] * N[k]))
         for t, c in coef:
             F = F + c * t.grad[:n]
-            Fw = Fw + (c * t.grad[n] if cm.nw else 0.0)
+            Fw = Fw + c * t.grad[n:][yf]
         gn = np.array([t.value + self.dist_shift[p] + N[k] / self.kc_dl[p] for k, (t, p) in enumerate(zip(pterms, act))])
         gs = np.array([sterms[i].value for i in stick_act])
-        R = np.concatenate([cm.to_q(F), [Fw] if nw else [], gn, gs])
+        R = np.concatenate([cm.to_q(F), Fw, gn, gs])
         if not with_jacobian:
             return R, None
-        # border: [w (nw), aux z (sum of ranks), N (len act), lambda (len stick_act)]
+        # border: [free workpiece dofs (nw), aux z (sum of ranks), N (len act), lambda (len stick_act)]
         for t, c in coef:
             diag = diag + c * t.diag
         ranks = [t.S.shape[0] for t, _ in coef]
@@ -143,35 +147,31 @@ class ChainNewton(Newton):
                 P[:, col:col + r] = c * t.U[:n]
                 Q[col:col + r] = t.S @ t.U[:n].T
                 E[col:col + r, col:col + r] = -np.eye(r)
-                if nw:
-                    E[0, col:col + r] = c * t.U[n]
-                    E[col:col + r, 0] = t.S @ t.U[n]
+                Uy = t.U[n:][yf]
+                E[:nw, col:col + r] = c * Uy
+                E[col:col + r, :nw] = t.S @ Uy.T
             col += r
         for j, t in enumerate(pterms):
             a = nw + nz + j
             P[:, a] = t.grad[:n]
             Q[a] = t.grad[:n]
             E[a, a] = 1.0 / self.kc_dl[act[j]]
-            if nw:
-                E[0, a] = t.grad[n]
-                E[a, 0] = t.grad[n]
+            E[:nw, a] = t.grad[n:][yf]
+            E[a, :nw] = t.grad[n:][yf]
         for t, kk, smu in slide:
             a = nw + nz + kk
             P[:, a] += smu * t.grad[:n]
-            if nw:
-                E[0, a] += smu * t.grad[n]
+            E[:nw, a] += smu * t.grad[n:][yf]
         for j, i in enumerate(stick_act):
             a = nw + nz + nn + j
             t = sterms[i]
             P[:, a] = t.grad[:n]
             Q[a] = t.grad[:n]
-            if nw:
-                E[0, a] = t.grad[n]
-                E[a, 0] = t.grad[n]
+            E[:nw, a] = t.grad[n:][yf]
+            E[a, :nw] = t.grad[n:][yf]
         rhs_phi = -F
         rhs_b = np.zeros(k)
-        if nw:
-            rhs_b[0] = -Fw
+        rhs_b[:nw] = -Fw
         rhs_b[nw + nz:nw + nz + nn] = -gn
         rhs_b[nw + nz + nn:] = -gs
         return R, (diag, off, P, Q, E, rhs_phi, rhs_b, nz)
@@ -179,8 +179,9 @@ class ChainNewton(Newton):
     def _step(self, jac):
         diag, off, P, Q, E, r1, r2, nz = jac
         dphi, y = solve_bordered(diag, off, P, Q, E, r1, r2)
-        nw = self.nw_free
-        dw = float(y[0]) if nw else 0.0
+        nw = self.yf.size
+        dw = np.zeros(self.model.nw)
+        dw[self.yf] = y[:nw]
         nn = len(self.normal_active)
         return dphi, dw, y[nw + nz:nw + nz + nn], y[nw + nz + nn:]
 
@@ -189,7 +190,8 @@ class ChainNewton(Newton):
         sc = self.scene
         m = sc.model
         cm = self.model
-        self.nw_free = 1 if (cm.nw and cm.wd in set(int(i) for i in idx)) else 0
+        free = set(int(i) for i in idx)
+        self.yf = np.array([j for j in range(cm.nw) if int(cm.wd[j]) in free], dtype=int)  # free workpiece dofs
         L, W = sc.length, sc.force_scale
         self.kc_dl = self.kc * L / W
         N = self.N.copy() / W
@@ -198,7 +200,7 @@ class ChainNewton(Newton):
             self.lam = np.zeros(len(self.sticks))
         lam = self.lam[stick_act].copy() / W
         phi, w = cm.split(q)
-        nf = cm.n + self.nw_free
+        nf = cm.n + self.yf.size
         def read_kc(ph, ww):  # MuJoCo's contact stiffness at an accepted state (one mj_inverse)
             if contacts and self.normal_active:
                 self._update_kc(cm.join(q, ph, ww))
@@ -233,7 +235,7 @@ class ChainNewton(Newton):
                 if polished or res_c < max(tol, CHAIN_FLOOR_ULPS / FLOOR_ULPS * self.noise_floor()):
                     break
                 polished = True
-            if contacts and self.nw_free and not self.normal_active and abs(cm.workpiece_force()) > 0.0:
+            if contacts and self.yf.size and not self.normal_active and np.any(cm.workpiece_force()[self.yf] != 0.0):
                 # a free workpiece with no contact left carries its weight alone: no equilibrium (a drop)
                 return finish(False, "stalled", state_q(phi, w), N, lam)
             if self.iterations >= max_iter:
@@ -287,15 +289,15 @@ class ChainNewton(Newton):
         otherwise spend itself on the whole load.  Normal forces are kept >= 0.
         """
         cm = self.model
-        n, nw = cm.n, self.nw_free
+        n, yf = cm.n, self.yf
         nodes = cm.nodes(phi)
         F, _, _ = cm.internal(phi)
-        b = np.concatenate([cm.to_q(F), [cm.workpiece_force()] if nw else []])
+        b = np.concatenate([cm.to_q(F), cm.workpiece_force()[yf]])
         cols = [cm.pair_term(p, phi, nodes, w).grad for p in self.normal_active]
         cols += [cm.stick_term(self.sticks[i], phi, nodes, w).grad for i in stick_act]
         if not cols:
             return N, lam
-        A = np.stack([np.concatenate([cm.to_q(c[:n]), c[n:n + nw]]) for c in cols], 1)
+        A = np.stack([np.concatenate([cm.to_q(c[:n]), c[n:][yf]]) for c in cols], 1)
         x, *_ = np.linalg.lstsq(A, -b, rcond=1e-12)
         nn = len(self.normal_active)
         if not np.all(np.isfinite(x)) or np.any(x[:nn] < 0.0):

@@ -173,7 +173,8 @@ def start_on_chain(scene: Scene, run: Newton | None) -> bool | None:
         # the free finger's equilibrium next to the grip's: Newton in link angles when the solve has the
         # chain model (O(n), from the grip shape), else the chain solver
         model = getattr(run, "model", None)
-        phi = model.free_equilibrium(ch.link_angles) if model is not None else None
+        phi = model.free_equilibrium(np.tile(ch.link_angles, model.fingers)) if model is not None else None
+        phi = phi[:scene.n] if phi is not None else None  # the fingers are mirror images
         if phi is None:
             phi = hinge_chain.solve_chain("free", p, scene.profile, scene.n, guess=ch.link_angles,
                                           gravity=gravity_factor(scene)).link_angles
