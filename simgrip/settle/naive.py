@@ -248,22 +248,16 @@ def naive_relax(
         out = {"steps": steps, "dt": dt, "setup_s": setup_s, "omega_max": wmax, "omega_min": wmin,
                "residual": res, "measured_s": wall, "note": ""}
         notes = []
-        if s_tol is not None:
-            out.update(converged=True, steps_to_tol=s_tol[0], time_to_tol_s=s_tol[1], tol_extrapolated=False)
-        else:
-            est = _extrapolate(hs, hres, tol)
-            out.update(converged=False, steps_to_tol=est, time_to_tol_s=(rate * est if est else math.inf),
-                       tol_extrapolated=est is not None)
-            notes.append(f"residual {res:.1e} after {steps} steps" + (": extrapolated" if est else ": no useful decay"))
+        ok, n_at, t_at, est = _reached(s_tol, hs, hres, tol, rate)
+        out.update(converged=ok, steps_to_tol=n_at, time_to_tol_s=t_at, tol_extrapolated=est)
+        if not ok:
+            notes.append(f"residual {res:.1e} after {steps} steps" + (": extrapolated" if n_at else ": no useful decay"))
         if want_match:
-            if hit is not None:
-                out.update(matched=True, steps_to_match=hit[0], time_to_match_s=hit[1], match_extrapolated=False)
-            else:
-                est = _extrapolate(hs, htip, tip_tol)
-                out.update(matched=False, steps_to_match=est, time_to_match_s=(rate * est if est else math.inf),
-                           match_extrapolated=est is not None)
+            ok, n_at, t_at, est = _reached(hit, hs, htip, tip_tol, rate)
+            out.update(matched=ok, steps_to_match=n_at, time_to_match_s=t_at, match_extrapolated=est)
+            if not ok:
                 notes.append(f"tip {htip[-1] if htip else math.nan:.1e} from the chain's"
-                             + (": extrapolated" if est else ": no useful decay"))
+                             + (": extrapolated" if n_at else ": no useful decay"))
         else:
             out.update(matched=None, steps_to_match=None, time_to_match_s=None, match_extrapolated=False)
         out["note"] = "; ".join(notes)
@@ -271,6 +265,19 @@ def naive_relax(
     finally:
         m.opt.timestep, m.dof_damping[:], m.dof_armature[:], m.pair_solref[:] = (
             saved[0], saved[1], saved[2], saved[3])
+
+
+def _reached(hit, steps, values, tol, rate) -> tuple[bool, float | None, float, bool]:
+    """``(reached, steps, time [s], extrapolated)`` of a quantity's first fall below ``tol``.
+
+    ``hit`` is ``(steps, time)`` where the run saw it, else None: then the steps
+    are extrapolated from the history ``(steps, values)`` (None when it does not
+    decay usefully) and the time is ``rate`` [s/step] times them (inf without).
+    """
+    if hit is not None:
+        return True, hit[0], hit[1], False
+    est = _extrapolate(steps, values, tol)
+    return False, est, (rate * est if est else math.inf), est is not None
 
 
 def _extrapolate(steps, res, tol) -> float | None:
