@@ -234,28 +234,47 @@ class Dyn:
     def run(self, tol, vtol, budget, watch=None) -> tuple[bool, str]:
         """Step until residual < tol and velocity < vtol; ``watch()`` returning a reason stops early."""
         start = self.steps
-        while True:
-            v = self.velocity()
+
+        def guard(v):
             if self.slow > 1.0 and self.held_q is None and self.steps > start:  # after a first batch
                 self._guard(v)
-            # the residual (one more forward pass) only once at rest: halves the cost of a step
-            if v < vtol:
-                r = self.residual()
-                if not math.isfinite(r):
-                    raise SettleError("dynamic settle diverged (non-finite residual)")
-                if r < tol:
-                    return True, "ok"
-            if watch is not None:
-                why = watch()
-                if why:
-                    return False, why
-            if self.steps >= budget:
-                return False, "max_steps"
-            # between checks: DYN_BATCH steps in one call (the stop test costs nothing in between)
-            # (one step per test while the fall guard is lifted: a workpiece that starts to fall
-            # gets it back before it moves a contact radius)
-            one = self.held_q is not None or (self.slow > 1.0 and not self.guard_on)
-            self.step(1 if one else min(DYN_BATCH, budget - self.steps))
+
+        # one step per test while the fall guard is lifted: a workpiece that starts to fall
+        # gets it back before it moves a contact radius
+        def one_step():
+            return self.held_q is not None or (self.slow > 1.0 and not self.guard_on)
+
+        return run_to_rest(self, tol, vtol, budget, watch, "dynamic settle", before=guard, one_step=one_step)
+
+
+def run_to_rest(dyn, tol, vtol, budget, watch=None, what="dynamic settle", *, before=None, one_step=None):
+    """Step ``dyn`` until its velocity is below ``vtol`` and its residual below ``tol``: ``(converged, why)``.
+
+    ``dyn`` has ``velocity()``, ``residual()`` (scaled, max over dofs), ``step(k)``,
+    ``steps`` and ``held_q``.  ``watch()`` returning a reason stops early; ``before(v)``
+    runs at each test; between tests ``DYN_BATCH`` steps go in one call (the stop test
+    costs nothing in between), one step while ``one_step()`` (default: the workpiece is
+    held in place).  A non-finite residual raises :class:`SettleError` naming ``what``.
+    """
+    while True:
+        v = dyn.velocity()
+        if before is not None:
+            before(v)
+        # the residual (one more forward pass) only once at rest: halves the cost of a step
+        if v < vtol:
+            r = dyn.residual()
+            if not math.isfinite(r):
+                raise SettleError(f"{what} diverged (non-finite residual)")
+            if r < tol:
+                return True, "ok"
+        if watch is not None:
+            why = watch()
+            if why:
+                return False, why
+        if dyn.steps >= budget:
+            return False, "max_steps"
+        one = one_step() if one_step is not None else dyn.held_q is not None
+        dyn.step(1 if one else min(DYN_BATCH, budget - dyn.steps))
 
 
 def _finger_pairs_touching(scene: Scene) -> bool:

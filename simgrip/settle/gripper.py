@@ -53,9 +53,9 @@ import numpy as np
 
 from simgrip.chain import link_positions
 from simgrip.settle import check_tol_steps
-from simgrip.settle.dynamics import (DYN_BATCH, DYN_DAMPING, DYN_DROP_FALL, DYN_DROP_SLIP, DYN_IMPRATIO,
+from simgrip.settle.dynamics import (DYN_DAMPING, DYN_DROP_FALL, DYN_DROP_SLIP, DYN_IMPRATIO,
                                      DYN_PEN_LIMIT, DYN_STEP, DYN_TIMECONST, DYN_TOL, DYN_TOL_PER_WEIGHT, DYN_VTOL,
-                                     DYN_WORKPIECE_DAMPING, lowest_frequency)
+                                     DYN_WORKPIECE_DAMPING, lowest_frequency, run_to_rest)
 from simgrip.settle.state import SettleError
 from simgrip.settle.statics import CONTACT_IMPEDANCE, check_warnings, restore_options, save_options
 from simgrip.sim.checks import clear_warnings
@@ -194,6 +194,10 @@ class _Dyn:
             r[self.scene.workpiece_dof] = 0.0
         return r
 
+    def residual(self) -> float:
+        """Largest scaled static residual (:meth:`residual_vector`)."""
+        return float(np.max(np.abs(self.residual_vector())))
+
     def velocity(self) -> float:
         v = np.abs(np.array(self.d.qvel)) / self.vscale
         if self.held_q is not None:
@@ -221,20 +225,7 @@ class _Dyn:
 
     def run(self, tol: float, budget: int, watch=None) -> tuple[bool, str]:
         """Step until the residual is below ``tol`` and the velocity below DYN_VTOL; ``watch()`` may stop it."""
-        while True:
-            if self.velocity() < DYN_VTOL:
-                r = float(np.max(np.abs(self.residual_vector())))
-                if not math.isfinite(r):
-                    raise SettleError("gripper settle diverged (non-finite residual)")
-                if r < tol:
-                    return True, "ok"
-            if watch is not None:
-                why = watch()
-                if why:
-                    return False, why
-            if self.steps >= budget:
-                return False, "max_steps"
-            self.step(1 if self.held_q is not None else min(DYN_BATCH, budget - self.steps))
+        return run_to_rest(self, tol, DYN_VTOL, budget, watch, "gripper settle")
 
 
 def _chain(scene: GripperScene, grip: str, b: float | None = None, guess=None):
