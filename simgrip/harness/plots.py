@@ -56,6 +56,8 @@ def pareto_plot(res, cases: dict, path: Path) -> None:
     time lies to the right), so one far extrapolation cannot stretch the axis;
     naive runs with no static state (the workpiece slid off) are listed in a note.
     """
+    from matplotlib.ticker import NullFormatter
+
     grips = [g for g in ("free", "I", "II", "III") if any(r["grip"] == g for r in res.rows)]
     fig = _figure(4.0 * len(grips), 3.8)
     axes = fig.subplots(1, len(grips), squeeze=False)[0]
@@ -89,6 +91,7 @@ def pareto_plot(res, cases: dict, path: Path) -> None:
                                 textcoords="offset points", xytext=(3, 3))
         ax.set_title(f"{'free rod' if g == 'free' else 'Grip ' + g}, κ̄0 = {cases[g]:g}")
         ax.set_xlabel("wall time [s]")
+        ax.xaxis.set_minor_formatter(NullFormatter())  # a panel spanning under a decade labels its minor ticks
         ax.grid(True, which="both", alpha=0.3)
     axes[0].set_ylabel("tip error |r − r_BVP| / ℓ")
     legend = {}  # every method and marker seen on any panel, once
