@@ -28,6 +28,7 @@ from simgrip.reference.elastica import (
     ElasticaSolution,
     check_guess,
     checked_problem,
+    march,
     solve,
     solve_problem,
 )
@@ -175,19 +176,13 @@ def track_largest_load(
     grip, params, P = checked_problem(grip, params, profiles[0], **kw)
     _grip_only(grip, "max_load")
     M_max, xtol, tol = _positive("M_max", M_max), _positive("xtol", xtol), check_tol(tol)
-    out, start = [], None
-    for i, prof in enumerate(profiles):
+
+    def one(i, prof, start):
         guess = None if guesses is None else check_guess(guesses[i])
-        try:
-            cap = _Search(grip, params, _dc_replace(P, profile=prof), M_max, xtol, tol).run(guess, start)
-        except ElasticaError:
-            if failures == "raise":
-                raise
-            cap = LoadCapacity(math.nan, "failed", None)
-        out.append(cap)
-        if cap.solution is not None:
-            start = cap
-    return out
+        return _Search(grip, params, _dc_replace(P, profile=prof), M_max, xtol, tol).run(guess, start)
+
+    return march(profiles, one, failures, failed=LoadCapacity(math.nan, "failed", None),
+                 ok=lambda cap: cap.solution is not None)
 
 
 class _Search:

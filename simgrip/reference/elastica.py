@@ -339,17 +339,27 @@ def sweep(
     Keyword arguments go to :func:`solve`.
     """
     check_failures(failures)
+    return march(profiles, lambda i, prof, prev: solve(grip, params, prof, guess=prev, **kw), failures, start=start)
+
+
+def march(items, solve_one, failures: str, *, start=None, failed=None, ok=lambda r: r is not None) -> list:
+    """``[solve_one(i, item, last) for each item]``, ``last`` the latest result that is ``ok`` (``start`` before one).
+
+    A step that raises :class:`ElasticaError` raises again (``failures="raise"``)
+    or gives ``failed`` (``"skip"``); the next step then starts from the last success.
+    """
     out: list = []
-    prev = start
-    for prof in profiles:
+    last = start
+    for i, item in enumerate(items):
         try:
-            sol = solve(grip, params, prof, guess=prev, **kw)
+            r = solve_one(i, item, last)
         except ElasticaError:
             if failures == "raise":
                 raise
-            sol = None
-        out.append(sol)
-        prev = sol if sol is not None else prev
+            r = failed
+        out.append(r)
+        if ok(r):
+            last = r
     return out
 
 
