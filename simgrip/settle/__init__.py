@@ -39,12 +39,11 @@ import time
 import mujoco
 import numpy as np
 
-from simgrip.settle.chain_model import eligible
 from simgrip.settle.chain_newton import ChainNewton
 from simgrip.settle.closing import close_grip, finger_alone, place_on_chain, release, start_free
 from simgrip.settle.dynamics import DYN_TOL, dynamics_tolerance, settle_dynamics
 from simgrip.settle.naive import naive_relax, naive_settle
-from simgrip.settle.newton import Newton, SOLVE_ITERS, read_newton
+from simgrip.settle.newton import SOLVE_ITERS, read_newton
 from simgrip.settle.state import FingerContact, SettledState, SettleError, finger_tip
 from simgrip.settle.target import check_target_error, settle_to_error
 from simgrip.settle.statics import (RestResidual, configure_statics, dof_scales, restore_options, save_options,
@@ -78,9 +77,6 @@ RESIDUAL_FLOOR_MAX = 1e-6
 #: Default total Newton iteration budget of one settle (``max_steps``): closing, release and
 #: the finger-alone settle together.
 NEWTON_BUDGET = 2000
-#: One-finger scenes use the chain-coordinate Newton (:mod:`.chain_newton`, ``O(n)`` per
-#: iteration); False forces MuJoCo's finite-difference Jacobian (:mod:`.newton`) everywhere.
-CHAIN_SOLVE = True
 
 
 def _check_settle_args(scene, tol, max_steps):
@@ -231,7 +227,7 @@ def _settle(
             check_grip_shape(scene, state)
             state.rest = scene.springs.rest.copy()
             return state
-        run = ChainNewton(scene) if (CHAIN_SOLVE and eligible(scene)) else Newton(scene)
+        run = ChainNewton(scene)
         run.budget = max_steps  # every Newton iteration of this settle counts against max_steps
         run.friction_at = "centreline" if contact == "point" else "surface"
         configure_statics(scene)

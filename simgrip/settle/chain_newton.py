@@ -29,7 +29,7 @@ import mujoco
 import numpy as np
 
 from simgrip.settle.banded import solve_bordered
-from simgrip.settle.chain_model import ChainModel
+from simgrip.settle.chain_model import ChainModel, eligible
 from simgrip.settle.newton import FLOOR_ULPS, PEN_MAX, Newton
 from simgrip.settle.state import SettleError
 from simgrip.settle.statics import sync_scene
@@ -49,6 +49,9 @@ class ChainNewton(Newton):
     """:class:`Newton` with the inner iteration in link angles (one- and two-finger scenes, see ``eligible``)."""
 
     def __init__(self, scene: Scene):
+        if not eligible(scene):
+            raise ValueError(f"scene: the chain Newton covers workpieces fixed, sliding in z or free in x, z, ry "
+                             f"with finger 0 along +x; got joints {tuple(scene.workpiece_joints)}")
         super().__init__(scene, scene.data)  # the scene's own MjData as scratch (the solve owns its state)
         self.model = ChainModel(scene)
         #: MuJoCo's contact distance minus the analytic one (round-off, over l), per pair

@@ -1,4 +1,4 @@
-"""Newton-KKT on MuJoCo's static force balance, with contact and sticking-friction constraints.
+"""The static solve's contact set and friction bookkeeping, around a Newton-KKT inner solve.
 
 Unknowns: the free dofs' positions, a normal force ``N`` per touching contact
 pair and a friction force ``lambda`` per sticking contact.  Equations::
@@ -7,22 +7,19 @@ pair and a friction force ``lambda`` per sticking contact.  Equations::
     K_c dist(q) + N = 0                (MuJoCo's soft contact law at rest)
     t . (p_f(q) - p_w(q)) = 0          (sticking)
 
-``r_free`` is MuJoCo's generalised force with contacts off; ``dist`` comes from
-``mj_geomDistance`` and its gradient is ``n'(J_2 - J_1)`` at the witness
-points.  ``K_c`` is read back from MuJoCo's own contact force at the solution
-and the solve repeated until they agree, so that the full MuJoCo residual
-(contacts on) vanishes; writing the stiff contact as a compliant constraint
-keeps Newton well conditioned.  Unilateral: a pair with ``N < 0`` leaves the
-set, a penetrating one joins it.  MuJoCo's friction is velocity based (it
-creeps at rest), so sticking is a constraint whose multiplier is the friction
-force; the friction cone ``|lambda| <= mu N`` decides hold or slip.
-
-``dr/dq`` comes from ``mjd_inverseFD`` and the constraints' curvature from
-differences of ``G' multipliers``; the KKT step is least squares (sticking
-leaves the sliding direction singular) with a backtracking line search on the
-residual and a tunnelling guard for pairs not yet touching.  Contact-law rows
-are accepted at their round-off floor (:data:`FLOOR_ULPS` ulps of ``K_c l``, more for a long,
-much-turned chain: :meth:`Newton.floor_ulps`).
+``r_free`` is MuJoCo's generalised force with contacts off and ``dist`` the
+pairs' signed distances (``mj_geomDistance``).  :class:`Newton` keeps what the
+inner solve does not own: the contact set (unilateral: a pair with ``N < 0``
+leaves the set, a penetrating one joins it), ``K_c`` read back from MuJoCo's
+own contact force at the solution and the solve repeated until they agree (so
+that the full MuJoCo residual, contacts on, vanishes; writing the stiff contact
+as a compliant constraint keeps Newton well conditioned), the sticks (MuJoCo's
+friction is velocity based and creeps at rest, so sticking is a constraint
+whose multiplier is the friction force; the friction cone ``|lambda| <= mu N``
+decides hold or slip) and MuJoCo's residual as the judge.  The inner Newton
+iteration, exact and ``O(n)``, is :class:`~simgrip.settle.chain_newton.ChainNewton`'s.
+Contact-law rows are accepted at their round-off floor (:data:`FLOOR_ULPS` ulps
+of ``K_c l``, more for a long, much-turned chain: :meth:`Newton.floor_ulps`).
 """
 
 from __future__ import annotations
@@ -34,8 +31,7 @@ import mujoco
 import numpy as np
 
 from simgrip.settle.state import SettledState, SettleError, read_state
-from simgrip.settle.statics import (CONTACT_STIFFNESS, Statics, Stick, centreline_point, check_warnings,
-                                    sync_scene)
+from simgrip.settle.statics import CONTACT_STIFFNESS, Statics, Stick, centreline_point, sync_scene
 from simgrip.sim.contacts import normal_force, pair_contacts
 from simgrip.sim.scene import Scene
 
@@ -57,10 +53,8 @@ SOLVE_ITERS = 200
 
 
 class Newton:
-    """Newton-KKT on the static equilibrium with contact and friction constraints.
+    """Contact set, ``K_c``, sticks and MuJoCo's residual around an inner Newton-KKT solve (``_newton``).
 
-    Unknowns: the free dofs' positions, a normal force ``N`` per touching
-    contact pair and a friction force ``lambda`` per sticking contact.
     Equations (dimensional)::
 
         r_free(q) + G_n(q)' N + G_s(q)' lambda (+ sliding friction) = 0
@@ -72,7 +66,9 @@ class Newton:
     convergence, the full MuJoCo residual (contacts on) vanishes: that residual
     is what :func:`settle` checks and reports.  Writing the stiff contact as
     a compliant constraint keeps Newton well conditioned (a pure penalty would
-    force tiny steps along the face).
+    force tiny steps along the face).  The inner solve is
+    :class:`~simgrip.settle.chain_newton.ChainNewton`'s; this class holds the
+    MuJoCo side: the contact set (``mj_geomDistance``), ``K_c`` and the reported residual.
     """
 
     def __init__(self, scene: Scene, data=None):
@@ -109,97 +105,6 @@ class Newton:
         mujoco.mj_kinematics(m, sd)
         L = self.scene.length
         return np.array([mujoco.mj_geomDistance(m, sd, g1, g2, L, None) for g1, g2 in self.pairs])
-
-    def _dist_grad(self, q, pairs) -> np.ndarray:
-        """Gradient of the listed pairs' signed distances over all dofs: ``n' (J_2 - J_1)``.
-
-        ``n`` is the unit normal from geom1 to geom2 and ``J_i`` the Jacobians
-        of the witness points (``mj_geomDistance``'s ``fromto``); central
-        differences when the witness points coincide.
-        """
-        m, sd = self.scene.model, self.st.d
-        L = self.scene.length
-        G = np.zeros((len(pairs), m.nv))
-        sd.qpos[:] = q
-        mujoco.mj_kinematics(m, sd)
-        mujoco.mj_comPos(m, sd)
-        j1 = np.zeros((3, m.nv))
-        j2 = np.zeros((3, m.nv))
-        ft = np.zeros(6)
-        for row, p in enumerate(pairs):
-            g1, g2 = self.pairs[p]
-            dist = mujoco.mj_geomDistance(m, sd, g1, g2, L, ft)
-            seg = ft[3:] - ft[:3]
-            if np.linalg.norm(seg) < 1e-12 * L:
-                G[row] = self._dist_grad_fd(q, p)
-                sd.qpos[:] = q
-                mujoco.mj_kinematics(m, sd)
-                mujoco.mj_comPos(m, sd)
-                continue
-            n = seg / np.linalg.norm(seg) * math.copysign(1.0, dist)
-            mujoco.mj_jac(m, sd, j1, None, ft[:3], int(m.geom_bodyid[g1]))
-            mujoco.mj_jac(m, sd, j2, None, ft[3:], int(m.geom_bodyid[g2]))
-            G[row] = n @ (j2 - j1)
-        return G
-
-    def _dist_grad_fd(self, q, p) -> np.ndarray:
-        m = self.scene.model
-        out = np.zeros(m.nv)
-        for c in range(m.nv):
-            h = 1e-6 * self.st.lscale[c]
-            v = np.zeros(m.nv)
-            v[c] = h
-            qp, qm = q.copy(), q.copy()
-            mujoco.mj_integratePos(m, qp, v, 1.0)
-            mujoco.mj_integratePos(m, qm, -v, 1.0)
-            out[c] = (self._dists(qp)[p] - self._dists(qm)[p]) / (2 * h)
-        return out
-
-    # -- residual --------------------------------------------------------------
-    def _residual(self, q, N, lam, idx):
-        """Scaled KKT residual and the pieces needed for the Jacobian."""
-        m = self.scene.model
-        L = self.scene.length
-        # MuJoCo's forces with contacts off (springs, gravity, applied)
-        m.opt.disableflags = self._flags | int(mujoco.mjtDisableBit.mjDSBL_CONTACT)
-        r = self.st.forces(q)
-        m.opt.disableflags = self._flags
-        check_warnings(self.st.d)
-        act = self.normal_active
-        dist = self._dists(q)
-        total = r.copy()
-        Gn = Gs = None
-        gs = np.zeros(0)
-        if act:
-            Gn = self._dist_grad_cached(q, act)
-            total += Gn.T @ N
-        stick_act = [i for i in range(len(self.sticks)) if i not in self.sliding]
-        if self.sticks:
-            self.st.d.qpos[:] = q
-            mujoco.mj_kinematics(m, self.st.d)
-            gs_all, Gs_all = self.st.stick_rows(self.sticks)
-            gs, Gs = gs_all[stick_act], Gs_all[stick_act]
-            total += Gs.T @ lam
-            for i, sign in self.sliding.items():
-                p = self._pair_of(self.sticks[i])
-                if p not in act:  # the pair has separated: N = 0, no sliding friction
-                    continue
-                k = act.index(p)
-                mu = float(m.pair_friction[p][0])
-                total += Gs_all[i] * sign * mu * N[k]
-        F = total[idx] / self.st.fscale[idx]
-        W = self.scene.force_scale
-        gn = (self.kc[act] * dist[act] + N) / W if act else np.zeros(0)
-        self._merit_weights = np.concatenate([np.ones(F.size), W / (self.kc[act] * L) if act else np.zeros(0),
-                                              np.ones(gs.size)])
-        return np.concatenate([F, gn, gs]), dist, Gn, Gs
-
-    def _dist_grad_cached(self, q, act):
-        key = (q.tobytes(), tuple(act))
-        if getattr(self, "_gcache_key", None) != key:
-            self._gcache_key = key
-            self._gcache = self._dist_grad(q, act)
-        return self._gcache
 
     def _pair_of(self, s: Stick) -> int:
         for i, (g1, g2) in enumerate(self.pairs):
@@ -298,107 +203,8 @@ class Newton:
         return moved
 
     def _newton(self, q, idx, tol, max_iter, contacts):
-        sc = self.scene
-        m = sc.model
-        L = sc.length
-        N = self.N.copy()
-        stick_act = [i for i in range(len(self.sticks)) if i not in self.sliding]
-        if self.lam.size != len(self.sticks):
-            self.lam = np.zeros(len(self.sticks))
-        lam = self.lam[stick_act].copy()
-        R, dist, Gn, Gs = self._residual(q, N, lam, idx)
-        while True:
-            res = float(np.max(np.abs(R))) if R.size else 0.0
-            if not math.isfinite(res):
-                raise SettleError("settle diverged (non-finite residual)")
-            nf = idx.size
-            res_f = float(np.max(np.abs(R[:nf]))) if nf else 0.0
-            res_c = float(np.max(np.abs(R[nf:]))) if R.size > nf else 0.0
-            if res_f < tol and res_c < max(tol, self.noise_floor()):
-                break
-            if self.iterations >= max_iter:
-                self.N, self.lam[stick_act] = N, lam
-                if self.budget is not None and self.iterations >= self.budget:
-                    return False, f"Newton iteration budget max_steps={self.budget} spent", q
-                return False, "max_iter", q
-            self.iterations += 1
-            if self.sticks:
-                self._reanchor(q)
-                R, dist, Gn, Gs = self._residual(q, N, lam, idx)
-            m.opt.disableflags = self._flags | int(mujoco.mjtDisableBit.mjDSBL_CONTACT)
-            H = self.st.jacobian(q)
-            m.opt.disableflags = self._flags
-            act = self.normal_active
-            if act:  # curvature of the constraints: d(G' mult)/dq by FD
-                H = H + self._constraint_curvature(q, N, lam, stick_act)
-            fs, ls = self.st.fscale[idx], self.st.lscale[idx]
-            nf, nn, ns = idx.size, len(act), len(stick_act)
-            K = np.zeros((nf + nn + ns, nf + nn + ns))
-            K[:nf, :nf] = H[np.ix_(idx, idx)] * ls[None, :] / fs[:, None]
-            if nn:
-                Gi = Gn[:, idx]
-                K[:nf, nf:nf + nn] = Gi.T / fs[:, None]
-                W = sc.force_scale
-                K[nf:nf + nn, :nf] = Gi * ls[None, :] * self.kc[act][:, None] / W
-                K[nf:nf + nn, nf:nf + nn] = np.eye(nn) / W
-            if ns:
-                Gi = Gs[:, idx]
-                K[:nf, nf + nn:] = Gi.T / fs[:, None]
-                K[nf + nn:, :nf] = Gi * ls[None, :] / L
-            if self.sliding and nn:  # sliding friction sign * mu * N depends on N
-                _, Gs_all = self.st.stick_rows(self.sticks)
-                for i, sign in self.sliding.items():
-                    p = self._pair_of(self.sticks[i])
-                    if p not in act:  # separated pair: no friction (see _residual)
-                        continue
-                    k = act.index(p)
-                    mu = float(m.pair_friction[p][0])
-                    K[:nf, nf + k] += Gs_all[i][idx] * sign * mu / fs
-            sol, *_ = np.linalg.lstsq(K, -R, rcond=1e-14)
-            dq = sol[:nf] * ls
-            dN = sol[nf:nf + nn]
-            dl = sol[nf + nn:]
-            wts = self._merit_weights.copy()
-            merit = float(np.linalg.norm(R * wts))
-            d0 = dist
-            step = 1.0
-            accepted = False
-            for _ in range(50):
-                v = np.zeros(m.nv)
-                v[idx] = step * dq
-                qn = q.copy()
-                mujoco.mj_integratePos(m, qn, v, 1.0)
-                Nn, ln = N + step * dN, lam + step * dl
-                Rn, distn, Gnn, Gsn = self._residual(qn, Nn, ln, idx)
-                ok = bool(np.all(np.isfinite(Rn)))
-                if ok and contacts:
-                    # inactive pairs: no tunnelling (move at most half their gap)
-                    inact = [p for p in range(len(self.pairs)) if p not in act]
-                    if inact:
-                        ok = all(distn[p] > -PEN_MAX * L or d0[p] <= 0 for p in inact) and all(
-                            d0[p] - distn[p] <= max(0.5 * d0[p], 0.0) + PEN_MAX * L for p in inact if d0[p] > 0
-                        )
-                mn = float(np.linalg.norm(Rn * wts))
-                # Armijo on the weighted merit, or (near round-off) a halved max residual
-                if ok and (mn < (1.0 - 1e-4 * step) * merit or (
-                        float(np.max(np.abs(Rn))) < 0.5 * res and mn < max(2.0 * merit, 1e-3 * tol ** 0.5))):
-                    accepted = True
-                    break
-                step *= 0.5
-            if not accepted:
-                self.N, self.lam[stick_act] = N, lam
-                return False, "stalled", q
-            q, N, lam, R, dist, Gn, Gs = qn, Nn, ln, Rn, distn, Gnn, Gsn
-            # a pair that starts touching joins the set at once
-            if contacts:
-                newp = [p for p in range(len(self.pairs)) if p not in self.normal_active and dist[p] < 0.0]
-                if newp:
-                    self.normal_active = self.normal_active + newp
-                    N = np.append(N, np.zeros(len(newp)))
-                    R, dist, Gn, Gs = self._residual(q, N, lam, idx)
-        self.N = N
-        self.lam[stick_act] = lam
-        return True, "ok", q
+        """One Newton-KKT solve at a fixed contact set: ``(converged, why, q)`` (the subclass's inner iteration)."""
+        raise NotImplementedError
 
     def _reanchor(self, q) -> None:
         """Move every stick's anchors to its pair's current contact point."""
@@ -413,33 +219,6 @@ class Newton:
     def _anchor(self, d, geom, point) -> np.ndarray:
         """Where the sticking friction acts: the contact ``point``, or (point contact) the finger's centreline there."""
         return centreline_point(self.scene.model, d, geom, point) if self.friction_at == "centreline" else point
-
-    def _constraint_curvature(self, q, N, lam, stick_act) -> np.ndarray:
-        """FD of ``G_n' N + G_s' lambda`` over q (geometric stiffness of the constraints)."""
-        m = self.scene.model
-        act = self.normal_active
-
-        def gen(qq):
-            out = np.zeros(m.nv)
-            if act:
-                out += self._dist_grad(qq, act).T @ N
-            if stick_act:
-                self.st.d.qpos[:] = qq
-                mujoco.mj_kinematics(m, self.st.d)
-                _, Gs = self.st.stick_rows(self.sticks)
-                out += Gs[stick_act].T @ lam
-            return out
-
-        base = gen(q)
-        C = np.zeros((m.nv, m.nv))
-        for c in range(m.nv):
-            h = 1e-6 * self.st.lscale[c]
-            v = np.zeros(m.nv)
-            v[c] = h
-            qp = q.copy()
-            mujoco.mj_integratePos(m, qp, v, 1.0)
-            C[:, c] = (gen(qp) - base) / h
-        return C
 
     def _commit(self, q) -> None:
         d = self.scene.data

@@ -33,7 +33,6 @@ __all__ = ["CONTACT_IMPEDANCE", "CONTACT_STIFFNESS", "RestResidual", "Statics", 
 CONTACT_IMPEDANCE = 0.9999
 #: Target contact stiffness over rho g (force per length, dimensionless).
 CONTACT_STIFFNESS = 1e6
-_FD_EPS = 1e-9
 
 
 # ---------------------------------------------------------------------------
@@ -130,18 +129,6 @@ class Statics:
             G[i] = t @ (jf - jw)
         return g, G
 
-    def jacobian(self, q) -> np.ndarray:
-        """``dr/dq`` (nv x nv, rows = force components) by ``mjd_inverseFD``."""
-        m, d = self.m, self.d
-        d.qpos[:] = q
-        d.qvel[:] = 0.0
-        d.qacc[:] = 0.0
-        d.qfrc_applied[:] = self.scene.data.qfrc_applied
-        DfDq = np.zeros((m.nv, m.nv))
-        mujoco.mjd_inverseFD(m, d, _FD_EPS, False, DfDq, None, None, None, None, None, None)
-        self.calls += 2 * m.nv + 1
-        return -DfDq.T
-
 
 def static_residual(scene: Scene, qpos=None) -> np.ndarray:
     """Dimensionless static generalised-force imbalance at ``qpos`` (default: the scene's).
@@ -220,7 +207,7 @@ def restore_options(m, s: SavedOptions) -> None:
 def configure_statics(scene: Scene) -> None:
     """Contact settings of the static solve (see the module docstring)."""
     m = scene.model
-    m.opt.noslip_iterations = 0  # a dynamics post-process; mjd_inverseFD rejects it
+    m.opt.noslip_iterations = 0  # a dynamics post-process, not part of the force balance at rest
     m.opt.ccd_tolerance = 1e-14  # distances exact to round-off (Newton differentiates them)
     m.opt.ccd_iterations = 200
     if m.npair == 0:
