@@ -38,3 +38,10 @@ GRIP_III_SLIDE_OFF = [
     dict(D=27.497204197282763, kappa=-9.076923278164506, M=20.245431709192307, mu_s=0.1409531991381925,
          b=0.35988568672429266, n=12),
 ]
+
+
+# A heavy Grip II whose two-finger release stalled at the contact rows' round-off (1.5x the floor)
+# because the line search measured them in length units (the force rows' round-off swamped them):
+# the workpiece was reported dropped while the symmetric reduction holds it.
+TWO_FINGER_HEAVY_II = dict(D=36.638914060188654, kappa=4.976523433174437, M=16.53275895587244,
+                           mu_s=0.6904909409134506, b=0.39658623586100206, n=8)

@@ -26,7 +26,8 @@ from simgrip.reference import solve_chain
 from simgrip.scenes import build_scene
 from simgrip.sim.scene import set_curvature
 from simgrip.settle import SettledState, SettleError, naive_settle, settle, settle_sweep
-from settle_cases import GRIP_III_SLIDE_OFF, KAPPA, PEN_LIMIT, chain_with_tip_couple, stress_scene  # noqa: F401
+from settle_cases import (GRIP_III_SLIDE_OFF, KAPPA, PEN_LIMIT, TWO_FINGER_HEAVY_II,  # noqa: F401
+                          chain_with_tip_couple, stress_scene)
 
 
 @pytest.fixture(scope="module")
@@ -201,6 +202,20 @@ def test_two_fingers_agree_with_the_symmetric_reduction():
             assert c.N2 == pytest.approx(one.N2, rel=1e-6)
         assert two.workpiece_pose[0] == pytest.approx(0.0, abs=1e-9)  # centred
         assert two.workpiece_pose[2] == pytest.approx(0.0, abs=1e-9)  # level
+
+
+def test_two_fingers_hold_what_the_symmetric_reduction_holds_heavy_grip_ii():
+    """A heavy workpiece (M = 16.5): the two-finger release converges to the reduction's state."""
+    from simgrip.params import DimensionlessParams
+
+    c = TWO_FINGER_HEAVY_II
+    p = DimensionlessParams(D=c["D"], M=c["M"], b=c["b"], mu_s=c["mu_s"])
+    one = settle(build_scene("II", p, Uniform(c["kappa"]), c["n"]))
+    two = settle(build_scene("II", p, Uniform(c["kappa"]), c["n"], fingers=2))
+    assert one.held and two.held
+    np.testing.assert_allclose(two.link_angles, np.vstack([one.link_angles] * 2), atol=1e-6)
+    for k in two.contacts:
+        assert k.N1 == pytest.approx(one.N1, rel=1e-6)
 
 
 # ---------------------------------------------------------------------------

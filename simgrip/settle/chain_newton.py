@@ -229,7 +229,8 @@ class ChainNewton(Newton):
             R, jac = self._system(phi, w, N, lam, stick_act, True)
             if not np.all(np.isfinite(R)):
                 raise SettleError("settle diverged (non-finite residual)")
-            res = float(np.max(np.abs(R))) if R.size else 0.0
+            scale = np.concatenate([np.ones(nf), self._row_scale(len(N), len(stick_act))])  # rows in force units
+            res = float(np.max(np.abs(R * scale))) if R.size else 0.0
             res_f = float(np.max(np.abs(R[:nf])))
             res_c = float(np.max(np.abs(R[nf:] * self._row_scale(len(N), len(stick_act))))) if R.size > nf else 0.0
             if res_f < tol and res_c < max(tol, self.noise_floor()):
@@ -267,7 +268,7 @@ class ChainNewton(Newton):
                         d0[p] - dn[p] <= max(0.5 * d0[p], 0.0) + PEN_MAX for p in inact if d0[p] > 0)
                 mn = float(np.linalg.norm(Rn)) if ok else math.inf
                 if ok and (mn < (1.0 - 1e-4 * step) * merit or (
-                        float(np.max(np.abs(Rn))) < 0.5 * res and mn < max(2.0 * merit, 1e-3 * tol ** 0.5))):
+                        float(np.max(np.abs(Rn * scale))) < 0.5 * res and mn < max(2.0 * merit, 1e-3 * tol ** 0.5))):
                     accepted = True
                     break
                 step *= 0.5
