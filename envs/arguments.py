@@ -67,13 +67,16 @@ def check_bool(name, value) -> bool:
 
 def check_action(action, shape: tuple) -> list:
     """``action`` as a list of floats clipped to ``[-1, 1]``; ValueError on a wrong shape or non-finite values."""
-    try:
-        a = np.asarray(action, dtype=np.float64)
-    except (TypeError, ValueError):
-        raise ValueError(f"action must be an array of {shape[0]} numbers, got {action!r}") from None
-    if a.shape != shape:
-        raise ValueError(f"action must have shape {shape}, got {a.shape}")
-    vals = a.tolist()
+    if type(action) is np.ndarray and action.shape == shape and action.dtype.kind == "f":
+        vals = action.tolist()  # the usual case: a float array of the right shape (float32 values are exact)
+    else:
+        try:
+            a = np.asarray(action, dtype=np.float64)
+        except (TypeError, ValueError):
+            raise ValueError(f"action must be an array of {shape[0]} numbers, got {action!r}") from None
+        if a.shape != shape:
+            raise ValueError(f"action must have shape {shape}, got {a.shape}")
+        vals = a.tolist()
     for v in vals:
         if not math.isfinite(v):
             raise ValueError(f"action must be finite (no NaN or inf), got {action!r}")

@@ -429,7 +429,7 @@ class PickEnv(gym.Env):
 
     def _set_kappa(self, kappa):
         if self._spring_view is not None:
-            np.multiply.outer(kappa, self._unit_rest, out=self._spring_view)
+            np.multiply(kappa[:, None], self._unit_rest, out=self._spring_view)
         else:  # pragma: no cover
             np.multiply.outer(kappa, self._unit_rest, out=self._rest_buf)
             self.model.qpos_spring[self._spring_idx] = self._rest_buf.ravel()
@@ -472,8 +472,8 @@ class PickEnv(gym.Env):
         else:  # pragma: no cover - the builder always makes them contiguous
             self._spring_view = None
 
-    def _get_obs(self, forces):
-        return self._observe(self.data, forces, self._kappa_cmd, self._kappa, self._z0, self._hold)
+    def _get_obs(self, forces, qpos=None):
+        return self._observe(self.data, forces, self._kappa_cmd, self._kappa, self._z0, self._hold, qpos)
 
     # --------------------------------------------------------------- API
     def reset(self, *, seed=None, options=None):
@@ -543,9 +543,11 @@ class PickEnv(gym.Env):
             raise PhysicsError(f"step diverged ({why})")
 
         forces = self._contact_forces(self.model, self.data)
-        bx, by, box_z, _, qx, qy, _ = d.qpos[self.box_qpos:self.box_qpos + 7].tolist()
+        q = d.qpos.tolist()
+        bq = self.box_qpos
+        bx, by, box_z, qx, qy = q[bq], q[bq + 1], q[bq + 2], q[bq + 4], q[bq + 5]
         gain = box_z - self._z0
-        rel = box_z - float(d.qpos[self.palm_qpos])
+        rel = box_z - q[self.palm_qpos]
         n0, f0, n1, f1, s0, s1 = forces
         both = n0 > 0.0 and n1 > 0.0
         if self._lifted_rel is None and gain > 0.005 and both:
@@ -568,7 +570,7 @@ class PickEnv(gym.Env):
         self._phi = phi
         terminated = bool(success or lost)
         self._needs_reset = terminated
-        obs = self._get_obs(forces)
+        obs = self._get_obs(forces, q)
         info.update({
             "is_success": success, "dropped": dropped and not success,
             "knocked_over": knocked and not success, "box_lift": gain,

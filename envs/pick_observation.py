@@ -115,6 +115,8 @@ class PickObservation:
         self._inv_l = 1.0 / length
         self._shape_end = 5 + 2 * shape_points
         self._size = self._shape_end + 16  # the per-finger layout
+        self._out_size = self.low.size
+        self._shape_end_out = self.slices["finger_shape"].stop
         # shape sampling: tangent angles at s/l = (k+1/2)/K, interpolated between link midpoints, from the
         # link angles (cumulative hinge angles)
         n = n_links
@@ -123,42 +125,55 @@ class PickObservation:
         interp = np.array([np.interp(s_k, s_link, e) for e in np.eye(n)]).T
         self._shape_matrix_t = np.ascontiguousarray((interp @ np.tril(np.ones((n, n)))).T)  # q -> theta(s_k)
 
-    def __call__(self, data, forces, kappa_cmd, kappa, z0: float, hold: float) -> np.ndarray:
+    def __call__(self, data, forces, kappa_cmd, kappa, z0: float, hold: float, qpos: list | None = None) -> np.ndarray:
         """The observation of ``data``.
 
         ``forces`` are :class:`~simgrip.envs.pick_contacts.BoxContactForces`' ``[normal_0, friction_0,
         normal_1, friction_1, ...]`` [N]; ``kappa_cmd``, ``kappa`` the commanded and actual curvatures (2,);
-        ``z0`` the box's starting height [m]; ``hold`` the time held at the target [s].
+        ``z0`` the box's starting height [m]; ``hold`` the time held at the target [s]; ``qpos`` optionally
+        ``data.qpos.tolist()`` when the caller has it.
         """
-        qpos, xpos = data.qpos, data.geom_xpos
+        # scalars are read with one tolist() per array and combined in Python; the finger shapes are one
+        # np.dot; the result is written into a fresh array in the final layout and clipped in place
+        q = data.qpos.tolist() if qpos is None else qpos
+        v = data.qvel.tolist()
         inv_l = self._inv_l
-        palm_z = float(qpos[self.palm_qpos])
-        palm_v = float(data.qvel[self.palm_dof])
+        palm_z, palm_v = q[self.palm_qpos], v[self.palm_dof]
         bq, bd = self.box_qpos, self.box_dof
-        bx, _, bz, qw, qx, qy, qz = qpos[bq:bq + 7].tolist()
-        vx, _, vz, _, wy, _ = data.qvel[bd:bd + 6].tolist()
+        xpos = data.geom_xpos
         x0, _, z0_tip = xpos[self.tips[0]].tolist()
-        x1, _, z1_tip = xpos[self.tips[1]].tolist()
-        tilt = math.atan2(2.0 * (qx * qz + qw * qy), 1.0 - 2.0 * (qx * qx + qy * qy))
         fu = self.force_unit
         lo, hi = self.kappa_range  # curvatures in action units (the action that commands them)
         c0, c1 = kappa_cmd.tolist()
         k0, k1 = kappa.tolist()
-        obs = np.empty(self._size)
-        n_shape = self._shape_end - 5
-        np.dot(qpos[self.hinge_qpos].reshape(2, self.n), self._shape_matrix_t,
-                  out=obs[5:self._shape_end].reshape(2, n_shape // 2))
-        obs[:5] = (palm_z * inv_l, 2.0 * (c0 - lo) / (hi - lo) - 1.0, 2.0 * (c1 - lo) / (hi - lo) - 1.0,
-                   2.0 * (k0 - lo) / (hi - lo) - 1.0, 2.0 * (k1 - lo) / (hi - lo) - 1.0)
-        obs[self._shape_end:] = (
-            x0 * inv_l, (z0_tip - palm_z) * inv_l, x1 * inv_l, (z1_tip - palm_z) * inv_l,
-            bx * inv_l, (bz - palm_z) * inv_l, tilt, vx * inv_l, (vz - palm_v) * inv_l, wy * SPIN_TIME,
-            (bz - z0) / self.target_height,
-            math.log1p(forces[0] / fu), math.log1p(forces[1] / fu), math.log1p(forces[2] / fu),
-            math.log1p(forces[3] / fu),
-            min(hold / self.hold_time, 1.0) if self.hold_time > 0 else 0.0)
-        if self._pick is not None:
-            obs = obs[self._pick]
+        bz = q[bq + 2]
+        hold_obs = min(hold / self.hold_time, 1.0) if self.hold_time > 0 else 0.0
+        end = self._shape_end_out
+        obs = np.empty(self._out_size)
+        if self._pick is None:  # per_finger: both fingers, the box's x, tilt and spin
+            bx, qw, qx, qy, qz = q[bq], q[bq + 3], q[bq + 4], q[bq + 5], q[bq + 6]
+            vx, vz, wy = v[bd], v[bd + 2], v[bd + 4]
+            x1, _, z1_tip = xpos[self.tips[1]].tolist()
+            tilt = math.atan2(2.0 * (qx * qz + qw * qy), 1.0 - 2.0 * (qx * qx + qy * qy))
+            np.dot(self._hinges_2n(data.qpos), self._shape_matrix_t, out=obs[5:end].reshape(2, (end - 5) // 2))
+            obs[:5] = (palm_z * inv_l, 2.0 * (c0 - lo) / (hi - lo) - 1.0, 2.0 * (c1 - lo) / (hi - lo) - 1.0,
+                       2.0 * (k0 - lo) / (hi - lo) - 1.0, 2.0 * (k1 - lo) / (hi - lo) - 1.0)
+            obs[end:] = (
+                x0 * inv_l, (z0_tip - palm_z) * inv_l, x1 * inv_l, (z1_tip - palm_z) * inv_l,
+                bx * inv_l, (bz - palm_z) * inv_l, tilt, vx * inv_l, (vz - palm_v) * inv_l, wy * SPIN_TIME,
+                (bz - z0) / self.target_height,
+                math.log1p(forces[0] / fu), math.log1p(forces[1] / fu), math.log1p(forces[2] / fu),
+                math.log1p(forces[3] / fu), hold_obs)
+        else:  # finger 0 and the box's z
+            np.dot(self._hinges_2n(data.qpos)[0], self._shape_matrix_t, out=obs[3:end])
+            obs[:3] = (palm_z * inv_l, 2.0 * (c0 - lo) / (hi - lo) - 1.0, 2.0 * (k0 - lo) / (hi - lo) - 1.0)
+            obs[end:] = (
+                x0 * inv_l, (z0_tip - palm_z) * inv_l, (bz - palm_z) * inv_l, (v[bd + 2] - palm_v) * inv_l,
+                (bz - z0) / self.target_height, math.log1p(forces[0] / fu), math.log1p(forces[1] / fu), hold_obs)
         np.maximum(obs, self.low, out=obs)
         np.minimum(obs, self.high, out=obs)
         return obs
+
+    def _hinges_2n(self, qpos):
+        """The hinge angles as a (2, n_links) array (a view when ``hinge_qpos`` is a slice)."""
+        return qpos[self.hinge_qpos].reshape(2, self.n)
