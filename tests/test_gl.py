@@ -13,13 +13,27 @@ import pytest
 from simgrip.sim import gl
 
 
+_GL_VARIABLES = ("DISPLAY", "WAYLAND_DISPLAY", "MUJOCO_GL", "PYOPENGL_PLATFORM")
+
+
 @pytest.fixture
 def headless(monkeypatch):
-    """A headless Linux machine without MUJOCO_GL / PYOPENGL_PLATFORM (probes are replaced per test)."""
+    """A headless Linux machine without MUJOCO_GL / PYOPENGL_PLATFORM (probes are replaced per test).
+
+    ``choose_backend`` records its choice in ``os.environ``; the variables are
+    restored afterwards whether or not they were set before, so a backend
+    chosen here (e.g. osmesa by a fake probe) never leaks into later tests.
+    """
+    saved = {name: os.environ.get(name) for name in _GL_VARIABLES}
     monkeypatch.setattr(gl.platform, "system", lambda: "Linux")
-    for name in ("DISPLAY", "WAYLAND_DISPLAY", "MUJOCO_GL", "PYOPENGL_PLATFORM"):
-        monkeypatch.delenv(name, raising=False)
-    return monkeypatch
+    for name in _GL_VARIABLES:
+        os.environ.pop(name, None)
+    yield monkeypatch
+    for name, value in saved.items():
+        if value is None:
+            os.environ.pop(name, None)
+        else:
+            os.environ[name] = value
 
 
 def test_the_users_backend_is_kept_without_probing(headless):
