@@ -12,65 +12,34 @@ import argparse
 import json
 
 import gymnasium as gym
-import numpy as np
 
 import simgrip.envs  # noqa: F401  (registers the simgrip ids)
+from simgrip.envs.evaluation import add_episode_arguments, check_env_id, run_episodes, summary
 
 
-def _count(text):
-    try:
-        v = int(text)
-    except ValueError:
-        raise argparse.ArgumentTypeError(f"expected a positive integer, got {text!r}") from None
-    if v < 1:
-        raise argparse.ArgumentTypeError(f"expected a positive integer, got {text!r}")
-    return v
-
-
-def _seed(text):
-    try:
-        v = int(text)
-    except ValueError:
-        raise argparse.ArgumentTypeError(f"expected an integer >= 0, got {text!r}") from None
-    if v < 0:
-        raise argparse.ArgumentTypeError(f"expected an integer >= 0, got {text!r}")
-    return v
+def _line(r) -> str:
+    end = "success" if r.info["is_success"] else "dropped" if r.info["dropped"] else \
+        "knocked over" if r.info["knocked_over"] else "time limit"
+    return f"episode {r.index:3d}: return={r.ret:7.1f}  {end}"
 
 
 def main(argv=None):
     p = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
-    p.add_argument("--episodes", type=_count, default=20, help="number of episodes (default 20)")
-    p.add_argument("--seed", type=_seed, default=0, help="seed of the first episode (default 0)")
-    p.add_argument("--env", default="simgrip/Pick-v1", help="registered env id (default simgrip/Pick-v1)")
-    p.add_argument("--json", action="store_true", help="print only a JSON summary")
+    add_episode_arguments(p)
     args = p.parse_args(argv)
-    if args.env not in gym.registry:
-        p.error(f"--env: unknown id {args.env!r}")
+    check_env_id(p, args.env)
 
     env = gym.make(args.env)
-    wins, returns = 0, []
-    for ep in range(args.episodes):
-        env.action_space.seed(args.seed + ep)
-        obs, info = env.reset(seed=args.seed + ep)
-        ret = 0.0
-        while True:
-            obs, reward, terminated, truncated, info = env.step(env.action_space.sample())
-            ret += float(reward)
-            if terminated or truncated:
-                break
-        wins += bool(info["is_success"])
-        returns.append(ret)
-        if not args.json:
-            end = "success" if info["is_success"] else "dropped" if info["dropped"] else \
-                "knocked over" if info["knocked_over"] else "time limit"
-            print(f"episode {ep:3d}: return={ret:7.1f}  {end}")
+    results = run_episodes(env, lambda obs: env.action_space.sample(), args.episodes, args.seed,
+                           on_reset=lambda env_, info, seed: env.action_space.seed(seed),
+                           on_episode=None if args.json else lambda r: print(_line(r)))
     env.close()
-    summary = {"episodes": args.episodes, "success_rate": wins / args.episodes, "mean_return": float(np.mean(returns))}
+    out = {k: v for k, v in summary(results).items() if k != "mean_length"}
     if args.json:
-        print(json.dumps(summary))
+        print(json.dumps(out))
     else:
-        print(f"success rate {summary['success_rate']:.0%}, mean return {summary['mean_return']:.1f}")
-    return summary
+        print(f"success rate {out['success_rate']:.0%}, mean return {out['mean_return']:.1f}")
+    return out
 
 
 if __name__ == "__main__":

@@ -18,79 +18,48 @@ import argparse
 import json
 
 import gymnasium as gym
-import numpy as np
 
 import simgrip.envs  # noqa: F401  (registers the simgrip ids)
+from simgrip.envs.evaluation import add_episode_arguments, check_env_id, run_episodes, summary
 from simgrip.envs.scripted import ObservationPickPolicy, ScriptedPickPolicy
 
 POLICIES = {"oracle": ScriptedPickPolicy, "observation": ObservationPickPolicy}
 
 
-def _count(text):
-    try:
-        v = int(text)
-    except ValueError:
-        raise argparse.ArgumentTypeError(f"expected a positive integer, got {text!r}") from None
-    if v < 1:
-        raise argparse.ArgumentTypeError(f"expected a positive integer, got {text!r}")
-    return v
-
-
-def _seed(text):
-    try:
-        v = int(text)
-    except ValueError:
-        raise argparse.ArgumentTypeError(f"expected an integer >= 0, got {text!r}") from None
-    if v < 0:
-        raise argparse.ArgumentTypeError(f"expected an integer >= 0, got {text!r}")
-    return v
-
-
 def main(argv=None):
     p = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
-    p.add_argument("--episodes", type=_count, default=20, help="number of episodes (default 20)")
-    p.add_argument("--seed", type=_seed, default=0, help="seed of the first episode (default 0)")
-    p.add_argument("--env", default="simgrip/Pick-v1", help="registered env id (default simgrip/Pick-v1)")
+    add_episode_arguments(p)
     p.add_argument("--policy", choices=sorted(POLICIES), default="oracle",
                    help="oracle (reads the true box) or observation (sees only the observation)")
-    p.add_argument("--json", action="store_true", help="print only a JSON summary")
     p.add_argument("--gif", default=None, help="also write a GIF of the first episode (oracle policy)")
     args = p.parse_args(argv)
-    if args.env not in gym.registry:
-        p.error(f"--env: unknown id {args.env!r}")
+    check_env_id(p, args.env)
 
     env = gym.make(args.env)
     policy = POLICIES[args.policy]()
-    wins, returns = 0, []
-    for ep in range(args.episodes):
-        obs, info = env.reset(seed=args.seed + ep)
-        policy.reset(env, info)
-        ret = 0.0
-        while True:
-            obs, reward, terminated, truncated, info = env.step(policy(obs))
-            ret += float(reward)
-            if terminated or truncated:
-                break
-        wins += bool(info["is_success"])
-        returns.append(ret)
-        if not args.json:
-            box = env.unwrapped.box
-            print(f"episode {ep:3d}: b={box.width * 100:.1f} cm  m={box.mass * 1000:.0f} g  mu={box.friction:.2f}  "
-                  f"kappa={policy.kappa:+.2f}  N={info['normal_force'].mean():.2f} N  return={ret:7.1f}  "
-                  f"{'success' if info['is_success'] else 'fail'}")
+
+    def line(r):
+        box = env.unwrapped.box
+        print(f"episode {r.index:3d}: b={box.width * 100:.1f} cm  m={box.mass * 1000:.0f} g  mu={box.friction:.2f}  "
+              f"kappa={policy.kappa:+.2f}  N={r.info['normal_force'].mean():.2f} N  return={r.ret:7.1f}  "
+              f"{'success' if r.info['is_success'] else 'fail'}")
+
+    results = run_episodes(env, policy, args.episodes, args.seed,
+                           on_reset=lambda env_, info, seed: policy.reset(env_, info),
+                           on_episode=None if args.json else line)
     env.close()
-    summary = {"episodes": args.episodes, "success_rate": wins / args.episodes, "mean_return": float(np.mean(returns))}
+    out = {k: v for k, v in summary(results).items() if k != "mean_length"}
     if args.json:
-        print(json.dumps(summary))
+        print(json.dumps(out))
     else:
-        print(f"success rate {summary['success_rate']:.0%} over {args.episodes} episodes, "
-              f"mean return {summary['mean_return']:.1f}")
+        print(f"success rate {out['success_rate']:.0%} over {args.episodes} episodes, "
+              f"mean return {out['mean_return']:.1f}")
     if args.gif:
         from simgrip.envs.rendering import render_pick_gif
 
         render_pick_gif(args.gif, seed=args.seed)
         print(f"wrote {args.gif}")
-    return summary
+    return out
 
 
 if __name__ == "__main__":

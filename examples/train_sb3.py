@@ -46,6 +46,7 @@ import gymnasium as gym
 import numpy as np
 
 import simgrip.envs  # noqa: F401  (registers the simgrip ids)
+from simgrip.envs.evaluation import non_negative_int, run_episodes, summary
 from simgrip.io import atomic_write, write_json
 
 ALGOS = ("ppo", "sac")
@@ -63,38 +64,14 @@ def _positive(kind):
     return parse
 
 
-def _non_negative_int(text):
-    try:
-        v = int(text)
-    except ValueError:
-        raise argparse.ArgumentTypeError(f"expected an integer >= 0, got {text!r}") from None
-    if v < 0:
-        raise argparse.ArgumentTypeError(f"expected an integer >= 0, got {text!r}")
-    return v
-
-
 def evaluate(model, env_id: str, episodes: int, seed0: int) -> dict:
     """Run the deterministic policy of ``model`` for ``episodes`` episodes on seeds ``seed0 + i``."""
     env = gym.make(env_id)
-    wins, returns, lengths = 0, [], []
     try:
-        for i in range(episodes):
-            obs, _ = env.reset(seed=seed0 + i)
-            ret, n = 0.0, 0
-            while True:
-                action, _ = model.predict(obs, deterministic=True)
-                obs, reward, terminated, truncated, info = env.step(action)
-                ret += float(reward)
-                n += 1
-                if terminated or truncated:
-                    break
-            wins += bool(info["is_success"])
-            returns.append(ret)
-            lengths.append(n)
+        results = run_episodes(env, lambda obs: model.predict(obs, deterministic=True)[0], episodes, seed0)
     finally:
         env.close()
-    return {"episodes": episodes, "success_rate": wins / episodes, "mean_return": float(np.mean(returns)),
-            "mean_length": float(np.mean(lengths)), "eval_seeds": [seed0, seed0 + episodes - 1]}
+    return {**summary(results), "eval_seeds": [seed0, seed0 + episodes - 1]}
 
 
 def _write_curve(path: Path, rows) -> None:
@@ -219,9 +196,9 @@ def main(argv=None) -> int:
                    help="also save the policy (and the curve so far) every so many budget minutes, "
                         "and evaluate each checkpoint at the end")
     p.add_argument("--steps", type=_positive(int), default=10_000_000, help="environment-step budget per algorithm")
-    p.add_argument("--seed", type=_non_negative_int, default=0, help="training seed (default 0)")
+    p.add_argument("--seed", type=non_negative_int, default=0, help="training seed (default 0)")
     p.add_argument("--eval-episodes", type=_positive(int), default=50, help="held-out evaluation episodes (default 50)")
-    p.add_argument("--eval-seed", type=_non_negative_int, default=1_000_000, help="first evaluation seed (default 1000000)")
+    p.add_argument("--eval-seed", type=non_negative_int, default=1_000_000, help="first evaluation seed (default 1000000)")
     p.add_argument("--threads", type=_positive(int), default=1, help="PyTorch threads (default 1)")
     p.add_argument("--out", required=True, help="output folder")
     args = p.parse_args(argv)

@@ -1,0 +1,106 @@
+"""Running a policy over seeded episodes, and the command-line options that say which.
+
+The baselines of the pick environments (``examples/random_policy.py``,
+``examples/scripted_pick.py``, the held-out evaluation of
+``examples/train_sb3.py``) all do the same thing: reset episode ``i`` with seed
+``seed0 + i``, act until the episode ends, and summarise success and return.
+:func:`run_episodes` is that loop; :func:`add_episode_arguments` the options
+``--episodes --seed --env --json`` they share, validated by argparse (exit 2
+naming the option).
+"""
+
+from __future__ import annotations
+
+import argparse
+from dataclasses import dataclass
+from typing import Any, Callable
+
+import numpy as np
+
+__all__ = ["EpisodeResult", "add_episode_arguments", "check_env_id", "positive_int", "non_negative_int", "run_episodes", "summary"]
+
+
+def positive_int(text: str) -> int:
+    """argparse type: an integer >= 1."""
+    try:
+        v = int(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"expected a positive integer, got {text!r}") from None
+    if v < 1:
+        raise argparse.ArgumentTypeError(f"expected a positive integer, got {text!r}")
+    return v
+
+
+def non_negative_int(text: str) -> int:
+    """argparse type: an integer >= 0 (seeds)."""
+    try:
+        v = int(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"expected an integer >= 0, got {text!r}") from None
+    if v < 0:
+        raise argparse.ArgumentTypeError(f"expected an integer >= 0, got {text!r}")
+    return v
+
+
+def add_episode_arguments(parser: argparse.ArgumentParser, *, episodes: int = 20) -> None:
+    """Add ``--episodes N``, ``--seed S`` (first episode's seed), ``--env ID`` and ``--json``."""
+    parser.add_argument("--episodes", type=positive_int, default=episodes, help=f"number of episodes (default {episodes})")
+    parser.add_argument("--seed", type=non_negative_int, default=0, help="seed of the first episode (default 0)")
+    parser.add_argument("--env", default="simgrip/Pick-v1", help="registered env id (default simgrip/Pick-v1)")
+    parser.add_argument("--json", action="store_true", help="print only a JSON summary")
+
+
+def check_env_id(parser: argparse.ArgumentParser, env_id: str) -> None:
+    """Exit 2 naming ``--env`` when ``env_id`` is not registered."""
+    import gymnasium as gym
+
+    if env_id not in gym.registry:
+        parser.error(f"--env: unknown id {env_id!r}")
+
+
+@dataclass(frozen=True)
+class EpisodeResult:
+    """One finished episode: its index, seed, undiscounted return, length in env steps and last ``info``."""
+
+    index: int
+    seed: int
+    ret: float
+    length: int
+    info: dict
+
+
+def run_episodes(env, act: Callable[[Any], Any], episodes: int, seed0: int, *,
+                 on_reset: Callable[[Any, dict, int], None] | None = None,
+                 on_episode: Callable[[EpisodeResult], None] | None = None) -> list[EpisodeResult]:
+    """Run ``episodes`` episodes of ``env``, episode ``i`` reset with seed ``seed0 + i``.
+
+    ``act(obs)`` returns the action; ``on_reset(env, info, seed)``, if given, is
+    called after each reset (a policy's own reset, seeding an action space);
+    ``on_episode(result)`` after each episode (printing a line).
+    """
+    results = []
+    for i in range(episodes):
+        seed = seed0 + i
+        obs, info = env.reset(seed=seed)
+        if on_reset is not None:
+            on_reset(env, info, seed)
+        ret, n = 0.0, 0
+        while True:
+            obs, reward, terminated, truncated, info = env.step(act(obs))
+            ret += float(reward)
+            n += 1
+            if terminated or truncated:
+                break
+        result = EpisodeResult(i, seed, ret, n, info)
+        results.append(result)
+        if on_episode is not None:
+            on_episode(result)
+    return results
+
+
+def summary(results: list[EpisodeResult]) -> dict:
+    """``{"episodes", "success_rate", "mean_return", "mean_length"}`` of finished episodes."""
+    n = len(results)
+    return {"episodes": n, "success_rate": sum(bool(r.info["is_success"]) for r in results) / n,
+            "mean_return": float(np.mean([r.ret for r in results])),
+            "mean_length": float(np.mean([r.length for r in results]))}
