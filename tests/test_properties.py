@@ -123,6 +123,19 @@ def finite(*values):
     return all(np.all(np.isfinite(np.asarray(v, dtype=float))) for v in values)
 
 
+def outcome(call, bound: str):
+    """``call()`` within ``BOUND_S[bound]``: its result, or None after a named refusal or a loud solver error."""
+    try:
+        with time_limit(BOUND_S[bound]):
+            return call()
+    except ValueError as exc:
+        assert_named(exc)
+    except RuntimeError as exc:
+        assert type(exc).__name__ in SOLVER_ERRORS, repr(exc)
+        event(f"solver error: {type(exc).__name__}")
+    return None
+
+
 # ----------------------------------------------------------------------------- parameters and profiles
 
 
@@ -206,16 +219,8 @@ def test_elastica_solve_any_state(data):
     from simgrip import elastica
 
     grip, kw, kappa = _state(data)
-    try:
-        params = DimensionlessParams(**kw)
-        with time_limit(BOUND_S["solve"]):
-            sol = elastica.solve(grip, params, Uniform(kappa))
-    except ValueError as exc:
-        assert_named(exc)
-        return
-    except RuntimeError as exc:
-        assert type(exc).__name__ in SOLVER_ERRORS, repr(exc)
-        event(f"solver error: {type(exc).__name__}")
+    sol = outcome(lambda: elastica.solve(grip, DimensionlessParams(**kw), Uniform(kappa)), "solve")
+    if sol is None:
         return
     event("result")
     assert finite(sol.tip, sol.N1, sol.N2, sol.normal_force, sol.friction_force, sol.theta, sol.x, sol.y)
@@ -238,16 +243,8 @@ def test_simulate_any_state(data):
     else:
         grip, kw, kappa = _state(data)
         links = data.draw(st.one_of(st.integers(2, 8), st.integers(2, 8), st.integers(2, 8), hostile), "links")
-    try:
-        params = DimensionlessParams(**kw)
-        with time_limit(BOUND_S["simulate"]):
-            state = simulate(grip, params, Uniform(kappa), links)
-    except ValueError as exc:
-        assert_named(exc)
-        return
-    except RuntimeError as exc:
-        assert type(exc).__name__ in SOLVER_ERRORS, repr(exc)
-        event(f"solver error: {type(exc).__name__}")
+    state = outcome(lambda: simulate(grip, DimensionlessParams(**kw), Uniform(kappa), links), "simulate")
+    if state is None:
         return
     event("result")
     assert finite(state.tip, state.joint_angles, state.nodes, state.residual, state.penetration)

@@ -21,23 +21,12 @@ import pytest
 from simgrip import STANDARD, Uniform
 from simgrip.params import D_MIN
 from simgrip.reference import elastica
-from simgrip.chain import ChainSprings, chain_springs
 from simgrip.reference import solve_chain
 from simgrip.scenes import build_scene
 from simgrip.sim.scene import set_curvature
 from simgrip.settle import SettledState, SettleError, naive_settle, settle, settle_sweep
 from settle_cases import (GRIP_III_SLIDE_OFF, KAPPA, PEN_LIMIT, TWO_FINGER_HEAVY_II,  # noqa: F401
                           chain_with_tip_couple, stress_scene)
-
-
-@pytest.fixture(scope="module")
-def surface_states():
-    """The same scenes with the friction at MuJoCo's contact point (``contact="surface"``: the tip couple)."""
-    out = {}
-    for grip in ("I", "II", "III"):
-        for n in (16, 32):
-            out[grip, n] = settle(build_scene(grip, STANDARD, Uniform(KAPPA[grip]), n), contact="surface")
-    return out
 
 
 @pytest.fixture(scope="module")

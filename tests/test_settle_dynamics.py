@@ -2,7 +2,6 @@
 
 from __future__ import annotations
 
-import math
 
 import numpy as np
 import pytest
@@ -12,16 +11,6 @@ from simgrip.reference import elastica, solve_chain
 from simgrip.scenes import build_scene
 from simgrip.settle import SettleError, settle, settle_sweep
 from settle_cases import GRIP_III_SLIDE_OFF, KAPPA, PEN_LIMIT, stress_scene
-
-
-@pytest.fixture(scope="module")
-def surface_states():
-    """The same scenes with the friction at MuJoCo's contact point (``contact="surface"``: the tip couple)."""
-    out = {}
-    for grip in ("I", "II", "III"):
-        for n in (16, 32):
-            out[grip, n] = settle(build_scene(grip, STANDARD, Uniform(KAPPA[grip]), n), contact="surface")
-    return out
 
 
 # ---------------------------------------------------------------------------
