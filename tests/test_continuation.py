@@ -16,7 +16,7 @@ import signal
 import numpy as np
 import pytest
 
-from simgrip import STANDARD, DimensionlessParams, Uniform
+from simgrip import STANDARD, Uniform
 from simgrip.reference.bvp import ElasticaError
 from simgrip.reference.continuation import MAX_BVP_RUNS, Budget, cold_start
 from simgrip.reference.elastica import checked_problem, solve

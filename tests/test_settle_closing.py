@@ -8,10 +8,10 @@ import numpy as np
 import pytest
 
 from simgrip import STANDARD, Uniform
-from simgrip.reference import elastica, solve_chain
+from simgrip.reference import elastica
 from simgrip.scenes import build_scene
-from simgrip.settle import SettleError, settle
-from settle_cases import KAPPA, stress_scene
+from simgrip.settle import settle
+from settle_cases import stress_scene
 
 
 # ---------------------------------------------------------------------------

@@ -191,7 +191,6 @@ class ChainNewton(Newton):
     # -- Newton -------------------------------------------------------------------------
     def _newton(self, q, idx, tol, max_iter, contacts):
         sc = self.scene
-        m = sc.model
         cm = self.model
         free = set(int(i) for i in idx)
         self.yf = np.array([j for j in range(cm.nw) if int(cm.wd[j]) in free], dtype=int)  # free workpiece dofs

@@ -30,7 +30,7 @@ import time
 import mujoco
 import numpy as np
 
-from simgrip.settle.state import SettledState, SettleError, read_state
+from simgrip.settle.state import SettledState, read_state
 from simgrip.settle.statics import CONTACT_STIFFNESS, Statics, Stick, centreline_point, sync_scene
 from simgrip.sim.contacts import normal_force, pair_contacts
 from simgrip.sim.scene import Scene
@@ -94,7 +94,6 @@ class Newton:
         return self.budget is not None and self.iterations >= self.budget
 
     def _contacts_on(self) -> bool:
-        m = self.scene.model
         return bool(self.pairs) and not (self._flags & int(mujoco.mjtDisableBit.mjDSBL_CONTACT))
 
     # -- geometry -------------------------------------------------------------
@@ -302,7 +301,6 @@ class Newton:
 
     def full_residual(self, q) -> np.ndarray:
         """MuJoCo's own static residual (contacts on) plus the friction forces, scaled."""
-        m = self.scene.model
         r = self.st.forces(q)
         if self.sticks:
             _, G = self.st.stick_rows(self.sticks)
