@@ -23,6 +23,7 @@ from __future__ import annotations
 import argparse
 import contextlib
 import json
+import re
 import signal
 import sys
 import threading
@@ -54,8 +55,18 @@ SLOW_LINKS = 512
 OUTPUT_OPTIONS = {"out": ("--out", True), "png": ("--png", False), "gif": ("--gif", False)}
 
 
+#: What argparse should read as a negative number, not an option: ``-5``, ``-0.5``, ``-.5``, ``-1e6``,
+#: ``-inf``, ``-nan`` (argparse's own pattern misses exponents, inf and nan, so ``--kappa -1e6`` was
+#: "expected one argument"); they then reach the option's type and validation, which names the parameter.
+_NEGATIVE_NUMBER = re.compile(r"^-(?:(?:\d+\.?\d*|\.\d+)(?:[eE][-+]?\d+)?|inf(?:inity)?|nan)$", re.IGNORECASE)
+
+
 class _Parser(argparse.ArgumentParser):
-    """argparse with a consistent one-line error and exit code 2."""
+    """argparse with a consistent one-line error and exit code 2, and negative numbers read as values."""
+
+    def __init__(self, *args, **kwargs):
+        super().__init__(*args, **kwargs)
+        self._negative_number_matcher = _NEGATIVE_NUMBER
 
     def error(self, message):  # pragma: no cover - exercised through main()
         self.print_usage(sys.stderr)
@@ -300,48 +311,6 @@ COMMANDS = {
 }
 
 
-def _negative_values(argv: list[str], parser: argparse.ArgumentParser) -> list[str]:
-    """``["--kappa", "-1e6"]`` -> ``["--kappa=-1e6"]`` for every option that takes one value.
-
-    argparse reads ``-1e6``, ``-inf`` or ``-nan`` after an option as another
-    option ("expected one argument"); joined with ``=`` they reach the option's
-    type and then validation, which names the parameter.
-    """
-    takes_value = set()
-    parsers = [parser]
-    while parsers:
-        p = parsers.pop()
-        for action in p._actions:
-            if isinstance(action, argparse._SubParsersAction):  # only the command's own options (sweep's --kappa takes 1 or 3)
-                command = next((a for a in argv if a in action.choices), None)
-                parsers.extend([action.choices[command]] if command else [])
-            elif action.option_strings and action.nargs is None:
-                takes_value.update(action.option_strings)
-    out: list[str] = []
-    i = 0
-    while i < len(argv):
-        tok = argv[i]
-        if tok == "--":
-            out.extend(argv[i:])
-            break
-        nxt = argv[i + 1] if i + 1 < len(argv) else None
-        if tok in takes_value and isinstance(nxt, str) and nxt.startswith("-") and _is_number(nxt):
-            out.append(f"{tok}={nxt}")
-            i += 2
-            continue
-        out.append(tok)
-        i += 1
-    return out
-
-
-def _is_number(text: str) -> bool:
-    try:
-        float(text)
-    except ValueError:
-        return False
-    return True
-
-
 def _check_outputs(args) -> list[Path]:
     """Check every output path of the command before any work (nothing is created); returns the folders.
 
@@ -425,7 +394,7 @@ def main(argv=None) -> int:
         try:
             try:
                 parser = build_parser()
-                args = parser.parse_args(_negative_values(argv, parser))
+                args = parser.parse_args(argv)
             except SystemExit as exc:  # --help, or argparse's own message (exit 2)
                 return exc.code if isinstance(exc.code, int) else (0 if exc.code is None else EXIT_USAGE)
             try:
