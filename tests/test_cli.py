@@ -228,12 +228,14 @@ def test_help_returns_0(capsys):
 
 
 def test_negative_values_reach_every_numeric_option():
-    from simgrip.cli import _negative_values, build_parser
+    import math
 
-    parser = build_parser()
-    argv = ["simulate", "I", "--kappa", "-1e6", "--D", "-inf", "--links", "-3", "--json", "--", "-x"]
-    assert _negative_values(argv, parser) == [
-        "simulate", "I", "--kappa=-1e6", "--D=-inf", "--links=-3", "--json", "--", "-x"]
+    from simgrip.cli import build_parser
+
+    args = build_parser().parse_args(["simulate", "I", "--kappa", "-1e6", "--D", "-inf", "--links", "-3", "--json"])
+    assert args.kappa == -1e6 and args.D == -math.inf and args.links == -3 and args.json
+    sweep = build_parser().parse_args(["sweep", "I", "--kappa", "-1e6", "-3", "5", "--links", "8", "--out", "x"])
+    assert sweep.kappa == ["-1e6", "-3", "5"]
 
 
 @pytest.mark.parametrize(
