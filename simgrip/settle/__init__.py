@@ -117,6 +117,22 @@ def settle(scene: Scene, *, target_error=None, **kw) -> SettledState:  # docstri
         return settle_to_error(scene, e, _settle, **kw)
 
 
+def _finish(scene: Scene, state: SettledState, tolerance: float, allow_unconverged: bool, what: str,
+            effort: str) -> SettledState:
+    """Both methods' last word: converged means residual <= ``tolerance``; then the checks the solve does not
+    enforce (condition (23), the grip's shape) and the rest angles the state was settled with."""
+    state.tolerance = tolerance
+    if state.converged and not state.residual <= tolerance:
+        state.converged = False
+        if not allow_unconverged:
+            raise SettleError(f"{what} did not converge (static residual {state.residual:.3g} above the "
+                              f"tolerance {tolerance:.3g} after {effort})")
+    check_condition_23(scene, state)
+    check_grip_shape(scene, state)
+    state.rest = scene.springs.rest.copy()
+    return state
+
+
 def _settle(
     scene: Scene,
     *,
@@ -217,16 +233,7 @@ def _settle(
                 start_free(scene)  # a free finger from its chain equilibrium: the dynamics checks it is at rest
                 mujoco.mj_forward(m, d)
             state = settle_dynamics(scene, tol, max_steps, warm_start, close, allow_unconverged, t0)
-            state.tolerance = tol
-            if state.converged and not state.residual <= tol:  # converged means residual <= tol
-                state.converged = False
-                if not allow_unconverged:
-                    raise SettleError(f"dynamic settle did not converge (static residual {state.residual:.3g} above "
-                                      f"the tolerance {tol:.3g} after {state.steps} steps)")
-            check_condition_23(scene, state)
-            check_grip_shape(scene, state)
-            state.rest = scene.springs.rest.copy()
-            return state
+            return _finish(scene, state, tol, allow_unconverged, "dynamic settle", f"{state.steps} steps")
         run = ChainNewton(scene)
         run.budget = max_steps  # every Newton iteration of this settle counts against max_steps
         run.friction_at = "centreline" if contact == "point" else "surface"
@@ -258,17 +265,10 @@ def _settle(
         if not converged and not allow_unconverged:
             raise SettleError(f"settle did not converge ({why} after {run.iterations} Newton iterations)")
         state = read_newton(scene, run, t0, held, converged)
-        # converged means residual <= tolerance: the reported (MuJoCo) residual is checked, not
-        # only Newton's own KKT rows; a grip's tolerance is raised to its contact round-off floor
-        state.tolerance = max(tol, min(run.noise_floor(), RESIDUAL_FLOOR_MAX)) if held else tol
-        if state.converged and not state.residual <= state.tolerance:
-            state.converged = False
-            if not allow_unconverged:
-                raise SettleError(f"settle did not converge (static residual {state.residual:.3g} above the "
-                                  f"tolerance {state.tolerance:.3g} after {run.iterations} Newton iterations)")
-        check_condition_23(scene, state)
-        check_grip_shape(scene, state)
-        state.rest = scene.springs.rest.copy()
+        # the reported (MuJoCo) residual is checked, not only Newton's own KKT rows; a grip's
+        # tolerance is raised to its contact round-off floor
+        state = _finish(scene, state, max(tol, min(run.noise_floor(), RESIDUAL_FLOOR_MAX)) if held else tol,
+                        allow_unconverged, "settle", f"{run.iterations} Newton iterations")
     finally:
         restore_options(m, saved)
         d.qfrc_applied[:] = 0.0
