@@ -55,6 +55,18 @@ def die_once(item):
     return x, os.getpid()
 
 
+def die_late(item):
+    """Item ``k`` sleeps, then kills its worker the first time: by then the others have finished."""
+    x, k, marker = item
+    if os.path.exists(marker):
+        time.sleep(1.0)  # a recomputation is slow, so the client sees the result lost first
+    elif x == k:
+        time.sleep(1.0)
+        Path(marker).write_text(str(os.getpid()))
+        os.kill(os.getpid(), signal.SIGKILL)
+    return x, os.getpid()
+
+
 # helpers --------------------------------------------------------------------------------------
 
 def _socket_inodes(pid: int) -> set[str]:
@@ -211,6 +223,25 @@ def test_a_killed_worker_loses_no_item(tmp_path):
     assert [x for x, _ in out] == list(range(12))
     killed = int(marker.read_text())
     assert out[5][1] != killed  # item 5 was recomputed by another (or a restarted) worker
+
+
+def test_results_lost_with_a_killed_worker_are_recomputed(tmp_path):
+    """Finished results not yet fetched live on their worker; when it dies they are lost and must be recomputed."""
+    marker = tmp_path / "killed"
+    items = [(x, 11, str(marker)) for x in range(12)]
+    seen = []
+
+    def slow_first(i, res):  # holds the client back while the other batches finish and the worker dies
+        seen.append(i)
+        while len(seen) == 1 and not marker.exists():
+            time.sleep(0.05)
+        if len(seen) == 1:
+            time.sleep(0.5)  # the scheduler notices the death and marks that worker's results lost
+
+    out = run_tasks(die_late, items, options=RunnerOptions(jobs=2, **QUIET), batch_size=1, on_result=slow_first)
+    assert marker.exists()
+    assert [x for x, _ in out] == list(range(12))
+    assert sorted(seen) == list(range(12))  # every item reported once
 
 
 # a cluster from the dask command line ---------------------------------------------------------

@@ -260,7 +260,14 @@ def _run_dask_quietly(fn, items, options, batch_size, on_result, bar) -> list:
         env.futures = futures
         start_of = {f.key: s for f, s in zip(futures, starts)}
         out = [None] * len(items)
-        for fut in as_completed(futures, loop=client.loop):
+        losses = {}
+        pending = as_completed(futures, loop=client.loop)
+        for fut in pending:
+            if fut.status in ("lost", "pending") and _connected(client) and losses.get(fut.key, 0) < _MAX_LOSSES:
+                # its result sat on a worker that died after the batch finished: the scheduler recomputes it
+                losses[fut.key] = losses.get(fut.key, 0) + 1
+                pending.add(fut)
+                continue
             if fut.status == "error":
                 exc = fut.exception()
                 if isinstance(exc, KilledWorker):  # the scheduler gave up: the batch crashed workers again and again
@@ -288,6 +295,14 @@ def _run_dask_quietly(fn, items, options, batch_size, on_result, bar) -> list:
         raise
     finally:
         env.stop(interrupted)
+
+
+_MAX_LOSSES = 5  # times one batch's result may be lost with its worker before the run gives up
+
+
+def _connected(client) -> bool:
+    """Whether the client still talks to its scheduler (a lost result is then recomputed)."""
+    return getattr(client, "status", None) == "running"
 
 
 def _token() -> str:
