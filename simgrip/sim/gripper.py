@@ -53,7 +53,8 @@ from simgrip.sim.fingers import FingerIndex, add_fingers, check_finger_links, in
 from simgrip.sim.scene import FingerScene, check_params, check_positive, root_spec, set_joint_angles
 from simgrip.sim.workpiece import BOX_DEPTH, BOX_HEIGHT
 
-__all__ = ["GRIPPER_GRIPS", "WORKPIECES", "GripperScene", "build_gripper", "check_gripper", "set_finger_angles"]
+__all__ = ["GRIPPER_GRIPS", "WORKPIECES", "GripperScene", "build_gripper", "check_gripper", "finger_azimuths",
+           "orient_fingers", "set_finger_angles", "workpiece_inertia"]
 
 #: Workpiece shapes of a K-finger gripper.
 WORKPIECES = ("box", "cylinder", "sphere")
@@ -256,9 +257,8 @@ def build_gripper(
     spec = root_spec(f"simgrip_gripper_{grip}_{K}{shape}_{n}", phys.g)
     add_fingers(spec, spec.worldbody, springs, fingers=K, length=L, EI=phys.EI, rho=phys.rho, r_link=r_link * L,
                 r_tip=r_tip * L)
-    azimuths = yaw + 2.0 * math.pi * np.arange(K) / K
-    for k in range(K):  # add_fingers mirrors finger 1; here every root turns to its own azimuth
-        spec.body(f"f{k}_link0").quat = _yaw_quat(float(azimuths[k]))
+    azimuths = finger_azimuths(K, yaw)
+    orient_fingers(spec, azimuths)
     size = _workpiece_size(shape, K, 0.5 * dimless.b - r_tip, L)
     z0 = float(link_positions(np.cumsum(q0[0]), springs.ds)[-1, 1]) * L
     _add_workpiece(spec, shape, size, phys.m * K, z0, yaw)
@@ -302,6 +302,31 @@ def _start(initial_angles, K: int, n: int) -> np.ndarray:
     return np.array(np.broadcast_to(q, (K, n)))
 
 
+def finger_azimuths(fingers: int, yaw: float = 0.0) -> np.ndarray:
+    """Azimuth of each finger's plane [rad]: ``yaw + 2 pi k / K``, ``k = 0 .. K-1``."""
+    return yaw + 2.0 * math.pi * np.arange(int(fingers)) / int(fingers)
+
+
+def orient_fingers(spec: mujoco.MjSpec, azimuths, prefix: str = "") -> None:
+    """Turn the root of finger ``k`` (built by :func:`~simgrip.sim.fingers.add_fingers`, which mirrors
+    finger 1) to point along ``azimuths[k]`` [rad] about the vertical; each finger then bends in its own plane."""
+    for k, a in enumerate(azimuths):
+        spec.body(f"{prefix}f{k}_link0").quat = _yaw_quat(float(a))
+
+
+def workpiece_inertia(shape: str, size, mass: float) -> list[float]:
+    """Principal inertia [kg m^2] of a solid ``shape`` of geom ``size`` [m] (as :func:`_workpiece_size`) and ``mass`` [kg]."""
+    if shape == "box":
+        hx, hy, hz = size
+        return [mass / 3.0 * (hy**2 + hz**2), mass / 3.0 * (hx**2 + hz**2), mass / 3.0 * (hx**2 + hy**2)]
+    if shape == "cylinder":
+        r, h = size[0], size[1]
+        side = mass * (3.0 * r**2 + 4.0 * h**2) / 12.0
+        return [side, side, 0.5 * mass * r**2]
+    r = size[0]
+    return [0.4 * mass * r**2] * 3
+
+
 def _yaw_quat(a: float) -> list[float]:
     return [math.cos(0.5 * a), 0.0, 0.0, math.sin(0.5 * a)]
 
@@ -325,19 +350,12 @@ def _add_workpiece(spec, shape: str, size, mass: float, z0: float, yaw: float) -
     body.ipos = [0.0, 0.0, 0.0]
     cls = spec.find_default("workpiece")
     if shape == "box":
-        hx, hy, hz = size
-        inertia = [mass / 3.0 * (hy**2 + hz**2), mass / 3.0 * (hx**2 + hz**2), mass / 3.0 * (hx**2 + hy**2)]
         kind, gsize = mujoco.mjtGeom.mjGEOM_BOX, list(size)
     elif shape == "cylinder":
-        r, h = size[0], size[1]
-        side = mass * (3.0 * r**2 + 4.0 * h**2) / 12.0
-        inertia = [side, side, 0.5 * mass * r**2]
-        kind, gsize = mujoco.mjtGeom.mjGEOM_CYLINDER, [r, h, 0.0]
+        kind, gsize = mujoco.mjtGeom.mjGEOM_CYLINDER, [size[0], size[1], 0.0]
     else:
-        r = size[0]
-        inertia = [0.4 * mass * r**2] * 3
-        kind, gsize = mujoco.mjtGeom.mjGEOM_SPHERE, [r, 0.0, 0.0]
-    body.inertia = inertia
+        kind, gsize = mujoco.mjtGeom.mjGEOM_SPHERE, [size[0], 0.0, 0.0]
+    body.inertia = workpiece_inertia(shape, size, mass)
     body.add_geom(cls, name=_WORKPIECE_GEOM, type=kind, size=gsize)
 
 
