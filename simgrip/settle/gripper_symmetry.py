@@ -1,0 +1,400 @@
+"""The symmetry skip of a K-finger gripper: one finger's planar settle, replicated to K fingers.
+
+Where a K-finger scene (:mod:`simgrip.sim.gripper`) is exactly symmetric,
+every finger is the same planar problem and the workpiece only slides along
+the palm axis, so the K-finger settled state is one planar finger's, turned
+to every azimuth.  :func:`settle_symmetric` settles that one finger with the
+planar static settle (:func:`simgrip.settle.settle`: Newton in link angles,
+tridiagonal, :mod:`simgrip.settle.chain_newton`) and returns a
+:class:`~simgrip.settle.gripper.GripperState` with the same fields as the
+K-finger dynamics (:func:`simgrip.settle.gripper.settle_gripper`).
+
+**When it is exact** (:func:`symmetry`), read from the compiled model, not
+from the builder's arguments, so that whatever the builder learns to do
+(offsets, turns, per-finger curvature) is seen:
+
+* the fingers are identical (hinge stiffness and rest angles, link masses,
+  inertias and frames, geom sizes, every contact pair's friction), their
+  roots at the palm's origin, evenly spaced in azimuth (``2 pi / K``), with
+  gravity along the palm axis;
+* the workpiece starts on the palm axis (its free joint's ``qpos0``; any
+  scene attribute named ``*offset*`` is zero), upright, and every finger's
+  plane meets the same surface head on at ``b/2 - r_tip`` from the axis: a
+  box face whose normal is the finger's ``E1`` (box ``K`` = 2, 4), a
+  vertical cylinder, a sphere;
+* one tip--workpiece contact pair per finger and no other.
+
+**The planar problem.**  Box and cylinder: the planar symmetric reduction
+(:func:`simgrip.scenes.build_scene` with one finger and a workpiece of mass
+``M`` sliding in ``z``, the same ``n``, profile, radii and gravity).  Sphere
+at contact elevation ``beta``: the same rod problem at width ``b cos beta``
+(:mod:`simgrip.reference.inclined`: each finger carries ``M`` vertically and
+its tip sits at ``X = (b/2) cos beta``), settled with a friction
+coefficient of 100 (the model's largest: the planar cone binds only
+where ``N1 < M/100``, and that finger is taken as dropped; ``N1 <= 0`` drops
+it as the dynamics does); the sphere's own cone then decides
+(``|F_f| <= mu_s N`` along the sphere's normal), and a dropped sphere leaves
+the fingers to settle alone (the planar free finger).  The contact is the
+planar settle's: ``contact="point"`` (default, the paper's point contact:
+friction on the centreline) or ``"surface"`` (box and cylinder: at MuJoCo's
+contact point, the finite-radius couple, as the dynamics).
+
+**Replication and the judge.**  Finger ``k`` takes the planar hinge angles;
+the workpiece sits on the axis, as high relative to the tips as the planar
+one (sphere: its centre ``b/2`` minus the planar penetration from every
+tip), oriented as built.  The contact force on finger ``k`` is ``N1 E1_k +
+N2 z`` at its tip centre plus the planar couple about ``E1_k x z``, and
+minus that on the workpiece.  The reported ``residual`` is MuJoCo's static
+balance of the K-finger model at that state under those forces (springs and
+gravity from ``mj_passive``/``mj_rne`` at rest, the forces by
+``mj_applyFT``), scaled per dof as the dynamics' (hinges and rotation over
+``rho g l^2``, translation over ``rho g l``); penetration and contact points
+are MuJoCo's collision in the K-finger scene.  The hinge rows are the planar
+finger's, the workpiece's horizontal and rotation rows cancel by symmetry,
+and its vertical row adds K fingers' vertical rows, so ``tolerance`` is
+``K`` times the planar state's.  The contact's force law is the planar
+settle's (its stiff static contact, :mod:`simgrip.settle.statics`), not the
+dynamics' softer one, so the penetration is smaller than the dynamics'.
+"""
+
+from __future__ import annotations
+
+import math
+import time
+from dataclasses import dataclass, replace
+
+import mujoco
+import numpy as np
+
+from simgrip.chain import chain_springs
+from simgrip.settle.state import SettleError
+from simgrip.sim.gripper import GripperScene
+from simgrip.validity import check_grip_shape
+
+__all__ = ["GRIPPER_METHODS", "Symmetry", "planar_scene", "settle_symmetric", "symmetric_or_none", "symmetry"]
+
+#: ``settle_gripper(method=...)``: the over-damped dynamics, the symmetry skip, or the skip where exact.
+GRIPPER_METHODS = ("dynamics", "symmetric", "auto")
+#: Grips the skip covers.
+SYMMETRIC_GRIPS = ("I", "II")
+#: Relative round-off within which two model arrays count as equal (the builder computes every
+#: finger's from the same numbers; trigonometry of the azimuths leaves a few ulps).
+_EQUAL_RTOL = 1e-9
+#: Friction coefficient of the sphere's planar problem (the model's largest): the planar cone binds only
+#: where ``N1 < M / 100``, the sphere's own cone decides.
+_NEVER_BINDS = 100.0
+
+
+@dataclass(frozen=True)
+class Symmetry:
+    """Whether the K-finger scene is exactly symmetric; ``reason`` says why not (empty when it is)."""
+
+    exact: bool
+    reason: str = ""
+
+
+def _same(a) -> bool:
+    """All rows of ``a`` (leading axis: the fingers) equal to the first, to round-off of its largest entry."""
+    a = np.asarray(a, dtype=float)
+    return bool(np.all(np.abs(a - a[:1]) <= _EQUAL_RTOL * float(np.max(np.abs(a), initial=0.0))))
+
+
+def _yaw_of(quat) -> tuple[float, float]:
+    """``(yaw about z, tilt)`` of a unit quaternion ``(w, x, y, z)``: tilt is ``|(x, y)|``."""
+    w, x, y, z = (float(v) for v in quat)
+    return 2.0 * math.atan2(z, w), math.hypot(x, y)
+
+
+def _wrap(a):
+    return (np.asarray(a, dtype=float) + math.pi) % (2.0 * math.pi) - math.pi
+
+
+def symmetry(scene: GripperScene) -> Symmetry:
+    """Whether every finger of ``scene`` is the same planar problem (see the module docstring)."""
+    if not isinstance(scene, GripperScene):
+        raise ValueError(f"scene must be a simgrip.sim.gripper.GripperScene, got {type(scene).__name__}")
+    m, K, n, L = scene.model, scene.fingers, scene.n, scene.length
+    if scene.grip not in SYMMETRIC_GRIPS:
+        return Symmetry(False, f"grip {scene.grip} (the skip covers {SYMMETRIC_GRIPS})")
+    if np.any(np.asarray(m.opt.gravity[:2]) != 0.0):
+        return Symmetry(False, "gravity is not along the palm axis")
+    jnt = m.dof_jntid[scene.joint_dof]
+    bodies = scene.index.link_body
+    link_geoms = scene.index.link_geom
+    checks = {
+        "hinge stiffness": m.jnt_stiffness[jnt],
+        "hinge rest angles": m.qpos_spring[scene.joint_qpos],
+        "link masses": m.body_mass[bodies],
+        "link inertias": m.body_inertia[bodies],
+        "link frames": np.concatenate([m.body_pos[bodies[:, 1:]], m.body_quat[bodies[:, 1:]]], axis=2),
+        "link geoms": m.geom_size[link_geoms],
+        "tip spheres": m.geom_size[scene.tip_geom][:, :1],
+    }
+    for what, arr in checks.items():
+        if not _same(arr):
+            return Symmetry(False, f"the fingers differ in their {what}")
+    for name, value in vars(scene).items():
+        if "offset" in name and value is not None and np.any(np.asarray(value, dtype=float) != 0.0):
+            return Symmetry(False, f"the workpiece is off the palm axis ({name} = {value!r})")
+    sp = chain_springs(scene.profile, n)
+    if not (np.allclose(m.qpos_spring[scene.joint_qpos[0]], sp.rest, rtol=0.0, atol=_EQUAL_RTOL)
+            and np.allclose(m.jnt_stiffness[jnt[0]], scene.physical.EI / L * sp.stiffness, rtol=_EQUAL_RTOL, atol=0)):
+        return Symmetry(False, "the scene's profile does not give its fingers' springs")
+    # roots at the palm's origin, evenly spaced in azimuth, turned about z only
+    roots = bodies[:, 0]
+    if np.max(np.abs(m.body_pos[roots])) > _EQUAL_RTOL * L:
+        return Symmetry(False, "a finger's root is off the palm's origin")
+    yaws, tilts = zip(*(_yaw_of(q) for q in m.body_quat[roots]))
+    if max(tilts) > _EQUAL_RTOL:
+        return Symmetry(False, "a finger's root is tilted")
+    spacing = np.sort((np.asarray(yaws) - yaws[0]) % (2.0 * math.pi))
+    if np.max(np.abs(_wrap(spacing - 2.0 * math.pi * np.arange(K) / K))) > 1e-9:
+        return Symmetry(False, "the fingers are not evenly spaced about the palm axis")
+    # the contact pairs: one per finger, tip with the workpiece, the same friction
+    pairs = sorted((int(m.pair_geom1[i]), int(m.pair_geom2[i])) for i in range(m.npair))
+    if pairs != sorted((int(g), int(scene.workpiece_geom)) for g in scene.tip_geom):
+        return Symmetry(False, "the contact pairs are not one tip--workpiece pair per finger")
+    if not _same(m.pair_friction):
+        return Symmetry(False, "the contact pairs' friction differs")
+    # the workpiece: on the axis, upright, every finger meeting the same surface head on
+    q0 = np.asarray(m.qpos0[scene.workpiece_qpos])
+    if np.max(np.abs(q0[:2])) > _EQUAL_RTOL * L:
+        return Symmetry(False, "the workpiece starts off the palm axis")
+    wg = scene.workpiece_geom
+    if np.max(np.abs(m.geom_pos[wg])) > _EQUAL_RTOL * L:
+        return Symmetry(False, "the workpiece's geom is off its body's centre")
+    rot = np.zeros(9)
+    quat = np.zeros(4)
+    mujoco.mju_mulQuat(quat, q0[3:], m.geom_quat[wg])
+    mujoco.mju_quat2Mat(rot, quat)
+    rot = rot.reshape(3, 3)
+    size = np.asarray(m.geom_size[wg])
+    face = (0.5 * scene.params.b - scene.r_tip) * L
+    gtype = int(m.geom_type[wg])
+    if gtype == int(mujoco.mjtGeom.mjGEOM_SPHERE):
+        ok = abs(size[0] - face) <= _EQUAL_RTOL * L
+        angles = np.atleast_1d(np.asarray(scene.contact_angle, dtype=float))
+        if ok and not np.all(angles == angles[0]):
+            return Symmetry(False, "the fingers' contact angles differ")
+    elif gtype == int(mujoco.mjtGeom.mjGEOM_CYLINDER):
+        ok = abs(size[0] - face) <= _EQUAL_RTOL * L and abs(rot[2, 2] - 1.0) <= _EQUAL_RTOL
+    elif gtype == int(mujoco.mjtGeom.mjGEOM_BOX):
+        ok = abs(rot[2, 2] - 1.0) <= _EQUAL_RTOL
+        for a in yaws:
+            e = rot.T @ np.array([math.cos(a), math.sin(a), 0.0])  # the finger's E1 in the box's frame
+            axis = int(np.argmax(np.abs(e[:2])))
+            ok = ok and abs(abs(e[axis]) - 1.0) <= 1e-9 and abs(size[axis] - face) <= _EQUAL_RTOL * L
+    else:
+        ok = False
+    if not ok:
+        return Symmetry(False, "the fingers do not all meet the workpiece's surface head on at b/2 - r_tip")
+    return Symmetry(True)
+
+
+def _planar_params(scene: GripperScene, beta: float):
+    """The planar problem's parameters in the scene's own units (the sphere's: width ``b cos beta``)."""
+    p = scene.physical
+    if scene.workpiece != "sphere":
+        return p
+    return replace(p, b=p.b * math.cos(beta), mu_s=_NEVER_BINDS)
+
+
+def planar_scene(scene: GripperScene, grip: str | None = None):
+    """The one-finger planar scene of ``scene``'s per-finger problem (built, not settled).
+
+    ``grip``: default the scene's; ``"free"`` for the finger alone.  Same ``n``,
+    profile, radii and gravity (the model's ``opt.gravity``) as ``scene``.
+    """
+    from simgrip.scenes import build_scene
+
+    beta = float(np.atleast_1d(scene.contact_angle)[0]) if scene.workpiece == "sphere" else 0.0
+    g = scene.grip if grip is None else grip
+    pl = build_scene(g, _planar_params(scene, beta), scene.profile, scene.n, r_tip=scene.r_tip, r_link=scene.r_link)
+    pl.model.opt.gravity[:] = scene.model.opt.gravity
+    gbit = int(mujoco.mjtDisableBit.mjDSBL_GRAVITY)
+    pl.model.opt.disableflags = (int(pl.model.opt.disableflags) & ~gbit) | (int(scene.model.opt.disableflags) & gbit)
+    return pl
+
+
+def symmetric_or_none(scene: GripperScene, method: str, **kw):
+    """``settle_gripper``'s hook: the skip's state for ``method`` ``"symmetric"`` or ``"auto"``, else None.
+
+    ``"auto"`` returns None where the scene is not exactly symmetric (the
+    caller settles it by dynamics); ``"symmetric"`` raises ValueError naming
+    ``method`` there.  ``kw`` go to :func:`settle_symmetric`.
+    """
+    if method not in GRIPPER_METHODS:
+        raise ValueError(f"method must be one of {GRIPPER_METHODS}, got {method!r}")
+    if method == "dynamics":
+        return None
+    sym = symmetry(scene)
+    if not sym.exact:
+        if method == "auto":
+            return None
+        raise ValueError(f"method 'symmetric' needs an exactly symmetric scene: {sym.reason}")
+    return settle_symmetric(scene, **kw)
+
+
+def settle_symmetric(scene: GripperScene, *, tol: float | None = None, max_steps: int | None = None,
+                     contact: str = "point", allow_unconverged: bool = False):
+    """Settle an exactly symmetric K-finger scene from one finger's planar settle (see the module docstring).
+
+    Parameters
+    ----------
+    scene : GripperScene
+        Exactly symmetric (:func:`symmetry`), else ValueError naming ``scene``.
+    tol : float, optional
+        The planar settle's static residual tolerance (default its own,
+        :data:`simgrip.settle.DEFAULT_TOL`); the K-finger state's
+        ``tolerance`` is ``K`` times the planar state's.
+    max_steps : int, optional
+        The planar settle's Newton iteration budget.
+    contact : {"point", "surface"}
+        Where the sticking friction acts (:func:`simgrip.settle.settle`);
+        ``"surface"`` for box and cylinder only.
+    allow_unconverged : bool
+        Return ``converged=False`` instead of raising :class:`SettleError`.
+
+    Returns
+    -------
+    GripperState
+        ``steps`` counts the planar Newton iterations; ``velocity`` and ``timestep`` are 0.
+    """
+    from simgrip.settle import settle
+
+    sym = symmetry(scene)
+    if not sym.exact:
+        raise ValueError(f"scene is not exactly symmetric ({sym.reason}): settle it with method='dynamics'")
+    if contact not in ("point", "surface"):
+        raise ValueError(f"contact must be 'point' or 'surface', got {contact!r}")
+    if contact == "surface" and scene.workpiece == "sphere":
+        raise ValueError("contact: 'surface' puts the vertical face's couple on the tip; the sphere's skip is "
+                         "the point contact only")
+    t0 = time.perf_counter()
+    kw = {k: v for k, v in (("tol", tol), ("max_steps", max_steps)) if v is not None}
+    pst = settle(planar_scene(scene), contact=contact, allow_unconverged=allow_unconverged, **kw)
+    tolerance = scene.fingers * float(pst.tolerance)
+    held = bool(pst.held)
+    converged = bool(pst.converged)
+    steps = int(pst.steps)
+    if held and scene.workpiece == "sphere":
+        held = _sphere_holds(scene, pst)
+    if not held and scene.workpiece == "sphere" and pst.held:
+        # the sphere's cone fails: it drops, and the fingers settle alone
+        alone = settle(planar_scene(scene, "free"), allow_unconverged=allow_unconverged, **kw)
+        converged, steps = converged and bool(alone.converged), steps + int(alone.steps)
+        tolerance = max(tolerance, float(alone.tolerance))
+        pst = alone
+    return _replicate(scene, pst, held, converged, steps, tolerance, allow_unconverged, t0)
+
+
+def _sphere_holds(scene: GripperScene, pst) -> bool:
+    """The sphere's cone at the planar contact: ``N > 0`` and ``|F_f| <= mu_s N`` along the sphere's normal."""
+    beta = float(np.atleast_1d(scene.contact_angle)[0])
+    c, s = math.cos(beta), math.sin(beta)
+    normal = pst.N1 * c + pst.N2 * s
+    friction = -pst.N1 * s + pst.N2 * c
+    return bool(normal > 0.0 and abs(friction) <= float(scene.physical.mu_s) * normal)
+
+
+def _replicate(scene: GripperScene, pst, held: bool, converged: bool, steps: int, tolerance: float,
+               allow_unconverged: bool, t0: float):
+    """The K-finger state from the planar state ``pst`` (see the module docstring)."""
+    from simgrip.settle.gripper import FingerRecord, GripperState
+
+    m, d, K = scene.model, scene.data, scene.fingers
+    L, W = scene.length, scene.force_scale
+    q_finger = np.asarray(pst.joint_angles[0], dtype=float)
+    phi = np.cumsum(q_finger)
+    tip = np.asarray(pst.tip[0], dtype=float)
+    qpos = np.array(m.qpos0)
+    qpos[scene.joint_qpos] = q_finger[None, :]
+    wq = scene.workpiece_qpos
+    if held:
+        if scene.workpiece == "sphere":
+            # on the axis, the planar penetration deep into every tip
+            r = 0.5 * scene.params.b - float(pst.penetration)
+            qpos[wq[2]] = (tip[1] - math.sqrt(max(r * r - tip[0] ** 2, 0.0))
+                           * (1.0 if float(np.atleast_1d(scene.contact_angle)[0]) >= 0 else -1.0)) * L
+        else:
+            qpos[wq[2]] = float(pst.workpiece_pose[1]) * L  # the planar workpiece's height (same root)
+    d.qpos[:] = qpos
+    d.qvel[:] = 0.0
+    d.qfrc_applied[:] = 0.0
+    mujoco.mj_kinematics(m, d)
+    mujoco.mj_comPos(m, d)
+    mujoco.mj_comVel(m, d)
+    wb = scene.workpiece_body
+    centre = np.array(d.xpos[wb])
+    frames = [scene.frame(k) for k in range(K)]
+    forces, torques, points = [], [], []
+    if held:
+        c = pst.contact
+        for k in range(K):
+            e1, e3 = frames[k][0], np.cross(frames[k][0], [0.0, 0.0, 1.0])  # E1 x z: the planar moment's axis
+            F = W * (c.N1 * e1 + c.N2 * np.array([0.0, 0.0, 1.0]))
+            tau = W * L * c.moment * e3
+            p = np.array(d.geom_xpos[scene.tip_geom[k]])
+            body = int(m.geom_bodyid[scene.tip_geom[k]])
+            mujoco.mj_applyFT(m, d, F, tau, p, body, d.qfrc_applied)
+            mujoco.mj_applyFT(m, d, -F, -tau, p, wb, d.qfrc_applied)
+            forces.append(F)
+            torques.append(tau)
+            points.append(p)
+    mujoco.mj_passive(m, d)
+    mujoco.mj_rne(m, d, 0, d.qfrc_bias)
+    fscale = np.full(m.nv, scene.moment_scale)
+    fscale[scene.workpiece_dof[:3]] = W
+    r = (d.qfrc_applied + d.qfrc_passive - d.qfrc_bias) / fscale
+    if not held:
+        r[scene.workpiece_dof] = 0.0  # parked
+    residual = float(np.max(np.abs(r)))
+    # MuJoCo's collision at the state (the scene's own options), the data left there at rest
+    d.qfrc_applied[:] = 0.0
+    mujoco.mj_forward(m, d)
+    records, pen_max = [], 0.0
+    total_f, total_m = np.zeros(3), np.zeros(3)
+    for k in range(K if held else 0):
+        cons = [i for i in range(d.ncon)
+                if int(d.contact.geom1[i]) == scene.tip_geom[k] and int(d.contact.geom2[i]) == scene.workpiece_geom]
+        if not cons:
+            raise SettleError(f"symmetric settle: finger {k}'s tip does not touch the workpiece at the replicated "
+                              f"state (the planar state is not the K-finger scene's)")
+        i = min(cons, key=lambda j: float(d.contact.dist[j]))
+        pen = -float(d.contact.dist[i]) / L
+        nvec = -np.asarray(d.contact.frame[i])[:3]  # from the workpiece into the tip
+        R = frames[k]
+        nk = R @ nvec
+        n2d = np.array([nk[0], nk[2]]) / math.hypot(nk[0], nk[2])
+        t2d = np.array([-n2d[1], n2d[0]])
+        Fk = R @ forces[k] / W
+        F2d = np.array([Fk[0], Fk[2]])
+        normal, friction = float(F2d @ n2d), float(F2d @ t2d)
+        pk = R @ np.asarray(d.contact.pos[i]) / L
+        tangential = math.sqrt(max(float(Fk @ Fk) - normal ** 2, 0.0))
+        records.append(FingerRecord(
+            finger=k, N1=float(Fk[0]), N2=float(Fk[2]), N3=float(Fk[1]), normal=normal, friction=friction,
+            contact_angle=float(math.atan2(n2d[1], n2d[0])), tip=tip.copy(), point=np.array([pk[0], pk[2], pk[1]]),
+            moment=float(pst.contact.moment), penetration=pen,
+            required_mu=tangential / normal if normal > 0 else math.inf))
+        pen_max = max(pen_max, pen)
+        total_f -= forces[k]
+        total_m += np.cross(points[k] - centre, -forces[k]) - torques[k]
+    if held:
+        total_f += float(m.body_mass[wb]) * np.asarray(m.opt.gravity)
+    state = GripperState(
+        grip=scene.grip, workpiece=scene.workpiece, fingers=K, links=scene.n,
+        joint_angles=np.tile(q_finger, (K, 1)), link_angles=np.tile(phi, (K, 1)), tip=np.tile(tip, (K, 1)),
+        records=records, held=held, converged=bool(converged and residual <= tolerance), residual=residual,
+        tolerance=tolerance, velocity=0.0, penetration=pen_max,
+        force_balance=total_f / W if held else np.zeros(3),
+        moment_balance=total_m / (W * L) if held else np.zeros(3),
+        workpiece_position=centre / L, workpiece_quat=np.array(d.xquat[wb]), steps=steps, timestep=0.0,
+        wall_time_s=time.perf_counter() - t0, qpos=np.array(d.qpos))
+    if hasattr(state, "method"):
+        state.method = "symmetric"
+    if not state.converged and not allow_unconverged:
+        raise SettleError(f"symmetric settle did not converge (K-finger residual {residual:.3g} above the tolerance "
+                          f"{tolerance:.3g}, {steps} planar Newton iterations)")
+    check_grip_shape(scene, state)
+    return state
