@@ -140,6 +140,8 @@ class GripperState:
     grip_matched: bool = True
     #: Conditions the state violates that the settle does not enforce (e.g. the other grip's shape).
     warnings: list = field(default_factory=list)
+    #: How it was settled: ``"dynamics"`` or ``"symmetric"`` (:mod:`simgrip.settle.gripper_symmetry`).
+    method: str = "dynamics"
 
 
 # ---------------------------------------------------------------------------
@@ -228,13 +230,15 @@ class _Dyn:
         return run_to_rest(self, tol, DYN_VTOL, budget, watch, "gripper settle")
 
 
-def _chain(scene: GripperScene, grip: str, b: float | None = None, guess=None):
+def _chain(scene: GripperScene, grip: str, b: float | None = None, guess=None, finger: int = 0):
+    """The hinge chain of ``finger`` (its own profile) in ``grip`` with its tip at ``X = b/2``; None if unsolved."""
     from simgrip.reference import DiscreteError, solve_chain
 
     p = scene.params if b is None else scene.params.replace(b=b)
     gravity = -float(scene.model.opt.gravity[2]) / scene.physical.g
+    profile = scene.profiles[finger] if scene.profiles else scene.profile
     try:
-        return solve_chain(grip, p, scene.profile, scene.n, guess=guess, gravity=gravity)
+        return solve_chain(grip, p, profile, scene.n, guess=guess, gravity=gravity)
     except (DiscreteError, ValueError):
         return None
 
@@ -265,7 +269,7 @@ def gripper_tolerance(scene: GripperScene) -> float:
 
 
 def settle_gripper(scene: GripperScene, *, tol: float | None = None, max_steps: int = GRIPPER_MAX_STEPS,
-                   allow_unconverged: bool = False) -> GripperState:
+                   allow_unconverged: bool = False, method: str = "dynamics") -> GripperState:
     """Settle a K-finger gripper by over-damped dynamics (see the module docstring).
 
     Parameters
@@ -278,6 +282,11 @@ def settle_gripper(scene: GripperScene, *, tol: float | None = None, max_steps: 
         Physics steps allowed to the whole settle (restarts included).
     allow_unconverged : bool
         Return ``converged=False`` instead of raising :class:`SettleError`.
+    method : {"dynamics", "symmetric", "auto"}
+        ``"symmetric"``: one finger's planar static settle replicated to K
+        (:mod:`simgrip.settle.gripper_symmetry`; ``tol`` and ``max_steps`` are
+        then the planar Newton's); ``"auto"``: that where the scene is exactly
+        symmetric, else the dynamics.
 
     Returns
     -------
@@ -285,6 +294,12 @@ def settle_gripper(scene: GripperScene, *, tol: float | None = None, max_steps: 
     """
     if not isinstance(scene, GripperScene):
         raise ValueError(f"scene must be a simgrip.sim.gripper.GripperScene, got {type(scene).__name__}")
+    if method != "dynamics":
+        from simgrip.settle.gripper_symmetry import symmetric_or_none
+
+        state = symmetric_or_none(scene, method, tol=tol, max_steps=max_steps, allow_unconverged=allow_unconverged)
+        if state is not None:
+            return state
     if tol is None:
         tol = gripper_tolerance(scene)
     tol, max_steps = check_tol_steps(tol, max_steps)
@@ -324,32 +339,42 @@ def settle_gripper(scene: GripperScene, *, tol: float | None = None, max_steps: 
 
 
 def _start(scene: GripperScene) -> np.ndarray | None:
-    """qpos of the start: fingers at the chain's grip equilibrium, workpiece centred on the palm axis.
+    """qpos of the start: every finger at its own chain's grip equilibrium (load ``M``) at its reach.
 
-    Box and cylinder: centred level with the tips.  Sphere: the tips at
-    ``X = (b/2) cos beta``, the centre ``(b/2) sin beta`` below them
-    (``beta = scene.contact_angle``).
+    Finger ``k``'s tip starts at ``X = scene.reach[k]`` (``b/2`` for a centred
+    workpiece; where its plane meets an off-centre or turned one), its own
+    profile.  Box and cylinder: the workpiece where the builder put it, its
+    centre level with the tips' mean height.  Sphere: the tips at ``X = (b/2)
+    cos beta``, the centre ``(b/2) sin beta`` below them (``beta =
+    scene.contact_angle``).
 
-    None when the free finger does not reach that ``X``, or when the chain's equilibrium there pulls
-    on the workpiece (``N1 <= 0``): nothing to hold.
+    None when a free finger does not reach its ``X``, or when a chain's equilibrium there pulls
+    on the workpiece (``N1 <= 0``): the workpiece is not held.
     """
     p = scene.params
     beta = scene.contact_angle  # sphere: the tip at X = (b/2) cos(beta) on the sphere; 0 for vertical faces
-    # the tip a hair inside the surface: MuJoCo sees the contact
-    ch = _chain(scene, scene.grip, b=p.b * math.cos(beta) - 2e-6)
-    free = _chain(scene, "free", guess=None if ch is None else ch.link_angles)
-    if free is not None and float(np.sum(np.cos(free.link_angles))) / scene.n > 0.5 * p.b * math.cos(beta):
-        return None
-    if ch is None or not (ch.success and ch.min_eigenvalue > 0.0):
-        raise SettleError(f"no start for grip {scene.grip}: the hinge chain has no stable equilibrium with its tip "
-                          f"on the workpiece (b = {p.b:g})")
-    if not ch.N1 > 0.0:
-        return None  # the loaded finger would have to pull on the workpiece: it cannot hold it
+    reach = np.full(scene.fingers, 0.5 * p.b) if scene.reach is None else np.asarray(scene.reach)
     q = np.array(scene.data.qpos)
-    q[scene.joint_qpos] = ch.joint_angles[None, :]
+    heights = []
+    for k in range(scene.fingers):
+        X = float(reach[k]) * math.cos(beta)
+        # the tip a hair inside the surface: MuJoCo sees the contact
+        ch = _chain(scene, scene.grip, b=2.0 * X - 2e-6, finger=k)
+        free = _chain(scene, "free", guess=None if ch is None else ch.link_angles, finger=k)
+        if free is not None and float(np.sum(np.cos(free.link_angles))) / scene.n > X:
+            return None
+        if ch is None or not (ch.success and ch.min_eigenvalue > 0.0):
+            raise SettleError(f"no start for grip {scene.grip}: finger {k}'s hinge chain has no stable equilibrium "
+                              f"with its tip on the workpiece (X = {X:g}, b = {p.b:g})")
+        if not ch.N1 > 0.0:
+            return None  # the loaded finger would have to pull on the workpiece: it cannot hold it
+        q[scene.joint_qpos[k]] = ch.joint_angles
+        heights.append(float(ch.tip[1]))
     wq = scene.workpiece_qpos
-    q[wq[:3]] = [0.0, 0.0, (float(ch.tip[1]) - 0.5 * p.b * math.sin(beta)) * scene.length]
-    q[wq[3:]] = [math.cos(0.5 * scene.yaw), 0.0, 0.0, math.sin(0.5 * scene.yaw)]
+    q[wq[:2]] = scene.model.qpos0[wq[:2]]  # the builder's centre (offset, turned by yaw)
+    q[wq[2]] = (float(np.mean(heights)) - 0.5 * p.b * math.sin(beta)) * scene.length
+    turn = scene.yaw + scene.workpiece_yaw
+    q[wq[3:]] = [math.cos(0.5 * turn), 0.0, 0.0, math.sin(0.5 * turn)]
     return q
 
 
@@ -384,10 +409,11 @@ def _settle_once(scene: GripperScene, dyn: _Dyn, tol: float, budget: int, reach:
         # park the workpiece (held, contact off) and settle the fingers alone from the chain's free shape
         dyn.hold(True)
         m.opt.disableflags |= int(mujoco.mjtDisableBit.mjDSBL_CONTACT)
-        free = _chain(scene, "free")
-        if free is not None:
-            d.qpos[scene.joint_qpos] = free.joint_angles[None, :]
-            d.qvel[:] = 0.0
+        for k in range(scene.fingers):
+            free = _chain(scene, "free", finger=k)
+            if free is not None:
+                d.qpos[scene.joint_qpos[k]] = free.joint_angles
+        d.qvel[:] = 0.0
         converged, why = dyn.run(tol, budget)
     return held, converged, why
 

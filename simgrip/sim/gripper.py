@@ -28,6 +28,13 @@ Geometry (lengths over ``l``; the palm axis is the world ``z`` axis):
   (sphere: from its centre); box and cylinder are :data:`BOX_HEIGHT` tall so
   that the tip meets a vertical face.  The whole scene (fingers and
   workpiece) is rotated by ``yaw`` about the palm axis.
+* Beyond the symmetric grasp: the workpiece may sit off the palm axis
+  (``offset``, over ``l``) and turn about its own vertical axis
+  (``workpiece_yaw``), both in the scene's frame (``yaw`` turns them with
+  the rest); box and cylinder only (:mod:`simgrip.sim.gripper_placement`
+  finds where each finger's plane meets it, the *reach*).  Each finger may
+  have its own curvature profile (``profile`` a sequence of ``K``): the same
+  stiffness, its own rest angles.
 * Contact: one pair per finger, its tip sphere with the workpiece (Grips I,
   II); no other pair can occur in these grips.
 
@@ -40,7 +47,7 @@ grip equilibrium.  Grip III (cradle) is not built for K fingers.
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 
 import mujoco
 import numpy as np
@@ -50,6 +57,7 @@ from simgrip.params import DimensionlessParams, PhysicalParams, check_grip
 from simgrip.profiles import CurvatureProfile, as_profile
 from simgrip.sim.contacts import add_pair
 from simgrip.sim.fingers import FingerIndex, add_fingers, check_finger_links, index_fingers
+from simgrip.sim.gripper_placement import check_offset, check_workpiece_yaw, place_fingers
 from simgrip.sim.scene import FingerScene, check_params, check_positive, root_spec, set_joint_angles
 from simgrip.sim.workpiece import BOX_DEPTH, BOX_HEIGHT
 
@@ -84,12 +92,13 @@ class GripperScene(FingerScene):
     physical : PhysicalParams
         SI parameters the model is built in (dimensionless ones with ``l = rho = g = 1``).
     profile : CurvatureProfile
+        Finger 0's profile (every finger's unless ``profiles`` differ).
     n : int
         Links per finger.
     fingers : int
         ``K``.
     springs : ChainSprings
-        Dimensionless springs of one finger (every finger has the same).
+        Dimensionless springs of finger 0 (every finger's unless ``profiles`` differ).
     index : FingerIndex
         The fingers' joint, body and geom addresses, shape (K, n).
     azimuths : ndarray (K,)
@@ -107,6 +116,19 @@ class GripperScene(FingerScene):
         Radii over ``l``.
     contact_angle : float
         Sphere: elevation of the start's contact normal [rad] (0 for box and cylinder).
+    offset : ndarray (2,)
+        The workpiece's centre off the palm axis over ``l``, scene frame (turned by ``yaw`` in the world).
+    workpiece_yaw : float
+        The workpiece's turn about its vertical axis relative to the fingers [rad].
+    profiles : tuple of CurvatureProfile
+        Every finger's profile, (K,).
+    finger_springs : tuple of ChainSprings
+        Every finger's springs, (K,).
+    reach : ndarray (K,)
+        ``X`` over ``l`` where each finger's tip centre meets the workpiece
+        (:func:`~simgrip.sim.gripper_placement.place_fingers`; ``b/2`` when centred).
+    normals : ndarray (K, 2)
+        The workpiece's outward horizontal normal there, ``(along E1, along E3)`` of the finger.
     """
 
     spec: mujoco.MjSpec
@@ -131,6 +153,12 @@ class GripperScene(FingerScene):
     r_tip: float
     r_link: float
     contact_angle: float = 0.0
+    offset: np.ndarray = field(default_factory=lambda: np.zeros(2))
+    workpiece_yaw: float = 0.0
+    profiles: tuple = ()
+    finger_springs: tuple = ()
+    reach: np.ndarray | None = None
+    normals: np.ndarray | None = None
 
     @property
     def tip_geom(self) -> np.ndarray:
@@ -196,6 +224,8 @@ def build_gripper(
     r_tip: float = DEFAULT_R_TIP,
     r_link: float = DEFAULT_R_LINK,
     initial_angles=None,
+    offset=(0.0, 0.0),
+    workpiece_yaw: float = 0.0,
 ) -> GripperScene:
     """Build and compile a K-finger gripper holding a workpiece (see the module docstring).
 
@@ -206,8 +236,8 @@ def build_gripper(
     params : PhysicalParams or DimensionlessParams
         ``M`` is the workpiece mass per finger; ``b`` the workpiece's width
         (box), diameter (cylinder, sphere) through the tip centres.
-    profile : CurvatureProfile, float or callable
-        Intrinsic curvature ``kappa_bar(s_bar)`` of every finger.
+    profile : CurvatureProfile, float or callable, or a sequence of K of them
+        Intrinsic curvature ``kappa_bar(s_bar)`` of every finger, or one per finger.
     n_links : int
         Links per finger.
     fingers : int
@@ -227,6 +257,14 @@ def build_gripper(
     initial_angles : array (n,) or (K, n), optional
         Joint angles of the start shape [rad]; default straight.  The
         workpiece's centre starts level with finger 0's tip.
+    offset : (dx, dy)
+        The workpiece's centre off the palm axis over ``l``, in the scene's
+        frame (turned by ``yaw``); box and cylinder only, the palm axis inside
+        the workpiece's footprint (ValueError naming ``offset``).
+    workpiece_yaw : float
+        The workpiece's turn about its vertical axis relative to the fingers
+        [rad]; a box's fingers must still meet flat faces (ValueError naming
+        ``workpiece_yaw``).
 
     Returns
     -------
@@ -234,7 +272,8 @@ def build_gripper(
     """
     grip, K, shape = check_gripper(grip, fingers, workpiece)
     dimless, phys = check_params(params)
-    prof = as_profile(profile)
+    profs = _profiles(profile, K)
+    prof = profs[0]
     n = check_finger_links(n_links)
     r_tip = check_positive("r_tip", r_tip, 0.05)
     r_link = check_positive("r_link", r_link, 0.05)
@@ -250,7 +289,13 @@ def build_gripper(
                          f"b = {dimless.b:g} l")
     if not 0.5 * dimless.b - r_tip > 0.0:
         raise ValueError(f"b must exceed 2 r_tip = {2 * r_tip:g}, got b = {dimless.b:g}")
-    springs = chain_springs(prof, n)
+    off = check_offset(offset)
+    psi = check_workpiece_yaw(workpiece_yaw)
+    finger_springs = tuple(chain_springs(p, n) for p in profs)
+    springs = finger_springs[0]
+    if shape == "sphere" and any(not np.array_equal(f.rest, springs.rest) for f in finger_springs[1:]):
+        raise ValueError("profile must be the same for every finger of a sphere (its tips start on one circle of "
+                         "latitude)")
     q0 = _start(initial_angles, K, n)
 
     L = phys.length
@@ -259,9 +304,15 @@ def build_gripper(
                 r_tip=r_tip * L)
     azimuths = finger_azimuths(K, yaw)
     orient_fingers(spec, azimuths)
+    for k in range(K):  # each finger's own rest angles (every finger has the same stiffness)
+        for i, rest in enumerate(finger_springs[k].rest):
+            spec.joint(f"f{k}_joint{i}").springref = float(rest)
     size = _workpiece_size(shape, K, 0.5 * dimless.b - r_tip, L)
+    place = place_fingers(shape, azimuths - yaw, size / L, r_tip, off, psi)
     z0 = float(link_positions(np.cumsum(q0[0]), springs.ds)[-1, 1]) * L
-    _add_workpiece(spec, shape, size, phys.m * K, z0, yaw)
+    cy, sy = math.cos(yaw), math.sin(yaw)
+    centre = [(cy * off[0] - sy * off[1]) * L, (sy * off[0] + cy * off[1]) * L, z0]
+    _add_workpiece(spec, shape, size, phys.m * K, centre, yaw + psi)
     for k in range(K):
         add_pair(spec, f"pair_f{k}_tip", f"f{k}_tip", _WORKPIECE_GEOM, phys.mu_s)
 
@@ -275,7 +326,8 @@ def build_gripper(
         workpiece_body=wb, workpiece_geom=mujoco.mj_name2id(model, mujoco.mjtObj.mjOBJ_GEOM, _WORKPIECE_GEOM),
         workpiece_qpos=np.arange(model.jnt_qposadr[wj], model.jnt_qposadr[wj] + 7),
         workpiece_dof=np.arange(model.jnt_dofadr[wj], model.jnt_dofadr[wj] + 6),
-        size=size, r_tip=r_tip, r_link=r_link, contact_angle=beta,
+        size=size, r_tip=r_tip, r_link=r_link, contact_angle=beta, offset=off, workpiece_yaw=psi,
+        profiles=profs, finger_springs=finger_springs, reach=place.reach, normals=place.normal,
     )
     set_finger_angles(scene, q0)
     return scene
@@ -291,6 +343,15 @@ def _check_contact_angle(value, shape: str) -> float:
     if shape != "sphere" and beta != 0.0:
         raise ValueError(f"contact_angle must be 0 for workpiece {shape!r} (its surface is vertical), got {value!r}")
     return beta
+
+
+def _profiles(profile, K: int) -> tuple:
+    """One profile per finger: ``profile`` for all, or a sequence of ``K`` (ValueError naming ``profile``)."""
+    if isinstance(profile, (list, tuple, np.ndarray)):
+        if len(profile) != K:
+            raise ValueError(f"profile must be one profile or one per finger ({K}), got {len(profile)}")
+        return tuple(as_profile(p) for p in profile)
+    return (as_profile(profile),) * K
 
 
 def _start(initial_angles, K: int, n: int) -> np.ndarray:
@@ -341,9 +402,9 @@ def _workpiece_size(shape: str, K: int, r: float, L: float) -> np.ndarray:
     return np.array([r, 0.0, 0.0]) * L
 
 
-def _add_workpiece(spec, shape: str, size, mass: float, z0: float, yaw: float) -> None:
-    """The workpiece body on a free joint, its geom and the solid's inertia, centred on the palm axis at ``z0``."""
-    body = spec.worldbody.add_body(name="workpiece_body", pos=[0.0, 0.0, z0], quat=_yaw_quat(yaw))
+def _add_workpiece(spec, shape: str, size, mass: float, centre, yaw: float) -> None:
+    """The workpiece body on a free joint, its geom and the solid's inertia, at ``centre`` [m] turned by ``yaw``."""
+    body = spec.worldbody.add_body(name="workpiece_body", pos=[float(v) for v in centre], quat=_yaw_quat(yaw))
     body.add_freejoint(name="workpiece_free")
     body.explicitinertial = True
     body.mass = mass
