@@ -8,12 +8,15 @@ id                          what                                     max steps
 ==========================  =======================================  =========
 ``simgrip/Pick-v1``         Grip I: palm-down tip pinch (50 Hz)      200 (4 s)
 ``simgrip/PickCradle-v1``   Grip III: cradle from a pedestal (50 Hz) 250 (5 s)
+``simgrip/PickMulti-v0``    K fingers around a box, cylinder, sphere 200 (4 s)
 ==========================  =======================================  =========
 
 >>> import gymnasium as gym, simgrip.envs
 >>> env = gym.make("simgrip/Pick-v1")          # doctest: +SKIP
 
-Extra keyword arguments of ``gym.make`` go to :class:`simgrip.envs.pick.PickEnv`.
+Extra keyword arguments of ``gym.make`` go to :class:`simgrip.envs.pick.PickEnv`
+(:class:`simgrip.envs.pick_multi.PickMultiEnv` for ``PickMulti``).  ``ENV_IDS``
+are the two-finger ids (``PickEnv``), ``MULTI_ENV_IDS`` the K-finger ones.
 The v0 ids are retired (v1 changed the reward and the observation, see the
 version history in :class:`~simgrip.envs.pick.PickEnv`); Gymnasium answers
 ``gym.make("simgrip/Pick-v0")`` with ``DeprecatedEnv`` naming v1.
@@ -23,14 +26,16 @@ from __future__ import annotations
 
 from gymnasium.envs.registration import register, registry
 
-__all__ = ["ENV_IDS", "register_envs"]
+__all__ = ["ENV_IDS", "MULTI_ENV_IDS", "register_envs"]
 
 #: id -> (entry point, kwargs, max_episode_steps)
 _ENVS = {
     "simgrip/Pick-v1": ("simgrip.envs.pick:PickEnv", {"grip": "I"}, 200),
     "simgrip/PickCradle-v1": ("simgrip.envs.pick:PickEnv", {"grip": "III"}, 250),
+    "simgrip/PickMulti-v0": ("simgrip.envs.pick_multi:PickMultiEnv", {}, 200),
 }
-ENV_IDS = tuple(_ENVS)
+ENV_IDS = tuple(k for k, v in _ENVS.items() if v[0] == "simgrip.envs.pick:PickEnv")
+MULTI_ENV_IDS = tuple(k for k in _ENVS if k not in ENV_IDS)
 
 
 def register_envs() -> None:

@@ -1,0 +1,209 @@
+"""The K-finger pick environment's observation, contact forces and reward terms.
+
+:func:`multi_obs_layout` names the observation's blocks and
+:class:`MultiObservation` turns a MuJoCo state into the observation vector of
+:class:`simgrip.envs.pick_multi.PickMultiEnv` (its docstring's table says what
+each entry means), in the conventions of the two-finger pick
+(:mod:`simgrip.envs.pick_observation`): lengths over the finger length,
+velocities in lengths per second, curvatures in action units, forces as
+``log(1 + F/W)``, every entry clipped to its bound.
+:class:`WorkpieceContactForces` sums each finger's contact forces on the
+workpiece; :func:`multi_reward` is Pick-v1's reward
+(:func:`simgrip.envs.pick_reward.pick_reward`) with the squeeze term averaged
+over ``K`` fingers and the least holding force per finger ``m g / (K mu)``.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+from simgrip.envs.pick_observation import SPIN_TIME
+
+__all__ = ["MultiObservation", "WorkpieceContactForces", "multi_obs_layout", "multi_reward"]
+
+
+def multi_obs_layout(fingers: int, shape_points: int = 8, shared_curvature: bool = True) -> list[tuple[str, int]]:
+    """``(name, size)`` of the observation's blocks, in order (see :class:`~simgrip.envs.pick_multi.PickMultiEnv`)."""
+    K = int(fingers)
+    nk = 1 if shared_curvature else K
+    return [
+        ("palm_height", 1),
+        ("kappa_command", nk),
+        ("kappa_actual", nk),
+        ("finger_shape", K * shape_points),
+        ("tip_position", 2 * K),
+        ("workpiece_position", 3),
+        ("workpiece_tilt", 2),
+        ("workpiece_velocity", 3),
+        ("workpiece_spin", 3),
+        ("workpiece_lift", 1),
+        ("contact_force", 2 * K),
+        ("hold", 1),
+    ]
+
+
+class WorkpieceContactForces:
+    """Forces of the workpiece on each of ``K`` fingers [N], read from a MuJoCo state.
+
+    With elliptic friction cones (the pick models') a contact's constraint rows
+    in ``data.efc_force`` are its contact-frame force (normal, tangent 1,
+    tangent 2, ...) and are read directly.
+
+    Parameters
+    ----------
+    fingers : int
+    work_geom : int
+        Geom id of the workpiece.
+    finger_of_geom : array of int
+        For each geom of the model, the finger it belongs to, or -1.
+    """
+
+    def __init__(self, fingers: int, work_geom: int, finger_of_geom):
+        self.K = int(fingers)
+        self.work_geom = int(work_geom)
+        self._fog = np.asarray(finger_of_geom).tolist()
+
+    def __call__(self, data) -> tuple[list, list, list]:
+        """``(normal, friction, side)``, each a list of ``K`` forces [N]: per finger the sum of its contacts'
+        normal forces, of their friction magnitudes, and of the normal forces' horizontal (squeezing) components."""
+        K = self.K
+        normal, friction, side = [0.0] * K, [0.0] * K, [0.0] * K
+        if data.ncon == 0:
+            return normal, friction, side
+        fog, wg = self._fog, self.work_geom
+        con = data.contact
+        frames = con.frame[:, 0:3].tolist()  # the contact normal
+        ef = None
+        for (g1, g2), adr, nrm in zip(con.geom.tolist(), con.efc_address.tolist(), frames):
+            f = fog[g2] if g1 == wg else (fog[g1] if g2 == wg else -1)
+            if f < 0 or adr < 0:
+                continue
+            if ef is None:
+                ef = data.efc_force.tolist()  # one conversion for all contacts
+            fn = ef[adr]
+            normal[f] += fn
+            friction[f] += math.hypot(ef[adr + 1], ef[adr + 2])
+            side[f] += fn * math.hypot(nrm[0], nrm[1])
+        return normal, friction, side
+
+
+class MultiObservation:
+    """Turns the state of a K-finger pick model into the environment's observation vector.
+
+    Parameters
+    ----------
+    fingers, n_links, shape_points, shared_curvature, kappa_range, length, target_height, hold_time
+        As :class:`~simgrip.envs.pick_multi.PickMultiEnv`'s arguments (SI units).
+    force_unit : float
+        Forces are observed as ``log(1 + F / force_unit)`` [N].
+    azimuths : array (K,)
+        Azimuth of each finger's plane [rad].
+    palm_qpos, palm_dof, work_qpos, work_dof, work_body : int
+        Addresses of the palm slide and the workpiece's free joint and body.
+    tips : array of int
+        Geom ids of the ``K`` tip spheres.
+    hinge_qpos : index
+        qpos index of the fingers' hinges, finger 0 first (``K * n_links``).
+
+    Attributes
+    ----------
+    layout, slices, low, high
+        ``(name, size)`` blocks, their slices and the bounds of the observation.
+    """
+
+    def __init__(self, *, fingers, n_links, shape_points, shared_curvature, kappa_range, length, target_height,
+                 hold_time, force_unit, azimuths, palm_qpos, palm_dof, work_qpos, work_dof, work_body, tips,
+                 hinge_qpos):
+        self.K, self.n, self.P = int(fingers), int(n_links), int(shape_points)
+        self.layout = multi_obs_layout(self.K, self.P, shared_curvature)
+        lo, hi = kappa_range
+        k_bound = max(2.0, abs(2.0 * (0.0 - lo) / (hi - lo) - 1.0))  # the fingers start straight (kappa = 0)
+        a_bound = max(20.0, 2.0 * max(abs(lo), abs(hi)))
+        bounds = {
+            "palm_height": (0, 10), "kappa_command": (-k_bound, k_bound), "kappa_actual": (-k_bound, k_bound),
+            "finger_shape": (-a_bound, a_bound), "tip_position": (-5, 5), "workpiece_position": (-10, 10),
+            "workpiece_tilt": (-1, 1), "workpiece_velocity": (-100, 100), "workpiece_spin": (-100, 100),
+            "workpiece_lift": (-20, 20), "contact_force": (0, 20), "hold": (0, 1),
+        }
+        self.slices, lows, highs = {}, [], []
+        for name, size in self.layout:
+            self.slices[name] = slice(len(lows), len(lows) + size)
+            lows += [bounds[name][0]] * size
+            highs += [bounds[name][1]] * size
+        self.low, self.high = np.array(lows, dtype=np.float64), np.array(highs, dtype=np.float64)
+        self.kappa_range = (float(lo), float(hi))
+        self.inv_l = 1.0 / length
+        self.target_height, self.hold_time, self.force_unit = target_height, hold_time, force_unit
+        self.cos_sin = np.array([np.cos(azimuths), np.sin(azimuths)])  # (2, K)
+        self.palm_qpos, self.palm_dof = palm_qpos, palm_dof
+        self.work_qpos, self.work_dof, self.work_body = work_qpos, work_dof, work_body
+        self.tips = np.asarray(tips)
+        self.hinge_qpos = hinge_qpos
+        # shape sampling: tangent angles at s/l = (k+1/2)/P, interpolated between link midpoints, from the
+        # link angles (cumulative hinge angles), as the two-finger observation
+        n, P = self.n, self.P
+        s_link = (np.arange(n) + 0.5) / n
+        s_k = (np.arange(P) + 0.5) / P
+        interp = np.array([np.interp(s_k, s_link, e) for e in np.eye(n)]).T
+        self._shape_matrix_t = np.ascontiguousarray((interp @ np.tril(np.ones((n, n)))).T)  # q -> theta(s_k)
+
+    def __call__(self, data, forces, kappa_cmd, kappa, z0: float, hold: float) -> np.ndarray:
+        """The observation of ``data``: ``forces`` are :class:`WorkpieceContactForces`' ``(normal, friction,
+        side)``; ``kappa_cmd``, ``kappa`` the commanded and actual curvatures (1 or K); ``z0`` the workpiece's
+        starting height [m]; ``hold`` the time held at the target [s]."""
+        sl, inv_l = self.slices, self.inv_l
+        q, v = data.qpos, data.qvel
+        palm_z, palm_v = float(q[self.palm_qpos]), float(v[self.palm_dof])
+        wq, wd = self.work_qpos, self.work_dof
+        lo, hi = self.kappa_range
+        obs = np.empty(self.low.size)
+        obs[0] = palm_z * inv_l
+        obs[sl["kappa_command"]] = 2.0 * (np.asarray(kappa_cmd) - lo) / (hi - lo) - 1.0
+        obs[sl["kappa_actual"]] = 2.0 * (np.asarray(kappa) - lo) / (hi - lo) - 1.0
+        hinges = q[self.hinge_qpos].reshape(self.K, self.n)
+        obs[sl["finger_shape"]] = (hinges @ self._shape_matrix_t).ravel()
+        tips = data.geom_xpos[self.tips]  # (K, 3), world; the palm axis is the world z axis
+        tip = np.empty((self.K, 2))
+        tip[:, 0] = np.einsum("ij,ji->i", tips[:, :2], self.cos_sin) * inv_l  # along each finger's E1
+        tip[:, 1] = (tips[:, 2] - palm_z) * inv_l
+        obs[sl["tip_position"]] = tip.ravel()
+        x, y, z = q[wq:wq + 3]
+        obs[sl["workpiece_position"]] = (x * inv_l, y * inv_l, (z - palm_z) * inv_l)
+        axis = data.xmat[self.work_body].reshape(3, 3)[:, 2]  # the workpiece's z axis in the world
+        obs[sl["workpiece_tilt"]] = axis[:2]
+        vx, vy, vz = v[wd:wd + 3]
+        obs[sl["workpiece_velocity"]] = (vx * inv_l, vy * inv_l, (vz - palm_v) * inv_l)
+        # the free joint's angular velocity is in the body frame: turn it into the world frame
+        obs[sl["workpiece_spin"]] = data.xmat[self.work_body].reshape(3, 3) @ v[wd + 3:wd + 6] * SPIN_TIME
+        obs[sl["workpiece_lift"]] = (z - z0) / self.target_height
+        normal, friction, _ = forces
+        cf = np.empty((self.K, 2))
+        cf[:, 0], cf[:, 1] = normal, friction
+        obs[sl["contact_force"]] = np.log1p(np.maximum(cf.ravel(), 0.0) / self.force_unit)
+        obs[-1] = min(hold / self.hold_time, 1.0) if self.hold_time > 0 else 0.0
+        np.maximum(obs, self.low, out=obs)
+        np.minimum(obs, self.high, out=obs)
+        return obs
+
+
+def multi_reward(*, phi: float, phi_prev: float, success: bool, lost: bool, side_forces, mass: float, g: float,
+                 friction: float, w_lift: float, w_success: float, w_squeeze: float, w_drop: float,
+                 squeeze_margin: float) -> tuple[float, dict]:
+    """One step's reward and its terms (``reward_lift``, ``reward_success``, ``reward_squeeze``, ``reward_drop``).
+
+    As :func:`simgrip.envs.pick_reward.pick_reward` with ``K = len(side_forces)`` fingers: the squeeze term is
+    ``-w_squeeze * mean_f x_f / (1 + x_f)``, ``x_f = max(0, S_f - squeeze_margin * m g / (K mu)) / (m g)``
+    (``S_f`` finger ``f``'s horizontal normal force [N]); for ``K = 2`` the two agree.
+    """
+    K = len(side_forces)
+    weight = mass * g
+    allow = squeeze_margin * weight / (K * friction)
+    xs = [max(s - allow, 0.0) / weight for s in side_forces]
+    r_squeeze = -w_squeeze * sum(x / (1.0 + x) for x in xs) / K
+    r_lift = w_lift * (phi - phi_prev)
+    r_success = w_success if success else 0.0
+    r_drop = -w_drop if lost else 0.0
+    return r_lift + r_success + r_squeeze + r_drop, {
+        "reward_lift": r_lift, "reward_success": r_success, "reward_squeeze": r_squeeze, "reward_drop": r_drop}
