@@ -11,7 +11,9 @@ Computing, simulating and drawing are separate modules:
 * :mod:`~simgrip.figures.plot` -- :func:`plot_figure` and :func:`save_figure`
   (matplotlib's object-oriented API, no pyplot state);
 * :mod:`~simgrip.figures.make` -- :func:`make_figures`, the files, one task of
-  the parallel runner per figure.
+  the parallel runner per figure;
+* :mod:`~simgrip.figures.gripper` -- K-finger grippers: :func:`render_gripper`
+  (a settled grasp drawn offscreen) and the normal force per finger on the BVP.
 
 ``import simgrip.figures`` does not import matplotlib: :func:`plot_figure` and
 :func:`save_figure` load :mod:`~simgrip.figures.plot` on first use.
@@ -45,17 +47,23 @@ fig16  (a) least ``mu_s = |f|/n`` to hold ``M = 5`` (gaps: no normal force, or
        ``mu_s = 1`` (hollow markers: limited by the fold where the finger
        snaps through); the three grips vs ``|kappa_bar0|``
 =====  ===================================================================
+
+K-finger grippers (:mod:`~simgrip.figures.gripper`; Grip I, standard case):
+``grasp3`` and ``grasp4`` (three fingers around a cylinder, four around a box,
+rendered), ``grip_forces`` (``N`` per finger vs ``kappa_bar0``, cylinder with
+3 and 4 fingers, on the BVP curve).
 """
 
 from __future__ import annotations
 
 from simgrip.figures.catalog import FIGURES, figure_key
 from simgrip.figures.data import figure_data
+from simgrip.figures.gripper import render_gripper
 from simgrip.figures.make import add_arguments, cli_figures, make_figures
 from simgrip.figures.overlay import simulation_overlay
 
 __all__ = ["FIGURES", "figure_data", "plot_figure", "make_figures", "save_figure", "simulation_overlay",
-           "figure_key", "add_arguments", "cli_figures"]
+           "figure_key", "add_arguments", "cli_figures", "render_gripper"]
 
 
 def __getattr__(name: str):

@@ -2,7 +2,7 @@
 
 from __future__ import annotations
 
-__all__ = ["FIGURES", "figure_key"]
+__all__ = ["FIGURES", "GRIPPER_FIGURES", "RENDERED_FIGURES", "figure_key"]
 
 #: Figure names, in the paper's order, with a one-line description.
 FIGURES = {
@@ -16,11 +16,19 @@ FIGURES = {
     "fig14": "Grip II with profile (34), alpha in [1, 3]",
     "fig15": "Grip III with profile (34), alpha in [1, 3]",
     "fig16": "least mu_s for M = 5 and largest M at mu_s = 1, three grips",
+    # K-finger grippers (simgrip.figures.gripper), Grip I at the standard case
+    "grasp3": "three fingers around a cylinder, settled at n = 32 (MuJoCo rendering)",
+    "grasp4": "four fingers around a box, settled at n = 32 (MuJoCo rendering)",
+    "grip_forces": "normal force per finger vs kappa_bar0, cylinder with 3 and 4 fingers: simulation on the BVP",
 }
+
+#: Figures made by :mod:`simgrip.figures.gripper`, and those of them that need OpenGL (rendered pictures).
+GRIPPER_FIGURES = ("grasp3", "grasp4", "grip_forces")
+RENDERED_FIGURES = ("grasp3", "grasp4")
 
 #: Rough relative cost of computing each figure (the slow ones are started first).
 COST = {"fig16": 10, "fig11": 8, "fig15": 6, "fig13": 4, "fig14": 4, "fig09": 3,
-        "fig07": 2, "fig08": 2, "fig06": 2, "fig12": 1}
+        "fig07": 2, "fig08": 2, "fig06": 2, "fig12": 1, "grip_forces": 2, "grasp3": 1, "grasp4": 1}
 
 #: Figures that can carry the MuJoCo overlay, and the grip of each grip sweep.
 OVERLAY_FIGURES = ("fig06", "fig07", "fig08", "fig09")
@@ -32,8 +40,10 @@ GRIP_TITLE = {"I": "Grip I (palm down)", "II": "Grip II (palm up)", "III": "Grip
 
 
 def figure_key(name) -> str:
-    """Normalise ``6``, ``"6"``, ``"fig6"``, ``"fig06"`` to ``"fig06"``; ``ValueError`` for an unknown figure."""
+    """Normalise ``6``, ``"6"``, ``"fig6"``, ``"fig06"`` to ``"fig06"`` (other names as listed); ``ValueError`` for an unknown figure."""
     s = str(name).strip().lower()
+    if s in FIGURES:
+        return s
     if s.startswith("fig"):
         s = s[3:]
     try:

@@ -285,8 +285,10 @@ def figure_data(name, *, params: DimensionlessParams | None = None) -> dict:
         data = _data_fig12(params)
     elif key in ("fig13", "fig14", "fig15"):
         data = _data_alpha({"fig13": "I", "fig14": "II", "fig15": "III"}[key], params)
-    else:
+    elif key == "fig16":
         data = _data_fig16(params)
+    else:
+        raise ValueError(f"{key} is not one of the paper's figures: simgrip.figures.gripper makes it")
     data["name"] = key
     return data
 

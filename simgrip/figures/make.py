@@ -9,7 +9,7 @@ from __future__ import annotations
 
 from pathlib import Path
 
-from simgrip.figures.catalog import COST, FIGURES, OVERLAY_FIGURES, figure_key
+from simgrip.figures.catalog import COST, FIGURES, GRIPPER_FIGURES, OVERLAY_FIGURES, RENDERED_FIGURES, figure_key
 
 __all__ = ["make_figures", "add_arguments", "cli_figures"]
 
@@ -18,12 +18,17 @@ def _render(task: tuple) -> str:
     """Compute, plot and write one figure: ``task = (name, out_dir, simulate, links)`` (runs in a worker).
 
     With ``simulate``, figures 6-9 get :func:`simgrip.figures.simulation_overlay` (``links`` links).
+    The K-finger figures are :func:`simgrip.figures.gripper.make_gripper_figure`'s.
     """
+    name, out_dir, simulate, links = task
+    if name in GRIPPER_FIGURES:
+        from simgrip.figures.gripper import make_gripper_figure
+
+        return str(make_gripper_figure(name, out_dir, simulate=simulate))
     from simgrip.figures.data import figure_data
     from simgrip.figures.overlay import simulation_overlay
     from simgrip.figures.plot import plot_figure, save_figure
 
-    name, out_dir, simulate, links = task
     data = figure_data(name)
     overlay = simulation_overlay(name, links=links) if simulate and name in OVERLAY_FIGURES else None
     return str(save_figure(plot_figure(name, data, overlay=overlay), Path(out_dir) / f"{name}.png"))
@@ -45,9 +50,11 @@ def make_figures(out_dir, *, which=None, jobs: int | None = None, progress: bool
         Show a progress bar.
     simulate : bool
         Overlay the MuJoCo hinge chain's settled states on figures 6-9
-        (:func:`simgrip.figures.simulation_overlay`, label ``"MuJoCo chain, n = <links>"``).
+        (:func:`simgrip.figures.simulation_overlay`, label ``"MuJoCo chain, n = <links>"``)
+        and the settled K-finger gripper's forces on ``grip_forces``.
     links : int
-        Links per finger of the simulated chain (default 16).
+        Links per finger of the simulated chain of figures 6-9 (default 16); the
+        K-finger figures use :data:`simgrip.figures.gripper.LINKS` (32).
     options : simgrip.parallel.runner.RunnerOptions, optional
         How to run (e.g. on an existing Dask cluster); replaces ``jobs`` and ``progress``.
 
@@ -73,6 +80,10 @@ def make_figures(out_dir, *, which=None, jobs: int | None = None, progress: bool
     options = RunnerOptions(jobs=jobs, progress=progress) if options is None else options
     links = check_links(links)
     out = check_output_dir(out_dir, option="out_dir")
+    if any(k in RENDERED_FIGURES for k in names):
+        from simgrip.sim.gl import choose_backend
+
+        choose_backend()  # before any work (RenderingUnavailable); the workers inherit the choice
     order = sorted(names, key=lambda k: -COST.get(k, 1))
     paths = run_tasks(_render, [(k, str(out), bool(simulate), links) for k in order],
                       options=options, desc="figures", batch_size=1)
@@ -85,9 +96,11 @@ def add_arguments(p) -> None:
     from simgrip.parallel.runner import add_runner_arguments
 
     p.add_argument("--out", default="figures", help="output folder [default ./figures]")
-    p.add_argument("--which", nargs="+", default=None, help="figures to make, e.g. 7 9 16 [default: all]")
+    p.add_argument("--which", nargs="+", default=None,
+                   help="figures to make, e.g. 7 9 16 grasp3 grasp4 grip_forces [default: all]")
     p.add_argument("--links", type=int, default=16,
-                   help="links per finger of the simulated chain overlaid on Figs. 6-9 [default 16]")
+                   help="links per finger of the simulated chain overlaid on Figs. 6-9 [default 16; "
+                        "the K-finger figures use 32]")
     p.add_argument("--no-simulate", action="store_true", help="reference curves only: no MuJoCo points on Figs. 6-9")
     add_runner_arguments(p)
 
