@@ -86,7 +86,7 @@ class PickMultiEnv(gym.Env):
     | height | ``workpiece_height = 0.06`` m | box and cylinder (a sphere is ``b`` tall) |
     | mass | ``mass_range = (0.02, 0.06)`` kg | the whole workpiece: ``M = m / (K rho l)`` per finger |
     | friction | ``friction_range = (0.5, 1.2)`` | finger-workpiece |
-    | offset | radius ``<= offset_max = 0.005`` m | centre's horizontal offset from the palm axis, uniform over the disc |
+    | offset | radius ``<= offset_max = 0.005`` m | centre's horizontal offset from the palm axis, uniform over the disc; ``K = 2``: along the fingers' line (``x``), the radius drawn alike (a centre off the line through two contacts turns about it) |
     | yaw | ``yaw_range = (-0.15, 0.15)`` rad | rotation about the vertical (a box's faces turn away from the fingers) |
 
     Fixed values via ``reset(options={"shape", "width", "mass", "friction",
@@ -417,6 +417,8 @@ class PickMultiEnv(gym.Env):
         width = _pos("width", options.get("width", width))
         mass = _pos("mass", options.get("mass", mass))
         mu = _pos("friction", options.get("friction", mu))
+        if self.K == 2:  # on the fingers' line: off it, a pinch's two contacts let the workpiece turn about it
+            angle = 0.0 if angle >= 0.0 else math.pi
         offset = options.get("offset", (radius * math.cos(angle), radius * math.sin(angle)))
         try:
             offset = tuple(float(v) for v in offset)

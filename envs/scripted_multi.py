@@ -11,7 +11,8 @@ with ``required_mu <= mu_s / safety`` (box, cylinder:
 :func:`simgrip.envs.scripted.choose_kappa`, as the ``Pick-v1`` controller;
 sphere: :func:`choose_kappa_sphere`), and puts the palm at the height where
 that solution's tip meets the workpiece (box, cylinder: mid-height of the
-face; sphere: at the elevation ``beta`` below its equator).  Open loop:
+face; sphere: at the elevation ``beta`` below its equator; with two fingers
+above the centre of mass, see :class:`ScriptedMultiPolicy`).  Open loop:
 move the palm there with the fingers straight, ramp the curvature, wait,
 lift by ``target_height`` plus an allowance, hold.
 """
@@ -81,9 +82,13 @@ class ScriptedMultiPolicy:
     ----------
     safety : float
         Friction safety factor: the chosen grip needs at most ``mu_s / safety``.
-    contact_angle : float
-        Sphere: elevation [rad] of the contact normal the palm height aims at (negative: below the equator,
-        the tips push up as well as in).
+    contact_angle : float or None
+        Sphere: elevation [rad] of the contact normal the palm height aims at.  Default: ``-0.35`` (below the
+        equator: the tips push up as well as in) for ``K >= 3``; ``+0.3`` for ``K = 2``, whose two contacts
+        lie on one line: the sphere would turn about it were its centre above it.
+    contact_height : float or None
+        Box, cylinder: height of the tip on the face, as a fraction of the workpiece's height.  Default: 0.5
+        for ``K >= 3``, 0.75 for ``K = 2`` (the centre of mass below the line through the two tips).
     ramp_time, settle_time : float
         Seconds to ramp the curvature command, then to wait before lifting.
     lift_speed : float
@@ -92,10 +97,11 @@ class ScriptedMultiPolicy:
         Palm travel beyond ``target_height`` [m] (the soft fingers sag under the load).
     """
 
-    def __init__(self, safety: float = 2.0, contact_angle: float = -0.35, ramp_time: float = 0.6,
-                 settle_time: float = 0.3, lift_speed: float = 0.5, extra_lift: float = 0.02):
+    def __init__(self, safety: float = 2.0, contact_angle: float | None = None, contact_height: float | None = None,
+                 ramp_time: float = 0.6, settle_time: float = 0.3, lift_speed: float = 0.5, extra_lift: float = 0.02):
         self.safety = float(safety)
-        self.contact_angle = float(contact_angle)
+        self.contact_angle = contact_angle
+        self.contact_height = contact_height
         self.ramp_time = float(ramp_time)
         self.settle_time = float(settle_time)
         self.lift_speed = float(lift_speed)
@@ -111,13 +117,16 @@ class ScriptedMultiPolicy:
         p = env.dimensionless().replace(b=b_eff)
         size = workpiece_size(w.shape, w.width, env.workpiece_height)
         top = 2.0 * half_height(w.shape, size)
+        pair = env.K == 2
         if w.shape == "sphere":
-            kappa, self.details = choose_kappa_sphere(p, self.contact_angle, safety=self.safety)
+            beta = self.contact_angle if self.contact_angle is not None else (0.3 if pair else -0.35)
+            kappa, self.details = choose_kappa_sphere(p, beta, safety=self.safety)
             palm = 0.5 * w.width - self.details["centre_height"] * L
         else:
             kappa, self.details = choose_kappa("I", p, safety=self.safety)
             tip_y = self.details["tip"][1] if self.details["tip"] is not None else -0.6
-            palm = 0.5 * top - tip_y * L  # the tip at mid-height of the face
+            frac = self.contact_height if self.contact_height is not None else (0.75 if pair else 0.5)
+            palm = frac * top - tip_y * L
         lo, hi = env.palm_range
         return kappa, min(max(palm, top + CLEARANCE, lo), hi)
 

@@ -1,0 +1,262 @@
+"""simgrip/PickMulti-v0: API conformance, determinism, rendering, argument checks, scripted vs random baselines."""
+
+import copy
+import json
+import math
+import os
+import pickle
+import subprocess
+import sys
+import textwrap
+import warnings
+
+import gymnasium as gym
+import numpy as np
+import pytest
+from gymnasium.utils.env_checker import check_env
+
+import simgrip
+import simgrip.envs  # noqa: F401  (registers the ids)
+from simgrip.envs import ENV_IDS, MULTI_ENV_IDS
+from simgrip.envs.pick_multi import PickMultiEnv
+from simgrip.envs.pick_multi_observation import multi_obs_layout
+from simgrip.envs.scripted_multi import ScriptedMultiPolicy
+
+ENV_ID = "simgrip/PickMulti-v0"
+#: Few links keep the episodes cheap; the grips are the same problem at any n.
+FAST = dict(n_links=6)
+
+
+def _rollout(env, seed, steps=40, action_seed=0):
+    obs, info = env.reset(seed=seed)
+    rng = np.random.default_rng(action_seed)
+    out = [obs]
+    for _ in range(steps):
+        obs, r, term, trunc, _ = env.step(rng.uniform(-1, 1, env.action_space.shape).astype(np.float32))
+        out.append(np.append(obs, r))
+        if term or trunc:
+            break
+    return info, out
+
+
+def _success_rate(make_policy, fingers, episodes, seed0):
+    env = gym.make(ENV_ID, fingers=fingers, **FAST)
+    wins = 0
+    try:
+        for ep in range(episodes):
+            obs, info = env.reset(seed=seed0 + ep)
+            act = make_policy(env, info, seed0 + ep)
+            while True:
+                obs, _, term, trunc, info = env.step(act(obs))
+                if term or trunc:
+                    break
+            wins += bool(info["is_success"])
+    finally:
+        env.close()
+    return wins / episodes
+
+
+def test_registered_with_a_time_limit_and_apart_from_the_two_finger_ids():
+    assert ENV_ID in MULTI_ENV_IDS and ENV_ID not in ENV_IDS
+    spec = gym.spec(ENV_ID)
+    assert spec.entry_point == "simgrip.envs.pick_multi:PickMultiEnv" and spec.max_episode_steps == 200
+
+
+@pytest.mark.parametrize("kwargs", [dict(fingers=3), dict(fingers=4, shared_curvature=False)])
+def test_check_env_passes_without_warnings(kwargs):
+    env = gym.make(ENV_ID, **FAST, **kwargs)
+    try:
+        with warnings.catch_warnings(record=True) as caught:
+            warnings.simplefilter("always")
+            check_env(env.unwrapped, skip_render_check=True)  # rendering: test_headless_render_*
+    finally:
+        env.close()
+    assert not [str(w.message) for w in caught]
+
+
+@pytest.mark.parametrize("fingers,shared", [(3, True), (4, False), (2, True)])
+def test_spaces_follow_the_documented_layout(fingers, shared):
+    env = PickMultiEnv(fingers=fingers, shared_curvature=shared, shape_points=5, **FAST)
+    nk = 1 if shared else fingers
+    assert env.action_space.shape == (nk + 1,)
+    size = (16 + 9 * fingers) if shared else (14 + 11 * fingers)  # 16 + (P + 4) K, 14 + (P + 6) K with P = 5
+    assert env.observation_space.shape == (size,)
+    assert env.obs_layout == multi_obs_layout(fingers, 5, shared)
+    assert sum(n for _, n in env.obs_layout) == size
+    shapes = set()
+    for seed in range(12):
+        obs, info = env.reset(seed=seed)
+        assert env.observation_space.contains(obs)
+        shapes.add(info["shape"])
+        obs, *_ = env.step(env.action_space.sample())
+        assert env.observation_space.contains(obs)
+    assert shapes == ({"box", "cylinder", "sphere"} if fingers in (2, 4) else {"cylinder", "sphere"})
+    env.close()
+
+
+def test_randomisation_seeded_in_range_and_overridable():
+    env = PickMultiEnv(fingers=4, size_range=(0.045, 0.05), mass_range=(0.03, 0.031), friction_range=(0.7, 0.9),
+                       offset_max=0.004, yaw_range=(-0.1, 0.1), **FAST)
+    seen = set()
+    for seed in range(6):
+        _, info = env.reset(seed=seed)
+        assert 0.045 <= info["width"] <= 0.05 and 0.03 <= info["mass"] <= 0.031 and 0.7 <= info["friction"] <= 0.9
+        assert math.hypot(*info["offset"]) <= 0.004 and -0.1 <= info["yaw"] <= 0.1
+        # the workpiece starts where it was drawn (settled on the table)
+        x, y = env.data.qpos[env.work_qpos:env.work_qpos + 2]
+        assert math.hypot(x - info["offset"][0], y - info["offset"][1]) < 1e-3
+        _, again = env.reset(seed=seed)
+        assert again["width"] == info["width"] and again["shape"] == info["shape"]
+        seen.add(round(info["width"], 9))
+    assert len(seen) == 6
+    _, info = env.reset(seed=0, options={"shape": "box", "width": 0.05, "mass": 0.04, "friction": 1.0,
+                                         "offset": (0.0, 0.0), "yaw": 0.0})
+    assert (info["shape"], info["width"], info["mass"], info["friction"]) == ("box", 0.05, 0.04, 1.0)
+    assert env.model.geom_size[env._pm.work_geom][0] == pytest.approx(0.025)
+    for bad in ({"shape": "cone"}, {"width": -1.0}, {"offset": (math.nan, 0.0)}, {"yaw": math.inf}, {"size": 1}):
+        with pytest.raises(ValueError):
+            env.reset(options=bad)
+    env.close()
+
+
+def test_same_seed_same_observations_and_rewards():
+    a, b = PickMultiEnv(**FAST), PickMultiEnv(**FAST)
+    for seed in (3, 8):
+        info_a, run_a = _rollout(a, seed)
+        info_b, run_b = _rollout(b, seed)
+        assert info_a["shape"] == info_b["shape"]
+        assert len(run_a) == len(run_b)
+        for x, y in zip(run_a, run_b):
+            np.testing.assert_array_equal(x, y)
+    # and again on the same instance, after another episode
+    _, again = _rollout(a, 3)
+    _, first = _rollout(b, 3)
+    for x, y in zip(again, first):
+        np.testing.assert_array_equal(x, y)
+    a.close()
+    b.close()
+
+
+@pytest.mark.parametrize("how", ["pickle", "deepcopy"])
+def test_copied_env_continues_exactly_like_the_original(how):
+    env = PickMultiEnv(fingers=4, shared_curvature=False, **FAST)
+    env.reset(seed=1)
+    rng = np.random.default_rng(0)
+    for _ in range(10):
+        env.step(rng.uniform(-1, 1, 5))
+    twin = pickle.loads(pickle.dumps(env)) if how == "pickle" else copy.deepcopy(env)
+    for a in rng.uniform(-1, 1, size=(30, 5)):
+        o1, r1, t1, *_ = env.step(a)
+        o2, r2, t2, *_ = twin.step(a)
+        np.testing.assert_array_equal(o1, o2)
+        assert (r1, t1) == (r2, t2)
+        if t1:
+            break
+    assert twin.model is not env.model
+    twin.reset(seed=2)  # every shape's model travels
+    env.close()
+    twin.close()
+
+
+def test_bad_constructor_arguments_name_the_parameter():
+    cases = [
+        (dict(fingers=1), "fingers"),
+        (dict(fingers=2.5), "fingers"),
+        (dict(fingers=3, shapes=("box",)), "shapes"),
+        (dict(fingers=3, shapes=("box", "cylinder")), "shapes"),
+        (dict(shapes=("cube",)), "shapes"),
+        (dict(shapes=()), "shapes"),
+        (dict(size_range=(math.nan, 0.05)), "size_range"),
+        (dict(mass_range=(0.02, math.nan)), "mass_range"),
+        (dict(friction_range=(math.nan, math.nan)), "friction_range"),
+        (dict(yaw_range=(math.nan, 0.1)), "yaw_range"),
+        (dict(offset_max=math.nan), "offset_max"),
+        (dict(workpiece_height=math.nan), "workpiece_height"),
+        (dict(kappa_range=(0.0, -10.0)), "kappa_range"),
+        (dict(shared_curvature=1), "shared_curvature"),
+        (dict(n_links=1), "n_links"),
+        (dict(render_mode="human"), "render_mode"),
+        (dict(camera="nowhere"), "camera"),
+        (dict(fingers=12, size_range=(0.01, 0.02)), "size_range"),
+    ]
+    for kwargs, name in cases:
+        with pytest.raises(ValueError, match=name):
+            PickMultiEnv(**{**FAST, **kwargs})
+
+
+def test_invalid_actions_raise_and_step_after_the_end_needs_reset():
+    env = PickMultiEnv(**FAST)
+    with pytest.raises(gym.error.ResetNeeded):
+        env.step(np.zeros(2))
+    env.reset(seed=0)
+    with pytest.raises(ValueError, match="finite"):
+        env.step(np.array([np.nan, 0.0]))
+    with pytest.raises(ValueError, match="shape"):
+        env.step(np.zeros(4))
+    env.close()
+
+
+def test_scripted_controller_picks_and_the_random_policy_does_not():
+    def scripted(env, info, seed):
+        pol = ScriptedMultiPolicy()
+        pol.reset(env, info)
+        return pol
+
+    def random(env, info, seed):
+        env.action_space.seed(seed)
+        return lambda obs: env.action_space.sample()
+
+    assert _success_rate(scripted, 3, 8, seed0=7000) >= 0.8
+    assert _success_rate(scripted, 4, 8, seed0=8000) >= 0.8
+    assert _success_rate(random, 3, 15, seed0=9000) < 0.1
+
+
+def test_make_vec_sync():
+    envs = gym.make_vec(ENV_ID, num_envs=2, vectorization_mode="sync", **FAST)
+    try:
+        obs, _ = envs.reset(seed=[1, 2])
+        assert obs.shape == (2, 52)
+        for _ in range(5):
+            obs, rew, term, trunc, _ = envs.step(envs.action_space.sample())
+        assert obs.shape == (2, 52) and rew.shape == (2,) and np.all(np.isfinite(obs))
+    finally:
+        envs.close()
+
+
+def test_headless_render_returns_an_image_of_the_right_shape(tmp_path):
+    from simgrip.sim.gl import RenderingUnavailable, choose_backend
+
+    try:
+        choose_backend()
+    except RenderingUnavailable as exc:
+        pytest.skip(str(exc))
+    code = """
+        import json, warnings
+        import gymnasium as gym, numpy as np, simgrip.envs
+        from gymnasium.utils.env_checker import check_env
+        env = gym.make("simgrip/PickMulti-v0", fingers=4, n_links=6, render_mode="rgb_array", width=200, height=150)
+        with warnings.catch_warnings(record=True) as caught:
+            warnings.simplefilter("always")
+            check_env(env.unwrapped)
+        frames = []
+        for shape in ("box", "sphere"):
+            env.reset(seed=0, options={"shape": shape})
+            frames.append(env.render())
+        env.close()
+        f = frames[0]
+        r, g, b = (f[..., i].astype(int) for i in range(3))
+        print(json.dumps({"warnings": [str(w.message) for w in caught], "shapes": [list(x.shape) for x in frames],
+                          "dtype": str(f.dtype), "finger": int(((r > 150) & (r - b > 80) & (g < 160)).sum()),
+                          "work": int(((b > 150) & (b - r > 80)).sum()), "std": float(f.std()),
+                          "differ": bool(np.any(frames[0] != frames[1]))}))
+    """
+    # the child imports the simgrip this process imported (not another installed copy)
+    root = os.path.dirname(os.path.dirname(simgrip.__file__))
+    env = dict(os.environ, PYTHONPATH=os.pathsep.join(filter(None, [root, os.environ.get("PYTHONPATH")])))
+    proc = subprocess.run([sys.executable, "-c", textwrap.dedent(code)], cwd=tmp_path, env=env,
+                          capture_output=True, text=True, timeout=240)
+    assert proc.returncode == 0, proc.stderr[-3000:]
+    out = json.loads(proc.stdout.strip().splitlines()[-1])
+    assert not out["warnings"], out["warnings"]
+    assert out["shapes"] == [[150, 200, 3]] * 2 and out["dtype"] == "uint8"
+    assert out["finger"] > 50 and out["work"] > 100 and out["std"] > 20 and out["differ"], out
