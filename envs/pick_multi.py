@@ -164,7 +164,7 @@ class PickMultiEnv(gym.Env):
     | ``fingers`` | 3 | ``K >= 2`` |
     | ``shapes`` | every shape ``K`` allows | workpiece shapes drawn from (box needs ``K`` = 2 or 4) |
     | ``shared_curvature`` | True | one curvature command for all fingers (else one per finger) |
-    | ``render_mode``, ``width``, ``height``, ``camera`` | None, 480, 360, ``"oblique"`` | ``"rgb_array"`` renders headless |
+    | ``render_mode``, ``width``, ``height``, ``camera`` | None, 480, 360, ``"gripper"`` | ``"rgb_array"`` renders headless (cameras ``gripper``, ``front``, ``oblique``) |
     | ``n_links`` | 12 | links per finger |
     | ``length``, ``EI``, ``rho``, ``g`` | 0.1, 3e-3, 0.15, 9.81 | finger (SI) |
     | ``size_range``, ``mass_range``, ``friction_range``, ``offset_max``, ``yaw_range``, ``workpiece_height`` | see above | randomisation |
@@ -223,7 +223,7 @@ class PickMultiEnv(gym.Env):
         finger_armature: float = 1e-5,
         width: int = 480,
         height: int = 360,
-        camera: str = "oblique",
+        camera: str = "gripper",
     ):
         _, self.K, _ = check_gripper("I", fingers, "cylinder")
         if shapes is None:

@@ -15,6 +15,7 @@ adds, in code:
 * the workpiece on a free joint: a box (faces normal to the fingers' planes
   at zero yaw), a cylinder with a vertical axis, or a sphere; its inertia is
   :func:`simgrip.sim.gripper.workpiece_inertia`;
+* a camera ``gripper`` looking down at the grip from the front right;
 * the explicit contact pairs: each finger's tip and links (but the last,
   whose end is the tip sphere) with the workpiece (condim 4), the palm slab
   with the workpiece, the workpiece with the table.
@@ -132,6 +133,7 @@ def build_pick_multi_model(shape: str, *, fingers: int, n_links: int, length: fl
     body.inertia = workpiece_inertia(shape, size, mass_max)
     body.add_geom(spec.find_default("pick"), name="workpiece", type=GEOM_TYPES[shape], size=list(size),
                   material="box")
+    _add_camera(spec, "gripper", pos=(0.17, -0.24, 0.19), target=(0.0, 0.0, 0.08))
     soft = dict(solref=PICK_SOLREF, solimp=PICK_SOLIMP)
     pairs = []
     for f in range(K):
@@ -157,6 +159,18 @@ def build_pick_multi_model(shape: str, *, fingers: int, n_links: int, length: fl
         finger_pairs=np.array([ident(mujoco.mjtObj.mjOBJ_PAIR, p) for p in pairs]),
         unit_rest=chain_springs(Uniform(1.0), n).rest,
     )
+
+
+def _add_camera(spec, name: str, pos, target) -> None:
+    """A fixed camera at ``pos`` looking at ``target`` (world, [m]), its image's up towards ``+z``."""
+    fwd = np.subtract(target, pos, dtype=float)
+    fwd /= np.linalg.norm(fwd)
+    right = np.cross(fwd, [0.0, 0.0, 1.0])
+    right /= np.linalg.norm(right)
+    up = np.cross(right, fwd)
+    quat = np.empty(4)
+    mujoco.mju_mat2Quat(quat, np.column_stack([right, up, -fwd]).ravel())  # a camera looks along its -z
+    spec.worldbody.add_camera(name=name, pos=list(pos), quat=list(quat), fovy=45.0)
 
 
 def set_workpiece(pm: PickMultiModel, data: mujoco.MjData, *, width: float, height: float, mass: float,

@@ -21,7 +21,9 @@ import gymnasium as gym
 
 import simgrip.envs  # noqa: F401  (registers the simgrip ids)
 from simgrip.envs.evaluation import add_episode_arguments, check_env_id, run_episodes, summary
+from simgrip.envs.pick_multi import PickMultiEnv
 from simgrip.envs.scripted import ObservationPickPolicy, ScriptedPickPolicy
+from simgrip.envs.scripted_multi import ScriptedMultiPolicy
 
 POLICIES = {"oracle": ScriptedPickPolicy, "observation": ObservationPickPolicy}
 
@@ -36,11 +38,15 @@ def main(argv=None):
     check_env_id(p, args.env)
 
     env = gym.make(args.env)
-    policy = POLICIES[args.policy]()
+    multi = isinstance(env.unwrapped, PickMultiEnv)  # K fingers: the per-finger theory's oracle
+    if multi and (args.policy != "oracle" or args.gif):
+        p.error(f"--env {args.env}: only the oracle policy, and no --gif (two-finger ids only)")
+    policy = ScriptedMultiPolicy() if multi else POLICIES[args.policy]()
 
     def line(r):
-        box = env.unwrapped.box
-        print(f"episode {r.index:3d}: b={box.width * 100:.1f} cm  m={box.mass * 1000:.0f} g  mu={box.friction:.2f}  "
+        box = env.unwrapped.workpiece if multi else env.unwrapped.box
+        shape = f"{box.shape:8s} " if multi else ""
+        print(f"episode {r.index:3d}: {shape}b={box.width * 100:.1f} cm  m={box.mass * 1000:.0f} g  mu={box.friction:.2f}  "
               f"kappa={policy.kappa:+.2f}  N={r.info['normal_force'].mean():.2f} N  return={r.ret:7.1f}  "
               f"{'success' if r.info['is_success'] else 'fail'}")
 
