@@ -8,9 +8,11 @@ contact time constant :data:`~simgrip.settle.dynamics.DYN_TIMECONST` ``h``.
 The workpiece's free joint is damped ``3 m / h`` in translation and ``3 I / h``
 in rotation (its principal inertia; the rotational dofs are in its body frame).
 
-* **Start**: every finger at the hinge chain's grip equilibrium
+* **Start** (:mod:`simgrip.settle.gripper_start`): every finger at the hinge chain's grip equilibrium
   (:func:`simgrip.reference.solve_chain`, the tip a hair inside ``X = b/2``),
-  the workpiece centred on the palm axis, level with the tips.  Each finger of a box
+  the workpiece centred on the palm axis, level with the tips; an off-centre
+  or turned workpiece, or unequal fingers, start with each finger at its own
+  reach and a share of the weight that balances the workpiece.  Each finger of a box
   (``K`` = 2, 4) or cylinder is then exactly the planar problem; a sphere's
   tips start at ``X = (b/2) cos beta`` (``beta`` the scene's
   ``contact_angle``, the contact normal's elevation), which is the planar
@@ -56,6 +58,7 @@ from simgrip.settle import check_tol_steps
 from simgrip.settle.dynamics import (DYN_DAMPING, DYN_DROP_FALL, DYN_DROP_SLIP, DYN_IMPRATIO,
                                      DYN_PEN_LIMIT, DYN_STEP, DYN_TIMECONST, DYN_TOL, DYN_TOL_PER_WEIGHT, DYN_VTOL,
                                      DYN_WORKPIECE_DAMPING, lowest_frequency, run_to_rest)
+from simgrip.settle.gripper_start import finger_chain, start_qpos
 from simgrip.settle.state import SettleError
 from simgrip.settle.statics import CONTACT_IMPEDANCE, check_warnings, restore_options, save_options
 from simgrip.sim.checks import clear_warnings
@@ -230,19 +233,6 @@ class _Dyn:
         return run_to_rest(self, tol, DYN_VTOL, budget, watch, "gripper settle")
 
 
-def _chain(scene: GripperScene, grip: str, b: float | None = None, guess=None, finger: int = 0):
-    """The hinge chain of ``finger`` (its own profile) in ``grip`` with its tip at ``X = b/2``; None if unsolved."""
-    from simgrip.reference import DiscreteError, solve_chain
-
-    p = scene.params if b is None else scene.params.replace(b=b)
-    gravity = -float(scene.model.opt.gravity[2]) / scene.physical.g
-    profile = scene.profiles[finger] if scene.profiles else scene.profile
-    try:
-        return solve_chain(grip, p, profile, scene.n, guess=guess, gravity=gravity)
-    except (DiscreteError, ValueError):
-        return None
-
-
 def _tips_on_workpiece(scene: GripperScene) -> np.ndarray:
     """Every tip's centre in the workpiece's body frame [m], (K, 3)."""
     d = scene.data
@@ -307,7 +297,7 @@ def settle_gripper(scene: GripperScene, *, tol: float | None = None, max_steps: 
     m, d = scene.model, scene.data
     saved = save_options(m)
     clear_warnings(d)
-    q_start = _start(scene)
+    q_start = start_qpos(scene)
     reach = q_start is not None
     if not reach:
         q_start = np.array(d.qpos)
@@ -336,46 +326,6 @@ def settle_gripper(scene: GripperScene, *, tol: float | None = None, max_steps: 
         d.qvel[:] = 0.0
         mujoco.mj_forward(m, d)
     return state
-
-
-def _start(scene: GripperScene) -> np.ndarray | None:
-    """qpos of the start: every finger at its own chain's grip equilibrium (load ``M``) at its reach.
-
-    Finger ``k``'s tip starts at ``X = scene.reach[k]`` (``b/2`` for a centred
-    workpiece; where its plane meets an off-centre or turned one), its own
-    profile.  Box and cylinder: the workpiece where the builder put it, its
-    centre level with the tips' mean height.  Sphere: the tips at ``X = (b/2)
-    cos beta``, the centre ``(b/2) sin beta`` below them (``beta =
-    scene.contact_angle``).
-
-    None when a free finger does not reach its ``X``, or when a chain's equilibrium there pulls
-    on the workpiece (``N1 <= 0``): the workpiece is not held.
-    """
-    p = scene.params
-    beta = scene.contact_angle  # sphere: the tip at X = (b/2) cos(beta) on the sphere; 0 for vertical faces
-    reach = np.full(scene.fingers, 0.5 * p.b) if scene.reach is None else np.asarray(scene.reach)
-    q = np.array(scene.data.qpos)
-    heights = []
-    for k in range(scene.fingers):
-        X = float(reach[k]) * math.cos(beta)
-        # the tip a hair inside the surface: MuJoCo sees the contact
-        ch = _chain(scene, scene.grip, b=2.0 * X - 2e-6, finger=k)
-        free = _chain(scene, "free", guess=None if ch is None else ch.link_angles, finger=k)
-        if free is not None and float(np.sum(np.cos(free.link_angles))) / scene.n > X:
-            return None
-        if ch is None or not (ch.success and ch.min_eigenvalue > 0.0):
-            raise SettleError(f"no start for grip {scene.grip}: finger {k}'s hinge chain has no stable equilibrium "
-                              f"with its tip on the workpiece (X = {X:g}, b = {p.b:g})")
-        if not ch.N1 > 0.0:
-            return None  # the loaded finger would have to pull on the workpiece: it cannot hold it
-        q[scene.joint_qpos[k]] = ch.joint_angles
-        heights.append(float(ch.tip[1]))
-    wq = scene.workpiece_qpos
-    q[wq[:2]] = scene.model.qpos0[wq[:2]]  # the builder's centre (offset, turned by yaw)
-    q[wq[2]] = (float(np.mean(heights)) - 0.5 * p.b * math.sin(beta)) * scene.length
-    turn = scene.yaw + scene.workpiece_yaw
-    q[wq[3:]] = [math.cos(0.5 * turn), 0.0, 0.0, math.sin(0.5 * turn)]
-    return q
 
 
 def _settle_once(scene: GripperScene, dyn: _Dyn, tol: float, budget: int, reach: bool) -> tuple[bool, bool, str]:
@@ -410,7 +360,7 @@ def _settle_once(scene: GripperScene, dyn: _Dyn, tol: float, budget: int, reach:
         dyn.hold(True)
         m.opt.disableflags |= int(mujoco.mjtDisableBit.mjDSBL_CONTACT)
         for k in range(scene.fingers):
-            free = _chain(scene, "free", finger=k)
+            free = finger_chain(scene, "free", finger=k)
             if free is not None:
                 d.qpos[scene.joint_qpos[k]] = free.joint_angles
         d.qvel[:] = 0.0

@@ -1,0 +1,244 @@
+"""The start of the K-finger settle (:mod:`simgrip.settle.gripper`): every finger at its chain's equilibrium.
+
+Each finger of a K-finger gripper is a planar hinge chain, rigid out of its
+plane; it touches the workpiece with its tip at ``X = scene.reach[k]``
+(:mod:`simgrip.sim.gripper_placement`; ``b/2`` when centred).  The settle
+starts every finger at the hinge chain's grip equilibrium
+(:func:`simgrip.reference.solve_chain`) with its tip there, carrying a
+vertical *share* ``s_k`` of the weight (``N2 = -s_k``), so that the
+dynamics has only MuJoCo's contact softness left to settle.
+
+* **Symmetric scenes** (centred, unturned, every finger alike): every
+  share is ``M`` and every finger the planar problem, exactly.
+* **Otherwise** the shares and the out-of-plane forces ``N3_k`` (which the
+  hinges carry, the fingers being rigid out of plane) are chosen so that the
+  workpiece starts balanced: its six equations (force and moment, with each
+  finger's ``N1`` and tip height from its chain) are linear in
+  ``(s, N3)``; the least-norm change from ``(M, 0)`` that solves them is
+  taken (:func:`balance_shares`); Newton on the shares makes the chains
+  solved at those shares give them back.  With ``K >= 4`` fingers the
+  equations do not fix ``(s, N3)`` (internal forces: a squeeze of the
+  vertical shares, a twist of the ``N3``); the least-norm choice starts those
+  at zero.  Without it, a start whose shares do not balance the workpiece's
+  moments loads those internal modes while the workpiece settles, and
+  MuJoCo's sticking friction (a stiff viscous coupling, not a spring) lets
+  them relax only by creep: the settle crawls for tens of thousands of steps
+  with a moment residual well above its tolerance.
+* ``K = 2``: both fingers lie in one plane, so nothing but their normal
+  forces holds the workpiece along it: it starts shifted along that plane
+  until the two ``N1`` agree (one more Newton unknown), where the tips' friction
+  would otherwise have to carry the difference (it cannot: the tips can
+  follow the workpiece in the plane).
+* A sphere is held centred with equal profiles only (the builder refuses
+  the rest): its start is the symmetric one at the contact angle.
+
+None (nothing to hold) when a free finger does not reach its ``X`` or a
+finger's loaded chain would pull on the workpiece (``N1 <= 0``).
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+from simgrip.params import M_MAX
+from simgrip.settle.state import SettleError
+from simgrip.sim.gripper import GripperScene
+
+__all__ = ["balance_shares", "finger_chain", "is_symmetric", "start_qpos"]
+
+#: Newton iterations balancing the start's shares (each ``K + 1`` solves of every chain).
+BALANCE_ITERATIONS = 8
+#: The start's shares are taken as balanced when they move less than this (over rho g l).
+BALANCE_TOL = 1e-10
+#: The tip starts this far (over l) inside the surface, so that MuJoCo sees the contact.
+START_INSIDE = 1e-6
+
+
+def finger_chain(scene: GripperScene, grip: str, X: float | None = None, guess=None, finger: int = 0,
+                 M: float | None = None, contact_moment: float = 0.0):
+    """Finger ``finger``'s hinge chain (its own profile) in ``grip``, tip at ``X``, load ``M``; None if unsolved.
+
+    ``contact_moment``: the tip couple (about ``E3``, over ``rho g l^2``) of a force on the tip sphere's surface.
+    """
+    from simgrip.reference import DiscreteError, solve_chain
+
+    p = scene.params
+    if X is not None:
+        p = p.replace(b=2.0 * X)
+    if M is not None:
+        p = p.replace(M=M)
+    gravity = -float(scene.model.opt.gravity[2]) / scene.physical.g
+    profile = scene.profiles[finger] if scene.profiles else scene.profile
+    try:
+        return solve_chain(grip, p, profile, scene.n, guess=guess, gravity=gravity, contact_moment=contact_moment)
+    except (DiscreteError, ValueError):
+        return None
+
+
+def is_symmetric(scene: GripperScene) -> bool:
+    """Centred, unturned workpiece and every finger alike: every finger is the planar problem."""
+    same = all(np.array_equal(s.rest, scene.springs.rest) for s in scene.finger_springs)
+    return bool(not np.any(scene.offset) and scene.workpiece_yaw == 0.0 and same)
+
+
+def balance_shares(azimuths, X, Y, N1, centre, M: float, arms=None) -> tuple[np.ndarray, np.ndarray, float]:
+    """``(s, N3, residual)``: the least-norm change from ``(M, 0)`` that balances the workpiece.
+
+    Finger ``k`` (azimuth ``azimuths[k]`` [rad], world frame) acts on the
+    workpiece at ``X_k E1_k + Y_k z`` with ``-(N1_k E1_k + N3_k E3_k - s_k z)``;
+    plus ``arms[k]`` (world, over ``l``: the contact point on the tip sphere's
+    surface off its centre, default none); the workpiece (centre ``centre = (x, y)``, weight ``K M``) is balanced
+    when those forces carry its weight and their moment about its centre
+    vanishes.  ``residual``: the largest equation left unbalanced (zero
+    unless the equations have no solution, e.g. ``K = 2`` with unequal ``N1``).
+    """
+    az = np.asarray(azimuths, dtype=float)
+    K = len(az)
+    c = np.array([centre[0], centre[1], float(np.mean(Y))])
+    A = np.zeros((6, 2 * K))
+    rhs = np.zeros(6)
+    rhs[2] = K * M
+    for k, a in enumerate(az):
+        e1 = np.array([math.cos(a), math.sin(a), 0.0])
+        e3 = np.array([-math.sin(a), math.cos(a), 0.0])
+        r = X[k] * e1 + np.array([0.0, 0.0, Y[k]]) - c
+        if arms is not None:
+            r = r + np.asarray(arms[k], dtype=float)
+        f0 = -N1[k] * e1
+        cols = {k: np.array([0.0, 0.0, 1.0]), K + k: -e3}
+        for j, col in cols.items():
+            A[:3, j] = col
+            A[3:, j] = np.cross(r, col)
+        rhs[:3] -= f0
+        rhs[3:] -= np.cross(r, f0)
+    u0 = np.concatenate([np.full(K, float(M)), np.zeros(K)])
+    du = np.linalg.lstsq(A, rhs - A @ u0, rcond=None)[0]
+    u = u0 + du
+    return u[:K], u[K:], float(np.max(np.abs(A @ u - rhs)))
+
+
+def _normals(scene: GripperScene) -> np.ndarray:
+    """The workpiece's horizontal normal at each finger, ``(along E1, along E3)`` (K, 2)."""
+    if scene.normals is None:
+        return np.tile([1.0, 0.0], (scene.fingers, 1))
+    return np.asarray(scene.normals, dtype=float)
+
+
+def _arms(scene: GripperScene) -> np.ndarray:
+    """World offsets (over l) of the contact points from the tip centres: ``-r_tip n`` (K, 3)."""
+    n = _normals(scene)
+    a = np.asarray(scene.azimuths, dtype=float)
+    e1 = np.stack([np.cos(a), np.sin(a), np.zeros_like(a)], axis=1)
+    e3 = np.stack([-np.sin(a), np.cos(a), np.zeros_like(a)], axis=1)
+    return -scene.r_tip * (n[:, :1] * e1 + n[:, 1:] * e3)
+
+
+def _chains(scene: GripperScene, X, shares, guesses, couple: bool = True):
+    """Every finger's loaded chain at its ``X`` and share; raises SettleError if one has no stable equilibrium.
+
+    ``couple``: the share's vertical force acts on the tip sphere's surface, ``r_tip n1`` inside the
+    tip centre: a tip couple ``r_tip n1 s`` (the friction's; the normal force passes through the
+    centre).  The symmetric start leaves it to the dynamics (as it always has).
+    """
+    out = []
+    n1 = _normals(scene)[:, 0] if couple else np.zeros(scene.fingers)
+    for k in range(scene.fingers):
+        ch = finger_chain(scene, scene.grip, X=float(X[k]) - START_INSIDE, finger=k, M=float(shares[k]),
+                          guess=guesses[k], contact_moment=scene.r_tip * float(n1[k]) * float(shares[k]))
+        if ch is None or not (ch.success and ch.min_eigenvalue > 0.0):
+            raise SettleError(f"no start for grip {scene.grip}: finger {k}'s hinge chain has no stable equilibrium "
+                              f"with its tip on the workpiece (X = {float(X[k]):g}, load {float(shares[k]):g}, "
+                              f"b = {scene.params.b:g})")
+        out.append(ch)
+    return out
+
+
+def _balanced(scene: GripperScene, X0, centre0):
+    """``(chains, X, centre)`` of the balanced start (see the module docstring): Newton on the shares.
+
+    Unknowns: the shares (and, for ``K = 2``, the shift along finger 0's ``E1``); equations: the
+    shares that :func:`balance_shares` returns from the chains at those shares are the shares (and
+    the two ``N1`` agree).  Finite-difference Jacobian, steps halved while a chain fails or a share
+    leaves ``[0, M_MAX]``; the best iterate is kept (an unbalanced start is settled by the dynamics).
+    """
+    K, M = scene.fingers, float(scene.params.M)
+    e1 = np.array([math.cos(scene.azimuths[0]), math.sin(scene.azimuths[0])])
+    sign = np.array([1.0, -1.0]) if K == 2 else None
+    arms = _arms(scene)
+
+    def evaluate(z, guesses):
+        shift = float(z[K]) if K == 2 else 0.0
+        X = X0 + shift * sign if K == 2 else X0
+        centre = centre0 + shift * e1
+        chains = _chains(scene, X, z[:K], guesses)
+        s, _n3, _r = balance_shares(scene.azimuths, X, [c.tip[1] for c in chains], [c.N1 for c in chains],
+                                    centre, M, arms=arms)
+        R = s - z[:K]
+        if K == 2:
+            R = np.append(R, chains[0].N1 - chains[1].N1)
+        return R, chains, X, centre
+
+    z = np.append(np.full(K, M), [0.0] if K == 2 else [])
+    R, chains, X, centre = evaluate(z, [None] * K)
+    best = (float(np.max(np.abs(R))), chains, X, centre)
+    for _ in range(BALANCE_ITERATIONS):
+        if best[0] < BALANCE_TOL * max(1.0, M):
+            break
+        guesses = [c.link_angles for c in chains]
+        J = np.zeros((len(z), len(z)))
+        for j in range(len(z)):
+            eps = 1e-6 * max(1.0, abs(z[j])) if j < K else 1e-7
+            dz = z.copy()
+            dz[j] += eps
+            try:
+                J[:, j] = (evaluate(dz, guesses)[0] - R) / eps
+            except SettleError:
+                return best[1:]
+        step = -np.linalg.lstsq(J, R, rcond=None)[0]
+        for _half in range(6):
+            zn = z + step
+            if np.all((zn[:K] >= 0.0) & (zn[:K] <= M_MAX)) and (K != 2 or abs(zn[K]) < 0.5 * float(np.min(X0))):
+                try:
+                    Rn, cn, Xn, centre_n = evaluate(zn, guesses)
+                except SettleError:
+                    Rn = None
+                if Rn is not None and float(np.max(np.abs(Rn))) < float(np.max(np.abs(R))):
+                    break
+            step *= 0.5
+        else:
+            break
+        z, R, chains = zn, Rn, cn
+        if float(np.max(np.abs(R))) < best[0]:
+            best = (float(np.max(np.abs(R))), cn, Xn, centre_n)
+    return best[1:]
+
+
+def start_qpos(scene: GripperScene) -> np.ndarray | None:
+    """qpos of the start (see the module docstring), or None when the workpiece cannot be held."""
+    p = scene.params
+    K, L = scene.fingers, scene.length
+    beta = scene.contact_angle  # sphere: the tip at X = (b/2) cos(beta) on the sphere; 0 for vertical faces
+    X = (np.full(K, 0.5 * p.b) if scene.reach is None else np.array(scene.reach)) * math.cos(beta)
+    wq = scene.workpiece_qpos
+    centre = np.array(scene.model.qpos0[wq[:2]]) / L  # the builder's (offset, turned by yaw)
+    for k in range(K):
+        free = finger_chain(scene, "free", finger=k)
+        if free is not None and float(np.sum(np.cos(free.link_angles))) / scene.n > X[k]:
+            return None
+    if is_symmetric(scene) or scene.workpiece == "sphere":
+        chains = _chains(scene, X, np.full(K, float(p.M)), [None] * K, couple=False)
+    else:
+        chains, X, centre = _balanced(scene, X, centre)
+    if not all(ch.N1 > 0.0 for ch in chains):
+        return None  # a loaded finger would have to pull on the workpiece: it cannot hold it
+    q = np.array(scene.data.qpos)
+    for k, ch in enumerate(chains):
+        q[scene.joint_qpos[k]] = ch.joint_angles
+    heights = [float(ch.tip[1]) for ch in chains]
+    q[wq[:2]] = centre * L
+    q[wq[2]] = (float(np.mean(heights)) - 0.5 * p.b * math.sin(beta)) * L
+    turn = scene.yaw + scene.workpiece_yaw
+    q[wq[3:]] = [math.cos(0.5 * turn), 0.0, 0.0, math.sin(0.5 * turn)]
+    return q
