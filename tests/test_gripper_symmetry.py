@@ -341,3 +341,19 @@ def test_planar_scene_is_the_fingers_problem():
     np.testing.assert_array_equal(pl.model.qpos_spring[pl.joint_qpos[0]], sc.model.qpos_spring[sc.joint_qpos[0]])
     np.testing.assert_allclose(pl.model.jnt_stiffness[pl.model.dof_jntid[pl.joint_dof[0]]], sc.model.jnt_stiffness[sc.model.dof_jntid[sc.joint_dof[0]]],
                                rtol=1e-14)
+
+
+def test_a_reused_planar_scene_gives_the_same_state():
+    sc = _gripper("II", 4, "box")
+    pl = planar_scene(sc)
+    a = settle_symmetric(sc)
+    b = settle_symmetric(sc, planar=pl)
+    c = settle_symmetric(sc, planar=pl)
+    for x in (b, c):
+        assert np.array_equal(x.qpos, a.qpos) and [r.N1 for r in x.records] == [r.N1 for r in a.records]
+    with pytest.raises(ValueError, match="planar"):
+        settle_symmetric(sc, planar=planar_scene(_gripper("II", 4, "box", kappa=4.0)))
+    with pytest.raises(ValueError, match="planar"):
+        settle_symmetric(sc, planar=build_scene("II", STANDARD, Uniform(5.0), N + 1))
+    with pytest.raises(ValueError, match="planar"):
+        settle_symmetric(sc, planar=sc)

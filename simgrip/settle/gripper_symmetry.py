@@ -236,7 +236,7 @@ def symmetric_or_none(scene: GripperScene, method: str, **kw):
 
 
 def settle_symmetric(scene: GripperScene, *, tol: float | None = None, max_steps: int | None = None,
-                     contact: str = "point", allow_unconverged: bool = False):
+                     contact: str = "point", allow_unconverged: bool = False, planar=None):
     """Settle an exactly symmetric K-finger scene from one finger's planar settle (see the module docstring).
 
     Parameters
@@ -254,6 +254,11 @@ def settle_symmetric(scene: GripperScene, *, tol: float | None = None, max_steps
         ``"surface"`` for box and cylinder only.
     allow_unconverged : bool
         Return ``converged=False`` instead of raising :class:`SettleError`.
+    planar : Scene, optional
+        A scene from :func:`planar_scene` of this ``scene`` to reuse (built
+        here when None).  Grips I/II settle from the hinge chain's start
+        whatever state the planar scene was left in, so reusing it gives the
+        same state bit for bit and saves its build.
 
     Returns
     -------
@@ -272,7 +277,7 @@ def settle_symmetric(scene: GripperScene, *, tol: float | None = None, max_steps
                          "the point contact only")
     t0 = time.perf_counter()
     kw = {k: v for k, v in (("tol", tol), ("max_steps", max_steps)) if v is not None}
-    pst = settle(planar_scene(scene), contact=contact, allow_unconverged=allow_unconverged, **kw)
+    pst = settle(_check_planar(scene, planar), contact=contact, allow_unconverged=allow_unconverged, **kw)
     tolerance = scene.fingers * float(pst.tolerance)
     held = bool(pst.held)
     converged = bool(pst.converged)
@@ -286,6 +291,29 @@ def settle_symmetric(scene: GripperScene, *, tol: float | None = None, max_steps
         tolerance = max(tolerance, float(alone.tolerance))
         pst = alone
     return _replicate(scene, pst, held, converged, steps, tolerance, allow_unconverged, t0)
+
+
+def _check_planar(scene: GripperScene, planar):
+    """``planar`` if it is ``scene``'s planar problem (ValueError naming ``planar`` otherwise), or a new one."""
+    from simgrip.sim.scene import Scene
+
+    if planar is None:
+        return planar_scene(scene)
+    if not isinstance(planar, Scene):
+        raise ValueError(f"planar must be a simgrip.sim.scene.Scene from planar_scene(scene), got "
+                         f"{type(planar).__name__}")
+    m, pm = scene.model, planar.model
+    same = (planar.grip == scene.grip and planar.n == scene.n and planar.fingers == 1 and planar.has_workpiece
+            and (planar.r_tip, planar.r_link) == (scene.r_tip, scene.r_link)
+            and np.array_equal(pm.qpos_spring[planar.joint_qpos[0]], m.qpos_spring[scene.joint_qpos[0]])
+            and np.allclose(pm.jnt_stiffness[pm.dof_jntid[planar.joint_dof[0]]],
+                            m.jnt_stiffness[m.dof_jntid[scene.joint_dof[0]]], rtol=_EQUAL_RTOL, atol=0.0)
+            and np.array_equal(pm.opt.gravity, m.opt.gravity)
+            and planar.physical == _planar_params(scene, float(np.atleast_1d(scene.contact_angle)[0])))
+    if not same:
+        raise ValueError("planar is not this scene's planar problem (grip, links, radii, springs, gravity "
+                         "or parameters differ): build it with planar_scene(scene)")
+    return planar
 
 
 def _sphere_holds(scene: GripperScene, pst) -> bool:
