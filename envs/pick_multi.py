@@ -5,7 +5,7 @@ A thin Gymnasium layer over the K-finger pick models of
 builder and placed as :func:`simgrip.sim.gripper.build_gripper` places them).
 The observation, contact forces and reward terms live in
 :mod:`simgrip.envs.pick_multi_observation`; this module holds the arguments,
-the per-episode randomisation, the episode bookkeeping and the Gymnasium API,
+the episode bookkeeping (the workpiece's draw: :mod:`simgrip.envs.pick_multi_workpiece`) and the Gymnasium API,
 in the conventions of :class:`simgrip.envs.pick.PickEnv` (``simgrip/Pick-v1``).
 """
 
@@ -13,7 +13,6 @@ from __future__ import annotations
 
 import dataclasses
 import math
-from dataclasses import dataclass
 
 import gymnasium as gym
 import mujoco
@@ -29,6 +28,7 @@ from simgrip.envs.arguments import check_positive as _pos
 from simgrip.envs.arguments import check_range as _range
 from simgrip.envs.pick_multi_model import build_pick_multi_model, half_height, set_workpiece
 from simgrip.envs.pick_multi_observation import MultiObservation, WorkpieceContactForces, multi_reward
+from simgrip.envs.pick_multi_workpiece import WORKPIECE_OPTIONS, WorkpieceParams, draw_workpiece
 from simgrip.envs.pick_reward import progress
 from simgrip.params import DimensionlessParams, PhysicalParams
 from simgrip.sim.checks import PhysicsError, StateCheck, check_invalid_state
@@ -40,19 +40,6 @@ __all__ = ["PickMultiEnv", "WorkpieceParams"]
 _COS_TILT = math.cos(math.radians(30.0))  # knocked over beyond this tilt (box, cylinder)
 _SHIFT = 0.03  # knocked away beyond this horizontal shift [m]
 _LIFTED = 0.005  # the workpiece counts as lifted once this high above its start [m]
-
-
-@dataclass(frozen=True)
-class WorkpieceParams:
-    """The workpiece of one episode (SI): shape, width [m] (box side, cylinder or sphere diameter), mass [kg],
-    finger-workpiece friction, horizontal offset ``(x, y)`` of its centre from the palm axis [m], yaw [rad]."""
-
-    shape: str
-    width: float
-    mass: float
-    friction: float
-    offset: tuple
-    yaw: float
 
 
 class PickMultiEnv(gym.Env):
@@ -327,9 +314,9 @@ class PickMultiEnv(gym.Env):
             tips=pm.fingers.tip_geom, hinge_qpos=self._hinges)
         self._forces = WorkpieceContactForces(self.K, pm.work_geom, pm.fingers.finger_of_geom)
         self._select(self.shapes[0])
-        w = (float(np.mean(self.size_range)))
-        self.workpiece = WorkpieceParams(self.shapes[0], w, float(np.mean(self.mass_range)),
-                                         float(np.mean(self.friction_range)), (0.0, 0.0), 0.0)
+        self.workpiece = WorkpieceParams(self.shapes[0], float(np.mean(self.size_range)),
+                                         float(np.mean(self.mass_range)), float(np.mean(self.friction_range)),
+                                         (0.0, 0.0), 0.0)
 
     def _select(self, shape: str):
         """Make ``shape``'s model and data the current ones."""
@@ -397,45 +384,24 @@ class PickMultiEnv(gym.Env):
     def reset(self, *, seed=None, options=None):
         super().reset(seed=seed)
         options = dict(options or {})
-        known = {"shape", "width", "mass", "friction", "offset", "yaw", "palm_height"}
-        unknown = set(options) - known
+        known = (*WORKPIECE_OPTIONS, "palm_height")
+        unknown = set(options) - set(known)
         if unknown:
             raise ValueError(f"unknown reset options {sorted(unknown)}; use {sorted(known)}")
         rng = self.np_random
-        # every draw is made whatever the options, so that a seed gives the same episode otherwise
-        shape = self.shapes[int(rng.integers(len(self.shapes)))]
-        width = float(rng.uniform(*self.size_range))
-        mass = float(rng.uniform(*self.mass_range))
-        mu = float(rng.uniform(*self.friction_range))
-        radius = self.offset_max * math.sqrt(float(rng.uniform()))
-        angle = float(rng.uniform(-math.pi, math.pi))
-        yaw = float(rng.uniform(*self.yaw_range))
+        work = draw_workpiece(rng, options, shapes=self.shapes, fingers=self.K, size_range=self.size_range,
+                              mass_range=self.mass_range, friction_range=self.friction_range,
+                              offset_max=self.offset_max, yaw_range=self.yaw_range, length=self.length)
         palm_z = float(rng.uniform(*self.palm_start))
-        shape = options.get("shape", shape)
-        if shape not in self.shapes:
-            raise ValueError(f"shape must be one of {self.shapes}, got {shape!r}")
-        width = _pos("width", options.get("width", width))
-        mass = _pos("mass", options.get("mass", mass))
-        mu = _pos("friction", options.get("friction", mu))
-        if self.K == 2:  # on the fingers' line: off it, a pinch's two contacts let the workpiece turn about it
-            angle = 0.0 if angle >= 0.0 else math.pi
-        offset = options.get("offset", (radius * math.cos(angle), radius * math.sin(angle)))
-        try:
-            offset = tuple(float(v) for v in offset)
-        except (TypeError, ValueError):
-            raise ValueError(f"offset must be an (x, y) pair in metres, got {offset!r}") from None
-        if len(offset) != 2 or not all(math.isfinite(v) for v in offset) or math.hypot(*offset) >= self.length:
-            raise ValueError(f"offset must be a finite (x, y) pair within the fingers' reach, got {offset!r}")
-        yaw = options.get("yaw", yaw)
-        if not isinstance(yaw, (int, float)) or isinstance(yaw, bool) or not math.isfinite(yaw):
-            raise ValueError(f"yaw must be a finite number (radians), got {yaw!r}")
         palm_z = float(np.clip(_pos("palm_height", options.get("palm_height", palm_z)), *self.palm_range))
+        shape, width, mass, mu, offset, yaw = (work.shape, work.width, work.mass, work.friction, work.offset,
+                                               work.yaw)
 
         self._select(shape)
         m, d = self.model, self.data
         size = set_workpiece(self._pm, d, width=width, height=self.workpiece_height, mass=mass, friction=mu,
                              spin_friction=self.spin_friction)
-        self.workpiece = WorkpieceParams(shape, width, mass, mu, offset, float(yaw))
+        self.workpiece = work
         mujoco.mj_resetData(m, d)
         self._reset_state()
         self._set_kappa(self._kappa)

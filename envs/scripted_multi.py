@@ -19,8 +19,6 @@ lift by ``target_height`` plus an allowance, hold.
 
 from __future__ import annotations
 
-import math
-
 import numpy as np
 
 from simgrip.envs.pick_multi_model import half_height, workpiece_size
