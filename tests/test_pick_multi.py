@@ -260,3 +260,20 @@ def test_headless_render_returns_an_image_of_the_right_shape(tmp_path):
     assert not out["warnings"], out["warnings"]
     assert out["shapes"] == [[150, 200, 3]] * 2 and out["dtype"] == "uint8"
     assert out["finger"] > 50 and out["work"] > 100 and out["std"] > 20 and out["differ"], out
+
+
+def test_sphere_choice_is_the_planar_choice_at_the_equator_and_holds_below_it():
+    from simgrip.envs.scripted import choose_kappa
+    from simgrip.envs.scripted_multi import choose_kappa_sphere
+    from simgrip.params import PhysicalParams
+
+    p = PhysicalParams(length=0.1, EI=3e-3, rho=0.15, g=9.81, m=0.04 / 3, b=0.058, mu_s=0.8,
+                       gamma=0.08).dimensionless()
+    k_eq, d_eq = choose_kappa_sphere(p, 0.0, safety=2.0, kappas=np.arange(-2.5, -7.01, -0.25))
+    k_planar, d_planar = choose_kappa("I", p, safety=2.0)
+    assert k_eq == k_planar
+    assert d_eq["normal_force"] == pytest.approx(d_planar["normal_force"], rel=1e-6)
+    k_low, d_low = choose_kappa_sphere(p, -0.35, safety=2.0)
+    assert d_low["normal_force"] > 0 and d_low["required_mu"] <= p.mu_s / 2.0
+    # the tips below the equator push up as well as in: the centre lies above the tips
+    assert d_low["centre_height"] > d_low["tip"][1]
