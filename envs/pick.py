@@ -37,7 +37,7 @@ from simgrip.envs.arguments import check_range as _range
 from simgrip.envs.pick_contacts import BoxContactForces
 from simgrip.envs.pick_model import build_pick_model
 from simgrip.envs.pick_observation import OBS_LAYOUT, PickObservation, obs_layout
-from simgrip.envs.pick_reward import pick_reward, progress
+from simgrip.envs.pick_reward import PickReward, progress
 from simgrip.params import DimensionlessParams, PhysicalParams
 from simgrip.sim.checks import PhysicsError, StateCheck, check_invalid_state
 from simgrip.sim.gl import make_renderer
@@ -382,10 +382,11 @@ class PickEnv(gym.Env):
         self._pedestal_h = pm.pedestal_height
         self._unit_rest = pm.unit_rest
         self._rest_buf = np.empty((2, n))
+        self._unit_rest2 = np.array([self._unit_rest, self._unit_rest])  # both fingers' rows
         self._spring_idx = pm.fingers.joint_qpos.ravel()
         hinges = pm.fingers.hinge_qpos
         self._fq = (hinges,) if hinges is not None else (pm.fingers.joint_qpos,)
-        self._bind_spring_view()
+        self._bind_views()
         self._contact_forces = BoxContactForces(self.model, self.box_geom, pm.fingers.finger_of_geom)
 
     @property
@@ -427,53 +428,81 @@ class PickEnv(gym.Env):
         mujoco.mj_setConst(m, d)
         self.box = box
 
-    def _set_kappa(self, kappa):
+    def _set_rest(self, k0: float, k1: float):
+        """Write the rest angles of curvatures ``k0``, ``k1`` (fingers 0 and 1) into ``model.qpos_spring``."""
         if self._spring_view is not None:
-            np.multiply(kappa[:, None], self._unit_rest, out=self._spring_view)
+            # one command for both fingers: one scalar times both rows (the same products as per finger)
+            np.multiply(self._unit_rest2, k0 if k0 == k1 else np.array(((k0,), (k1,))), out=self._spring_view)
         else:  # pragma: no cover
-            np.multiply.outer(kappa, self._unit_rest, out=self._rest_buf)
+            np.multiply.outer((k0, k1), self._unit_rest, out=self._rest_buf)
             self.model.qpos_spring[self._spring_idx] = self._rest_buf.ravel()
 
+    @property
+    def _kappa_cmd(self) -> np.ndarray:
+        """Commanded curvatures of fingers 0 and 1 (a copy)."""
+        return np.array(self._kcmd)
+
+    @property
+    def _kappa(self) -> np.ndarray:
+        """Actual curvatures of fingers 0 and 1 (after the lag; a copy)."""
+        return np.array(self._kact)
+
     def _reset_state(self):
-        self._kappa_cmd = np.zeros(2)
-        self._kappa = np.zeros(2)
+        self._kcmd = (0.0, 0.0)  # commanded curvatures of fingers 0 and 1
+        self._kact = (0.0, 0.0)  # actual curvatures (after the lag)
         self._palm_target = float(self.palm_start[0])
         self._z0 = 0.0
-        self._xy0 = np.zeros(2)
+        self._xy0 = (0.0, 0.0)  # the box's starting (x, y)
         self._lifted_rel = None
         self._hold = 0.0
         self._phi = 0.0
+        self._reward = PickReward(box_mass=self.box.mass, g=self.g, friction=self.box.friction, w_lift=self.w_lift,
+                                  w_success=self.w_success, w_squeeze=self.w_squeeze, w_drop=self.w_drop,
+                                  squeeze_margin=self.squeeze_margin)
         self._needs_reset = True  # until reset() has run; again once the episode terminates
 
     # Pickling and deep copies: the state is the model (its rest angles change at run time), the data
     # (including the solver's warm start), the lag filter, the palm target, the episode's bookkeeping and
-    # the RNG, all plain attributes; what must be rebuilt is the view of the rest angles into the model
-    # and the renderer (a GL context, made again on the next render()).
+    # the RNG, all plain attributes; what must be rebuilt is the views into the model and the data bound by
+    # _bind_views (a pickled view would be a stale copy) and the renderer (a GL context, made again on the
+    # next render()).
+    _VIEWS = ("_spring_view", "_check", "_qpos", "_qvel", "_ctrl", "_tips", "_hinges")
+
     def __getstate__(self):
         state = self.__dict__.copy()
         state["_renderer"] = None
-        state["_spring_view"] = None
-        state["_check"] = None
+        for name in self._VIEWS:
+            state[name] = None
         if isinstance(state.get("spec"), mujoco.MjSpec):  # the builder's MjSpec cannot be pickled
             state["spec"] = None
         return state
 
     def __setstate__(self, state):
         self.__dict__.update(state)
-        self._bind_spring_view()
+        self._bind_views()
 
-    def _bind_spring_view(self):
-        """Point ``_spring_view`` at the fingers' rest angles inside ``model.qpos_spring`` (when contiguous), and
-        ``_check`` (the state check of every step) at ``data``."""
-        self._check = StateCheck(self.data)
+    def _bind_views(self):
+        """Bind what every step reads and writes, once: ``_spring_view`` (the fingers' rest angles inside
+        ``model.qpos_spring``, when contiguous), ``_check`` (the state check), views of ``data.qpos``,
+        ``data.qvel``, ``data.ctrl``, the tips' ``geom_xpos`` rows and the hinge angles."""
+        d = self.data
+        self._check = StateCheck(d)
         flat = self._spring_idx
         if np.array_equal(flat, np.arange(flat[0], flat[0] + flat.size)):
             self._spring_view = self.model.qpos_spring[flat[0]:flat[0] + flat.size].reshape(2, self.n)
         else:  # pragma: no cover - the builder always makes them contiguous
             self._spring_view = None
+        self._qpos, self._qvel, self._ctrl = d.qpos, d.qvel, d.ctrl
+        self._tips = (d.geom_xpos[int(self.fingers.tip_geom[0])], d.geom_xpos[int(self.fingers.tip_geom[1])])
+        # a slice reads a view (bound once); an index array copies, so it is read on every step
+        self._hinges = d.qpos[self._fq[0]] if isinstance(self._fq[0], slice) else None
 
-    def _get_obs(self, forces, qpos=None):
-        return self._observe(self.data, forces, self._kappa_cmd, self._kappa, self._z0, self._hold, qpos)
+    def _get_obs(self, forces, q: list, v: list):
+        """The observation (``q``, ``v``: ``data.qpos.tolist()``, ``data.qvel.tolist()``)."""
+        hinges = self._hinges if self._hinges is not None else self.data.qpos[self._spring_idx]
+        (c0, c1), (k0, k1) = self._kcmd, self._kact
+        return self._observe.observe(q, v, hinges, self._tips[0], self._tips[1], c0, c1, k0, k1, forces, self._z0,
+                                     self._hold)
 
     # --------------------------------------------------------------- API
     def reset(self, *, seed=None, options=None):
@@ -497,7 +526,7 @@ class PickEnv(gym.Env):
         self._set_box(BoxParams(width, mass, mu))
         mujoco.mj_resetData(m, d)
         self._reset_state()
-        self._set_kappa(self._kappa)
+        self._set_rest(0.0, 0.0)
         d.qpos[self.palm_qpos] = palm_z
         self._palm_target = palm_z
         d.ctrl[0] = palm_z
@@ -508,42 +537,44 @@ class PickEnv(gym.Env):
             if self.settle_steps:
                 mujoco.mj_step(m, d, nstep=self.settle_steps)
         self._z0 = float(d.qpos[self.box_qpos + 2])
-        self._xy0 = np.array(d.qpos[self.box_qpos:self.box_qpos + 2])
+        self._xy0 = tuple(d.qpos[self.box_qpos:self.box_qpos + 2].tolist())
         self._needs_reset = False
         forces = self._contact_forces(self.model, self.data)
         info = {
             "box_width": width, "box_mass": mass, "box_friction": mu, "palm_height": palm_z,
             "dimensionless": self.dimensionless(),
         }
-        return self._get_obs(forces), info
+        return self._get_obs(forces, d.qpos.tolist(), d.qvel.tolist()), info
 
     def step(self, action):
+        # Every line here runs once per control step beside frame_skip mj_step calls: values are read from
+        # views bound once (_bind_views), as lists (one tolist per array) and combined in Python.
         if self._needs_reset:
             raise ResetNeeded("step() called before reset() or after the episode terminated; call reset()")
         a = check_action(action, self.action_space.shape)
-        m, d = self.model, self.data
         lo, hi = self.kappa_range
         k0 = lo + 0.5 * (a[0] + 1.0) * (hi - lo)
         k1 = lo + 0.5 * (a[1] + 1.0) * (hi - lo) if self.per_finger else k0
-        cmd = self._kappa_cmd
-        cmd[0], cmd[1] = k0, k1
+        self._kcmd = (k0, k1)
         # pneumatic lag: exact first-order response over one control step, rest angles held within it
-        kap = self._kappa
-        c0, c1 = kap.tolist()
-        kap[0], kap[1] = c0 + self._lag_alpha * (k0 - c0), c1 + self._lag_alpha * (k1 - c1)
-        self._set_kappa(kap)
-        self._palm_target = min(max(self._palm_target + a[-1] * self.palm_speed * self.dt,
-                                    self.palm_range[0]), self.palm_range[1])
-        d.ctrl[0] = self._palm_target
-        self._check.clear()
-        mujoco.mj_step(m, d, nstep=self.frame_skip)
-        why = self._check()
+        c0, c1 = self._kact
+        alpha = self._lag_alpha
+        c0, c1 = c0 + alpha * (k0 - c0), c1 + alpha * (k1 - c1)
+        self._kact = (c0, c1)
+        self._set_rest(c0, c1)
+        pr = self.palm_range
+        self._palm_target = min(max(self._palm_target + a[-1] * self.palm_speed * self.dt, pr[0]), pr[1])
+        self._ctrl[0] = self._palm_target
+        check = self._check
+        check.clear()
+        mujoco.mj_step(self.model, self.data, nstep=self.frame_skip)
+        q, v = self._qpos.tolist(), self._qvel.tolist()
+        why = check(q, v)
         if why is not None:
             self._needs_reset = True
             raise PhysicsError(f"step diverged ({why})")
 
         forces = self._contact_forces(self.model, self.data)
-        q = d.qpos.tolist()
         bq = self.box_qpos
         bx, by, box_z, qx, qy = q[bq], q[bq + 1], q[bq + 2], q[bq + 4], q[bq + 5]
         gain = box_z - self._z0
@@ -554,7 +585,8 @@ class PickEnv(gym.Env):
             self._lifted_rel = rel
         dropped = self._lifted_rel is not None and rel < self._lifted_rel - self.drop_distance
         up_z = 1.0 - 2.0 * (qx * qx + qy * qy)  # z component of the box's z axis
-        shifted = math.hypot(bx - self._xy0[0], by - self._xy0[1]) > 0.03
+        xy0 = self._xy0
+        shifted = math.hypot(bx - xy0[0], by - xy0[1]) > 0.03
         knocked = up_z < _COS_TILT or shifted
         if gain >= self.target_height and both:
             self._hold += self.dt
@@ -563,20 +595,18 @@ class PickEnv(gym.Env):
         success = self._hold >= self.hold_time - 1e-9
         lost = (dropped or knocked) and not success
         phi = progress(gain, self.target_height, lost)
-        reward, info = pick_reward(phi=phi, phi_prev=self._phi, success=success, lost=lost, side_forces=(s0, s1),
-                                   box_mass=self.box.mass, g=self.g, friction=self.box.friction, w_lift=self.w_lift,
-                                   w_success=self.w_success, w_squeeze=self.w_squeeze, w_drop=self.w_drop,
-                                   squeeze_margin=self.squeeze_margin)
+        reward, r_lift, r_success, r_squeeze, r_drop = self._reward(phi, self._phi, success, lost, s0, s1)
         self._phi = phi
-        terminated = bool(success or lost)
+        terminated = success or lost
         self._needs_reset = terminated
-        obs = self._get_obs(forces, q)
-        info.update({
+        obs = self._get_obs(forces, q, v)
+        info = {
+            "reward_lift": r_lift, "reward_success": r_success, "reward_squeeze": r_squeeze, "reward_drop": r_drop,
             "is_success": success, "dropped": dropped and not success,
             "knocked_over": knocked and not success, "box_lift": gain,
             "normal_force": np.array((n0, n1)), "friction_force": np.array((f0, f1)),
             "side_force": np.array((s0, s1)), "hold_time": self._hold,
-        })
+        }
         return obs, reward, terminated, False, info
 
     def render(self):

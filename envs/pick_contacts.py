@@ -6,6 +6,10 @@ normal force's horizontal (squeezing) component.  With elliptic friction cones
 (the pick model's) a contact's constraint rows in ``data.efc_force`` are its
 contact-frame force (normal, tangent 1, tangent 2, ...) and are read directly;
 otherwise each contact's force comes from :func:`mujoco.mj_contactForce`.
+
+It runs on every environment step, so it reads as little as it can: the
+contacts' geom pairs always (one ``tolist``), and the constraint forces,
+addresses and normals only once a box-finger contact is found.
 """
 
 from __future__ import annotations
@@ -43,31 +47,29 @@ class BoxContactForces:
         the box's top adds to its normal force but not to its side force.
         """
         out = [0.0, 0.0, 0.0, 0.0, 0.0, 0.0]
-        if data.ncon == 0:
+        if not data.ncon:
             return out
         fog, bg = self._fog_list, self.box_geom
         con = data.contact
-        geoms = con.geom.tolist()
-        nx = con.frame[:, 0].tolist()  # x component of each contact normal
-        if self._elliptic:
-            adrs = con.efc_address.tolist()
-            ef = None
-            for (g1, g2), adr, n_x in zip(geoms, adrs, nx):
-                f = fog[g2] if g1 == bg else (fog[g1] if g2 == bg else -1)
-                if f >= 0:
-                    if ef is None:
-                        ef = data.efc_force.tolist()  # one conversion for all contacts
-                    fn = ef[adr]
-                    out[2 * f] += fn
-                    out[2 * f + 1] += math.hypot(ef[adr + 1], ef[adr + 2])
-                    out[4 + f] += fn * abs(n_x)
-            return out
-        cf = self._cf
-        for i, ((g1, g2), n_x) in enumerate(zip(geoms, nx)):
+        ef = None
+        for i, (g1, g2) in enumerate(con.geom.tolist()):
             f = fog[g2] if g1 == bg else (fog[g1] if g2 == bg else -1)
-            if f >= 0:
-                mujoco.mj_contactForce(model, data, i, cf)
-                out[2 * f] += float(cf[0])
-                out[2 * f + 1] += math.hypot(cf[1], cf[2])
-                out[4 + f] += float(cf[0]) * abs(n_x)
+            if f < 0:
+                continue
+            if ef is None:  # the first box-finger contact: read the rest, once for all contacts
+                nx = con.frame[:, 0].tolist()  # x component of each contact normal
+                if self._elliptic:
+                    adrs = con.efc_address.tolist()
+                    ef = data.efc_force.tolist()
+                else:
+                    ef = self._cf
+            if self._elliptic:
+                adr = adrs[i]
+                fn, ft = ef[adr], math.hypot(ef[adr + 1], ef[adr + 2])
+            else:
+                mujoco.mj_contactForce(model, data, i, ef)
+                fn, ft = float(ef[0]), math.hypot(ef[1], ef[2])
+            out[2 * f] += fn
+            out[2 * f + 1] += ft
+            out[4 + f] += fn * abs(nx[i])
         return out

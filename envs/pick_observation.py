@@ -133,19 +133,29 @@ class PickObservation:
         ``z0`` the box's starting height [m]; ``hold`` the time held at the target [s]; ``qpos`` optionally
         ``data.qpos.tolist()`` when the caller has it.
         """
-        # scalars are read with one tolist() per array and combined in Python; the finger shapes are one
-        # np.dot; the result is written into a fresh array in the final layout and clipped in place
-        q = data.qpos.tolist() if qpos is None else qpos
-        v = data.qvel.tolist()
+        xpos = data.geom_xpos
+        c0, c1 = kappa_cmd
+        k0, k1 = kappa
+        return self.observe(data.qpos.tolist() if qpos is None else qpos, data.qvel.tolist(),
+                            data.qpos[self.hinge_qpos].reshape(-1), xpos[self.tips[0]], xpos[self.tips[1]],
+                            float(c0), float(c1), float(k0), float(k1), forces, z0, hold)
+
+    def observe(self, q: list, v: list, hinges, tip0, tip1, c0: float, c1: float, k0: float, k1: float, forces,
+                z0: float, hold: float) -> np.ndarray:
+        """The observation from values already read (the environment's step).
+
+        ``q``, ``v``: ``data.qpos.tolist()``, ``data.qvel.tolist()``; ``hinges``: the fingers' hinge angles
+        (``2 n_links``, e.g. a view of ``data.qpos``); ``tip0``, ``tip1``: the tips' ``geom_xpos`` rows;
+        ``c0, c1``, ``k0, k1``: commanded and actual curvatures; the rest as :meth:`__call__`.
+        """
+        # scalars are combined in Python; the finger shapes are one np.dot; the result is written into a
+        # fresh array in the final layout and clipped in place
         inv_l = self._inv_l
         palm_z, palm_v = q[self.palm_qpos], v[self.palm_dof]
         bq, bd = self.box_qpos, self.box_dof
-        xpos = data.geom_xpos
-        x0, _, z0_tip = xpos[self.tips[0]].tolist()
+        x0, _, z0_tip = tip0.tolist()
         fu = self.force_unit
         lo, hi = self.kappa_range  # curvatures in action units (the action that commands them)
-        c0, c1 = kappa_cmd.tolist()
-        k0, k1 = kappa.tolist()
         bz = q[bq + 2]
         hold_obs = min(hold / self.hold_time, 1.0) if self.hold_time > 0 else 0.0
         end = self._shape_end_out
@@ -153,9 +163,9 @@ class PickObservation:
         if self._pick is None:  # per_finger: both fingers, the box's x, tilt and spin
             bx, qw, qx, qy, qz = q[bq], q[bq + 3], q[bq + 4], q[bq + 5], q[bq + 6]
             vx, vz, wy = v[bd], v[bd + 2], v[bd + 4]
-            x1, _, z1_tip = xpos[self.tips[1]].tolist()
+            x1, _, z1_tip = tip1.tolist()
             tilt = math.atan2(2.0 * (qx * qz + qw * qy), 1.0 - 2.0 * (qx * qx + qy * qy))
-            np.dot(self._hinges_2n(data.qpos), self._shape_matrix_t, out=obs[5:end].reshape(2, (end - 5) // 2))
+            np.dot(hinges.reshape(2, self.n), self._shape_matrix_t, out=obs[5:end].reshape(2, (end - 5) // 2))
             obs[:5] = (palm_z * inv_l, 2.0 * (c0 - lo) / (hi - lo) - 1.0, 2.0 * (c1 - lo) / (hi - lo) - 1.0,
                        2.0 * (k0 - lo) / (hi - lo) - 1.0, 2.0 * (k1 - lo) / (hi - lo) - 1.0)
             obs[end:] = (
@@ -165,7 +175,7 @@ class PickObservation:
                 math.log1p(forces[0] / fu), math.log1p(forces[1] / fu), math.log1p(forces[2] / fu),
                 math.log1p(forces[3] / fu), hold_obs)
         else:  # finger 0 and the box's z
-            np.dot(self._hinges_2n(data.qpos)[0], self._shape_matrix_t, out=obs[3:end])
+            np.dot(hinges[:self.n], self._shape_matrix_t, out=obs[3:end])
             obs[:3] = (palm_z * inv_l, 2.0 * (c0 - lo) / (hi - lo) - 1.0, 2.0 * (k0 - lo) / (hi - lo) - 1.0)
             obs[end:] = (
                 x0 * inv_l, (z0_tip - palm_z) * inv_l, (bz - palm_z) * inv_l, (v[bd + 2] - palm_v) * inv_l,
@@ -173,7 +183,3 @@ class PickObservation:
         np.maximum(obs, self.low, out=obs)
         np.minimum(obs, self.high, out=obs)
         return obs
-
-    def _hinges_2n(self, qpos):
-        """The hinge angles as a (2, n_links) array (a view when ``hinge_qpos`` is a slice)."""
-        return qpos[self.hinge_qpos].reshape(2, self.n)
