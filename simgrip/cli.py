@@ -23,6 +23,7 @@ from __future__ import annotations
 import argparse
 import contextlib
 import json
+import math
 import re
 import signal
 import sys
@@ -123,6 +124,13 @@ def build_parser() -> argparse.ArgumentParser:
                            "settled by dynamics); --json gains 'fingers', one record per finger")
             p.add_argument("--workpiece", default=None,
                            help="with --fingers: box (K = 2 or 4), cylinder or sphere (diameter b) [default cylinder]")
+            p.add_argument("--offset", type=float, nargs=2, default=None, metavar=("DX", "DY"),
+                           help="with --fingers: the workpiece's centre off the palm axis over l (box, cylinder; "
+                           "the palm axis inside its footprint) [default 0 0]")
+            p.add_argument("--workpiece-yaw", type=float, default=None, metavar="DEG",
+                           help="with --fingers: the workpiece turned about its vertical axis, degrees [default 0]")
+            p.add_argument("--kappa-per-finger", type=float, nargs="+", default=None, metavar="K",
+                           help="with --fingers: one uniform curvature per finger (K values; replaces --kappa)")
             p.add_argument("--contact-angle", type=float, default=None,
                            help="with --workpiece sphere: elevation of the contact normal at the start, radians in "
                            "(-pi/2, pi/2) (0: the equator) [default 0]")
@@ -208,18 +216,32 @@ def _cmd_simulate(args) -> dict:
     from simgrip.compare import settled_record, simulate
 
     grip = check_grip(args.grip)
-    params, profile, links = _params(args), _profile(args, grip), _links(args.links)
-    if args.fingers is not None or args.workpiece is not None or args.contact_angle is not None:
+    per_finger = args.kappa_per_finger is not None
+    params, links = _params(args), _links(args.links)
+    profile = None if per_finger else _profile(args, grip)
+    if (args.fingers is not None or args.workpiece is not None or args.contact_angle is not None or per_finger
+            or args.offset is not None or args.workpiece_yaw is not None):
         from simgrip.gripper import gripper_record, simulate_gripper
+        from simgrip.sim.gripper import uniform_profiles
 
         if args.method not in (None, "dynamics") or args.target_error is not None or args.contact is not None:
             raise ValueError("method: a K-finger gripper (--fingers) settles by dynamics only (no --method newton, "
                              "no --target-error, no --contact)")
         if args.fingers is None:
-            raise ValueError("fingers: --workpiece and --contact-angle need --fingers K")
+            raise ValueError("fingers: --workpiece, --contact-angle, --offset, --workpiece-yaw and --kappa-per-finger "
+                             "need --fingers K")
+        if per_finger:
+            if args.kappa is not None:
+                raise ValueError("kappa_per_finger: give --kappa-per-finger or --kappa, not both")
+            profile = list(uniform_profiles(args.kappa_per_finger, args.fingers))
+        yaw_deg = 0.0 if args.workpiece_yaw is None else args.workpiece_yaw
+        if not math.isfinite(yaw_deg):
+            raise ValueError(f"workpiece_yaw must be finite (degrees), got {yaw_deg!r}")
         state = simulate_gripper(grip, params, profile, links, fingers=args.fingers,
                                  workpiece=args.workpiece or "cylinder",
-                                 contact_angle=args.contact_angle or 0.0)
+                                 contact_angle=args.contact_angle or 0.0,
+                                 offset=args.offset if args.offset is not None else (0.0, 0.0),
+                                 workpiece_yaw=math.radians(yaw_deg))
         return gripper_record(state, params, profile)
     return settled_record(simulate(grip, params, profile, links, method=args.method or "newton",
                                    target_error=args.target_error, contact=args.contact),

@@ -19,17 +19,21 @@ __all__ = ["gripper_record", "simulate_gripper"]
 
 
 def simulate_gripper(grip: str, params: DimensionlessParams, profile, links: int, *, fingers: int, workpiece: str,
-                     yaw: float = 0.0, contact_angle: float = 0.0, **settle_kw):
+                     yaw: float = 0.0, contact_angle: float = 0.0, offset=(0.0, 0.0), workpiece_yaw: float = 0.0,
+                     **settle_kw):
     """Build the K-finger gripper and settle it; returns its :class:`~simgrip.settle.gripper.GripperState`.
 
-    ``yaw`` and ``contact_angle`` go to :func:`~simgrip.sim.gripper.build_gripper`, extra
-    keywords to :func:`~simgrip.settle.gripper.settle_gripper`.
+    ``profile`` is one profile or one per finger; ``yaw``, ``contact_angle``, ``offset`` (over l) and
+    ``workpiece_yaw`` [rad] go to :func:`~simgrip.sim.gripper.build_gripper`, extra keywords to
+    :func:`~simgrip.settle.gripper.settle_gripper`.
     """
     from simgrip.settle.gripper import settle_gripper
     from simgrip.sim.gripper import build_gripper
 
-    scene = build_gripper(grip, params, as_profile(profile), links, fingers=fingers, workpiece=workpiece, yaw=yaw,
-                          contact_angle=contact_angle)
+    if not isinstance(profile, (list, tuple)):
+        profile = as_profile(profile)
+    scene = build_gripper(grip, params, profile, links, fingers=fingers, workpiece=workpiece, yaw=yaw,
+                          contact_angle=contact_angle, offset=offset, workpiece_yaw=workpiece_yaw)
     return settle_gripper(scene, **settle_kw)
 
 
@@ -62,7 +66,7 @@ def _stability(state, params: DimensionlessParams, profile) -> float:
     try:
         if state.held and state.records:
             r = state.records[0]
-            p = params.replace(b=params.b * math.cos(r.contact_angle))  # the tip's X on an inclined contact
+            p = params.replace(b=2.0 * float(r.tip[0]))  # finger 0's settled tip X (off-centre, inclined contact)
             ch = discrete.solve_chain(state.grip, p, profile, state.links, contact_moment=r.moment,
                                       guess=state.link_angles[0])
         else:
@@ -96,7 +100,8 @@ def gripper_record(state, params: DimensionlessParams, profile=None) -> dict:
         "friction_force": float(first.friction) if first else 0.0,
         "required_mu": float(first.required_mu) if first else 0.0,
         "feasible": bool(state.held),
-        "min_eigenvalue": None if profile is None else _stability(state, params, as_profile(profile)),
+        "min_eigenvalue": None if profile is None else _stability(state, params, as_profile(
+            profile[0] if isinstance(profile, (list, tuple)) else profile)),
         "N1": float(first.N1) if first else 0.0,
         "N2": float(first.N2) if first else 0.0,
         **settle_fields(state),
@@ -108,6 +113,8 @@ def gripper_record(state, params: DimensionlessParams, profile=None) -> dict:
         "workpiece": state.workpiece,
         "fingers": [_finger(state, k) for k in range(state.fingers)],
         "workpiece_position": [float(v) for v in state.workpiece_position],
+        "offset": [float(v) for v in getattr(state, "offset", (0.0, 0.0))],
+        "workpiece_yaw": float(getattr(state, "workpiece_yaw", 0.0)),
         "force_balance": [float(v) for v in state.force_balance],
         "moment_balance": [float(v) for v in state.moment_balance],
     }

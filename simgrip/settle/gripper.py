@@ -32,6 +32,10 @@ in rotation (its principal inertia; the rotational dofs are in its body frame).
   (in the workpiece's frame) or a workpiece that falls
   :data:`~simgrip.settle.dynamics.DYN_DROP_FALL` is dropped: it is parked
   (held, contact off) and the fingers settle alone from the chain's free shape.
+* **Drop retry**: a workpiece dropped from a start that touched it is settled
+  once more from the start at half the step (as the planar dynamic settle:
+  a growing two-step oscillation of the contacts at ``h`` can throw it off);
+  it is dropped when it drops at both steps.
 * **Penetration**: a settled state penetrating
   :data:`~simgrip.settle.dynamics.DYN_PEN_LIMIT` or more is settled again with
   half the step (at most three times).
@@ -143,6 +147,9 @@ class GripperState:
     grip_matched: bool = True
     #: Conditions the state violates that the settle does not enforce (e.g. the other grip's shape).
     warnings: list = field(default_factory=list)
+    #: The scene's workpiece offset (over l, scene frame) and turn about its axis [rad] (:func:`build_gripper`).
+    offset: np.ndarray = field(default_factory=lambda: np.zeros(2))
+    workpiece_yaw: float = 0.0
     #: How it was settled: ``"dynamics"`` or ``"symmetric"`` (:mod:`simgrip.settle.gripper_symmetry`).
     method: str = "dynamics"
 
@@ -302,8 +309,10 @@ def settle_gripper(scene: GripperScene, *, tol: float | None = None, max_steps: 
     if not reach:
         q_start = np.array(d.qpos)
     steps, factor = 0, 1.0
+    retried_drop = False
     try:
-        for attempt in range(4):
+        for attempt in range(5):
+            restore_options(m, saved)  # a dropped attempt left contact off
             d.qpos[:] = q_start
             d.qvel[:] = 0.0
             d.qfrc_applied[:] = 0.0
@@ -313,7 +322,13 @@ def settle_gripper(scene: GripperScene, *, tol: float | None = None, max_steps: 
             steps += dyn.steps
             state = _read(scene, dyn, held, converged, steps, t0, tol)
             check_grip_shape(scene, state)
-            if (state.penetration < DYN_PEN_LIMIT or attempt == 3 or steps >= max_steps
+            if reach and not held and not retried_drop and state.converged and steps < max_steps:
+                # dropped from a start that touched: once more at half the step, as the planar dynamic settle
+                # does (a growing two-step oscillation of the contacts at h can throw the workpiece off)
+                retried_drop = True
+                factor *= 0.5
+                continue
+            if (state.penetration < DYN_PEN_LIMIT or attempt >= 3 or steps >= max_steps
                     or not state.converged):
                 break
             factor *= 0.5
@@ -434,4 +449,5 @@ def _read(scene: GripperScene, dyn: _Dyn, held: bool, converged: bool, steps: in
         force_balance=total_f / W if held else np.zeros(3),
         moment_balance=total_m / (W * L) if held else np.zeros(3),
         workpiece_position=centre / L, workpiece_quat=np.array(d.xquat[wb]), steps=steps, timestep=dyn.h,
-        wall_time_s=time.perf_counter() - t0, qpos=np.array(d.qpos))
+        wall_time_s=time.perf_counter() - t0, qpos=np.array(d.qpos), offset=np.array(scene.offset),
+        workpiece_yaw=float(scene.workpiece_yaw))

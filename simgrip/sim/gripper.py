@@ -62,7 +62,7 @@ from simgrip.sim.scene import FingerScene, check_params, check_positive, root_sp
 from simgrip.sim.workpiece import BOX_DEPTH, BOX_HEIGHT
 
 __all__ = ["GRIPPER_GRIPS", "WORKPIECES", "GripperScene", "build_gripper", "check_gripper", "finger_azimuths",
-           "orient_fingers", "set_finger_angles", "workpiece_inertia"]
+           "orient_fingers", "set_finger_angles", "uniform_profiles", "workpiece_inertia"]
 
 #: Workpiece shapes of a K-finger gripper.
 WORKPIECES = ("box", "cylinder", "sphere")
@@ -343,6 +343,26 @@ def _check_contact_angle(value, shape: str) -> float:
     if shape != "sphere" and beta != 0.0:
         raise ValueError(f"contact_angle must be 0 for workpiece {shape!r} (its surface is vertical), got {value!r}")
     return beta
+
+
+def uniform_profiles(kappas, fingers: int) -> tuple:
+    """One uniform profile per finger from ``kappas`` (``K`` curvatures ``kappa_bar``), for ``build_gripper``.
+
+    ValueError naming ``kappa_per_finger`` unless there are exactly ``fingers`` finite values of
+    magnitude at most :data:`~simgrip.params.KAPPA_LIMIT`.
+    """
+    from simgrip.params import KAPPA_LIMIT
+    from simgrip.profiles import Uniform
+
+    try:
+        k = np.asarray(kappas, dtype=float)
+    except (TypeError, ValueError):
+        raise ValueError(f"kappa_per_finger must be {fingers} real numbers, got {kappas!r}") from None
+    if k.ndim != 1 or len(k) != int(fingers):
+        raise ValueError(f"kappa_per_finger must give one curvature per finger ({fingers}), got {kappas!r}")
+    if not np.all(np.isfinite(k)) or np.any(np.abs(k) > KAPPA_LIMIT):
+        raise ValueError(f"kappa_per_finger must be finite with |kappa| <= {KAPPA_LIMIT:g}, got {kappas!r}")
+    return tuple(Uniform(float(v)) for v in k)
 
 
 def _profiles(profile, K: int) -> tuple:

@@ -101,7 +101,7 @@ def place_fingers(shape: str, azimuths, size_l, r_tip: float, offset, workpiece_
     reach, normal, face = np.zeros(K), np.zeros((K, 2)), np.full(K, -1)
     if shape == "sphere":
         if np.any(c != 0.0):
-            raise ValueError(f"offset must be (0, 0) for workpiece 'sphere' (held centred only), got {tuple(c)}")
+            raise ValueError(f"offset must be (0, 0) for workpiece 'sphere' (held centred only), got {tuple(float(v) for v in c)}")
         reach[:] = size_l[0] + r_tip
         normal[:, 0] = 1.0
         return Placement(reach, normal, face)
@@ -109,7 +109,7 @@ def place_fingers(shape: str, azimuths, size_l, r_tip: float, offset, workpiece_
         R = size_l[0] + r_tip
         if not math.hypot(*c) < size_l[0]:
             raise ValueError(f"offset must keep the palm axis inside the cylinder (|offset| < {size_l[0]:g} l), "
-                             f"got {tuple(c)}")
+                             f"got {tuple(float(v) for v in c)}")
         for k, a in enumerate(az):
             e1, e3 = np.array([math.cos(a), math.sin(a)]), np.array([-math.sin(a), math.cos(a)])
             along, across = float(c @ e1), float(c @ e3)
@@ -124,7 +124,7 @@ def place_fingers(shape: str, azimuths, size_l, r_tip: float, offset, workpiece_
     o = rot.T @ (-c)  # the palm axis in the box's frame
     if not np.all(np.abs(o) < half):
         raise ValueError(f"offset must keep the palm axis inside the box's footprint (|dx|, |dy| within its half "
-                         f"sizes {tuple(half)} l, turned by workpiece_yaw), got {tuple(c)}")
+                         f"sizes {tuple(half)} l, turned by workpiece_yaw), got {tuple(float(v) for v in c)}")
     for k, a in enumerate(az):
         e1, e3 = np.array([math.cos(a), math.sin(a)]), np.array([-math.sin(a), math.cos(a)])
         u = rot.T @ e1
@@ -138,7 +138,7 @@ def place_fingers(shape: str, azimuths, size_l, r_tip: float, offset, workpiece_
         other = 1 - axis
         if not abs(hit[other]) < half[other]:
             raise ValueError(f"offset / workpiece_yaw: finger {k}'s plane meets the box on an edge (the tip would "
-                             f"touch its rounded strip, not a flat face); offset {tuple(c)}, "
+                             f"touch its rounded strip, not a flat face); offset {tuple(float(v) for v in c)}, "
                              f"workpiece_yaw {workpiece_yaw:g} rad")
         n_box = np.zeros(2)
         n_box[axis] = math.copysign(1.0, u[axis])
