@@ -75,8 +75,8 @@ __all__ = ["GRIPPER_METHODS", "Symmetry", "planar_scene", "settle_symmetric", "s
 
 #: ``settle_gripper(method=...)``: the over-damped dynamics, the symmetry skip, or the skip where exact.
 GRIPPER_METHODS = ("dynamics", "symmetric", "auto")
-#: Grips the skip covers.
-SYMMETRIC_GRIPS = ("I", "II")
+#: Grips the skip covers (III: the K = 4 cradle, :mod:`simgrip.sim.gripper_cradle`).
+SYMMETRIC_GRIPS = ("I", "II", "III")
 #: Relative round-off within which two model arrays count as equal (the builder computes every
 #: finger's from the same numbers; trigonometry of the azimuths leaves a few ulps).
 _EQUAL_RTOL = 1e-9
@@ -128,8 +128,11 @@ def symmetry(scene: GripperScene) -> Symmetry:
         "link inertias": m.body_inertia[bodies],
         "link frames": np.concatenate([m.body_pos[bodies[:, 1:]], m.body_quat[bodies[:, 1:]]], axis=2),
         "link geoms": m.geom_size[link_geoms],
-        "tip spheres": m.geom_size[scene.tip_geom][:, :1],
     }
+    if np.all(scene.tip_geom >= 0):
+        checks["tip spheres"] = m.geom_size[scene.tip_geom][:, :1]
+    elif np.any(scene.tip_geom >= 0):
+        return Symmetry(False, "some fingers have tip spheres and some not")
     for what, arr in checks.items():
         if not _same(arr):
             return Symmetry(False, f"the fingers differ in their {what}")
@@ -150,9 +153,13 @@ def symmetry(scene: GripperScene) -> Symmetry:
     spacing = np.sort((np.asarray(yaws) - yaws[0]) % (2.0 * math.pi))
     if np.max(np.abs(_wrap(spacing - 2.0 * math.pi * np.arange(K) / K))) > 1e-9:
         return Symmetry(False, "the fingers are not evenly spaced about the palm axis")
-    # the contact pairs: one per finger, tip with the workpiece, the same friction
+    # the contact pairs: one per finger, tip with the workpiece (III: its links with its edge), the same friction
     pairs = sorted((int(m.pair_geom1[i]), int(m.pair_geom2[i])) for i in range(m.npair))
-    if pairs != sorted((int(g), int(scene.workpiece_geom)) for g in scene.tip_geom):
+    if scene.grip == "III":
+        why = _cradle_pairs(scene, pairs, np.asarray(yaws))
+        if why:
+            return Symmetry(False, why)
+    elif pairs != sorted((int(g), int(scene.workpiece_geom)) for g in scene.tip_geom):
         return Symmetry(False, "the contact pairs are not one tip--workpiece pair per finger")
     if not _same(m.pair_friction):
         return Symmetry(False, "the contact pairs' friction differs")
@@ -170,6 +177,8 @@ def symmetry(scene: GripperScene) -> Symmetry:
     rot = rot.reshape(3, 3)
     size = np.asarray(m.geom_size[wg])
     face = (0.5 * scene.params.b - scene.r_tip) * L
+    if scene.grip == "III":  # the cradle's box: any half width, the same along every finger
+        face = float(size[0])
     gtype = int(m.geom_type[wg])
     if gtype == int(mujoco.mjtGeom.mjGEOM_SPHERE):
         ok = abs(size[0] - face) <= _EQUAL_RTOL * L
@@ -188,7 +197,40 @@ def symmetry(scene: GripperScene) -> Symmetry:
         ok = False
     if not ok:
         return Symmetry(False, "the fingers do not all meet the workpiece's surface head on at b/2 - r_tip")
+    if scene.grip == "III" and not _same(np.asarray(scene.data.qpos)[scene.joint_qpos]):
+        return Symmetry(False, "the fingers' start shapes differ (Grip III settles from the start)")
     return Symmetry(True)
+
+
+def _cradle_pairs(scene: GripperScene, pairs, yaws) -> str:
+    """Grip III: every finger's links in the same window paired with one edge, the same in its frame; else why not."""
+    m, K, L = scene.model, scene.fingers, scene.length
+    owner = np.asarray(scene.index.finger_of_geom)
+    links, edges = [set() for _ in range(K)], [set() for _ in range(K)]
+    for g1, g2 in pairs:
+        k = int(owner[g1]) if g1 < owner.size else -1
+        if k < 0 or int(m.geom_bodyid[g2]) != scene.workpiece_body:
+            return "a contact pair is not a finger's link with the workpiece"
+        links[k].add(int(np.nonzero(scene.index.link_geom[k] == g1)[0][0]))
+        edges[k].add(g2)
+    if any(len(e) != 1 for e in edges) or any(lk != links[0] for lk in links):
+        return "the fingers' links are not paired alike, each with one edge"
+    q0 = np.asarray(m.qpos0[scene.workpiece_qpos])
+    rot = np.zeros(9)
+    mujoco.mju_quat2Mat(rot, q0[3:])
+    rot = rot.reshape(3, 3)
+    seen = []
+    for k, (edge,) in enumerate(edges):
+        a = float(yaws[k])
+        R = np.array([[math.cos(a), math.sin(a), 0.0], [-math.sin(a), math.cos(a), 0.0], [0.0, 0.0, 1.0]])
+        axis = np.zeros(9)
+        mujoco.mju_quat2Mat(axis, m.geom_quat[edge])
+        axis = R @ rot @ axis.reshape(3, 3)[:, 2]
+        seen.append(np.concatenate([R @ rot @ m.geom_pos[edge] / L, np.abs(axis), m.geom_size[edge] / L,
+                                    [int(m.geom_type[edge])]]))
+    if not _same(seen) or abs(abs(seen[0][4]) - 1.0) > 1e-9:
+        return "the fingers' edges are not alike in their frames (each along E3 at the same place)"
+    return ""
 
 
 def _planar_params(scene: GripperScene, beta: float):
@@ -209,27 +251,71 @@ def planar_scene(scene: GripperScene, grip: str | None = None):
 
     beta = float(np.atleast_1d(scene.contact_angle)[0]) if scene.workpiece == "sphere" else 0.0
     g = scene.grip if grip is None else grip
-    pl = build_scene(g, _planar_params(scene, beta), scene.profile, scene.n, r_tip=scene.r_tip, r_link=scene.r_link)
+    if g == "III":
+        pl = _planar_cradle(scene)
+    else:
+        pl = build_scene(g, _planar_params(scene, beta), scene.profile, scene.n, r_tip=scene.r_tip,
+                         r_link=scene.r_link)
     pl.model.opt.gravity[:] = scene.model.opt.gravity
     gbit = int(mujoco.mjtDisableBit.mjDSBL_GRAVITY)
     pl.model.opt.disableflags = (int(pl.model.opt.disableflags) & ~gbit) | (int(scene.model.opt.disableflags) & gbit)
     return pl
 
 
-def symmetric_or_none(scene: GripperScene, method: str, **kw):
+def _cradle_edges(scene: GripperScene) -> list:
+    """Grip III: the edge geom each finger's links are paired with (finger order)."""
+    m = scene.model
+    owner = np.asarray(scene.index.finger_of_geom)
+    edges = {}
+    for i in range(m.npair):
+        edges.setdefault(int(owner[int(m.pair_geom1[i])]), int(m.pair_geom2[i]))
+    return [edges[k] for k in range(scene.fingers)]
+
+
+def _planar_cradle(scene: GripperScene):
+    """The planar Grip III scene of the K = 4 cradle: the same start shape, so the same box and contact links."""
+    from simgrip.sim.scene import build_scene as build_model
+
+    m, L = scene.model, scene.length
+    edge = _cradle_edges(scene)[0]
+    q_start = np.array(scene.data.qpos[scene.joint_qpos[0]])
+    pl = build_model("III", scene.physical, scene.profile, scene.n, r_tip=scene.r_tip, r_link=scene.r_link,
+                     r_corner=float(m.geom_size[edge][0]) / L, initial_angles=q_start)
+    pm = pl.model
+    links = sorted(int(np.nonzero(scene.index.link_geom[0] == m.pair_geom1[i])[0][0])
+                   for i in range(m.npair) if int(m.pair_geom2[i]) == edge)
+    plinks = sorted(int(np.nonzero(pl.index.link_geom[0] == pm.pair_geom1[i])[0][0]) for i in range(pm.npair))
+    same = (abs(float(pl.box_half[0]) - float(scene.size[0])) <= _EQUAL_RTOL * L
+            and abs(float(pl.box_half[2]) - float(scene.size[2])) <= _EQUAL_RTOL * L
+            and abs(float(pm.body_pos[pl.workpiece_body][2]) - float(m.qpos0[scene.workpiece_qpos[2]])) <= _EQUAL_RTOL * L
+            and links == plinks)
+    if not same:
+        raise ValueError("scene: its fingers' start shape is not the one its box was placed on (Grip III settles "
+                         "from the start: build the scene with that start as initial_angles)")
+    return pl
+
+
+def symmetric_or_none(scene: GripperScene, method: str | None, **kw):
     """``settle_gripper``'s hook: the skip's state for ``method`` ``"symmetric"`` or ``"auto"``, else None.
 
     ``"auto"`` returns None where the scene is not exactly symmetric (the
     caller settles it by dynamics); ``"symmetric"`` raises ValueError naming
-    ``method`` there.  ``kw`` go to :func:`settle_symmetric`.
+    ``method`` there.  ``None`` (settle_gripper's default) is ``"dynamics"``
+    for Grips I/II and ``"symmetric"`` for Grip III, which has no K-finger
+    dynamics (``"dynamics"`` raises there).  ``kw`` go to :func:`settle_symmetric`.
     """
+    if method is None:
+        method = "symmetric" if isinstance(scene, GripperScene) and scene.grip == "III" else "dynamics"
     if method not in GRIPPER_METHODS:
         raise ValueError(f"method must be one of {GRIPPER_METHODS}, got {method!r}")
     if method == "dynamics":
+        if isinstance(scene, GripperScene) and scene.grip == "III":
+            raise ValueError("method: the K-finger cradle (Grip III) has no dynamic settle; it is settled by the "
+                             "symmetry skip (method 'symmetric' or 'auto')")
         return None
     sym = symmetry(scene)
     if not sym.exact:
-        if method == "auto":
+        if method == "auto" and scene.grip != "III":
             return None
         raise ValueError(f"method 'symmetric' needs an exactly symmetric scene: {sym.reason}")
     return settle_symmetric(scene, **kw)
@@ -299,6 +385,8 @@ def _check_planar(scene: GripperScene, planar):
 
     if planar is None:
         return planar_scene(scene)
+    if scene.grip == "III":
+        raise ValueError("planar: Grip III settles from the scene's start shape; its planar scene is built anew")
     if not isinstance(planar, Scene):
         raise ValueError(f"planar must be a simgrip.sim.scene.Scene from planar_scene(scene), got "
                          f"{type(planar).__name__}")
@@ -314,6 +402,26 @@ def _check_planar(scene: GripperScene, planar):
         raise ValueError("planar is not this scene's planar problem (grip, links, radii, springs, gravity "
                          "or parameters differ): build it with planar_scene(scene)")
     return planar
+
+
+def _check_cradle(scene: GripperScene, state, phi, gamma: float) -> None:
+    """The K = 4 cradle is well-posed only where the fingers beyond the contact stay off the palm axis.
+
+    The four fingers' planes meet on the palm axis; finger points at ``X_k, X_j`` in two perpendicular
+    planes lie at least ``sqrt(X_k^2 + X_j^2) >= sqrt(2) min X`` apart, so ``X > sqrt(2) r_link``
+    beyond ``gamma`` keeps the link capsules apart (there is no contact pair between fingers).
+    Otherwise the state is reported not held, with a warning.
+    """
+    from simgrip.chain import link_positions
+
+    nodes = link_positions(phi, 1.0 / scene.n)
+    beyond = nodes[np.arange(scene.n + 1) / scene.n > gamma + 1e-12]
+    if beyond.size and float(np.min(beyond[:, 0])) <= math.sqrt(2.0) * scene.r_link:
+        state.held = False
+        state.grip_matched = False
+        state.warnings.append(f"the fingers beyond the contact reach the palm axis (X = {np.min(beyond[:, 0]):.3g} l "
+                              f"<= sqrt(2) r_link): the four fingers would pass through each other; the state is "
+                              f"reported as not held")
 
 
 def _sphere_holds(scene: GripperScene, pst) -> bool:
@@ -362,8 +470,12 @@ def _replicate(scene: GripperScene, pst, held: bool, converged: bool, steps: int
             e1, e3 = frames[k][0], np.cross(frames[k][0], [0.0, 0.0, 1.0])  # E1 x z: the planar moment's axis
             F = W * (c.N1 * e1 + c.N2 * np.array([0.0, 0.0, 1.0]))
             tau = W * L * c.moment * e3
-            p = np.array(d.geom_xpos[scene.tip_geom[k]])
-            body = int(m.geom_bodyid[scene.tip_geom[k]])
+            if scene.grip == "III":  # at the centreline point at gamma, on the link that carries it
+                p = L * (float(c.point[0]) * e1 + np.array([0.0, 0.0, float(c.point[1])]))
+                body = int(scene.index.link_body[k, min(int(c.gamma * scene.n), scene.n - 1)])
+            else:  # at the tip's centre
+                p = np.array(d.geom_xpos[scene.tip_geom[k]])
+                body = int(m.geom_bodyid[scene.tip_geom[k]])
             mujoco.mj_applyFT(m, d, F, tau, p, body, d.qfrc_applied)
             mujoco.mj_applyFT(m, d, -F, -tau, p, wb, d.qfrc_applied)
             forces.append(F)
@@ -382,15 +494,19 @@ def _replicate(scene: GripperScene, pst, held: bool, converged: bool, steps: int
     mujoco.mj_forward(m, d)
     records, pen_max = [], 0.0
     total_f, total_m = np.zeros(3), np.zeros(3)
+    edges = _cradle_edges(scene) if scene.grip == "III" else None
     for k in range(K if held else 0):
-        cons = [i for i in range(d.ncon)
-                if int(d.contact.geom1[i]) == scene.tip_geom[k] and int(d.contact.geom2[i]) == scene.workpiece_geom]
+        if edges is None:
+            mine, other = {int(scene.tip_geom[k])}, int(scene.workpiece_geom)
+        else:
+            mine, other = set(int(g) for g in scene.index.link_geom[k]), edges[k]
+        cons = [i for i in range(d.ncon) if int(d.contact.geom1[i]) in mine and int(d.contact.geom2[i]) == other]
         if not cons:
-            raise SettleError(f"symmetric settle: finger {k}'s tip does not touch the workpiece at the replicated "
+            raise SettleError(f"symmetric settle: finger {k} does not touch the workpiece at the replicated "
                               f"state (the planar state is not the K-finger scene's)")
-        i = min(cons, key=lambda j: float(d.contact.dist[j]))
+        i = min(cons, key=lambda j: float(d.contact.dist[j]))  # the deepest
         pen = -float(d.contact.dist[i]) / L
-        nvec = -np.asarray(d.contact.frame[i])[:3]  # from the workpiece into the tip
+        nvec = -np.asarray(d.contact.frame[i])[:3]  # from the workpiece into the finger
         R = frames[k]
         nk = R @ nvec
         n2d = np.array([nk[0], nk[2]]) / math.hypot(nk[0], nk[2])
@@ -400,11 +516,16 @@ def _replicate(scene: GripperScene, pst, held: bool, converged: bool, steps: int
         normal, friction = float(F2d @ n2d), float(F2d @ t2d)
         pk = R @ np.asarray(d.contact.pos[i]) / L
         tangential = math.sqrt(max(float(Fk @ Fk) - normal ** 2, 0.0))
+        need = tangential / normal if normal > 0 else math.inf
+        angle = float(math.atan2(n2d[1], n2d[0]))
+        if edges is not None:  # the theory's frame at gamma: n along e2 = E3 x e1, f along e1 (the planar reading)
+            c = pst.contact
+            normal, friction, need = float(c.normal), float(c.friction), float(c.required_mu)
+            angle = float(_wrap(c.theta + 0.5 * math.pi))
         records.append(FingerRecord(
             finger=k, N1=float(Fk[0]), N2=float(Fk[2]), N3=float(Fk[1]), normal=normal, friction=friction,
-            contact_angle=float(math.atan2(n2d[1], n2d[0])), tip=tip.copy(), point=np.array([pk[0], pk[2], pk[1]]),
-            moment=float(pst.contact.moment), penetration=pen,
-            required_mu=tangential / normal if normal > 0 else math.inf))
+            contact_angle=angle, tip=tip.copy(), point=np.array([pk[0], pk[2], pk[1]]),
+            moment=float(pst.contact.moment), penetration=pen, required_mu=need))
         pen_max = max(pen_max, pen)
         total_f -= forces[k]
         total_m += np.cross(points[k] - centre, -forces[k]) - torques[k]
@@ -421,6 +542,9 @@ def _replicate(scene: GripperScene, pst, held: bool, converged: bool, steps: int
         wall_time_s=time.perf_counter() - t0, qpos=np.array(d.qpos))
     if hasattr(state, "method"):
         state.method = "symmetric"
+    state.warnings.extend(pst.warnings)
+    if scene.grip == "III" and held:
+        _check_cradle(scene, state, phi, float(pst.contact.gamma))
     if not state.converged and not allow_unconverged:
         raise SettleError(f"symmetric settle did not converge (K-finger residual {residual:.3g} above the tolerance "
                           f"{tolerance:.3g}, {steps} planar Newton iterations)")
