@@ -43,6 +43,11 @@ are reported as flags rather than returned quietly:
 ``penetration``
     contact penetration above :data:`PENETRATION_TOL` (over ``l``).
 
+K-finger cases (off-centre, turned workpieces, unequal fingers;
+:mod:`simgrip.harness.stress_gripper`) run alongside and are checked for
+balance, finiteness and determinism; ``stress.json`` lists them under
+``gripper``.
+
 Outputs: ``stress.json`` (counts, every case with inputs and outcome, the
 failures listed) and ``stability_map.png`` (per grip, ``kappa`` against
 ``log10 D``: easy, slow, dropped, rejected, unsettled, failed).
@@ -265,6 +270,8 @@ class StressResult:
     failures: list
     files: dict = field(default_factory=dict)
     elapsed_s: float = 0.0
+    #: The K-finger cases: ``counts``, ``cases``, ``failures`` (:mod:`simgrip.harness.stress_gripper`).
+    gripper: dict = field(default_factory=dict)
     jobs: int = 1
 
     @property
@@ -310,6 +317,7 @@ def run_stress(
     grid_cases: int | None = None,
     max_links: int = 256,
     options=None,
+    gripper_cases: int | None = None,
 ) -> StressResult:
     """Run the stress cases of :func:`make_cases` and write ``stress.json`` and ``stability_map.png``.
 
@@ -334,22 +342,36 @@ def run_stress(
         Largest ``n`` (256 by default; smaller for quick runs).
     options : simgrip.parallel.runner.RunnerOptions, optional
         How to run (e.g. on an existing Dask cluster); replaces ``jobs`` and ``progress``.
+    gripper_cases : int, optional
+        K-finger cases run alongside (default :func:`~simgrip.harness.stress_gripper.default_gripper_cases`).
     """
     from simgrip.harness.plots import stability_map
     from simgrip.parallel.runner import RunnerOptions, run_tasks
 
     options = RunnerOptions(jobs=jobs, progress=progress) if options is None else options
     todo = make_cases(cases, seed, grid_cases, max_links)
+    from simgrip.harness import stress_gripper as sg
+
+    n_gripper = sg.default_gripper_cases(cases) if gripper_cases is None else gripper_cases
+    if isinstance(n_gripper, bool) or not isinstance(n_gripper, (int, np.integer)) or n_gripper < 0:
+        raise ValueError(f"gripper_cases must be an integer >= 0, got {gripper_cases!r}")
+    g_todo = sg.make_gripper_cases(n_gripper, seed, max_links=min(32, max_links))
     out = check_output_dir(out_dir, option="out_dir")
     t0 = time.perf_counter()
     heavy_first = sorted(todo, key=lambda c: -c["n"])  # large n first: the last batches finish together
     done = {rec["id"]: rec for rec in run_tasks(_case_task, [(c, timeout_s, max_steps) for c in heavy_first],
                                                 options=options, desc="stress")}
     recs = [done[c["id"]] for c in todo]
+    g_done = {r["id"]: r for r in run_tasks(sg.gripper_task, [(c, timeout_s) for c in g_todo], options=options,
+                                            desc="stress (K fingers)")} if g_todo else {}
+    g_recs = [g_done[c["id"]] for c in g_todo]
+    gripper = {"counts": sg.gripper_counts(g_recs), "failures": [c for c in g_recs if c["outcome"] == "failed"],
+               "cases": g_recs}
     counts = _counts(recs)
     failures = [c for c in recs if c["outcome"] == "failed"]
     workers = 1 if options.in_process else (options.local_workers if not options.remote else None)
-    res = StressResult(cases=recs, counts=counts, failures=failures, elapsed_s=time.perf_counter() - t0, jobs=workers)
+    res = StressResult(cases=recs, counts=counts, failures=failures, elapsed_s=time.perf_counter() - t0, jobs=workers,
+                       gripper=gripper)
     write_json(out / "stress.json", {
         "meta": {"cases": len(recs), "seed": seed, "jobs": workers, "elapsed_s": res.elapsed_s,
                  "timeout_s": timeout_s, "max_steps": max_steps, "penetration_tol": PENETRATION_TOL,
@@ -360,6 +382,7 @@ def run_stress(
         "unsettled": res.unsettled,
         "flagged": [c for c in recs if c["outcome"] == "settled" and any(c["flags"].values())],
         "cases": recs,
+        "gripper": gripper,
     })
     stability_map([{**c, "category": _category(c)} for c in recs], GRIPS, SLOW_STEPS, out / "stability_map.png")
     res.files = {"stress.json": out / "stress.json", "stability_map.png": out / "stability_map.png"}
@@ -383,6 +406,8 @@ def add_arguments(p) -> None:
     p.add_argument("--cases", type=int, default=500, help="number of cases [default 500]")
     p.add_argument("--seed", type=int, default=0, help="seed of the random cases [default 0]")
     p.add_argument("--out", default="stress_out", help="output folder [default stress_out]")
+    p.add_argument("--gripper-cases", type=int, default=None,
+                   help="K-finger cases (off-centre, turned, unequal fingers) [default: one per 50 cases, 1..8]")
     add_runner_arguments(p)
 
 
@@ -390,7 +415,10 @@ def cli_stress(args) -> dict:
     """Run the stress test from parsed arguments; returns the counts and the failures (the CLI checked ``--out`` first)."""
     from simgrip.parallel.runner import runner_options
 
-    res = run_stress(args.out, cases=args.cases, seed=args.seed, options=runner_options(args))
-    return {"out": str(args.out), "counts": res.counts,
+    res = run_stress(args.out, cases=args.cases, seed=args.seed, options=runner_options(args),
+                     gripper_cases=args.gripper_cases)
+    return {"out": str(args.out), "counts": res.counts, "gripper_counts": res.gripper["counts"],
+            "gripper_failures": [{k: c[k] for k in ("id", "grip", "workpiece", "fingers", "error")}
+                                 for c in res.gripper["failures"]],
             "failures": [{k: c[k] for k in ("id", "grip", "D", "kappa", "M", "mu_s", "b", "n", "profile", "error")}
                          for c in res.failures]}

@@ -1,0 +1,169 @@
+"""K-finger cases of the stress run: off-centre, turned workpieces and unequal fingers (``simgrip stress``).
+
+There is no closed form for these grasps, so each case is checked for what must
+hold (:func:`run_gripper_case`):
+
+* the settle ends: a state, or a named error (``rejected``: a ValueError
+  naming an input; ``unsettled``: :class:`~simgrip.settle.SettleError`);
+* a returned state is finite and converged, its static residual within its
+  tolerance; a held workpiece is balanced: its net force within the residual
+  (to round-off) and its net moment within ``sqrt(3)`` tolerances (the
+  rotation rows are in its body frame);
+* it is deterministic: the same case built and settled again gives
+  bit-identical ``qpos`` and step count;
+* it ends within the per-case wall-clock guard (a hang is a failure).
+
+:func:`make_gripper_cases` draws the cases from a seeded generator
+(:func:`numpy.random.default_rng`), so a run is reproducible and its cases do
+not depend on how the run is spread over processes: grips I and II in turn,
+a cylinder (``K`` = 3, 4, 5) or a box (``K`` = 2, 4), one uniform curvature
+per finger (a base curling onto the workpiece, each finger within
+``+-KAPPA_SPREAD`` of it), ``D``, ``M``, ``mu_s``, ``b``, ``n``, and the
+workpiece off the palm axis by up to :data:`OFFSET_FRACTION` of its
+half-width (``K = 2``: along the fingers' plane only, see
+:mod:`simgrip.sim.gripper_placement`) and turned (box: up to
+:data:`MAX_BOX_YAW`).
+"""
+
+from __future__ import annotations
+
+import math
+import time
+import traceback
+import warnings
+
+import numpy as np
+
+__all__ = ["GRIPPER_SHAPES", "default_gripper_cases", "gripper_counts", "gripper_task", "make_gripper_cases",
+           "run_gripper_case"]
+
+#: ``(workpiece, K)`` pairs drawn, in turn.
+GRIPPER_SHAPES = (("cylinder", 3), ("box", 4), ("cylinder", 4), ("box", 2), ("cylinder", 5))
+#: Each finger's curvature within this of the case's base curvature.
+KAPPA_SPREAD = 0.3
+#: The workpiece's centre off the palm axis by at most this fraction of its half-width.
+OFFSET_FRACTION = 0.1
+#: Largest turn of a box about its axis [rad] (its fingers stay on flat faces).
+MAX_BOX_YAW = 0.15
+#: Inputs a rejection may name (beyond simgrip.harness.stress.INPUT_NAMES).
+GRIPPER_INPUTS = ("offset", "workpiece_yaw", "workpiece", "kappa_per_finger", "contact_angle")
+
+
+def make_gripper_cases(count: int, seed: int = 0, max_links: int = 32) -> list[dict]:
+    """``count`` K-finger cases (see the module docstring); ids ``0 .. count-1``.
+
+    ``max_links`` caps ``n`` (drawn from 8, 16, 32).  ValueError naming ``count``, ``seed`` or ``max_links``.
+    """
+    for name, value, lowest in (("count", count, 0), ("seed", seed, 0), ("max_links", max_links, 2)):
+        if isinstance(value, bool) or not isinstance(value, (int, np.integer)) or value < lowest:
+            raise ValueError(f"{name} must be an integer >= {lowest}, got {value!r}")
+    rng = np.random.default_rng([int(seed), 13])
+    out = []
+    for i in range(int(count)):
+        grip = ("I", "II")[i % 2]
+        shape, K = GRIPPER_SHAPES[(i // 2) % len(GRIPPER_SHAPES)]
+        base = float(rng.uniform(-8.0, -4.0) if grip == "I" else rng.uniform(3.5, 7.0))
+        kappas = [round(base + float(rng.uniform(-KAPPA_SPREAD, KAPPA_SPREAD)), 6) for _ in range(K)]
+        b = float(rng.uniform(0.4, 0.8))
+        radius = OFFSET_FRACTION * (0.5 * b - 2e-3) * float(rng.uniform(0.0, 1.0))
+        angle = 0.0 if K == 2 else float(rng.uniform(-math.pi, math.pi))
+        radius *= 1.0 if K != 2 else float(rng.choice([-1.0, 1.0]))
+        yaw_lim = MAX_BOX_YAW if shape == "box" else math.pi
+        out.append(dict(
+            kind="gripper", id=i, grip=grip, workpiece=shape, fingers=K, kappas=kappas,
+            D=float(10 ** rng.uniform(-0.5, 0.5)), M=float(rng.uniform(0.5, 8.0)),
+            mu_s=float(10 ** rng.uniform(0.0, 0.5)), b=b,
+            n=int(min(max_links, int(rng.choice([8, 16, 32])))),
+            offset=[radius * math.cos(angle), radius * math.sin(angle)],
+            workpiece_yaw=float(rng.uniform(-yaw_lim, yaw_lim)),
+        ))
+    return out
+
+
+def _settle(case: dict):
+    from simgrip.params import DimensionlessParams
+    from simgrip.settle.gripper import settle_gripper
+    from simgrip.sim.gripper import build_gripper, uniform_profiles
+
+    params = DimensionlessParams(D=case["D"], M=case["M"], b=case["b"], mu_s=case["mu_s"])
+    scene = build_gripper(case["grip"], params, list(uniform_profiles(case["kappas"], case["fingers"])), case["n"],
+                          fingers=case["fingers"], workpiece=case["workpiece"], offset=case["offset"],
+                          workpiece_yaw=case["workpiece_yaw"])
+    return settle_gripper(scene)
+
+
+def _check(st) -> str | None:
+    """Why a returned state breaks what must hold, or None."""
+    arrays = [st.qpos, st.tip, st.force_balance, st.moment_balance]
+    forces = [v for r in st.records for v in (r.N1, r.N2, r.N3)]
+    if not (all(np.all(np.isfinite(a)) for a in arrays) and np.all(np.isfinite(forces))
+            and math.isfinite(st.residual)):
+        return "non-finite settled state returned"
+    if not st.converged or not st.residual <= st.tolerance:
+        return f"state returned with converged={st.converged}, residual {st.residual:.3g} (tolerance {st.tolerance:.3g})"
+    if st.held:
+        weight = st.fingers * max(1.0, float(np.max(np.abs([r.N2 for r in st.records] or [0.0]))))
+        if not np.max(np.abs(st.force_balance)) <= st.residual + 1e-12 * (1.0 + weight):
+            return f"force balance {np.max(np.abs(st.force_balance)):.3g} above the residual {st.residual:.3g}"
+        if not np.linalg.norm(st.moment_balance) <= math.sqrt(3.0) * st.tolerance:
+            return f"moment balance {np.linalg.norm(st.moment_balance):.3g} above sqrt(3) x {st.tolerance:.3g}"
+    return None
+
+
+def run_gripper_case(case: dict, *, timeout_s: float = 60.0) -> dict:
+    """Build and settle one K-finger case twice; the case with ``outcome``, ``error``, ``held``, ``steps``..."""
+    from simgrip.harness.stress import _deadline, _Timeout, names_an_input
+    from simgrip.settle import SettleError
+
+    rec = dict(case)
+    rec.update(outcome=None, error=None, error_type=None, steps=None, residual=None, held=None, penetration=None,
+               time_s=None)
+    t0 = time.perf_counter()
+    try:
+        with warnings.catch_warnings(), _deadline(timeout_s):
+            warnings.simplefilter("error", RuntimeWarning)
+            st = _settle(case)
+            again = _settle(case)
+        rec.update(steps=int(st.steps), residual=float(st.residual), held=bool(st.held),
+                   penetration=float(st.penetration))
+        why = _check(st)
+        if why is None and not (np.array_equal(st.qpos, again.qpos) and st.steps == again.steps):
+            why = "not deterministic: the same case settled twice differs"
+        if why is None:
+            rec["outcome"] = "settled"
+        else:
+            rec.update(outcome="failed", error=why, error_type="check")
+    except _Timeout:
+        rec.update(outcome="failed", error=f"no answer within {timeout_s:g} s (hang)", error_type="Timeout")
+    except ValueError as exc:
+        named = names_an_input(str(exc)) or any(k in str(exc) for k in GRIPPER_INPUTS)
+        rec.update(outcome="rejected" if named else "failed", error=str(exc) if named else
+                   f"unnamed ValueError: {exc}\n{traceback.format_exc(limit=4)}", error_type=type(exc).__name__)
+    except SettleError as exc:
+        rec.update(outcome="unsettled", error=str(exc), error_type=type(exc).__name__)
+    except Exception as exc:  # noqa: BLE001 - anything else is a failure, recorded
+        rec.update(outcome="failed", error=f"{exc}\n{traceback.format_exc(limit=4)}", error_type=type(exc).__name__)
+    rec["time_s"] = time.perf_counter() - t0
+    return rec
+
+
+def gripper_counts(recs) -> dict:
+    """Outcome -> number of K-finger cases, plus ``held`` and ``dropped`` among the settled."""
+    counts = {k: 0 for k in ("settled", "rejected", "unsettled", "failed")}
+    for c in recs:
+        counts[c["outcome"]] += 1
+    counts["total"] = len(recs)
+    counts["held"] = sum(1 for c in recs if c["outcome"] == "settled" and c["held"])
+    counts["dropped"] = sum(1 for c in recs if c["outcome"] == "settled" and not c["held"])
+    return counts
+
+
+def gripper_task(task: tuple) -> dict:
+    """Runner task: ``task = (case, timeout_s)``."""
+    case, timeout_s = task
+    return run_gripper_case(case, timeout_s=timeout_s)
+
+
+def default_gripper_cases(cases: int) -> int:
+    """K-finger cases in a stress run of ``cases`` planar cases: one per 50, at least 1, at most 8."""
+    return min(8, max(1, int(cases) // 50))
