@@ -346,6 +346,7 @@ class PickEnv(gym.Env):
             raise ValueError(f"camera must be one of {cams}, got {self.camera!r}")
         na = 3 if self.per_finger else 2
         self.action_space = spaces.Box(-1.0, 1.0, (na,), dtype=np.float32)
+        self._action_shape = (na,)
         self._force_unit = self.g * float(np.mean(self.box_mass_range))
         self._observe = PickObservation(
             n_links=self.n, shape_points=self.shape_points, per_finger=self.per_finger, kappa_range=self.kappa_range,
@@ -355,6 +356,7 @@ class PickEnv(gym.Env):
             hinge_qpos=self._fq)
         self.obs_layout, self.obs_slices = self._observe.layout, self._observe.slices
         self.observation_space = spaces.Box(self._observe.low, self._observe.high, dtype=np.float64)
+        self._bind_views()
         self._renderer = None
         self.box = BoxParams(np.mean(self.box_width_range), np.mean(self.box_mass_range), np.mean(self.friction_range))
         self._reset_state()
@@ -386,7 +388,6 @@ class PickEnv(gym.Env):
         self._spring_idx = pm.fingers.joint_qpos.ravel()
         hinges = pm.fingers.hinge_qpos
         self._fq = (hinges,) if hinges is not None else (pm.fingers.joint_qpos,)
-        self._bind_views()
         self._contact_forces = BoxContactForces(self.model, self.box_geom, pm.fingers.finger_of_geom)
 
     @property
@@ -494,12 +495,14 @@ class PickEnv(gym.Env):
             self._spring_view = None
         self._qpos, self._qvel, self._ctrl = d.qpos, d.qvel, d.ctrl
         self._tips = (d.geom_xpos[int(self.fingers.tip_geom[0])], d.geom_xpos[int(self.fingers.tip_geom[1])])
-        # a slice reads a view (bound once); an index array copies, so it is read on every step
-        self._hinges = d.qpos[self._fq[0]] if isinstance(self._fq[0], slice) else None
+        # the hinges the observation reads: a slice reads a view (bound once); an index array copies, so it is
+        # read on every step
+        read = self._observe.hinges_read
+        self._hinges = d.qpos[read] if isinstance(read, slice) else None
 
     def _get_obs(self, forces, q: list, v: list):
         """The observation (``q``, ``v``: ``data.qpos.tolist()``, ``data.qvel.tolist()``)."""
-        hinges = self._hinges if self._hinges is not None else self.data.qpos[self._spring_idx]
+        hinges = self._hinges if self._hinges is not None else self.data.qpos[self._observe.hinges_read]
         (c0, c1), (k0, k1) = self._kcmd, self._kact
         return self._observe.observe(q, v, hinges, self._tips[0], self._tips[1], c0, c1, k0, k1, forces, self._z0,
                                      self._hold)
@@ -551,7 +554,7 @@ class PickEnv(gym.Env):
         # views bound once (_bind_views), as lists (one tolist per array) and combined in Python.
         if self._needs_reset:
             raise ResetNeeded("step() called before reset() or after the episode terminated; call reset()")
-        a = check_action(action, self.action_space.shape)
+        a = check_action(action, self._action_shape)
         lo, hi = self.kappa_range
         k0 = lo + 0.5 * (a[0] + 1.0) * (hi - lo)
         k1 = lo + 0.5 * (a[1] + 1.0) * (hi - lo) if self.per_finger else k0
@@ -599,7 +602,9 @@ class PickEnv(gym.Env):
         self._phi = phi
         terminated = success or lost
         self._needs_reset = terminated
-        obs = self._get_obs(forces, q, v)
+        hinges = self._hinges if self._hinges is not None else self.data.qpos[self._observe.hinges_read]
+        obs = self._observe.observe(q, v, hinges, self._tips[0], self._tips[1], k0, k1, c0, c1, forces, self._z0,
+                                    self._hold)
         info = {
             "reward_lift": r_lift, "reward_success": r_success, "reward_squeeze": r_squeeze, "reward_drop": r_drop,
             "is_success": success, "dropped": dropped and not success,

@@ -98,6 +98,9 @@ class PickObservation:
     ----------
     layout, slices, low, high
         ``(name, size)`` blocks, their slices and the bounds of the observation.
+    hinges_read : slice or ndarray
+        qpos index of the hinge angles the observation reads (:meth:`observe`'s ``hinges``): finger 0's
+        ``n_links``, both fingers' ``2 n_links`` with ``per_finger``.
     """
 
     def __init__(self, *, n_links, shape_points, per_finger, kappa_range, length, target_height, hold_time,
@@ -124,6 +127,18 @@ class PickObservation:
         s_k = (np.arange(shape_points) + 0.5) / shape_points
         interp = np.array([np.interp(s_k, s_link, e) for e in np.eye(n)]).T
         self._shape_matrix_t = np.ascontiguousarray((interp @ np.tril(np.ones((n, n)))).T)  # q -> theta(s_k)
+        nread = 2 * n if per_finger else n
+        hq = hinge_qpos[0] if isinstance(hinge_qpos, tuple) and len(hinge_qpos) == 1 else hinge_qpos
+        if isinstance(hq, slice):
+            self.hinges_read = slice(hq.start, hq.start + nread)
+        else:
+            self.hinges_read = np.asarray(hq).ravel()[:nread]
+        # without per_finger, one np.dot of finger 0's hinges makes the whole (fresh) observation array: the
+        # shape entries in their place, zeros elsewhere (filled next)
+        self._shape_out = None
+        if not per_finger:
+            self._shape_out = np.zeros((n, self._out_size))
+            self._shape_out[:, 3:self._shape_end_out] = self._shape_matrix_t
 
     def __call__(self, data, forces, kappa_cmd, kappa, z0: float, hold: float, qpos: list | None = None) -> np.ndarray:
         """The observation of ``data``.
@@ -137,19 +152,19 @@ class PickObservation:
         c0, c1 = kappa_cmd
         k0, k1 = kappa
         return self.observe(data.qpos.tolist() if qpos is None else qpos, data.qvel.tolist(),
-                            data.qpos[self.hinge_qpos].reshape(-1), xpos[self.tips[0]], xpos[self.tips[1]],
+                            data.qpos[self.hinges_read], xpos[self.tips[0]], xpos[self.tips[1]],
                             float(c0), float(c1), float(k0), float(k1), forces, z0, hold)
 
     def observe(self, q: list, v: list, hinges, tip0, tip1, c0: float, c1: float, k0: float, k1: float, forces,
                 z0: float, hold: float) -> np.ndarray:
         """The observation from values already read (the environment's step).
 
-        ``q``, ``v``: ``data.qpos.tolist()``, ``data.qvel.tolist()``; ``hinges``: the fingers' hinge angles
-        (``2 n_links``, e.g. a view of ``data.qpos``); ``tip0``, ``tip1``: the tips' ``geom_xpos`` rows;
+        ``q``, ``v``: ``data.qpos.tolist()``, ``data.qvel.tolist()``; ``hinges``: ``data.qpos[hinges_read]``
+        (a view bound once where ``hinges_read`` is a slice); ``tip0``, ``tip1``: the tips' ``geom_xpos`` rows;
         ``c0, c1``, ``k0, k1``: commanded and actual curvatures; the rest as :meth:`__call__`.
         """
-        # scalars are combined in Python; the finger shapes are one np.dot; the result is written into a
-        # fresh array in the final layout and clipped in place
+        # scalars are combined in Python; the finger shapes are one np.dot (without per_finger, the np.dot
+        # makes the fresh array in the final layout); the rest is written in and the result clipped in place
         inv_l = self._inv_l
         palm_z, palm_v = q[self.palm_qpos], v[self.palm_dof]
         bq, bd = self.box_qpos, self.box_dof
@@ -159,12 +174,12 @@ class PickObservation:
         bz = q[bq + 2]
         hold_obs = min(hold / self.hold_time, 1.0) if self.hold_time > 0 else 0.0
         end = self._shape_end_out
-        obs = np.empty(self._out_size)
         if self._pick is None:  # per_finger: both fingers, the box's x, tilt and spin
             bx, qw, qx, qy, qz = q[bq], q[bq + 3], q[bq + 4], q[bq + 5], q[bq + 6]
             vx, vz, wy = v[bd], v[bd + 2], v[bd + 4]
             x1, _, z1_tip = tip1.tolist()
             tilt = math.atan2(2.0 * (qx * qz + qw * qy), 1.0 - 2.0 * (qx * qx + qy * qy))
+            obs = np.empty(self._out_size)
             np.dot(hinges.reshape(2, self.n), self._shape_matrix_t, out=obs[5:end].reshape(2, (end - 5) // 2))
             obs[:5] = (palm_z * inv_l, 2.0 * (c0 - lo) / (hi - lo) - 1.0, 2.0 * (c1 - lo) / (hi - lo) - 1.0,
                        2.0 * (k0 - lo) / (hi - lo) - 1.0, 2.0 * (k1 - lo) / (hi - lo) - 1.0)
@@ -175,7 +190,7 @@ class PickObservation:
                 math.log1p(forces[0] / fu), math.log1p(forces[1] / fu), math.log1p(forces[2] / fu),
                 math.log1p(forces[3] / fu), hold_obs)
         else:  # finger 0 and the box's z
-            np.dot(hinges[:self.n], self._shape_matrix_t, out=obs[3:end])
+            obs = np.dot(hinges, self._shape_out)
             obs[:3] = (palm_z * inv_l, 2.0 * (c0 - lo) / (hi - lo) - 1.0, 2.0 * (k0 - lo) / (hi - lo) - 1.0)
             obs[end:] = (
                 x0 * inv_l, (z0_tip - palm_z) * inv_l, (bz - palm_z) * inv_l, (v[bd + 2] - palm_v) * inv_l,
