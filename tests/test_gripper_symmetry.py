@@ -357,3 +357,93 @@ def test_a_reused_planar_scene_gives_the_same_state():
         settle_symmetric(sc, planar=build_scene("II", STANDARD, Uniform(5.0), N + 1))
     with pytest.raises(ValueError, match="planar"):
         settle_symmetric(sc, planar=sc)
+
+
+# ---------------------------------------------------------------------------
+# Grip III: the K = 4 cradle (simgrip.sim.gripper_cradle) is the planar Grip III per finger
+
+
+def _cradle(kappa=-4.0, n=N, params=STANDARD, **kw):
+    from simgrip.scenes import start_angles
+
+    q = start_angles("III", params, Uniform(kappa), n)
+    return build_gripper("III", params, Uniform(kappa), n, fingers=4, workpiece="box", initial_angles=q, **kw)
+
+
+@pytest.mark.parametrize("kappa", [-3.0, -4.0, -5.0])
+def test_cradle_is_the_planar_grip_iii_per_finger(kappa):
+    """Every finger of the K = 4 cradle equals the planar Grip III settle from the same start (round-off),
+    and, at n = 32, the BVP at the simulation's own gamma within 1 % (issue 9's Grip III bound)."""
+    n = 32
+    sc = _cradle(kappa, n)
+    assert symmetry(sc).exact
+    st = settle_gripper(sc)  # Grip III's default: the symmetry skip
+    pl = settle(build_scene("III", STANDARD, Uniform(kappa), n))
+    c = pl.contact
+    assert st.method == "symmetric" and st.held and pl.held and st.converged and st.residual <= st.tolerance
+    assert len(st.records) == 4 and st.warnings == pl.warnings
+    ref = elastica.solve("III", STANDARD.replace(b=2.0 * float(c.point[0])), Uniform(kappa), gamma=float(c.gamma),
+                         contact_moment=float(c.moment))
+    for rec in st.records:
+        for a, b in ((rec.N1, pl.N1), (rec.N2, pl.N2), (rec.normal, c.normal), (rec.friction, c.friction),
+                     (rec.required_mu, c.required_mu)):
+            assert a == pytest.approx(b, abs=1e-12)
+        assert abs(rec.N3) <= 1e-12
+        assert rec.contact_angle == pytest.approx(c.theta + 0.5 * math.pi, abs=1e-12)
+        np.testing.assert_allclose(rec.tip, pl.tip[0], atol=1e-12)
+        assert rec.penetration == pytest.approx(c.penetration, rel=1e-6)
+        # the contact sits on finger k's own edge, at its midpoint (out of plane ~ 0)
+        assert abs(rec.point[2]) <= 1e-9 and abs(rec.point[0] - c.point[0]) <= 2 * (sc.r_link + 1e-3)
+        assert abs(rec.normal / ref.n - 1.0) <= 0.01 and abs(rec.friction - ref.f) <= 0.01 * abs(ref.n)
+    # the box: on the axis at the planar box's height, balanced (vertical row: 4 planar rows)
+    assert np.max(np.abs(st.workpiece_position[:2])) <= 1e-12
+    assert st.workpiece_position[2] == pytest.approx(pl.workpiece_pose[1], abs=1e-12)
+    assert np.max(np.abs(st.force_balance)) <= st.residual + 1e-12
+    assert np.max(np.abs(st.moment_balance)) <= 1e-12 * 4 * STANDARD.M
+
+
+def test_cradle_holds_iff_the_planar_cradle_does():
+    # Grip III's corner may slide along the rod to a new gamma before it holds (or drops): hold/drop and
+    # the state are the planar cradle's, whatever the friction
+    for mu in (0.1, 0.15, 1.0):
+        p = STANDARD.replace(mu_s=mu)
+        st = settle_symmetric(_cradle(-4.0, params=p))
+        pl = settle(build_scene("III", p, Uniform(-4.0), N))
+        assert st.held is pl.held and st.converged
+        if pl.held:
+            assert all(r.N1 == pytest.approx(pl.N1, abs=1e-12) for r in st.records)
+        else:
+            assert st.records == [] and np.all(st.force_balance == 0)
+            np.testing.assert_allclose(st.link_angles, np.tile(pl.link_angles[0], (4, 1)), atol=1e-13)
+    assert not settle_symmetric(_cradle(-4.0, params=STANDARD.replace(mu_s=0.1))).held
+
+
+def test_cradle_fingers_reaching_the_palm_axis_are_not_held():
+    # b = 0.3, gamma = 0.5: the planar cradle holds, but beyond the contact each finger curls past the palm
+    # axis, where the four fingers' planes meet: they would pass through each other
+    p = STANDARD.replace(b=0.3, gamma=0.5, M=1.0, mu_s=2.0)
+    pl = settle(build_scene("III", p, Uniform(-5.0), N))
+    assert pl.held and pl.tip_clear and np.min(pl.nodes[0][:, 0]) < 0
+    st = settle_symmetric(_cradle(-5.0, params=p))
+    assert not st.held and not st.grip_matched and "palm axis" in st.warnings[-1]
+
+
+def test_cradle_methods_rotation_and_start():
+    sc = _cradle()
+    with pytest.raises(ValueError, match="method"):
+        settle_gripper(sc, method="dynamics")
+    a = settle_gripper(sc, method="auto")
+    b = settle_symmetric(_cradle(yaw=0.7))
+    assert a.method == "symmetric" and b.held
+    for ra, rb in zip(a.records, b.records):
+        assert rb.N1 == pytest.approx(ra.N1, abs=1e-12) and rb.normal == pytest.approx(ra.normal, abs=1e-12)
+    with pytest.raises(ValueError, match="planar"):
+        settle_symmetric(sc, planar=planar_scene(sc))
+    # a second settle starts from the build's start again (as the planar cradle's), whatever the data holds
+    sc.data.qpos[sc.joint_qpos[:, 4]] += 1e-3
+    c = settle_gripper(sc)
+    assert np.array_equal(c.qpos, a.qpos)
+    # a model changed after building is refused
+    sc.model.geom_size[sc.workpiece_geom][0] *= 1.01
+    with pytest.raises(ValueError, match="scene"):
+        settle_symmetric(sc)

@@ -197,8 +197,6 @@ def symmetry(scene: GripperScene) -> Symmetry:
         ok = False
     if not ok:
         return Symmetry(False, "the fingers do not all meet the workpiece's surface head on at b/2 - r_tip")
-    if scene.grip == "III" and not _same(np.asarray(scene.data.qpos)[scene.joint_qpos]):
-        return Symmetry(False, "the fingers' start shapes differ (Grip III settles from the start)")
     return Symmetry(True)
 
 
@@ -273,12 +271,17 @@ def _cradle_edges(scene: GripperScene) -> list:
 
 
 def _planar_cradle(scene: GripperScene):
-    """The planar Grip III scene of the K = 4 cradle: the same start shape, so the same box and contact links."""
+    """The planar Grip III scene of the K = 4 cradle: the start it was built with, so the same box and contact links.
+
+    As the planar cradle's settle, every settle of the scene starts from the shape the box was placed on
+    (:func:`simgrip.sim.gripper_cradle.cradle_start_angles`), not from the state a previous settle left.
+    """
+    from simgrip.sim.gripper_cradle import cradle_start_angles
     from simgrip.sim.scene import build_scene as build_model
 
     m, L = scene.model, scene.length
     edge = _cradle_edges(scene)[0]
-    q_start = np.array(scene.data.qpos[scene.joint_qpos[0]])
+    q_start = cradle_start_angles(m)
     pl = build_model("III", scene.physical, scene.profile, scene.n, r_tip=scene.r_tip, r_link=scene.r_link,
                      r_corner=float(m.geom_size[edge][0]) / L, initial_angles=q_start)
     pm = pl.model
@@ -290,8 +293,8 @@ def _planar_cradle(scene: GripperScene):
             and abs(float(pm.body_pos[pl.workpiece_body][2]) - float(m.qpos0[scene.workpiece_qpos[2]])) <= _EQUAL_RTOL * L
             and links == plinks)
     if not same:
-        raise ValueError("scene: its fingers' start shape is not the one its box was placed on (Grip III settles "
-                         "from the start: build the scene with that start as initial_angles)")
+        raise ValueError("scene: the planar cradle from its start shape is not its box and contact links (the "
+                         "model was changed after building)")
     return pl
 
 

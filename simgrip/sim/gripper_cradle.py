@@ -28,7 +28,8 @@ equilibrium there, the start the theory compares with); the box is square,
 half width ``hx`` and half height ``BOX_HEIGHT/2``, placed so that a corner
 capsule (radius ``r_corner``) along each bottom edge touches the start shape
 (:func:`~simgrip.sim.workpiece.corner_placement`: the same ``hx`` and height
-as the planar box); every link within ``contact_window`` of the contact's
+as the planar box; the start is kept in the model, :func:`cradle_start_angles`,
+the shape every settle of the scene starts from); every link within ``contact_window`` of the contact's
 arc length gets a contact pair with its finger's edge, no other pair.  The
 box weighs ``4 M``.  The fingers carry no tip sphere (as the planar cradle).
 
@@ -53,12 +54,15 @@ from simgrip.sim.fingers import add_fingers, check_finger_links, index_fingers
 from simgrip.sim.scene import DEFAULT_R_CORNER, check_params, check_positive, root_spec, set_joint_angles
 from simgrip.sim.workpiece import BOX_HEIGHT, contact_links, corner_placement, cradle_start
 
-__all__ = ["CRADLE_FINGERS", "DEFAULT_CONTACT_WINDOW", "build_cradle", "corner_name"]
+__all__ = ["CRADLE_FINGERS", "DEFAULT_CONTACT_WINDOW", "START_NUMERIC", "build_cradle", "corner_name", "cradle_start_angles"]
 
 #: Fingers of a K-finger cradle (one per face of the box).
 CRADLE_FINGERS = (4,)
 #: Links within this arc length (over l) of the start's contact get a pair with their edge (as the planar scene).
 DEFAULT_CONTACT_WINDOW = 0.35
+
+#: Name of the model's custom numeric field holding the start's joint angles (every finger's).
+START_NUMERIC = "cradle_start"
 
 _WORKPIECE_GEOM = "workpiece_geom"
 
@@ -66,6 +70,15 @@ _WORKPIECE_GEOM = "workpiece_geom"
 def corner_name(k: int) -> str:
     """Name of the capsule along the bottom edge finger ``k`` carries."""
     return f"corner{k}"
+
+
+def cradle_start_angles(model) -> np.ndarray:
+    """The joint angles [rad] a cradle was built with (the box placed on them), from the compiled model."""
+    i = mujoco.mj_name2id(model, mujoco.mjtObj.mjOBJ_NUMERIC, START_NUMERIC)
+    if i < 0:
+        raise ValueError(f"model has no '{START_NUMERIC}' field: not a cradle built by build_cradle")
+    a = int(model.numeric_adr[i])
+    return np.array(model.numeric_data[a:a + int(model.numeric_size[i])])
 
 
 def build_cradle(params: PhysicalParams | DimensionlessParams, profile, n_links: int, *, fingers: int = 4,
@@ -113,6 +126,7 @@ def build_cradle(params: PhysicalParams | DimensionlessParams, profile, n_links:
     size = np.array([hx, hx, hz])
 
     spec = root_spec(f"simgrip_gripper_III_{K}box_{n}", phys.g)
+    spec.add_numeric(name=START_NUMERIC, data=[float(v) for v in q0], size=n)  # the settle starts from it
     add_fingers(spec, spec.worldbody, springs, fingers=K, length=L, EI=phys.EI, rho=phys.rho, r_link=r_link * L)
     azimuths = finger_azimuths(K, yaw)
     orient_fingers(spec, azimuths)
