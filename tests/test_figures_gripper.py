@@ -182,3 +182,19 @@ def test_make_figures_writes_the_gripper_figures(tmp_path):
     assert [p.name for p in paths] == ["grasp4.png", "grasp3.png"]
     for p in paths:
         _check_png(p)
+
+
+def test_without_opengl_all_figures_skip_the_renders_but_named_renders_fail(tmp_path, monkeypatch, capsys):
+    import simgrip.figures.make as make
+    import simgrip.sim.gl as gl
+
+    def no_backend():
+        raise gl.RenderingUnavailable("no OpenGL backend works here (tried egl, osmesa)")
+
+    monkeypatch.setattr(gl, "choose_backend", no_backend)
+    monkeypatch.setattr(make, "FIGURES", {"fig12": "", "grasp3": ""})  # "all" = one cheap curve and one render
+    paths = make.make_figures(tmp_path, jobs=1, progress=False, simulate=False)
+    assert [p.name for p in paths] == ["fig12.png"]
+    assert "skipping the renders" in capsys.readouterr().err
+    with pytest.raises(gl.RenderingUnavailable):
+        make.make_figures(tmp_path, which=["grasp3"], jobs=1, progress=False)

@@ -7,6 +7,7 @@ not depend on ``jobs``.  The output folder is checked before any work.
 
 from __future__ import annotations
 
+import sys
 from pathlib import Path
 
 from simgrip.figures.catalog import COST, FIGURES, GRIPPER_FIGURES, OVERLAY_FIGURES, RENDERED_FIGURES, figure_key
@@ -81,9 +82,15 @@ def make_figures(out_dir, *, which=None, jobs: int | None = None, progress: bool
     links = check_links(links)
     out = check_output_dir(out_dir, option="out_dir")
     if any(k in RENDERED_FIGURES for k in names):
-        from simgrip.sim.gl import choose_backend
+        from simgrip.sim.gl import RenderingUnavailable, choose_backend
 
-        choose_backend()  # before any work (RenderingUnavailable); the workers inherit the choice
+        try:
+            choose_backend()  # before any work; the workers inherit the choice
+        except RenderingUnavailable as exc:
+            if which is not None:  # renders asked for by name: say why they cannot be made
+                raise
+            names = [k for k in names if k not in RENDERED_FIGURES]  # "all" on a machine without OpenGL
+            print(f"simgrip figures: skipping the renders {', '.join(RENDERED_FIGURES)} ({exc})", file=sys.stderr)
     order = sorted(names, key=lambda k: -COST.get(k, 1))
     paths = run_tasks(_render, [(k, str(out), bool(simulate), links) for k in order],
                       options=options, desc="figures", batch_size=1)
