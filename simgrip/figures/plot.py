@@ -417,6 +417,9 @@ def plot_figure(name, data: dict, *, overlay: dict | None = None):
     with pyplot.
     """
     key = figure_key(name)
+    if key not in _PLOTTERS:
+        raise ValueError(f"name: {key} is not drawn from figure_data (the K-finger figures: "
+                         f"simgrip.figures.gripper.make_gripper_figure)")
     if overlay is not None:
         if key not in OVERLAY_FIGURES:
             raise ValueError(f"overlay is supported for fig06-fig09 only, not {key}")
