@@ -23,7 +23,8 @@ one run measures, interleaved run by run:
                           (``planar=``), as a sweep would
 ========================  =====================================================
 
-and reports ``full / (K single_dyn)`` (the target: <= 1),
+and reports ``full / (K single_dyn)`` (the target: <= 1; also per physics
+step, to tell more steps from dearer ones),
 ``full / (K single_newton)``, ``full / skip`` and ``full / skip_reuse`` (what
 the skip saves).  As
 in :mod:`simgrip.harness.bench_settle`: every time is the fastest of
@@ -96,7 +97,7 @@ def gripper_bench(*, quick: bool = False, repeats: int | None = None, n: int = N
                        "skip": _gripper(grip, kappa, n, K, shape, "skip"),
                        "skip_reuse": _gripper(grip, kappa, n, K, shape, "skip_reuse"), **single}
                 t = _interleaved(fns, reps)
-                full, skip = fns["full"](), fns["skip"]()
+                full, skip, one = fns["full"](), fns["skip"](), fns["single_dyn"]()
                 dN = max(abs(a.N1 - b.N1) for a, b in zip(full.records, skip.records)) / abs(full.records[0].N1) \
                     if full.held and skip.held else None
                 row = {"grip": grip, "kappa": kappa, "n": n, "fingers": K, "workpiece": shape,
@@ -107,7 +108,9 @@ def gripper_bench(*, quick: bool = False, repeats: int | None = None, n: int = N
                        "skip_reuse_s": t["skip_reuse"], "full/skip": t["full"] / t["skip"],
                        "full/skip_reuse": t["full"] / t["skip_reuse"],
                        "skip/single_newton": t["skip"] / t["single_newton"],
-                       "full_steps": full.steps, "held": [full.held, skip.held], "N1_rel_diff": dN}
+                       "full_steps": full.steps, "single_dyn_steps": one.steps,
+                       "full/(K single_dyn) per step": t["full"] * one.steps / (K * t["single_dyn"] * full.steps),
+                       "held": [full.held, skip.held], "N1_rel_diff": dN}
                 rows.append(row)
                 checks[f"{grip} K={K} {shape}: full <= K x single (dynamics)"] = row["full/(K single_dyn)"] <= 1.0
     return {"rows": rows, "checks": checks, "repeats": reps, "n": n}
@@ -124,12 +127,15 @@ def _fmt(v) -> str:
 def gripper_bench_md(rec: dict) -> str:
     """Markdown table of :func:`gripper_bench`."""
     cols = ("grip", "fingers", "workpiece", "full_s", "single_dyn_s", "single_newton_s", "skip_s", "skip_reuse_s",
-            "full/(K single_dyn)", "full/(K single_newton)", "full/skip", "full/skip_reuse", "N1_rel_diff")
+            "full/(K single_dyn)", "full/(K single_newton)", "full/skip", "full/skip_reuse", "full_steps",
+            "single_dyn_steps", "full/(K single_dyn) per step", "N1_rel_diff")
     out = ["# K-finger settles (issue 13)", "",
            f"n = {rec['n']}; fastest CPU time of {rec['repeats']} interleaved runs, one BLAS thread.  full: the "
            "coupled K-finger dynamics; single_dyn / single_newton: the planar one-finger dynamic / default "
            "(Newton) settle of the same per-finger problem; skip: the symmetry skip (one planar Newton settle, "
-           "its scene's build included, replicated; skip_reuse: the same with the planar scene built once).  N1_rel_diff: skip (point contact) against the dynamics "
+           "its scene's build included, replicated; skip_reuse: the same with the planar scene built once).  "
+           "full_steps, single_dyn_steps: physics steps of the two dynamic settles; per step: the time ratio per "
+           "physics step.  N1_rel_diff: skip (point contact) against the dynamics "
            "(MuJoCo's surface contact).", "",
            "| " + " | ".join(cols) + " |", "|" + "---|" * len(cols)]
     for r in rec["rows"]:
