@@ -46,11 +46,13 @@ class BoxContactForces:
         ``side_f`` is the horizontal (squeezing) component of finger ``f``'s normal forces; a finger pressing on
         the box's top adds to its normal force but not to its side force.
         """
-        out = [0.0, 0.0, 0.0, 0.0, 0.0, 0.0]
         if not data.ncon:
-            return out
+            return [0.0, 0.0, 0.0, 0.0, 0.0, 0.0]
         fog, bg = self._fog_list, self.box_geom
         con = data.contact
+        elliptic = self._elliptic
+        hypot = math.hypot
+        n0 = t0 = s0 = n1 = t1 = s1 = 0.0
         ef = None
         for i, (g1, g2) in enumerate(con.geom.tolist()):
             f = fog[g2] if g1 == bg else (fog[g1] if g2 == bg else -1)
@@ -58,18 +60,23 @@ class BoxContactForces:
                 continue
             if ef is None:  # the first box-finger contact: read the rest, once for all contacts
                 nx = con.frame[:, 0].tolist()  # x component of each contact normal
-                if self._elliptic:
+                if elliptic:
                     adrs = con.efc_address.tolist()
                     ef = data.efc_force.tolist()
                 else:
                     ef = self._cf
-            if self._elliptic:
+            if elliptic:
                 adr = adrs[i]
-                fn, ft = ef[adr], math.hypot(ef[adr + 1], ef[adr + 2])
+                fn, ft = ef[adr], hypot(ef[adr + 1], ef[adr + 2])
             else:
                 mujoco.mj_contactForce(model, data, i, ef)
-                fn, ft = float(ef[0]), math.hypot(ef[1], ef[2])
-            out[2 * f] += fn
-            out[2 * f + 1] += ft
-            out[4 + f] += fn * abs(nx[i])
-        return out
+                fn, ft = float(ef[0]), hypot(ef[1], ef[2])
+            if f:
+                n1 += fn
+                t1 += ft
+                s1 += fn * abs(nx[i])
+            else:
+                n0 += fn
+                t0 += ft
+                s0 += fn * abs(nx[i])
+        return [n0, t0, n1, t1, s0, s1]

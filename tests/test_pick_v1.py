@@ -273,3 +273,153 @@ def test_symmetric_layout_leaves_out_only_mirrored_entries():
             np.testing.assert_allclose(o1[sl], mine, atol=1e-6, err_msg=name)
         if t1:
             break
+
+
+# ------------------------------------------- step against a reference computed from the state
+def _reference_forces(env):
+    """Per finger (normal, friction magnitude, horizontal part of the normal) [N]: contact by contact through
+    mujoco.mj_contactForce (the documented API), not the constraint rows the env reads."""
+    m, d = env.model, env.data
+    fog = np.asarray(env.fingers.finger_of_geom)
+    out, cf = np.zeros((2, 3)), np.zeros(6)
+    for i in range(d.ncon):
+        c = d.contact[i]
+        g1, g2 = c.geom
+        other = g2 if g1 == env.box_geom else (g1 if g2 == env.box_geom else -1)
+        if other < 0 or fog[other] < 0:
+            continue
+        mujoco.mj_contactForce(m, d, i, cf)
+        out[fog[other]] += (cf[0], np.hypot(cf[1], cf[2]), cf[0] * abs(c.frame[0]))
+    return out
+
+
+def _reference_obs(env, kcmd, kact, z0, hold, forces):
+    """The observation as the docstring's table defines it, from the MuJoCo state (the per-finger layout,
+    reduced to finger 0 and the box's z without per_finger)."""
+    from simgrip.envs.pick_observation import SPIN_TIME
+
+    d, L, n, K = env.data, env.length, env.n, env.shape_points
+    lo, hi = env.kappa_range
+    W = env.g * np.mean(env.box_mass_range)
+    palm_z, palm_v = d.qpos[env.palm_qpos], d.qvel[env.palm_dof]
+    s_link, s_k = (np.arange(n) + 0.5) / n, (np.arange(K) + 0.5) / K
+    shape = [np.interp(s_k, s_link, np.cumsum(d.qpos[env.joint_qpos[f]])) for f in (0, 1)]
+    tips = [d.geom_xpos[env.tip_geom[f]] for f in (0, 1)]
+    bq, bd = env.box_qpos, env.box_dof
+    R = np.zeros(9)
+    mujoco.mju_quat2Mat(R, d.qpos[bq + 3:bq + 7])
+    b = {
+        "palm_height": [palm_z / L],
+        "kappa_command": [2 * (k - lo) / (hi - lo) - 1 for k in kcmd],
+        "kappa_actual": [2 * (k - lo) / (hi - lo) - 1 for k in kact],
+        "finger_shape": np.concatenate(shape),
+        "tip_position": [tips[0][0] / L, (tips[0][2] - palm_z) / L, tips[1][0] / L, (tips[1][2] - palm_z) / L],
+        "box_position": [d.qpos[bq] / L, (d.qpos[bq + 2] - palm_z) / L],
+        "box_tilt": [np.arctan2(R[2], R[8])],  # the box's z axis (third column) towards +x
+        "box_velocity": [d.qvel[bd] / L, (d.qvel[bd + 2] - palm_v) / L],
+        "box_spin": [d.qvel[bd + 4] * SPIN_TIME],
+        "box_lift": [(d.qpos[bq + 2] - z0) / env.target_height],
+        "contact_force": np.log1p(forces[:, :2] / W).ravel(),
+        "hold": [min(hold / env.hold_time, 1.0)],
+    }
+    if not env.per_finger:
+        b = {name: v[:size] if name not in ("box_position", "box_velocity") else v[1:]
+             for name, v in b.items() for name2, size in env.obs_layout if name2 == name}
+    obs = np.concatenate([np.asarray(b[name], dtype=float) for name, _ in env.obs_layout])
+    return np.clip(obs, env.observation_space.low, env.observation_space.high)
+
+
+def _check_against_reference(env, seed, policy):
+    """Roll one episode and recompute every step's observation, reward, end and info from the state."""
+    from simgrip.chain import chain_springs
+    from simgrip.profiles import Uniform
+
+    obs, info = env.reset(seed=seed)
+    d = env.data
+    lo, hi = env.kappa_range
+    unit_rest = chain_springs(Uniform(1.0), env.n).rest
+    alpha = 1.0 - np.exp(-env.dt / env.kappa_tau)
+    z0, xy0 = d.qpos[env.box_qpos + 2], d.qpos[env.box_qpos:env.box_qpos + 2].copy()
+    kact, hold, phi, lifted_rel = np.zeros(2), 0.0, 0.0, None
+    np.testing.assert_allclose(obs, _reference_obs(env, (0, 0), kact, z0, 0.0, _reference_forces(env)),
+                               rtol=0, atol=1e-12)
+    mg = env.box.mass * env.g
+    allow = env.squeeze_margin * mg / (2 * env.box.friction)
+    steps = 0
+    for t in range(300):
+        action = policy(t, obs, env)
+        a = np.clip(np.asarray(action, dtype=float), -1, 1)
+        obs, r, term, trunc, info = env.step(action)
+        steps += 1
+        kcmd = lo + (a[:-1] + 1) / 2 * (hi - lo)
+        kcmd = kcmd if env.per_finger else np.repeat(kcmd, 2)
+        kact = kact + alpha * (kcmd - kact)
+        for f in (0, 1):  # the rest angles written for the step
+            np.testing.assert_allclose(env.model.qpos_spring[env.joint_qpos[f]], kact[f] * unit_rest, atol=1e-15)
+        forces = _reference_forces(env)
+        box_z, rel = d.qpos[env.box_qpos + 2], d.qpos[env.box_qpos + 2] - d.qpos[env.palm_qpos]
+        gain = box_z - z0
+        both = forces[0, 0] > 0 and forces[1, 0] > 0
+        if lifted_rel is None and gain > 0.005 and both:
+            lifted_rel = rel
+        dropped = lifted_rel is not None and rel < lifted_rel - env.drop_distance
+        R = np.zeros(9)
+        mujoco.mju_quat2Mat(R, d.qpos[env.box_qpos + 3:env.box_qpos + 7])
+        knocked = R[8] < np.cos(np.radians(30)) or np.hypot(*(d.qpos[env.box_qpos:env.box_qpos + 2] - xy0)) > 0.03
+        hold = hold + env.dt if gain >= env.target_height and both else 0.0
+        success = hold >= env.hold_time - 1e-9
+        lost = (dropped or knocked) and not success
+        phi_new = 0.0 if lost else float(np.clip(gain / env.target_height, 0, 1))
+        x = np.maximum(forces[:, 2] - allow, 0) / mg
+        terms = (env.w_lift * (phi_new - phi), env.w_success * success, -env.w_squeeze * np.mean(x / (1 + x)),
+                 -env.w_drop * lost)
+        phi = phi_new
+        np.testing.assert_allclose(obs, _reference_obs(env, kcmd, kact, z0, hold, forces), rtol=0, atol=1e-12,
+                                   err_msg=f"step {t}")
+        assert r == pytest.approx(sum(terms), rel=0, abs=1e-12)
+        for key, value in zip(("reward_lift", "reward_success", "reward_squeeze", "reward_drop"), terms):
+            assert info[key] == pytest.approx(value, rel=0, abs=1e-12), key
+        assert (term, trunc) == (success or lost, False)
+        assert (info["is_success"], info["dropped"], info["knocked_over"]) == (
+            success, dropped and not success, knocked and not success)
+        assert info["box_lift"] == pytest.approx(gain, rel=0, abs=1e-15)
+        assert info["hold_time"] == pytest.approx(hold, rel=0, abs=1e-12)
+        for key, col in (("normal_force", 0), ("friction_force", 1), ("side_force", 2)):
+            assert isinstance(info[key], np.ndarray) and info[key].shape == (2,)
+            np.testing.assert_allclose(info[key], forces[:, col], rtol=1e-12, atol=1e-12, err_msg=key)
+        if term:
+            break
+    return steps, info, forces
+
+
+class _Oracle:
+    def __call__(self, t, obs, env):
+        if t == 0:
+            self.pol = ScriptedPickPolicy()
+            self.pol.reset(env)
+        return self.pol(obs)
+
+
+def _random(seed, scale=1.3):
+    """Uniform actions, some outside [-1, 1] (the env clips them)."""
+    rng = np.random.default_rng(seed)
+    return lambda t, obs, env: rng.uniform(-scale, scale, env.action_space.shape)
+
+
+@pytest.mark.parametrize("grip, per_finger, seed, policy", [
+    ("I", False, 1, "oracle"), ("III", False, 1, "oracle"), ("I", False, 0, "full_curl"), ("I", False, 0, "random"),
+    ("I", True, 2, "random"), ("III", True, 1, "oracle")])
+def test_step_matches_a_reference_computed_from_the_state(grip, per_finger, seed, policy):
+    """Every step's observation, reward terms, end and info equal what the docstring defines, recomputed
+    from the MuJoCo state by a plain reference (contact forces through mj_contactForce, finger shapes by
+    np.interp, the box's tilt from its rotation matrix), to rounding."""
+    env = PickEnv(grip=grip, per_finger=per_finger)
+    policies = {"oracle": _Oracle(), "random": _random(seed),
+                "full_curl": lambda t, obs, env: np.array([-1.0, 1.0])}  # squeezes hard: the squeeze term counts
+    steps, info, forces = _check_against_reference(env, seed, policies[policy])
+    if policy in ("oracle", "full_curl"):
+        assert info["is_success"]  # the episode reached the end that matters: held at the target
+        assert forces[0, 0] > 0 and forces[1, 0] > 0 and steps > 20
+    if policy == "full_curl":
+        assert info["reward_squeeze"] < -0.1 * env.w_squeeze
+    env.close()
