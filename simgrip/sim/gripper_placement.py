@@ -17,8 +17,10 @@ the hinges (rigid out of plane) carry.
 Box and cylinder have vertical faces, so a tip at any height meets the
 surface at the same ``X``.  Geometry the gripper cannot hold is refused
 (ValueError naming ``offset`` or ``workpiece_yaw``): the palm axis outside the
-workpiece's footprint (a finger would start inside it), or a finger meeting
-the box on an edge's rounded strip instead of a flat face.  A sphere is held
+workpiece's footprint (a finger would start inside it), a finger meeting
+the box on an edge's rounded strip instead of a flat face, or two fingers
+with the workpiece off their common plane (it would hang from the line
+through the two contacts and swing about it).  A sphere is held
 centred only (its tips start on a circle of latitude, :func:`simgrip.settle.gripper`).
 """
 
@@ -105,6 +107,9 @@ def place_fingers(shape: str, azimuths, size_l, r_tip: float, offset, workpiece_
         reach[:] = size_l[0] + r_tip
         normal[:, 0] = 1.0
         return Placement(reach, normal, face)
+    if K == 2 and abs(float(c @ np.array([-math.sin(az[0]), math.cos(az[0])]))) > 0.0:
+        raise ValueError(f"offset must lie along the fingers' plane for fingers = 2 (across it the workpiece hangs "
+                         f"from the line through the two contacts and swings about it), got {tuple(float(v) for v in c)}")
     if shape == "cylinder":
         R = size_l[0] + r_tip
         if not math.hypot(*c) < size_l[0]:
