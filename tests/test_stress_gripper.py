@@ -1,0 +1,75 @@
+"""The K-finger cases of the stress run (simgrip.harness.stress_gripper): draws, checks, and that they can fail."""
+
+from __future__ import annotations
+
+import math
+from dataclasses import replace
+
+import numpy as np
+import pytest
+
+import simgrip.harness.stress_gripper as sg
+from simgrip.harness.stress_gripper import (GRIPPER_SHAPES, MAX_BOX_YAW, OFFSET_FRACTION, gripper_counts,
+                                            make_gripper_cases, run_gripper_case)
+
+
+def test_cases_are_seeded_and_within_their_ranges():
+    a = make_gripper_cases(20, seed=3)
+    assert a == make_gripper_cases(20, seed=3) and a != make_gripper_cases(20, seed=4)
+    assert [c["id"] for c in a] == list(range(20))
+    assert {(c["workpiece"], c["fingers"]) for c in a} == set(GRIPPER_SHAPES)
+    for c in a:
+        assert len(c["kappas"]) == c["fingers"]
+        assert all(k < 0 for k in c["kappas"]) if c["grip"] == "I" else all(k > 0 for k in c["kappas"])
+        assert math.hypot(*c["offset"]) <= OFFSET_FRACTION * 0.5 * c["b"]
+        if c["fingers"] == 2:
+            assert c["offset"][1] == 0.0  # along the fingers' plane
+        if c["workpiece"] == "box":
+            assert abs(c["workpiece_yaw"]) <= MAX_BOX_YAW
+    assert max(c["n"] for c in make_gripper_cases(10, max_links=8)) == 8
+    for kw, name in ((dict(count=-1), "count"), (dict(count=2, seed=-1), "seed"), (dict(count=2, max_links=1),
+                                                                                    "max_links")):
+        with pytest.raises(ValueError, match=name):
+            make_gripper_cases(**kw)
+
+
+@pytest.fixture(scope="module")
+def two():
+    return [run_gripper_case(c) for c in make_gripper_cases(2)]
+
+
+def test_cases_settle_balanced_and_deterministic(two):
+    for rec in two:
+        assert rec["outcome"] == "settled", rec["error"]
+        assert rec["held"] and math.isfinite(rec["residual"]) and rec["steps"] > 0
+    counts = gripper_counts(two)
+    assert counts["settled"] == counts["total"] == 2 and counts["held"] == 2
+
+
+def test_the_checks_can_fail(monkeypatch):
+    case = make_gripper_cases(1)[0]
+    good = sg._settle(case)
+    calls = {"n": 0}
+
+    def nan_state(_case):
+        return replace(good, residual=math.nan)
+
+    def unbalanced(_case):
+        return replace(good, force_balance=good.force_balance + np.array([0.0, 0.0, 1e-3]))
+
+    def changing(_case):
+        calls["n"] += 1
+        return replace(good, steps=good.steps + calls["n"])
+
+    def named(_case):
+        raise ValueError("offset must keep the palm axis inside the cylinder")
+
+    def unnamed(_case):
+        raise ValueError("something inside went wrong")
+
+    for fake, outcome, text in ((nan_state, "failed", "non-finite"), (unbalanced, "failed", "force balance"),
+                                (changing, "failed", "deterministic"), (named, "rejected", "offset"),
+                                (unnamed, "failed", "unnamed")):
+        monkeypatch.setattr(sg, "_settle", fake)
+        rec = run_gripper_case(case)
+        assert rec["outcome"] == outcome and text in rec["error"], (fake.__name__, rec["error"])
