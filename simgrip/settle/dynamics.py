@@ -6,16 +6,28 @@ Everything is chosen from the model:
   velocity update share the metric ``M + h D + h^2 K``, so hinge stiffness is
   implicit and contacts with a time constant far below the step
   (:data:`DYN_TIMECONST` ``h``, refsafe off) stay stable.
-* **Damping and step**: hinge damping ``D = h K`` (stiffness-proportional: the
+* **Damping and step**: hinge damping ``D = h max(K, R)`` (stiffness-proportional: the
   over-damped flow is preconditioned by the spring matrix, so the number of
   steps does not grow with ``n``); ``h = 1 / omega_min`` of the hinge chain with
   its physical inertia (power iteration on ``K^{-1} M``: ``K`` is diagonal in
-  hinge coordinates, one ``mj_mulM`` per iteration).  The workpiece has no stiffness: damping ``3 m / h``
+  hinge coordinates, one ``mj_mulM`` per iteration).  MuJoCo integrates the
+  springs and the damping implicitly but gravity and the contact forces
+  explicitly: their geometric stiffness ``H`` (:func:`geometric_stiffness_bound`)
+  is stable in the over-damped step only while ``|H| <~ K``, which a soft finger
+  (``D`` small: gravity and the workpiece's weight far above the springs) breaks
+  by orders of magnitude; ``R``, the Gershgorin row sums of ``H``, keeps every
+  step a contraction (updated at each stop test from MuJoCo's contact forces,
+  at least the workpiece's weight at each contact while it hangs on the finger).
+  The workpiece has no stiffness: damping ``3 m / h``
   (Grip III raises it, and the finger's with it, so a falling workpiece moves
-  at most :data:`DYN_FALL_STEP` contact radii per step; this fall guard is
-  lifted while everything moves slower than :data:`DYN_GUARD_V`, one step per
-  stop test, and comes back above ten times that: near rest the plain
-  over-damped flow converges in a fixed number of steps).
+  at most :data:`DYN_FALL_STEP` contact radii per step).  This fall guard is a
+  factor ``1 <= s <= slow`` on all the damping: over-damped, the flow only runs
+  ``s`` times slower along the same path, and the step the plain flow would take,
+  ``s v h`` (``v`` the velocity under the guard), tells how much of it is
+  needed: ``s`` is set at each stop test so that this step stays below
+  :data:`DYN_FALL_STEP` contact radii (one step per test while ``s < slow``);
+  near rest ``s = 1`` and the plain over-damped flow converges in a fixed
+  number of steps.
 * **Contacts**: elliptic cone, ``impratio =`` :data:`DYN_IMPRATIO` (MuJoCo's
   sticking friction creeps at a speed ~ 1/impratio and leaves ~1e-5 of the
   weight unbalanced, hence :data:`DYN_TOL`); a state penetrating more than
@@ -82,8 +94,6 @@ DYN_RELEASE_STEPS = 20
 DYN_DROP_FALL = 0.2
 #: Physics steps per ``mj_step`` call between two stop tests (velocity, drop watch) once nothing is held.
 DYN_BATCH = 16
-#: Velocity (as DYN_VTOL) below which the Grip III fall guard's extra damping is lifted.
-DYN_GUARD_V = 1e-3
 #: Physics steps allowed to the h/2 rerun that confirms a drop (a state that does not come to rest
 #: in them keeps the drop found at h).
 DYN_DROP_RETRY_STEPS = 2000
@@ -128,6 +138,57 @@ def lowest_frequency(m, d, k, sprung, iters: int = 50, rtol: float = 1e-12) -> f
     return math.sqrt(1.0 / lam)
 
 
+def geometric_stiffness_bound(scene: Scene, d, load: float = 0.0) -> np.ndarray:
+    """Gershgorin row sums ``R`` [N m/rad] of the loads' geometric stiffness at the finger hinges (0 elsewhere).
+
+    A force ``F`` held fixed at a point ``p`` beyond two hinges ``a <= b`` of a
+    planar serial chain adds ``d^2 V / dq_a dq_b = F . (p - o_b)`` to the Hessian
+    (``o_b`` the later hinge's anchor: ``d^2 p / dq_a dq_b = -(p - o_b)`` in the
+    plane), so the Hessian of the loads is ``H_ab = g_max(a,b)`` with ``g_c`` the
+    sum over the loads beyond hinge ``c``: for gravity ``m_c g . (com_c - o_c)``
+    (``m_c``, ``com_c`` the subtree's mass and centre of mass); for the
+    workpiece's weight ``load`` [N] hanging on a finger through a contact at ``p``,
+    at most ``load |p - o_c|`` (its direction there is the contact's).  A row of
+    ``|H|`` sums to ``R_a = a |g_a| + sum_{b > a} |g_b|`` (``a`` counted from 1
+    at the base).
+
+    MuJoCo's step is implicit in the springs ``K`` and the damping ``D`` but
+    explicit in these loads.  In the over-damped limit a step maps the error
+    ``e -> (I - B^{-1}(K + H)) e`` with ``B = K + D/h``; with ``D = h max(K, R)``,
+    ``B >= K + R`` row by row, so every eigenvalue of ``B^{-1}(K + H)`` lies in
+    ``(0, 1]`` for a stable equilibrium (Gershgorin): each step contracts.  The
+    springs' own contact force (a finger squeezing the workpiece) scales with
+    ``K`` and is left out: the bound is smooth in the configuration (no
+    measured contact force, which chatters), and it matters where gravity and the
+    workpiece's weight dominate the springs (``D`` small).
+    ``d`` must be current (kinematics, ``subtree_com``, contacts).
+    """
+    m = scene.model
+    R = np.zeros(m.nv)
+    gvec = np.asarray(m.opt.gravity, dtype=float)
+    idx = scene.index
+    # the contacts on each finger: (link index, point)
+    on = [[] for _ in range(scene.fingers)]
+    if load > 0.0:
+        for i in range(d.ncon):
+            c = d.contact[i]
+            for g in (int(c.geom[0]), int(c.geom[1])):
+                f = int(idx.finger_of_geom[g]) if g < len(idx.finger_of_geom) else -1
+                k = np.flatnonzero(idx.link_body[f] == m.geom_bodyid[g]) if f >= 0 else ()
+                if len(k):
+                    on[f].append((int(k[0]), np.array(c.pos)))
+    for f in range(scene.fingers):
+        bodies = idx.link_body[f]
+        dofs = idx.joint_dof[f]
+        o = d.xanchor[m.dof_jntid[dofs]]
+        g = np.abs(m.body_subtreemass[bodies] * ((d.subtree_com[bodies] - o) @ gvec))
+        for k, p in on[f]:
+            g[:k + 1] += load * np.linalg.norm(p[None, :] - o[:k + 1], axis=1)
+        after = np.concatenate([np.cumsum(g[::-1])[::-1][1:], [0.0]])
+        R[dofs] = (np.arange(len(g)) + 1.0) * g + after
+    return R
+
+
 class Dyn:
     """Over-damped MuJoCo dynamics (``mjINT_DISCRETE``) configured from the model's scales."""
 
@@ -154,36 +215,53 @@ class Dyn:
         m.opt.impratio = DYN_IMPRATIO
         m.opt.noslip_iterations = 0  # no effect on pair contacts with mjINT_DISCRETE (measured)
         m.opt.disableflags |= int(mujoco.mjtDisableBit.mjDSBL_REFSAFE)
-        m.dof_damping[:] = DYN_DAMPING * h * k
+        self.k = np.where(k > 0, k, 0.0)
         wd = np.asarray(scene.workpiece_dof, dtype=int)
         #: damping factor of the Grip III fall guard (1: none); :meth:`run` lifts it near rest (:meth:`_guard`)
         self.slow = 1.0
+        #: the workpiece's own damping without the guard, and the dofs the guard scales (its translations)
+        self.wp_damping = np.zeros(m.nv)
+        self.wp_guarded = np.zeros(m.nv, dtype=bool)
         if wd.size:
             dw = DYN_WORKPIECE_DAMPING / h
             if scene.grip == "III":
                 # the corner meets thin capsules: falling freely, the workpiece may move at most
-                # DYN_FALL_STEP contact radii per step (else it tunnels through the rod)
+                # DYN_FALL_STEP contact radii per step (else it tunnels through the rod); the
+                # finger is slowed alike: a sliding corner must not see the rod spring away
                 r = (scene.r_link + scene.r_corner) * scene.length
-                slow = max(1.0, scene.physical.g * h / (DYN_FALL_STEP * r) / dw)
-                dw *= slow
-                # the finger slowed alike: a sliding corner must not see the rod spring away
-                m.dof_damping[:] *= slow
-                self.slow = slow
-            m.dof_damping[wd] = dw * scene.workpiece_mass
+                self.slow = max(1.0, scene.physical.g * h / (DYN_FALL_STEP * r) / dw)
             for j, name in zip(wd, scene.workpiece_joints):
                 if name == "ry":  # rotation: inertia about y instead of mass
                     e, col = np.zeros(m.nv), np.zeros(m.nv)
                     e[j] = 1.0
                     mujoco.mj_mulM(m, d, col, e)  # the rotation's inertia M[j, j]
-                    m.dof_damping[j] = DYN_WORKPIECE_DAMPING * float(col[j]) / h
-        self.damping_guard = m.dof_damping.copy()
-        self.damping_plain = m.dof_damping / self.slow
-        self.guard_on = self.slow > 1.0
+                    self.wp_damping[j] = DYN_WORKPIECE_DAMPING * float(col[j]) / h
+                else:
+                    self.wp_damping[j] = dw * scene.workpiece_mass
+                    self.wp_guarded[j] = True
+        #: the fall guard's current factor on the damping, in [1, slow] (:meth:`_guard`)
+        self.factor = self.slow
+        self.R = np.zeros(m.nv)
+        self.held_q = None
+        self.update_damping()
         if m.npair:
             m.pair_solref[:] = [DYN_TIMECONST * h, 1.0]
             m.pair_solimp[:, 0] = CONTACT_IMPEDANCE
             m.pair_solimp[:, 1] = CONTACT_IMPEDANCE
-        self.held_q = None
+
+    def update_damping(self) -> None:
+        """Hinge damping ``h max(K, R)`` (:func:`geometric_stiffness_bound` at the current state), times the
+        fall guard's factor while it is on; the workpiece's ``3 m / h`` (its translations times the guard)."""
+        m, sc = self.m, self.scene
+        hanging = (sc.has_workpiece and sc.free_workpiece and self.held_q is None
+                   and not int(m.opt.disableflags) & int(mujoco.mjtDisableBit.mjDSBL_CONTACT))
+        load = sc.workpiece_mass * sc.physical.g if hanging else 0.0
+        self.R = geometric_stiffness_bound(sc, self.d, load)
+        factor = self.factor
+        h = self.h
+        damp = np.where(self.k > 0, DYN_DAMPING * h * np.maximum(self.k, self.R) * factor, 0.0)
+        damp += np.where(self.wp_guarded, self.wp_damping * factor, self.wp_damping)
+        m.dof_damping[:] = damp
 
     def residual(self) -> float:
         """Static residual at rest: ``qfrc_smooth + qfrc_constraint`` at ``qvel = 0`` (MuJoCo's friction included)."""
@@ -204,6 +282,7 @@ class Dyn:
     def step(self, k: int = 1) -> None:
         """``k`` physics steps (``k > 1`` only while the workpiece is not held in place)."""
         m, d = self.m, self.d
+        self.update_damping()  # the loads' geometric stiffness at the current state
         mujoco.mj_step(m, d, k)
         self.steps += k
         self.calls += k
@@ -215,17 +294,19 @@ class Dyn:
         check_warnings(d)
 
     def _guard(self, v: float) -> None:
-        """Grip III fall guard with hysteresis: its extra damping (``slow``) on while anything moves
-        faster than ``10 DYN_GUARD_V``, off below ``DYN_GUARD_V`` (near rest the plain over-damped flow,
-        ``D = h K``, converges in a step count independent of the guard: a slowly moving workpiece
-        cannot tunnel; one that speeds up again gets the guard back before it moves a contact radius)."""
-        on = self.guard_on
-        if on and v < DYN_GUARD_V:
-            self.m.dof_damping[:] = self.damping_plain
-            self.guard_on = False
-        elif not on and v > 10.0 * DYN_GUARD_V:
-            self.m.dof_damping[:] = self.damping_guard
-            self.guard_on = True
+        """Grip III fall guard: the factor ``s`` on the damping that keeps the plain flow's step below
+        :data:`DYN_FALL_STEP` contact radii.  Over-damped, the velocity goes as ``1 / s``: under the factor
+        ``s`` the plain flow's step is ``s v h`` (``v`` over ``l / sqrt(l/g)``), an upper bound
+        (inertia and the implicit springs add to the damping's metric), so ``s`` never lets the
+        workpiece move more than a fraction of a contact radius in one step, and a slow velocity
+        under heavy damping (a force far from balance) does not lift it."""
+        sc = self.scene
+        step = v * self.factor * self.h / math.sqrt(sc.length / sc.physical.g)
+        allowed = DYN_FALL_STEP * (sc.r_link + sc.r_corner)
+        factor = min(self.slow, max(1.0, step / allowed))
+        if factor != self.factor:
+            self.factor = factor
+            self.update_damping()
 
     def hold(self, on: bool) -> None:
         hold_workpiece(self.scene, on)
@@ -239,10 +320,10 @@ class Dyn:
             if self.slow > 1.0 and self.held_q is None and self.steps > start:  # after a first batch
                 self._guard(v)
 
-        # one step per test while the fall guard is lifted: a workpiece that starts to fall
-        # gets it back before it moves a contact radius
+        # one step per test while the fall guard is below its full factor: a workpiece that starts
+        # to fall gets it back before it moves a contact radius
         def one_step():
-            return self.held_q is not None or (self.slow > 1.0 and not self.guard_on)
+            return self.held_q is not None or self.factor < self.slow
 
         return run_to_rest(self, tol, vtol, budget, watch, "dynamic settle", before=guard, one_step=one_step)
 
@@ -284,6 +365,12 @@ def _finger_pairs_touching(scene: Scene) -> bool:
     return any((int(d.contact.geom1[i]) in mine and int(d.contact.geom2[i]) in wg) for i in range(d.ncon))
 
 
+def _deepest_contact(scene: Scene) -> float:
+    """Deepest penetration [m] of the contacts in the scene's data (0 without contacts)."""
+    d = scene.data
+    return max((-float(d.contact.dist[i]) for i in range(d.ncon)), default=0.0)
+
+
 def _put_back(scene: Scene, state: SettledState) -> None:
     """Put the scene's data back at a settled state (at rest)."""
     d = scene.data
@@ -295,6 +382,8 @@ def _put_back(scene: Scene, state: SettledState) -> None:
 def settle_dynamics(scene: Scene, tol: float, max_steps: int, warm_start, close: bool,
                      allow_unconverged: bool, t0: float) -> SettledState:
     """Over-damped settle; the time step halves (from the start) while penetration >= DYN_PEN_LIMIT,
+    or a contact tunnels (the tip sphere wholly inside the face, the corner across the rod's axis:
+    the run stops there),
     and once when the workpiece drops: a drop counts when it happens at two time steps ``h`` and
     ``h/2`` (a heavy workpiece on a soft finger can start a growing two-step oscillation of the contact
     at ``h = 1/omega_min`` that throws it off the tip; at ``h/2`` it holds)."""
@@ -303,7 +392,7 @@ def settle_dynamics(scene: Scene, tol: float, max_steps: int, warm_start, close:
     flags0 = int(scene.model.opt.disableflags)  # a drop leaves contact off (the finger settles alone)
     steps = calls = 0
     factor = 1.0
-    retried_drop = False
+    retried_drop = tunnelled = False
     first_drop = None
     for _attempt in range(4):
         # max_steps is the budget of the whole settle: a restart gets what the earlier attempts left
@@ -311,8 +400,9 @@ def settle_dynamics(scene: Scene, tol: float, max_steps: int, warm_start, close:
         if first_drop is not None:
             budget = min(budget, DYN_DROP_RETRY_STEPS)
         try:
-            state, dropped = _settle_dynamics_once(scene, tol, budget, warm_start, close,
-                                                   allow_unconverged or first_drop is not None, t0, factor)
+            state, dropped, tunnelled = _settle_dynamics_once(scene, tol, budget, warm_start, close,
+                                                              allow_unconverged or first_drop is not None, t0,
+                                                              factor)
         except SettleError:
             if first_drop is None:
                 raise
@@ -329,8 +419,8 @@ def settle_dynamics(scene: Scene, tol: float, max_steps: int, warm_start, close:
         if retry_drop:
             first_drop = state
         retried_drop = retried_drop or dropped
-        if (state.penetration < DYN_PEN_LIMIT and not retry_drop) or _attempt == 3 or steps >= max_steps or (
-                not state.converged):
+        if _attempt == 3 or steps >= max_steps or (not tunnelled and (
+                (state.penetration < DYN_PEN_LIMIT and not retry_drop) or not state.converged)):
             break
         d.qpos[:] = q0
         d.qvel[:] = 0.0
@@ -338,12 +428,16 @@ def settle_dynamics(scene: Scene, tol: float, max_steps: int, warm_start, close:
         scene.model.opt.disableflags = flags0
         mujoco.mj_forward(scene.model, d)
         factor *= 0.5
+    if tunnelled and first_drop is None and not allow_unconverged:
+        raise SettleError(f"dynamic settle tunnelled (a contact deeper than the finger geom) at every "
+                          f"step down to h/{round(1 / factor)}")
     state.steps, state.forward_calls = steps, calls
     return state
 
 
 def _settle_dynamics_once(scene: Scene, tol: float, max_steps: int, warm_start, close: bool,
-                          allow_unconverged: bool, t0: float, step_factor: float) -> SettledState:
+                          allow_unconverged: bool, t0: float, step_factor: float) -> tuple[SettledState, bool, bool]:
+    """One dynamic settle at ``step_factor`` h: ``(state, dropped, tunnelled)``."""
     m, d = scene.model, scene.data
     dyn = Dyn(scene, step_factor)
     vtol = DYN_VTOL
@@ -430,11 +524,17 @@ def _settle_dynamics_once(scene: Scene, tol: float, max_steps: int, warm_start, 
                     return "lost contact"  # out of contact, or sliding down the rod far past any hold
                 if scene.grip in ("I", "II") and abs(slip_coordinate(scene) - s0) > DYN_DROP_SLIP:
                     return "slipped"
+                if _deepest_contact(scene) > tunnel:
+                    return "tunnelled"
                 return None
 
+            # tunnelled: the tip sphere wholly inside the face (I/II), the corner across the rod's axis (III)
+            tunnel = (2.0 * scene.r_tip if scene.grip in ("I", "II") else scene.r_link + scene.r_corner) * scene.length
             converged, why = dyn.run(tol, vtol, max_steps, watch)
             if why in ("lost contact", "slipped"):
                 held, converged, dropped = False, True, True
+            elif why == "tunnelled":
+                return read_dynamics(scene, dyn, t0, held, False), False, True
     if not (scene.has_workpiece and held) and converged:
         if scene.has_workpiece:  # park the workpiece, settle the finger alone (from the chain's free state)
             dyn.hold(True)
@@ -444,7 +544,7 @@ def _settle_dynamics_once(scene: Scene, tol: float, max_steps: int, warm_start, 
         converged, why = dyn.run(tol, vtol, max_steps)
     if not converged and not allow_unconverged:
         raise SettleError(f"dynamic settle did not converge ({why} after {dyn.steps} steps)")
-    return read_dynamics(scene, dyn, t0, held, converged), dropped
+    return read_dynamics(scene, dyn, t0, held, converged), dropped, False
 
 
 def read_dynamics(scene: Scene, dyn: Dyn, t0: float, held: bool, converged: bool) -> SettledState:
