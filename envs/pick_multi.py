@@ -309,9 +309,8 @@ class PickMultiEnv(gym.Env):
         self._observe = MultiObservation(
             fingers=self.K, n_links=self.n, shape_points=self.shape_points, shared_curvature=self.shared_curvature,
             kappa_range=self.kappa_range, length=self.length, target_height=self.target_height,
-            hold_time=self.hold_time, force_unit=self._force_unit, azimuths=pm.azimuths, palm_qpos=pm.palm_qpos,
-            palm_dof=pm.palm_dof, work_qpos=pm.work_qpos, work_dof=pm.work_dof, work_body=pm.work_body,
-            tips=pm.fingers.tip_geom, hinge_qpos=self._hinges)
+            hold_time=self.hold_time, force_unit=self._force_unit, palm_qpos=pm.palm_qpos,
+            palm_dof=pm.palm_dof, work_qpos=pm.work_qpos, work_dof=pm.work_dof, hinge_qpos=self._hinges)
         self._forces = WorkpieceContactForces(self.K, pm.work_geom, pm.fingers.finger_of_geom)
         self._select(self.shapes[0])
         self.workpiece = WorkpieceParams(self.shapes[0], float(np.mean(self.size_range)),

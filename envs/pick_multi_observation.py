@@ -17,6 +17,7 @@ from __future__ import annotations
 
 import math
 
+import mujoco
 import numpy as np
 
 from simgrip.envs.pick_observation import SPIN_TIME
@@ -98,12 +99,8 @@ class MultiObservation:
         As :class:`~simgrip.envs.pick_multi.PickMultiEnv`'s arguments (SI units).
     force_unit : float
         Forces are observed as ``log(1 + F / force_unit)`` [N].
-    azimuths : array (K,)
-        Azimuth of each finger's plane [rad].
-    palm_qpos, palm_dof, work_qpos, work_dof, work_body : int
-        Addresses of the palm slide and the workpiece's free joint and body.
-    tips : array of int
-        Geom ids of the ``K`` tip spheres.
+    palm_qpos, palm_dof, work_qpos, work_dof : int
+        Addresses of the palm slide and the workpiece's free joint.
     hinge_qpos : index
         qpos index of the fingers' hinges, finger 0 first (``K * n_links``).
 
@@ -114,8 +111,7 @@ class MultiObservation:
     """
 
     def __init__(self, *, fingers, n_links, shape_points, shared_curvature, kappa_range, length, target_height,
-                 hold_time, force_unit, azimuths, palm_qpos, palm_dof, work_qpos, work_dof, work_body, tips,
-                 hinge_qpos):
+                 hold_time, force_unit, palm_qpos, palm_dof, work_qpos, work_dof, hinge_qpos):
         self.K, self.n, self.P = int(fingers), int(n_links), int(shape_points)
         self.layout = multi_obs_layout(self.K, self.P, shared_curvature)
         lo, hi = kappa_range
@@ -136,10 +132,10 @@ class MultiObservation:
         self.kappa_range = (float(lo), float(hi))
         self.inv_l = 1.0 / length
         self.target_height, self.hold_time, self.force_unit = target_height, hold_time, force_unit
-        self.cos_sin = np.array([np.cos(azimuths), np.sin(azimuths)])  # (2, K)
         self.palm_qpos, self.palm_dof = palm_qpos, palm_dof
-        self.work_qpos, self.work_dof, self.work_body = work_qpos, work_dof, work_body
-        self.tips = np.asarray(tips)
+        self.work_qpos, self.work_dof = work_qpos, work_dof
+        self._ds = 1.0 / self.n  # link length over l
+        self._rot = np.empty(9)
         self.hinge_qpos = hinge_qpos
         # shape sampling: tangent angles at s/l = (k+1/2)/P, interpolated between link midpoints, from the
         # link angles (cumulative hinge angles), as the two-finger observation
@@ -164,19 +160,23 @@ class MultiObservation:
         obs[sl["kappa_actual"]] = 2.0 * (np.asarray(kappa) - lo) / (hi - lo) - 1.0
         hinges = q[self.hinge_qpos].reshape(self.K, self.n)
         obs[sl["finger_shape"]] = (hinges @ self._shape_matrix_t).ravel()
-        tips = data.geom_xpos[self.tips]  # (K, 3), world; the palm axis is the world z axis
+        # everything from qpos / qvel (after the step; MuJoCo's xpos / xmat are those before its last
+        # integration): the tips by the chain's forward kinematics in each finger's plane
+        theta = np.cumsum(hinges, axis=1)
         tip = np.empty((self.K, 2))
-        tip[:, 0] = np.einsum("ij,ji->i", tips[:, :2], self.cos_sin) * inv_l  # along each finger's E1
-        tip[:, 1] = (tips[:, 2] - palm_z) * inv_l
+        tip[:, 0] = np.cos(theta).sum(axis=1) * self._ds
+        tip[:, 1] = np.sin(theta).sum(axis=1) * self._ds
         obs[sl["tip_position"]] = tip.ravel()
         x, y, z = q[wq:wq + 3]
         obs[sl["workpiece_position"]] = (x * inv_l, y * inv_l, (z - palm_z) * inv_l)
-        axis = data.xmat[self.work_body].reshape(3, 3)[:, 2]  # the workpiece's z axis in the world
-        obs[sl["workpiece_tilt"]] = axis[:2]
+        rot = self._rot
+        mujoco.mju_quat2Mat(rot, q[wq + 3:wq + 7])
+        rot = rot.reshape(3, 3)
+        obs[sl["workpiece_tilt"]] = rot[:2, 2]  # the workpiece's z axis in the world: (x, y)
         vx, vy, vz = v[wd:wd + 3]
         obs[sl["workpiece_velocity"]] = (vx * inv_l, vy * inv_l, (vz - palm_v) * inv_l)
         # the free joint's angular velocity is in the body frame: turn it into the world frame
-        obs[sl["workpiece_spin"]] = data.xmat[self.work_body].reshape(3, 3) @ v[wd + 3:wd + 6] * SPIN_TIME
+        obs[sl["workpiece_spin"]] = rot @ v[wd + 3:wd + 6] * SPIN_TIME
         obs[sl["workpiece_lift"]] = (z - z0) / self.target_height
         normal, friction, _ = forces
         cf = np.empty((self.K, 2))

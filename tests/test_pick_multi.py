@@ -277,3 +277,56 @@ def test_sphere_choice_is_the_planar_choice_at_the_equator_and_holds_below_it():
     assert d_low["normal_force"] > 0 and d_low["required_mu"] <= p.mu_s / 2.0
     # the tips below the equator push up as well as in: the centre lies above the tips
     assert d_low["centre_height"] > d_low["tip"][1]
+
+
+def test_two_finger_reward_is_pick_v1s():
+    from simgrip.envs.pick_multi_observation import multi_reward
+    from simgrip.envs.pick_reward import pick_reward
+
+    kw = dict(phi=0.4, phi_prev=0.3, success=False, lost=False, g=9.81, friction=0.7, w_lift=10.0, w_success=20.0,
+              w_squeeze=0.04, w_drop=10.0, squeeze_margin=2.0)
+    for sides in ((0.0, 0.0), (0.3, 1.7), (5.0, 0.1)):
+        r2, t2 = pick_reward(side_forces=sides, box_mass=0.05, **kw)
+        rk, tk = multi_reward(side_forces=sides, mass=0.05, **kw)
+        assert rk == pytest.approx(r2, rel=1e-12, abs=1e-15)
+        assert tk == pytest.approx(t2, rel=1e-12, abs=1e-15)
+
+
+def test_contact_forces_and_tips_against_mujoco_and_the_chain():
+    """The forces read from efc_force against mj_contactForce; the observed tips against the hinge chain's
+    forward kinematics (simgrip.chain.link_positions) in each finger's plane."""
+    import mujoco
+
+    from simgrip.chain import link_positions
+
+    env = PickMultiEnv(fingers=3, **FAST)
+    obs, info = env.reset(seed=11, options={"shape": "cylinder"})
+    pol = ScriptedMultiPolicy()
+    pol.reset(env, info)
+    touched = False
+    for _ in range(80):
+        obs, _, term, _, info = env.step(pol(obs))
+        m, d = env.model, env.data
+        normal = np.zeros(3)
+        friction = np.zeros(3)
+        f6 = np.zeros(6)
+        owner = env.fingers.finger_of_geom
+        for i in range(d.ncon):
+            g1, g2 = d.contact.geom[i]
+            k = owner[g2] if g1 == env._pm.work_geom else owner[g1] if g2 == env._pm.work_geom else -1
+            if k >= 0:
+                mujoco.mj_contactForce(m, d, i, f6)
+                normal[k] += f6[0]
+                friction[k] += math.hypot(f6[1], f6[2])
+        np.testing.assert_allclose(info["normal_force"], normal, rtol=1e-12, atol=1e-12)
+        np.testing.assert_allclose(info["friction_force"], friction, rtol=1e-12, atol=1e-12)
+        touched |= bool(np.all(normal > 0))
+        tips = obs[env.obs_slices["tip_position"]].reshape(3, 2)
+        q = d.qpos[env.joint_qpos]
+        for k in range(3):
+            end = link_positions(np.cumsum(q[k]), 1.0 / env.n)[-1]  # (X, Y) over l, in the finger's plane
+            np.testing.assert_allclose(tips[k], end, atol=1e-9)
+        if term:
+            break
+    assert touched
+    env.close()
