@@ -324,6 +324,7 @@ class PickMultiEnv(gym.Env):
         flat = self._pm.fingers.joint_qpos.ravel()
         self._spring = self.model.qpos_spring[flat[0]:flat[0] + flat.size].reshape(self.K, self.n)
         self._check = StateCheck(self.data)
+        self._unit_rest = np.tile(self._pm.unit_rest, (self.K, 1))
 
     @property
     def joint_qpos(self) -> np.ndarray:
@@ -360,7 +361,8 @@ class PickMultiEnv(gym.Env):
         self._needs_reset = True
 
     def _set_kappa(self, kappa):
-        self._spring[:] = np.multiply.outer(np.broadcast_to(kappa, (self.K,)), self._pm.unit_rest)
+        """Rest angles of every finger for the curvatures ``kappa`` (1 shared or K), written into the model."""
+        np.multiply(self._unit_rest, kappa[:, None], out=self._spring)
 
     def __getstate__(self):
         state = self.__dict__.copy()
@@ -427,11 +429,12 @@ class PickMultiEnv(gym.Env):
         a = check_action(action, self.action_space.shape)
         m, d = self.model, self.data
         lo, hi = self.kappa_range
-        cmd = np.array([lo + 0.5 * (v + 1.0) * (hi - lo) for v in a[:-1]])
-        self._kappa_cmd = cmd
+        cmd = self._kappa_cmd
+        cmd[:] = [lo + 0.5 * (v + 1.0) * (hi - lo) for v in a[:-1]]
         # pneumatic lag: exact first-order response over one control step, rest angles held within it
-        self._kappa = self._kappa + self._lag_alpha * (cmd - self._kappa)
-        self._set_kappa(self._kappa)
+        kap = self._kappa
+        kap += self._lag_alpha * (cmd - kap)
+        self._set_kappa(kap)
         self._palm_target = min(max(self._palm_target + a[-1] * self.palm_speed * self.dt,
                                     self.palm_range[0]), self.palm_range[1])
         d.ctrl[0] = self._palm_target
@@ -445,7 +448,7 @@ class PickMultiEnv(gym.Env):
         forces = self._forces(d)
         normal, friction, side = forces
         wq = self.work_qpos
-        x, y, z, qw, qx, qy = (float(v) for v in d.qpos[wq:wq + 6])
+        x, y, z, qw, qx, qy = d.qpos[wq:wq + 6].tolist()
         gain = z - self._z0
         rel = z - float(d.qpos[self.palm_qpos])
         touching = sum(f > 0.0 for f in normal)

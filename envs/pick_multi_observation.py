@@ -17,7 +17,6 @@ from __future__ import annotations
 
 import math
 
-import mujoco
 import numpy as np
 
 from simgrip.envs.pick_observation import SPIN_TIME
@@ -135,54 +134,61 @@ class MultiObservation:
         self.palm_qpos, self.palm_dof = palm_qpos, palm_dof
         self.work_qpos, self.work_dof = work_qpos, work_dof
         self._ds = 1.0 / self.n  # link length over l
-        self._rot = np.empty(9)
         self.hinge_qpos = hinge_qpos
         # shape sampling: tangent angles at s/l = (k+1/2)/P, interpolated between link midpoints, from the
         # link angles (cumulative hinge angles), as the two-finger observation
         n, P = self.n, self.P
         s_link = (np.arange(n) + 0.5) / n
         s_k = (np.arange(P) + 0.5) / P
-        interp = np.array([np.interp(s_k, s_link, e) for e in np.eye(n)]).T
-        self._shape_matrix_t = np.ascontiguousarray((interp @ np.tril(np.ones((n, n)))).T)  # q -> theta(s_k)
+        interp = np.array([np.interp(s_k, s_link, e) for e in np.eye(n)]).T  # link angles -> theta(s_k)
+        self._interp_t = np.ascontiguousarray(interp.T)
+        self._k_scale = (2.0 / (hi - lo), -2.0 * lo / (hi - lo) - 1.0)  # curvature -> action units
+        self._shape_start = self.slices["finger_shape"].start
+        self._tip_start = self.slices["tip_position"].start
+        self._tail_start = self.slices["workpiece_position"].start
 
     def __call__(self, data, forces, kappa_cmd, kappa, z0: float, hold: float) -> np.ndarray:
         """The observation of ``data``: ``forces`` are :class:`WorkpieceContactForces`' ``(normal, friction,
-        side)``; ``kappa_cmd``, ``kappa`` the commanded and actual curvatures (1 or K); ``z0`` the workpiece's
-        starting height [m]; ``hold`` the time held at the target [s]."""
-        sl, inv_l = self.slices, self.inv_l
+        side)``; ``kappa_cmd``, ``kappa`` the commanded and actual curvatures (arrays of 1 or K); ``z0`` the
+        workpiece's starting height [m]; ``hold`` the time held at the target [s]."""
+        # everything from qpos / qvel (after the step; MuJoCo's xpos / xmat are those before its last
+        # integration).  Arrays for the fingers (one cumsum, one product, one complex exp), Python floats for the
+        # rest (one tolist per block), one array write per block, then the clip in place.
+        inv_l, K = self.inv_l, self.K
         q, v = data.qpos, data.qvel
         palm_z, palm_v = float(q[self.palm_qpos]), float(v[self.palm_dof])
         wq, wd = self.work_qpos, self.work_dof
-        lo, hi = self.kappa_range
         obs = np.empty(self.low.size)
-        obs[0] = palm_z * inv_l
-        obs[sl["kappa_command"]] = 2.0 * (np.asarray(kappa_cmd) - lo) / (hi - lo) - 1.0
-        obs[sl["kappa_actual"]] = 2.0 * (np.asarray(kappa) - lo) / (hi - lo) - 1.0
-        hinges = q[self.hinge_qpos].reshape(self.K, self.n)
-        obs[sl["finger_shape"]] = (hinges @ self._shape_matrix_t).ravel()
-        # everything from qpos / qvel (after the step; MuJoCo's xpos / xmat are those before its last
-        # integration): the tips by the chain's forward kinematics in each finger's plane
-        theta = np.cumsum(hinges, axis=1)
-        tip = np.empty((self.K, 2))
-        tip[:, 0] = np.cos(theta).sum(axis=1) * self._ds
-        tip[:, 1] = np.sin(theta).sum(axis=1) * self._ds
-        obs[sl["tip_position"]] = tip.ravel()
-        x, y, z = q[wq:wq + 3]
-        obs[sl["workpiece_position"]] = (x * inv_l, y * inv_l, (z - palm_z) * inv_l)
-        rot = self._rot
-        mujoco.mju_quat2Mat(rot, q[wq + 3:wq + 7])
-        rot = rot.reshape(3, 3)
-        obs[sl["workpiece_tilt"]] = rot[:2, 2]  # the workpiece's z axis in the world: (x, y)
-        vx, vy, vz = v[wd:wd + 3]
-        obs[sl["workpiece_velocity"]] = (vx * inv_l, vy * inv_l, (vz - palm_v) * inv_l)
-        # the free joint's angular velocity is in the body frame: turn it into the world frame
-        obs[sl["workpiece_spin"]] = rot @ v[wd + 3:wd + 6] * SPIN_TIME
-        obs[sl["workpiece_lift"]] = (z - z0) / self.target_height
+        # header: palm height, curvature command and actual curvature in action units
+        a, b = self._k_scale
+        head = [palm_z * inv_l]
+        head += [a * k + b for k in kappa_cmd.tolist()]
+        head += [a * k + b for k in kappa.tolist()]
+        obs[:self._shape_start] = head
+        theta = np.cumsum(q[self.hinge_qpos].reshape(K, self.n), axis=1)  # link angles
+        np.dot(theta, self._interp_t, out=obs[self._shape_start:self._tip_start].reshape(K, self.P))
+        # tips by the chain's forward kinematics in each finger's plane: X + iZ = ds sum exp(i theta)
+        tip = np.exp(1j * theta).sum(axis=1) * self._ds
+        tips = obs[self._tip_start:self._tail_start].reshape(K, 2)
+        tips[:, 0], tips[:, 1] = tip.real, tip.imag
+        x, y, z, qw, qx, qy, qz = q[wq:wq + 7].tolist()
+        vx, vy, vz, wx, wy, wz = v[wd:wd + 6].tolist()
+        # rotation matrix of the unit quaternion (qw, qx, qy, qz); the free joint's angular velocity is in
+        # the body frame: turned into the world frame
+        r00, r01, r02 = 1 - 2 * (qy * qy + qz * qz), 2 * (qx * qy - qw * qz), 2 * (qx * qz + qw * qy)
+        r10, r11, r12 = 2 * (qx * qy + qw * qz), 1 - 2 * (qx * qx + qz * qz), 2 * (qy * qz - qw * qx)
+        r20, r21, r22 = 2 * (qx * qz - qw * qy), 2 * (qy * qz + qw * qx), 1 - 2 * (qx * qx + qy * qy)
+        st = SPIN_TIME
+        tail = [x * inv_l, y * inv_l, (z - palm_z) * inv_l, r02, r12,
+                vx * inv_l, vy * inv_l, (vz - palm_v) * inv_l,
+                (r00 * wx + r01 * wy + r02 * wz) * st, (r10 * wx + r11 * wy + r12 * wz) * st,
+                (r20 * wx + r21 * wy + r22 * wz) * st, (z - z0) / self.target_height]
+        fu = self.force_unit
         normal, friction, _ = forces
-        cf = np.empty((self.K, 2))
-        cf[:, 0], cf[:, 1] = normal, friction
-        obs[sl["contact_force"]] = np.log1p(np.maximum(cf.ravel(), 0.0) / self.force_unit)
-        obs[-1] = min(hold / self.hold_time, 1.0) if self.hold_time > 0 else 0.0
+        for fn, ff in zip(normal, friction):
+            tail += [math.log1p(max(fn, 0.0) / fu), math.log1p(max(ff, 0.0) / fu)]
+        tail.append(min(hold / self.hold_time, 1.0) if self.hold_time > 0 else 0.0)
+        obs[self._tail_start:] = tail
         np.maximum(obs, self.low, out=obs)
         np.minimum(obs, self.high, out=obs)
         return obs
