@@ -72,3 +72,21 @@ def test_bad_cradles_are_refused():
         build_gripper("III", STANDARD, Uniform(-4.0), N, fingers=4, workpiece="box", initial_angles=q)
     with pytest.raises(ValueError, match="r_link"):
         build_gripper("III", STANDARD, Uniform(-4.0), N, fingers=4, workpiece="box", r_link=-1.0)
+
+
+def test_simulate_the_cradle_from_the_command_line(capsys):
+    """``simulate III --fingers 4 --workpiece box``: every finger is the planar ``simulate III`` (same start)."""
+    import json
+
+    from simgrip.cli import main
+
+    args = ["simulate", "III", "--kappa", "-4", "--links", "12", "--json"]
+    assert main(args) == 0
+    planar = json.loads(capsys.readouterr().out)
+    assert main(args + ["--fingers", "4", "--workpiece", "box"]) == 0
+    rec = json.loads(capsys.readouterr().out)
+    assert rec["held"] and rec["method"] == "symmetric" and len(rec["fingers"]) == 4
+    for f in rec["fingers"]:
+        for key in ("normal_force", "friction_force", "N1", "N2"):
+            assert f[key] == pytest.approx(planar[key], abs=1e-12)
+        np.testing.assert_allclose(f["tip"], planar["tip"], atol=1e-12)
