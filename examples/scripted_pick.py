@@ -5,7 +5,10 @@ friction) and solves the paper's Grip I (or III) problem for the gentlest
 curvature that holds it with a friction safety factor of 2, ramps the
 pneumatic command to it, lifts and holds.  ``--policy observation`` sees only
 what a learned policy sees: it grips with one curvature for the whole
-randomised range and curls further when it sees the box slip.
+randomised range and curls further when it sees the box slip.  With
+``--env simgrip/PickMulti-v0`` (K fingers around a box, cylinder or sphere) the
+oracle is :class:`simgrip.envs.scripted_multi.ScriptedMultiPolicy`: the same
+per-finger planar theory (an inclined contact on a sphere).
 
     python examples/scripted_pick.py [--episodes 20] [--seed 0] [--env simgrip/Pick-v1]
                                      [--policy oracle|observation] [--json] [--gif pick.gif]
