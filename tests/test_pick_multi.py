@@ -330,3 +330,13 @@ def test_contact_forces_and_tips_against_mujoco_and_the_chain():
             break
     assert touched
     env.close()
+
+
+def test_check_env_of_stable_baselines3():
+    sb3_checker = pytest.importorskip("stable_baselines3.common.env_checker")
+    env = gym.make(ENV_ID, **FAST)
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always")
+        sb3_checker.check_env(env.unwrapped)
+    env.close()
+    assert not [str(w.message) for w in caught]
