@@ -31,3 +31,19 @@ def test_counts_and_lists():
     assert res["disagree_above_margin"] == [] and res["unsettled"] == []
     assert [r["newton"] for r in res["records"]] == ["held", "dropped"]
     assert 0 < MARGIN < 1
+
+
+def test_like_is_compared_with_like_and_the_contact_models_are_reported():
+    # stress case 38 (Grip III, D = 0.01, kappa = -12): the point-contact settle holds 11 % inside
+    # the cone, the surface-contact one (the dynamics' own contact problem) only at the cone; the
+    # couple of the finite contact radius turns this soft rod by ~0.8 rad (C / D), so the two
+    # contact problems genuinely differ. The methods are compared on the surface problem.
+    rec = agreement_case({"id": 38, "grip": "III", "D": 0.01, "kappa": -12.0, "M": 5.0, "mu_s": 1.0, "b": 0.6,
+                          "n": 16, "profile": "uniform", "alpha": 0.0, "outcome": "settled"})
+    assert rec["newton_point"] == "held" and rec["margin_newton_point"] > 0.1
+    assert rec["newton"] == "held" and abs(rec["margin_newton"]) < MARGIN
+    assert rec["agree"] and rec["dynamics"] == "held"
+    assert rec["couple_rotation"] > 0.5
+    # the standard case: a stiff rod, a couple that turns it by < 1 %
+    std = agreement_case(_case(1, "I", -6.0, 1.0))
+    assert std["couple_rotation"] < 0.01 and not std["contact_model_differs"]

@@ -147,8 +147,9 @@ def geometric_stiffness_bound(scene: Scene, d, load: float = 0.0) -> np.ndarray:
     plane), so the Hessian of the loads is ``H_ab = g_max(a,b)`` with ``g_c`` the
     sum over the loads beyond hinge ``c``: for gravity ``m_c g . (com_c - o_c)``
     (``m_c``, ``com_c`` the subtree's mass and centre of mass); for the
-    workpiece's weight ``load`` [N] hanging on a finger through a contact at ``p``,
-    at most ``load |p - o_c|`` (its direction there is the contact's).  A row of
+    workpiece's weight ``load`` [N] hanging on a finger through its contacts at
+    ``p_i``, at most ``load max_i |p_i - o_c|`` (however the contacts share it: a
+    bound that does not jump when a second contact appears).  A row of
     ``|H|`` sums to ``R_a = a |g_a| + sum_{b > a} |g_b|`` (``a`` counted from 1
     at the base).
 
@@ -182,8 +183,10 @@ def geometric_stiffness_bound(scene: Scene, d, load: float = 0.0) -> np.ndarray:
         dofs = idx.joint_dof[f]
         o = d.xanchor[m.dof_jntid[dofs]]
         g = np.abs(m.body_subtreemass[bodies] * ((d.subtree_com[bodies] - o) @ gvec))
+        arm = np.zeros(len(bodies))  # the weight's largest lever over the finger's contacts beyond each hinge
         for k, p in on[f]:
-            g[:k + 1] += load * np.linalg.norm(p[None, :] - o[:k + 1], axis=1)
+            arm[:k + 1] = np.maximum(arm[:k + 1], np.linalg.norm(p[None, :] - o[:k + 1], axis=1))
+        g += load * arm
         after = np.concatenate([np.cumsum(g[::-1])[::-1][1:], [0.0]])
         R[dofs] = (np.arange(len(g)) + 1.0) * g + after
     return R
