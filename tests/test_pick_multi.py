@@ -208,6 +208,7 @@ def test_scripted_controller_picks_and_the_random_policy_does_not():
 
     assert _success_rate(scripted, 3, 8, seed0=7000) >= 0.8
     assert _success_rate(scripted, 4, 8, seed0=8000) >= 0.8
+    assert _success_rate(scripted, 2, 6, seed0=8500) >= 0.8
     assert _success_rate(random, 3, 15, seed0=9000) < 0.1
 
 
