@@ -241,6 +241,10 @@ def run_case(case: dict, *, timeout_s: float = CASE_TIMEOUT_S, max_steps: int | 
 def _case_task(task: tuple) -> dict:
     """Runner task: ``task = (case, timeout_s, max_steps)``."""
     case, timeout_s, max_steps = task
+    if case.get("kind") == "gripper":  # a K-finger case (simgrip.harness.stress_gripper)
+        from simgrip.harness.stress_gripper import run_gripper_case
+
+        return run_gripper_case(case, timeout_s=timeout_s)
     return run_case(case, timeout_s=timeout_s, max_steps=max_steps)
 
 
@@ -359,11 +363,11 @@ def run_stress(
     out = check_output_dir(out_dir, option="out_dir")
     t0 = time.perf_counter()
     heavy_first = sorted(todo, key=lambda c: -c["n"])  # large n first: the last batches finish together
-    done = {rec["id"]: rec for rec in run_tasks(_case_task, [(c, timeout_s, max_steps) for c in heavy_first],
-                                                options=options, desc="stress")}
+    tasks = [(c, timeout_s, max_steps) for c in g_todo + heavy_first]  # one run: the K-finger cases first
+    done, g_done = {}, {}
+    for rec in run_tasks(_case_task, tasks, options=options, desc="stress"):
+        (g_done if rec.get("kind") == "gripper" else done)[rec["id"]] = rec
     recs = [done[c["id"]] for c in todo]
-    g_done = {r["id"]: r for r in run_tasks(sg.gripper_task, [(c, timeout_s) for c in g_todo], options=options,
-                                            desc="stress (K fingers)")} if g_todo else {}
     g_recs = [g_done[c["id"]] for c in g_todo]
     gripper = {"counts": sg.gripper_counts(g_recs), "failures": [c for c in g_recs if c["outcome"] == "failed"],
                "cases": g_recs}

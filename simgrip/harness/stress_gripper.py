@@ -34,8 +34,7 @@ import warnings
 
 import numpy as np
 
-__all__ = ["GRIPPER_SHAPES", "default_gripper_cases", "gripper_counts", "gripper_task", "make_gripper_cases",
-           "run_gripper_case"]
+__all__ = ["GRIPPER_SHAPES", "default_gripper_cases", "gripper_counts", "make_gripper_cases", "run_gripper_case"]
 
 #: ``(workpiece, K)`` pairs drawn, in turn.
 GRIPPER_SHAPES = (("cylinder", 3), ("box", 4), ("cylinder", 4), ("box", 2), ("cylinder", 5))
@@ -156,12 +155,6 @@ def gripper_counts(recs) -> dict:
     counts["held"] = sum(1 for c in recs if c["outcome"] == "settled" and c["held"])
     counts["dropped"] = sum(1 for c in recs if c["outcome"] == "settled" and not c["held"])
     return counts
-
-
-def gripper_task(task: tuple) -> dict:
-    """Runner task: ``task = (case, timeout_s)``."""
-    case, timeout_s = task
-    return run_gripper_case(case, timeout_s=timeout_s)
 
 
 def default_gripper_cases(cases: int) -> int:
