@@ -16,10 +16,17 @@ dynamics has only MuJoCo's contact softness left to settle.
   finger's ``N1`` and tip height from its chain) are linear in
   ``(s, N3)``; the least-norm change from ``(M, 0)`` that solves them is
   taken (:func:`balance_shares`); Newton on the shares makes the chains
-  solved at those shares give them back.  With ``K >= 4`` fingers the
+  solved at those shares give them back (each chain carrying the tip couple
+  of its friction on the tip sphere's surface, ``r_tip n1 s``).  A share must
+  lie in ``[0, M_MAX]`` (the chain's load is a weight): where the balance
+  needs a finger to pull the workpiece down, or Newton does not converge in
+  :data:`BALANCE_ITERATIONS`, the best iterate is started from and the
+  dynamics settles the rest (slowly, or it drops the workpiece: reported,
+  never hidden).  With ``K >= 4`` fingers the
   equations do not fix ``(s, N3)`` (internal forces: a squeeze of the
   vertical shares, a twist of the ``N3``); the least-norm choice starts those
-  at zero.  Without it, a start whose shares do not balance the workpiece's
+  at zero, and the settled state keeps about that (statics cannot choose;
+  MuJoCo's contact solver, through its path, does).  Without it, a start whose shares do not balance the workpiece's
   moments loads those internal modes while the workpiece settles, and
   MuJoCo's sticking friction (a stiff viscous coupling, not a spring) lets
   them relax only by creep: the settle crawls for tens of thousands of steps
