@@ -467,7 +467,7 @@ class PickEnv(gym.Env):
     # the RNG, all plain attributes; what must be rebuilt is the views into the model and the data bound by
     # _bind_views (a pickled view would be a stale copy) and the renderer (a GL context, made again on the
     # next render()).
-    _VIEWS = ("_spring_view", "_check", "_qpos", "_qvel", "_ctrl", "_tips", "_hinges")
+    _VIEWS = ("_spring_view", "_check", "_qpos", "_qvel", "_ctrl", "_tips", "_hinges", "_hot")
 
     def __getstate__(self):
         state = self.__dict__.copy()
@@ -499,6 +499,12 @@ class PickEnv(gym.Env):
         # read on every step
         read = self._observe.hinges_read
         self._hinges = d.qpos[read] if isinstance(read, slice) else None
+        # what step() reads, in one tuple (one attribute lookup); the constants beside it never change
+        self._hot = (self.model, d, self._check, self._qpos, self._qvel, self._ctrl, self._tips[0], self._tips[1],
+                     self._hinges, self._contact_forces, self._observe)
+        self._consts = (self.kappa_range[0], self.kappa_range[1], self.per_finger, self._lag_alpha,
+                        self.palm_range[0], self.palm_range[1], self.palm_speed, self.dt, self.frame_skip,
+                        self.box_qpos, self.palm_qpos, self.target_height, self.hold_time, self.drop_distance)
 
     def _get_obs(self, forces, q: list, v: list):
         """The observation (``q``, ``v``: ``data.qpos.tolist()``, ``data.qvel.tolist()``)."""
@@ -550,67 +556,62 @@ class PickEnv(gym.Env):
         return self._get_obs(forces, d.qpos.tolist(), d.qvel.tolist()), info
 
     def step(self, action):
-        # Every line here runs once per control step beside frame_skip mj_step calls: values are read from
-        # views bound once (_bind_views), as lists (one tolist per array) and combined in Python.
+        # Every line here runs once per control step beside frame_skip mj_step calls: constants and views are
+        # bound once (_bind_views), arrays read as lists (one tolist each) and combined in Python.
         if self._needs_reset:
             raise ResetNeeded("step() called before reset() or after the episode terminated; call reset()")
+        lo, hi, per_finger, alpha, palm_lo, palm_hi, palm_step, dt, fs, bq, pq, target, hold_time, drop = self._consts
+        model, data, check, qpos, qvel, ctrl, tip0, tip1, hinges, contact_forces, observe = self._hot
         a = check_action(action, self._action_shape)
-        lo, hi = self.kappa_range
         k0 = lo + 0.5 * (a[0] + 1.0) * (hi - lo)
-        k1 = lo + 0.5 * (a[1] + 1.0) * (hi - lo) if self.per_finger else k0
+        k1 = lo + 0.5 * (a[1] + 1.0) * (hi - lo) if per_finger else k0
         self._kcmd = (k0, k1)
         # pneumatic lag: exact first-order response over one control step, rest angles held within it
         c0, c1 = self._kact
-        alpha = self._lag_alpha
         c0, c1 = c0 + alpha * (k0 - c0), c1 + alpha * (k1 - c1)
         self._kact = (c0, c1)
         self._set_rest(c0, c1)
-        pr = self.palm_range
-        self._palm_target = min(max(self._palm_target + a[-1] * self.palm_speed * self.dt, pr[0]), pr[1])
-        self._ctrl[0] = self._palm_target
-        check = self._check
+        self._palm_target = palm = min(max(self._palm_target + a[-1] * palm_step * dt, palm_lo), palm_hi)
+        ctrl[0] = palm
         check.clear()
-        mujoco.mj_step(self.model, self.data, nstep=self.frame_skip)
-        q, v = self._qpos.tolist(), self._qvel.tolist()
+        mujoco.mj_step(model, data, fs)  # nstep = frame_skip (positional: pybind's keyword parsing costs more)
+        q, v = qpos.tolist(), qvel.tolist()
         why = check(q, v)
         if why is not None:
             self._needs_reset = True
             raise PhysicsError(f"step diverged ({why})")
 
-        forces = self._contact_forces(self.model, self.data)
-        bq = self.box_qpos
+        forces = contact_forces(model, data)
         bx, by, box_z, qx, qy = q[bq], q[bq + 1], q[bq + 2], q[bq + 4], q[bq + 5]
         gain = box_z - self._z0
-        rel = box_z - q[self.palm_qpos]
+        rel = box_z - q[pq]
         n0, f0, n1, f1, s0, s1 = forces
         both = n0 > 0.0 and n1 > 0.0
-        if self._lifted_rel is None and gain > 0.005 and both:
-            self._lifted_rel = rel
-        dropped = self._lifted_rel is not None and rel < self._lifted_rel - self.drop_distance
+        lifted_rel = self._lifted_rel
+        if lifted_rel is None and gain > 0.005 and both:
+            self._lifted_rel = lifted_rel = rel
+        dropped = lifted_rel is not None and rel < lifted_rel - drop
         up_z = 1.0 - 2.0 * (qx * qx + qy * qy)  # z component of the box's z axis
-        xy0 = self._xy0
-        shifted = math.hypot(bx - xy0[0], by - xy0[1]) > 0.03
+        x0, y0 = self._xy0
+        shifted = math.hypot(bx - x0, by - y0) > 0.03
         knocked = up_z < _COS_TILT or shifted
-        if gain >= self.target_height and both:
-            self._hold += self.dt
-        else:
-            self._hold = 0.0
-        success = self._hold >= self.hold_time - 1e-9
+        self._hold = hold = self._hold + dt if gain >= target and both else 0.0
+        success = hold >= hold_time - 1e-9
         lost = (dropped or knocked) and not success
-        phi = progress(gain, self.target_height, lost)
+        phi = progress(gain, target, lost)
         reward, r_lift, r_success, r_squeeze, r_drop = self._reward(phi, self._phi, success, lost, s0, s1)
         self._phi = phi
         terminated = success or lost
         self._needs_reset = terminated
-        hinges = self._hinges if self._hinges is not None else self.data.qpos[self._observe.hinges_read]
-        obs = self._observe.observe(q, v, hinges, self._tips[0], self._tips[1], k0, k1, c0, c1, forces, self._z0,
-                                    self._hold)
+        if hinges is None:  # pragma: no cover - the builder makes the hinges contiguous (a view)
+            hinges = data.qpos[observe.hinges_read]
+        obs = observe.observe(q, v, hinges, tip0, tip1, k0, k1, c0, c1, forces, self._z0, hold)
         info = {
             "reward_lift": r_lift, "reward_success": r_success, "reward_squeeze": r_squeeze, "reward_drop": r_drop,
             "is_success": success, "dropped": dropped and not success,
             "knocked_over": knocked and not success, "box_lift": gain,
             "normal_force": np.array((n0, n1)), "friction_force": np.array((f0, f1)),
-            "side_force": np.array((s0, s1)), "hold_time": self._hold,
+            "side_force": np.array((s0, s1)), "hold_time": hold,
         }
         return obs, reward, terminated, False, info
 

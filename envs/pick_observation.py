@@ -136,6 +136,8 @@ class PickObservation:
         # without per_finger, one np.dot of finger 0's hinges makes the whole (fresh) observation array: the
         # shape entries in their place, zeros elsewhere (filled next)
         self._shape_out = None
+        self._consts = (self._inv_l, palm_qpos, palm_dof, box_qpos, box_dof, force_unit, kappa_range[0],
+                        kappa_range[1] - kappa_range[0], target_height, hold_time, self._shape_end_out)
         if not per_finger:
             self._shape_out = np.zeros((n, self._out_size))
             self._shape_out[:, 3:self._shape_end_out] = self._shape_matrix_t
@@ -165,15 +167,11 @@ class PickObservation:
         """
         # scalars are combined in Python; the finger shapes are one np.dot (without per_finger, the np.dot
         # makes the fresh array in the final layout); the rest is written in and the result clipped in place
-        inv_l = self._inv_l
-        palm_z, palm_v = q[self.palm_qpos], v[self.palm_dof]
-        bq, bd = self.box_qpos, self.box_dof
+        inv_l, pq, pd, bq, bd, fu, lo, span, th, ht, end = self._consts  # curvatures in action units: lo, span
+        palm_z, palm_v = q[pq], v[pd]
         x0, _, z0_tip = tip0.tolist()
-        fu = self.force_unit
-        lo, hi = self.kappa_range  # curvatures in action units (the action that commands them)
         bz = q[bq + 2]
-        hold_obs = min(hold / self.hold_time, 1.0) if self.hold_time > 0 else 0.0
-        end = self._shape_end_out
+        hold_obs = min(hold / ht, 1.0) if ht > 0 else 0.0
         if self._pick is None:  # per_finger: both fingers, the box's x, tilt and spin
             bx, qw, qx, qy, qz = q[bq], q[bq + 3], q[bq + 4], q[bq + 5], q[bq + 6]
             vx, vz, wy = v[bd], v[bd + 2], v[bd + 4]
@@ -181,20 +179,20 @@ class PickObservation:
             tilt = math.atan2(2.0 * (qx * qz + qw * qy), 1.0 - 2.0 * (qx * qx + qy * qy))
             obs = np.empty(self._out_size)
             np.dot(hinges.reshape(2, self.n), self._shape_matrix_t, out=obs[5:end].reshape(2, (end - 5) // 2))
-            obs[:5] = (palm_z * inv_l, 2.0 * (c0 - lo) / (hi - lo) - 1.0, 2.0 * (c1 - lo) / (hi - lo) - 1.0,
-                       2.0 * (k0 - lo) / (hi - lo) - 1.0, 2.0 * (k1 - lo) / (hi - lo) - 1.0)
+            obs[:5] = (palm_z * inv_l, 2.0 * (c0 - lo) / span - 1.0, 2.0 * (c1 - lo) / span - 1.0,
+                       2.0 * (k0 - lo) / span - 1.0, 2.0 * (k1 - lo) / span - 1.0)
             obs[end:] = (
                 x0 * inv_l, (z0_tip - palm_z) * inv_l, x1 * inv_l, (z1_tip - palm_z) * inv_l,
                 bx * inv_l, (bz - palm_z) * inv_l, tilt, vx * inv_l, (vz - palm_v) * inv_l, wy * SPIN_TIME,
-                (bz - z0) / self.target_height,
+                (bz - z0) / th,
                 math.log1p(forces[0] / fu), math.log1p(forces[1] / fu), math.log1p(forces[2] / fu),
                 math.log1p(forces[3] / fu), hold_obs)
         else:  # finger 0 and the box's z
             obs = np.dot(hinges, self._shape_out)
-            obs[:3] = (palm_z * inv_l, 2.0 * (c0 - lo) / (hi - lo) - 1.0, 2.0 * (k0 - lo) / (hi - lo) - 1.0)
+            obs[:3] = (palm_z * inv_l, 2.0 * (c0 - lo) / span - 1.0, 2.0 * (k0 - lo) / span - 1.0)
             obs[end:] = (
                 x0 * inv_l, (z0_tip - palm_z) * inv_l, (bz - palm_z) * inv_l, (v[bd + 2] - palm_v) * inv_l,
-                (bz - z0) / self.target_height, math.log1p(forces[0] / fu), math.log1p(forces[1] / fu), hold_obs)
+                (bz - z0) / th, math.log1p(forces[0] / fu), math.log1p(forces[1] / fu), hold_obs)
         np.maximum(obs, self.low, out=obs)
         np.minimum(obs, self.high, out=obs)
         return obs
