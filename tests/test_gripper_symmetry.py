@@ -382,3 +382,18 @@ def test_cradle_methods_rotation_and_start():
     sc.model.geom_size[sc.workpiece_geom][0] *= 1.01
     with pytest.raises(ValueError, match="scene"):
         settle_symmetric(sc)
+
+
+def test_arguments_are_checked_and_budgets_honoured():
+    from simgrip.settle import SettleError
+
+    sc = _gripper("I", 3, "cylinder", n=8)
+    for kw, name in [(dict(tol=0), "tol"), (dict(tol="x"), "tol"), (dict(max_steps=0), "max_steps"),
+                     (dict(contact="x"), "contact"), (dict(planar="x"), "planar")]:
+        with pytest.raises(ValueError, match=name):
+            settle_symmetric(sc, **kw)
+    with pytest.raises(ValueError, match="scene"):
+        settle_symmetric(build_scene("I", STANDARD, Uniform(-6.0), 8))
+    with pytest.raises(SettleError, match="max_steps=1"):
+        settle_symmetric(sc, max_steps=1)
+    assert not settle_symmetric(sc, max_steps=1, allow_unconverged=True).converged
