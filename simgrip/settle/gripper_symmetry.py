@@ -135,6 +135,7 @@ def symmetric_or_none(scene: GripperScene, method: str | None, **kw):
     for Grips I/II and ``"symmetric"`` for Grip III, which has no K-finger
     dynamics (``"dynamics"`` raises there).  ``kw`` go to :func:`settle_symmetric`.
     """
+    t0 = time.perf_counter()
     if method is None:
         method = "symmetric" if isinstance(scene, GripperScene) and scene.grip == "III" else "dynamics"
     if method not in GRIPPER_METHODS:
@@ -149,7 +150,7 @@ def symmetric_or_none(scene: GripperScene, method: str | None, **kw):
         if method == "auto" and scene.grip != "III":
             return None
         raise ValueError(f"method 'symmetric' needs an exactly symmetric scene: {sym.reason}")
-    return settle_symmetric(scene, **kw)
+    return _settle_exact(scene, t0, **kw)
 
 
 def settle_symmetric(scene: GripperScene, *, tol: float | None = None, max_steps: int | None = None,
@@ -182,17 +183,24 @@ def settle_symmetric(scene: GripperScene, *, tol: float | None = None, max_steps
     GripperState
         ``steps`` counts the planar Newton iterations; ``velocity`` and ``timestep`` are 0.
     """
-    from simgrip.settle import settle
-
+    t0 = time.perf_counter()
     sym = symmetry(scene)
     if not sym.exact:
         raise ValueError(f"scene is not exactly symmetric ({sym.reason}): settle it with method='dynamics'")
+    return _settle_exact(scene, t0, tol=tol, max_steps=max_steps, contact=contact, allow_unconverged=allow_unconverged,
+                         planar=planar)
+
+
+def _settle_exact(scene: GripperScene, t0: float, *, tol=None, max_steps=None, contact: str = "point",
+                  allow_unconverged: bool = False, planar=None):
+    """:func:`settle_symmetric` of a scene already found exactly symmetric (``t0``: when the settle began)."""
+    from simgrip.settle import settle
+
     if contact not in ("point", "surface"):
         raise ValueError(f"contact must be 'point' or 'surface', got {contact!r}")
     if contact == "surface" and scene.workpiece == "sphere":
         raise ValueError("contact: 'surface' puts the vertical face's couple on the tip; the sphere's skip is "
                          "the point contact only")
-    t0 = time.perf_counter()
     kw = {k: v for k, v in (("tol", tol), ("max_steps", max_steps)) if v is not None}
     pst = settle(_check_planar(scene, planar), contact=contact, allow_unconverged=allow_unconverged, **kw)
     tolerance = scene.fingers * float(pst.tolerance)
