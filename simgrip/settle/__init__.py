@@ -46,8 +46,8 @@ from simgrip.settle.naive import naive_relax, naive_settle
 from simgrip.settle.newton import SOLVE_ITERS, read_newton
 from simgrip.settle.state import FingerContact, SettledState, SettleError, finger_tip
 from simgrip.settle.target import check_target_error, settle_to_error
-from simgrip.settle.statics import (RestResidual, configure_statics, dof_scales, restore_options, save_options,
-                                    static_residual, sync_scene)
+from simgrip.settle.statics import (RestResidual, angle_floor, configure_statics, dof_scales, restore_options,
+                                    save_options, static_residual, sync_scene)
 from simgrip.sim.checks import clear_warnings
 from simgrip.sim.scene import Scene, set_curvature
 from simgrip.threads import blas_threads
@@ -267,8 +267,10 @@ def _settle(
         state = read_newton(scene, run, t0, held, converged)
         # the reported (MuJoCo) residual is checked, not only Newton's own KKT rows; a grip's
         # tolerance is raised to its contact round-off floor
-        state = _finish(scene, state, max(tol, min(run.noise_floor(), RESIDUAL_FLOOR_MAX)) if held else tol,
-                        allow_unconverged, "settle", f"{run.iterations} Newton iterations")
+        tolerance = max(tol, angle_floor(scene))  # the joint angles' round-off (stiff fine chains)
+        if held:
+            tolerance = max(tolerance, min(run.noise_floor(), RESIDUAL_FLOOR_MAX))
+        state = _finish(scene, state, tolerance, allow_unconverged, "settle", f"{run.iterations} Newton iterations")
     finally:
         restore_options(m, saved)
         d.qfrc_applied[:] = 0.0

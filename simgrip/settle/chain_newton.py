@@ -32,7 +32,7 @@ from simgrip.settle.banded import solve_bordered
 from simgrip.settle.chain_model import ChainModel, eligible
 from simgrip.settle.newton import FLOOR_ULPS, PEN_MAX, Newton
 from simgrip.settle.state import SettleError
-from simgrip.settle.statics import sync_scene
+from simgrip.settle.statics import angle_floor, sync_scene
 from simgrip.sim.contacts import pair_contacts
 from simgrip.sim.scene import Scene
 
@@ -232,7 +232,7 @@ class ChainNewton(Newton):
             res = float(np.max(np.abs(R * scale))) if R.size else 0.0
             res_f = float(np.max(np.abs(R[:nf])))
             res_c = float(np.max(np.abs(R[nf:] * self._row_scale(len(N), len(stick_act))))) if R.size > nf else 0.0
-            if res_f < tol and res_c < max(tol, self.noise_floor()):
+            if res_f < max(tol, angle_floor(sc, state_q(phi, w))) and res_c < max(tol, self.noise_floor()):
                 # the analytic contact rows resolve ~1 ulp of K_c l, far below MuJoCo's distance
                 # round-off (the floor): one more step when they are above a few ulps and improving
                 if polished or res_c < max(tol, CHAIN_FLOOR_ULPS / FLOOR_ULPS * self.noise_floor()):

@@ -66,8 +66,10 @@ DYN_STEP = 1.0
 DYN_DAMPING = 1.0
 #: Workpiece damping: ``D_w = DYN_WORKPIECE_DAMPING m_w / h`` (over-damped, no stiffness to scale by).
 DYN_WORKPIECE_DAMPING = 3.0
-#: Grip III: largest free fall of the workpiece per step, over the contact radii ``r_link + r_corner``.
-DYN_FALL_STEP = 0.3
+#: Grip III: largest step of the workpiece (and of the finger, per unit length) per physics step, over
+#: the contact radii ``r_link + r_corner``: a corner that moves less than that between two steps is seen in
+#: contact before its centre crosses the rod's axis (the depth at which the run counts it tunnelled).
+DYN_FALL_STEP = 1.0
 #: Contact time constant over the time step (refsafe off: mjINT_DISCRETE solves contacts implicitly).
 DYN_TIMECONST = 1e-2
 #: Friction-to-normal impedance ratio: MuJoCo's sticking friction creeps at a speed ~ 1/impratio.

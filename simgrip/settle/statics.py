@@ -26,13 +26,15 @@ from simgrip.sim.checks import active_warnings
 from simgrip.sim.scene import Scene
 from simgrip.settle.state import SettleError
 
-__all__ = ["CONTACT_IMPEDANCE", "CONTACT_STIFFNESS", "RestResidual", "Statics", "Stick", "dof_scales",
-           "static_residual", "sync_scene", "centreline_point"]
+__all__ = ["ANGLE_FLOOR_ULPS", "CONTACT_IMPEDANCE", "CONTACT_STIFFNESS", "RestResidual", "Statics", "Stick",
+           "angle_floor", "dof_scales", "static_residual", "sync_scene", "centreline_point"]
 
 #: Contact impedance during settle (MuJoCo's maximum is 0.9999).
 CONTACT_IMPEDANCE = 0.9999
 #: Target contact stiffness over rho g (force per length, dimensionless).
 CONTACT_STIFFNESS = 1e6
+#: Round-off of a joint angle in ulps of the largest link angle (:func:`angle_floor`).
+ANGLE_FLOOR_ULPS = 2.5
 
 
 # ---------------------------------------------------------------------------
@@ -49,6 +51,32 @@ def dof_scales(scene: Scene) -> tuple[np.ndarray, np.ndarray]:
             force[m.jnt_dofadr[j]] = scene.force_scale
             length[m.jnt_dofadr[j]] = scene.length
     return force, length
+
+
+def angle_floor(scene: Scene, qpos=None) -> float:
+    """Round-off floor of the hinge rows of the static residual at ``qpos`` (over ``rho g l^2``).
+
+    The chain is solved in link angles ``phi`` (running sums of the joint angles,
+    up to ``Phi = max |phi|``) and MuJoCo is handed the joint angles ``q_a =
+    phi_a - phi_(a-1)``: each ``phi`` is rounded to half an ulp, their difference
+    to another half, so a joint angle carries up to ``1.5 eps Phi_a`` (``Phi_a =
+    max(|phi_a|, |phi_(a-1)|)``), and the last Newton update its own rounding
+    (``eps Phi_a``): the spring moment ``k_a (q_a - q0_a)`` of the nearest
+    representable state can be off by ``2.5 eps k_a Phi_a``
+    (:data:`ANGLE_FLOOR_ULPS`); the floor is the largest over the hinges.  A
+    stiff fine chain (``k = D n`` over ``rho g l^2``) reaches the default
+    tolerance ``1e-10`` near ``D n Phi ~ 2e5``; no residual test below this floor
+    can pass.
+    """
+    m = scene.model
+    q = np.asarray(scene.data.qpos if qpos is None else qpos)
+    jq = np.asarray(scene.joint_qpos, dtype=int)
+    if jq.size == 0:
+        return 0.0
+    phi = np.abs(np.cumsum(q[jq].reshape(-1, jq.shape[-1]), axis=-1))
+    big = np.maximum(phi, np.concatenate([np.zeros((phi.shape[0], 1)), phi[:, :-1]], axis=1))  # max |phi| at each hinge
+    k = m.jnt_stiffness[m.dof_jntid[np.asarray(scene.joint_dof, dtype=int).reshape(big.shape)]]
+    return float(ANGLE_FLOOR_ULPS * np.finfo(float).eps * np.max(k * big) / scene.moment_scale)
 
 
 @dataclass
