@@ -62,7 +62,7 @@ from simgrip.settle import check_tol_steps
 from simgrip.settle.dynamics import (DYN_DAMPING, DYN_DROP_FALL, DYN_DROP_SLIP, DYN_IMPRATIO,
                                      DYN_PEN_LIMIT, DYN_STEP, DYN_TIMECONST, DYN_TOL, DYN_TOL_PER_WEIGHT, DYN_VTOL,
                                      DYN_WORKPIECE_DAMPING, lowest_frequency, run_to_rest)
-from simgrip.settle.gripper_start import finger_chain, start_qpos
+from simgrip.settle.gripper_start import finger_chain, is_symmetric, start_qpos
 from simgrip.settle.state import SettleError
 from simgrip.settle.statics import CONTACT_IMPEDANCE, check_warnings, restore_options, save_options
 from simgrip.sim.checks import clear_warnings
@@ -318,6 +318,11 @@ def settle_gripper(scene: GripperScene, *, tol: float | None = None, max_steps: 
             d.qfrc_applied[:] = 0.0
             mujoco.mj_forward(m, d)
             dyn = _Dyn(scene, factor)
+            if reach and not is_symmetric(scene) and scene.workpiece != "sphere":
+                seated = start_qpos(scene, timestep=dyn.h)  # every tip at MuJoCo's rest depth (gripper_start)
+                if seated is not None:
+                    d.qpos[:] = seated
+                    mujoco.mj_forward(m, d)
             held, converged, why = _settle_once(scene, dyn, tol, int(max_steps) - steps, reach)
             steps += dyn.steps
             state = _read(scene, dyn, held, converged, steps, t0, tol)

@@ -36,6 +36,13 @@ dynamics has only MuJoCo's contact softness left to settle.
   until the two ``N1`` agree (one more Newton unknown), where the tips' friction
   would otherwise have to carry the difference (it cannot: the tips can
   follow the workpiece in the plane).
+* **Depth**: in the first step MuJoCo's soft contact sinks from the start's
+  :data:`START_INSIDE` to the depth it rests at under the normal force
+  (~2e-5 to 5e-5 l at the dynamics' step); where the contact normal is not in
+  the finger's plane (a turned or off-centre workpiece) that sinking moves the
+  tip along the surface too, the stiff sticking friction saturates for a step
+  and can throw the workpiece off.  An unsymmetric start is therefore solved
+  with every tip at that rest depth (:func:`rest_depth`), given the step.
 * A sphere is held centred with equal profiles only (the builder refuses
   the rest): its start is the symmetric one at the contact angle.
 
@@ -50,10 +57,11 @@ import math
 import numpy as np
 
 from simgrip.params import M_MAX
+from simgrip.settle.dynamics import DYN_TIMECONST
 from simgrip.settle.state import SettleError
 from simgrip.sim.gripper import GripperScene
 
-__all__ = ["balance_shares", "finger_chain", "is_symmetric", "start_qpos"]
+__all__ = ["balance_shares", "finger_chain", "is_symmetric", "rest_depth", "start_qpos"]
 
 #: Newton iterations balancing the start's shares (each ``K + 1`` solves of every chain).
 BALANCE_ITERATIONS = 8
@@ -142,7 +150,7 @@ def _arms(scene: GripperScene) -> np.ndarray:
     return -scene.r_tip * (n[:, :1] * e1 + n[:, 1:] * e3)
 
 
-def _chains(scene: GripperScene, X, shares, guesses, couple: bool = True):
+def _chains(scene: GripperScene, X, shares, guesses, couple: bool = True, inside=None):
     """Every finger's loaded chain at its ``X`` and share; raises SettleError if one has no stable equilibrium.
 
     ``couple``: the share's vertical force acts on the tip sphere's surface, ``r_tip n1`` inside the
@@ -152,7 +160,8 @@ def _chains(scene: GripperScene, X, shares, guesses, couple: bool = True):
     out = []
     n1 = _normals(scene)[:, 0] if couple else np.zeros(scene.fingers)
     for k in range(scene.fingers):
-        ch = finger_chain(scene, scene.grip, X=float(X[k]) - START_INSIDE, finger=k, M=float(shares[k]),
+        depth = START_INSIDE if inside is None else float(inside[k])
+        ch = finger_chain(scene, scene.grip, X=float(X[k]) - depth, finger=k, M=float(shares[k]),
                           guess=guesses[k], contact_moment=scene.r_tip * float(n1[k]) * float(shares[k]))
         if ch is None or not (ch.success and ch.min_eigenvalue > 0.0):
             raise SettleError(f"no start for grip {scene.grip}: finger {k}'s hinge chain has no stable equilibrium "
@@ -162,7 +171,7 @@ def _chains(scene: GripperScene, X, shares, guesses, couple: bool = True):
     return out
 
 
-def _balanced(scene: GripperScene, X0, centre0):
+def _balanced(scene: GripperScene, X0, centre0, inside=None):
     """``(chains, X, centre)`` of the balanced start (see the module docstring): Newton on the shares.
 
     Unknowns: the shares (and, for ``K = 2``, the shift along finger 0's ``E1``); equations: the
@@ -179,7 +188,7 @@ def _balanced(scene: GripperScene, X0, centre0):
         shift = float(z[K]) if K == 2 else 0.0
         X = X0 + shift * sign if K == 2 else X0
         centre = centre0 + shift * e1
-        chains = _chains(scene, X, z[:K], guesses)
+        chains = _chains(scene, X, z[:K], guesses, inside=inside)
         s, _n3, _r = balance_shares(scene.azimuths, X, [c.tip[1] for c in chains], [c.N1 for c in chains],
                                     centre, M, arms=arms)
         R = s - z[:K]
@@ -222,8 +231,24 @@ def _balanced(scene: GripperScene, X0, centre0):
     return best[1:]
 
 
-def start_qpos(scene: GripperScene) -> np.ndarray | None:
-    """qpos of the start (see the module docstring), or None when the workpiece cannot be held."""
+def rest_depth(N1, timestep: float, scene: GripperScene) -> np.ndarray:
+    """How deep (over l) MuJoCo's soft contact rests under normal forces ``N1`` (over rho g l), per finger.
+
+    The contact behaves like a spring of time constant ``tc = DYN_TIMECONST h`` on a mass of order the
+    finger's, ``rho l``: it sinks ``N tc^2 / (rho l)``, i.e. ``N (tc^2 g / l)`` over ``l``
+    (measured: 0.8 to 1.1 times that over n = 16, 32, K = 3, 4, grips I and II).  At least
+    :data:`START_INSIDE`.
+    """
+    tc = DYN_TIMECONST * float(timestep)
+    return np.maximum(START_INSIDE, np.asarray(N1, dtype=float) * tc * tc * scene.physical.g / scene.length)
+
+
+def start_qpos(scene: GripperScene, timestep: float | None = None) -> np.ndarray | None:
+    """qpos of the start (see the module docstring), or None when the workpiece cannot be held.
+
+    ``timestep`` [s]: the dynamics' step; given, an unsymmetric start puts every tip at the depth
+    MuJoCo's contact rests at (:func:`rest_depth`) instead of :data:`START_INSIDE`.
+    """
     p = scene.params
     K, L = scene.fingers, scene.length
     beta = scene.contact_angle  # sphere: the tip at X = (b/2) cos(beta) on the sphere; 0 for vertical faces
@@ -237,7 +262,10 @@ def start_qpos(scene: GripperScene) -> np.ndarray | None:
     if is_symmetric(scene) or scene.workpiece == "sphere":
         chains = _chains(scene, X, np.full(K, float(p.M)), [None] * K, couple=False)
     else:
-        chains, X, centre = _balanced(scene, X, centre)
+        X0, centre0 = X, centre
+        chains, X, centre = _balanced(scene, X0, centre0)
+        if timestep is not None:
+            chains, X, centre = _balanced(scene, X0, centre0, inside=rest_depth([c.N1 for c in chains], timestep, scene))
     if not all(ch.N1 > 0.0 for ch in chains):
         return None  # a loaded finger would have to pull on the workpiece: it cannot hold it
     q = np.array(scene.data.qpos)
