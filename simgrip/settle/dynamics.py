@@ -16,8 +16,8 @@ Everything is chosen from the model:
   is stable in the over-damped step only while ``|H| <~ K``, which a soft finger
   (``D`` small: gravity and the workpiece's weight far above the springs) breaks
   by orders of magnitude; ``R``, the Gershgorin row sums of ``H``, keeps every
-  step a contraction (updated at each stop test from MuJoCo's contact forces,
-  at least the workpiece's weight at each contact while it hangs on the finger).
+  step a contraction (updated from the configuration before every ``mj_step``
+  call: gravity, and the workpiece's weight while it hangs on the finger).
   The workpiece has no stiffness: damping ``3 m / h``
   (Grip III raises it, and the finger's with it, so a falling workpiece moves
   at most :data:`DYN_FALL_STEP` contact radii per step).  This fall guard is a
@@ -255,8 +255,8 @@ class Dyn:
             m.pair_solimp[:, 1] = CONTACT_IMPEDANCE
 
     def update_damping(self) -> None:
-        """Hinge damping ``h max(K, R)`` (:func:`geometric_stiffness_bound` at the current state), times the
-        fall guard's factor while it is on; the workpiece's ``3 m / h`` (its translations times the guard)."""
+        """Hinge damping ``h max(K, R)`` (:func:`geometric_stiffness_bound` at the current state) times the
+        fall guard's factor; the workpiece's ``3 m / h`` (its translations times the guard's factor)."""
         m, sc = self.m, self.scene
         hanging = (sc.has_workpiece and sc.free_workpiece and self.held_q is None
                    and not int(m.opt.disableflags) & int(mujoco.mjtDisableBit.mjDSBL_CONTACT))
@@ -303,8 +303,8 @@ class Dyn:
         :data:`DYN_FALL_STEP` contact radii.  Over-damped, the velocity goes as ``1 / s``: under the factor
         ``s`` the plain flow's step is ``s v h`` (``v`` over ``l / sqrt(l/g)``), an upper bound
         (inertia and the implicit springs add to the damping's metric), so ``s`` never lets the
-        workpiece move more than a fraction of a contact radius in one step, and a slow velocity
-        under heavy damping (a force far from balance) does not lift it."""
+        workpiece move more than :data:`DYN_FALL_STEP` contact radii in one step, and a slow
+        velocity under heavy damping (a force far from balance) does not lift it."""
         sc = self.scene
         step = v * self.factor * self.h / math.sqrt(sc.length / sc.physical.g)
         allowed = DYN_FALL_STEP * (sc.r_link + sc.r_corner)
@@ -441,7 +441,8 @@ def settle_dynamics(scene: Scene, tol: float, max_steps: int, warm_start, close:
 
 
 def _settle_dynamics_once(scene: Scene, tol: float, max_steps: int, warm_start, close: bool,
-                          allow_unconverged: bool, t0: float, step_factor: float) -> tuple[SettledState, bool, bool]:
+                          allow_unconverged: bool, t0: float,
+                          step_factor: float) -> tuple[SettledState, bool, bool]:
     """One dynamic settle at ``step_factor`` h: ``(state, dropped, tunnelled)``."""
     m, d = scene.model, scene.data
     dyn = Dyn(scene, step_factor)
@@ -534,7 +535,8 @@ def _settle_dynamics_once(scene: Scene, tol: float, max_steps: int, warm_start, 
                 return None
 
             # tunnelled: the tip sphere wholly inside the face (I/II), the corner across the rod's axis (III)
-            tunnel = (2.0 * scene.r_tip if scene.grip in ("I", "II") else scene.r_link + scene.r_corner) * scene.length
+            tunnel = scene.length * (2.0 * scene.r_tip if scene.grip in ("I", "II")
+                                     else scene.r_link + scene.r_corner)
             converged, why = dyn.run(tol, vtol, max_steps, watch)
             if why in ("lost contact", "slipped"):
                 held, converged, dropped = False, True, True
