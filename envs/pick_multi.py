@@ -302,6 +302,12 @@ class PickMultiEnv(gym.Env):
         self._models = {s: build_pick_multi_model(s, **kw) for s in self.shapes}
         self._datas = {s: mujoco.MjData(pm.model) for s, pm in self._models.items()}
         pm = self._models[self.shapes[0]]
+        for other in self._models.values():  # what step and the observation read is at the same addresses
+            same = (other.palm_qpos, other.palm_dof, other.work_qpos, other.work_dof, other.work_geom) == \
+                (pm.palm_qpos, pm.palm_dof, pm.work_qpos, pm.work_dof, pm.work_geom)
+            if not (same and np.array_equal(other.fingers.joint_qpos, pm.fingers.joint_qpos)
+                    and np.array_equal(other.fingers.finger_of_geom, pm.fingers.finger_of_geom)):
+                raise RuntimeError(f"the {other.shape!r} model's addresses differ from the {pm.shape!r} model's")
         self.fingers = pm.fingers
         self.azimuths = pm.azimuths
         self.palm_qpos, self.palm_dof = pm.palm_qpos, pm.palm_dof
