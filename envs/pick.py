@@ -198,7 +198,8 @@ class PickEnv(gym.Env):
 
     ## Arguments
 
-    Every argument is checked: a bad value raises ``ValueError`` naming it.
+    Every argument is checked: a bad value raises ``ValueError`` naming it.  They are read once, at
+    construction (the reward weights at each ``reset``): to change one, make a new environment.
 
     | argument | default | meaning |
     |----------|---------|---------|
@@ -467,7 +468,7 @@ class PickEnv(gym.Env):
     # the RNG, all plain attributes; what must be rebuilt is the views into the model and the data bound by
     # _bind_views (a pickled view would be a stale copy) and the renderer (a GL context, made again on the
     # next render()).
-    _VIEWS = ("_spring_view", "_check", "_qpos", "_qvel", "_ctrl", "_tips", "_hinges", "_hot")
+    _VIEWS = ("_spring_view", "_check", "_qpos", "_qvel", "_ctrl", "_tips", "_hot")
 
     def __getstate__(self):
         state = self.__dict__.copy()
@@ -485,7 +486,7 @@ class PickEnv(gym.Env):
     def _bind_views(self):
         """Bind what every step reads and writes, once: ``_spring_view`` (the fingers' rest angles inside
         ``model.qpos_spring``, when contiguous), ``_check`` (the state check), views of ``data.qpos``,
-        ``data.qvel``, ``data.ctrl``, the tips' ``geom_xpos`` rows and the hinge angles."""
+        ``data.qvel``, ``data.ctrl`` and the tips' ``geom_xpos`` rows."""
         d = self.data
         self._check = StateCheck(d)
         flat = self._spring_idx
@@ -495,23 +496,17 @@ class PickEnv(gym.Env):
             self._spring_view = None
         self._qpos, self._qvel, self._ctrl = d.qpos, d.qvel, d.ctrl
         self._tips = (d.geom_xpos[int(self.fingers.tip_geom[0])], d.geom_xpos[int(self.fingers.tip_geom[1])])
-        # the hinges the observation reads: a slice reads a view (bound once); an index array copies, so it is
-        # read on every step
-        read = self._observe.hinges_read
-        self._hinges = d.qpos[read] if isinstance(read, slice) else None
         # what step() reads, in one tuple (one attribute lookup); the constants beside it never change
         self._hot = (self.model, d, self._check, self._qpos, self._qvel, self._ctrl, self._tips[0], self._tips[1],
-                     self._hinges, self._contact_forces, self._observe)
+                     self._contact_forces, self._observe)
         self._consts = (self.kappa_range[0], self.kappa_range[1], self.per_finger, self._lag_alpha,
                         self.palm_range[0], self.palm_range[1], self.palm_speed, self.dt, self.frame_skip,
                         self.box_qpos, self.palm_qpos, self.target_height, self.hold_time, self.drop_distance)
 
     def _get_obs(self, forces, q: list, v: list):
         """The observation (``q``, ``v``: ``data.qpos.tolist()``, ``data.qvel.tolist()``)."""
-        hinges = self._hinges if self._hinges is not None else self.data.qpos[self._observe.hinges_read]
         (c0, c1), (k0, k1) = self._kcmd, self._kact
-        return self._observe.observe(q, v, hinges, self._tips[0], self._tips[1], c0, c1, k0, k1, forces, self._z0,
-                                     self._hold)
+        return self._observe.observe(q, v, self._tips[0], self._tips[1], c0, c1, k0, k1, forces, self._z0, self._hold)
 
     # --------------------------------------------------------------- API
     def reset(self, *, seed=None, options=None):
@@ -561,7 +556,7 @@ class PickEnv(gym.Env):
         if self._needs_reset:
             raise ResetNeeded("step() called before reset() or after the episode terminated; call reset()")
         lo, hi, per_finger, alpha, palm_lo, palm_hi, palm_step, dt, fs, bq, pq, target, hold_time, drop = self._consts
-        model, data, check, qpos, qvel, ctrl, tip0, tip1, hinges, contact_forces, observe = self._hot
+        model, data, check, qpos, qvel, ctrl, tip0, tip1, contact_forces, observe = self._hot
         a = check_action(action, self._action_shape)
         k0 = lo + 0.5 * (a[0] + 1.0) * (hi - lo)
         k1 = lo + 0.5 * (a[1] + 1.0) * (hi - lo) if per_finger else k0
@@ -603,9 +598,7 @@ class PickEnv(gym.Env):
         self._phi = phi
         terminated = success or lost
         self._needs_reset = terminated
-        if hinges is None:  # pragma: no cover - the builder makes the hinges contiguous (a view)
-            hinges = data.qpos[observe.hinges_read]
-        obs = observe.observe(q, v, hinges, tip0, tip1, k0, k1, c0, c1, forces, self._z0, hold)
+        obs = observe.observe(q, v, tip0, tip1, k0, k1, c0, c1, forces, self._z0, hold)
         info = {
             "reward_lift": r_lift, "reward_success": r_success, "reward_squeeze": r_squeeze, "reward_drop": r_drop,
             "is_success": success, "dropped": dropped and not success,

@@ -3,15 +3,19 @@
 :func:`obs_layout` names the observation's blocks; :class:`PickObservation`
 holds what turns a MuJoCo state into the observation vector of
 :class:`simgrip.envs.pick.PickEnv` (its docstring's table says what each entry
-means).  The observation is computed in the per-finger layout and, when one
-command drives both fingers, reduced to finger 0 and the box's ``z`` by one
-index array; lengths are divided by the finger length, forces by the mean box
-weight, and every entry is clipped to its bound.
+means).  Without ``per_finger`` the observation keeps finger 0 and the box's
+``z`` of the per-finger layout (the bounds are reduced by one index array);
+lengths are divided by the finger length, forces by the mean box weight, and
+every entry is clipped to its bound.  It is computed on every environment
+step, right after the physics, on Python floats (the state read as lists, the
+finger shapes by linear interpolation of the link angles) and turned into an
+array once.
 """
 
 from __future__ import annotations
 
 import math
+from itertools import accumulate
 
 import numpy as np
 
@@ -98,9 +102,6 @@ class PickObservation:
     ----------
     layout, slices, low, high
         ``(name, size)`` blocks, their slices and the bounds of the observation.
-    hinges_read : slice or ndarray
-        qpos index of the hinge angles the observation reads (:meth:`observe`'s ``hinges``): finger 0's
-        ``n_links``, both fingers' ``2 n_links`` with ``per_finger``.
     """
 
     def __init__(self, *, n_links, shape_points, per_finger, kappa_range, length, target_height, hold_time,
@@ -116,31 +117,27 @@ class PickObservation:
         self.tips = tips
         self.hinge_qpos = hinge_qpos
         self._inv_l = 1.0 / length
-        self._shape_end = 5 + 2 * shape_points
-        self._size = self._shape_end + 16  # the per-finger layout
-        self._out_size = self.low.size
-        self._shape_end_out = self.slices["finger_shape"].stop
-        # shape sampling: tangent angles at s/l = (k+1/2)/K, interpolated between link midpoints, from the
-        # link angles (cumulative hinge angles)
-        n = n_links
-        s_link = (np.arange(n) + 0.5) / n
-        s_k = (np.arange(shape_points) + 0.5) / shape_points
-        interp = np.array([np.interp(s_k, s_link, e) for e in np.eye(n)]).T
-        self._shape_matrix_t = np.ascontiguousarray((interp @ np.tril(np.ones((n, n)))).T)  # q -> theta(s_k)
-        nread = 2 * n if per_finger else n
-        hq = hinge_qpos[0] if isinstance(hinge_qpos, tuple) and len(hinge_qpos) == 1 else hinge_qpos
-        if isinstance(hq, slice):
-            self.hinges_read = slice(hq.start, hq.start + nread)
-        else:
-            self.hinges_read = np.asarray(hq).ravel()[:nread]
-        # without per_finger, one np.dot of finger 0's hinges makes the whole (fresh) observation array: the
-        # shape entries in their place, zeros elsewhere (filled next)
-        self._shape_out = None
         self._consts = (self._inv_l, palm_qpos, palm_dof, box_qpos, box_dof, force_unit, kappa_range[0],
-                        kappa_range[1] - kappa_range[0], target_height, hold_time, self._shape_end_out)
-        if not per_finger:
-            self._shape_out = np.zeros((n, self._out_size))
-            self._shape_out[:, 3:self._shape_end_out] = self._shape_matrix_t
+                        kappa_range[1] - kappa_range[0], target_height, hold_time)
+        self._low, self._high = self.low.tolist(), self.high.tolist()
+        # each finger's hinges in qpos: a slice where contiguous (the builder's case), else a list of addresses
+        hq = hinge_qpos[0] if isinstance(hinge_qpos, tuple) and len(hinge_qpos) == 1 else hinge_qpos
+        n = n_links
+        if isinstance(hq, slice):
+            self._hinges = tuple(slice(hq.start + f * n, hq.start + (f + 1) * n) for f in (0, 1))
+        else:
+            flat = np.asarray(hq).ravel().tolist()
+            self._hinges = (flat[:n], flat[n:2 * n])
+        # shape sampling: the tangent angle (the link angle, a cumulative sum of hinge angles, at each link's
+        # midpoint s/l = (j+1/2)/n) interpolated linearly at s/l = (k+1/2)/K, held at the end values beyond the
+        # first and last midpoints (np.interp's rule): theta_k = w_a c[i] + w_b c[i+1]
+        s_link = (np.arange(n) + 0.5) / n
+        lerp = []
+        for s_k in (np.arange(shape_points) + 0.5) / shape_points:
+            i = int(min(max(np.searchsorted(s_link, s_k, side="right") - 1, 0), n - 2))
+            w = float(min(max((s_k - s_link[i]) / (s_link[i + 1] - s_link[i]), 0.0), 1.0))
+            lerp.append((i, 1.0 - w, w))
+        self._lerp = tuple(lerp)
 
     def __call__(self, data, forces, kappa_cmd, kappa, z0: float, hold: float, qpos: list | None = None) -> np.ndarray:
         """The observation of ``data``.
@@ -153,46 +150,43 @@ class PickObservation:
         xpos = data.geom_xpos
         c0, c1 = kappa_cmd
         k0, k1 = kappa
-        return self.observe(data.qpos.tolist() if qpos is None else qpos, data.qvel.tolist(),
-                            data.qpos[self.hinges_read], xpos[self.tips[0]], xpos[self.tips[1]],
-                            float(c0), float(c1), float(k0), float(k1), forces, z0, hold)
+        return self.observe(data.qpos.tolist() if qpos is None else qpos, data.qvel.tolist(), xpos[self.tips[0]],
+                            xpos[self.tips[1]], float(c0), float(c1), float(k0), float(k1), forces, z0, hold)
 
-    def observe(self, q: list, v: list, hinges, tip0, tip1, c0: float, c1: float, k0: float, k1: float, forces,
+    def shape(self, q: list, finger: int) -> list:
+        """Tangent angles [rad] of ``finger`` at the ``shape_points`` arc lengths, from ``q = data.qpos.tolist()``."""
+        h = self._hinges[finger]
+        c = list(accumulate(q[h] if type(h) is slice else [q[j] for j in h]))  # link angles
+        return [wa * c[i] + wb * c[i + 1] for i, wa, wb in self._lerp]
+
+    def observe(self, q: list, v: list, tip0, tip1, c0: float, c1: float, k0: float, k1: float, forces,
                 z0: float, hold: float) -> np.ndarray:
         """The observation from values already read (the environment's step).
 
-        ``q``, ``v``: ``data.qpos.tolist()``, ``data.qvel.tolist()``; ``hinges``: ``data.qpos[hinges_read]``
-        (a view bound once where ``hinges_read`` is a slice); ``tip0``, ``tip1``: the tips' ``geom_xpos`` rows;
-        ``c0, c1``, ``k0, k1``: commanded and actual curvatures; the rest as :meth:`__call__`.
+        ``q``, ``v``: ``data.qpos.tolist()``, ``data.qvel.tolist()``; ``tip0``, ``tip1``: the tips'
+        ``geom_xpos`` rows (views are fine); ``c0, c1``, ``k0, k1``: commanded and actual curvatures; the rest
+        as :meth:`__call__`.
         """
-        # scalars are combined in Python; the finger shapes are one np.dot (without per_finger, the np.dot
-        # makes the fresh array in the final layout); the rest is written in and the result clipped in place
-        inv_l, pq, pd, bq, bd, fu, lo, span, th, ht, end = self._consts  # curvatures in action units: lo, span
+        # everything is computed on Python floats and clipped to the bounds in Python: after frame_skip
+        # mj_step calls the caches are cold, where each numpy call costs microseconds; one np.array at the end
+        inv_l, pq, pd, bq, bd, fu, lo, span, th, ht = self._consts  # curvatures in action units: lo, span
         palm_z, palm_v = q[pq], v[pd]
         x0, _, z0_tip = tip0.tolist()
         bz = q[bq + 2]
         hold_obs = min(hold / ht, 1.0) if ht > 0 else 0.0
         if self._pick is None:  # per_finger: both fingers, the box's x, tilt and spin
             bx, qw, qx, qy, qz = q[bq], q[bq + 3], q[bq + 4], q[bq + 5], q[bq + 6]
-            vx, vz, wy = v[bd], v[bd + 2], v[bd + 4]
             x1, _, z1_tip = tip1.tolist()
             tilt = math.atan2(2.0 * (qx * qz + qw * qy), 1.0 - 2.0 * (qx * qx + qy * qy))
-            obs = np.empty(self._out_size)
-            np.dot(hinges.reshape(2, self.n), self._shape_matrix_t, out=obs[5:end].reshape(2, (end - 5) // 2))
-            obs[:5] = (palm_z * inv_l, 2.0 * (c0 - lo) / span - 1.0, 2.0 * (c1 - lo) / span - 1.0,
-                       2.0 * (k0 - lo) / span - 1.0, 2.0 * (k1 - lo) / span - 1.0)
-            obs[end:] = (
-                x0 * inv_l, (z0_tip - palm_z) * inv_l, x1 * inv_l, (z1_tip - palm_z) * inv_l,
-                bx * inv_l, (bz - palm_z) * inv_l, tilt, vx * inv_l, (vz - palm_v) * inv_l, wy * SPIN_TIME,
-                (bz - z0) / th,
-                math.log1p(forces[0] / fu), math.log1p(forces[1] / fu), math.log1p(forces[2] / fu),
-                math.log1p(forces[3] / fu), hold_obs)
+            vals = [palm_z * inv_l, 2.0 * (c0 - lo) / span - 1.0, 2.0 * (c1 - lo) / span - 1.0,
+                    2.0 * (k0 - lo) / span - 1.0, 2.0 * (k1 - lo) / span - 1.0, *self.shape(q, 0), *self.shape(q, 1),
+                    x0 * inv_l, (z0_tip - palm_z) * inv_l, x1 * inv_l, (z1_tip - palm_z) * inv_l,
+                    bx * inv_l, (bz - palm_z) * inv_l, tilt, v[bd] * inv_l, (v[bd + 2] - palm_v) * inv_l,
+                    v[bd + 4] * SPIN_TIME, (bz - z0) / th,
+                    math.log1p(forces[0] / fu), math.log1p(forces[1] / fu), math.log1p(forces[2] / fu),
+                    math.log1p(forces[3] / fu), hold_obs]
         else:  # finger 0 and the box's z
-            obs = np.dot(hinges, self._shape_out)
-            obs[:3] = (palm_z * inv_l, 2.0 * (c0 - lo) / span - 1.0, 2.0 * (k0 - lo) / span - 1.0)
-            obs[end:] = (
-                x0 * inv_l, (z0_tip - palm_z) * inv_l, (bz - palm_z) * inv_l, (v[bd + 2] - palm_v) * inv_l,
-                (bz - z0) / th, math.log1p(forces[0] / fu), math.log1p(forces[1] / fu), hold_obs)
-        np.maximum(obs, self.low, out=obs)
-        np.minimum(obs, self.high, out=obs)
-        return obs
+            vals = [palm_z * inv_l, 2.0 * (c0 - lo) / span - 1.0, 2.0 * (k0 - lo) / span - 1.0, *self.shape(q, 0),
+                    x0 * inv_l, (z0_tip - palm_z) * inv_l, (bz - palm_z) * inv_l, (v[bd + 2] - palm_v) * inv_l,
+                    (bz - z0) / th, math.log1p(forces[0] / fu), math.log1p(forces[1] / fu), hold_obs]
+        return np.array([lo_ if x < lo_ else (hi_ if x > hi_ else x) for x, lo_, hi_ in zip(vals, self._low, self._high)])
