@@ -5,7 +5,7 @@ The baselines of the pick environments (``examples/random_policy.py``,
 ``examples/train_sb3.py``) all do the same thing: reset episode ``i`` with seed
 ``seed0 + i``, act until the episode ends, and summarise success and return.
 :func:`run_episodes` is that loop; :func:`add_episode_arguments` the options
-``--episodes --seed --env --json`` they share, validated by argparse (exit 2
+``--episodes --seed --env --fingers --json`` they share, validated by argparse (exit 2
 naming the option).
 """
 
@@ -17,7 +17,7 @@ from typing import Any, Callable
 
 import numpy as np
 
-__all__ = ["EpisodeResult", "add_episode_arguments", "check_env_id", "positive_int", "non_negative_int", "run_episodes", "summary"]
+__all__ = ["EpisodeResult", "add_episode_arguments", "check_env_id", "env_kwargs", "positive_int", "non_negative_int", "run_episodes", "summary"]
 
 
 def positive_int(text: str) -> int:
@@ -47,6 +47,8 @@ def add_episode_arguments(parser: argparse.ArgumentParser, *, episodes: int = 20
     parser.add_argument("--episodes", type=positive_int, default=episodes, help=f"number of episodes (default {episodes})")
     parser.add_argument("--seed", type=non_negative_int, default=0, help="seed of the first episode (default 0)")
     parser.add_argument("--env", default="simgrip/Pick-v1", help="registered env id (default simgrip/Pick-v1)")
+    parser.add_argument("--fingers", type=positive_int, default=None,
+                        help="fingers K of simgrip/PickMulti-v0 (default: the env's, 3); other envs have two")
     parser.add_argument("--json", action="store_true", help="print only a JSON summary")
 
 
@@ -56,6 +58,19 @@ def check_env_id(parser: argparse.ArgumentParser, env_id: str) -> None:
 
     if env_id not in gym.registry:
         parser.error(f"--env: unknown id {env_id!r}")
+
+
+def env_kwargs(parser: argparse.ArgumentParser, args: argparse.Namespace) -> dict:
+    """``gym.make`` keyword arguments from the options; exit 2 naming ``--fingers`` where the env has no such choice."""
+    if getattr(args, "fingers", None) is None:
+        return {}
+    from simgrip.envs import MULTI_ENV_IDS
+
+    if args.env not in MULTI_ENV_IDS:
+        parser.error(f"--fingers: {args.env} has two fingers; the finger count is chosen for {', '.join(MULTI_ENV_IDS)}")
+    if args.fingers < 2:
+        parser.error(f"--fingers: at least 2, got {args.fingers}")
+    return {"fingers": args.fingers}
 
 
 @dataclass(frozen=True)

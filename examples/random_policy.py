@@ -1,6 +1,8 @@
 """Uniformly random actions in a simgrip env: the baseline a learner must beat.
 
-    python examples/random_policy.py [--episodes 20] [--seed 0] [--env simgrip/Pick-v1] [--json]
+    python examples/random_policy.py [--episodes 20] [--seed 0] [--env simgrip/Pick-v1] [--fingers K] [--json]
+
+``--fingers K`` chooses the finger count of ``simgrip/PickMulti-v0`` (default 3).
 
 Episode ``i`` is reset with seed ``--seed + i`` and its actions are drawn from
 the action space seeded the same way, so a run is reproducible.  Prints one
@@ -14,7 +16,7 @@ import json
 import gymnasium as gym
 
 import simgrip.envs  # noqa: F401  (registers the simgrip ids)
-from simgrip.envs.evaluation import add_episode_arguments, check_env_id, run_episodes, summary
+from simgrip.envs.evaluation import add_episode_arguments, check_env_id, env_kwargs, run_episodes, summary
 
 
 def _line(r) -> str:
@@ -29,7 +31,7 @@ def main(argv=None):
     args = p.parse_args(argv)
     check_env_id(p, args.env)
 
-    env = gym.make(args.env)
+    env = gym.make(args.env, **env_kwargs(p, args))
     results = run_episodes(env, lambda obs: env.action_space.sample(), args.episodes, args.seed,
                            on_reset=lambda env_, info, seed: env.action_space.seed(seed),
                            on_episode=None if args.json else lambda r: print(_line(r)))

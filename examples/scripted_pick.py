@@ -10,7 +10,7 @@ randomised range and curls further when it sees the box slip.  With
 oracle is :class:`simgrip.envs.scripted_multi.ScriptedMultiPolicy`: the same
 per-finger planar theory (an inclined contact on a sphere).
 
-    python examples/scripted_pick.py [--episodes 20] [--seed 0] [--env simgrip/Pick-v1]
+    python examples/scripted_pick.py [--episodes 20] [--seed 0] [--env simgrip/Pick-v1] [--fingers K]
                                      [--policy oracle|observation] [--json] [--gif pick.gif]
 
 Prints one line per episode and a summary, or with ``--json`` only one JSON
@@ -23,7 +23,7 @@ import json
 import gymnasium as gym
 
 import simgrip.envs  # noqa: F401  (registers the simgrip ids)
-from simgrip.envs.evaluation import add_episode_arguments, check_env_id, run_episodes, summary
+from simgrip.envs.evaluation import add_episode_arguments, check_env_id, env_kwargs, run_episodes, summary
 from simgrip.envs.pick_multi import PickMultiEnv
 from simgrip.envs.scripted import ObservationPickPolicy, ScriptedPickPolicy
 from simgrip.envs.scripted_multi import ScriptedMultiPolicy
@@ -40,7 +40,7 @@ def main(argv=None):
     args = p.parse_args(argv)
     check_env_id(p, args.env)
 
-    env = gym.make(args.env)
+    env = gym.make(args.env, **env_kwargs(p, args))
     multi = isinstance(env.unwrapped, PickMultiEnv)  # K fingers: the per-finger theory's oracle
     if multi and (args.policy != "oracle" or args.gif):
         p.error(f"--env {args.env}: only the oracle policy, and no --gif (two-finger ids only)")

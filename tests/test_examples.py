@@ -18,6 +18,8 @@ def _example(name):
 
 @pytest.mark.parametrize("name, argv", [
     ("scripted_pick", ["--policy", "oracle"]), ("scripted_pick", ["--policy", "observation"]), ("random_policy", []),
+    ("scripted_pick", ["--env", "simgrip/PickMulti-v0", "--fingers", "4"]),
+    ("random_policy", ["--env", "simgrip/PickMulti-v0", "--fingers", "4"]),
 ])
 def test_examples_print_a_json_summary(name, argv, capsys):
     summary = _example(name).main(["--episodes", "2", "--seed", "7", "--json", *argv])
@@ -31,13 +33,20 @@ def test_examples_print_a_json_summary(name, argv, capsys):
 def test_random_policy_documents_only_its_options():
     module = _example("random_policy")
     doc = module.__doc__
-    for option in ("--episodes", "--seed", "--env", "--json"):
-        assert option in doc
+    options = {"--episodes", "--seed", "--env", "--fingers", "--json"}
     import re
 
-    assert set(re.findall(r"--[a-z][a-z-]*", doc)) == {"--episodes", "--seed", "--env", "--json"}
+    assert set(re.findall(r"--[a-z][a-z-]*", doc)) == options
     with pytest.raises(SystemExit):
         module.main(["--vector", "4"])
+
+
+@pytest.mark.parametrize("argv", [["--fingers", "4"], ["--env", "simgrip/PickMulti-v0", "--fingers", "1"],
+                                  ["--env", "simgrip/PickMulti-v0", "--fingers", "x"]])
+def test_fingers_option_is_checked(argv, capsys):
+    with pytest.raises(SystemExit) as exc:
+        _example("random_policy").main(["--episodes", "1", *argv])
+    assert exc.value.code == 2 and "--fingers" in capsys.readouterr().err
 
 
 def test_train_sb3_smoke(tmp_path, capsys):
