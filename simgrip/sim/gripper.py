@@ -260,7 +260,8 @@ def build_gripper(
     offset : (dx, dy)
         The workpiece's centre off the palm axis over ``l``, in the scene's
         frame (turned by ``yaw``); box and cylinder only, the palm axis inside
-        the workpiece's footprint (ValueError naming ``offset``).
+        the workpiece's footprint, two fingers: along their plane (ValueError
+        naming ``offset``).
     workpiece_yaw : float
         The workpiece's turn about its vertical axis relative to the fingers
         [rad]; a box's fingers must still meet flat faces (ValueError naming
