@@ -120,8 +120,9 @@ def build_parser() -> argparse.ArgumentParser:
                        "resolutions it chooses (free, I, II; --links is then ignored)")
         if name == "simulate":
             p.add_argument("--fingers", type=int, default=None,
-                           help="K >= 2 fingers around the palm axis holding a workpiece free in 3-D (Grips I, II; "
-                           "settled by dynamics); --json gains 'fingers', one record per finger")
+                           help="K >= 2 fingers around the palm axis holding a workpiece free in 3-D (Grips I, II: "
+                           "settled by dynamics; III: a box with K = 4, each finger carrying its face's bottom edge, "
+                           "settled as the planar cradle); --json gains 'fingers', one record per finger")
             p.add_argument("--workpiece", default=None,
                            help="with --fingers: box (K = 2 or 4), cylinder or sphere (diameter b) [default cylinder]")
             p.add_argument("--offset", type=float, nargs=2, default=None, metavar=("DX", "DY"),

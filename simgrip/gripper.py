@@ -32,8 +32,13 @@ def simulate_gripper(grip: str, params: DimensionlessParams, profile, links: int
 
     if not isinstance(profile, (list, tuple)):
         profile = as_profile(profile)
+    start = {}
+    if str(grip).strip().upper() == "III" and not isinstance(profile, (list, tuple)):
+        from simgrip.scenes import start_angles  # the cradle starts where the theory does (the planar simulate's)
+
+        start["initial_angles"] = start_angles("III", params, profile, links)
     scene = build_gripper(grip, params, profile, links, fingers=fingers, workpiece=workpiece, yaw=yaw,
-                          contact_angle=contact_angle, offset=offset, workpiece_yaw=workpiece_yaw)
+                          contact_angle=contact_angle, offset=offset, workpiece_yaw=workpiece_yaw, **start)
     return settle_gripper(scene, **settle_kw)
 
 
@@ -105,7 +110,7 @@ def gripper_record(state, params: DimensionlessParams, profile=None) -> dict:
         "N1": float(first.N1) if first else 0.0,
         "N2": float(first.N2) if first else 0.0,
         **settle_fields(state),
-        "method": "dynamics",
+        "method": getattr(state, "method", "dynamics"),
         "warnings": list(state.warnings),
         "extrapolated": False,
         "error_estimate": None,

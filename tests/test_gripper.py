@@ -96,7 +96,7 @@ def test_check_gripper_normalises_and_names_what_is_wrong():
         (("I", 2.0, "cylinder"), "fingers"),
         (("I", 3, "cone"), "workpiece"),
         (("I", 3, None), "workpiece"),
-        (("III", 4, "box"), "grip"),
+        (("III", 3, "box"), "fingers"),  # the cradle (Grip III) is a box with K = 4
         (("free", 3, "cylinder"), "grip"),
         (("V", 3, "cylinder"), "grip"),
     ]

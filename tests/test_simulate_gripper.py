@@ -65,9 +65,9 @@ def test_bad_gripper_options_exit_2_naming_them(capsys, args, name):
     assert name in err and "Traceback" not in err
 
 
-def test_grip_iii_with_fingers_is_refused(capsys):
-    assert main(["simulate", "III", "--kappa", "-6", "--links", "8", "--fingers", "4", "--workpiece", "box"]) == 2
-    assert "grip" in capsys.readouterr().err
+def test_grip_iii_with_fingers_is_refused(capsys):  # but for a box with K = 4 (the cradle: tests/test_gripper_cradle)
+    assert main(["simulate", "III", "--kappa", "-6", "--links", "8", "--fingers", "3", "--workpiece", "cylinder"]) == 2
+    assert "workpiece" in capsys.readouterr().err
 
 
 def test_sphere_contact_angle_from_the_command_line(capsys):

@@ -20,7 +20,9 @@ A task that raises becomes a row with the error in its note.
 Files written (atomically) to ``out_dir``, which is checked before any work:
 ``bench.csv``, ``bench.json``, ``pareto.png`` (:mod:`simgrip.harness.plots`),
 ``summary.md``, ``skips.md`` (:mod:`simgrip.harness.tables`), ``sweep.json``, and the
-settle's targets ``settle_targets.json``/``.md`` (:mod:`simgrip.harness.bench_settle`).
+settle's targets ``settle_targets.json``/``.md`` (:mod:`simgrip.harness.bench_settle`), and the
+K-finger settles ``gripper.json``/``.md`` (:mod:`simgrip.harness.bench_gripper`; their rows also
+under ``"gripper"`` in ``bench.json``).
 
 Command line: ``simgrip bench [--quick] [--out DIR] [--repeats R]`` and the
 runner's options (``--jobs``, ``--scheduler``, ``--scheduler-file``,
@@ -98,6 +100,8 @@ class BenchResult:
     sweep: dict
     env: dict = field(default_factory=dict)
     settle_targets: dict = field(default_factory=dict)
+    #: K-finger settles against K single fingers and the symmetry skip (:mod:`simgrip.harness.bench_gripper`).
+    gripper: dict = field(default_factory=dict)
     files: dict = field(default_factory=dict)
     jobs: int | None = 1
     quick: bool = False
@@ -206,7 +210,11 @@ def run_bench(
     from simgrip.harness.bench_settle import write_settle_targets  # the settle's issue-9 targets, one run
 
     result.settle_targets = write_settle_targets(out, quick=quick)["checks"]
-    result.files = {**_write(out, result), **{name: out / name for name in ("settle_targets.json", "settle_targets.md")}}
+    from simgrip.harness.bench_gripper import write_gripper_bench  # issue 13's K-finger ratios, one run
+
+    result.gripper = write_gripper_bench(out, quick=quick)
+    result.files = {**_write(out, result), **{name: out / name for name in ("settle_targets.json", "settle_targets.md",
+                                                                            "gripper.json", "gripper.md")}}
     return result
 
 
@@ -229,7 +237,8 @@ def _write(out: Path, res: BenchResult) -> dict:
         fh.write(buf.getvalue())
     meta = {"quick": res.quick, "jobs": res.jobs, "elapsed_s": res.elapsed_s, "params": vars(STANDARD),
             "standard_cases": STANDARD_CASES, "cpu_count": os.cpu_count(), "load_avg": _loadavg()}
-    write_json(out / "bench.json", {"meta": meta, "rows": res.rows, "ratios": res.ratios, "env": res.env})
+    write_json(out / "bench.json", {"meta": meta, "rows": res.rows, "ratios": res.ratios, "env": res.env,
+                                    "gripper": res.gripper.get("rows", [])})
     write_json(out / "sweep.json", res.sweep)
     with atomic_write(out / "skips.md") as fh:
         fh.write(skips_md(res.skips))

@@ -266,7 +266,7 @@ def gripper_tolerance(scene: GripperScene) -> float:
 
 
 def settle_gripper(scene: GripperScene, *, tol: float | None = None, max_steps: int = GRIPPER_MAX_STEPS,
-                   allow_unconverged: bool = False, method: str = "dynamics") -> GripperState:
+                   allow_unconverged: bool = False, method: str | None = None) -> GripperState:
     """Settle a K-finger gripper by over-damped dynamics (see the module docstring).
 
     Parameters
@@ -279,11 +279,12 @@ def settle_gripper(scene: GripperScene, *, tol: float | None = None, max_steps: 
         Physics steps allowed to the whole settle (restarts included).
     allow_unconverged : bool
         Return ``converged=False`` instead of raising :class:`SettleError`.
-    method : {"dynamics", "symmetric", "auto"}
+    method : {None, "dynamics", "symmetric", "auto"}
         ``"symmetric"``: one finger's planar static settle replicated to K
         (:mod:`simgrip.settle.gripper_symmetry`; ``tol`` and ``max_steps`` are
         then the planar Newton's); ``"auto"``: that where the scene is exactly
-        symmetric, else the dynamics.
+        symmetric, else the dynamics.  None: ``"dynamics"`` for Grips I/II,
+        ``"symmetric"`` for the K = 4 cradle (Grip III has no K-finger dynamics).
 
     Returns
     -------
@@ -291,12 +292,11 @@ def settle_gripper(scene: GripperScene, *, tol: float | None = None, max_steps: 
     """
     if not isinstance(scene, GripperScene):
         raise ValueError(f"scene must be a simgrip.sim.gripper.GripperScene, got {type(scene).__name__}")
-    if method != "dynamics":
-        from simgrip.settle.gripper_symmetry import symmetric_or_none
+    from simgrip.settle.gripper_symmetry import symmetric_or_none
 
-        state = symmetric_or_none(scene, method, tol=tol, max_steps=max_steps, allow_unconverged=allow_unconverged)
-        if state is not None:
-            return state
+    state = symmetric_or_none(scene, method, tol=tol, max_steps=max_steps, allow_unconverged=allow_unconverged)
+    if state is not None:
+        return state
     if tol is None:
         tol = gripper_tolerance(scene)
     tol, max_steps = check_tol_steps(tol, max_steps)

@@ -41,7 +41,9 @@ Geometry (lengths over ``l``; the palm axis is the world ``z`` axis):
 The builder runs no solver: the fingers start at ``initial_angles`` (default
 straight) and the workpiece's centre level with their tips;
 :func:`simgrip.settle.gripper.settle_gripper` starts from the hinge chain's
-grip equilibrium.  Grip III (cradle) is not built for K fingers.
+grip equilibrium.  Grip III (the cradle) is built for a box with ``K = 4``
+(each finger carries the bottom edge of its face) by
+:mod:`simgrip.sim.gripper_cradle`.
 """
 
 from __future__ import annotations
@@ -67,7 +69,7 @@ __all__ = ["GRIPPER_GRIPS", "WORKPIECES", "GripperScene", "build_gripper", "chec
 #: Workpiece shapes of a K-finger gripper.
 WORKPIECES = ("box", "cylinder", "sphere")
 #: Grips a K-finger gripper is built for.
-GRIPPER_GRIPS = ("I", "II")
+GRIPPER_GRIPS = ("I", "II", "III")
 #: Default tip sphere radius over ``l`` (as the planar scene's).
 DEFAULT_R_TIP = 2e-3
 #: Default link capsule radius over ``l``.
@@ -190,12 +192,18 @@ def check_gripper(grip, fingers, workpiece) -> tuple[str, int, str]:
 
     ``fingers`` is an integer ``>= 2``; ``workpiece`` one of :data:`WORKPIECES`;
     a box takes ``K = 2`` or ``4`` (one finger centred on each of two or four faces);
-    ``grip`` one of :data:`GRIPPER_GRIPS`.
+    ``grip`` one of :data:`GRIPPER_GRIPS`; Grip III (the cradle) a box with ``K = 4``
+    (:mod:`simgrip.sim.gripper_cradle`).
     """
     g = check_grip(grip)
     if g not in GRIPPER_GRIPS:
-        raise ValueError(f"grip must be one of {GRIPPER_GRIPS} for a K-finger gripper (Grip III and the free rod "
-                         f"are built by simgrip.sim.scene), got {grip!r}")
+        raise ValueError(f"grip must be one of {GRIPPER_GRIPS} for a K-finger gripper (the free rod "
+                         f"is built by simgrip.sim.scene), got {grip!r}")
+    if g == "III" and (not isinstance(workpiece, str) or workpiece.strip().lower() != "box" or isinstance(fingers, bool)
+                       or fingers != 4):
+        raise ValueError(f"workpiece must be 'box' with fingers = 4 for Grip III (each finger carries the bottom edge "
+                         f"of its face; two fingers are the planar cradle, simgrip.sim.scene), got workpiece = "
+                         f"{workpiece!r}, fingers = {fingers!r}")
     if isinstance(fingers, bool) or not isinstance(fingers, (int, np.integer)) or fingers < 2:
         raise ValueError(f"fingers must be an integer >= 2, got {fingers!r}")
     if not isinstance(workpiece, str) or workpiece.strip().lower() not in WORKPIECES:
@@ -231,8 +239,10 @@ def build_gripper(
 
     Parameters
     ----------
-    grip : {"I", "II"}
-        Palm down (tip pinch) or palm up.
+    grip : {"I", "II", "III"}
+        Palm down (tip pinch), palm up, or the cradle (box, ``K = 4``:
+        :func:`simgrip.sim.gripper_cradle.build_cradle`, started from
+        ``initial_angles`` or the geometric cradle shape).
     params : PhysicalParams or DimensionlessParams
         ``M`` is the workpiece mass per finger; ``b`` the workpiece's width
         (box), diameter (cylinder, sphere) through the tip centres.
@@ -272,6 +282,14 @@ def build_gripper(
     GripperScene
     """
     grip, K, shape = check_gripper(grip, fingers, workpiece)
+    if grip == "III":
+        from simgrip.sim.gripper_cradle import build_cradle
+
+        if contact_angle != 0.0 or np.any(np.asarray(offset, dtype=float) != 0.0) or workpiece_yaw != 0.0:
+            raise ValueError("offset, workpiece_yaw and contact_angle must be 0 for Grip III (the cradle is built "
+                             "symmetric only)")
+        return build_cradle(params, profile, n_links, fingers=K, yaw=yaw, r_tip=r_tip, r_link=r_link,
+                            initial_angles=initial_angles)
     dimless, phys = check_params(params)
     profs = _profiles(profile, K)
     prof = profs[0]
