@@ -96,7 +96,8 @@ class PickObservation:
     tips : tuple of int
         Geom ids of the two tip spheres.
     hinge_qpos : index
-        qpos index of the fingers' hinges, finger 0 then finger 1 (``2 * n_links``; a slice reads a view).
+        qpos index of the fingers' hinges, finger 0 then finger 1 (``2 * n_links``): a slice (contiguous, the
+        builder's case) or an index array.
 
     Attributes
     ----------
@@ -153,7 +154,7 @@ class PickObservation:
         return self.observe(data.qpos.tolist() if qpos is None else qpos, data.qvel.tolist(), xpos[self.tips[0]],
                             xpos[self.tips[1]], float(c0), float(c1), float(k0), float(k1), forces, z0, hold)
 
-    def shape(self, q: list, finger: int) -> list:
+    def finger_shape(self, q: list, finger: int) -> list:
         """Tangent angles [rad] of ``finger`` at the ``shape_points`` arc lengths, from ``q = data.qpos.tolist()``."""
         h = self._hinges[finger]
         c = list(accumulate(q[h] if type(h) is slice else [q[j] for j in h]))  # link angles
@@ -167,8 +168,8 @@ class PickObservation:
         ``geom_xpos`` rows (views are fine); ``c0, c1``, ``k0, k1``: commanded and actual curvatures; the rest
         as :meth:`__call__`.
         """
-        # everything is computed on Python floats and clipped to the bounds in Python: after frame_skip
-        # mj_step calls the caches are cold, where each numpy call costs microseconds; one np.array at the end
+        # everything is computed on Python floats and clipped to the bounds in Python, one np.array at the end:
+        # right after the physics the caches are cold, and numpy calls cost more there than these few lines
         inv_l, pq, pd, bq, bd, fu, lo, span, th, ht = self._consts  # curvatures in action units: lo, span
         palm_z, palm_v = q[pq], v[pd]
         x0, _, z0_tip = tip0.tolist()
@@ -179,14 +180,16 @@ class PickObservation:
             x1, _, z1_tip = tip1.tolist()
             tilt = math.atan2(2.0 * (qx * qz + qw * qy), 1.0 - 2.0 * (qx * qx + qy * qy))
             vals = [palm_z * inv_l, 2.0 * (c0 - lo) / span - 1.0, 2.0 * (c1 - lo) / span - 1.0,
-                    2.0 * (k0 - lo) / span - 1.0, 2.0 * (k1 - lo) / span - 1.0, *self.shape(q, 0), *self.shape(q, 1),
+                    2.0 * (k0 - lo) / span - 1.0, 2.0 * (k1 - lo) / span - 1.0, *self.finger_shape(q, 0),
+                    *self.finger_shape(q, 1),
                     x0 * inv_l, (z0_tip - palm_z) * inv_l, x1 * inv_l, (z1_tip - palm_z) * inv_l,
                     bx * inv_l, (bz - palm_z) * inv_l, tilt, v[bd] * inv_l, (v[bd + 2] - palm_v) * inv_l,
                     v[bd + 4] * SPIN_TIME, (bz - z0) / th,
                     math.log1p(forces[0] / fu), math.log1p(forces[1] / fu), math.log1p(forces[2] / fu),
                     math.log1p(forces[3] / fu), hold_obs]
         else:  # finger 0 and the box's z
-            vals = [palm_z * inv_l, 2.0 * (c0 - lo) / span - 1.0, 2.0 * (k0 - lo) / span - 1.0, *self.shape(q, 0),
-                    x0 * inv_l, (z0_tip - palm_z) * inv_l, (bz - palm_z) * inv_l, (v[bd + 2] - palm_v) * inv_l,
+            vals = [palm_z * inv_l, 2.0 * (c0 - lo) / span - 1.0, 2.0 * (k0 - lo) / span - 1.0,
+                    *self.finger_shape(q, 0), x0 * inv_l, (z0_tip - palm_z) * inv_l, (bz - palm_z) * inv_l, (v[bd + 2] - palm_v) * inv_l,
                     (bz - z0) / th, math.log1p(forces[0] / fu), math.log1p(forces[1] / fu), hold_obs]
-        return np.array([lo_ if x < lo_ else (hi_ if x > hi_ else x) for x, lo_, hi_ in zip(vals, self._low, self._high)])
+        return np.array([lo_ if x < lo_ else (hi_ if x > hi_ else x)
+                         for x, lo_, hi_ in zip(vals, self._low, self._high)])

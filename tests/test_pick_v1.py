@@ -423,3 +423,26 @@ def test_step_matches_a_reference_computed_from_the_state(grip, per_finger, seed
     if policy == "full_curl":
         assert info["reward_squeeze"] < -0.1 * env.w_squeeze
     env.close()
+
+
+@pytest.mark.parametrize("n, K", [(2, 2), (3, 8), (12, 8), (40, 8), (5, 50)])
+def test_finger_shape_is_the_interpolated_link_angle(n, K):
+    """The observed tangent angles are np.interp of the link angles (cumulative hinge angles) at link
+    midpoints, end values held beyond them (K > n samples fall outside the first and last midpoints)."""
+    from simgrip.envs.pick_observation import PickObservation
+
+    obs = PickObservation(n_links=n, shape_points=K, per_finger=True, kappa_range=(-10.0, 0.0), length=0.1,
+                          target_height=0.06, hold_time=0.5, force_unit=0.4, palm_qpos=0, palm_dof=0, box_qpos=1,
+                          box_dof=1, tips=(0, 1), hinge_qpos=slice(8, 8 + 2 * n))
+    spread = PickObservation(n_links=n, shape_points=K, per_finger=True, kappa_range=(-10.0, 0.0), length=0.1,
+                             target_height=0.06, hold_time=0.5, force_unit=0.4, palm_qpos=0, palm_dof=0, box_qpos=1,
+                             box_dof=1, tips=(0, 1), hinge_qpos=np.arange(8, 8 + 4 * n, 2))  # not contiguous
+    rng = np.random.default_rng(n)
+    s_link, s_k = (np.arange(n) + 0.5) / n, (np.arange(K) + 0.5) / K
+    for _ in range(20):
+        q = rng.normal(size=8 + 4 * n)
+        for f in (0, 1):
+            ref = np.interp(s_k, s_link, np.cumsum(q[8 + f * n:8 + (f + 1) * n]))
+            np.testing.assert_allclose(obs.finger_shape(q.tolist(), f), ref, rtol=0, atol=1e-13)
+            ref = np.interp(s_k, s_link, np.cumsum(q[8 + 2 * f * n:8 + 2 * (f + 1) * n:2]))
+            np.testing.assert_allclose(spread.finger_shape(q.tolist(), f), ref, rtol=0, atol=1e-13)
