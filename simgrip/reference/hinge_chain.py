@@ -11,7 +11,14 @@ length ``gamma`` inside link ``m = floor(gamma/ds)``, linear along it:
 ``X(gamma) = sum_{i<m} ds cos(phi_i) + (gamma - m ds) cos(phi_m)``.  A point
 couple ``M_c`` (E3 component) at the contact adds the potential ``-M_c phi``
 of the link that carries it: link ``m`` for Grip III, the last link (a tip
-couple) for the free rod and Grips I/II.  This is the exact settled state the
+couple) for the free rod and Grips I/II.  The workpiece's vertical force on
+the contact is ``N2 = -load`` (default ``load = params.M``, its weight share);
+a ``load`` of either sign is accepted (:func:`check_load`): a negative one is a
+friction force pushing the contact up, i.e. a finger whose friction pulls the
+workpiece down (a K-finger grasp's balance may need one,
+:mod:`simgrip.settle.gripper_start`).  The load enters only through the
+linear term ``load Y(s_c)`` of the energy, so nothing else changes with its
+sign.  This is the exact settled state the
 MuJoCo chain built from the same springs must reach.  (For Grip III the couple
 loads every hinge up to ``m``, i.e. the continuous moment jump is moved to the
 end of link ``m``'s cell; that is second order only when ``gamma`` is a link
@@ -43,7 +50,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from simgrip.chain import ChainSprings, check_links, link_positions, springs_of
-from simgrip.params import DimensionlessParams, _finite
+from simgrip.params import M_MAX, DimensionlessParams, _finite
 from simgrip.reference.arguments import check_discrete
 from simgrip.reference.minimiser import (
     DiscreteEnergy,
@@ -57,7 +64,7 @@ from simgrip.reference.minimiser import (
     minimise,
 )
 
-__all__ = ["ChainEquilibrium", "chain_energy", "cradle_start_angles", "solve_chain"]
+__all__ = ["ChainEquilibrium", "chain_energy", "check_load", "cradle_start_angles", "solve_chain"]
 
 
 @dataclass(frozen=True)
@@ -121,7 +128,22 @@ class ChainEquilibrium(DiscreteEquilibrium):
         return np.interp(s, sm, th)
 
 
-def _chain_problem(grip, params, springs: ChainSprings, gamma, contact_moment, gravity):
+def check_load(load, grip: str, params: DimensionlessParams) -> float:
+    """The contact's vertical load (``N2 = -load``): ``params.M`` when None, else a finite float of either sign.
+
+    ``|load| <= M_MAX`` (the bound of ``M``); a load on the free rod (no contact) is refused.
+    """
+    if load is None:
+        return params.M
+    v = _finite("load", load)
+    if grip == "free":
+        raise ValueError(f"load: the free rod has no contact to carry a load, got load={load!r}")
+    if abs(v) > M_MAX:
+        raise ValueError(f"load must lie in [-{M_MAX:g}, {M_MAX:g}] (the range of M), got {load!r}")
+    return v
+
+
+def _chain_problem(grip, params, springs: ChainSprings, gamma, contact_moment, gravity, M):
     n = springs.n
     ds = springs.ds
     smid = (np.arange(n) + 0.5) * ds
@@ -132,14 +154,14 @@ def _chain_problem(grip, params, springs: ChainSprings, gamma, contact_moment, g
         lin[n - 1] = -float(contact_moment)  # a tip couple turns the last link: potential -C phi_{n-1}
     if grip in ("I", "II"):
         w = np.full(n, ds)
-        a = a + params.M * w
+        a = a + M * w
         c0 = -0.5 * params.b
     elif grip == "III":
         m = min(int(math.floor(gamma * n)), n - 1)
         w = np.zeros(n)
         w[:m] = ds
         w[m] = gamma - m * ds
-        a = a + params.M * w
+        a = a + M * w
         lin[m] = -float(contact_moment)
         c0 = -0.5 * params.b
     prob = DiscreteEnergy(params.D, np.asarray(springs.stiffness, float), np.asarray(springs.rest, float), a, lin, w, c0,
@@ -170,17 +192,19 @@ def chain_energy(
     gravity=1.0,
     springs=None,
     hessian=True,
+    load=None,
 ) -> EnergyTerms:
     """Chain potential ``V0 - N1 X(s_c)`` with gradient and Hessian in the link angles.
 
-    ``V0`` = springs + gravity on link midpoints + ``M Y(s_c)`` (``N2 = -M``)
-    ``- M_c phi_m``.  ``gravity`` scales the rod's weight (1 = physical; 0 for
-    gravity-free checks); ``springs`` overrides :func:`simgrip.chain.chain_springs`.
+    ``V0`` = springs + gravity on link midpoints + ``load Y(s_c)`` (``N2 = -load``, ``load``
+    default ``params.M``, either sign) ``- M_c phi_m``.  ``gravity`` scales the rod's weight
+    (1 = physical; 0 for gravity-free checks); ``springs`` overrides :func:`simgrip.chain.chain_springs`.
     """
     grip, params, prof, n, gam, grav = check_discrete(grip, params, profile, "n", n, gamma, gravity)
     sp = _springs_for(prof, n, springs)
     cm = _finite("contact_moment", contact_moment)
-    prob, _, _ = _chain_problem(grip, params, sp, gam, cm, grav)
+    M = check_load(load, grip, params)
+    prob, _, _ = _chain_problem(grip, params, sp, gam, cm, grav, M)
     return energy_terms(prob, link_angles, N1, hessian)
 
 
@@ -195,6 +219,7 @@ def solve_chain(
     guess=None,
     gravity=1.0,
     springs=None,
+    load=None,
 ) -> ChainEquilibrium:
     """Static equilibrium of the ``n``-link hinge chain (the MuJoCo finger's settled state).
 
@@ -219,18 +244,25 @@ def solve_chain(
         Factor on the rod's own weight (1 physical, 0 gravity free).
     springs : ChainSprings, optional
         Override the springs (for convergence studies of other hinge rules).
+    load : float, optional
+        The workpiece's vertical load on the contact (over ``rho g l``; the force on
+        the rod is ``N2 = -load``, reported as ``N2``).  Default ``params.M`` (its
+        weight share; bit-identical to not passing it).  Either sign, ``|load| <=
+        M_MAX``: a negative load pushes the contact up (the friction of a finger
+        that pulls the workpiece down).  Grips only.
 
     Raises
     ------
     ValueError
-        Bad ``grip``, ``n``, ``gamma`` or ``guess``.
+        Bad ``grip``, ``n``, ``gamma``, ``guess`` or ``load``.
     DiscreteError
         Newton failed to converge.
     """
     grip, params, prof, n, gam, prob_gravity = check_discrete(grip, params, profile, "n", n, gamma, gravity)
     sp = _springs_for(prof, n, springs)
     cm = _finite("contact_moment", contact_moment)
-    prob, unit_rest, m = _chain_problem(grip, params, sp, gam, cm, prob_gravity)
+    M = check_load(load, grip, params)
+    prob, unit_rest, m = _chain_problem(grip, params, sp, gam, cm, prob_gravity, M)
     smid = (np.arange(n) + 0.5) / n
     g0 = angles_from_guess(guess, smid, n, "n link angles")
     res = minimise(prob, unit_rest, grip_sign(grip, prof), g0)
@@ -247,7 +279,7 @@ def solve_chain(
     return ChainEquilibrium(
         grip=grip, n=n, params=params, link_angles=phi, joint_angles=np.diff(phi, prepend=0.0), nodes=nodes,
         tip=tip, contact=contact, gamma=gam_out, contact_moment=cm, gravity=prob_gravity,
-        **equilibrium_fields(prob, res, params.M),
+        **equilibrium_fields(prob, res, M),
     )
 
 
