@@ -12,7 +12,9 @@ from simgrip.settle import SettleError
 from simgrip.settle.dynamics import DYN_TIMECONST
 from simgrip.settle.gripper import settle_gripper
 from simgrip.settle import gripper_start
-from simgrip.settle.gripper_start import balance_shares, is_symmetric, rest_depth, start_qpos
+from simgrip.settle.gripper_start import (UNSTABLE_GROWTH, balance_shares, is_symmetric, rest_depth, start_forces,
+                                         start_growth, start_qpos)
+from simgrip.harness.stress_gripper import _scene, make_gripper_cases
 from simgrip.sim.gripper import build_gripper
 
 
@@ -74,7 +76,7 @@ def test_is_symmetric():
 @pytest.mark.parametrize("grip, kappa, n", [("I", -6.0, 16), ("II", 5.0, 32), ("I", -6.0, 32)])
 def test_rest_depth_is_where_the_contact_rests(grip, kappa, n):
     # the settled penetration of a symmetric grasp against N tc^2 g / l: the same law within -25 %..+10 %
-    st = settle_gripper(build_gripper(grip, STANDARD, kappa, n, fingers=3, workpiece="cylinder"))
+    st = settle_gripper(build_gripper(grip, STANDARD, kappa, n, fingers=3, workpiece="cylinder"), method="dynamics")
     r = st.records[0]
     scene = build_gripper(grip, STANDARD, kappa, n, fingers=3, workpiece="cylinder")
     depth = float(rest_depth([r.normal], st.timestep, scene)[0])
@@ -99,3 +101,41 @@ def test_the_balanced_start_is_what_lets_the_settle_finish(monkeypatch):
     monkeypatch.setattr(settle_module, "is_symmetric", lambda scene: True)
     with pytest.raises(SettleError, match="did not converge"):
         settle_gripper(build())
+
+
+def test_a_start_that_needs_a_pulling_finger_is_balanced_with_a_negative_share():
+    """Stress case 16 (two-finger box, Grip I, off-centre): its balance needs finger 1's friction to pull
+    the box down.  The start now carries that (solve_chain's signed load) and balances the box exactly."""
+    scene = _scene(make_gripper_cases(17)[16])
+    f = start_forces(scene)
+    assert f.balanced and f.residual < 1e-10
+    assert min(-f.N2) < -0.5  # a negative share: the finger pushes its tip's friction downwards on the box
+    assert np.sum(-f.N2) == pytest.approx(scene.fingers * scene.params.M, rel=1e-12)  # the weight
+    # the required mu is |force - normal part| / normal part, from the same forces
+    assert np.all(f.normal > 0) and np.all(f.required_mu == f.tangential / f.normal)
+
+
+def test_start_forces_of_a_symmetric_grasp_are_the_planar_problem():
+    scene = build_gripper("I", STANDARD, -6.0, 16, fingers=3, workpiece="cylinder")
+    f = start_forces(scene)
+    np.testing.assert_array_equal(f.N2, -STANDARD.M)
+    np.testing.assert_allclose(f.N3, 0.0)
+    np.testing.assert_allclose(f.required_mu, STANDARD.M / f.N1, rtol=1e-12)
+    assert f.balanced and f.residual < 1e-12
+
+
+def test_stress_case_22_starts_at_an_unstable_equilibrium():
+    """Stress case 22 (four-finger box, Grip I, n = 8) has a balanced start whose friction suffices, yet the
+    settle leaves it exponentially until the box tips out.  The settle's one-step map linearised about the
+    start has a real eigenvalue ~1.0175 per step (measured growth of the box's tilt in the run: ~1.0135 per
+    step at MuJoCo's default solver tolerance); a stable start of the same kind (case 2, four-finger box)
+    has none above 1 beyond the neutral drift of sticking friction."""
+    bad, good = _scene(make_gripper_cases(23)[22]), _scene(make_gripper_cases(3)[2])
+    f = start_forces(bad)
+    assert f.balanced and f.max_required_mu < bad.params.mu_s
+    g_bad, g_good = start_growth(bad), start_growth(good)
+    assert g_bad > 1.0 + 10 * UNSTABLE_GROWTH
+    assert abs(g_good - 1.0) < 0.1 * UNSTABLE_GROWTH
+    assert start_growth(bad, 0.5) > 1.0 + UNSTABLE_GROWTH  # at half the step too (the settle's drop retry)
+    q = np.array(bad.data.qpos)
+    assert start_growth(bad) == g_bad and np.array_equal(bad.data.qpos, q)  # deterministic, state restored

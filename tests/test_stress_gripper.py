@@ -73,3 +73,34 @@ def test_the_checks_can_fail(monkeypatch):
         monkeypatch.setattr(sg, "_settle", fake)
         rec = run_gripper_case(case)
         assert rec["outcome"] == outcome and text in rec["error"], (fake.__name__, rec["error"])
+
+
+def test_a_drop_is_explained_from_its_start(monkeypatch):
+    """diagnose_start names the first reason that applies; run_gripper_case records it for drops and unsettled
+    cases only, and gripper_counts tallies them."""
+    from simgrip.settle import gripper_start as gs
+
+    case = make_gripper_cases(1)[0]
+    real = gs.start_forces(sg._scene(case))
+
+    def forces(mu=None, balanced=True):
+        f = real if mu is None else replace(real, required_mu=np.full_like(real.required_mu, mu))
+        return lambda scene: replace(f, balanced=balanced)
+
+    for mu, growth, balanced, reason in ((2 * case["mu_s"], 1.5, False, "friction"),
+                                        (0.5 * case["mu_s"], 1.0 + 2 * gs.UNSTABLE_GROWTH, False, "unstable start"),
+                                        (0.5 * case["mu_s"], 1.0, False, "unbalanced start"),
+                                        (0.5 * case["mu_s"], 1.0, True, "unexplained")):
+        monkeypatch.setattr(gs, "start_forces", forces(mu, balanced))
+        monkeypatch.setattr(gs, "start_growth", lambda scene, g=growth: g)
+        d = sg.diagnose_start(case)
+        assert d["drop_reason"] == reason and d["start_mu"] == pytest.approx(mu) and d["start_growth"] == growth
+    # a held case is not diagnosed; a dropped one is
+    good = sg._settle(case)
+    monkeypatch.setattr(sg, "_settle", lambda _c: good)
+    assert run_gripper_case(case)["drop_reason"] is None
+    monkeypatch.setattr(sg, "_settle", lambda _c: replace(good, held=False, records=[]))
+    rec = run_gripper_case(case)
+    assert rec["outcome"] == "settled" and rec["drop_reason"] == "unexplained"
+    counts = gripper_counts([rec, dict(rec, outcome="unsettled", drop_reason="friction")])
+    assert counts["dropped_by"] == {"unexplained": 1} and counts["unsettled_by"] == {"friction": 1}

@@ -13,6 +13,19 @@ hold (:func:`run_gripper_case`):
   bit-identical ``qpos`` and step count;
 * it ends within the per-case wall-clock guard (a hang is a failure).
 
+A drop, or a settle that does not end, is explained from its start
+(:func:`diagnose_start`, :mod:`simgrip.settle.gripper_start`): ``start_mu``
+(the largest friction coefficient the start's forces need at a finger),
+``start_balanced`` / ``start_residual`` (whether a start with the workpiece
+level balances it at all) and ``start_growth`` (the largest eigenvalue
+modulus of the settle's one-step map linearised about the start).  Its
+``drop_reason`` is the first that applies of ``"friction"`` (``start_mu >
+mu_s``), ``"unstable start"`` (``start_growth > 1 + UNSTABLE_GROWTH``: the
+workpiece leaves an unstable equilibrium exponentially), ``"unbalanced
+start"`` (no balanced level start: the dynamics had to find one) and
+``"unexplained"`` (a balanced, stable start whose friction suffices: a
+finding, not an expected drop).
+
 :func:`make_gripper_cases` draws the cases from a seeded generator
 (:func:`numpy.random.default_rng`), so a run is reproducible and its cases do
 not depend on how the run is spread over processes: grips I and II in turn,
@@ -34,7 +47,8 @@ import warnings
 
 import numpy as np
 
-__all__ = ["GRIPPER_SHAPES", "default_gripper_cases", "gripper_counts", "make_gripper_cases", "run_gripper_case"]
+__all__ = ["DROP_REASONS", "GRIPPER_SHAPES", "default_gripper_cases", "diagnose_start", "gripper_counts",
+           "make_gripper_cases", "run_gripper_case"]
 
 #: ``(workpiece, K)`` pairs drawn, in turn.
 GRIPPER_SHAPES = (("cylinder", 3), ("box", 4), ("cylinder", 4), ("box", 2), ("cylinder", 5))
@@ -46,6 +60,8 @@ OFFSET_FRACTION = 0.1
 MAX_BOX_YAW = 0.15
 #: Inputs a rejection may name (beyond simgrip.harness.stress.INPUT_NAMES).
 GRIPPER_INPUTS = ("offset", "workpiece_yaw", "workpiece", "kappa_per_finger", "contact_angle")
+#: Why a case dropped or did not settle, in the order they are tested (see the module docstring).
+DROP_REASONS = ("friction", "unstable start", "unbalanced start", "unexplained")
 
 
 def make_gripper_cases(count: int, seed: int = 0, max_links: int = 32) -> list[dict]:
@@ -79,16 +95,41 @@ def make_gripper_cases(count: int, seed: int = 0, max_links: int = 32) -> list[d
     return out
 
 
-def _settle(case: dict):
+def _scene(case: dict):
     from simgrip.params import DimensionlessParams
-    from simgrip.settle.gripper import settle_gripper
     from simgrip.sim.gripper import build_gripper, uniform_profiles
 
     params = DimensionlessParams(D=case["D"], M=case["M"], b=case["b"], mu_s=case["mu_s"])
-    scene = build_gripper(case["grip"], params, list(uniform_profiles(case["kappas"], case["fingers"])), case["n"],
-                          fingers=case["fingers"], workpiece=case["workpiece"], offset=case["offset"],
-                          workpiece_yaw=case["workpiece_yaw"])
-    return settle_gripper(scene)
+    return build_gripper(case["grip"], params, list(uniform_profiles(case["kappas"], case["fingers"])), case["n"],
+                         fingers=case["fingers"], workpiece=case["workpiece"], offset=case["offset"],
+                         workpiece_yaw=case["workpiece_yaw"])
+
+
+def _settle(case: dict):
+    from simgrip.settle.gripper import settle_gripper
+
+    return settle_gripper(_scene(case))
+
+
+def diagnose_start(case: dict) -> dict:
+    """The start's ``start_mu``, ``start_balanced``, ``start_residual``, ``start_growth`` and the ``drop_reason``
+    they give (see the module docstring); the first three None when the start holds nothing."""
+    from simgrip.settle.gripper_start import UNSTABLE_GROWTH, start_forces, start_growth
+
+    f = start_forces(_scene(case))
+    growth = start_growth(_scene(case))
+    out = dict(start_mu=None, start_balanced=None, start_residual=None,
+               start_growth=None if growth is None else float(growth), drop_reason="unexplained")
+    if f is None:
+        return out
+    out.update(start_mu=f.max_required_mu, start_balanced=f.balanced, start_residual=f.residual)
+    if f.max_required_mu > case["mu_s"]:
+        out["drop_reason"] = "friction"
+    elif growth is not None and growth > 1.0 + UNSTABLE_GROWTH:
+        out["drop_reason"] = "unstable start"
+    elif not f.balanced:
+        out["drop_reason"] = "unbalanced start"
+    return out
 
 
 def _check(st) -> str | None:
@@ -116,7 +157,8 @@ def run_gripper_case(case: dict, *, timeout_s: float = 60.0) -> dict:
 
     rec = dict(case)
     rec.update(outcome=None, error=None, error_type=None, steps=None, residual=None, held=None, penetration=None,
-               time_s=None)
+               time_s=None, start_mu=None, start_balanced=None, start_residual=None, start_growth=None,
+               drop_reason=None)
     t0 = time.perf_counter()
     try:
         with warnings.catch_warnings(), _deadline(timeout_s):
@@ -142,18 +184,33 @@ def run_gripper_case(case: dict, *, timeout_s: float = 60.0) -> dict:
         rec.update(outcome="unsettled", error=str(exc), error_type=type(exc).__name__)
     except Exception as exc:  # noqa: BLE001 - anything else is a failure, recorded
         rec.update(outcome="failed", error=f"{exc}\n{traceback.format_exc(limit=4)}", error_type=type(exc).__name__)
+    if rec["outcome"] == "unsettled" or (rec["outcome"] == "settled" and not rec["held"]):
+        try:
+            with warnings.catch_warnings(), _deadline(timeout_s):
+                rec.update(diagnose_start(case))
+        except Exception as exc:  # noqa: BLE001 - a diagnosis that fails is said, never the case's outcome
+            rec["drop_reason"] = f"undiagnosed ({type(exc).__name__}: {exc})"
     rec["time_s"] = time.perf_counter() - t0
     return rec
 
 
 def gripper_counts(recs) -> dict:
-    """Outcome -> number of K-finger cases, plus ``held`` and ``dropped`` among the settled."""
+    """Outcome -> number of K-finger cases, plus ``held`` and ``dropped`` among the settled, and
+    ``dropped_by`` / ``unsettled_by``: ``drop_reason`` -> number."""
     counts = {k: 0 for k in ("settled", "rejected", "unsettled", "failed")}
     for c in recs:
         counts[c["outcome"]] += 1
     counts["total"] = len(recs)
     counts["held"] = sum(1 for c in recs if c["outcome"] == "settled" and c["held"])
     counts["dropped"] = sum(1 for c in recs if c["outcome"] == "settled" and not c["held"])
+    for name, sel in (("dropped_by", lambda c: c["outcome"] == "settled" and not c["held"]),
+                      ("unsettled_by", lambda c: c["outcome"] == "unsettled")):
+        by: dict = {}
+        for c in recs:
+            if sel(c):
+                why = c.get("drop_reason") or "undiagnosed"
+                by[why] = by.get(why, 0) + 1
+        counts[name] = by
     return counts
 
 

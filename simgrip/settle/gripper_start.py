@@ -17,16 +17,26 @@ dynamics has only MuJoCo's contact softness left to settle.
   ``(s, N3)``; the least-norm change from ``(M, 0)`` that solves them is
   taken (:func:`balance_shares`); Newton on the shares makes the chains
   solved at those shares give them back (each chain carrying the tip couple
-  of its friction on the tip sphere's surface, ``r_tip n1 s``).  A share must
-  lie in ``[0, M_MAX]`` (the chain's load is a weight): where the balance
-  needs a finger to pull the workpiece down, or Newton does not converge in
-  :data:`BALANCE_ITERATIONS`, the best iterate is started from and the
-  dynamics settles the rest (slowly, or it drops the workpiece: reported,
-  never hidden).  With ``K >= 4`` fingers the
-  equations do not fix ``(s, N3)`` (internal forces: a squeeze of the
-  vertical shares, a twist of the ``N3``); the least-norm choice starts those
-  at zero, and the settled state keeps about that (statics cannot choose;
-  MuJoCo's contact solver, through its path, does).  Without it, a start whose shares do not balance the workpiece's
+  of its friction on the tip sphere's surface, ``r_tip n1 s``).  A share may
+  have either sign (``|s| <= M_MAX``): a negative one is a finger whose
+  friction pulls the workpiece *down* (the others then carry more than the
+  weight), and its chain is solved with that upward load on its tip
+  (:func:`simgrip.reference.solve_chain`'s signed ``load``).  Where Newton
+  does not converge in :data:`BALANCE_ITERATIONS`, the best iterate is
+  started from and the dynamics settles the rest (reported, never hidden).
+  Whether the friction can carry a start's forces is not the start's
+  business: :func:`start_forces` reports each finger's required ``mu``,
+  and a start that needs more than ``mu_s`` drops.
+* **Statically indeterminate internal forces** (``K >= 4``): the six
+  equations do not fix the ``2K`` unknowns ``(s, N3)``; ``2K - 6`` internal
+  modes (a squeeze of the vertical shares, a twist of the ``N3``) are free.
+  Per-finger ``N2`` and ``N3`` are then *not* determined by statics; the
+  start takes the least-norm choice and the dynamics keeps that split (the
+  sticking contacts hold what they start with; MuJoCo's contact solver,
+  through its path, moves it only by creep).  Only ``N1``, the tips and the
+  workpiece's pose are determinate: compare those, not the per-finger
+  ``N2``/``N3``, across resolutions or against another solver.  Without the
+  balanced start, a start whose shares do not balance the workpiece's
   moments loads those internal modes while the workpiece settles, and
   MuJoCo's sticking friction (a stiff viscous coupling, not a spring) lets
   them relax only by creep: the settle crawls for tens of thousands of steps
@@ -53,6 +63,7 @@ finger's loaded chain would pull on the workpiece (``N1 <= 0``).
 from __future__ import annotations
 
 import math
+from dataclasses import dataclass
 
 import numpy as np
 
@@ -61,7 +72,7 @@ from simgrip.settle.dynamics import DYN_TIMECONST
 from simgrip.settle.state import SettleError
 from simgrip.sim.gripper import GripperScene
 
-__all__ = ["balance_shares", "finger_chain", "is_symmetric", "rest_depth", "start_qpos"]
+__all__ = ["StartForces", "balance_shares", "finger_chain", "is_symmetric", "rest_depth", "start_forces", "start_growth", "start_qpos"]
 
 #: Newton iterations balancing the start's shares (each ``K + 1`` solves of every chain).
 BALANCE_ITERATIONS = 8
@@ -69,12 +80,19 @@ BALANCE_ITERATIONS = 8
 BALANCE_TOL = 1e-10
 #: The tip starts this far (over l) inside the surface, so that MuJoCo sees the contact.
 START_INSIDE = 1e-6
+#: A start whose linearised one-step transition grows by more than this per step is unstable
+#: (:func:`start_growth`): e^10 within the settle's 20 000-step budget.  MuJoCo's neutral modes (sticking
+#: friction is a viscous coupling: a drift along it neither grows nor decays) sit at 1 within ~2e-5.
+UNSTABLE_GROWTH = 5e-4
+#: Finite-difference step of :func:`start_growth`'s linearisation (qpos in m and rad, qvel).
+FD_EPS = 1e-9
 
 
 def finger_chain(scene: GripperScene, grip: str, X: float | None = None, guess=None, finger: int = 0,
                  M: float | None = None, contact_moment: float = 0.0):
     """Finger ``finger``'s hinge chain (its own profile) in ``grip``, tip at ``X``, load ``M``; None if unsolved.
 
+    ``M``: the workpiece's vertical load on the tip (``N2 = -M``, either sign; default ``params.M``).
     ``contact_moment``: the tip couple (about ``E3``, over ``rho g l^2``) of a force on the tip sphere's surface.
     """
     from simgrip.reference import DiscreteError, solve_chain
@@ -82,12 +100,11 @@ def finger_chain(scene: GripperScene, grip: str, X: float | None = None, guess=N
     p = scene.params
     if X is not None:
         p = p.replace(b=2.0 * X)
-    if M is not None:
-        p = p.replace(M=M)
     gravity = -float(scene.model.opt.gravity[2]) / scene.physical.g
     profile = scene.profiles[finger] if scene.profiles else scene.profile
     try:
-        return solve_chain(grip, p, profile, scene.n, guess=guess, gravity=gravity, contact_moment=contact_moment)
+        return solve_chain(grip, p, profile, scene.n, guess=guess, gravity=gravity, contact_moment=contact_moment,
+                           load=None if M is None or grip == "free" else float(M))
     except (DiscreteError, ValueError):
         return None
 
@@ -177,7 +194,7 @@ def _balanced(scene: GripperScene, X0, centre0, inside=None):
     Unknowns: the shares (and, for ``K = 2``, the shift along finger 0's ``E1``); equations: the
     shares that :func:`balance_shares` returns from the chains at those shares are the shares (and
     the two ``N1`` agree).  Finite-difference Jacobian, steps halved while a chain fails or a share
-    leaves ``[0, M_MAX]``; the best iterate is kept (an unbalanced start is settled by the dynamics).
+    leaves ``[-M_MAX, M_MAX]``; the best iterate is kept (an unbalanced start is settled by the dynamics).
     """
     K, M = scene.fingers, float(scene.params.M)
     e1 = np.array([math.cos(scene.azimuths[0]), math.sin(scene.azimuths[0])])
@@ -215,7 +232,7 @@ def _balanced(scene: GripperScene, X0, centre0, inside=None):
         step = -np.linalg.lstsq(J, R, rcond=None)[0]
         for _half in range(6):
             zn = z + step
-            if np.all((zn[:K] >= 0.0) & (zn[:K] <= M_MAX)) and (K != 2 or abs(zn[K]) < 0.5 * float(np.min(X0))):
+            if np.all(np.abs(zn[:K]) <= M_MAX) and (K != 2 or abs(zn[K]) < 0.5 * float(np.min(X0))):
                 try:
                     Rn, cn, Xn, centre_n = evaluate(zn, guesses)
                 except SettleError:
@@ -243,18 +260,41 @@ def rest_depth(N1, timestep: float, scene: GripperScene) -> np.ndarray:
     return np.maximum(START_INSIDE, np.asarray(N1, dtype=float) * tc * tc * scene.physical.g / scene.length)
 
 
-def start_qpos(scene: GripperScene, timestep: float | None = None) -> np.ndarray | None:
-    """qpos of the start (see the module docstring), or None when the workpiece cannot be held.
+@dataclass(frozen=True)
+class StartForces:
+    """The forces of the start (:func:`start_qpos`), per finger, in the finger's frame (over ``rho g l``).
 
-    ``timestep`` [s]: the dynamics' step; given, an unsymmetric start puts every tip at the depth
-    MuJoCo's contact rests at (:func:`rest_depth`) instead of :data:`START_INSIDE`.
+    ``N1`` (along ``E1``), ``N2 = -share`` (up) and ``N3`` (out of plane) are the force on the rod,
+    as :class:`~simgrip.settle.gripper.FingerRecord` reads the settled one; ``normal`` its component
+    along the workpiece's normal into the tip, ``tangential`` the magnitude of the rest, and
+    ``required_mu = tangential / normal`` (``inf`` where ``normal <= 0``): the friction coefficient the
+    start needs at each finger.  ``residual``: the largest of the workpiece's six equations the start
+    leaves unbalanced (0 to round-off when it is balanced); ``balanced``: ``residual`` below
+    :data:`BALANCE_TOL` times ``max(1, M)``.
     """
+
+    N1: np.ndarray
+    N2: np.ndarray
+    N3: np.ndarray
+    normal: np.ndarray
+    tangential: np.ndarray
+    required_mu: np.ndarray
+    residual: float
+    balanced: bool
+
+    @property
+    def max_required_mu(self) -> float:
+        return float(np.max(self.required_mu))
+
+
+def _start(scene: GripperScene, timestep: float | None):
+    """``(chains, X, centre, beta)`` of the start, or None when the workpiece cannot be held."""
     p = scene.params
-    K, L = scene.fingers, scene.length
+    K = scene.fingers
     beta = scene.contact_angle  # sphere: the tip at X = (b/2) cos(beta) on the sphere; 0 for vertical faces
     X = (np.full(K, 0.5 * p.b) if scene.reach is None else np.array(scene.reach)) * math.cos(beta)
     wq = scene.workpiece_qpos
-    centre = np.array(scene.model.qpos0[wq[:2]]) / L  # the builder's (offset, turned by yaw)
+    centre = np.array(scene.model.qpos0[wq[:2]]) / scene.length  # the builder's (offset, turned by yaw)
     for k in range(K):
         free = finger_chain(scene, "free", finger=k)
         if free is not None and float(np.sum(np.cos(free.link_angles))) / scene.n > X[k]:
@@ -268,6 +308,62 @@ def start_qpos(scene: GripperScene, timestep: float | None = None) -> np.ndarray
             chains, X, centre = _balanced(scene, X0, centre0, inside=rest_depth([c.N1 for c in chains], timestep, scene))
     if not all(ch.N1 > 0.0 for ch in chains):
         return None  # a loaded finger would have to pull on the workpiece: it cannot hold it
+    return chains, X, centre, beta
+
+
+def start_forces(scene: GripperScene, timestep: float | None = None) -> StartForces | None:
+    """The forces of the start :func:`start_qpos` makes (same arguments), or None when it holds nothing.
+
+    ``N1`` and ``N2`` are each chain's; ``N3`` the out-of-plane forces :func:`balance_shares` pairs with
+    the chains' shares (zero for a symmetric start).  The normal is the workpiece's at each finger
+    (horizontal, ``scene.normals``; a sphere's raised by ``scene.contact_angle``).
+    """
+    got = _start(scene, timestep)
+    if got is None:
+        return None
+    chains, X, centre, beta = got
+    K, M = scene.fingers, float(scene.params.M)
+    N1 = np.array([c.N1 for c in chains])
+    share = -np.array([c.N2 for c in chains])
+    arms = None if (is_symmetric(scene) or scene.workpiece == "sphere") else _arms(scene)
+    s, N3, _r = balance_shares(scene.azimuths, X, [c.tip[1] for c in chains], N1, centre, M, arms=arms)
+    if arms is None:
+        N3 = np.zeros(K)
+    # the workpiece's equations at the start's own shares (s from balance_shares is the least-norm answer)
+    az = np.asarray(scene.azimuths, dtype=float)
+    Y = np.array([c.tip[1] for c in chains])
+    c3 = np.array([centre[0], centre[1], float(np.mean(Y))])
+    force, moment = np.array([0.0, 0.0, -K * M]), np.zeros(3)
+    arm3 = np.zeros((K, 3)) if arms is None else np.asarray(arms, dtype=float)
+    for k, a in enumerate(az):
+        e1 = np.array([math.cos(a), math.sin(a), 0.0])
+        e3 = np.array([-math.sin(a), math.cos(a), 0.0])
+        on_rod = N1[k] * e1 + N3[k] * e3 - share[k] * np.array([0.0, 0.0, 1.0])
+        force -= on_rod
+        moment += np.cross(X[k] * e1 + np.array([0.0, 0.0, Y[k]]) - c3 + arm3[k], -on_rod)
+    residual = float(max(np.max(np.abs(force)), np.max(np.abs(moment))))
+    nh = _normals(scene)
+    normal_3 = np.stack([math.cos(beta) * nh[:, 0], math.cos(beta) * nh[:, 1], np.full(K, math.sin(beta))], axis=1)
+    F = np.stack([N1, N3, -share], axis=1)  # (E1, E3, up) on the rod
+    normal = np.einsum("ij,ij->i", F, normal_3)
+    tangential = np.sqrt(np.maximum(np.einsum("ij,ij->i", F, F) - normal**2, 0.0))
+    with np.errstate(divide="ignore", invalid="ignore"):
+        mu = np.where(normal > 0.0, tangential / np.where(normal > 0.0, normal, 1.0), math.inf)
+    return StartForces(N1=N1, N2=-share, N3=N3, normal=normal, tangential=tangential, required_mu=mu,
+                       residual=residual, balanced=bool(residual < BALANCE_TOL * max(1.0, M)))
+
+
+def start_qpos(scene: GripperScene, timestep: float | None = None) -> np.ndarray | None:
+    """qpos of the start (see the module docstring), or None when the workpiece cannot be held.
+
+    ``timestep`` [s]: the dynamics' step; given, an unsymmetric start puts every tip at the depth
+    MuJoCo's contact rests at (:func:`rest_depth`) instead of :data:`START_INSIDE`.
+    """
+    got = _start(scene, timestep)
+    if got is None:
+        return None
+    chains, X, centre, beta = got
+    p, L, wq = scene.params, scene.length, scene.workpiece_qpos
     q = np.array(scene.data.qpos)
     for k, ch in enumerate(chains):
         q[scene.joint_qpos[k]] = ch.joint_angles
@@ -277,3 +373,51 @@ def start_qpos(scene: GripperScene, timestep: float | None = None) -> np.ndarray
     turn = scene.yaw + scene.workpiece_yaw
     q[wq[3:]] = [math.cos(0.5 * turn), 0.0, 0.0, math.sin(0.5 * turn)]
     return q
+
+
+def start_growth(scene: GripperScene, step_factor: float = 1.0) -> float | None:
+    """Largest ``|eigenvalue|`` of the settle's one-step map linearised about its start; None if it holds nothing.
+
+    The start (:func:`start_qpos` at the dynamics' step ``step_factor h``, at rest) is an equilibrium
+    of the workpiece and the chains; whether it is a *stable* one is read from MuJoCo's own
+    over-damped dynamics (:mod:`simgrip.settle.gripper`'s options, contacts sticking): the transition
+    ``x_{t+1} = A x_t`` (``x = (qpos, qvel)``, centred finite differences, :func:`mujoco.mjd_transitionFD`)
+    has its largest eigenvalue modulus at 1 (neutral: the sticking drift) for a stable start and above
+    1 when a mode grows: ``> 1 + UNSTABLE_GROWTH`` is an unstable equilibrium (a real eigenvalue: a
+    negative stiffness, the workpiece tipping out of the grip), which the dynamics then leaves
+    exponentially at that rate per step.  The model's options are restored.
+    """
+    import mujoco
+
+    from simgrip.settle.gripper import _Dyn
+    from simgrip.settle.statics import restore_options, save_options
+
+    m, d = scene.model, scene.data
+    saved, q_saved = save_options(m), np.array(d.qpos)
+    try:
+        q = start_qpos(scene)
+        if q is None:
+            return None
+        d.qpos[:] = q
+        d.qvel[:] = 0.0
+        mujoco.mj_forward(m, d)
+        dyn = _Dyn(scene, float(step_factor))
+        if not is_symmetric(scene) and scene.workpiece != "sphere":
+            q = start_qpos(scene, timestep=dyn.h)
+            d.qpos[:] = q
+        d.qvel[:] = 0.0
+        mujoco.mj_forward(m, d)
+        n = 2 * m.nv + m.na
+        A = np.zeros((n, n))
+        tol, its = float(m.opt.tolerance), int(m.opt.iterations)
+        m.opt.tolerance, m.opt.iterations = 0.0, max(its, 200)  # the solver to round-off: no noise to difference
+        try:
+            mujoco.mjd_transitionFD(m, d, FD_EPS, 1, A, None, None, None)
+        finally:
+            m.opt.tolerance, m.opt.iterations = tol, its
+        return float(np.max(np.abs(np.linalg.eigvals(A))))
+    finally:
+        restore_options(m, saved)
+        d.qpos[:] = q_saved
+        d.qvel[:] = 0.0
+        mujoco.mj_forward(m, d)
