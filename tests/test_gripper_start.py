@@ -91,7 +91,7 @@ def test_the_balanced_start_is_what_lets_the_settle_finish(monkeypatch):
         return build_gripper("I", STANDARD, -6.0, 16, fingers=4, workpiece="box", offset=(0.02, 0.01),
                              workpiece_yaw=0.1)
 
-    st = settle_gripper(build())
+    st = settle_gripper(build(), method="dynamics")
     assert st.held and st.converged and st.steps <= 100
     q = start_qpos(build(), timestep=st.timestep)
     assert q is not None and np.all(np.isfinite(q))
@@ -100,7 +100,7 @@ def test_the_balanced_start_is_what_lets_the_settle_finish(monkeypatch):
 
     monkeypatch.setattr(settle_module, "is_symmetric", lambda scene: True)
     with pytest.raises(SettleError, match="did not converge"):
-        settle_gripper(build())
+        settle_gripper(build(), method="dynamics")
 
 
 def test_a_start_that_needs_a_pulling_finger_is_balanced_with_a_negative_share():
@@ -127,8 +127,8 @@ def test_start_forces_of_a_symmetric_grasp_are_the_planar_problem():
 def test_stress_case_22_starts_at_an_unstable_equilibrium():
     """Stress case 22 (four-finger box, Grip I, n = 8) has a balanced start whose friction suffices, yet the
     settle leaves it exponentially until the box tips out.  The settle's one-step map linearised about the
-    start has a real eigenvalue ~1.0175 per step (measured growth of the box's tilt in the run: ~1.0135 per
-    step at MuJoCo's default solver tolerance); a stable start of the same kind (case 2, four-finger box)
+    start has a real eigenvalue ~1.0135 per step (the growth of the box's turn measured in the run: 1.0133 to
+    1.0136 per step over steps 200 to 600); a stable start of the same kind (case 2, four-finger box)
     has none above 1 beyond the neutral drift of sticking friction."""
     bad, good = _scene(make_gripper_cases(23)[22]), _scene(make_gripper_cases(3)[2])
     f = start_forces(bad)

@@ -88,8 +88,8 @@ def test_a_drop_is_explained_from_its_start(monkeypatch):
         return lambda scene: replace(f, balanced=balanced)
 
     for mu, growth, balanced, reason in ((2 * case["mu_s"], 1.5, False, "friction"),
-                                        (0.5 * case["mu_s"], 1.0 + 2 * gs.UNSTABLE_GROWTH, False, "unstable start"),
-                                        (0.5 * case["mu_s"], 1.0, False, "unbalanced start"),
+                                        (0.5 * case["mu_s"], 1.5, False, "unbalanced start"),
+                                        (0.5 * case["mu_s"], 1.0 + 2 * gs.UNSTABLE_GROWTH, True, "unstable start"),
                                         (0.5 * case["mu_s"], 1.0, True, "unexplained")):
         monkeypatch.setattr(gs, "start_forces", forces(mu, balanced))
         monkeypatch.setattr(gs, "start_growth", lambda scene, g=growth: g)
@@ -102,5 +102,7 @@ def test_a_drop_is_explained_from_its_start(monkeypatch):
     monkeypatch.setattr(sg, "_settle", lambda _c: replace(good, held=False, records=[]))
     rec = run_gripper_case(case)
     assert rec["outcome"] == "settled" and rec["drop_reason"] == "unexplained"
+    monkeypatch.setattr(sg, "_settle", lambda _c: replace(good, held=False, records=[], grip_matched=False))
+    assert run_gripper_case(case)["drop_reason"] == "wrong grip"
     counts = gripper_counts([rec, dict(rec, outcome="unsettled", drop_reason="friction")])
     assert counts["dropped_by"] == {"unexplained": 1} and counts["unsettled_by"] == {"friction": 1}

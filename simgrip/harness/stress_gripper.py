@@ -19,12 +19,15 @@ A drop, or a settle that does not end, is explained from its start
 ``start_balanced`` / ``start_residual`` (whether a start with the workpiece
 level balances it at all) and ``start_growth`` (the largest eigenvalue
 modulus of the settle's one-step map linearised about the start).  Its
-``drop_reason`` is the first that applies of ``"friction"`` (``start_mu >
-mu_s``), ``"unstable start"`` (``start_growth > 1 + UNSTABLE_GROWTH``: the
-workpiece leaves an unstable equilibrium exponentially), ``"unbalanced
-start"`` (no balanced level start: the dynamics had to find one) and
-``"unexplained"`` (a balanced, stable start whose friction suffices: a
-finding, not an expected drop).
+``drop_reason`` is the first that applies of ``"wrong grip"`` (held, but a
+tip settled on the other grip's side of the palm, so reported not held:
+:func:`simgrip.validity.check_grip_shape`), ``"friction"`` (``start_mu >
+mu_s``), ``"unbalanced start"`` (no balanced start with the workpiece level:
+the dynamics had to find one, and its ``start_mu`` and ``start_growth`` are
+about a state that is not an equilibrium), ``"unstable start"``
+(``start_growth > 1 + UNSTABLE_GROWTH``: the workpiece leaves an unstable
+equilibrium exponentially) and ``"unexplained"`` (a balanced, stable start
+whose friction suffices: a finding, not an expected drop).
 
 :func:`make_gripper_cases` draws the cases from a seeded generator
 (:func:`numpy.random.default_rng`), so a run is reproducible and its cases do
@@ -61,7 +64,7 @@ MAX_BOX_YAW = 0.15
 #: Inputs a rejection may name (beyond simgrip.harness.stress.INPUT_NAMES).
 GRIPPER_INPUTS = ("offset", "workpiece_yaw", "workpiece", "kappa_per_finger", "contact_angle")
 #: Why a case dropped or did not settle, in the order they are tested (see the module docstring).
-DROP_REASONS = ("friction", "unstable start", "unbalanced start", "unexplained")
+DROP_REASONS = ("wrong grip", "friction", "unbalanced start", "unstable start", "unexplained")
 
 
 def make_gripper_cases(count: int, seed: int = 0, max_links: int = 32) -> list[dict]:
@@ -113,7 +116,8 @@ def _settle(case: dict):
 
 def diagnose_start(case: dict) -> dict:
     """The start's ``start_mu``, ``start_balanced``, ``start_residual``, ``start_growth`` and the ``drop_reason``
-    they give (see the module docstring); the first three None when the start holds nothing."""
+    they give (see the module docstring; all but ``"wrong grip"``); the first three None when the start holds
+    nothing."""
     from simgrip.settle.gripper_start import UNSTABLE_GROWTH, start_forces, start_growth
 
     f = start_forces(_scene(case))
@@ -125,10 +129,10 @@ def diagnose_start(case: dict) -> dict:
     out.update(start_mu=f.max_required_mu, start_balanced=f.balanced, start_residual=f.residual)
     if f.max_required_mu > case["mu_s"]:
         out["drop_reason"] = "friction"
-    elif growth is not None and growth > 1.0 + UNSTABLE_GROWTH:
-        out["drop_reason"] = "unstable start"
     elif not f.balanced:
         out["drop_reason"] = "unbalanced start"
+    elif growth is not None and growth > 1.0 + UNSTABLE_GROWTH:
+        out["drop_reason"] = "unstable start"
     return out
 
 
@@ -157,8 +161,8 @@ def run_gripper_case(case: dict, *, timeout_s: float = 60.0) -> dict:
 
     rec = dict(case)
     rec.update(outcome=None, error=None, error_type=None, steps=None, residual=None, held=None, penetration=None,
-               time_s=None, start_mu=None, start_balanced=None, start_residual=None, start_growth=None,
-               drop_reason=None)
+               time_s=None, grip_matched=None, start_mu=None, start_balanced=None, start_residual=None,
+               start_growth=None, drop_reason=None)
     t0 = time.perf_counter()
     try:
         with warnings.catch_warnings(), _deadline(timeout_s):
@@ -166,7 +170,7 @@ def run_gripper_case(case: dict, *, timeout_s: float = 60.0) -> dict:
             st = _settle(case)
             again = _settle(case)
         rec.update(steps=int(st.steps), residual=float(st.residual), held=bool(st.held),
-                   penetration=float(st.penetration))
+                   penetration=float(st.penetration), grip_matched=bool(st.grip_matched))
         why = _check(st)
         if why is None and not (np.array_equal(st.qpos, again.qpos) and st.steps == again.steps):
             why = "not deterministic: the same case settled twice differs"
@@ -188,6 +192,8 @@ def run_gripper_case(case: dict, *, timeout_s: float = 60.0) -> dict:
         try:
             with warnings.catch_warnings(), _deadline(timeout_s):
                 rec.update(diagnose_start(case))
+            if rec["grip_matched"] is False:
+                rec["drop_reason"] = "wrong grip"
         except Exception as exc:  # noqa: BLE001 - a diagnosis that fails is said, never the case's outcome
             rec["drop_reason"] = f"undiagnosed ({type(exc).__name__}: {exc})"
     rec["time_s"] = time.perf_counter() - t0
