@@ -78,6 +78,7 @@ def test_the_checks_can_fail(monkeypatch):
 def test_a_drop_is_explained_from_its_start(monkeypatch):
     """diagnose_start names the first reason that applies; run_gripper_case records it for drops and unsettled
     cases only, and gripper_counts tallies them."""
+    from simgrip.settle import gripper_stability as gst
     from simgrip.settle import gripper_start as gs
 
     case = make_gripper_cases(1)[0]
@@ -87,14 +88,16 @@ def test_a_drop_is_explained_from_its_start(monkeypatch):
         f = real if mu is None else replace(real, required_mu=np.full_like(real.required_mu, mu))
         return lambda scene: replace(f, balanced=balanced)
 
-    for mu, growth, balanced, reason in ((2 * case["mu_s"], 1.5, False, "friction"),
-                                        (0.5 * case["mu_s"], 1.5, False, "unbalanced start"),
-                                        (0.5 * case["mu_s"], 1.0 + 2 * gs.UNSTABLE_GROWTH, True, "unstable start"),
-                                        (0.5 * case["mu_s"], 1.0, True, "unexplained")):
+    for mu, eig, balanced, reason in ((2 * case["mu_s"], -1.0, False, "friction"),
+                                     (0.5 * case["mu_s"], -1.0, False, "unbalanced start"),
+                                     (0.5 * case["mu_s"], -1.0, True, "unstable start"),
+                                     (0.5 * case["mu_s"], 1.0, True, "unexplained")):
         monkeypatch.setattr(gs, "start_forces", forces(mu, balanced))
-        monkeypatch.setattr(gs, "start_growth", lambda scene, g=growth: g)
+        monkeypatch.setattr(gst, "start_growth", lambda scene: 1.25)
+        monkeypatch.setattr(gst, "start_stiffness", lambda scene, e=eig: gst.StartStiffness(np.array([e, 2.0]), 2, 1e-6))
         d = sg.diagnose_start(case)
-        assert d["drop_reason"] == reason and d["start_mu"] == pytest.approx(mu) and d["start_growth"] == growth
+        assert d["drop_reason"] == reason and d["start_mu"] == pytest.approx(mu) and d["start_growth"] == 1.25
+        assert d["start_min_eigenvalue"] == eig
     # a held case is not diagnosed; a dropped one is
     good = sg._settle(case)
     monkeypatch.setattr(sg, "_settle", lambda _c: good)

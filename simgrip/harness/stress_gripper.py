@@ -17,16 +17,20 @@ A drop, or a settle that does not end, is explained from its start
 (:func:`diagnose_start`, :mod:`simgrip.settle.gripper_start`): ``start_mu``
 (the largest friction coefficient the start's forces need at a finger),
 ``start_balanced`` / ``start_residual`` (whether a start with the workpiece
-level balances it at all) and ``start_growth`` (the largest eigenvalue
-modulus of the settle's one-step map linearised about the start).  Its
+level balances it at all), ``start_min_eigenvalue`` (the smallest
+eigenvalue of the statics' second variation on the workpiece's admissible
+motions, negative: unstable) and ``start_growth`` (the largest eigenvalue
+modulus of the settle's one-step map linearised about the start, above
+``1 + UNSTABLE_GROWTH``: unstable), both from
+:mod:`simgrip.settle.gripper_stability`.  Its
 ``drop_reason`` is the first that applies of ``"wrong grip"`` (held, but a
 tip settled on the other grip's side of the palm, so reported not held:
 :func:`simgrip.validity.check_grip_shape`), ``"friction"`` (``start_mu >
 mu_s``), ``"unbalanced start"`` (no balanced start with the workpiece level:
 the dynamics had to find one, and its ``start_mu`` and ``start_growth`` are
 about a state that is not an equilibrium), ``"unstable start"``
-(``start_growth > 1 + UNSTABLE_GROWTH``: the workpiece leaves an unstable
-equilibrium exponentially) and ``"unexplained"`` (a balanced, stable start
+(a negative ``start_min_eigenvalue``: the workpiece leaves an unstable
+equilibrium exponentially, at the rate ``start_growth`` per step) and ``"unexplained"`` (a balanced, stable start
 whose friction suffices: a finding, not an expected drop).
 
 :func:`make_gripper_cases` draws the cases from a seeded generator
@@ -118,20 +122,24 @@ def diagnose_start(case: dict) -> dict:
     """The start's ``start_mu``, ``start_balanced``, ``start_residual``, ``start_growth`` and the ``drop_reason``
     they give (see the module docstring; all but ``"wrong grip"``); the first three None when the start holds
     nothing."""
-    from simgrip.settle.gripper_start import UNSTABLE_GROWTH, start_forces, start_growth
+    from simgrip.settle.gripper_stability import start_growth, start_stiffness
+    from simgrip.settle.gripper_start import start_forces
 
     f = start_forces(_scene(case))
     growth = start_growth(_scene(case))
-    out = dict(start_mu=None, start_balanced=None, start_residual=None,
+    out = dict(start_mu=None, start_balanced=None, start_residual=None, start_min_eigenvalue=None,
                start_growth=None if growth is None else float(growth), drop_reason="unexplained")
     if f is None:
         return out
+    stiff = start_stiffness(_scene(case)) if case["workpiece"] != "sphere" else None
+    if stiff is not None:
+        out["start_min_eigenvalue"] = stiff.min_eigenvalue
     out.update(start_mu=f.max_required_mu, start_balanced=f.balanced, start_residual=f.residual)
     if f.max_required_mu > case["mu_s"]:
         out["drop_reason"] = "friction"
     elif not f.balanced:
         out["drop_reason"] = "unbalanced start"
-    elif growth is not None and growth > 1.0 + UNSTABLE_GROWTH:
+    elif stiff is not None and not stiff.stable:
         out["drop_reason"] = "unstable start"
     return out
 
@@ -162,7 +170,7 @@ def run_gripper_case(case: dict, *, timeout_s: float = 60.0) -> dict:
     rec = dict(case)
     rec.update(outcome=None, error=None, error_type=None, steps=None, residual=None, held=None, penetration=None,
                time_s=None, grip_matched=None, start_mu=None, start_balanced=None, start_residual=None,
-               start_growth=None, drop_reason=None)
+               start_min_eigenvalue=None, start_growth=None, drop_reason=None)
     t0 = time.perf_counter()
     try:
         with warnings.catch_warnings(), _deadline(timeout_s):

@@ -88,7 +88,8 @@ class ChainEquilibrium(DiscreteEquilibrium):
         Tip for I/II, the material point at ``gamma`` for III, None for free.
     N1, N2, energy, min_eigenvalue, gradient_norm, iterations, success
         See :class:`~simgrip.reference.minimiser.DiscreteEquilibrium`; the
-        eigenvalue's metric is ``ds`` per link.
+        eigenvalue's metric is ``ds`` per link.  ``N2 = -load``, the load solved
+        with (``params.M`` unless :func:`solve_chain` was given ``load``).
     gamma : float or None
         Grip III contact arc length used.
     contact_moment : float

@@ -26,7 +26,8 @@ dynamics has only MuJoCo's contact softness left to settle.
   started from and the dynamics settles the rest (reported, never hidden).
   Whether the friction can carry a start's forces is not the start's
   business: :func:`start_forces` reports each finger's required ``mu``,
-  and a start that needs more than ``mu_s`` drops.
+  and a start that needs more than ``mu_s`` drops; whether the balanced
+  start is a stable equilibrium is :mod:`simgrip.settle.gripper_stability`'s.
 * **Statically indeterminate internal forces** (``K >= 4``): the six
   equations do not fix the ``2K`` unknowns ``(s, N3)``; ``2K - 6`` internal
   modes (a squeeze of the vertical shares, a twist of the ``N3``) are free.
@@ -72,7 +73,7 @@ from simgrip.settle.dynamics import DYN_TIMECONST
 from simgrip.settle.state import SettleError
 from simgrip.sim.gripper import GripperScene
 
-__all__ = ["StartForces", "balance_shares", "finger_chain", "is_symmetric", "rest_depth", "start_forces", "start_growth", "start_qpos"]
+__all__ = ["StartForces", "balance_shares", "finger_chain", "is_symmetric", "rest_depth", "start_forces", "start_qpos"]
 
 #: Newton iterations balancing the start's shares (each ``K + 1`` solves of every chain).
 BALANCE_ITERATIONS = 8
@@ -80,12 +81,6 @@ BALANCE_ITERATIONS = 8
 BALANCE_TOL = 1e-10
 #: The tip starts this far (over l) inside the surface, so that MuJoCo sees the contact.
 START_INSIDE = 1e-6
-#: A start whose linearised one-step transition grows by more than this per step is unstable
-#: (:func:`start_growth`): e^10 within the settle's 20 000-step budget.  MuJoCo's neutral modes (sticking
-#: friction is a viscous coupling: a drift along it neither grows nor decays) sit at 1 within ~2e-5.
-UNSTABLE_GROWTH = 5e-4
-#: Finite-difference step of :func:`start_growth`'s linearisation (qpos in m and rad, qvel).
-FD_EPS = 1e-9
 
 
 def finger_chain(scene: GripperScene, grip: str, X: float | None = None, guess=None, finger: int = 0,
@@ -374,50 +369,3 @@ def start_qpos(scene: GripperScene, timestep: float | None = None) -> np.ndarray
     q[wq[3:]] = [math.cos(0.5 * turn), 0.0, 0.0, math.sin(0.5 * turn)]
     return q
 
-
-def start_growth(scene: GripperScene, step_factor: float = 1.0) -> float | None:
-    """Largest ``|eigenvalue|`` of the settle's one-step map linearised about its start; None if it holds nothing.
-
-    The start (:func:`start_qpos` at the dynamics' step ``step_factor h``, at rest) is an equilibrium
-    of the workpiece and the chains; whether it is a *stable* one is read from MuJoCo's own
-    over-damped dynamics (:mod:`simgrip.settle.gripper`'s options, contacts sticking): the transition
-    ``x_{t+1} = A x_t`` (``x = (qpos, qvel)``, centred finite differences, :func:`mujoco.mjd_transitionFD`)
-    has its largest eigenvalue modulus at 1 (neutral: the sticking drift) for a stable start and above
-    1 when a mode grows: ``> 1 + UNSTABLE_GROWTH`` is an unstable equilibrium (a real eigenvalue: a
-    negative stiffness, the workpiece tipping out of the grip), which the dynamics then leaves
-    exponentially at that rate per step.  The model's options are restored.
-    """
-    import mujoco
-
-    from simgrip.settle.gripper import _Dyn
-    from simgrip.settle.statics import restore_options, save_options
-
-    m, d = scene.model, scene.data
-    saved, q_saved = save_options(m), np.array(d.qpos)
-    try:
-        q = start_qpos(scene)
-        if q is None:
-            return None
-        d.qpos[:] = q
-        d.qvel[:] = 0.0
-        mujoco.mj_forward(m, d)
-        dyn = _Dyn(scene, float(step_factor))
-        if not is_symmetric(scene) and scene.workpiece != "sphere":
-            q = start_qpos(scene, timestep=dyn.h)
-            d.qpos[:] = q
-        d.qvel[:] = 0.0
-        mujoco.mj_forward(m, d)
-        n = 2 * m.nv + m.na
-        A = np.zeros((n, n))
-        tol, its = float(m.opt.tolerance), int(m.opt.iterations)
-        m.opt.tolerance, m.opt.iterations = 0.0, max(its, 200)  # the solver to round-off: no noise to difference
-        try:
-            mujoco.mjd_transitionFD(m, d, FD_EPS, 1, A, None, None, None)
-        finally:
-            m.opt.tolerance, m.opt.iterations = tol, its
-        return float(np.max(np.abs(np.linalg.eigvals(A))))
-    finally:
-        restore_options(m, saved)
-        d.qpos[:] = q_saved
-        d.qvel[:] = 0.0
-        mujoco.mj_forward(m, d)
