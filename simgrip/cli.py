@@ -109,20 +109,24 @@ def build_parser() -> argparse.ArgumentParser:
         p.add_argument(
             "--method", default=None,
             help="settle method: newton (static solve, residual 1e-10) or dynamics "
-            "(over-damped MuJoCo dynamics with MuJoCo's own friction) [default newton]",
+            "(over-damped MuJoCo dynamics with MuJoCo's own friction) [default newton]; with --fingers: "
+            "auto (the symmetry skip where the scene is exactly symmetric, else dynamics), symmetric or "
+            "dynamics [default auto]",
         )
         p.add_argument("--contact", default=None,
                        help="where sticking friction acts: point (the finger's centreline, the paper's point "
                        "contact; default for newton) or surface (MuJoCo's contact point on the tip sphere, whose "
-                       "radius adds a couple; the reference then carries it; the only choice for dynamics)")
+                       "radius adds a couple; the reference then carries it; the only choice for dynamics); "
+                       "with --fingers: the symmetry skip's (point by default; surface for box and cylinder)")
         p.add_argument("--target-error", type=float, default=None,
                        help="settle to this error (tip over l, forces relative) by Richardson extrapolation over "
                        "resolutions it chooses (free, I, II; --links is then ignored)")
         if name == "simulate":
             p.add_argument("--fingers", type=int, default=None,
                            help="K >= 2 fingers around the palm axis holding a workpiece free in 3-D (Grips I, II: "
-                           "settled by dynamics; III: a box with K = 4, each finger carrying its face's bottom edge, "
-                           "settled as the planar cradle); --json gains 'fingers', one record per finger")
+                           "the symmetry skip where exactly symmetric, else dynamics, see --method; III: a box with "
+                           "K = 4, each finger carrying its face's bottom edge, settled as the planar cradle); "
+                           "--json gains 'fingers', one record per finger, and 'method', which settle ran")
             p.add_argument("--workpiece", default=None,
                            help="with --fingers: box (K = 2 or 4), cylinder or sphere (diameter b) [default cylinder]")
             p.add_argument("--offset", type=float, nargs=2, default=None, metavar=("DX", "DY"),
@@ -132,9 +136,9 @@ def build_parser() -> argparse.ArgumentParser:
                            help="with --fingers: the workpiece turned about its vertical axis, degrees [default 0]")
             p.add_argument("--kappa-per-finger", type=float, nargs="+", default=None, metavar="K",
                            help="with --fingers: one uniform curvature per finger (K values; replaces --kappa)")
-            p.add_argument("--contact-angle", type=float, default=None,
-                           help="with --workpiece sphere: elevation of the contact normal at the start, radians in "
-                           "(-pi/2, pi/2) (0: the equator) [default 0]")
+            p.add_argument("--contact-angle", type=float, default=None, metavar="DEG",
+                           help="with --workpiece sphere: elevation of the contact normal at the start, degrees in "
+                           "(-90, 90) (0: the equator) [default 0]; the JSON's angles are in radians")
 
     p = sub.add_parser("bench", help="run time against error, naive vs settle vs minimiser vs BVP, what skipping buys")
     from simgrip.harness import bench as _bench  # light: matplotlib/mujoco are imported inside its functions
@@ -225,9 +229,14 @@ def _cmd_simulate(args) -> dict:
         from simgrip.gripper import gripper_record, simulate_gripper
         from simgrip.sim.gripper import uniform_profiles
 
-        if args.method not in (None, "dynamics") or args.target_error is not None or args.contact is not None:
-            raise ValueError("method: a K-finger gripper (--fingers) settles by dynamics only (no --method newton, "
-                             "no --target-error, no --contact)")
+        from simgrip.settle.gripper_symmetry import GRIPPER_METHODS
+
+        if args.method is not None and args.method not in GRIPPER_METHODS:
+            raise ValueError(f"method: a K-finger gripper (--fingers) settles by {' or '.join(GRIPPER_METHODS)} "
+                             f"(no newton: that is the planar finger's), got {args.method!r}")
+        if args.target_error is not None:
+            raise ValueError("method: --target-error extrapolates the planar finger's settle; a K-finger gripper "
+                             "(--fingers) has none")
         if args.fingers is None:
             raise ValueError("fingers: --workpiece, --contact-angle, --offset, --workpiece-yaw and --kappa-per-finger "
                              "need --fingers K")
@@ -238,11 +247,15 @@ def _cmd_simulate(args) -> dict:
         yaw_deg = 0.0 if args.workpiece_yaw is None else args.workpiece_yaw
         if not math.isfinite(yaw_deg):
             raise ValueError(f"workpiece_yaw must be finite (degrees), got {yaw_deg!r}")
+        beta_deg = 0.0 if args.contact_angle is None else args.contact_angle
+        if not (math.isfinite(beta_deg) and abs(beta_deg) < 90.0):
+            raise ValueError(f"contact_angle must lie in (-90, 90) degrees, got {beta_deg!r}")
         state = simulate_gripper(grip, params, profile, links, fingers=args.fingers,
                                  workpiece=args.workpiece or "cylinder",
-                                 contact_angle=args.contact_angle or 0.0,
+                                 contact_angle=math.radians(beta_deg),
                                  offset=args.offset if args.offset is not None else (0.0, 0.0),
-                                 workpiece_yaw=math.radians(yaw_deg))
+                                 workpiece_yaw=math.radians(yaw_deg), method=args.method or "auto",
+                                 contact=args.contact)
         return gripper_record(state, params, profile)
     return settled_record(simulate(grip, params, profile, links, method=args.method or "newton",
                                    target_error=args.target_error, contact=args.contact),

@@ -23,9 +23,10 @@ def simulate_gripper(grip: str, params: DimensionlessParams, profile, links: int
                      **settle_kw):
     """Build the K-finger gripper and settle it; returns its :class:`~simgrip.settle.gripper.GripperState`.
 
-    ``profile`` is one profile or one per finger; ``yaw``, ``contact_angle``, ``offset`` (over l) and
-    ``workpiece_yaw`` [rad] go to :func:`~simgrip.sim.gripper.build_gripper`, extra keywords to
-    :func:`~simgrip.settle.gripper.settle_gripper`.
+    ``profile`` is one profile or one per finger; ``yaw``, ``contact_angle`` [rad], ``offset`` (over l)
+    and ``workpiece_yaw`` [rad] go to :func:`~simgrip.sim.gripper.build_gripper`, extra keywords
+    (``method``: default ``"auto"``, the symmetry skip where the scene is exactly symmetric, else the
+    dynamics; ``contact``, ``tol``, ...) to :func:`~simgrip.settle.gripper.settle_gripper`.
     """
     from simgrip.settle.gripper import settle_gripper
     from simgrip.sim.gripper import build_gripper
@@ -87,13 +88,17 @@ def gripper_record(state, params: DimensionlessParams, profile=None) -> dict:
     Top level: the planar ``simulate`` record's fields for finger 0
     (``tip``, ``normal_force``, ``friction_force``, ``required_mu``, ``N1``,
     ``N2``; zeros when dropped), ``held`` and ``feasible`` for the workpiece,
-    the settle's ``steps``, ``residual``, ``penetration``, ``wall_time_s``;
-    then ``fingers``: one record per finger (``normal_force``,
+    the settle's ``steps``, ``residual``, ``penetration``, ``wall_time_s``,
+    ``method`` (which settle ran: ``"symmetric"``, the symmetry skip, or
+    ``"dynamics"``) and ``contact`` (where the friction acts: ``"point"`` or
+    ``"surface"``); then ``fingers``: one record per finger (``normal_force``,
     ``friction_force``, ``N1``, ``N2``, ``N3``, ``tip``, ``contact`` (X, Y,
     out of plane), ``contact_angle``, ``contact_moment``, ``required_mu``,
     ``penetration``; zero forces and ``contact`` None for a finger off the
-    workpiece), ``workpiece``, ``workpiece_position`` and the
-    workpiece's ``force_balance`` / ``moment_balance``.
+    workpiece), ``workpiece``, ``workpiece_position``, ``offset``,
+    ``workpiece_yaw`` and the workpiece's ``force_balance`` / ``moment_balance``.
+    Angles (``contact_angle``, ``workpiece_yaw``) are in radians, whatever the
+    command line took (degrees).
     """
     first = state.records[0] if state.records else None
     return {
@@ -110,7 +115,8 @@ def gripper_record(state, params: DimensionlessParams, profile=None) -> dict:
         "N1": float(first.N1) if first else 0.0,
         "N2": float(first.N2) if first else 0.0,
         **settle_fields(state),
-        "method": getattr(state, "method", "dynamics"),
+        "method": state.method,
+        "contact": state.contact,
         "warnings": list(state.warnings),
         "extrapolated": False,
         "error_estimate": None,

@@ -111,7 +111,7 @@ def small_grasps():
     out = {}
     for K, shape in fg.GRASPS.values():
         sc = build_gripper("I", STANDARD, Uniform(-6.0), SMALL_N, fingers=K, workpiece=shape)
-        out[K] = sc, settle_gripper(sc)
+        out[K] = sc, settle_gripper(sc, method="dynamics")
     return out
 
 

@@ -70,7 +70,7 @@ CONVERGENCE = ["cyl3-offset-kappa-I", "box4-offset-yaw-I", "box4-kappa-I", "cyl3
 def _settle(name, n=N, params=STANDARD, tol=None, **kw):
     grip, profile, build = SCENES[name]
     return settle_gripper(build_gripper(grip, params, profile, n, **{**build, **kw}),
-                          **({} if tol is None else {"tol": tol}))
+                          **({} if tol is None else {"tol": tol}), method="dynamics")
 
 
 def _values(st) -> np.ndarray:
@@ -154,14 +154,15 @@ def test_deterministic():
 @pytest.mark.parametrize("K, shape, kappa", [(3, "cylinder", -6.0), (4, "box", -6.0), (3, "cylinder", 5.0)])
 def test_no_offset_no_turn_equal_fingers_is_the_symmetric_grasp(K, shape, kappa):
     grip = "I" if kappa < 0 else "II"
-    sym = settle_gripper(build_gripper(grip, STANDARD, kappa, N, fingers=K, workpiece=shape))
+    sym = settle_gripper(build_gripper(grip, STANDARD, kappa, N, fingers=K, workpiece=shape), method="dynamics")
     same = settle_gripper(build_gripper(grip, STANDARD, [kappa] * K, N, fingers=K, workpiece=shape,
-                                        offset=(0.0, 0.0), workpiece_yaw=0.0))
+                                        offset=(0.0, 0.0), workpiece_yaw=0.0), method="dynamics")
     assert sym.held and np.array_equal(sym.qpos, same.qpos) and np.array_equal(_values(sym), _values(same))
     # every finger alike, to round-off
     assert np.ptp(_values(sym), axis=0).max() <= 1e-9
     # through the balanced start (a vanishing offset): the same equilibrium within the tolerance
-    near = settle_gripper(build_gripper(grip, STANDARD, kappa, N, fingers=K, workpiece=shape, offset=(1e-12, 0.0)))
+    near = settle_gripper(build_gripper(grip, STANDARD, kappa, N, fingers=K, workpiece=shape, offset=(1e-12, 0.0)),
+                          method="dynamics")
     assert near.held and np.max(np.abs(_values(near) - _values(sym))) <= sym.tolerance
 
 
@@ -189,8 +190,9 @@ def test_a_finger_out_of_reach_holds_nothing():
     p = DimensionlessParams(D=1.0, M=0.5, b=0.6, mu_s=2.0)
     free = solve_chain("free", p, -2.5, N)
     assert 0.2 < np.sum(np.cos(free.link_angles)) / N < 0.3
-    centred = settle_gripper(build_gripper("I", p, -2.5, N, fingers=3, workpiece="cylinder"))
+    centred = settle_gripper(build_gripper("I", p, -2.5, N, fingers=3, workpiece="cylinder"), method="dynamics")
     assert centred.held
-    st = settle_gripper(build_gripper("I", p, -2.5, N, fingers=3, workpiece="cylinder", offset=(-0.1, 0.0)))
+    st = settle_gripper(build_gripper("I", p, -2.5, N, fingers=3, workpiece="cylinder", offset=(-0.1, 0.0)),
+                        method="dynamics")
     assert not st.held and st.converged and st.records == []
     np.testing.assert_allclose(st.link_angles, np.vstack([free.link_angles] * 3), atol=1e-5)

@@ -100,7 +100,7 @@ def pairs():
     for grip in KAPPA:
         for K, shape in CASES:
             sc = _gripper(grip, K, shape)
-            out[grip, K, shape] = (settle_symmetric(sc, contact="surface"), settle_gripper(sc))
+            out[grip, K, shape] = (settle_symmetric(sc, contact="surface"), settle_gripper(sc, method="dynamics"))
     return out
 
 
@@ -112,10 +112,21 @@ def test_methods_of_settle_gripper():
     sc = _gripper("I", 3, "cylinder")
     st = settle_gripper(sc, method="auto")
     assert isinstance(st, GripperState) and st.method == "symmetric" and st.held and st.converged
-    assert settle_gripper(sc).method == "dynamics"
+    assert st.contact == "point"
+    # the default is "auto": the skip (point contact) where exact, bit for bit
+    default = settle_gripper(sc)
+    assert default.method == "symmetric" and default.contact == "point" and np.array_equal(default.qpos, st.qpos)
+    assert settle_gripper(sc, contact="surface").contact == "surface"
+    dyn = settle_gripper(sc, method="dynamics")
+    assert dyn.method == "dynamics" and dyn.contact == "surface" and dyn.steps > 0
+    with pytest.raises(ValueError, match="contact"):  # the dynamics has MuJoCo's surface contact only
+        settle_gripper(sc, method="dynamics", contact="point")
     sc.model.qpos_spring[sc.joint_qpos[1, 2]] += 1e-3  # finger 1 differs: auto falls back to the dynamics
     st = settle_gripper(sc, method="auto")
-    assert st.method == "dynamics" and st.held
+    assert st.method == "dynamics" and st.contact == "surface" and st.held
+    assert settle_gripper(sc).method == "dynamics"
+    with pytest.raises(ValueError, match="contact"):
+        settle_gripper(sc, contact="point")
     with pytest.raises(ValueError, match="method 'symmetric'.*rest angles"):
         settle_gripper(sc, method="symmetric")
     with pytest.raises(ValueError, match="scene is not exactly symmetric"):
@@ -188,7 +199,7 @@ def test_sphere_skip_agrees_with_the_dynamics_and_the_inclined_elastica(sensitiv
     ``X = b/2`` (``cos(0.2) = 0.98``: second order in the difference).
     """
     sc = _gripper(grip, 3, "sphere", contact_angle=beta)
-    sym, dyn = settle_symmetric(sc), settle_gripper(sc)
+    sym, dyn = settle_symmetric(sc), settle_gripper(sc, method="dynamics")
     assert sym.held and dyn.held and sym.converged
     s_n, s_y, nx, yx, nc, yc = sensitivity[grip]
     tols = sym.tolerance + dyn.tolerance
@@ -213,7 +224,7 @@ def test_sphere_dropped_by_its_own_cone():
     sc = _gripper("II", 3, "sphere", contact_angle=0.2)
     ref = solve_inclined("II", STANDARD, Uniform(KAPPA["II"]), 0.2)
     assert not ref.feasible
-    sym, dyn = settle_symmetric(sc), settle_gripper(sc)
+    sym, dyn = settle_symmetric(sc), settle_gripper(sc, method="dynamics")
     assert not sym.held and not dyn.held and sym.records == [] and sym.converged
     free = solve_chain("free", STANDARD, Uniform(KAPPA["II"]), N)
     np.testing.assert_allclose(sym.link_angles, np.tile(free.link_angles, (3, 1)), atol=1e-8)
@@ -312,7 +323,7 @@ def test_cradle_is_the_planar_grip_iii_per_finger(kappa):
     n = 32
     sc = _cradle(kappa, n)
     assert symmetry(sc).exact
-    st = settle_gripper(sc)  # Grip III's default: the symmetry skip
+    st = settle_gripper(sc)  # the default ("auto"): the symmetry skip
     pl = settle(build_scene("III", STANDARD, Uniform(kappa), n))
     c = pl.contact
     assert st.method == "symmetric" and st.held and pl.held and st.converged and st.residual <= st.tolerance

@@ -1,4 +1,7 @@
-"""The K-finger dynamic settle (simgrip.settle.gripper) against the planar settle and the BVP.
+"""The K-finger dynamic settle (simgrip.settle.gripper, ``method="dynamics"``) against the planar settle and the BVP.
+
+(The default, ``method="auto"``, settles an exactly symmetric scene by the symmetry skip instead:
+tests/test_gripper_symmetry.)
 
 A cylinder (any K) and a box (K = 4) put every finger in the paper's planar
 problem: tip on a vertical surface at radius b/2, friction vertical, the
@@ -56,7 +59,8 @@ def planar():
 
 @pytest.fixture(scope="module")
 def grippers():
-    return {(g, K, w): settle_gripper(build_gripper(g, STANDARD, Uniform(KAPPA[g]), N, fingers=K, workpiece=w))
+    return {(g, K, w): settle_gripper(build_gripper(g, STANDARD, Uniform(KAPPA[g]), N, fingers=K, workpiece=w),
+                                      method="dynamics")
             for g in KAPPA for K, w in PLANAR}
 
 
@@ -147,7 +151,8 @@ def test_every_finger_matches_the_bvp(grippers, grip, K, shape):
 def test_workpiece_force_and_moment_balance(grippers, sensitivity, grip, K, shape):
     st = grippers.get((grip, K, shape))
     if st is None:
-        st = settle_gripper(build_gripper(grip, STANDARD, Uniform(KAPPA[grip]), N, fingers=K, workpiece=shape))
+        st = settle_gripper(build_gripper(grip, STANDARD, Uniform(KAPPA[grip]), N, fingers=K, workpiece=shape),
+                            method="dynamics")
     assert st.held and st.converged
     # the reader's contact forces plus the weight are the residual's translation rows
     assert np.max(np.abs(st.force_balance)) <= st.residual + 1e-12 * (1 + st.fingers * STANDARD.M)  # round-off
@@ -167,7 +172,7 @@ def test_held_iff_mu_n_reaches_m_per_finger(planar, grip):
     for K, shape in ((3, "cylinder"), (4, "box")):
         for factor, held in ((1.02, True), (0.98, False)):
             st = settle_gripper(build_gripper(grip, STANDARD.replace(mu_s=need * factor), Uniform(KAPPA[grip]), N,
-                                              fingers=K, workpiece=shape))
+                                              fingers=K, workpiece=shape), method="dynamics")
             assert st.held is held and st.converged, (K, shape, factor)
             if not held:
                 assert st.records == []
@@ -178,7 +183,7 @@ def test_held_iff_mu_n_reaches_m_per_finger(planar, grip):
 def test_out_of_reach_is_not_held():
     # kappa = -1: the free finger's tip stays beyond X = b/2, nothing to hold
     p = STANDARD
-    st = settle_gripper(build_gripper("I", p, Uniform(-1.0), N, fingers=3, workpiece="cylinder"))
+    st = settle_gripper(build_gripper("I", p, Uniform(-1.0), N, fingers=3, workpiece="cylinder"), method="dynamics")
     assert not st.held and st.converged and st.records == []
     free = solve_chain("free", p, Uniform(-1.0), N)
     np.testing.assert_allclose(st.link_angles, np.vstack([free.link_angles] * 3), atol=1e-5)
@@ -193,7 +198,7 @@ def test_a_finger_that_would_pull_does_not_hold():
     assert solve_chain("I", p, Uniform(-2.73), 10).N1 < 0
     assert not settle(build_scene("I", p, Uniform(-2.73), 10), method="dynamics").held
     for K, shape in ((4, "box"), (3, "cylinder")):
-        st = settle_gripper(build_gripper("I", p, Uniform(-2.73), 10, fingers=K, workpiece=shape))
+        st = settle_gripper(build_gripper("I", p, Uniform(-2.73), 10, fingers=K, workpiece=shape), method="dynamics")
         assert not st.held and st.converged and st.records == []
         free = solve_chain("free", p, Uniform(-2.73), 10)
         np.testing.assert_allclose(st.link_angles, np.vstack([free.link_angles] * K), atol=1e-5)
@@ -203,8 +208,9 @@ def test_a_finger_that_would_pull_does_not_hold():
 def test_invariant_under_rotation_about_the_palm_axis(grippers, sensitivity, K, shape):
     grip = "I"
     a = grippers.get((grip, K, shape)) or settle_gripper(
-        build_gripper(grip, STANDARD, Uniform(KAPPA[grip]), N, fingers=K, workpiece=shape))
-    b = settle_gripper(build_gripper(grip, STANDARD, Uniform(KAPPA[grip]), N, fingers=K, workpiece=shape, yaw=0.7))
+        build_gripper(grip, STANDARD, Uniform(KAPPA[grip]), N, fingers=K, workpiece=shape), method="dynamics")
+    b = settle_gripper(build_gripper(grip, STANDARD, Uniform(KAPPA[grip]), N, fingers=K, workpiece=shape, yaw=0.7),
+                       method="dynamics")
     assert b.held and b.converged
     s_n, s_y = sensitivity[grip]
     assert len(a.records) == len(b.records) == K
@@ -221,7 +227,8 @@ def test_invariant_under_rotation_about_the_palm_axis(grippers, sensitivity, K, 
 
 def test_deterministic():
     def run():
-        return settle_gripper(build_gripper("II", STANDARD, Uniform(5.0), N, fingers=3, workpiece="sphere"))
+        return settle_gripper(build_gripper("II", STANDARD, Uniform(5.0), N, fingers=3, workpiece="sphere"),
+                              method="dynamics")
 
     a, b = run(), run()
     assert np.array_equal(a.qpos, b.qpos) and a.steps == b.steps
@@ -232,19 +239,19 @@ def test_settle_restores_the_model_and_checks_its_arguments():
     sc = build_gripper("I", STANDARD, Uniform(-6.0), 8, fingers=3, workpiece="cylinder")
     m = sc.model
     before = (float(m.opt.timestep), int(m.opt.integrator), m.dof_damping.copy(), m.pair_solref.copy())
-    st = settle_gripper(sc)
+    st = settle_gripper(sc, method="dynamics")
     assert st.held
     assert (float(m.opt.timestep), int(m.opt.integrator)) == before[:2]
     assert np.array_equal(m.dof_damping, before[2]) and np.array_equal(m.pair_solref, before[3])
     for kw, name in [(dict(tol=0), "tol"), (dict(tol="x"), "tol"), (dict(max_steps=0), "max_steps"),
                      (dict(max_steps=True), "max_steps")]:
         with pytest.raises(ValueError, match=name):
-            settle_gripper(sc, **kw)
+            settle_gripper(sc, **kw, method="dynamics")
     with pytest.raises(ValueError, match="scene"):
-        settle_gripper(build_scene("I", STANDARD, Uniform(-6.0), 8))
+        settle_gripper(build_scene("I", STANDARD, Uniform(-6.0), 8), method="dynamics")
     with pytest.raises(SettleError, match="did not converge"):
-        settle_gripper(sc, max_steps=5)
-    st = settle_gripper(sc, max_steps=5, allow_unconverged=True)
+        settle_gripper(sc, max_steps=5, method="dynamics")
+    st = settle_gripper(sc, max_steps=5, allow_unconverged=True, method="dynamics")
     assert not st.converged
 
 
@@ -257,7 +264,7 @@ def test_sphere_fingers_match_the_inclined_contact_elastica(grip, beta):
     elastica to the second-order bound at n = 16, the normal and friction forces included.
     """
     st = settle_gripper(build_gripper(grip, STANDARD, Uniform(KAPPA[grip]), N, fingers=3, workpiece="sphere",
-                                      contact_angle=beta))
+                                      contact_angle=beta), method="dynamics")
     assert st.held and st.converged and len(st.records) == 3
     s_n, s_y = _sensitivity(grip, 2 * st.records[0].tip[0])
     for rec in st.records:
@@ -285,13 +292,13 @@ def test_sphere_fingers_match_the_inclined_contact_elastica(grip, beta):
 @pytest.mark.parametrize("grip, beta", [("I", -0.1), ("II", -0.2)])
 def test_sphere_held_iff_the_inclined_cone_holds(grip, beta):
     probe = settle_gripper(build_gripper(grip, STANDARD, Uniform(KAPPA[grip]), N, fingers=3, workpiece="sphere",
-                                         contact_angle=beta))
+                                         contact_angle=beta), method="dynamics")
     rec = probe.records[0]
     need = solve_inclined(grip, STANDARD, Uniform(KAPPA[grip]), rec.contact_angle,
                           contact_moment=rec.moment).required_mu
     for factor, held in ((1.02, True), (0.98, False)):
         st = settle_gripper(build_gripper(grip, STANDARD.replace(mu_s=need * factor), Uniform(KAPPA[grip]), N,
-                                          fingers=3, workpiece="sphere", contact_angle=beta))
+                                          fingers=3, workpiece="sphere", contact_angle=beta), method="dynamics")
         assert st.held is held and st.converged, factor
 
 
@@ -306,7 +313,8 @@ def test_every_finger_converges_at_second_order_to_the_bvp(grip):
     """
     errs = []
     for n in (8, 16, 32):
-        st = settle_gripper(build_gripper(grip, STANDARD, Uniform(KAPPA[grip]), n, fingers=3, workpiece="cylinder"))
+        st = settle_gripper(build_gripper(grip, STANDARD, Uniform(KAPPA[grip]), n, fingers=3, workpiece="cylinder"),
+                            method="dynamics")
         assert st.held and st.converged
         row = []
         for rec in st.records:
@@ -324,8 +332,9 @@ def test_si_parameters_give_the_dimensionless_state():
     # built in SI (l = 0.1 m, rho = 0.05 kg/m, g = 9.81): every step scales with the model, so the
     # dimensionless state is the one built with l = rho = g = 1, to round-off
     si = settle_gripper(build_gripper("I", STANDARD.to_physical(length=0.1, rho=0.05, g=9.81), Uniform(-6.0), N,
-                                      fingers=3, workpiece="cylinder"))
-    one = settle_gripper(build_gripper("I", STANDARD, Uniform(-6.0), N, fingers=3, workpiece="cylinder"))
+                                      fingers=3, workpiece="cylinder"), method="dynamics")
+    one = settle_gripper(build_gripper("I", STANDARD, Uniform(-6.0), N, fingers=3, workpiece="cylinder"),
+                         method="dynamics")
     assert si.held and si.steps == one.steps
     for a, b in zip(si.records, one.records):
         assert a.N1 == pytest.approx(b.N1, rel=1e-9) and a.N2 == pytest.approx(b.N2, rel=1e-9)
@@ -341,7 +350,8 @@ def test_a_state_in_the_other_grips_shape_is_not_held():
     p = DimensionlessParams(D=0.142, M=3.3, b=0.762, mu_s=0.894)
     pl = settle(build_scene("II", p, Uniform(9.83), 6), method="dynamics")
     assert not pl.held and not pl.grip_matched
-    st = settle_gripper(build_gripper("II", p, Uniform(9.83), 6, fingers=3, workpiece="cylinder"))
+    st = settle_gripper(build_gripper("II", p, Uniform(9.83), 6, fingers=3, workpiece="cylinder"), method="dynamics")
     assert not st.held and not st.grip_matched and st.converged
     assert any("wrong grip" in w for w in st.warnings)
     assert np.all(st.tip[:, 1] < 0)
+

@@ -1,6 +1,14 @@
-"""The dynamic settle of a K-finger gripper (:mod:`simgrip.sim.gripper`) and its settled state.
+"""The settle of a K-finger gripper (:mod:`simgrip.sim.gripper`): the symmetry skip where exact, else dynamics.
 
-The same over-damped MuJoCo dynamics as the planar ``settle(method="dynamics")``
+:func:`settle_gripper` by default (``method="auto"``) settles an exactly
+symmetric scene (:func:`simgrip.sim.symmetry.symmetry`) by the symmetry skip
+(:mod:`simgrip.settle.gripper_symmetry`: one finger's planar Newton settle,
+the paper's point contact by default, replicated to K fingers), and any other
+scene by the over-damped dynamics of this module, as the planar settle's
+default is the fast point-contact Newton and its dynamics the surface
+contact.  The state's ``method`` and ``contact`` say which ran.
+
+The dynamics is the planar ``settle(method="dynamics")``'s
 (:mod:`simgrip.settle.dynamics`, whose constants it uses): ``mjINT_DISCRETE``,
 time step ``h = 1/omega_min`` of the hinge chains, hinge damping ``h K``,
 elliptic cone with ``impratio`` :data:`~simgrip.settle.dynamics.DYN_IMPRATIO`,
@@ -22,6 +30,11 @@ in rotation (its principal inertia; the rotational dofs are in its body frame).
   (``N1 <= 0``), leaves the workpiece unheld; a chain equilibrium that does
   not exist or is unstable raises
   :class:`SettleError` (the planar settle's staged closing is not provided here).
+* **Indeterminate forces** (``K >= 4``): statics fixes each finger's ``N1``,
+  the tips and the workpiece's pose, but not how the fingers share the
+  weight (``N2``) and the out-of-plane forces (``N3``); the settle keeps
+  the start's least-norm split (sticking contacts hold what they start
+  with).  Per-finger ``N2``/``N3`` are then the start's choice, not physics.
 * **Release**: the chains' start shape already carries the weight by
   friction, so the workpiece is let go at once; the dynamics then
   runs until the static residual at rest is below ``tol`` (default
@@ -152,6 +165,9 @@ class GripperState:
     workpiece_yaw: float = 0.0
     #: How it was settled: ``"dynamics"`` or ``"symmetric"`` (:mod:`simgrip.settle.gripper_symmetry`).
     method: str = "dynamics"
+    #: Where the sticking friction acts: ``"surface"`` (MuJoCo's contact point on the tip sphere; the
+    #: dynamics) or ``"point"`` (the finger's centreline, the paper's point contact; the skip's default).
+    contact: str = "surface"
 
 
 # ---------------------------------------------------------------------------
@@ -265,26 +281,45 @@ def gripper_tolerance(scene: GripperScene) -> float:
     return max(DYN_TOL, DYN_TOL_PER_WEIGHT * scene.fingers * float(scene.params.M))
 
 
-def settle_gripper(scene: GripperScene, *, tol: float | None = None, max_steps: int = GRIPPER_MAX_STEPS,
-                   allow_unconverged: bool = False, method: str | None = None) -> GripperState:
-    """Settle a K-finger gripper by over-damped dynamics (see the module docstring).
+def settle_gripper(scene: GripperScene, *, tol: float | None = None, max_steps: int | None = None,
+                   allow_unconverged: bool = False, method: str | None = None,
+                   contact: str | None = None) -> GripperState:
+    """Settle a K-finger gripper: the symmetry skip where the scene is exactly symmetric, else the dynamics.
+
+    The default (``method=None``, ``"auto"``) is as the planar settle's: the
+    fast static solve of the paper's point-contact problem where it is exact
+    (one finger's planar Newton settle replicated to K,
+    :mod:`simgrip.settle.gripper_symmetry`), the over-damped dynamics with
+    MuJoCo's surface contact (see the module docstring) where it is not.  The
+    state's ``method`` says which ran.
 
     Parameters
     ----------
     scene : GripperScene
     tol : float, optional
         Static residual tolerance (over ``rho g l^2`` / ``rho g l``); default
-        :func:`gripper_tolerance` (MuJoCo's sticking friction creeps below it).
-    max_steps : int
-        Physics steps allowed to the whole settle (restarts included).
+        :func:`gripper_tolerance` for the dynamics (MuJoCo's sticking friction
+        creeps below it), the planar Newton's for the skip.
+    max_steps : int, optional
+        Dynamics: physics steps allowed to the whole settle (restarts
+        included; default :data:`GRIPPER_MAX_STEPS`).  Skip: the planar
+        Newton's iteration budget (default its own).
     allow_unconverged : bool
         Return ``converged=False`` instead of raising :class:`SettleError`.
-    method : {None, "dynamics", "symmetric", "auto"}
-        ``"symmetric"``: one finger's planar static settle replicated to K
-        (:mod:`simgrip.settle.gripper_symmetry`; ``tol`` and ``max_steps`` are
-        then the planar Newton's); ``"auto"``: that where the scene is exactly
-        symmetric, else the dynamics.  None: ``"dynamics"`` for Grips I/II,
-        ``"symmetric"`` for the K = 4 cradle (Grip III has no K-finger dynamics).
+    method : {None, "auto", "symmetric", "dynamics"}
+        None is ``"auto"``: ``"symmetric"`` where the scene is exactly
+        symmetric (:func:`simgrip.sim.symmetry.symmetry`), else
+        ``"dynamics"``.  ``"symmetric"``: one finger's planar static settle
+        replicated to K (ValueError naming ``method`` where the scene is not
+        exactly symmetric); ``"dynamics"``: the over-damped dynamics of all K
+        fingers and the workpiece (Grips I/II only: the K = 4 cradle, Grip
+        III, is settled by the skip).
+    contact : {None, "point", "surface"}
+        Where the sticking friction acts.  The skip: ``"point"`` (default, the
+        paper's point contact, on the centreline) or ``"surface"`` (box and
+        cylinder: at MuJoCo's contact point, the tip sphere's couple, as the
+        dynamics).  The dynamics has MuJoCo's surface contact only:
+        ``"point"`` raises ValueError naming ``contact`` where it runs.
 
     Returns
     -------
@@ -294,11 +329,14 @@ def settle_gripper(scene: GripperScene, *, tol: float | None = None, max_steps: 
         raise ValueError(f"scene must be a simgrip.sim.gripper.GripperScene, got {type(scene).__name__}")
     from simgrip.settle.gripper_symmetry import symmetric_or_none
 
-    state = symmetric_or_none(scene, method, tol=tol, max_steps=max_steps, allow_unconverged=allow_unconverged)
+    state = symmetric_or_none(scene, method, contact=contact, tol=tol, max_steps=max_steps,
+                              allow_unconverged=allow_unconverged)
     if state is not None:
         return state
     if tol is None:
         tol = gripper_tolerance(scene)
+    if max_steps is None:
+        max_steps = GRIPPER_MAX_STEPS
     tol, max_steps = check_tol_steps(tol, max_steps)
     t0 = time.perf_counter()
     m, d = scene.model, scene.data

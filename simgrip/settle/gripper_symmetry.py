@@ -126,31 +126,45 @@ def _planar_cradle(scene: GripperScene):
     return pl
 
 
-def symmetric_or_none(scene: GripperScene, method: str | None, **kw):
+def symmetric_or_none(scene: GripperScene, method: str | None, *, contact: str | None = None, **kw):
     """``settle_gripper``'s hook: the skip's state for ``method`` ``"symmetric"`` or ``"auto"``, else None.
 
-    ``"auto"`` returns None where the scene is not exactly symmetric (the
-    caller settles it by dynamics); ``"symmetric"`` raises ValueError naming
-    ``method`` there.  ``None`` (settle_gripper's default) is ``"dynamics"``
-    for Grips I/II and ``"symmetric"`` for Grip III, which has no K-finger
-    dynamics (``"dynamics"`` raises there).  ``kw`` go to :func:`settle_symmetric`.
+    ``None`` (settle_gripper's default) is ``"auto"``: the skip where the scene
+    is exactly symmetric (:func:`symmetry`), else None (the caller settles it
+    by dynamics); Grip III, which has no K-finger dynamics, raises ValueError
+    naming ``method`` where it is not symmetric.  ``"symmetric"`` raises there
+    too; ``"dynamics"`` returns None (and raises for Grip III).  ``contact``:
+    the skip's (:func:`settle_symmetric`, default ``"point"``); the dynamics
+    has MuJoCo's surface contact only, so ``"point"`` raises ValueError naming
+    ``contact`` where the dynamics runs.  ``kw`` go to :func:`settle_symmetric`.
     """
     t0 = time.perf_counter()
     if method is None:
-        method = "symmetric" if isinstance(scene, GripperScene) and scene.grip == "III" else "dynamics"
+        method = "auto"
     if method not in GRIPPER_METHODS:
         raise ValueError(f"method must be one of {GRIPPER_METHODS}, got {method!r}")
+    if contact is not None and contact not in ("point", "surface"):
+        raise ValueError(f"contact must be 'point' or 'surface', got {contact!r}")
     if method == "dynamics":
         if isinstance(scene, GripperScene) and scene.grip == "III":
             raise ValueError("method: the K-finger cradle (Grip III) has no dynamic settle; it is settled by the "
                              "symmetry skip (method 'symmetric' or 'auto')")
+        _dynamics_contact(contact)
         return None
     sym = symmetry(scene)
     if not sym.exact:
         if method == "auto" and scene.grip != "III":
+            _dynamics_contact(contact)
             return None
-        raise ValueError(f"method 'symmetric' needs an exactly symmetric scene: {sym.reason}")
-    return _settle_exact(scene, t0, **kw)
+        raise ValueError(f"method '{method}' needs an exactly symmetric scene: {sym.reason}")
+    return _settle_exact(scene, t0, contact=contact or "point", **kw)
+
+
+def _dynamics_contact(contact: str | None) -> None:
+    """The dynamics' contact is MuJoCo's, on the tip sphere's surface: ValueError naming ``contact`` otherwise."""
+    if contact not in (None, "surface"):
+        raise ValueError(f"contact: the K-finger dynamics has MuJoCo's surface contact only (the point contact is "
+                         f"the symmetry skip's, for exactly symmetric scenes), got {contact!r}")
 
 
 def settle_symmetric(scene: GripperScene, *, tol: float | None = None, max_steps: int | None = None,
@@ -215,7 +229,9 @@ def _settle_exact(scene: GripperScene, t0: float, *, tol=None, max_steps=None, c
         converged, steps = converged and bool(alone.converged), steps + int(alone.steps)
         tolerance = max(tolerance, float(alone.tolerance))
         pst = alone
-    return _replicate(scene, pst, held, converged, steps, tolerance, allow_unconverged, t0)
+    state = _replicate(scene, pst, held, converged, steps, tolerance, allow_unconverged, t0)
+    state.contact = contact
+    return state
 
 
 def _check_planar(scene: GripperScene, planar):
@@ -379,8 +395,7 @@ def _replicate(scene: GripperScene, pst, held: bool, converged: bool, steps: int
         moment_balance=total_m / (W * L) if held else np.zeros(3),
         workpiece_position=centre / L, workpiece_quat=np.array(d.xquat[wb]), steps=steps, timestep=0.0,
         wall_time_s=time.perf_counter() - t0, qpos=np.array(d.qpos))
-    if hasattr(state, "method"):
-        state.method = "symmetric"
+    state.method = "symmetric"
     state.warnings.extend(pst.warnings)
     if scene.grip == "III" and held:
         _check_cradle(scene, state, phi, float(pst.contact.gamma))
