@@ -446,3 +446,24 @@ def test_finger_shape_is_the_interpolated_link_angle(n, K):
             np.testing.assert_allclose(obs.finger_shape(q.tolist(), f), ref, rtol=0, atol=1e-13)
             ref = np.interp(s_k, s_link, np.cumsum(q[8 + 2 * f * n:8 + 2 * (f + 1) * n:2]))
             np.testing.assert_allclose(spread.finger_shape(q.tolist(), f), ref, rtol=0, atol=1e-13)
+
+
+def test_contact_forces_read_from_constraint_rows_equal_mj_contact_force():
+    """The elliptic-cone fast path (efc_force rows) and the general one (mj_contactForce) agree, with the
+    fingers on the box."""
+    from simgrip.envs.pick_contacts import BoxContactForces
+
+    env = PickEnv()
+    env.reset(seed=0)
+    touched = 0
+    for _ in range(40):
+        env.step(np.array([-1.0, 0.5]))  # full curl, lift: both fingers on the box
+        fast = env._contact_forces(env.model, env.data)
+        general = BoxContactForces(env.model, env.box_geom, env.fingers.finger_of_geom)
+        general._elliptic = False
+        np.testing.assert_allclose(general(env.model, env.data), fast, rtol=1e-12, atol=1e-12)
+        np.testing.assert_allclose(fast, _reference_forces(env).ravel()[[0, 1, 3, 4, 2, 5]], rtol=1e-12,
+                                   atol=1e-12)
+        touched += fast[0] > 0 and fast[2] > 0
+    assert touched > 20
+    env.close()
