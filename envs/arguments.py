@@ -1,12 +1,24 @@
-"""Checks of the environments' arguments: each bad value raises ``ValueError`` naming the argument."""
+"""Checks of the environments' arguments: each bad value raises ``ValueError`` naming the argument.
+
+The scalar checks (:func:`check_number`, :func:`check_range`, ...) serve every
+argument; :func:`set_finger_arguments`, :func:`set_task_arguments` and
+:func:`check_camera` check the arguments that ``simgrip/Pick-v1``
+(:class:`~simgrip.envs.pick.PickEnv`) and ``simgrip/PickMulti-v0``
+(:class:`~simgrip.envs.pick_multi.PickMultiEnv`) share (same names, same
+checks, same messages) and set them on the environment.
+"""
 
 from __future__ import annotations
 
 import math
 
+import mujoco
 import numpy as np
 
-__all__ = ["check_action", "check_bool", "check_int", "check_number", "check_positive", "check_range"]
+from simgrip.chain import check_links
+
+__all__ = ["check_action", "check_bool", "check_camera", "check_int", "check_number", "check_positive", "check_range",
+           "set_finger_arguments", "set_task_arguments"]
 
 
 def check_range(name, value, lo=-math.inf, hi=math.inf, positive=True, strict=False) -> tuple[float, float]:
@@ -81,3 +93,76 @@ def check_action(action, shape: tuple) -> list:
         if not math.isfinite(v):
             raise ValueError(f"action must be finite (no NaN or inf), got {action!r}")
     return [-1.0 if v < -1.0 else (1.0 if v > 1.0 else v) for v in vals]
+
+
+def set_finger_arguments(env, *, render_mode, n_links, length, EI, rho, g, r_tip) -> None:
+    """Check the render mode and the fingers' arguments and set them on ``env`` (SI units).
+
+    Sets ``env.render_mode`` (None or one of ``env.metadata["render_modes"]``), ``env.n`` (``n_links``, an
+    integer >= 2), ``env.length`` [m], ``env.EI`` [N m^2], ``env.rho`` [kg/m], ``env.g`` [m/s^2] and
+    ``env.r_tip`` [m] (all > 0); ValueError naming the first bad argument.
+    """
+    if render_mode is not None and render_mode not in env.metadata["render_modes"]:
+        raise ValueError(f"render_mode must be None or 'rgb_array', got {render_mode!r}")
+    env.render_mode = render_mode
+    env.n = check_links(n_links, "n_links")
+    env.length = check_positive("length", length)
+    env.EI = check_positive("EI", EI)
+    env.rho = check_positive("rho", rho)
+    env.g = check_positive("g", g)
+    env.r_tip = check_positive("r_tip", r_tip)
+
+
+def set_task_arguments(env, *, kappa_range, kappa_tau, palm_speed, palm_range, palm_start, target_height,
+                       hold_time, w_lift, w_success, w_squeeze, w_drop, squeeze_margin, drop_distance, timestep,
+                       frame_skip, settle_time, finger_damping_time, shape_points, spin_friction, impratio,
+                       finger_armature, width, height, camera) -> None:
+    """Check the control, task, reward, physics and rendering arguments and set them on ``env``.
+
+    Each argument is set under its own name (SI units: ``kappa_range`` is the curvature command's range of
+    ``kappa_bar``, a ``(low, high)`` pair with ``low < high``; ``kappa_tau`` [s]; ``palm_speed`` [m/s];
+    ``palm_range``, ``palm_start`` [m], ``palm_start`` within ``palm_range``; ``target_height`` [m];
+    ``hold_time``, ``timestep``, ``settle_time``, ``finger_damping_time`` [s]; ``finger_armature`` [kg m^2];
+    ``width``, ``height`` [pixels]; ``camera`` a non-empty name, checked against the model by
+    :func:`check_camera`).  Derived: ``env.settle_steps`` (physics steps of ``settle_time``), ``env.dt``
+    (``timestep * frame_skip``, the control step [s]), ``env._lag_alpha`` (the pneumatic lag's exact
+    first-order factor over one control step) and ``env.metadata["render_fps"]``.  ValueError naming the first
+    bad argument.
+    """
+    env.kappa_range = check_range("kappa_range", kappa_range, positive=False, strict=True)
+    env.kappa_tau = check_number("kappa_tau", kappa_tau, positive=False)
+    env.palm_speed = check_positive("palm_speed", palm_speed)
+    env.palm_range = check_range("palm_range", palm_range)
+    env.palm_start = check_range("palm_start", palm_start, lo=env.palm_range[0], hi=env.palm_range[1])
+    env.target_height = check_positive("target_height", target_height)
+    env.hold_time = check_number("hold_time", hold_time, positive=False)
+    env.w_lift = check_number("w_lift", w_lift, positive=False)
+    env.w_success = check_number("w_success", w_success, positive=False)
+    env.w_squeeze = check_number("w_squeeze", w_squeeze, positive=False)
+    env.w_drop = check_number("w_drop", w_drop, positive=False)
+    env.squeeze_margin = check_positive("squeeze_margin", squeeze_margin)
+    env.drop_distance = check_positive("drop_distance", drop_distance)
+    env.timestep = check_positive("timestep", timestep)
+    env.frame_skip = check_int("frame_skip", frame_skip, 1)
+    env.settle_time = check_number("settle_time", settle_time, positive=False)
+    env.settle_steps = int(round(env.settle_time / env.timestep))
+    env.finger_damping_time = check_number("finger_damping_time", finger_damping_time, positive=False)
+    env.shape_points = check_int("shape_points", shape_points, 2)
+    env.spin_friction = check_positive("spin_friction", spin_friction)
+    env.impratio = check_positive("impratio", impratio)
+    env.finger_armature = check_number("finger_armature", finger_armature, positive=False)
+    env.width = check_int("width", width, 1)
+    env.height = check_int("height", height, 1)
+    if not isinstance(camera, str) or not camera:
+        raise ValueError(f"camera must be the name of a camera of the model, got {camera!r}")
+    env.camera = camera
+    env.dt = env.timestep * env.frame_skip
+    env._lag_alpha = 1.0 if env.kappa_tau == 0 else 1.0 - math.exp(-env.dt / env.kappa_tau)
+    env.metadata = dict(env.metadata, render_fps=int(round(1.0 / env.dt)))
+
+
+def check_camera(model, camera: str) -> None:
+    """ValueError naming ``camera`` unless ``model`` (an ``MjModel``) has a camera of that name."""
+    if mujoco.mj_name2id(model, mujoco.mjtObj.mjOBJ_CAMERA, camera) < 0:
+        cams = [model.camera(i).name for i in range(model.ncam)]
+        raise ValueError(f"camera must be one of {cams}, got {camera!r}")

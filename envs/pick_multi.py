@@ -20,9 +20,8 @@ import numpy as np
 from gymnasium import spaces
 from gymnasium.error import ResetNeeded
 
-from simgrip.envs.arguments import check_action
+from simgrip.envs.arguments import check_action, check_camera, set_finger_arguments, set_task_arguments
 from simgrip.envs.arguments import check_bool as _bool
-from simgrip.envs.arguments import check_int as _int
 from simgrip.envs.arguments import check_number as _num
 from simgrip.envs.arguments import check_positive as _pos
 from simgrip.envs.arguments import check_range as _range
@@ -228,15 +227,8 @@ class PickMultiEnv(gym.Env):
                 chosen.append(s)
         self.shapes = tuple(chosen)
         self.shared_curvature = _bool("shared_curvature", shared_curvature)
-        if render_mode is not None and render_mode not in self.metadata["render_modes"]:
-            raise ValueError(f"render_mode must be None or 'rgb_array', got {render_mode!r}")
-        self.render_mode = render_mode
-        self.n = _int("n_links", n_links, 2)
-        self.length = _pos("length", length)
-        self.EI = _pos("EI", EI)
-        self.rho = _pos("rho", rho)
-        self.g = _pos("g", g)
-        self.r_tip = _pos("r_tip", r_tip)
+        set_finger_arguments(self, render_mode=render_mode, n_links=n_links, length=length, EI=EI, rho=rho, g=g,
+                             r_tip=r_tip)
         self.size_range = _range("size_range", size_range, hi=1.9 * self.length)
         self.mass_range = _range("mass_range", mass_range)
         self.friction_range = _range("friction_range", friction_range)
@@ -249,41 +241,16 @@ class PickMultiEnv(gym.Env):
         if self.r_tip >= (0.5 * self.size_range[0] + self.r_tip) * math.sin(math.pi / self.K):
             raise ValueError(f"size_range: with fingers = {self.K} the tip spheres (radius {self.r_tip} m) "
                              f"overlap around a workpiece {self.size_range[0]} m wide")
-        self.kappa_range = _range("kappa_range", kappa_range, positive=False, strict=True)
-        self.kappa_tau = _num("kappa_tau", kappa_tau, positive=False)
-        self.palm_speed = _pos("palm_speed", palm_speed)
-        self.palm_range = _range("palm_range", palm_range)
-        self.palm_start = _range("palm_start", palm_start, lo=self.palm_range[0], hi=self.palm_range[1])
-        self.target_height = _pos("target_height", target_height)
-        self.hold_time = _num("hold_time", hold_time, positive=False)
-        self.w_lift = _num("w_lift", w_lift, positive=False)
-        self.w_success = _num("w_success", w_success, positive=False)
-        self.w_squeeze = _num("w_squeeze", w_squeeze, positive=False)
-        self.w_drop = _num("w_drop", w_drop, positive=False)
-        self.squeeze_margin = _pos("squeeze_margin", squeeze_margin)
-        self.drop_distance = _pos("drop_distance", drop_distance)
-        self.timestep = _pos("timestep", timestep)
-        self.frame_skip = _int("frame_skip", frame_skip, 1)
-        self.settle_time = _num("settle_time", settle_time, positive=False)
-        self.settle_steps = int(round(self.settle_time / self.timestep))
-        self.finger_damping_time = _num("finger_damping_time", finger_damping_time, positive=False)
-        self.shape_points = _int("shape_points", shape_points, 2)
-        self.spin_friction = _pos("spin_friction", spin_friction)
-        self.impratio = _pos("impratio", impratio)
-        self.finger_armature = _num("finger_armature", finger_armature, positive=False)
-        self.width = _int("width", width, 1)
-        self.height = _int("height", height, 1)
-        if not isinstance(camera, str) or not camera:
-            raise ValueError(f"camera must be the name of a camera of the model, got {camera!r}")
-        self.camera = camera
-        self.dt = self.timestep * self.frame_skip
-        self._lag_alpha = 1.0 if self.kappa_tau == 0 else 1.0 - math.exp(-self.dt / self.kappa_tau)
-        self.metadata = dict(self.metadata, render_fps=int(round(1.0 / self.dt)))
+        set_task_arguments(
+            self, kappa_range=kappa_range, kappa_tau=kappa_tau, palm_speed=palm_speed, palm_range=palm_range,
+            palm_start=palm_start, target_height=target_height, hold_time=hold_time, w_lift=w_lift,
+            w_success=w_success, w_squeeze=w_squeeze, w_drop=w_drop, squeeze_margin=squeeze_margin,
+            drop_distance=drop_distance, timestep=timestep, frame_skip=frame_skip, settle_time=settle_time,
+            finger_damping_time=finger_damping_time, shape_points=shape_points, spin_friction=spin_friction,
+            impratio=impratio, finger_armature=finger_armature, width=width, height=height, camera=camera)
 
         self._build()
-        if mujoco.mj_name2id(self.model, mujoco.mjtObj.mjOBJ_CAMERA, self.camera) < 0:
-            cams = [self.model.camera(i).name for i in range(self.model.ncam)]
-            raise ValueError(f"camera must be one of {cams}, got {self.camera!r}")
+        check_camera(self.model, self.camera)
         nk = 1 if self.shared_curvature else self.K
         self.action_space = spaces.Box(-1.0, 1.0, (nk + 1,), dtype=np.float32)
         self.observation_space = spaces.Box(self._observe.low, self._observe.high, dtype=np.float64)
