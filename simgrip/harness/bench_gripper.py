@@ -38,7 +38,8 @@ surface contact differ by the tip couple, ~0.3 %).
 
 from __future__ import annotations
 
-from simgrip.io import atomic_write, write_json
+from simgrip.harness.tables import checks_md, write_record
+from simgrip.harness.timing import fastest_cpu_times, settle_from_start
 from simgrip.params import STANDARD
 from simgrip.profiles import Uniform
 
@@ -50,22 +51,6 @@ CASES = {"I": -6.0, "II": 5.0}
 SHAPES = ((2, "box"), (4, "box"), (2, "cylinder"), (3, "cylinder"), (4, "cylinder"))
 #: Links per finger.
 N_LINKS = 32
-
-
-def _planar(grip, kappa, n, **kw):
-    """A one-finger planar settle of the per-finger problem, from the same start each run."""
-    from simgrip.scenes import build_scene
-    from simgrip.settle import settle
-
-    sc = build_scene(grip, STANDARD, Uniform(kappa), n)
-    q0, bp = sc.data.qpos.copy(), sc.model.body_pos.copy()
-
-    def run():
-        sc.data.qpos[:] = q0
-        sc.model.body_pos[:] = bp
-        return settle(sc, **kw)
-
-    return run
 
 
 def _gripper(grip, kappa, n, K, shape, method):
@@ -84,19 +69,19 @@ def _gripper(grip, kappa, n, K, shape, method):
 
 def gripper_bench(*, quick: bool = False, repeats: int | None = None, n: int = N_LINKS) -> dict:
     """Measure the table of the module docstring; returns ``{"rows": [...], "checks": {...}, "repeats": R}``."""
-    from simgrip.harness.bench_settle import _interleaved
     from simgrip.threads import blas_threads
 
     reps = int(repeats or (3 if quick else 7))
     rows, checks = [], {}
     with blas_threads(1):
         for grip, kappa in CASES.items():
-            single = {"single_dyn": _planar(grip, kappa, n, method="dynamics"), "single_newton": _planar(grip, kappa, n)}
+            single = {"single_dyn": settle_from_start(grip, kappa, n, method="dynamics"),
+                      "single_newton": settle_from_start(grip, kappa, n)}
             for K, shape in SHAPES:
                 fns = {"full": _gripper(grip, kappa, n, K, shape, "full"),
                        "skip": _gripper(grip, kappa, n, K, shape, "skip"),
                        "skip_reuse": _gripper(grip, kappa, n, K, shape, "skip_reuse"), **single}
-                t = _interleaved(fns, reps)
+                t = fastest_cpu_times(fns, reps)
                 full, skip, one = fns["full"](), fns["skip"](), fns["single_dyn"]()
                 dN = max(abs(a.N1 - b.N1) for a, b in zip(full.records, skip.records)) / abs(full.records[0].N1) \
                     if full.held and skip.held else None
@@ -140,20 +125,14 @@ def gripper_bench_md(rec: dict) -> str:
            "| " + " | ".join(cols) + " |", "|" + "---|" * len(cols)]
     for r in rec["rows"]:
         out.append("| " + " | ".join(_fmt(r.get(c)) for c in cols) + " |")
-    out += ["", "| check | met |", "|---|---|"]
-    out += [f"| {k} | {'yes' if v else 'NO'} |" for k, v in rec["checks"].items()]
+    out += checks_md(rec["checks"])
     return "\n".join(out) + "\n"
 
 
 def write_gripper_bench(out_dir, *, quick: bool = False, repeats: int | None = None) -> dict:
     """Measure and write ``gripper.json`` and ``gripper.md`` into ``out_dir``; returns the record."""
-    from pathlib import Path
-
     rec = gripper_bench(quick=quick, repeats=repeats)
-    out = Path(out_dir)
-    write_json(out / "gripper.json", rec)
-    with atomic_write(out / "gripper.md") as fh:
-        fh.write(gripper_bench_md(rec))
+    write_record(out_dir, "gripper", rec, gripper_bench_md(rec))
     return rec
 
 

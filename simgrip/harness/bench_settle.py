@@ -29,11 +29,11 @@ Grip III, n = 32                          forces within 1 % of the BVP at the
 from __future__ import annotations
 
 import math
-import time
 
 import numpy as np
 
-from simgrip.io import atomic_write, write_json
+from simgrip.harness.tables import checks_md, write_record
+from simgrip.harness.timing import fastest_cpu_times, settle_from_start
 from simgrip.params import STANDARD
 from simgrip.profiles import Uniform
 
@@ -45,30 +45,9 @@ CASES = {"free": -3.0, "I": -6.0, "II": 5.0, "III": -4.0}
 REF_TOL = 1e-10
 
 
-def _interleaved(fns: dict, repeats: int) -> dict:
-    """Fastest CPU seconds of each ``fn()``, the functions run in turn ``repeats`` times."""
-    times = {k: [] for k in fns}
-    for _ in range(max(1, repeats)):
-        for k, fn in fns.items():
-            t0 = time.process_time()
-            fn()
-            times[k].append(time.process_time() - t0)
-    return {k: min(v) for k, v in times.items()}
-
-
 def _settler(grip, n, **kw):
-    from simgrip.scenes import build_scene
-    from simgrip.settle import settle
-
-    sc = build_scene(grip, STANDARD, Uniform(CASES[grip]), n)
-    q0, bp = sc.data.qpos.copy(), sc.model.body_pos.copy()
-
-    def run():
-        sc.data.qpos[:] = q0
-        sc.model.body_pos[:] = bp
-        return settle(sc, **kw)
-
-    return run
+    """The settle of ``grip``'s standard case (:data:`CASES`) with ``n`` links, from the same start each run."""
+    return settle_from_start(grip, CASES[grip], n, **kw)
 
 
 def settle_targets(*, quick: bool = False, repeats: int | None = None) -> dict:
@@ -92,7 +71,7 @@ def _settle_targets(quick: bool, repeats: int | None) -> dict:
     ns = (32, 64, 128, 256)
     free_t = {}
     for n in ns:
-        t = _interleaved({"settle": _settler("free", n),
+        t = fastest_cpu_times({"settle": _settler("free", n),
                           "chain": lambda n=n: solve_chain("free", STANDARD, Uniform(CASES["free"]), n)}, reps)
         free_t[n] = t["settle"]
         rows.append({"case": f"free n={n}", "settle_s": t["settle"], "chain_s": t["chain"],
@@ -105,7 +84,7 @@ def _settle_targets(quick: bool, repeats: int | None) -> dict:
     # -- grips at n = 32: settle vs BVP, chain minimiser, dynamics ----------------------
     for grip in ("I", "II", "III"):
         k = CASES[grip]
-        t = _interleaved({
+        t = fastest_cpu_times({
             "settle": _settler(grip, 32),
             "dynamics": _settler(grip, 32, method="dynamics"),
             "bvp": lambda g=grip, k=k: elastica.solve(g, STANDARD, Uniform(k)),
@@ -139,7 +118,7 @@ def _settle_targets(quick: bool, repeats: int | None) -> dict:
     for grip in ("free", "I", "II"):
         k = CASES[grip]
         ref = elastica.solve(grip, STANDARD, Uniform(k), tol=REF_TOL)
-        t = _interleaved({"target": _settler(grip, 16, target_error=1e-5),
+        t = fastest_cpu_times({"target": _settler(grip, 16, target_error=1e-5),
                           "bvp": lambda g=grip, k=k: elastica.solve(g, STANDARD, Uniform(k))}, reps)
         st = _settler(grip, 16, target_error=1e-5)()
         tip_err = float(np.max(np.abs(st.tip[0] - ref.tip)))
@@ -166,20 +145,14 @@ def settle_targets_md(rec: dict) -> str:
     out = ["# Settle targets (issue 9)", "", f"Fastest CPU time of {rec['repeats']} interleaved runs.", ""]
     for r in rec["rows"]:
         out.append("- " + r["case"] + ": " + "; ".join(f"{k} {_fmt(v)}" for k, v in r.items() if k != "case"))
-    out += ["", "| check | met |", "|---|---|"]
-    out += [f"| {k} | {'yes' if v else 'NO'} |" for k, v in rec["checks"].items()]
+    out += checks_md(rec["checks"])
     return "\n".join(out) + "\n"
 
 
 def write_settle_targets(out_dir, *, quick: bool = False, repeats: int | None = None) -> dict:
     """Measure and write ``settle_targets.json`` and ``settle_targets.md`` into ``out_dir``."""
-    from pathlib import Path
-
     rec = settle_targets(quick=quick, repeats=repeats)
-    out = Path(out_dir)
-    write_json(out / "settle_targets.json", rec)
-    with atomic_write(out / "settle_targets.md") as fh:
-        fh.write(settle_targets_md(rec))
+    write_record(out_dir, "settle_targets", rec, settle_targets_md(rec))
     return rec
 
 

@@ -8,6 +8,9 @@ Where the naive run's time is only a lower bound (an extrapolation too far to
 trust, or no decay at all, see :mod:`simgrip.harness.methods`), the ratio is
 an upper bound and reads ``< x``; where the naive run has no static state to
 reach, ``0``.  Infinite times print as words ("never"), not ``inf``.
+:func:`checks_md` and :func:`write_record` serve the bench's other records
+(settle targets, K-finger settles): their checks table, and the record
+written as JSON and Markdown.
 """
 
 from __future__ import annotations
@@ -15,7 +18,7 @@ from __future__ import annotations
 import math
 import os
 
-__all__ = ["ratios", "summary_md", "skips_md", "fmt"]
+__all__ = ["ratios", "summary_md", "skips_md", "fmt", "checks_md", "write_record"]
 
 GRIP_ORDER = ("free", "I", "II", "III")
 
@@ -196,3 +199,21 @@ def summary_md(res, load_avg) -> str:
     L += ["Reproduce: `simgrip bench" + (" --quick" if res.quick else "") + f"{jobs}` "
           "(or `python -c \"from simgrip.harness.bench import run_bench; run_bench('bench_out')\"`).", ""]
     return "\n".join(L)
+
+
+def checks_md(checks: dict) -> list[str]:
+    """Markdown lines of a ``{check: met}`` table (a blank line first; met reads yes or NO)."""
+    return ["", "| check | met |", "|---|---|"] + [f"| {k} | {'yes' if v else 'NO'} |" for k, v in checks.items()]
+
+
+def write_record(out_dir, name: str, rec: dict, markdown: str) -> None:
+    """Write ``rec`` as ``<name>.json`` and ``markdown`` as ``<name>.md`` into ``out_dir``, each whole or not at
+    all (:func:`simgrip.io.write_json`, :func:`simgrip.io.atomic_write`)."""
+    from pathlib import Path
+
+    from simgrip.io import atomic_write, write_json
+
+    out = Path(out_dir)
+    write_json(out / f"{name}.json", rec)
+    with atomic_write(out / f"{name}.md") as fh:
+        fh.write(markdown)
