@@ -112,11 +112,13 @@ def check_grip(grip: str) -> str:
     return g
 
 
-def _finite(name: str, value) -> float:
+def _finite(name: str, value, unit: str | None = None) -> float:
+    """``value`` as a finite float; ValueError naming ``name`` (and its ``unit``, e.g. "radians") otherwise."""
     try:
         v = float(value)
     except (TypeError, ValueError):
-        raise ValueError(f"{name} must be a real number, got {value!r}") from None
+        what = f"a real number ({unit})" if unit else "a real number"
+        raise ValueError(f"{name} must be {what}, got {value!r}") from None
     if not math.isfinite(v):
         raise ValueError(f"{name} must be finite, got {value!r}")
     return v

@@ -55,7 +55,7 @@ import mujoco
 import numpy as np
 
 from simgrip.chain import ChainSprings, chain_springs, link_positions
-from simgrip.params import DimensionlessParams, PhysicalParams, check_grip
+from simgrip.params import DimensionlessParams, PhysicalParams, _finite, check_grip
 from simgrip.profiles import CurvatureProfile, as_profile
 from simgrip.sim.contacts import add_pair
 from simgrip.sim.fingers import FingerIndex, add_fingers, check_finger_links, index_fingers
@@ -296,12 +296,7 @@ def build_gripper(
     n = check_finger_links(n_links)
     r_tip = check_positive("r_tip", r_tip, 0.05)
     r_link = check_positive("r_link", r_link, 0.05)
-    try:
-        yaw = float(yaw)
-    except (TypeError, ValueError):
-        raise ValueError(f"yaw must be a real number (radians), got {yaw!r}") from None
-    if not math.isfinite(yaw):
-        raise ValueError(f"yaw must be finite, got {yaw!r}")
+    yaw = _finite("yaw", yaw, unit="radians")
     beta = _check_contact_angle(contact_angle, shape)
     if 2.0 * r_tip >= 2.0 * (0.5 * dimless.b) * math.sin(math.pi / K):
         raise ValueError(f"fingers = {K}: the tip spheres (radius {r_tip:g} l) overlap on the circle of diameter "

@@ -31,6 +31,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from simgrip.params import _finite
+
 __all__ = ["Placement", "check_offset", "check_workpiece_yaw", "place_fingers"]
 
 
@@ -65,13 +67,7 @@ def check_workpiece_yaw(value) -> float:
 
     Whether a box's fingers still meet flat faces at that turn is checked by :func:`place_fingers`.
     """
-    try:
-        psi = float(value)
-    except (TypeError, ValueError):
-        raise ValueError(f"workpiece_yaw must be a real number (radians), got {value!r}") from None
-    if not math.isfinite(psi):
-        raise ValueError(f"workpiece_yaw must be finite, got {value!r}")
-    return psi
+    return _finite("workpiece_yaw", value, unit="radians")
 
 
 def place_fingers(shape: str, azimuths, size_l, r_tip: float, offset, workpiece_yaw: float) -> Placement:
