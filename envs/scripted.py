@@ -28,7 +28,14 @@ from simgrip.reference.elastica import ElasticaError, solve
 from simgrip.profiles import Uniform
 from simgrip.params import DimensionlessParams, PhysicalParams
 
-__all__ = ["ObservationPickPolicy", "ScriptedPickPolicy", "choose_kappa"]
+__all__ = ["ObservationPickPolicy", "ScriptedPickPolicy", "choose_kappa", "kappa_action"]
+
+
+def kappa_action(kappa: float, kappa_range) -> float:
+    """The curvature command's action (in ``[-1, 1]``, clipped) that commands ``kappa_bar = kappa`` within
+    the env's ``kappa_range = (low, high)`` (the inverse of the envs' ``low + (a + 1)/2 (high - low)``)."""
+    lo, hi = kappa_range
+    return float(np.clip(2.0 * (kappa - lo) / (hi - lo) - 1.0, -1.0, 1.0))
 
 
 def choose_kappa(grip: str, params: DimensionlessParams, *, safety: float = 2.0,
@@ -138,10 +145,6 @@ class ScriptedPickPolicy:
         self.t_from, self.k_from = 0.0, 0.0  # Grip I: the curvature ramp starts here
         return self.kappa
 
-    def _a_kappa(self, kappa):
-        lo, hi = self.env.kappa_range
-        return float(np.clip(2.0 * (kappa - lo) / (hi - lo) - 1.0, -1.0, 1.0))
-
     def _first(self, obs):
         """Read the palm's start height and (Grip III) the grasp height off the first observation."""
         env = self.env
@@ -192,7 +195,7 @@ class ScriptedPickPolicy:
             vz = min(self.lift_speed, remaining / (env.palm_speed * env.dt)) if remaining > 0 else 0.0
         lo, hi = env.palm_range
         self.palm_target = min(max(self.palm_target + vz * env.palm_speed * env.dt, lo), hi)
-        ak = self._a_kappa(k)
+        ak = kappa_action(k, env.kappa_range)
         a = [ak, ak, vz] if env.per_finger else [ak, vz]
         return np.array(a, dtype=np.float32)
 

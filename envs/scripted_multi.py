@@ -22,7 +22,7 @@ from __future__ import annotations
 import numpy as np
 
 from simgrip.envs.pick_multi_model import half_height, workpiece_size
-from simgrip.envs.scripted import choose_kappa
+from simgrip.envs.scripted import choose_kappa, kappa_action
 from simgrip.params import DimensionlessParams
 from simgrip.profiles import Uniform
 from simgrip.reference.elastica import ElasticaError
@@ -138,10 +138,6 @@ class ScriptedMultiPolicy:
         self.t = 0.0
         return self.kappa
 
-    def _a_kappa(self, kappa):
-        lo, hi = self.env.kappa_range
-        return float(np.clip(2.0 * (kappa - lo) / (hi - lo) - 1.0, -1.0, 1.0))
-
     def __call__(self, obs):
         env = self.env
         step = env.palm_speed * env.dt
@@ -165,6 +161,6 @@ class ScriptedMultiPolicy:
                 vz = min(self.lift_speed, remaining / step) if remaining > 0 else 0.0
         lo, hi = env.palm_range
         self.palm_target = min(max(self.palm_target + vz * step, lo), hi)
-        ak = self._a_kappa(k)
+        ak = kappa_action(k, env.kappa_range)
         nk = env.action_space.shape[0] - 1
         return np.array([ak] * nk + [vz], dtype=np.float32)
