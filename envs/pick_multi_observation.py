@@ -19,7 +19,7 @@ import math
 
 import numpy as np
 
-from simgrip.envs.pick_observation import SPIN_TIME
+from simgrip.envs.pick_observation import SPIN_TIME, finger_bounds
 
 __all__ = ["MultiObservation", "WorkpieceContactForces", "multi_obs_layout", "multi_reward"]
 
@@ -114,14 +114,8 @@ class MultiObservation:
         self.K, self.n, self.P = int(fingers), int(n_links), int(shape_points)
         self.layout = multi_obs_layout(self.K, self.P, shared_curvature)
         lo, hi = kappa_range
-        k_bound = max(2.0, abs(2.0 * (0.0 - lo) / (hi - lo) - 1.0))  # the fingers start straight (kappa = 0)
-        a_bound = max(20.0, 2.0 * max(abs(lo), abs(hi)))
-        bounds = {
-            "palm_height": (0, 10), "kappa_command": (-k_bound, k_bound), "kappa_actual": (-k_bound, k_bound),
-            "finger_shape": (-a_bound, a_bound), "tip_position": (-5, 5), "workpiece_position": (-10, 10),
-            "workpiece_tilt": (-1, 1), "workpiece_velocity": (-100, 100), "workpiece_spin": (-100, 100),
-            "workpiece_lift": (-20, 20), "contact_force": (0, 20), "hold": (0, 1),
-        }
+        bounds = {**finger_bounds(kappa_range), "workpiece_position": (-10, 10), "workpiece_tilt": (-1, 1),
+                  "workpiece_velocity": (-100, 100), "workpiece_spin": (-100, 100), "workpiece_lift": (-20, 20)}
         self.slices, lows, highs = {}, [], []
         for name, size in self.layout:
             self.slices[name] = slice(len(lows), len(lows) + size)

@@ -19,7 +19,7 @@ from itertools import accumulate
 
 import numpy as np
 
-__all__ = ["OBS_LAYOUT", "SPIN_TIME", "PickObservation", "obs_layout"]
+__all__ = ["OBS_LAYOUT", "SPIN_TIME", "PickObservation", "finger_bounds", "obs_layout"]
 
 #: The box's spin is observed as ``omega_y * SPIN_TIME`` (rad per 0.1 s).
 SPIN_TIME = 0.1
@@ -51,17 +51,20 @@ def obs_layout(shape_points: int = 8, per_finger: bool = False) -> list[tuple[st
 OBS_LAYOUT = obs_layout(8)
 
 
-def _bounds(kappa_range, shape_points: int, per_finger: bool):
-    """Layout, slices, the index array reducing the per-finger layout (or None), lower and upper bounds."""
+def finger_bounds(kappa_range) -> dict:
+    """``{name: (low, high)}`` of the observation blocks every pick environment has (the palm, curvatures,
+    finger shapes, tips, contact forces, hold; units as the observation's), for ``kappa_range = (low, high)``."""
     lo, hi = kappa_range
     k_bound = max(2.0, abs(2.0 * (0.0 - lo) / (hi - lo) - 1.0))  # the fingers start straight (kappa = 0)
     a_bound = max(20.0, 2.0 * max(abs(lo), abs(hi)))
-    bounds = {
-        "palm_height": (0, 10), "kappa_command": (-k_bound, k_bound), "kappa_actual": (-k_bound, k_bound),
-        "finger_shape": (-a_bound, a_bound), "tip_position": (-5, 5), "box_position": (-10, 10),
-        "box_tilt": (-math.pi, math.pi), "box_velocity": (-100, 100), "box_spin": (-100, 100),
-        "box_lift": (-20, 20), "contact_force": (0, 20), "hold": (0, 1),
-    }
+    return {"palm_height": (0, 10), "kappa_command": (-k_bound, k_bound), "kappa_actual": (-k_bound, k_bound),
+            "finger_shape": (-a_bound, a_bound), "tip_position": (-5, 5), "contact_force": (0, 20), "hold": (0, 1)}
+
+
+def _bounds(kappa_range, shape_points: int, per_finger: bool):
+    """Layout, slices, the index array reducing the per-finger layout (or None), lower and upper bounds."""
+    bounds = {**finger_bounds(kappa_range), "box_position": (-10, 10), "box_tilt": (-math.pi, math.pi),
+              "box_velocity": (-100, 100), "box_spin": (-100, 100), "box_lift": (-20, 20)}
     # the observation is computed in the per-finger layout; without per_finger it keeps finger 0 and the box's z
     full, lows, highs, index = obs_layout(shape_points, True), [], [], {}
     for name, size in full:
