@@ -10,9 +10,13 @@ contact.  The state's ``method`` and ``contact`` say which ran.
 
 The dynamics is the planar ``settle(method="dynamics")``'s
 (:mod:`simgrip.settle.dynamics`, whose constants it uses): ``mjINT_DISCRETE``,
-time step ``h = 1/omega_min`` of the hinge chains, hinge damping ``h K``,
+time step ``h = 1/omega_min`` of the straight hinge chains
+(:func:`straight_frequency`, as the planar settle's from its built, straight
+scene), hinge damping ``h max(K, R)`` with ``R`` the loads' geometric
+stiffness bound (each finger carrying ``M``, its share of the weight ``K M``),
 elliptic cone with ``impratio`` :data:`~simgrip.settle.dynamics.DYN_IMPRATIO`,
-contact time constant :data:`~simgrip.settle.dynamics.DYN_TIMECONST` ``h``.
+contact time constant :data:`~simgrip.settle.dynamics.DYN_TIMECONST` ``h``,
+MuJoCo's dense constraint Jacobian up to :data:`GRIPPER_DENSE_NV` dofs.
 The workpiece's free joint is damped ``3 m / h`` in translation and ``3 I / h``
 in rotation (its principal inertia; the rotational dofs are in its body frame).
 
@@ -74,7 +78,8 @@ from simgrip.chain import link_positions
 from simgrip.settle import check_tol_steps
 from simgrip.settle.dynamics import (DYN_DAMPING, DYN_DROP_FALL, DYN_DROP_SLIP, DYN_IMPRATIO,
                                      DYN_PEN_LIMIT, DYN_STEP, DYN_TIMECONST, DYN_TOL, DYN_TOL_PER_WEIGHT, DYN_VTOL,
-                                     DYN_WORKPIECE_DAMPING, lowest_frequency, run_to_rest)
+                                     DYN_WORKPIECE_DAMPING, geometric_stiffness_bound, lowest_frequency,
+                                     run_to_rest)
 from simgrip.settle.gripper_start import finger_chain, is_symmetric, start_qpos
 from simgrip.settle.state import SettleError
 from simgrip.settle.statics import CONTACT_IMPEDANCE, check_warnings, restore_options, save_options
@@ -82,10 +87,16 @@ from simgrip.sim.checks import clear_warnings
 from simgrip.sim.gripper import GripperScene
 from simgrip.validity import check_grip_shape
 
-__all__ = ["FingerRecord", "GripperState", "gripper_tolerance", "settle_gripper"]
+__all__ = ["FingerRecord", "GripperState", "contact_rest_depth", "gripper_tolerance", "settle_gripper",
+           "straight_frequency"]
 
 #: Default physics-step budget of one settle.
 GRIPPER_MAX_STEPS = 20_000
+#: Largest number of dofs for which the dynamics uses MuJoCo's dense constraint Jacobian (sparse above).
+#: A gripper has few contact rows (one per finger), and the dense path's step is 10-25 % cheaper up to
+#: ``nv`` ~ 200 and dearer from ~260 on (measured, II, K = 2 and 4, n = 16 to 96); MuJoCo's own default
+#: switches at 60.  The settled state is the same to round-off either way.
+GRIPPER_DENSE_NV = 200
 
 
 @dataclass
@@ -181,7 +192,6 @@ class _Dyn:
         m, d = scene.model, scene.data
         self.scene, self.m, self.d = scene, m, d
         self.steps = 0
-        hinge = scene.joint_dof.ravel()
         wdof = scene.workpiece_dof
         self.fscale = np.full(m.nv, scene.moment_scale)
         self.fscale[wdof[:3]] = scene.force_scale
@@ -189,11 +199,8 @@ class _Dyn:
         self.vscale[wdof[:3]] = scene.length
         self.vscale /= math.sqrt(scene.length / scene.physical.g)
         k = m.jnt_stiffness[m.dof_jntid].copy()
-        mujoco.mj_kinematics(m, d)
-        mujoco.mj_comPos(m, d)
-        mujoco.mj_crb(m, d)
-        h = step_factor * DYN_STEP / lowest_frequency(m, d, k, hinge)
-        self.h = h
+        self.scratch = mujoco.MjData(m)
+        self.h = h = step_factor * DYN_STEP / straight_frequency(scene, self.scratch, k)
         m.opt.integrator = mujoco.mjtIntegrator.mjINT_DISCRETE
         m.opt.timestep = h
         m.opt.cone = mujoco.mjtCone.mjCONE_ELLIPTIC
@@ -207,8 +214,25 @@ class _Dyn:
         m.pair_solref[:] = [DYN_TIMECONST * h, 1.0]
         m.pair_solimp[:, 0] = CONTACT_IMPEDANCE
         m.pair_solimp[:, 1] = CONTACT_IMPEDANCE
-        self.scratch = mujoco.MjData(m)
         self.held_q: np.ndarray | None = None
+        self.k = np.where(k > 0, k, 0.0)
+        self.hinge = scene.joint_dof.ravel()
+        self.update_damping()
+
+    def update_damping(self) -> None:
+        """Hinge damping ``h max(K, R)``, ``R`` the loads' geometric stiffness bound at the current state.
+
+        As the planar dynamics' (:func:`simgrip.settle.dynamics.geometric_stiffness_bound`: MuJoCo's step
+        is explicit in gravity and the contact loads, which a soft finger's springs do not dominate; ``R``
+        keeps every step a contraction).  While the workpiece hangs on the fingers (not held, contact
+        on), each finger carries its per-finger share of the weight, ``M`` (``K M`` over ``K``), as the
+        planar problem's finger does.
+        """
+        m, sc = self.m, self.scene
+        hanging = self.held_q is None and not int(m.opt.disableflags) & int(mujoco.mjtDisableBit.mjDSBL_CONTACT)
+        load = sc.workpiece_mass * sc.physical.g / sc.fingers if hanging else 0.0
+        R = geometric_stiffness_bound(sc, self.d, load)
+        m.dof_damping[self.hinge] = DYN_DAMPING * self.h * np.maximum(self.k[self.hinge], R[self.hinge])
 
     def residual_vector(self) -> np.ndarray:
         """Static balance at rest per dof, scaled (``qfrc_smooth + qfrc_constraint`` at ``qvel = 0``)."""
@@ -242,6 +266,7 @@ class _Dyn:
 
     def step(self, k: int = 1) -> None:
         sc, d = self.scene, self.d
+        self.update_damping()  # the loads' geometric stiffness at the current state
         mujoco.mj_step(self.m, d, k)
         self.steps += k
         if self.held_q is not None:
@@ -254,6 +279,71 @@ class _Dyn:
     def run(self, tol: float, budget: int, watch=None) -> tuple[bool, str]:
         """Step until the residual is below ``tol`` and the velocity below DYN_VTOL; ``watch()`` may stop it."""
         return run_to_rest(self, tol, DYN_VTOL, budget, watch, "gripper settle")
+
+
+def straight_frequency(scene: GripperScene, scratch, k: np.ndarray) -> float:
+    """Lowest natural frequency [rad/s] of the hinge chains, straight (every hinge angle 0), with their inertia.
+
+    The configuration is fixed, not the start's: a curled start has less inertia about the base and a higher
+    ``omega_min``, hence a shorter step ``h = 1/omega_min`` and more steps to the same rest (Grip II's loaded
+    start: ``h`` 0.77 times the straight chain's).  The planar dynamic settle takes ``omega_min`` at the built
+    scene, straight for Grips I/II, so the K-finger and the planar settle of the same per-finger problem
+    step alike.  ``scratch`` (an ``MjData`` of the scene's model) is overwritten; ``k`` the dofs' stiffness.
+    """
+    m = scene.model
+    scratch.qpos[:] = m.qpos0
+    scratch.qpos[scene.joint_qpos.ravel()] = 0.0
+    mujoco.mj_kinematics(m, scratch)
+    mujoco.mj_comPos(m, scratch)
+    mujoco.mj_crb(m, scratch)
+    return lowest_frequency(m, scratch, k, scene.joint_dof.ravel())
+
+
+def contact_rest_depth(scene: GripperScene, N1, timestep: float) -> np.ndarray:
+    """How deep (over l) MuJoCo's soft contact rests under normal forces ``N1`` (over rho g l) in the dynamics.
+
+    MuJoCo's contact is a constraint with reference acceleration ``-k r`` (``k = 1/(d tc)^2``, ``tc =
+    DYN_TIMECONST h``, impedance ``d`` -> 1) acting through the inverse of the step's metric
+    ``M + h D + h^2 K`` (``mjINT_DISCRETE``): at rest a normal force ``N`` sinks the contact by
+    ``r = N tc^2 A_nn``, ``A_nn = n J (M + h D + h^2 K)^{-1} J^T n`` the contact's mobility along its
+    normal (MuJoCo's ``efc_diagA``), the tip's and the workpiece's.  Evaluated at the scene's current
+    state (its contacts' normals; a finger out of contact: its ``E1``) with the damping the dynamics
+    sets there (:class:`_Dyn`: hinges ``h max(K, R)`` with each finger carrying ``M``, the workpiece
+    ``3 m / h`` and ``3 I / h``), at the step ``timestep`` [s].  Returns one depth per finger.
+    """
+    m = scene.model
+    h = float(timestep)
+    s = mujoco.MjData(m)
+    s.qpos[:] = scene.data.qpos
+    mujoco.mj_forward(m, s)
+    k = m.jnt_stiffness[m.dof_jntid].copy()
+    hinge = scene.joint_dof.ravel()
+    R = geometric_stiffness_bound(scene, s, scene.workpiece_mass * scene.physical.g / scene.fingers)
+    damp = np.zeros(m.nv)
+    damp[hinge] = DYN_DAMPING * h * np.maximum(k[hinge], R[hinge])
+    wb, wdof = scene.workpiece_body, scene.workpiece_dof
+    damp[wdof[:3]] = DYN_WORKPIECE_DAMPING * float(m.body_mass[wb]) / h
+    damp[wdof[3:]] = DYN_WORKPIECE_DAMPING * np.asarray(m.body_inertia[wb]) / h
+    metric = np.zeros((m.nv, m.nv))
+    mujoco.mj_fullM(m, s, metric)
+    metric += np.diag(h * damp + h * h * np.where(k > 0, k, 0.0))
+    tc = DYN_TIMECONST * h
+    depth = np.zeros(scene.fingers)
+    jt, jw = np.zeros((3, m.nv)), np.zeros((3, m.nv))
+    for f in range(scene.fingers):
+        g = int(scene.tip_geom[f])
+        cons = [i for i in range(s.ncon)
+                if int(s.contact.geom1[i]) == g and int(s.contact.geom2[i]) == scene.workpiece_geom]
+        if cons:
+            i = cons[0]
+            p, n = np.array(s.contact.pos[i]), np.array(s.contact.frame[i][:3])
+        else:
+            p, n = np.array(s.geom_xpos[g]), scene.frame(f)[0]
+        mujoco.mj_jac(m, s, jt, None, p, int(m.geom_bodyid[g]))
+        mujoco.mj_jac(m, s, jw, None, p, wb)
+        j = n @ (jw - jt)
+        depth[f] = float(j @ np.linalg.solve(metric, j))
+    return np.asarray(N1, dtype=float) * scene.force_scale * tc * tc * depth / scene.length
 
 
 def _tips_on_workpiece(scene: GripperScene) -> np.ndarray:
@@ -340,7 +430,9 @@ def settle_gripper(scene: GripperScene, *, tol: float | None = None, max_steps: 
     tol, max_steps = check_tol_steps(tol, max_steps)
     t0 = time.perf_counter()
     m, d = scene.model, scene.data
-    saved = save_options(m)
+    saved, jacobian = save_options(m), int(m.opt.jacobian)
+    dense = m.nv <= GRIPPER_DENSE_NV
+    m.opt.jacobian = int(mujoco.mjtJacobian.mjJAC_DENSE if dense else mujoco.mjtJacobian.mjJAC_SPARSE)
     clear_warnings(d)
     q_start = start_qpos(scene)
     reach = q_start is not None
@@ -380,6 +472,7 @@ def settle_gripper(scene: GripperScene, *, tol: float | None = None, max_steps: 
                               f"{state.residual:.3g}, tolerance {tol:.3g})")
     finally:
         restore_options(m, saved)
+        m.opt.jacobian = jacobian
         d.qfrc_applied[:] = 0.0
         d.qvel[:] = 0.0
         mujoco.mj_forward(m, d)
