@@ -23,8 +23,9 @@ one run measures, interleaved run by run:
                           (``planar=``), as a sweep would
 ========================  =====================================================
 
-and reports ``full / (K single_dyn)`` (the target: <= 1; also per physics
-step, to tell more steps from dearer ones),
+(these scenes are exactly symmetric, so ``settle_gripper``'s default,
+``method="auto"``, is the skip) and reports ``full / (K single_dyn)`` (the
+target: <= 1; also per physics step, to tell more steps from dearer ones),
 ``full / (K single_newton)``, ``full / skip`` and ``full / skip_reuse`` (what
 the skip saves).  As
 in :mod:`simgrip.harness.bench_settle`: every time is the fastest of
