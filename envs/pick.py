@@ -38,6 +38,7 @@ from simgrip.envs.pick_reward import PickReward, progress
 from simgrip.params import DimensionlessParams, PhysicalParams
 from simgrip.sim.checks import PhysicsError, StateCheck, check_invalid_state
 from simgrip.sim.gl import make_renderer
+from simgrip.sim.workpiece import workpiece_inertia
 
 __all__ = ["PickEnv", "BoxParams", "OBS_LAYOUT", "obs_layout"]  # the last two from pick_observation
 
@@ -384,8 +385,7 @@ class PickEnv(gym.Env):
         m.geom_rbound[self.box_geom] = math.sqrt(hx * hx + hy * hy + hz * hz)
         m.geom_aabb[self.box_geom] = [0, 0, 0, hx, hy, hz]
         m.body_mass[self.box_body] = box.mass
-        m.body_inertia[self.box_body] = [box.mass / 3 * (hy**2 + hz**2), box.mass / 3 * (hx**2 + hz**2),
-                                         box.mass / 3 * (hx**2 + hy**2)]
+        m.body_inertia[self.box_body] = workpiece_inertia("box", (hx, hy, hz), box.mass)
         m.pair_friction[self._finger_pair_ids, 0:2] = box.friction
         m.pair_friction[self._finger_pair_ids, 2] = self.spin_friction * box.friction
         mujoco.mj_setConst(m, d)

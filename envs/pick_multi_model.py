@@ -14,7 +14,7 @@ adds, in code:
   in its own vertical plane;
 * the workpiece on a free joint: a box (faces normal to the fingers' planes
   at zero yaw), a cylinder with a vertical axis, or a sphere; its inertia is
-  :func:`simgrip.sim.gripper.workpiece_inertia`;
+  :func:`simgrip.sim.workpiece.workpiece_inertia`;
 * a camera ``gripper`` looking down at the grip from the front right;
 * the explicit contact pairs: each finger's tip and links (but the last,
   whose end is the tip sphere) with the workpiece (condim 4), the palm slab
@@ -39,7 +39,8 @@ from simgrip.models import model_path
 from simgrip.profiles import Uniform
 from simgrip.sim.contacts import add_pair
 from simgrip.sim.fingers import FingerIndex, add_fingers, check_finger_links, index_fingers
-from simgrip.sim.gripper import finger_azimuths, orient_fingers, workpiece_inertia
+from simgrip.sim.gripper import finger_azimuths, orient_fingers
+from simgrip.sim.workpiece import workpiece_inertia
 
 __all__ = ["GEOM_TYPES", "PickMultiModel", "build_pick_multi_model", "half_height", "set_workpiece", "workpiece_size"]
 

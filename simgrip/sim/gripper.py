@@ -61,7 +61,7 @@ from simgrip.sim.contacts import add_pair
 from simgrip.sim.fingers import FingerIndex, add_fingers, check_finger_links, index_fingers
 from simgrip.sim.gripper_placement import check_offset, check_workpiece_yaw, place_fingers
 from simgrip.sim.scene import FingerScene, check_params, check_positive, root_spec, set_joint_angles
-from simgrip.sim.workpiece import BOX_DEPTH, BOX_HEIGHT
+from simgrip.sim.workpiece import BOX_DEPTH, BOX_HEIGHT, workpiece_inertia
 
 __all__ = ["GRIPPER_GRIPS", "WORKPIECES", "GripperScene", "build_gripper", "check_gripper", "finger_azimuths",
            "orient_fingers", "set_finger_angles", "uniform_profiles", "workpiece_inertia"]
@@ -407,19 +407,6 @@ def orient_fingers(spec: mujoco.MjSpec, azimuths, prefix: str = "") -> None:
     finger 1) to point along ``azimuths[k]`` [rad] about the vertical; each finger then bends in its own plane."""
     for k, a in enumerate(azimuths):
         spec.body(f"{prefix}f{k}_link0").quat = _yaw_quat(float(a))
-
-
-def workpiece_inertia(shape: str, size, mass: float) -> list[float]:
-    """Principal inertia [kg m^2] of a solid ``shape`` of geom ``size`` [m] (as :func:`_workpiece_size`) and ``mass`` [kg]."""
-    if shape == "box":
-        hx, hy, hz = size
-        return [mass / 3.0 * (hy**2 + hz**2), mass / 3.0 * (hx**2 + hz**2), mass / 3.0 * (hx**2 + hy**2)]
-    if shape == "cylinder":
-        r, h = size[0], size[1]
-        side = mass * (3.0 * r**2 + 4.0 * h**2) / 12.0
-        return [side, side, 0.5 * mass * r**2]
-    r = size[0]
-    return [0.4 * mass * r**2] * 3
 
 
 def _yaw_quat(a: float) -> list[float]:

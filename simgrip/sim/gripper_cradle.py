@@ -93,7 +93,8 @@ def build_cradle(params: PhysicalParams | DimensionlessParams, profile, n_links:
     ``l``.  ValueError naming the bad argument (``b`` when the box's corner
     would not sit at ``x > 0`` on the start shape).
     """
-    from simgrip.sim.gripper import GripperScene, finger_azimuths, orient_fingers, workpiece_inertia
+    from simgrip.sim.gripper import GripperScene, finger_azimuths, orient_fingers
+    from simgrip.sim.workpiece import workpiece_inertia
 
     if isinstance(fingers, bool) or fingers not in CRADLE_FINGERS:
         raise ValueError(f"fingers must be one of {CRADLE_FINGERS} for Grip III (one finger per face of the box), "

@@ -51,6 +51,7 @@ __all__ = [
     "lower_onto_fingers",
     "place_workpiece",
     "slip_coordinate",
+    "workpiece_inertia",
     "workpiece_pose",
 ]
 
@@ -141,6 +142,21 @@ def contact_links(s: float, springs: ChainSprings, window: float) -> np.ndarray:
 # building
 
 
+def workpiece_inertia(shape: str, size, mass: float) -> list[float]:
+    """Principal inertia [kg m^2] of a solid ``shape`` ("box", "cylinder" with a vertical axis, "sphere") of
+    mass ``mass`` [kg] and MuJoCo geom ``size`` [m] (box: half sizes; cylinder: radius, half height; sphere:
+    radius), about its centre, in the geom's axes."""
+    if shape == "box":
+        hx, hy, hz = size
+        return [mass / 3.0 * (hy**2 + hz**2), mass / 3.0 * (hx**2 + hz**2), mass / 3.0 * (hx**2 + hy**2)]
+    if shape == "cylinder":
+        r, h = size[0], size[1]
+        side = mass * (3.0 * r**2 + 4.0 * h**2) / 12.0
+        return [side, side, 0.5 * mass * r**2]
+    r = size[0]
+    return [0.4 * mass * r**2] * 3
+
+
 def add_workpiece(spec: mujoco.MjSpec, *, half_size, center_z: float, mass: float, joints: tuple) -> mujoco.MjsBody:
     """Attach ``models/workpiece.xml`` as ``workpiece_body`` with box ``half_size`` [m] centred at ``(0, 0, center_z)``.
 
@@ -154,7 +170,7 @@ def add_workpiece(spec: mujoco.MjSpec, *, half_size, center_z: float, mass: floa
     body.explicitinertial = True
     body.mass = mass
     body.ipos = [0.0, 0.0, 0.0]
-    body.inertia = [mass / 3.0 * (hy**2 + hz**2), mass / 3.0 * (hx**2 + hz**2), mass / 3.0 * (hx**2 + hy**2)]
+    body.inertia = workpiece_inertia("box", (hx, hy, hz), mass)
     body.first_geom().size = [hx, hy, hz]
     axes = {"x": [1, 0, 0], "z": [0, 0, 1], "ry": [0, -1, 0]}
     for name in joints:
