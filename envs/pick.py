@@ -32,13 +32,12 @@ from simgrip.envs.arguments import check_bool as _bool
 from simgrip.envs.arguments import check_positive as _pos
 from simgrip.envs.arguments import check_range as _range
 from simgrip.envs.pick_contacts import BoxContactForces
-from simgrip.envs.pick_model import build_pick_model
+from simgrip.envs.pick_model import build_pick_model, resize_workpiece
 from simgrip.envs.pick_observation import OBS_LAYOUT, PickObservation, obs_layout
 from simgrip.envs.pick_reward import PickReward, progress
 from simgrip.params import DimensionlessParams, PhysicalParams
 from simgrip.sim.checks import PhysicsError, StateCheck, check_invalid_state
 from simgrip.sim.gl import make_renderer
-from simgrip.sim.workpiece import workpiece_inertia
 
 __all__ = ["PickEnv", "BoxParams", "OBS_LAYOUT", "obs_layout"]  # the last two from pick_observation
 
@@ -379,16 +378,11 @@ class PickEnv(gym.Env):
                               b=self.box.width, mu_s=self.box.friction, gamma=0.8 * self.length)
 
     def _set_box(self, box: BoxParams):
-        m, d = self.model, self.data
-        hx, hy, hz = 0.5 * box.width, 0.5 * self.box_depth, 0.5 * self.box_height
-        m.geom_size[self.box_geom] = [hx, hy, hz]
-        m.geom_rbound[self.box_geom] = math.sqrt(hx * hx + hy * hy + hz * hz)
-        m.geom_aabb[self.box_geom] = [0, 0, 0, hx, hy, hz]
-        m.body_mass[self.box_body] = box.mass
-        m.body_inertia[self.box_body] = workpiece_inertia("box", (hx, hy, hz), box.mass)
-        m.pair_friction[self._finger_pair_ids, 0:2] = box.friction
-        m.pair_friction[self._finger_pair_ids, 2] = self.spin_friction * box.friction
-        mujoco.mj_setConst(m, d)
+        """Resize the box to ``box`` (:func:`~simgrip.envs.pick_model.resize_workpiece`) and keep it."""
+        size = (0.5 * box.width, 0.5 * self.box_depth, 0.5 * self.box_height)
+        resize_workpiece(self.model, self.data, shape="box", geom=self.box_geom, body=self.box_body,
+                         pairs=self._finger_pair_ids, size=size, mass=box.mass, friction=box.friction,
+                         spin_friction=self.spin_friction)
         self.box = box
 
     def _set_rest(self, k0: float, k1: float):

@@ -19,7 +19,8 @@ with :class:`mujoco.MjSpec` and adds, in code:
   with the box, the box with the table (and pedestal).
 
 Addresses are looked up once (:class:`PickModel`); the fingers' through
-:func:`simgrip.sim.fingers.index_fingers`.
+:func:`simgrip.sim.fingers.index_fingers`.  Each episode resizes the
+workpiece in place (:func:`resize_workpiece`, also the K-finger models').
 """
 
 from __future__ import annotations
@@ -35,8 +36,9 @@ from simgrip.models import model_path
 from simgrip.profiles import Uniform
 from simgrip.sim.contacts import add_pair
 from simgrip.sim.fingers import FingerIndex, add_fingers, check_finger_links, index_fingers
+from simgrip.sim.workpiece import workpiece_inertia
 
-__all__ = ["FINGER_PREFIX", "PEDESTAL_HEIGHT", "PickModel", "build_pick_model"]
+__all__ = ["FINGER_PREFIX", "PEDESTAL_HEIGHT", "PickModel", "build_pick_model", "resize_workpiece"]
 
 #: Prefix of the fingers' names in the pick model.
 FINGER_PREFIX = "hand_"
@@ -128,6 +130,34 @@ def build_pick_model(grip: str, *, n_links: int, length: float, EI: float, rho: 
         finger_pairs=np.array([mujoco.mj_name2id(model, mujoco.mjtObj.mjOBJ_PAIR, p) for p in finger_pairs]),
         pedestal_height=pedestal, unit_rest=chain_springs(Uniform(1.0), n).rest,
     )
+
+
+def resize_workpiece(model: mujoco.MjModel, data: mujoco.MjData, *, shape: str, geom: int, body: int, pairs,
+                     size, mass: float, friction: float, spin_friction: float) -> None:
+    """Resize the workpiece ``geom`` of ``body`` in place (no recompilation), then :func:`mujoco.mj_setConst`.
+
+    Sets the geom's ``size`` [m] (MuJoCo's: box half sizes; cylinder radius, half height; sphere radius), its
+    bounding sphere and box, the body's ``mass`` [kg] and the solid's inertia
+    (:func:`~simgrip.sim.workpiece.workpiece_inertia`), and the friction of the finger ``pairs`` (pair ids):
+    sliding ``friction``, torsional ``spin_friction * friction`` [m].
+    """
+    if shape == "box":
+        hx, hy, hz = size[0], size[1], size[2]
+        rbound = math.sqrt(hx * hx + hy * hy + hz * hz)
+    elif shape == "cylinder":
+        hx = hy = size[0]
+        hz = size[1]
+        rbound = math.hypot(hx, hz)
+    else:  # sphere
+        hx = hy = hz = rbound = size[0]
+    model.geom_size[geom] = size
+    model.geom_rbound[geom] = rbound
+    model.geom_aabb[geom] = [0.0, 0.0, 0.0, hx, hy, hz]
+    model.body_mass[body] = mass
+    model.body_inertia[body] = workpiece_inertia(shape, size, mass)
+    model.pair_friction[pairs, 0:2] = friction
+    model.pair_friction[pairs, 2] = spin_friction * friction
+    mujoco.mj_setConst(model, data)
 
 
 def _add_palm_servo(spec, palm, moving_mass: float) -> None:

@@ -27,14 +27,14 @@ the fingers) and resizes the workpiece per episode (:func:`set_workpiece`).
 
 from __future__ import annotations
 
-import math
 from dataclasses import dataclass
 
 import mujoco
 import numpy as np
 
 from simgrip.chain import chain_springs
-from simgrip.envs.pick_model import FINGER_PREFIX, PALM_MASS, PICK_SOLIMP, PICK_SOLREF, _add_palm_servo
+from simgrip.envs.pick_model import (FINGER_PREFIX, PALM_MASS, PICK_SOLIMP, PICK_SOLREF, _add_palm_servo,
+                                     resize_workpiece)
 from simgrip.models import model_path
 from simgrip.profiles import Uniform
 from simgrip.sim.contacts import add_pair
@@ -176,19 +176,10 @@ def _add_camera(spec, name: str, pos, target) -> None:
 
 def set_workpiece(pm: PickMultiModel, data: mujoco.MjData, *, width: float, height: float, mass: float,
                   friction: float, spin_friction: float) -> np.ndarray:
-    """Resize the workpiece of ``pm`` in place (no recompilation): size, bounding volumes, mass, inertia, the
-    finger pairs' friction (sliding ``friction``, torsional ``spin_friction * friction`` [m]); then
-    :func:`mujoco.mj_setConst`.  Returns the geom size [m]."""
-    m = pm.model
+    """Resize the workpiece of ``pm`` in place to ``width`` x ``height`` [m] (:func:`workpiece_size`), ``mass``
+    [kg] and the finger pairs' friction (:func:`simgrip.envs.pick_model.resize_workpiece`: no recompilation).
+    Returns the geom size [m]."""
     size = workpiece_size(pm.shape, width, height)
-    gid, bid = pm.work_geom, pm.work_body
-    m.geom_size[gid] = size
-    a, c = float(size[0]), half_height(pm.shape, size)
-    m.geom_aabb[gid] = [0.0, 0.0, 0.0, a, a, c]
-    m.geom_rbound[gid] = {"box": math.sqrt(2.0 * a * a + c * c), "cylinder": math.hypot(a, c), "sphere": a}[pm.shape]
-    m.body_mass[bid] = mass
-    m.body_inertia[bid] = workpiece_inertia(pm.shape, size, mass)
-    m.pair_friction[pm.finger_pairs, 0:2] = friction
-    m.pair_friction[pm.finger_pairs, 2] = spin_friction * friction
-    mujoco.mj_setConst(m, data)
+    resize_workpiece(pm.model, data, shape=pm.shape, geom=pm.work_geom, body=pm.work_body, pairs=pm.finger_pairs,
+                     size=size, mass=mass, friction=friction, spin_friction=spin_friction)
     return size
