@@ -64,7 +64,7 @@ from simgrip.sim.scene import FingerScene, check_params, check_positive, root_sp
 from simgrip.sim.workpiece import BOX_DEPTH, BOX_HEIGHT, workpiece_inertia
 
 __all__ = ["GRIPPER_GRIPS", "WORKPIECES", "GripperScene", "build_gripper", "check_gripper", "finger_azimuths",
-           "orient_fingers", "set_finger_angles", "uniform_profiles", "workpiece_inertia"]
+           "compile_gripper", "orient_fingers", "set_finger_angles", "uniform_profiles", "workpiece_inertia"]
 
 #: Workpiece shapes of a K-finger gripper.
 WORKPIECES = ("box", "cylinder", "sphere")
@@ -330,21 +330,29 @@ def build_gripper(
     for k in range(K):
         add_pair(spec, f"pair_f{k}_tip", f"f{k}_tip", _WORKPIECE_GEOM, phys.mu_s)
 
-    model = spec.compile()
-    index = index_fingers(model, K, n)
-    wb = mujoco.mj_name2id(model, mujoco.mjtObj.mjOBJ_BODY, "workpiece_body")
-    wj = int(model.body_jntadr[wb])
-    scene = GripperScene(
-        spec=spec, model=model, data=mujoco.MjData(model), grip=grip, workpiece=shape, params=dimless,
-        physical=phys, profile=prof, n=n, fingers=K, springs=springs, index=index, azimuths=azimuths, yaw=yaw,
-        workpiece_body=wb, workpiece_geom=mujoco.mj_name2id(model, mujoco.mjtObj.mjOBJ_GEOM, _WORKPIECE_GEOM),
-        workpiece_qpos=np.arange(model.jnt_qposadr[wj], model.jnt_qposadr[wj] + 7),
-        workpiece_dof=np.arange(model.jnt_dofadr[wj], model.jnt_dofadr[wj] + 6),
-        size=size, r_tip=r_tip, r_link=r_link, contact_angle=beta, offset=off, workpiece_yaw=psi,
-        profiles=profs, finger_springs=finger_springs, reach=place.reach, normals=place.normal,
-    )
+    scene = compile_gripper(
+        spec, fingers=K, n=n, grip=grip, workpiece=shape, params=dimless, physical=phys, profile=prof,
+        springs=springs, azimuths=azimuths, yaw=yaw, size=size, r_tip=r_tip, r_link=r_link, contact_angle=beta,
+        offset=off, workpiece_yaw=psi, profiles=profs, finger_springs=finger_springs, reach=place.reach,
+        normals=place.normal)
     set_finger_angles(scene, q0)
     return scene
+
+
+def compile_gripper(spec: mujoco.MjSpec, *, fingers: int, n: int, **fields) -> GripperScene:
+    """Compile ``spec`` (``fingers`` fingers of ``n`` links named as :func:`~simgrip.sim.fingers.add_fingers`
+    names them, the workpiece body ``workpiece_body`` on a free joint with its geom) into a
+    :class:`GripperScene`: the finger and workpiece addresses are looked up in the compiled model, ``fields``
+    are the scene's other attributes."""
+    model = spec.compile()
+    index = index_fingers(model, fingers, n)
+    wb = mujoco.mj_name2id(model, mujoco.mjtObj.mjOBJ_BODY, "workpiece_body")
+    wj = int(model.body_jntadr[wb])
+    return GripperScene(
+        spec=spec, model=model, data=mujoco.MjData(model), n=n, fingers=fingers, index=index, workpiece_body=wb,
+        workpiece_geom=mujoco.mj_name2id(model, mujoco.mjtObj.mjOBJ_GEOM, _WORKPIECE_GEOM),
+        workpiece_qpos=np.arange(model.jnt_qposadr[wj], model.jnt_qposadr[wj] + 7),
+        workpiece_dof=np.arange(model.jnt_dofadr[wj], model.jnt_dofadr[wj] + 6), **fields)
 
 
 def _check_contact_angle(value, shape: str) -> float:

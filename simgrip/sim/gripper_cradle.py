@@ -50,7 +50,7 @@ from simgrip.chain import chain_springs
 from simgrip.params import DimensionlessParams, PhysicalParams
 from simgrip.profiles import as_profile
 from simgrip.sim.contacts import add_pair
-from simgrip.sim.fingers import add_fingers, check_finger_links, index_fingers
+from simgrip.sim.fingers import add_fingers, check_finger_links
 from simgrip.sim.scene import DEFAULT_R_CORNER, check_params, check_positive, root_spec, set_joint_angles
 from simgrip.sim.workpiece import BOX_HEIGHT, contact_links, corner_placement, cradle_start
 
@@ -93,7 +93,7 @@ def build_cradle(params: PhysicalParams | DimensionlessParams, profile, n_links:
     ``l``.  ValueError naming the bad argument (``b`` when the box's corner
     would not sit at ``x > 0`` on the start shape).
     """
-    from simgrip.sim.gripper import GripperScene, finger_azimuths, orient_fingers
+    from simgrip.sim.gripper import compile_gripper, finger_azimuths, orient_fingers
     from simgrip.sim.workpiece import workpiece_inertia
 
     if isinstance(fingers, bool) or fingers not in CRADLE_FINGERS:
@@ -150,21 +150,10 @@ def build_cradle(params: PhysicalParams | DimensionlessParams, profile, n_links:
         for i in links:
             add_pair(spec, f"pair_f{k}_link{i}", f"f{k}_geom{i}", corner_name(k), phys.mu_s)
 
-    model = spec.compile()
-    index = index_fingers(model, K, n)
-    wb = mujoco.mj_name2id(model, mujoco.mjtObj.mjOBJ_BODY, "workpiece_body")
-    wj = int(model.body_jntadr[wb])
-    scene = GripperScene(
-        spec=spec, model=model, data=mujoco.MjData(model), grip="III", workpiece="box", params=dimless,
-        physical=phys, profile=prof, n=n, fingers=K, springs=springs, index=index, azimuths=azimuths, yaw=float(yaw),
-        workpiece_body=wb, workpiece_geom=mujoco.mj_name2id(model, mujoco.mjtObj.mjOBJ_GEOM, _WORKPIECE_GEOM),
-        workpiece_qpos=np.arange(model.jnt_qposadr[wj], model.jnt_qposadr[wj] + 7),
-        workpiece_dof=np.arange(model.jnt_dofadr[wj], model.jnt_dofadr[wj] + 6),
-        size=size, r_tip=float(r_tip), r_link=r_link, contact_angle=0.0,
-    )
-    for name, value in (("profiles", (prof,) * K), ("finger_springs", (springs,) * K),
-                        ("reach", np.full(K, 0.5 * dimless.b)), ("normals", np.tile([1.0, 0.0], (K, 1)))):
-        if hasattr(scene, name):  # the builder's per-finger fields, where it has them
-            setattr(scene, name, value)
+    scene = compile_gripper(
+        spec, fingers=K, n=n, grip="III", workpiece="box", params=dimless, physical=phys, profile=prof,
+        springs=springs, azimuths=azimuths, yaw=float(yaw), size=size, r_tip=float(r_tip), r_link=r_link,
+        contact_angle=0.0, profiles=(prof,) * K, finger_springs=(springs,) * K, reach=np.full(K, 0.5 * dimless.b),
+        normals=np.tile([1.0, 0.0], (K, 1)))
     set_joint_angles(scene, np.tile(q0, (K, 1)))
     return scene
