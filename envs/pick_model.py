@@ -38,7 +38,7 @@ from simgrip.sim.contacts import add_pair
 from simgrip.sim.fingers import FingerIndex, add_fingers, check_finger_links, index_fingers
 from simgrip.sim.workpiece import workpiece_inertia
 
-__all__ = ["FINGER_PREFIX", "PEDESTAL_HEIGHT", "PickModel", "build_pick_model", "resize_workpiece"]
+__all__ = ["FINGER_PREFIX", "PEDESTAL_HEIGHT", "PickModel", "build_pick_model", "hand_spec", "resize_workpiece"]
 
 #: Prefix of the fingers' names in the pick model.
 FINGER_PREFIX = "hand_"
@@ -100,14 +100,8 @@ def build_pick_model(grip: str, *, n_links: int, length: float, EI: float, rho: 
     [kg m^2] go to every finger hinge.
     """
     n = check_finger_links(n_links, parent_depth=1, name="n_links")
-    spec = mujoco.MjSpec.from_file(str(model_path("pick_scene.xml")))
-    spec.option.timestep = timestep
-    spec.option.impratio = impratio
-    spec.option.gravity = [0.0, 0.0, -g]
-    palm = spec.body("palm")
-    _add_palm_servo(spec, palm, PALM_MASS + 2.0 * rho * length + box_mass_max)
-    add_fingers(spec, palm, chain_springs(Uniform(0.0), n), fingers=2, length=length, EI=EI, rho=rho,
-                r_link=r_tip, r_tip=r_tip, damping_time=damping_time, armature=armature, prefix=FINGER_PREFIX)
+    spec = hand_spec(fingers=2, n=n, length=length, EI=EI, rho=rho, g=g, r_tip=r_tip, mass_max=box_mass_max,
+                     timestep=timestep, impratio=impratio, damping_time=damping_time, armature=armature)
     hx, hy, hz = (0.5 * float(v) for v in box_size)
     spec.geom("box").size = [hx, hy, hz]
     pedestal = PEDESTAL_HEIGHT if grip == "III" else 0.0
@@ -130,6 +124,27 @@ def build_pick_model(grip: str, *, n_links: int, length: float, EI: float, rho: 
         finger_pairs=np.array([mujoco.mj_name2id(model, mujoco.mjtObj.mjOBJ_PAIR, p) for p in finger_pairs]),
         pedestal_height=pedestal, unit_rest=chain_springs(Uniform(1.0), n).rest,
     )
+
+
+def hand_spec(*, fingers: int, n: int, length: float, EI: float, rho: float, g: float, r_tip: float,
+              mass_max: float, timestep: float, impratio: float, damping_time: float, armature: float,
+              keep_box: bool = True) -> mujoco.MjSpec:
+    """``models/pick_scene.xml`` with its options (``timestep`` [s], ``impratio``, gravity ``g`` [m/s^2]), the
+    palm's slide and servo (critically damped for the palm, the fingers and a workpiece of ``mass_max`` [kg]) and
+    ``fingers`` straight fingers of ``n`` links under the palm (:func:`simgrip.sim.fingers.add_fingers`: link
+    and tip radius ``r_tip`` [m], hinge ``damping_time`` [s] and ``armature`` [kg m^2]); without the scene's
+    box unless ``keep_box``."""
+    spec = mujoco.MjSpec.from_file(str(model_path("pick_scene.xml")))
+    spec.option.timestep = timestep
+    spec.option.impratio = impratio
+    spec.option.gravity = [0.0, 0.0, -g]
+    if not keep_box:
+        spec.delete(spec.body("box"))
+    palm = spec.body("palm")
+    _add_palm_servo(spec, palm, PALM_MASS + fingers * rho * length + mass_max)
+    add_fingers(spec, palm, chain_springs(Uniform(0.0), n), fingers=fingers, length=length, EI=EI, rho=rho,
+                r_link=r_tip, r_tip=r_tip, damping_time=damping_time, armature=armature, prefix=FINGER_PREFIX)
+    return spec
 
 
 def resize_workpiece(model: mujoco.MjModel, data: mujoco.MjData, *, shape: str, geom: int, body: int, pairs,

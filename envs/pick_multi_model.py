@@ -33,12 +33,10 @@ import mujoco
 import numpy as np
 
 from simgrip.chain import chain_springs
-from simgrip.envs.pick_model import (FINGER_PREFIX, PALM_MASS, PICK_SOLIMP, PICK_SOLREF, _add_palm_servo,
-                                     resize_workpiece)
-from simgrip.models import model_path
+from simgrip.envs.pick_model import FINGER_PREFIX, PICK_SOLIMP, PICK_SOLREF, hand_spec, resize_workpiece
 from simgrip.profiles import Uniform
 from simgrip.sim.contacts import add_pair
-from simgrip.sim.fingers import FingerIndex, add_fingers, check_finger_links, index_fingers
+from simgrip.sim.fingers import FingerIndex, check_finger_links, index_fingers
 from simgrip.sim.gripper import finger_azimuths, orient_fingers
 from simgrip.sim.workpiece import workpiece_inertia
 
@@ -115,15 +113,9 @@ def build_pick_multi_model(shape: str, *, fingers: int, n_links: int, length: fl
     """
     n = check_finger_links(n_links, parent_depth=1, name="n_links")
     K = int(fingers)
-    spec = mujoco.MjSpec.from_file(str(model_path("pick_scene.xml")))
-    spec.option.timestep = timestep
-    spec.option.impratio = impratio
-    spec.option.gravity = [0.0, 0.0, -g]
-    spec.delete(spec.body("box"))
-    palm = spec.body("palm")
-    _add_palm_servo(spec, palm, PALM_MASS + K * rho * length + mass_max)
-    add_fingers(spec, palm, chain_springs(Uniform(0.0), n), fingers=K, length=length, EI=EI, rho=rho,
-                r_link=r_tip, r_tip=r_tip, damping_time=damping_time, armature=armature, prefix=FINGER_PREFIX)
+    spec = hand_spec(fingers=K, n=n, length=length, EI=EI, rho=rho, g=g, r_tip=r_tip, mass_max=mass_max,
+                     timestep=timestep, impratio=impratio, damping_time=damping_time, armature=armature,
+                     keep_box=False)
     azimuths = finger_azimuths(K)
     orient_fingers(spec, azimuths, FINGER_PREFIX)
     size = workpiece_size(shape, width, height)
