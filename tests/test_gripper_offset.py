@@ -121,6 +121,11 @@ def test_every_finger_converges_at_second_order_in_n(name):
         assert st.held and st.converged
         vals.append(_values(st))
     v = np.array(vals)  # (resolution, finger, quantity)
+    if v.shape[1] >= 4:
+        # K >= 4: how the vertical and out-of-plane forces split among the fingers is statically
+        # indeterminate (2K - 6 internal modes of sticking friction; the settle keeps its start's
+        # least-norm split), so only N1 and the tip are judged
+        v = v[:, :, [0, 3, 4]]
     d1, d2 = np.abs(v[0] - v[1]), np.abs(v[1] - v[2])
     judged = d2 >= 100 * tol
     assert np.all(judged[:, 0])  # every finger's N1 (and most tip heights: Grip II's hardly move with n)

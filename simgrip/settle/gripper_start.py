@@ -69,7 +69,6 @@ from dataclasses import dataclass
 import numpy as np
 
 from simgrip.params import M_MAX
-from simgrip.settle.dynamics import DYN_TIMECONST
 from simgrip.settle.state import SettleError
 from simgrip.sim.gripper import GripperScene
 
@@ -246,13 +245,12 @@ def _balanced(scene: GripperScene, X0, centre0, inside=None):
 def rest_depth(N1, timestep: float, scene: GripperScene) -> np.ndarray:
     """How deep (over l) MuJoCo's soft contact rests under normal forces ``N1`` (over rho g l), per finger.
 
-    The contact behaves like a spring of time constant ``tc = DYN_TIMECONST h`` on a mass of order the
-    finger's, ``rho l``: it sinks ``N tc^2 / (rho l)``, i.e. ``N (tc^2 g / l)`` over ``l``
-    (measured: 0.8 to 1.1 times that over n = 16, 32, K = 3, 4, grips I and II).  At least
-    :data:`START_INSIDE`.
+    :func:`simgrip.settle.gripper.contact_rest_depth` (``N tc^2 A_nn``: the contact's mobility through
+    the dynamics' step metric) at the scene's current state, at least :data:`START_INSIDE`.
     """
-    tc = DYN_TIMECONST * float(timestep)
-    return np.maximum(START_INSIDE, np.asarray(N1, dtype=float) * tc * tc * scene.physical.g / scene.length)
+    from simgrip.settle.gripper import contact_rest_depth  # the dynamics' own law (imports this module)
+
+    return np.maximum(START_INSIDE, contact_rest_depth(scene, N1, timestep))
 
 
 @dataclass(frozen=True)
