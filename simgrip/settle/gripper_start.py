@@ -161,16 +161,17 @@ def _arms(scene: GripperScene) -> np.ndarray:
     return -scene.r_tip * (n[:, :1] * e1 + n[:, 1:] * e3)
 
 
-def _chains(scene: GripperScene, X, shares, guesses, couple: bool = True, inside=None):
+def _chains(scene: GripperScene, X, shares, guesses, couple: bool = True, inside=None, fingers: int | None = None):
     """Every finger's loaded chain at its ``X`` and share; raises SettleError if one has no stable equilibrium.
 
     ``couple``: the share's vertical force acts on the tip sphere's surface, ``r_tip n1`` inside the
     tip centre: a tip couple ``r_tip n1 s`` (the friction's; the normal force passes through the
-    centre).  The symmetric start leaves it to the dynamics (as it always has).
+    centre).  The symmetric start leaves it to the dynamics (as it always has).  ``fingers``: solve
+    only the first so many (default all).
     """
     out = []
     n1 = _normals(scene)[:, 0] if couple else np.zeros(scene.fingers)
-    for k in range(scene.fingers):
+    for k in range(scene.fingers if fingers is None else fingers):
         depth = START_INSIDE if inside is None else float(inside[k])
         ch = finger_chain(scene, scene.grip, X=float(X[k]) - depth, finger=k, M=float(shares[k]),
                           guess=guesses[k], contact_moment=scene.r_tip * float(n1[k]) * float(shares[k]))
@@ -288,12 +289,15 @@ def _start(scene: GripperScene, timestep: float | None):
     X = (np.full(K, 0.5 * p.b) if scene.reach is None else np.array(scene.reach)) * math.cos(beta)
     wq = scene.workpiece_qpos
     centre = np.array(scene.model.qpos0[wq[:2]]) / scene.length  # the builder's (offset, turned by yaw)
-    for k in range(K):
+    equal_shares = is_symmetric(scene) or scene.workpiece == "sphere"  # (a sphere's fingers are equal)
+    alike = equal_shares and bool(np.all(X == X[0]))  # every finger the same problem: solve one, share it
+    for k in range(1 if alike else K):
         free = finger_chain(scene, "free", finger=k)
         if free is not None and float(np.sum(np.cos(free.link_angles))) / scene.n > X[k]:
             return None
-    if is_symmetric(scene) or scene.workpiece == "sphere":
-        chains = _chains(scene, X, np.full(K, float(p.M)), [None] * K, couple=False)
+    if equal_shares:  # (alike: one finger's chain serves all, the same arrays, read only)
+        chains = _chains(scene, X, np.full(K, float(p.M)), [None] * K, couple=False, fingers=1 if alike else None)
+        chains = chains * K if alike else chains
     else:
         X0, centre0 = X, centre
         chains, X, centre = _balanced(scene, X0, centre0)
