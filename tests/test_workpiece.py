@@ -57,3 +57,25 @@ def test_hold_and_place_move_the_workpiece_as_asked():
     place_workpiece(fixed, -0.25)
     assert workpiece_pose(fixed)[1] == pytest.approx(-0.25)
     assert workpiece_pose(build_scene("free", STANDARD, Uniform(-6.0), 8)) is None
+
+
+@pytest.mark.parametrize("shape, size", [("box", (0.03, 0.02, 0.05)), ("cylinder", (0.025, 0.04, 0.0)),
+                                         ("sphere", (0.03, 0.0, 0.0))])
+def test_workpiece_inertia_is_mujocos_inertia_of_the_solid_geom(shape, size):
+    """The one inertia formula (PickEnv's box, the K-finger scenes, add_workpiece) against MuJoCo's own
+    inertia of the same solid geom (inertiafromgeom), to round-off."""
+    import mujoco
+
+    from simgrip.sim.workpiece import workpiece_inertia
+
+    mass = 0.047
+    spec = mujoco.MjSpec()
+    body = spec.worldbody.add_body(name="w")
+    body.add_freejoint()
+    types = {"box": mujoco.mjtGeom.mjGEOM_BOX, "cylinder": mujoco.mjtGeom.mjGEOM_CYLINDER,
+             "sphere": mujoco.mjtGeom.mjGEOM_SPHERE}
+    body.add_geom(type=types[shape], size=list(size), mass=mass)
+    model = spec.compile()
+    b = mujoco.mj_name2id(model, mujoco.mjtObj.mjOBJ_BODY, "w")
+    assert model.body_mass[b] == pytest.approx(mass, rel=1e-12)
+    np.testing.assert_allclose(workpiece_inertia(shape, size, mass), model.body_inertia[b], rtol=1e-9)
