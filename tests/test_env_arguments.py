@@ -83,3 +83,25 @@ def test_copied_env_continues_exactly_like_the_original(how, env_id):
     np.testing.assert_array_equal(o1, o2)
     env.close()
     twin.close()
+
+
+SHARED_ARGUMENTS = ("n_links", "length", "EI", "rho", "g", "r_tip", "kappa_range", "kappa_tau", "palm_speed",
+                    "palm_range", "palm_start", "target_height", "hold_time", "w_lift", "w_success", "w_squeeze",
+                    "w_drop", "squeeze_margin", "drop_distance", "timestep", "frame_skip", "settle_time",
+                    "finger_damping_time", "shape_points", "spin_friction", "impratio", "finger_armature", "width",
+                    "height", "camera")
+
+
+@pytest.mark.parametrize("name", SHARED_ARGUMENTS)
+def test_shared_arguments_are_refused_alike_by_both_pick_envs(name):
+    """The arguments PickEnv and PickMultiEnv share are checked by one implementation (set_finger_arguments,
+    set_task_arguments, check_camera): the same bad value, the same message."""
+    from simgrip.envs.pick_multi import PickMultiEnv
+
+    for value in BAD_ARGUMENTS[name]:
+        with pytest.raises(ValueError, match=rf"\b{name}\b") as one:
+            PickEnv(**{name: value})
+        with pytest.raises(ValueError, match=rf"\b{name}\b") as other:
+            PickMultiEnv(**{name: value})
+        if name != "camera" or not isinstance(value, str) or value == "":  # a missing camera lists the model's
+            assert str(one.value) == str(other.value)
