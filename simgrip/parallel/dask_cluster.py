@@ -236,18 +236,24 @@ class RemoteDask:
 
 @contextlib.contextmanager
 def quiet_dask_logs():
-    """distributed logs a lost scheduler or worker with tracebacks; the runner says it once (RunnerError)."""
+    """distributed logs a lost scheduler or worker with tracebacks; the runner says it once (RunnerError).
+
+    The levels come back when the block ends normally.  When it ends with an
+    exception (Ctrl-C, a failed task, a lost cluster) they stay quiet: the
+    cluster's event-loop thread may still be closing its connections after the
+    block and would log each one (``Batched Comm Closed`` with a traceback)
+    under the one line the command prints.
+    """
     import logging
 
     loggers = [logging.getLogger(name) for name in ("distributed", "distributed.client", "distributed.nanny",
-                                                     "distributed.scheduler", "distributed.worker")]
+                                                     "distributed.scheduler", "distributed.worker",
+                                                     "distributed.batched", "distributed.core", "distributed.comm")]
     saved = [lg.level for lg in loggers]
     for lg in loggers:
         lg.setLevel(logging.CRITICAL)
-    try:
-        yield
-    finally:
-        for lg, level in zip(loggers, saved):
-            lg.setLevel(level)
+    yield  # an exception propagates from here and leaves the loggers quiet
+    for lg, level in zip(loggers, saved):
+        lg.setLevel(level)
 
 
