@@ -148,13 +148,13 @@ def start_growth(scene: GripperScene, step_factor: float = 1.0) -> float | None:
     """Largest ``|eigenvalue|`` of the settle's one-step map linearised about its start; None if it holds nothing.
 
     The start is :func:`~simgrip.settle.gripper_start.start_qpos` at the dynamics' step ``step_factor h``
-    (:mod:`simgrip.settle.gripper`'s options), at rest; MuJoCo's solver is run to round-off for the
+    (:mod:`simgrip.settle.gripper_dynamics`' options), at rest; MuJoCo's solver is run to round-off for the
     centred differences.  ``> 1 + UNSTABLE_GROWTH``: unstable (module docstring).  The model's options
     and state are restored.
     """
     import mujoco
 
-    from simgrip.settle.gripper import _Dyn
+    from simgrip.settle.gripper_dynamics import GripperDynamics
     from simgrip.settle.statics import restore_options, save_options
 
     m, d = scene.model, scene.data
@@ -167,7 +167,7 @@ def start_growth(scene: GripperScene, step_factor: float = 1.0) -> float | None:
         d.qpos[:] = q
         d.qvel[:] = 0.0
         mujoco.mj_forward(m, d)
-        dyn = _Dyn(scene, float(step_factor))
+        dyn = GripperDynamics(scene, float(step_factor))
         if not is_symmetric(scene) and scene.workpiece != "sphere":
             d.qpos[:] = start_qpos(scene, timestep=dyn.h)
         d.qvel[:] = 0.0

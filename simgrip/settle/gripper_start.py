@@ -246,10 +246,10 @@ def _balanced(scene: GripperScene, X0, centre0, inside=None):
 def rest_depth(N1, timestep: float, scene: GripperScene) -> np.ndarray:
     """How deep (over l) MuJoCo's soft contact rests under normal forces ``N1`` (over rho g l), per finger.
 
-    :func:`simgrip.settle.gripper.contact_rest_depth` (``N tc^2 A_nn``: the contact's mobility through
+    :func:`simgrip.settle.gripper_dynamics.contact_rest_depth` (``N tc^2 A_nn``: the contact's mobility through
     the dynamics' step metric) at the scene's current state, at least :data:`START_INSIDE`.
     """
-    from simgrip.settle.gripper import contact_rest_depth  # the dynamics' own law (imports this module)
+    from simgrip.settle.gripper_dynamics import contact_rest_depth  # the dynamics' own law (imports this module)
 
     return np.maximum(START_INSIDE, contact_rest_depth(scene, N1, timestep))
 
