@@ -9,7 +9,7 @@ default is the fast point-contact Newton and its dynamics the surface
 contact.  The state's ``method`` and ``contact`` say which ran.
 
 The dynamics (:mod:`simgrip.settle.gripper_dynamics`) is the planar
-``settle(method="dynamics")``'s integrator (:mod:`simgrip.settle.dynamics`)
+``settle(method="dynamics")``'s integrator (:mod:`simgrip.settle.integrator`)
 on all K fingers and the workpiece, with MuJoCo's dense constraint Jacobian
 up to :data:`GRIPPER_DENSE_NV` dofs.  This module drives it:
 
@@ -37,7 +37,7 @@ up to :data:`GRIPPER_DENSE_NV` dofs.  This module drives it:
   runs until the static residual at rest is below ``tol`` (default
   :func:`gripper_tolerance`, scaled by the weight ``K M``) and the velocities
   below :data:`~simgrip.settle.dynamics.DYN_VTOL` (tested between batches of
-  :data:`~simgrip.settle.dynamics.DYN_BATCH` steps).  A tip that slides
+  :data:`~simgrip.settle.integrator.DYN_BATCH` steps).  A tip that slides
   :data:`~simgrip.settle.dynamics.DYN_DROP_SLIP` over the workpiece's surface
   (in the workpiece's frame) or a workpiece that falls
   :data:`~simgrip.settle.dynamics.DYN_DROP_FALL` is dropped: it is parked

@@ -1,14 +1,14 @@
 """The over-damped MuJoCo dynamics of a K-finger gripper scene (:mod:`simgrip.sim.gripper`).
 
 :class:`GripperDynamics` sets the planar ``settle(method="dynamics")``'s
-integrator (:mod:`simgrip.settle.dynamics`, whose constants it uses) on the
+integrator (:mod:`simgrip.settle.integrator`, whose constants it uses) on the
 gripper's model: ``mjINT_DISCRETE``, time step ``h = 1/omega_min`` of the
 straight hinge chains (:func:`straight_frequency`, as the planar settle's
 from its built, straight scene), hinge damping ``h max(K, R)`` with ``R``
 the loads' geometric stiffness bound (each finger carrying ``M``, its share
 of the weight ``K M``), elliptic cone with ``impratio``
-:data:`~simgrip.settle.dynamics.DYN_IMPRATIO`, contact time constant
-:data:`~simgrip.settle.dynamics.DYN_TIMECONST` ``h``.  The workpiece's free
+:data:`~simgrip.settle.integrator.DYN_IMPRATIO`, contact time constant
+:data:`~simgrip.settle.integrator.DYN_TIMECONST` ``h``.  The workpiece's free
 joint is damped ``3 m / h`` in translation and ``3 I / h`` in rotation (its
 principal inertia; the rotational dofs are in its body frame).  The caller
 saves and restores the model's options.
@@ -35,9 +35,9 @@ import math
 import mujoco
 import numpy as np
 
-from simgrip.settle.dynamics import (DYN_DAMPING, DYN_DROP_FALL, DYN_DROP_SLIP, DYN_IMPRATIO, DYN_STEP,
-                                     DYN_TIMECONST, DYN_VTOL, DYN_WORKPIECE_DAMPING, geometric_stiffness_bound,
-                                     lowest_frequency, run_to_rest)
+from simgrip.settle.dynamics import DYN_DROP_FALL, DYN_DROP_SLIP, DYN_VTOL
+from simgrip.settle.integrator import (DYN_DAMPING, DYN_IMPRATIO, DYN_STEP, DYN_TIMECONST, DYN_WORKPIECE_DAMPING,
+                                       geometric_stiffness_bound, lowest_frequency, run_to_rest)
 from simgrip.settle.gripper_start import finger_chain
 from simgrip.settle.state import SettleError
 from simgrip.settle.statics import CONTACT_IMPEDANCE, check_warnings
@@ -83,7 +83,7 @@ class GripperDynamics:
     def update_damping(self) -> None:
         """Hinge damping ``h max(K, R)``, ``R`` the loads' geometric stiffness bound at the current state.
 
-        As the planar dynamics' (:func:`simgrip.settle.dynamics.geometric_stiffness_bound`: MuJoCo's step
+        As the planar dynamics' (:func:`simgrip.settle.integrator.geometric_stiffness_bound`: MuJoCo's step
         is explicit in gravity and the contact loads, which a soft finger's springs do not dominate; ``R``
         keeps every step a contraction).  While the workpiece hangs on the fingers (not held, contact
         on), each finger carries its per-finger share of the weight, ``M`` (``K M`` over ``K``), as the
