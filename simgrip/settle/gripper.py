@@ -82,9 +82,9 @@ __all__ = ["FingerRecord", "GripperState", "contact_rest_depth", "gripper_tolera
 #: Default physics-step budget of one settle.
 GRIPPER_MAX_STEPS = 20_000
 #: Largest number of dofs for which the dynamics uses MuJoCo's dense constraint Jacobian (sparse above).
-#: A gripper has few contact rows (one per finger), and the dense path's step is 10-25 % cheaper up to
-#: ``nv`` ~ 200 and dearer from ~260 on (measured, II, K = 2 and 4, n = 16 to 96); MuJoCo's own default
-#: switches at 60.  The settled state is the same to round-off either way.
+#: A gripper has few contact rows (one per finger), so the dense path's step stays the cheaper one up to
+#: ``nv`` ~ 200 (Grip II, K = 2 and 4, n = 16 to 96), well above MuJoCo's own switch at 60.  The settled
+#: state is the same to round-off either way.
 GRIPPER_DENSE_NV = 200
 
 

@@ -112,6 +112,7 @@ class GripperDynamics:
         return float(np.max(np.abs(self.residual_vector())))
 
     def velocity(self) -> float:
+        """Largest scaled speed: hinges in rad, the workpiece in ``l``, per ``sqrt(l/g)`` (0 on a held workpiece)."""
         v = np.abs(np.array(self.d.qvel)) / self.vscale
         if self.held_q is not None:
             v[self.scene.workpiece_dof] = 0.0
@@ -126,6 +127,7 @@ class GripperDynamics:
         self.held_q = np.array(d.qpos[sc.workpiece_qpos]) if on else None
 
     def step(self, k: int = 1) -> None:
+        """``k`` physics steps; a held workpiece is put back; a non-finite state raises :class:`SettleError`."""
         sc, d = self.scene, self.d
         self.update_damping()  # the loads' geometric stiffness at the current state
         mujoco.mj_step(self.m, d, k)

@@ -76,10 +76,12 @@ class StartStiffness:
 
     @property
     def min_eigenvalue(self) -> float:
+        """The least eigenvalue of the stiffness (``eigenvalues`` are ascending)."""
         return float(self.eigenvalues[0])
 
     @property
     def stable(self) -> bool:
+        """No eigenvalue below ``-tolerance``."""
         return bool(self.min_eigenvalue >= -self.tolerance)
 
 

@@ -278,6 +278,7 @@ class StartForces:
 
     @property
     def max_required_mu(self) -> float:
+        """The largest friction coefficient any finger's contact needs (``max(required_mu)``)."""
         return float(np.max(self.required_mu))
 
 

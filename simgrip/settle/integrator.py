@@ -239,6 +239,7 @@ class Dyn:
         return float(np.max(np.abs(r)))
 
     def velocity(self) -> float:
+        """Largest scaled speed: rad or ``l`` per ``sqrt(l/g)`` (the workpiece's left out while it is held)."""
         v = np.array(self.d.qvel) / self.vscale
         if self.held_q is not None:
             v[np.asarray(self.scene.workpiece_dof, dtype=int)] = 0.0
@@ -274,6 +275,7 @@ class Dyn:
             self.update_damping()
 
     def hold(self, on: bool) -> None:
+        """Hold the workpiece where it is (:func:`~simgrip.settle.closing.hold_workpiece`) or let it go."""
         hold_workpiece(self.scene, on)
         self.held_q = np.array(self.d.qpos[self.scene.workpiece_qpos]) if on else None
 
