@@ -206,6 +206,9 @@ class RestResidual:
 
 @dataclass
 class SavedOptions:
+    """A model's solver and contact options as :func:`save_options` found them (``dynamics``: integrator,
+    time step [s], cone, impratio, dof damping, pair dims and frictions)."""
+
     solref: np.ndarray
     solimp: np.ndarray
     noslip: int
@@ -215,6 +218,7 @@ class SavedOptions:
 
 
 def save_options(m) -> SavedOptions:
+    """The options a settle changes on model ``m``, to put back with :func:`restore_options`."""
     dyn = (int(m.opt.integrator), float(m.opt.timestep), int(m.opt.cone), float(m.opt.impratio),
            m.dof_damping.copy(), m.pair_dim.copy(), m.pair_friction.copy())
     return SavedOptions(m.pair_solref.copy(), m.pair_solimp.copy(), int(m.opt.noslip_iterations), int(m.opt.disableflags),
@@ -222,6 +226,7 @@ def save_options(m) -> SavedOptions:
 
 
 def restore_options(m, s: SavedOptions) -> None:
+    """Put model ``m``'s options back as :func:`save_options` saved them in ``s``."""
     m.pair_solref[:] = s.solref
     m.pair_solimp[:] = s.solimp
     m.opt.noslip_iterations = s.noslip
