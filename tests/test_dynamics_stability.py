@@ -59,6 +59,8 @@ def test_geometric_bound_is_the_row_sum_of_gravitys_hessian(grip, kappa):
     mujoco.mj_forward(sc.model, d)
     R = geometric_stiffness_bound(sc, d, 0.0)
     dofs = sc.index.joint_dof[0]
+    # central differences at eps = 1e-6: truncation ~eps^2 (1e-12) relative, round-off ~1e-16/eps (1e-10)
+    # of the bias force; rtol 1e-6 leaves room for both, atol covers the rows near zero
     np.testing.assert_allclose(R[dofs], np.abs(H[np.ix_(dofs, dofs)]).sum(axis=1), rtol=1e-6, atol=1e-9)
 
 

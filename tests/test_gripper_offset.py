@@ -200,4 +200,7 @@ def test_a_finger_out_of_reach_holds_nothing():
     st = settle_gripper(build_gripper("I", p, -2.5, N, fingers=3, workpiece="cylinder", offset=(-0.1, 0.0)),
                         method="dynamics")
     assert not st.held and st.converged and st.records == []
-    np.testing.assert_allclose(st.link_angles, np.vstack([free.link_angles] * 3), atol=1e-5)
+    # the fingers settle alone from this very chain shape (finger_chain "free"): the dynamics may move them
+    # only while the residual is above its tolerance tol = 1e-5 (rho g l^2), i.e. each hinge by about
+    # tol / (D n) and a link angle (a sum of n) by about tol / D = 1e-5
+    np.testing.assert_allclose(st.link_angles, np.vstack([free.link_angles] * 3), atol=st.tolerance / p.D)
