@@ -120,7 +120,7 @@ class Statics:
     """Static residual of the model plus sticking constraints, on a scratch MjData.
 
     ``data``: the MjData to evaluate on (default: a new one; the chain-coordinate solve
-    passes the scene's own, whose state it owns during the settle: an MjData costs ~1 ms).
+    passes the scene's own, whose state it owns during the settle, rather than allocate another MjData).
     """
 
     def __init__(self, scene: Scene, data=None):
