@@ -280,6 +280,7 @@ def _cmd_compare(args) -> str:
     from simgrip.io import to_jsonable
     from simgrip.report import format_comparison
 
+    _load_solvers()
     grip = check_grip(args.grip)
     result = compare(grip, _params(args), _profile(args, grip), _links(args.links), method=args.method or "newton",
                      target_error=args.target_error, contact=args.contact)
