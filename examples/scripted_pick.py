@@ -8,7 +8,9 @@ what a learned policy sees: it grips with one curvature for the whole
 randomised range and curls further when it sees the box slip.  With
 ``--env simgrip/PickMulti-v0`` (K fingers around a box, cylinder or sphere) the
 oracle is :class:`simgrip.envs.scripted_multi.ScriptedMultiPolicy`: the same
-per-finger planar theory (an inclined contact on a sphere).
+per-finger planar theory (an inclined contact on a sphere); the observation
+policy is :class:`~simgrip.envs.scripted_multi.ObservationMultiPolicy` (the
+theory's worst case over the randomised ranges, curling further on slip).
 
     python examples/scripted_pick.py [--episodes 20] [--seed 0] [--env simgrip/Pick-v1] [--fingers K]
                                      [--policy oracle|observation] [--json] [--gif pick.gif]
@@ -26,25 +28,26 @@ import simgrip.envs  # noqa: F401  (registers the simgrip ids)
 from simgrip.envs.evaluation import add_episode_arguments, check_env_id, env_kwargs, run_episodes, summary
 from simgrip.envs.pick_multi import PickMultiEnv
 from simgrip.envs.scripted import ObservationPickPolicy, ScriptedPickPolicy
-from simgrip.envs.scripted_multi import ScriptedMultiPolicy
+from simgrip.envs.scripted_multi import ObservationMultiPolicy, ScriptedMultiPolicy
 
 POLICIES = {"oracle": ScriptedPickPolicy, "observation": ObservationPickPolicy}
+MULTI_POLICIES = {"oracle": ScriptedMultiPolicy, "observation": ObservationMultiPolicy}
 
 
 def main(argv=None):
     p = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     add_episode_arguments(p)
     p.add_argument("--policy", choices=sorted(POLICIES), default="oracle",
-                   help="oracle (reads the true box) or observation (sees only the observation)")
+                   help="oracle (reads the true box or workpiece) or observation (sees only the observation)")
     p.add_argument("--gif", default=None, help="also write a GIF of the first episode (oracle policy)")
     args = p.parse_args(argv)
     check_env_id(p, args.env)
 
     env = gym.make(args.env, **env_kwargs(p, args))
     multi = isinstance(env.unwrapped, PickMultiEnv)  # K fingers: the per-finger theory's oracle
-    if multi and (args.policy != "oracle" or args.gif):
-        p.error(f"--env {args.env}: only the oracle policy, and no --gif (two-finger ids only)")
-    policy = ScriptedMultiPolicy() if multi else POLICIES[args.policy]()
+    if multi and args.gif:
+        p.error(f"--env {args.env}: no --gif (two-finger ids only)")
+    policy = (MULTI_POLICIES if multi else POLICIES)[args.policy]()
 
     def line(r):
         box = env.unwrapped.workpiece if multi else env.unwrapped.box

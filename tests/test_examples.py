@@ -19,6 +19,7 @@ def _example(name):
 @pytest.mark.parametrize("name, argv", [
     ("scripted_pick", ["--policy", "oracle"]), ("scripted_pick", ["--policy", "observation"]), ("random_policy", []),
     ("scripted_pick", ["--env", "simgrip/PickMulti-v0", "--fingers", "4"]),
+    ("scripted_pick", ["--env", "simgrip/PickMulti-v0", "--fingers", "3", "--policy", "observation"]),
     ("random_policy", ["--env", "simgrip/PickMulti-v0", "--fingers", "4"]),
 ])
 def test_examples_print_a_json_summary(name, argv, capsys):

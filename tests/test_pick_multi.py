@@ -20,7 +20,7 @@ import simgrip.envs  # noqa: F401  (registers the ids)
 from simgrip.envs import ENV_IDS, MULTI_ENV_IDS
 from simgrip.envs.pick_multi import PickMultiEnv
 from simgrip.envs.pick_multi_observation import multi_obs_layout
-from simgrip.envs.scripted_multi import ScriptedMultiPolicy
+from simgrip.envs.scripted_multi import ObservationMultiPolicy, ScriptedMultiPolicy
 
 ENV_ID = "simgrip/PickMulti-v0"
 #: Few links keep the episodes cheap; the grips are the same problem at any n.
@@ -210,6 +210,46 @@ def test_scripted_controller_picks_and_the_random_policy_does_not():
     assert _success_rate(scripted, 4, 8, seed0=8000) >= 0.8
     assert _success_rate(scripted, 2, 6, seed0=8500) >= 0.8
     assert _success_rate(random, 3, 15, seed0=9000) < 0.1
+
+
+class _Blind:
+    """The env as the observation policy may see it: its configuration, never the episode's workpiece or state."""
+
+    HIDDEN = ("workpiece", "model", "data", "physical_params", "dimensionless", "np_random")
+
+    def __init__(self, env):
+        self._env = env
+
+    @property
+    def unwrapped(self):
+        return self
+
+    def __getattr__(self, name):
+        if name in self.HIDDEN or name.startswith("_"):
+            raise AssertionError(f"the observation policy read env.{name}")
+        return getattr(self._env, name)
+
+
+@pytest.mark.parametrize("fingers, seed0", [(3, 11000), (4, 12000)])
+def test_observation_policy_picks_without_reading_the_workpiece(fingers, seed0):
+    guesses = []
+
+    def honest(env, info, seed):
+        pol = ObservationMultiPolicy()
+        pol.reset(_Blind(env.unwrapped), info)
+
+        def act(obs):
+            a = pol(obs)
+            if len(guesses) == seed - seed0:  # the plan is made on the first observation
+                truth = env.unwrapped.workpiece  # read here by the test, not by the policy
+                guesses.append((pol.details["shape_guess"] == "sphere", truth.shape == "sphere",
+                                abs(truth.width - 0.06) < 1e-3))
+            return a
+        return act
+
+    assert _success_rate(honest, fingers, 20, seed0=seed0) >= 0.8
+    # the centre height tells a sphere from a box or cylinder (60 mm tall) unless the sphere is about 60 mm wide
+    assert len(guesses) == 20 and all(g == t for g, t, near in guesses if not near)
 
 
 def test_make_vec_sync():
