@@ -13,61 +13,52 @@ import pytest
 from simgrip.sim import gl
 
 
-_GL_VARIABLES = ("DISPLAY", "WAYLAND_DISPLAY", "MUJOCO_GL", "PYOPENGL_PLATFORM")
-
-
 @pytest.fixture
 def headless(monkeypatch):
-    """A headless Linux machine without MUJOCO_GL / PYOPENGL_PLATFORM (probes are replaced per test).
+    """A headless Linux machine's environment, as a private dict (probes are replaced per test).
 
-    ``choose_backend`` records its choice in ``os.environ``; the variables are
-    restored afterwards whether or not they were set before, so a backend
-    chosen here (e.g. osmesa by a fake probe) never leaks into later tests.
+    ``choose_backend`` reads and records its choice in the mapping it is given:
+    the tests give it this dict, so no backend is ever written into the test
+    process's own environment (where it would bind every later render to it).
     """
-    saved = {name: os.environ.get(name) for name in _GL_VARIABLES}
     monkeypatch.setattr(gl.platform, "system", lambda: "Linux")
-    for name in _GL_VARIABLES:
-        os.environ.pop(name, None)
-    yield monkeypatch
-    for name, value in saved.items():
-        if value is None:
-            os.environ.pop(name, None)
-        else:
-            os.environ[name] = value
+    return {"PATH": os.environ.get("PATH", "")}
 
 
-def test_the_users_backend_is_kept_without_probing(headless):
-    headless.setenv("MUJOCO_GL", "osmesa")
-    headless.setattr(gl, "probe", lambda b: pytest.fail("probed although MUJOCO_GL is set"))
-    assert gl.choose_backend() == "osmesa"
+def test_the_users_backend_is_kept_without_probing(headless, monkeypatch):
+    headless["MUJOCO_GL"] = "users-own"
+    monkeypatch.setattr(gl, "probe", lambda b: pytest.fail("probed although MUJOCO_GL is set"))
+    assert gl.choose_backend(headless) == "users-own"
 
 
-def test_a_display_keeps_mujocos_default(headless):
-    headless.setenv("DISPLAY", ":0")
-    headless.setattr(gl, "probe", lambda b: pytest.fail("probed although there is a display"))
-    assert gl.choose_backend() is None
+def test_a_display_keeps_mujocos_default(headless, monkeypatch):
+    headless["DISPLAY"] = ":0"
+    monkeypatch.setattr(gl, "probe", lambda b: pytest.fail("probed although there is a display"))
+    assert gl.choose_backend(headless) is None
 
 
-def test_headless_takes_the_first_backend_that_works_and_records_it(headless):
+def test_headless_takes_the_first_backend_that_works_and_records_it(headless, monkeypatch):
     tried = []
 
     def probe(backend):
         tried.append(backend)
         return "libEGL not found" if backend == "egl" else None
 
-    headless.setattr(gl, "probe", probe)
-    assert gl.choose_backend() == "osmesa"
+    monkeypatch.setattr(gl, "probe", probe)
+    before = {k: os.environ.get(k) for k in ("MUJOCO_GL", "PYOPENGL_PLATFORM")}
+    assert gl.choose_backend(headless) == "osmesa"
     assert tried == ["egl", "osmesa"]
-    assert os.environ["MUJOCO_GL"] == "osmesa" and os.environ["PYOPENGL_PLATFORM"] == "osmesa"
+    assert headless["MUJOCO_GL"] == "osmesa" and headless["PYOPENGL_PLATFORM"] == "osmesa"
+    assert {k: os.environ.get(k) for k in before} == before  # the process's own environment is untouched
 
 
-def test_no_backend_says_what_it_tried_and_why(headless):
-    headless.setattr(gl, "probe", lambda b: f"lib{b} missing")
+def test_no_backend_says_what_it_tried_and_why(headless, monkeypatch):
+    monkeypatch.setattr(gl, "probe", lambda b: f"lib{b} missing")
     with pytest.raises(gl.RenderingUnavailable) as info:
-        gl.choose_backend()
+        gl.choose_backend(headless)
     msg = str(info.value)
     assert "egl: libegl missing" in msg and "osmesa: libosmesa missing" in msg and "MUJOCO_GL" in msg
-    assert "MUJOCO_GL" not in os.environ
+    assert "MUJOCO_GL" not in headless
 
 
 def test_a_backend_that_cannot_load_is_reported_not_raised():

@@ -50,11 +50,15 @@ class RenderingUnavailable(RuntimeError):
     """No OpenGL backend can render offscreen on this machine."""
 
 
-def has_display() -> bool:
-    """Whether a window system is reachable (``DISPLAY`` or ``WAYLAND_DISPLAY``), or the OS is not Linux."""
+def has_display(environ=None) -> bool:
+    """Whether a window system is reachable (``DISPLAY`` or ``WAYLAND_DISPLAY``), or the OS is not Linux.
+
+    ``environ``: the environment to read (default ``os.environ``).
+    """
     if platform.system() != "Linux":
         return True
-    return bool(os.environ.get("DISPLAY") or os.environ.get("WAYLAND_DISPLAY"))
+    env = os.environ if environ is None else environ
+    return bool(env.get("DISPLAY") or env.get("WAYLAND_DISPLAY"))
 
 
 def probe(backend: str, timeout: float = 60.0) -> str | None:
@@ -74,27 +78,29 @@ def probe(backend: str, timeout: float = 60.0) -> str | None:
     return lines[-1] if lines else f"exit status {proc.returncode}"
 
 
-def choose_backend() -> str | None:
+def choose_backend(environ=None) -> str | None:
     """The GL backend rendering will use (``"egl"``, ``"osmesa"``, the user's ``MUJOCO_GL``), or None for MuJoCo's default.
 
     On headless Linux without ``MUJOCO_GL`` the backends of
     :data:`HEADLESS_BACKENDS` are probed in order and the first that works is
-    set in ``MUJOCO_GL`` / ``PYOPENGL_PLATFORM``; :class:`RenderingUnavailable`
-    when none does.
+    set in ``MUJOCO_GL`` / ``PYOPENGL_PLATFORM`` of ``environ`` (default
+    ``os.environ``, so that worker processes inherit the choice);
+    :class:`RenderingUnavailable` when none does.
     """
-    user = os.environ.get("MUJOCO_GL", "").strip().lower()
+    env = os.environ if environ is None else environ
+    user = env.get("MUJOCO_GL", "").strip().lower()
     if user:
         return user
-    if has_display():
+    if has_display(env):
         return None
-    platform_ = os.environ.get("PYOPENGL_PLATFORM", "").strip().lower()
+    platform_ = env.get("PYOPENGL_PLATFORM", "").strip().lower()
     candidates = [platform_] if platform_ in HEADLESS_BACKENDS else list(HEADLESS_BACKENDS)
     failures = []
     for backend in candidates:
         why = probe(backend)
         if why is None:
-            os.environ["MUJOCO_GL"] = backend
-            os.environ["PYOPENGL_PLATFORM"] = backend
+            env["MUJOCO_GL"] = backend
+            env["PYOPENGL_PLATFORM"] = backend
             return backend
         failures.append(f"{backend}: {why}")
     raise RenderingUnavailable(
