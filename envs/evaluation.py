@@ -20,26 +20,23 @@ import numpy as np
 __all__ = ["EpisodeResult", "add_episode_arguments", "check_env_id", "env_kwargs", "positive_int", "non_negative_int", "run_episodes", "summary"]
 
 
-def positive_int(text: str) -> int:
-    """argparse type: an integer >= 1."""
-    try:
-        v = int(text)
-    except ValueError:
-        raise argparse.ArgumentTypeError(f"expected a positive integer, got {text!r}") from None
-    if v < 1:
-        raise argparse.ArgumentTypeError(f"expected a positive integer, got {text!r}")
-    return v
+def _int_at_least(name: str, lo: int, expected: str, doc: str):
+    """An argparse type: an integer ``>= lo``, refused with ``expected`` in the message."""
+    def parse(text: str) -> int:
+        try:
+            v = int(text)
+        except ValueError:
+            raise argparse.ArgumentTypeError(f"expected {expected}, got {text!r}") from None
+        if v < lo:
+            raise argparse.ArgumentTypeError(f"expected {expected}, got {text!r}")
+        return v
+
+    parse.__name__, parse.__qualname__, parse.__doc__ = name, name, doc
+    return parse
 
 
-def non_negative_int(text: str) -> int:
-    """argparse type: an integer >= 0 (seeds)."""
-    try:
-        v = int(text)
-    except ValueError:
-        raise argparse.ArgumentTypeError(f"expected an integer >= 0, got {text!r}") from None
-    if v < 0:
-        raise argparse.ArgumentTypeError(f"expected an integer >= 0, got {text!r}")
-    return v
+positive_int = _int_at_least("positive_int", 1, "a positive integer", "argparse type: an integer >= 1.")
+non_negative_int = _int_at_least("non_negative_int", 0, "an integer >= 0", "argparse type: an integer >= 0 (seeds).")
 
 
 def add_episode_arguments(parser: argparse.ArgumentParser, *, episodes: int = 20) -> None:
