@@ -208,19 +208,9 @@ def _seed(value) -> int:
     return value
 
 
-def _load_solvers() -> None:
-    """Import the solvers (SciPy, MuJoCo) before a command times its solve: ``wall_time_s`` is the solve alone."""
-    import scipy.integrate  # noqa: F401
-    import scipy.optimize  # noqa: F401
-
-    import simgrip.reference  # noqa: F401
-    import simgrip.settle  # noqa: F401
-
-
 def _cmd_solve(args) -> dict:
     from simgrip.report import solve_record
 
-    _load_solvers()
 
     grip = check_grip(args.grip)
     if args.K > MAX_K:
@@ -231,7 +221,6 @@ def _cmd_solve(args) -> dict:
 def _cmd_simulate(args) -> dict:
     from simgrip.compare import settled_record, simulate
 
-    _load_solvers()
 
     grip = check_grip(args.grip)
     per_finger = args.kappa_per_finger is not None
@@ -280,7 +269,6 @@ def _cmd_compare(args) -> str:
     from simgrip.io import to_jsonable
     from simgrip.report import format_comparison
 
-    _load_solvers()
     grip = check_grip(args.grip)
     result = compare(grip, _params(args), _profile(args, grip), _links(args.links), method=args.method or "newton",
                      target_error=args.target_error, contact=args.contact)

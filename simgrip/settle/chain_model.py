@@ -57,6 +57,7 @@ from dataclasses import dataclass
 
 import mujoco
 import numpy as np
+from scipy.linalg import solve_banded
 
 from simgrip.sim.scene import Scene
 
@@ -223,8 +224,6 @@ class ChainModel:
         backtracking line search on ``|F|`` guards the rest.  Not checked for
         stability: callers use it near a known stable branch.
         """
-        from scipy.linalg import solve_banded
-
         phi = np.array(phi0, dtype=float)
         F, diag, off = self.internal(phi)
         res = float(np.max(np.abs(self.to_q(F))))

@@ -27,6 +27,7 @@ from __future__ import annotations
 import mujoco
 import numpy as np
 
+from simgrip.reference import DiscreteError, hinge_chain
 from simgrip.settle.chain_model import gravity_factor
 from simgrip.settle.newton import Newton
 from simgrip.settle.state import SettleError, finger_tip
@@ -59,8 +60,6 @@ def start_free(scene: Scene) -> bool:
     finger stalls) settles like any other.  False (state unchanged) when the
     chain solver fails.
     """
-    from simgrip.reference import DiscreteError, hinge_chain
-
     try:
         ch = hinge_chain.solve_chain("free", scene.params, scene.profile, scene.n, gravity=gravity_factor(scene))
     except (DiscreteError, ValueError):
@@ -121,8 +120,6 @@ def release(scene: Scene, run: Newton, tol: float, max_steps: int) -> tuple[bool
 
 def place_on_chain(scene: Scene, run: Newton) -> bool:
     """Fallback start for Grips I/II: the hinge chain's equilibrium, workpiece at the tip."""
-    from simgrip.reference import DiscreteError, hinge_chain
-
     try:
         # the tip a hair inside the face so that MuJoCo reports the contact
         ch = hinge_chain.solve_chain(scene.grip, scene.params.replace(b=scene.params.b - 2e-6), scene.profile, scene.n,
@@ -163,8 +160,6 @@ def start_on_chain(scene: Scene, run: Newton | None) -> bool | None:
     chain's equilibrium exists, is stable (positive projected Hessian) and
     pushes on the face (``N1 > 0``); otherwise None and the staged closing runs.
     """
-    from simgrip.reference import DiscreteError, hinge_chain
-
     p = scene.params
     try:
         # the tip a hair inside the face so that MuJoCo reports the contact
@@ -284,8 +279,6 @@ def _close_predicted(scene: Scene, run: Newton, target, t: float, z0: float, tol
     every tip pair carrying a positive normal force; otherwise the scene and the
     Newton state are restored and False returned (the MuJoCo ramp then runs).
     """
-    from simgrip.reference import DiscreteError, hinge_chain
-
     m, d = scene.model, scene.data
     margin = 0.5 * BOX_HEIGHT - 0.1
     # the tip a hair inside the face so that MuJoCo reports the contact (as place_on_chain)

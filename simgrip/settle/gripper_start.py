@@ -69,6 +69,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from simgrip.params import M_MAX
+from simgrip.reference import DiscreteError, solve_chain
 from simgrip.settle.state import SettleError
 from simgrip.sim.gripper import GripperScene
 
@@ -89,8 +90,6 @@ def finger_chain(scene: GripperScene, grip: str, X: float | None = None, guess=N
     ``M``: the workpiece's vertical load on the tip (``N2 = -M``, either sign; default ``params.M``).
     ``contact_moment``: the tip couple (about ``E3``, over ``rho g l^2``) of a force on the tip sphere's surface.
     """
-    from simgrip.reference import DiscreteError, solve_chain
-
     p = scene.params
     if X is not None:
         p = p.replace(b=2.0 * X)

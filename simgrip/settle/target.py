@@ -46,6 +46,7 @@ import time
 import mujoco
 import numpy as np
 
+from simgrip.reference import DiscreteError, solve_chain
 from simgrip.settle.chain_model import gravity_factor
 from simgrip.settle.state import SettledState, SettleError
 
@@ -75,8 +76,6 @@ def check_target_error(target_error, grip: str) -> float:
 
 def _chain_quantities(scene, n, held: bool, guess=None):
     """Tip, (N1, N2) and link angles of the hinge chain at ``n`` links (the grip's, or free when not held)."""
-    from simgrip.reference import DiscreteError, solve_chain
-
     grip = scene.grip if held else "free"
     try:
         ch = solve_chain(grip, scene.params, scene.profile, n, guess=guess, gravity=gravity_factor(scene))
