@@ -349,6 +349,10 @@ COMMANDS = {
 }
 
 
+#: Commands that do not import MuJoCo up front: solve needs none; render chooses its GL backend first (named error).
+_NO_MUJOCO_IMPORT = ("solve", "render")
+
+
 def _check_outputs(args) -> list[Path]:
     """Check every output path of the command before any work (nothing is created); returns the folders.
 
@@ -438,6 +442,10 @@ def main(argv=None) -> int:
             try:
                 folders = _check_outputs(args)
                 created = [f for f in folders if not f.exists()]
+                if args.command not in _NO_MUJOCO_IMPORT:
+                    from simgrip.sim.gl import import_mujoco
+
+                    import_mujoco()  # a MUJOCO_GL whose library is missing must not stop work that does not render
                 result = COMMANDS[args.command](args)
             except ValueError as exc:
                 print(f"{prefix}: error: {exc}", file=sys.stderr)

@@ -26,9 +26,74 @@ def headless(monkeypatch):
 
 
 def test_the_users_backend_is_kept_without_probing(headless, monkeypatch):
-    headless["MUJOCO_GL"] = "users-own"
+    headless["MUJOCO_GL"] = "EGL"
+    monkeypatch.setattr(gl, "missing_library", lambda b: None)
     monkeypatch.setattr(gl, "probe", lambda b: pytest.fail("probed although MUJOCO_GL is set"))
-    assert gl.choose_backend(headless) == "users-own"
+    assert gl.choose_backend(headless) == "egl"
+
+
+def test_the_users_backend_without_its_library_is_named(headless, monkeypatch):
+    """MUJOCO_GL=osmesa without libOSMesa: MuJoCo's own import dies in PyOpenGL (AttributeError); ours names it."""
+    headless["MUJOCO_GL"] = "osmesa"
+    monkeypatch.setattr(gl.ctypes.util, "find_library", lambda name: None)
+    with pytest.raises(gl.RenderingUnavailable, match=r"MUJOCO_GL=osmesa: libOSMesa not found"):
+        gl.choose_backend(headless)
+
+
+def test_an_unknown_users_backend_is_named(headless):
+    headless["MUJOCO_GL"] = "bogus"
+    with pytest.raises(gl.RenderingUnavailable, match=r"MUJOCO_GL=bogus is not a backend MuJoCo knows"):
+        gl.choose_backend(headless)
+
+
+_TWICE = """
+import warnings
+warnings.simplefilter("ignore")
+from simgrip import STANDARD, Uniform
+from simgrip.sim.gl import RenderingUnavailable, make_renderer
+from simgrip.sim.scene import build_scene
+sc = build_scene("I", STANDARD, Uniform(-6.0), 8, render=True)
+for attempt in range(3):
+    try:
+        make_renderer(sc.model, 60, 80)
+        print("rendered")
+    except RenderingUnavailable as exc:
+        print("unavailable", exc)
+"""
+
+
+@pytest.mark.parametrize("display", [None, ":97"], ids=["no-display", "unreachable-display"])
+def test_glfw_without_a_working_display_fails_by_name_every_time(display):
+    """GLFW's second try after a failed one aborted the interpreter (libc++abi, rc 134): refused by name instead."""
+    env = {k: v for k, v in os.environ.items() if k not in ("MUJOCO_GL", "PYOPENGL_PLATFORM", "DISPLAY", "WAYLAND_DISPLAY")}
+    env["MUJOCO_GL"] = "glfw"
+    if display:
+        env["DISPLAY"] = display
+    proc = subprocess.run([sys.executable, "-c", _TWICE], env=env, capture_output=True, text=True, timeout=120)
+    assert proc.returncode == 0, proc.stderr[-2000:]
+    lines = proc.stdout.splitlines()
+    assert len(lines) == 3 and all(ln.startswith("unavailable cannot render with MUJOCO_GL=glfw") for ln in lines), lines
+    assert len(set(lines)) == 1  # the later attempts repeat the first error without touching GLFW again
+
+
+@pytest.mark.parametrize("value", ["bogus", "osmesa"])
+def test_commands_that_do_not_render_ignore_a_broken_mujoco_gl(value, tmp_path):
+    """``MUJOCO_GL=bogus`` (or osmesa without libOSMesa) makes ``import mujoco`` raise: simulate warns and works."""
+    if value == "osmesa" and gl.missing_library("osmesa") is None:
+        pytest.skip("libOSMesa is installed here: MUJOCO_GL=osmesa is not broken")
+    env = {k: v for k, v in os.environ.items() if k not in ("PYOPENGL_PLATFORM",)}
+    env["MUJOCO_GL"] = value
+    proc = subprocess.run([sys.executable, "-m", "simgrip.cli", "simulate", "I", "--kappa", "-6", "--links", "8",
+                           "--json"], env=env, capture_output=True, text=True, timeout=120, cwd=tmp_path)
+    assert proc.returncode == 0, proc.stderr
+    assert json.loads(proc.stdout)["grip"] == "I"
+    assert proc.stderr.strip().splitlines() == [
+        next(ln for ln in proc.stderr.splitlines() if ln.startswith(f"simgrip: warning: MUJOCO_GL={value} cannot be loaded"))]
+    proc = subprocess.run([sys.executable, "-m", "simgrip.cli", "render", "--png", "g.png", "--gif", "p.gif"],
+                          env=env, capture_output=True, text=True, timeout=120, cwd=tmp_path)
+    assert proc.returncode == 1 and "Traceback" not in proc.stderr
+    assert proc.stderr.strip().splitlines()[-1].startswith(f"simgrip render: failed: RenderingUnavailable: MUJOCO_GL={value}")
+    assert not list(tmp_path.iterdir())
 
 
 def test_a_display_keeps_mujocos_default(headless, monkeypatch):
