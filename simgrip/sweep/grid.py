@@ -22,7 +22,7 @@ from simgrip.chain import check_links
 from simgrip.params import DimensionlessParams, _finite, check_grip
 from simgrip.profiles import Uniform
 
-__all__ = ["AXES", "DEFAULTS", "SweepGrid", "SweepPoint", "parse_axis", "make_grid"]
+__all__ = ["AXES", "DEFAULTS", "SweepGrid", "SweepPoint", "axis_count", "parse_axis", "make_grid"]
 
 #: Swept parameters in grid order (the CLI option of each is ``--<name>``; ``mu`` is ``mu_s``).
 AXES = ("kappa", "D", "M", "mu", "b", "gamma")
@@ -39,12 +39,13 @@ def _number(name: str, what: str, value) -> float:
     return _finite(f"{name}: {what}", value)
 
 
-def parse_axis(name: str, values) -> tuple[float, ...]:
-    """Values of axis ``name`` from one value or ``(START, STOP, NUM)`` (inclusive linspace).
+def axis_count(name: str, values) -> int:
+    """Number of values axis ``name`` would have, from the option alone (one value, or ``START STOP NUM``).
 
-    ``NUM`` is an integer >= 1; ``STOP >= START`` when ``NUM > 1`` (``NUM = 1``
-    gives ``START``).  Every value is checked as a value of its parameter.
-    Raises ``ValueError`` naming ``name``.
+    Nothing is allocated: ``NUM`` is checked as a number (``ValueError``
+    naming ``name`` and ``NUM`` for NaN, inf, a non-integer or a value below 1)
+    and returned as an exact Python int, however large (``1e300`` included);
+    the bounds on it are :func:`simgrip.sweep.budget.check_sweep`'s.
     """
     if name not in AXES:
         raise ValueError(f"axis must be one of {AXES}, got {name!r}")
@@ -52,21 +53,43 @@ def parse_axis(name: str, values) -> tuple[float, ...]:
         values = [values]
     values = list(values)
     if len(values) == 1:
+        return 1
+    if len(values) != 3:
+        raise ValueError(f"{name} takes one value or START STOP NUM, got {len(values)} values {values!r}")
+    num_f = _number(name, "NUM", values[2])
+    if num_f != int(num_f) or num_f < 1:
+        raise ValueError(f"{name}: NUM must be an integer >= 1, got {values[2]!r}")
+    return int(num_f)
+
+
+def parse_axis(name: str, values) -> tuple[float, ...]:
+    """Values of axis ``name`` from one value or ``(START, STOP, NUM)`` (inclusive linspace).
+
+    ``NUM`` is an integer >= 1 and at most
+    :data:`~simgrip.sweep.budget.MAX_AXIS_VALUES` (checked before any array
+    exists, :func:`axis_count`); ``STOP >= START`` when ``NUM > 1`` (``NUM = 1``
+    gives ``START``).  Every value is checked as a value of its parameter.
+    Raises ``ValueError`` naming ``name``.
+    """
+    from simgrip.sweep.budget import MAX_AXIS_VALUES
+
+    num = axis_count(name, values)
+    if isinstance(values, (str, bytes)) or not hasattr(values, "__len__"):
+        values = [values]
+    values = list(values)
+    if len(values) == 1:
         out = (_number(name, "the value", values[0]),)
-    elif len(values) == 3:
+    else:
         start = _number(name, "START", values[0])
         stop = _number(name, "STOP", values[1])
-        num_f = _number(name, "NUM", values[2])
-        if num_f != int(num_f) or num_f < 1:
-            raise ValueError(f"{name}: NUM must be an integer >= 1, got {values[2]!r}")
-        num = int(num_f)
+        if num > MAX_AXIS_VALUES:
+            raise ValueError(f"{name}: NUM = {values[2]!r}: at most {MAX_AXIS_VALUES} values on one axis "
+                             "(every value is listed in sweep.json)")
         if num > 1 and stop < start:
             raise ValueError(f"{name}: STOP must not be below START when NUM > 1, got START {start!r}, STOP {stop!r}")
         if num > 1 and stop == start:
             raise ValueError(f"{name}: STOP equals START with NUM = {num}: give one value instead")
         out = tuple(float(v) for v in np.linspace(start, stop, num)) if num > 1 else (start,)
-    else:
-        raise ValueError(f"{name} takes one value or START STOP NUM, got {len(values)} values {values!r}")
     for v in out:
         _check_value(name, v)
     return out
@@ -169,9 +192,22 @@ class SweepGrid:
 
 def make_grid(grip: str, *, kappa, D=None, M=None, mu=None, b=None, gamma=None, links: int,
               method: str = "newton") -> SweepGrid:
-    """A :class:`SweepGrid` from axis specifications (see :func:`parse_axis`); ``None`` takes :data:`DEFAULTS`."""
+    """A :class:`SweepGrid` from axis specifications (see :func:`parse_axis`); ``None`` takes :data:`DEFAULTS`.
+
+    The grid's size is computed from the ``NUM`` values alone and checked
+    (:func:`simgrip.sweep.budget.check_sweep`: points, values per axis, the
+    client's memory) before any axis is built; ``ValueError`` names the
+    option(s) and gives the estimate.  Time and disk are checked by
+    :func:`~simgrip.sweep.run.run_sweep`, which knows the workers and the folder.
+    """
+    from simgrip.sweep.budget import check_sweep
+
     given = {"kappa": kappa, "D": D, "M": M, "mu": mu, "b": b, "gamma": gamma}
     if kappa is None:
         raise ValueError("kappa is required (--kappa K or --kappa START STOP NUM)")
-    axes = {a: parse_axis(a, DEFAULTS[a] if v is None else v) for a, v in given.items()}
+    specs = {a: DEFAULTS[a] if v is None else v for a, v in given.items()}
+    counts = {a: axis_count(a, v) for a, v in specs.items()}
+    links = check_links(links)
+    check_sweep(counts, links, str(method).strip().lower(), workers=None)
+    axes = {a: parse_axis(a, v) for a, v in specs.items()}
     return SweepGrid(grip=grip, axes=axes, links=links, method=method)

@@ -27,7 +27,11 @@ import numpy as np
 from simgrip.sweep.grid import AXES
 from simgrip.io import atomic_write
 
-__all__ = ["CATEGORIES", "cell_categories", "write_map"]
+__all__ = ["CATEGORIES", "MAX_MAP_CELLS", "cell_categories", "check_map", "write_map"]
+
+#: Most cells of a map: the figure is 704 x 528 pixels (6.4 x 4.8 in at 110 dpi), its axes fewer, so more cells
+#: than 500 x 500 cannot be told apart; the cell arrays cost ~50 bytes a cell.
+MAX_MAP_CELLS = 250_000
 
 #: Cell categories, in the colour order of the map.
 CATEGORIES = ("held", "dropped", "mixed", "disagree", "no verdict")
@@ -42,8 +46,24 @@ def _plot_axes(grid) -> tuple[str, ...]:
     return grid.swept[:2]
 
 
+def check_map(grid) -> None:
+    """``ValueError`` naming ``--no-map`` when ``grid``'s map would have more than :data:`MAX_MAP_CELLS` cells."""
+    plotted = _plot_axes(grid)
+    sizes = [len(grid.axes[a]) for a in plotted]
+    cells = 1
+    for n in sizes:
+        cells *= n
+    if cells > MAX_MAP_CELLS:
+        what = " x ".join(f"{n} ({a})" for n, a in zip(sizes, plotted))
+        raise ValueError(f"map: {what} = {cells} cells is more than map.png can show (at most {MAX_MAP_CELLS}, "
+                         "the figure has 704 x 528 pixels): add --no-map (write_map=False), or sweep fewer values")
+
+
 def cell_categories(grid, rows) -> tuple[np.ndarray, np.ndarray, tuple[str, ...]]:
     """Category index (into :data:`CATEGORIES`) and BVP-feasible fraction per cell, and the plotted axes.
+
+    ``rows`` is any iterable of records (read once: e.g. :func:`simgrip.sweep.store.iter_csv`
+    of ``sweep.csv``); memory grows with the cells, not the points.
 
     Arrays have shape ``(len(y values), len(x values))`` with ``x`` the first
     swept axis; with fewer swept axes the missing dimensions have length 1.
@@ -110,7 +130,11 @@ def _boundary(frac, xe, ye) -> list:
 
 
 def write_map(path, grid, rows) -> None:
-    """Draw the map of ``rows`` (the sweep's table, grid order) and write it to ``path`` as PNG, atomically."""
+    """Draw the map of ``rows`` (the sweep's records, any order, read once) and write it to ``path`` as PNG, atomically.
+
+    Raises ``ValueError`` (:func:`check_map`) for a grid of more than :data:`MAX_MAP_CELLS` cells.
+    """
+    check_map(grid)
     import matplotlib
 
     matplotlib.use("Agg", force=False)

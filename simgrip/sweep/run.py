@@ -19,24 +19,39 @@ order, :data:`~simgrip.sweep.point.COLUMNS`), ``sweep.json``
 (arguments, versions, counts) and ``map.png`` (:mod:`~simgrip.sweep.map`),
 each atomically, after saving finished points in ``.partial/`` as they arrive
 (:mod:`~simgrip.sweep.store`): an interrupted sweep is completed by
-``resume=True`` (``--resume``) without recomputing saved points.  Dask
-recomputes the batch of a worker that dies, so no point is lost or doubled.
+``resume=True`` (``--resume``) without recomputing saved points (damaged
+batch files are set aside and recomputed).  Dask recomputes the batch of a
+worker that dies, so no point is lost or doubled.
+
+Bounded: the grid is estimated and checked before anything is allocated
+(:mod:`~simgrip.sweep.budget`: points, memory, disk, time at the stated
+points/s; ``--jobs`` capped); points go to the runner in chunks
+(:data:`~simgrip.sweep.budget.CHUNK_IN_PROCESS` in-process,
+:data:`~simgrip.sweep.budget.CHUNK_DASK` on Dask, where a local cluster starts
+once per chunk, ~1-3 s in ~100 s of work on 2 cores), rows are saved as they
+arrive and merged into ``sweep.csv`` by streaming, the counts and the map are
+made on the way: with an output folder this process keeps one byte per point.
 """
 
 from __future__ import annotations
 
+import itertools
+import json
+import math
 import platform
 import sys
 import time
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from pathlib import Path
 
 from simgrip.parallel.runner import RunnerOptions, add_runner_arguments, run_tasks, runner_options
+from simgrip.sweep.budget import CHUNK_DASK, CHUNK_IN_PROCESS, cap_jobs, check_sweep, machine
 from simgrip.sweep.grid import SweepGrid, make_grid
+from simgrip.sweep.map import check_map
 from simgrip.sweep.point import COLUMNS, evaluate_point
-from simgrip.sweep.store import PARTIAL, PartialStore, counts, write_csv
+from simgrip.sweep.store import PARTIAL, PartialStore, Tally, counts, iter_csv
 
-__all__ = ["SweepResult", "run_sweep", "add_arguments", "cli_sweep", "versions"]
+__all__ = ["SweepResult", "run_sweep", "add_arguments", "cli_sweep", "versions", "stderr_note"]
 
 
 @dataclass
@@ -46,9 +61,6 @@ class SweepResult:
     Attributes
     ----------
     grid : SweepGrid
-    rows : list of dict
-        One record per point in grid order, keys :data:`~simgrip.sweep.point.COLUMNS`
-        (plus ``index``).
     counts : dict
         Points per status, held, feasible, agreeing, ... (:func:`~simgrip.sweep.store.counts`).
     computed, resumed : int
@@ -57,21 +69,39 @@ class SweepResult:
         Time of the whole call [s] (cluster start-up included).
     paths : dict
         ``{"csv", "json", "map"}`` file paths, empty without an output folder.
+    records : list of dict or None
+        The table in memory, for a sweep without an output folder; ``None``
+        when it was streamed to ``sweep.csv`` (read it with :meth:`iter_rows`
+        or :attr:`rows`).
     """
 
     grid: SweepGrid
-    rows: list
     counts: dict
     computed: int
     resumed: int
     wall_time_s: float
     paths: dict = field(default_factory=dict)
+    records: list | None = None
+
+    def iter_rows(self):
+        """Every record, in grid order, keys ``index`` and :data:`~simgrip.sweep.point.COLUMNS`, one at a time
+        (read from ``sweep.csv`` when the sweep wrote one: memory does not grow with the table)."""
+        if self.records is not None:
+            yield from self.records
+            return
+        for i, r in enumerate(iter_csv(self.paths["csv"])):
+            yield {"index": i, **r}
+
+    @property
+    def rows(self) -> list:
+        """Every record in a list (reads the whole ``sweep.csv`` into memory when the sweep wrote one)."""
+        return self.records if self.records is not None else list(self.iter_rows())
 
     def column(self, name: str) -> list:
         """The values of one column, in grid order."""
         if name not in COLUMNS and name != "index":
             raise ValueError(f"column must be one of {COLUMNS}, got {name!r}")
-        return [r[name] for r in self.rows]
+        return [r[name] for r in self.iter_rows()]
 
 
 def versions() -> dict:
@@ -87,9 +117,30 @@ def versions() -> dict:
     return out
 
 
+def stderr_note(line: str) -> None:
+    """The default ``note`` of :func:`run_sweep`: one line on stderr."""
+    print(f"simgrip sweep: {line}", file=sys.stderr, flush=True)
+
+
+def _workers(options: RunnerOptions) -> int | None:
+    """Workers the time estimate is made for (None: a remote cluster, unknown before it is reached)."""
+    return None if options.remote else (1 if options.in_process else options.local_workers)
+
+
+def _cap(options: RunnerOptions, todo: int, batch_size, note) -> RunnerOptions:
+    """``options`` with ``jobs`` capped for ``todo`` points (:func:`simgrip.sweep.budget.cap_jobs`)."""
+    if options.remote:
+        return options
+    tasks = todo if batch_size is None else math.ceil(todo / batch_size)
+    jobs, why = cap_jobs(options.jobs, tasks)
+    if why and note is not None:
+        note(why)
+    return options if jobs == options.jobs else replace(options, jobs=jobs)
+
+
 def run_sweep(grid: SweepGrid, *, out=None, options: RunnerOptions = RunnerOptions(), batch_size: int | None = None,
-              resume: bool = False, write_map: bool = True, on_record=None) -> SweepResult:
-    """Run every point of ``grid``; returns the table (and writes the files when ``out`` is given).
+              resume: bool = False, write_map: bool = True, on_record=None, note=stderr_note) -> SweepResult:
+    """Run every point of ``grid``; returns the counts (and writes the files when ``out`` is given).
 
     Parameters
     ----------
@@ -97,24 +148,38 @@ def run_sweep(grid: SweepGrid, *, out=None, options: RunnerOptions = RunnerOptio
         The sweep (:func:`~simgrip.sweep.grid.make_grid`).
     out : path, optional
         Output folder (checked, and created, before any work; ``ValueError``
-        naming ``--out`` when it cannot be written).  Without it nothing is
-        written and nothing can be resumed.
+        naming ``--out`` when it cannot be written, or when ``sweep.csv``,
+        ``sweep.json``, ``map.png`` or ``.partial`` in it is of the wrong kind).
+        Rows are streamed to it: the memory of this process does not grow with
+        the number of points (one byte per point).  Without it nothing is
+        written, nothing can be resumed, and the records are kept in memory
+        (:attr:`SweepResult.records`).
     options : RunnerOptions
-        In-process, local Dask cluster or existing cluster.
+        In-process, local Dask cluster or existing cluster.  A local ``jobs``
+        is capped (:func:`simgrip.sweep.budget.cap_jobs`: the tasks, 4 per
+        core, memory; a note says so) and refused above
+        :data:`~simgrip.sweep.budget.MAX_JOBS`.
     batch_size : int, optional
         Points per Dask task (default: the runner's); does not change the rows.
     resume : bool
         Complete the unfinished sweep saved in ``out/.partial`` (must be the same
-        grid); without it an unfinished sweep in ``out`` is refused.
+        grid; damaged batch files are set aside and their points recomputed);
+        without it an unfinished sweep in ``out`` is refused.  On a finished
+        sweep of the same grid nothing is computed.
     write_map : bool
-        Draw ``map.png``.
+        Draw ``map.png`` (refused before any work above
+        :data:`~simgrip.sweep.map.MAX_MAP_CELLS` cells).
     on_record : callable, optional
         Called with each point's record as it arrives (completion order).
+    note : callable, optional
+        Receives one-line notes (jobs lowered, a damaged batch set aside, a
+        finished sweep); default :func:`stderr_note`, ``None`` for silence.
 
     Raises
     ------
     ValueError
-        Bad output folder, or a ``.partial`` folder that does not fit ``resume``.
+        A grid this machine cannot sweep (:func:`simgrip.sweep.budget.check_sweep`),
+        a bad output folder, too many jobs, or a ``.partial`` folder that does not fit ``resume``.
     RunnerError
         The cluster failed (finished points stay saved for ``resume``).
     KeyboardInterrupt
@@ -123,48 +188,111 @@ def run_sweep(grid: SweepGrid, *, out=None, options: RunnerOptions = RunnerOptio
     if not isinstance(grid, SweepGrid):
         raise ValueError(f"grid must be a SweepGrid, got {type(grid).__name__}")
     t0 = time.perf_counter()
+    options = _cap(options, grid.size, batch_size, None)  # refuses a --jobs above the bound, before anything
+    check_sweep({a: len(v) for a, v in grid.axes.items()}, grid.links, grid.method, workers=_workers(options),
+                to_disk=out is not None, here=machine(out))
+    if out is not None and write_map:
+        check_map(grid)
     store = None
-    done: dict[int, dict] = {}
+    resumed = 0
     if out is not None:
         from simgrip.io import check_output_dir
 
         out = check_output_dir(out, "--out")
-        store = PartialStore(out, grid.spec())
-        done = store.open(resume)
-    todo = [p for p in grid.points() if p.index not in done]
-    fresh: dict[int, dict] = {}
+        from simgrip.io import check_output_files_in  # _write's files: a folder at sweep.csv is refused now
+
+        check_output_files_in(out, ("sweep.csv", "sweep.json") + (("map.png",) if write_map else ()), "--out")
+        store = PartialStore(out, grid)
+        store.check()
+        if resume and not store.exists() and (out / "sweep.csv").exists():
+            return _finished(out, grid, note, t0)
+        resumed = store.open(resume, note)
+    options = _cap(options, grid.size - resumed, batch_size, note)
+    done = store.done if store is not None else bytearray(grid.size)
+    records = None if store is not None else [None] * grid.size
+    computed = 0
+
+    from tqdm import tqdm
+
+    bar = tqdm(total=grid.size - resumed, desc="sweep", unit="point", disable=not options.progress)
 
     def arrived(_, rec):
-        fresh[rec["index"]] = rec
+        nonlocal computed
+        computed += 1
+        bar.update(1)
         if store is not None:
             store.add(rec)
+        else:
+            records[rec["index"]] = rec
         if on_record is not None:
             on_record(rec)
 
+    quiet = replace(options, progress=False)
+    chunk = CHUNK_IN_PROCESS if options.in_process else CHUNK_DASK
+    pending = (p for p in grid.points() if not done[p.index])
     try:
-        run_tasks(evaluate_point, todo, options=options, desc="sweep", batch_size=batch_size, on_result=arrived)
+        while True:
+            points = list(itertools.islice(pending, chunk))
+            if not points:
+                break
+            run_tasks(evaluate_point, points, options=quiet, desc="sweep", batch_size=batch_size, on_result=arrived)
     finally:
+        bar.close()
         if store is not None:
             store.flush()
-    rows = [done[i] if i in done else fresh[i] for i in range(grid.size)]
-    result = SweepResult(grid=grid, rows=rows, counts=counts(rows), computed=len(fresh), resumed=len(done),
-                         wall_time_s=time.perf_counter() - t0)
-    if out is not None:
-        result.paths = _write(out, result, options, batch_size, write_map)
-        store.remove()
+    result = SweepResult(grid=grid, counts={}, computed=computed, resumed=resumed, wall_time_s=0.0, records=records)
+    if out is None:
+        result.counts = counts(records)
+        result.wall_time_s = time.perf_counter() - t0
+        return result
+    result.paths = _write(out, result, store, options, batch_size, write_map, t0)
+    store.remove()
     return result
 
 
-def _write(out: Path, result: SweepResult, options: RunnerOptions, batch_size, draw: bool) -> dict:
+def _finished(out: Path, grid: SweepGrid, note, t0: float) -> SweepResult:
+    """``--resume`` on a folder that holds a finished sweep: computes nothing when it is this sweep."""
+    try:
+        meta = json.loads((out / "sweep.json").read_text(encoding="utf-8"))
+        args = meta["arguments"]
+        same = {k: args[k] for k in grid.spec()} == json.loads(json.dumps(grid.spec()))
+    except (OSError, ValueError, KeyError, TypeError):
+        raise ValueError(f"--resume: {str(out)!r} holds a sweep.csv but no unfinished sweep ({PARTIAL}/) and no "
+                         "readable sweep.json saying which sweep it is: drop --resume to compute it again") from None
+    if not same:
+        raise ValueError(f"--resume: {str(out)!r} holds a finished sweep of a different grid (grip, axes, links or "
+                         "method differ): drop --resume to replace it, or choose another --out")
+    tally = Tally()
+    try:
+        for r in iter_csv(out / "sweep.csv"):
+            tally.add(r)
+    except (OSError, ValueError) as exc:
+        raise ValueError(f"--resume: {str(out / 'sweep.csv')!r} cannot be read back ({exc}): drop --resume to "
+                         "compute the sweep again") from None
+    c = tally.as_dict()
+    if c["points"] != grid.size:
+        raise ValueError(f"--resume: {str(out / 'sweep.csv')!r} has {c['points']} rows, the grid {grid.size} "
+                         "points: drop --resume to compute the sweep again")
+    if note is not None:
+        note(f"{out} holds this sweep, finished ({grid.size} points): nothing to compute")
+    paths = {k: str(out / name) for k, name in (("csv", "sweep.csv"), ("json", "sweep.json"), ("map", "map.png"))
+             if (out / name).is_file()}
+    return SweepResult(grid=grid, counts=c, computed=0, resumed=grid.size, wall_time_s=time.perf_counter() - t0,
+                       paths=paths)
+
+
+def _write(out: Path, result: SweepResult, store: PartialStore, options: RunnerOptions, batch_size, draw: bool,
+           t0: float) -> dict:
     paths = {"csv": out / "sweep.csv", "json": out / "sweep.json"}
-    write_csv(paths["csv"], result.rows)
+    result.counts = store.merge(paths["csv"])  # streamed, in grid order, counted on the way
     if draw:
         from simgrip.sweep.map import write_map
 
         paths["map"] = out / "map.png"
-        write_map(paths["map"], result.grid, result.rows)
+        write_map(paths["map"], result.grid, iter_csv(paths["csv"]))
     from simgrip.io import write_json
 
+    result.wall_time_s = time.perf_counter() - t0
     write_json(paths["json"], {
         "command": "sweep",
         "arguments": {**result.grid.spec(), "jobs": options.jobs, "scheduler": options.scheduler,
@@ -194,7 +322,8 @@ def add_arguments(p) -> None:
     p.add_argument("--links", type=int, required=True, help="links per finger")
     p.add_argument("--method", default="newton", help="settle method: newton or dynamics [default newton]")
     p.add_argument("--out", required=True, help="output folder (sweep.csv, sweep.json, map.png)")
-    p.add_argument("--resume", action="store_true", help=f"complete an interrupted sweep saved in OUT/{PARTIAL}")
+    p.add_argument("--resume", action="store_true", help=f"complete an interrupted sweep saved in OUT/{PARTIAL} (damaged batch files are set aside "
+                   "and recomputed; a finished sweep computes nothing)")
     p.add_argument("--batch-size", type=int, default=None, help="points per Dask task [default: automatic]")
     p.add_argument("--no-map", action="store_true", help="do not draw map.png")
     p.add_argument("--profile", action="store_true",
@@ -217,7 +346,7 @@ def cli_sweep(args):
     if args.profile:
         from simgrip.sweep.profile import cli_profile
 
-        return cli_profile(args, grid, options)
+        return cli_profile(args, grid, _cap(options, grid.size, args.batch_size, stderr_note))
     try:
         res = run_sweep(grid, out=args.out, options=options, batch_size=args.batch_size, resume=args.resume,
                         write_map=not args.no_map)
