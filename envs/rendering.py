@@ -1,7 +1,10 @@
 """Pictures of the pick environment for ``simgrip render``: a PNG of a settled grip, a GIF of a pick.
 
 Both run the scripted elastica controller (:class:`simgrip.envs.scripted.ScriptedPickPolicy`)
-in :class:`simgrip.envs.pick.PickEnv` and write through :func:`simgrip.io.atomic_write`.
+in :class:`simgrip.envs.pick.PickEnv` and write through :func:`simgrip.io.atomic_write`, under
+:mod:`simgrip.io`'s output-path policy: ``path`` is checked before anything is rendered (a
+folder, FIFO, device or socket there, or a dangling link, raises ``ValueError`` naming ``path``;
+a link to a regular file is followed and kept).
 Rendering is offscreen; on a machine without a display the backend is chosen by
 :func:`simgrip.sim.gl.choose_backend` (``MUJOCO_GL`` if set, else EGL, then OSMesa).
 """
@@ -13,7 +16,7 @@ import os
 
 import numpy as np
 
-from simgrip.io import atomic_write
+from simgrip.io import atomic_write, check_output_file
 
 __all__ = ["render_grip_png", "render_pick_gif", "scripted_frames"]
 
@@ -66,9 +69,13 @@ def scripted_frames(*, grip: str = "I", seed: int = 0, every: int = 2, max_steps
 
 def render_grip_png(path: str | os.PathLike, *, grip: str = "I", seed: int = 0, width: int = 640,
                     height: int = 480, camera: str = "front", env_kwargs=None) -> dict:
-    """Write a PNG of the scripted controller's settled grip (before the lift); returns the episode info."""
+    """Write a PNG of the scripted controller's settled grip (before the lift); returns the episode info.
+
+    ``path`` is checked first (``ValueError`` naming it; see the module docstring).
+    """
     from PIL import Image
 
+    check_output_file(path, "path")
     frames, info = scripted_frames(grip=grip, seed=seed, width=width, height=height, camera=camera,
                                    env_kwargs=env_kwargs, until="settled")
     buf = io.BytesIO()
@@ -80,9 +87,13 @@ def render_grip_png(path: str | os.PathLike, *, grip: str = "I", seed: int = 0, 
 
 def render_pick_gif(path: str | os.PathLike, *, grip: str = "I", seed: int = 0, width: int = 320,
                     height: int = 240, every: int = 2, camera: str = "front", env_kwargs=None) -> dict:
-    """Write an animated GIF of one scripted pick (every ``every``-th control step); returns the episode info."""
+    """Write an animated GIF of one scripted pick (every ``every``-th control step); returns the episode info.
+
+    ``path`` is checked first (``ValueError`` naming it; see the module docstring).
+    """
     from PIL import Image
 
+    check_output_file(path, "path")
     frames, info = scripted_frames(grip=grip, seed=seed, every=every, width=width, height=height,
                                    camera=camera, env_kwargs=env_kwargs, until="end")
     ms = int(round(1000.0 * int(every) * info["dt"]))

@@ -47,6 +47,14 @@ def main(argv=None):
     multi = isinstance(env.unwrapped, PickMultiEnv)  # K fingers: the per-finger theory's oracle
     if multi and args.gif:
         p.error(f"--env {args.env}: no --gif (two-finger ids only)")
+    if args.gif is not None:  # simgrip.io's output-path policy, before any episode runs
+        from simgrip.io import check_output_file
+
+        try:
+            check_output_file(args.gif, "--gif", create=False)
+        except ValueError as exc:
+            env.close()
+            p.error(str(exc))
     policy = (MULTI_POLICIES if multi else POLICIES)[args.policy]()
 
     def line(r):

@@ -47,7 +47,7 @@ import numpy as np
 
 import simgrip.envs  # noqa: F401  (registers the simgrip ids)
 from simgrip.envs.evaluation import non_negative_int, run_episodes, summary
-from simgrip.io import atomic_write, write_json
+from simgrip.io import atomic_write, check_output_dir, check_output_files_in, write_json
 
 ALGOS = ("ppo", "sac")
 
@@ -209,11 +209,12 @@ def main(argv=None) -> int:
         p.error('needs Stable-Baselines3 and PyTorch: pip install "simgrip[rl]"')
     if args.env not in gym.registry:
         p.error(f"--env: unknown id {args.env!r}")
-    out = Path(args.out)
-    try:
-        out.mkdir(parents=True, exist_ok=True)
-    except OSError as e:
-        p.error(f"--out: cannot create {out}: {e}")
+    try:  # simgrip.io's output-path policy: a folder, and no FIFO/device/folder where a result file goes
+        out = check_output_dir(args.out, "--out")
+        names = [f"{a}_{kind}" for a in args.algo for kind in ("curve.csv", "model.zip", "eval.json")]
+        check_output_files_in(out, names + ["curves.png"], "--out")
+    except ValueError as e:
+        p.error(str(e))
     torch.set_num_threads(args.threads)
     for algo in args.algo:
         result = train(algo, args.env, steps=args.steps, minutes=args.minutes, seed=args.seed, out=out,

@@ -54,6 +54,8 @@ MAX_K = 16384
 SLOW_LINKS = 512
 #: Output options and whether each names a folder (True) or a file (False), checked before any work.
 OUTPUT_OPTIONS = {"out": ("--out", True), "png": ("--png", False), "gif": ("--gif", False)}
+#: render's files when neither --png nor --gif is given (with either, only the ones given are written).
+RENDER_DEFAULTS = {"--png": "grip.png", "--gif": "pick.gif"}
 
 
 #: What argparse should read as a negative number, not an option: ``-5``, ``-0.5``, ``-.5``, ``-1e6``,
@@ -155,11 +157,17 @@ def build_parser() -> argparse.ArgumentParser:
 
     _sweep.add_arguments(p)
 
-    p = sub.add_parser("render", help="PNG of a settled grip and GIF of a scripted pick (pick environment)")
+    p = sub.add_parser("render", help="PNG of a settled grip and GIF of a scripted pick (pick environment)",
+                       description="Writes only the files asked for: --png alone writes only the PNG, --gif alone "
+                       "only the GIF; with neither, both, as grip.png and pick.gif in the current folder. Each "
+                       "must be a new or regular file (a symbolic link is followed, the link kept); a folder, "
+                       "FIFO, device or socket, or one file for both, is refused before any rendering (exit 2).")
     p.add_argument("--grip", default="I", help="I (pinch) or III (cradle) [default I]")
     p.add_argument("--seed", type=int, default=0, help="episode seed [default 0]")
-    p.add_argument("--png", default="grip.png", help="PNG of the settled grip [default grip.png]")
-    p.add_argument("--gif", default="pick.gif", help="GIF of the scripted pick [default pick.gif]")
+    p.add_argument("--png", default=None, help="write the PNG of the settled grip here "
+                   "[default: grip.png, only when --gif is not given either]")
+    p.add_argument("--gif", default=None, help="write the GIF of the scripted pick here "
+                   "[default: pick.gif, only when --png is not given either]")
 
     p = sub.add_parser("figures", help="write the paper's figures (Figs. 6-16) as PNG files")
     from simgrip import figures as _figures  # light: matplotlib/mujoco are imported inside its functions
@@ -282,9 +290,19 @@ def _cmd_render(args):
     choose_backend()  # headless: EGL, then OSMesa (RenderingUnavailable, exit 1, says what it tried)
 
     seed = _seed(args.seed)
-    render_grip_png(args.png, grip=args.grip, seed=seed)
-    render_pick_gif(args.gif, grip=args.grip, seed=seed)
-    return [str(args.png), str(args.gif)]
+    outputs = _render_outputs(args)  # only what was asked for (both defaults when nothing was)
+    if "--png" in outputs:
+        render_grip_png(outputs["--png"], grip=args.grip, seed=seed)
+    if "--gif" in outputs:
+        render_pick_gif(outputs["--gif"], grip=args.grip, seed=seed)
+    return [str(path) for path in outputs.values()]
+
+
+def _render_outputs(args) -> dict[str, str]:
+    """render's files as ``{option: path}``: those given, or :data:`RENDER_DEFAULTS` when neither is."""
+    given = {option: getattr(args, option[2:]) for option in RENDER_DEFAULTS}
+    given = {option: path for option, path in given.items() if path is not None}
+    return given or dict(RENDER_DEFAULTS)
 
 
 def _cmd_bench(args) -> dict:
@@ -357,20 +375,27 @@ def _check_outputs(args) -> list[Path]:
     """Check every output path of the command before any work (nothing is created); returns the folders.
 
     The one check of ``--out`` (bench, stress, figures, sweep, ...) and of
-    render's ``--png``/``--gif``: ``ValueError`` naming the option when a path
-    is an existing file/folder of the wrong kind or cannot be written.
+    render's ``--png``/``--gif`` (the files it will write, defaults included),
+    under :mod:`simgrip.io`'s output-path policy: ``ValueError`` naming the
+    option when a path is of the wrong kind (a file where a folder belongs; a
+    folder, FIFO, device or socket where a file belongs), cannot be written, or
+    when two outputs are one file.
     """
-    from simgrip.io import check_output_dir, check_output_file
+    from simgrip.io import check_distinct_outputs, check_output_dir, check_output_file
 
     folders = []
+    files = _render_outputs(args) if args.command == "render" else {}
     for attr, (option, is_dir) in OUTPUT_OPTIONS.items():
         value = getattr(args, attr, None)
-        if value is None:
+        if value is None or option in files:
             continue
         if is_dir:
             folders.append(check_output_dir(value, option, create=False))
         else:
-            folders.append(check_output_file(value, option, create=False).parent)
+            files[option] = value
+    for option, value in files.items():
+        folders.append(check_output_file(value, option, create=False).parent)
+    check_distinct_outputs(files)
     return folders
 
 

@@ -66,7 +66,7 @@ def make_figures(out_dir, *, which=None, jobs: int | None = None, progress: bool
     """
     from simgrip.chain import check_links
     from simgrip.parallel.runner import RunnerOptions, run_tasks
-    from simgrip.io import check_output_dir
+    from simgrip.io import check_output_dir, check_output_files_in
 
     if which is None:
         names = list(FIGURES)
@@ -91,6 +91,7 @@ def make_figures(out_dir, *, which=None, jobs: int | None = None, progress: bool
                 raise
             names = [k for k in names if k not in RENDERED_FIGURES]  # "all" on a machine without OpenGL
             print(f"simgrip figures: skipping the renders {', '.join(RENDERED_FIGURES)} ({exc})", file=sys.stderr)
+    check_output_files_in(out, [f"{k}.png" for k in names], "out_dir")  # a folder/FIFO at figNN.png: refused now
     order = sorted(names, key=lambda k: -COST.get(k, 1))
     paths = run_tasks(_render, [(k, str(out), bool(simulate), links) for k in order],
                       options=options, desc="figures", batch_size=1)

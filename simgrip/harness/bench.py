@@ -43,7 +43,7 @@ import numpy as np
 from simgrip.harness.methods import BVP_TOLS, STANDARD_CASES, bench_task
 from simgrip.harness.skips import SKIPS, skip_task, sweep_task, warm_start_row
 from simgrip.harness.tables import GRIP_ORDER, ratios, skips_md, summary_md
-from simgrip.io import atomic_write, check_output_dir, write_json
+from simgrip.io import atomic_write, check_output_dir, check_output_files_in, write_json
 from simgrip.params import STANDARD, DimensionlessParams
 
 __all__ = [
@@ -175,6 +175,7 @@ def run_bench(
     _check_positive("repeats", repeats)
     options = RunnerOptions(jobs=jobs, progress=progress) if options is None else options
     out = check_output_dir(out_dir, option="out_dir")
+    check_output_files_in(out, OUTPUT_FILES, "out_dir")  # before the minutes of work, not at the end
     t_start = time.perf_counter()
     ns = N_QUICK if quick else N_FULL
     reps = int(repeats or (1 if quick else 3))
@@ -216,6 +217,11 @@ def run_bench(
     result.files = {**_write(out, result), **{name: out / name for name in ("settle_targets.json", "settle_targets.md",
                                                                             "gripper.json", "gripper.md")}}
     return result
+
+
+#: The files run_bench writes into its folder (_write's, then write_settle_targets' and write_gripper_bench's).
+OUTPUT_FILES = ("bench.csv", "bench.json", "sweep.json", "skips.md", "summary.md", "pareto.png",
+                "settle_targets.json", "settle_targets.md", "gripper.json", "gripper.md")
 
 
 def _loadavg():

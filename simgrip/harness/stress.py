@@ -68,7 +68,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from simgrip.harness.stress_cases import BOX, GRIPS, make_cases, stress_profile
-from simgrip.io import check_output_dir, write_json
+from simgrip.io import check_output_dir, check_output_files_in, write_json
 
 __all__ = [
     "StressResult",
@@ -361,6 +361,7 @@ def run_stress(
         raise ValueError(f"gripper_cases must be an integer >= 0, got {gripper_cases!r}")
     g_todo = sg.make_gripper_cases(n_gripper, seed, max_links=min(32, max_links))
     out = check_output_dir(out_dir, option="out_dir")
+    check_output_files_in(out, ("stress.json", "stability_map.png"), "out_dir")  # refused before the cases run
     t0 = time.perf_counter()
     heavy_first = sorted(todo, key=lambda c: -c["n"])  # large n first: the last batches finish together
     tasks = [(c, timeout_s, max_steps) for c in g_todo + heavy_first]  # one run: the K-finger cases first

@@ -153,9 +153,10 @@ def cli_profile(args, grid, options: RunnerOptions):
     """``simgrip sweep ... --profile``: print the table, write ``OUT/profile.json``."""
     from pathlib import Path
 
-    from simgrip.io import check_output_dir, write_json
+    from simgrip.io import check_output_dir, check_output_files_in, write_json
 
     out = check_output_dir(args.out, "--out")
+    check_output_files_in(out, ("profile.json",), "--out")  # before the timing runs
     workers = options.jobs if options.jobs is not None and options.jobs > 1 else 2
     prof = profile_sweep(grid, workers=workers, batch_size=args.batch_size, progress=options.progress,
                          remote=options if options.remote else None)
