@@ -331,7 +331,9 @@ def check_stress(cases: int, gripper_cases: int = 0, *, workers: int | None = 1,
     seconds = _f(total) * STRESS_SECONDS_PER_CASE / w
     if total > limit:
         name = "gripper_cases" if gripper_cases > cases else "cases"
-        raise ValueError(f"{name}: {count_text(total)} cases would need ~{human_bytes(_f(total) * STRESS_CASE_BYTES)}"
+        what = f"{count_text(int(cases))} cases" + (f" + {count_text(int(gripper_cases))} K-finger cases"
+                                                    if gripper_cases else "")
+        raise ValueError(f"{name}: {what} would need ~{human_bytes(_f(total) * STRESS_CASE_BYTES)}"
                          f" of memory and ~{human_seconds(seconds)} on {w} worker{'s' * (w != 1)}; at most {limit} "
                          f"cases here (bounds: {MAX_CASES} cases, {MEMORY_FRACTION:.0%} of "
                          f"{human_bytes(here.memory)} of memory, {MAX_WALL_DAYS:g} days)")

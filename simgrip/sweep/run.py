@@ -188,8 +188,8 @@ def run_sweep(grid: SweepGrid, *, out=None, options: RunnerOptions = RunnerOptio
     if not isinstance(grid, SweepGrid):
         raise ValueError(f"grid must be a SweepGrid, got {type(grid).__name__}")
     t0 = time.perf_counter()
-    options = _cap(options, grid.size, batch_size, None)  # refuses a --jobs above the bound, before anything
-    check_sweep({a: len(v) for a, v in grid.axes.items()}, grid.links, grid.method, workers=_workers(options),
+    planned = _cap(options, grid.size, batch_size, None)  # refuses a --jobs above the bound, before anything
+    check_sweep({a: len(v) for a, v in grid.axes.items()}, grid.links, grid.method, workers=_workers(planned),
                 to_disk=out is not None, here=machine(out))
     if out is not None and write_map:
         check_map(grid)
