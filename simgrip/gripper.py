@@ -87,7 +87,8 @@ def gripper_record(state, params: DimensionlessParams, profile=None) -> dict:
 
     Top level: the planar ``simulate`` record's fields for finger 0
     (``tip``, ``normal_force``, ``friction_force``, ``required_mu``, ``N1``,
-    ``N2``; zeros when dropped), ``held`` and ``feasible`` for the workpiece,
+    ``N2``; zeros when dropped), ``held`` and ``feasible`` for the workpiece
+    (``feasible``: held and, Grip III, condition (23) met: ``state.tip_clear``),
     the settle's ``steps``, ``residual``, ``penetration``, ``wall_time_s``,
     ``method`` (which settle ran: ``"symmetric"``, the symmetry skip, or
     ``"dynamics"``) and ``contact`` (where the friction acts: ``"point"`` or
@@ -109,7 +110,7 @@ def gripper_record(state, params: DimensionlessParams, profile=None) -> dict:
         "normal_force": float(first.normal) if first else 0.0,
         "friction_force": float(first.friction) if first else 0.0,
         "required_mu": float(first.required_mu) if first else 0.0,
-        "feasible": bool(state.held),
+        "feasible": bool(state.held and getattr(state, "tip_clear", True)),
         "min_eigenvalue": None if profile is None else _stability(state, params, as_profile(
             profile[0] if isinstance(profile, (list, tuple)) else profile)),
         "N1": float(first.N1) if first else 0.0,

@@ -108,7 +108,12 @@ def settle_gripper(scene: GripperScene, *, tol: float | None = None, max_steps: 
     (one finger's planar Newton settle replicated to K,
     :mod:`simgrip.settle.gripper_symmetry`), the over-damped dynamics with
     MuJoCo's surface contact (see the module docstring) where it is not.  The
-    state's ``method`` says which ran.
+    state's ``method`` says which ran.  Where the skip fails (:class:`SettleError`,
+    or an unconverged state) under ``"auto"``, the dynamics
+    settles the scene instead and the state's ``warnings`` say so (the default
+    must not fail where another method answers; the Grip III cradle: one
+    finger's planar dynamics, replicated); an explicit ``"symmetric"`` or
+    ``contact="point"`` (the skip's only) raise as before.
 
     Parameters
     ----------
@@ -146,10 +151,50 @@ def settle_gripper(scene: GripperScene, *, tol: float | None = None, max_steps: 
         raise ValueError(f"scene must be a simgrip.sim.gripper.GripperScene, got {type(scene).__name__}")
     from simgrip.settle.gripper_symmetry import symmetric_or_none
 
-    state = symmetric_or_none(scene, method, contact=contact, tol=tol, max_steps=max_steps,
-                              allow_unconverged=allow_unconverged)
-    if state is not None:
-        return state
+    t0 = time.perf_counter()
+    try:
+        skip = symmetric_or_none(scene, method, contact=contact, tol=tol, max_steps=max_steps,
+                                 allow_unconverged=allow_unconverged)
+    except SettleError as exc:
+        if not _may_fall_back(scene, method, contact):
+            raise
+        skip, why = None, str(exc)
+    else:
+        if skip is None:
+            return _settle_dynamics(scene, tol, max_steps, allow_unconverged)
+        if skip.converged or not _may_fall_back(scene, method, contact):
+            return skip
+        why = f"symmetric settle did not converge (residual {skip.residual:.3g}, tolerance {skip.tolerance:.3g})"
+    # method "auto": the default must not fail where another method answers; the dynamics settles the same
+    # scene (MuJoCo's surface contact), and the state says why it, not the skip, answered
+    try:
+        if scene.grip == "III":  # the cradle: one finger's planar dynamics, replicated
+            from simgrip.settle.gripper_symmetry import settle_cradle_dynamics
+
+            state = settle_cradle_dynamics(scene, tol=tol, max_steps=max_steps, allow_unconverged=allow_unconverged)
+        else:
+            state = _settle_dynamics(scene, tol, max_steps, allow_unconverged)
+    except SettleError as exc:
+        raise SettleError(f"{why}; the fallback to the dynamics failed too: {exc}") from exc
+    if skip is not None and not state.converged:
+        return skip  # allow_unconverged: neither converged; the skip's state (the default's) is returned
+    which = "one finger's planar dynamics, replicated" if scene.grip == "III" else "the over-damped dynamics"
+    state.warnings.insert(0, f"the symmetry skip failed ({why}): settled by {which} instead "
+                             f"(method 'dynamics', MuJoCo's surface contact)")
+    state.wall_time_s = time.perf_counter() - t0
+    return state
+
+
+def _may_fall_back(scene: GripperScene, method: str | None, contact: str | None) -> bool:
+    """Whether a failed symmetry skip falls back to the dynamics: ``method`` auto (None) and a contact the dynamics
+    has (None or ``"surface"``; the point contact is the skip's only).  The cradle (Grip III) falls back to one
+    finger's planar dynamics, replicated (:func:`~simgrip.settle.gripper_symmetry.settle_cradle_dynamics`)."""
+    return method in (None, "auto") and contact in (None, "surface")
+
+
+def _settle_dynamics(scene: GripperScene, tol: float | None, max_steps: int | None,
+                     allow_unconverged: bool) -> GripperState:
+    """The over-damped dynamics of all K fingers and the workpiece (see the module docstring)."""
     if tol is None:
         tol = gripper_tolerance(scene)
     if max_steps is None:

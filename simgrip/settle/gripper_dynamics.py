@@ -119,11 +119,14 @@ class GripperDynamics:
         return float(np.max(v))
 
     def hold(self, on: bool) -> None:
-        """Hold the workpiece where it is (pose reset after each step, weight cancelled) or let go."""
+        """Hold the workpiece where it is (pose reset after each step, weight cancelled) or let go (its true weight,
+    ``K M``, on the fingers)."""
         sc, d = self.scene, self.d
         d.qfrc_applied[:] = 0.0
+        # the model's workpiece may be heavier than its weight (an inertia floor, GripperScene.weight_relief)
+        d.qfrc_applied[sc.workpiece_dof[2]] = sc.weight_relief
         if on:
-            d.qfrc_applied[sc.workpiece_dof[2]] = sc.workpiece_mass * sc.physical.g
+            d.qfrc_applied[sc.workpiece_dof[2]] += sc.workpiece_mass * sc.physical.g
         self.held_q = np.array(d.qpos[sc.workpiece_qpos]) if on else None
 
     def step(self, k: int = 1) -> None:

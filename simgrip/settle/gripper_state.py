@@ -95,6 +95,10 @@ class GripperState:
     qpos: np.ndarray = field(repr=False)
     #: Every finger's tip on its grip's side of the palm (:func:`simgrip.validity.check_grip_shape`).
     grip_matched: bool = True
+    #: Grip III: the rod beyond the contact stays below the workpiece (condition (23),
+    #: :func:`simgrip.validity.check_condition_23`, read from the planar state the cradle replicates); a held
+    #: state with ``tip_clear`` False is not feasible (:func:`simgrip.gripper.gripper_record`), as the planar one.
+    tip_clear: bool = True
     #: Conditions the state violates that the settle does not enforce (e.g. the other grip's shape).
     warnings: list = field(default_factory=list)
     #: The scene's workpiece offset (over l, scene frame) and turn about its axis [rad] (:func:`build_gripper`).

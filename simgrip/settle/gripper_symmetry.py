@@ -60,7 +60,8 @@ from simgrip.sim.gripper import GripperScene
 from simgrip.sim.symmetry import EQUAL_RTOL, Symmetry, cradle_edges, symmetry
 from simgrip.validity import check_grip_shape
 
-__all__ = ["GRIPPER_METHODS", "Symmetry", "planar_scene", "settle_symmetric", "symmetric_or_none", "symmetry"]
+__all__ = ["GRIPPER_METHODS", "Symmetry", "planar_scene", "settle_cradle_dynamics", "settle_symmetric",
+           "symmetric_or_none", "symmetry"]
 
 #: ``settle_gripper(method=...)``: the over-damped dynamics, the symmetry skip, or the skip where exact.
 GRIPPER_METHODS = ("dynamics", "symmetric", "auto")
@@ -206,8 +207,12 @@ def settle_symmetric(scene: GripperScene, *, tol: float | None = None, max_steps
 
 
 def _settle_exact(scene: GripperScene, t0: float, *, tol=None, max_steps=None, contact: str = "point",
-                  allow_unconverged: bool = False, planar=None):
-    """:func:`settle_symmetric` of a scene already found exactly symmetric (``t0``: when the settle began)."""
+                  allow_unconverged: bool = False, planar=None, planar_method: str = "newton"):
+    """:func:`settle_symmetric` of a scene already found exactly symmetric (``t0``: when the settle began).
+
+    ``planar_method``: the planar settle's method; ``"dynamics"`` (MuJoCo's surface contact) is the K = 4
+    cradle's fallback where its Newton settle fails (:func:`settle_cradle_dynamics`).
+    """
     from simgrip.settle import settle
 
     if contact not in ("point", "surface"):
@@ -216,14 +221,24 @@ def _settle_exact(scene: GripperScene, t0: float, *, tol=None, max_steps=None, c
         raise ValueError("contact: 'surface' puts the vertical face's couple on the tip; the sphere's skip is "
                          "the point contact only")
     kw = {k: v for k, v in (("tol", tol), ("max_steps", max_steps)) if v is not None}
-    pst = settle(_check_planar(scene, planar), contact=contact, allow_unconverged=allow_unconverged, **kw)
+    pst = settle(_check_planar(scene, planar), contact=contact, allow_unconverged=allow_unconverged,
+                 method=planar_method, **kw)
     tolerance = scene.fingers * float(pst.tolerance)
-    held = bool(pst.held)
+    # The planar settle reports a contact equilibrium in the other grip's shape (a finger curled away from the
+    # workpiece that still presses on it from the other side of the palm) as not held, with a "wrong grip"
+    # warning (check_grip_shape); its finger still carries the workpiece.  Replicated unloaded, that shape would
+    # not balance (the residual is the workpiece's weight: "did not converge").  So the mechanical state is
+    # replicated held, and the K-finger grip-shape check reports it not held with its own warning, as the
+    # K-finger dynamics does.
+    wrong_grip = not pst.grip_matched and pst.contact is not None
+    held = bool(pst.held) or wrong_grip
+    if wrong_grip:
+        pst = replace(pst, warnings=[w for w in pst.warnings if not w.startswith("wrong grip:")])
     converged = bool(pst.converged)
     steps = int(pst.steps)
     if held and scene.workpiece == "sphere":
         held = _sphere_holds(scene, pst)
-    if not held and scene.workpiece == "sphere" and pst.held:
+    if not held and scene.workpiece == "sphere" and (pst.held or wrong_grip):
         # the sphere's cone fails: it drops, and the fingers settle alone
         alone = settle(planar_scene(scene, "free"), allow_unconverged=allow_unconverged, **kw)
         converged, steps = converged and bool(alone.converged), steps + int(alone.steps)
@@ -231,7 +246,27 @@ def _settle_exact(scene: GripperScene, t0: float, *, tol=None, max_steps=None, c
         pst = alone
     state = _replicate(scene, pst, held, converged, steps, tolerance, allow_unconverged, t0)
     state.contact = contact
+    if planar_method == "dynamics":
+        state.method = "dynamics"
     return state
+
+
+def settle_cradle_dynamics(scene: GripperScene, *, tol=None, max_steps=None, allow_unconverged: bool = False):
+    """The K = 4 cradle (Grip III, exactly symmetric) settled by one finger's planar dynamics, replicated.
+
+    The cradle has no K-finger dynamics; each of its fingers is exactly the planar Grip III problem, so the
+    planar over-damped dynamics (``settle(method="dynamics")``, MuJoCo's surface contact) of that problem,
+    replicated as the skip replicates its Newton state, is the cradle's dynamic settle.  ``method`` of the
+    state is ``"dynamics"``, ``contact`` ``"surface"``; ``tol``/``max_steps`` are the planar dynamics'.
+    """
+    t0 = time.perf_counter()
+    if scene.grip != "III":
+        raise ValueError(f"scene: settle_cradle_dynamics settles the Grip III cradle, got Grip {scene.grip}")
+    sym = symmetry(scene)
+    if not sym.exact:
+        raise ValueError(f"scene is not exactly symmetric ({sym.reason})")
+    return _settle_exact(scene, t0, tol=tol, max_steps=max_steps, contact="surface",
+                         allow_unconverged=allow_unconverged, planar_method="dynamics")
 
 
 def _check_planar(scene: GripperScene, planar):
@@ -336,6 +371,7 @@ def _replicate(scene: GripperScene, pst, held: bool, converged: bool, steps: int
             forces.append(F)
             torques.append(tau)
             points.append(p)
+    d.qfrc_applied[scene.workpiece_dof[2]] += scene.weight_relief  # the model's gravity less the true weight
     mujoco.mj_passive(m, d)
     mujoco.mj_rne(m, d, 0, d.qfrc_bias)
     fscale = np.full(m.nv, scene.moment_scale)
@@ -385,7 +421,7 @@ def _replicate(scene: GripperScene, pst, held: bool, converged: bool, steps: int
         total_f -= forces[k]
         total_m += np.cross(points[k] - centre, -forces[k]) - torques[k]
     if held:
-        total_f += float(m.body_mass[wb]) * np.asarray(m.opt.gravity)
+        total_f += scene.workpiece_mass * np.asarray(m.opt.gravity)  # the true weight (not the inertia floor)
     state = GripperState(
         grip=scene.grip, workpiece=scene.workpiece, fingers=K, links=scene.n,
         joint_angles=np.tile(q_finger, (K, 1)), link_angles=np.tile(phi, (K, 1)), tip=np.tile(tip, (K, 1)),
@@ -396,6 +432,7 @@ def _replicate(scene: GripperScene, pst, held: bool, converged: bool, steps: int
         workpiece_position=centre / L, workpiece_quat=np.array(d.xquat[wb]), steps=steps, timestep=0.0,
         wall_time_s=time.perf_counter() - t0, qpos=np.array(d.qpos))
     state.method = "symmetric"
+    state.tip_clear = bool(getattr(pst, "tip_clear", True)) if held else True
     state.warnings.extend(pst.warnings)
     if scene.grip == "III" and held:
         _check_cradle(scene, state, phi, float(pst.contact.gamma))

@@ -64,7 +64,8 @@ from simgrip.sim.scene import FingerScene, check_params, check_positive, root_sp
 from simgrip.sim.workpiece import BOX_DEPTH, BOX_HEIGHT, workpiece_inertia
 
 __all__ = ["GRIPPER_GRIPS", "WORKPIECES", "GripperScene", "build_gripper", "check_gripper", "finger_azimuths",
-           "compile_gripper", "orient_fingers", "set_finger_angles", "uniform_profiles", "workpiece_inertia"]
+           "compile_gripper", "orient_fingers", "set_finger_angles", "uniform_profiles", "workpiece_body_mass",
+           "workpiece_inertia"]
 
 #: Workpiece shapes of a K-finger gripper.
 WORKPIECES = ("box", "cylinder", "sphere")
@@ -74,6 +75,10 @@ GRIPPER_GRIPS = ("I", "II", "III")
 DEFAULT_R_TIP = 2e-3
 #: Default link capsule radius over ``l``.
 DEFAULT_R_LINK = 2e-3
+#: Least inertial mass of the workpiece per finger over ``rho l`` (:func:`workpiece_body_mass`; its weight stays
+#: ``K M``).  Set by the K-finger dynamics: at 1e-4 a weightless workpiece was still dropped (the tips sank into
+#: it), from 1e-3 it is held at D = 1e-2, 1 and 1e4; 1e-2 keeps a decade of margin.
+MIN_WORKPIECE_MASS = 1e-2
 
 _WORKPIECE_GEOM = "workpiece_geom"
 
@@ -169,8 +174,17 @@ class GripperScene(FingerScene):
 
     @property
     def workpiece_mass(self) -> float:
-        """Mass of the workpiece [kg]: ``K m``."""
+        """Mass of the workpiece [kg]: ``K m`` (its weight; the model's inertial mass may be larger)."""
         return self.physical.m * self.fingers
+
+    @property
+    def weight_relief(self) -> float:
+        """Upward force [N] that makes the model's gravity on the workpiece its true weight ``K m g``.
+
+        The model's workpiece has the inertial mass :func:`workpiece_body_mass` (floored for light
+        workpieces); the settles apply this force to its vertical dof, so only ``K m g`` is carried.
+        """
+        return (float(self.model.body_mass[self.workpiece_body]) - self.workpiece_mass) * self.physical.g
 
     def frame(self, k: int) -> np.ndarray:
         """Finger ``k``'s frame as rows ``(E1, E3, E2)`` in world coordinates.
@@ -326,7 +340,7 @@ def build_gripper(
     z0 = float(link_positions(np.cumsum(q0[0]), springs.ds)[-1, 1]) * L
     cy, sy = math.cos(yaw), math.sin(yaw)
     centre = [(cy * off[0] - sy * off[1]) * L, (sy * off[0] + cy * off[1]) * L, z0]
-    _add_workpiece(spec, shape, size, phys.m * K, centre, yaw + psi)
+    _add_workpiece(spec, shape, size, workpiece_body_mass(phys, K), centre, yaw + psi)
     for k in range(K):
         add_pair(spec, f"pair_f{k}_tip", f"f{k}_tip", _WORKPIECE_GEOM, phys.mu_s)
 
@@ -431,6 +445,19 @@ def _workpiece_size(shape: str, K: int, r: float, L: float) -> np.ndarray:
     return np.array([r, 0.0, 0.0]) * L
 
 
+def workpiece_body_mass(phys, K: int) -> float:
+    """The workpiece body's inertial mass [kg]: ``K m``, at least ``K`` :data:`MIN_WORKPIECE_MASS` ``rho l``.
+
+    Only the inertia is floored, not the weight: the settles apply the difference of the model's gravity
+    and the true weight ``K m g`` as an upward force on the workpiece (:attr:`GripperScene.weight_relief`),
+    so every static balance is the true ``M``'s (``M = 0`` included).  Why a floor: MuJoCo refuses a free
+    body without mass, and its soft contact rests at a depth proportional to the contact's mobility
+    (:func:`simgrip.settle.gripper_dynamics.contact_rest_depth`), which a nearly massless workpiece makes
+    unbounded: the tips sank through it and the dynamics dropped every workpiece with ``M < ~1e-3``.
+    """
+    return K * max(phys.m, MIN_WORKPIECE_MASS * phys.rho * phys.length)
+
+
 def _add_workpiece(spec, shape: str, size, mass: float, centre, yaw: float) -> None:
     """The workpiece body on a free joint, its geom and the solid's inertia, at ``centre`` [m] turned by ``yaw``."""
     body = spec.worldbody.add_body(name="workpiece_body", pos=[float(v) for v in centre], quat=_yaw_quat(yaw))
@@ -445,7 +472,9 @@ def _add_workpiece(spec, shape: str, size, mass: float, centre, yaw: float) -> N
         kind, gsize = mujoco.mjtGeom.mjGEOM_CYLINDER, [size[0], size[1], 0.0]
     else:
         kind, gsize = mujoco.mjtGeom.mjGEOM_SPHERE, [size[0], 0.0, 0.0]
-    body.inertia = workpiece_inertia(shape, size, mass)
+    # MuJoCo refuses inertias below mjMINVAL; only a weightless workpiece (the mass floor) in small units gets
+    # there, and a weightless body's rotational inertia does not enter the statics
+    body.inertia = [max(v, 10.0 * mujoco.mjMINVAL) for v in workpiece_inertia(shape, size, mass)]
     body.add_geom(cls, name=_WORKPIECE_GEOM, type=kind, size=gsize)
 
 

@@ -93,7 +93,7 @@ def build_cradle(params: PhysicalParams | DimensionlessParams, profile, n_links:
     ``l``.  ValueError naming the bad argument (``b`` when the box's corner
     would not sit at ``x > 0`` on the start shape).
     """
-    from simgrip.sim.gripper import compile_gripper, finger_azimuths, orient_fingers
+    from simgrip.sim.gripper import compile_gripper, finger_azimuths, orient_fingers, workpiece_body_mass
     from simgrip.sim.workpiece import workpiece_inertia
 
     if isinstance(fingers, bool) or fingers not in CRADLE_FINGERS:
@@ -135,9 +135,10 @@ def build_cradle(params: PhysicalParams | DimensionlessParams, profile, n_links:
                                    quat=[math.cos(0.5 * yaw), 0.0, 0.0, math.sin(0.5 * yaw)])
     body.add_freejoint(name="workpiece_free")
     body.explicitinertial = True
-    body.mass = phys.m * K
+    mass = workpiece_body_mass(phys, K)  # M = 0: MuJoCo needs a massive free body (the floor)
+    body.mass = mass
     body.ipos = [0.0, 0.0, 0.0]
-    body.inertia = workpiece_inertia("box", size, phys.m * K)
+    body.inertia = [max(v, 10.0 * mujoco.mjMINVAL) for v in workpiece_inertia("box", size, mass)]
     body.add_geom(spec.find_default("workpiece"), name=_WORKPIECE_GEOM, type=mujoco.mjtGeom.mjGEOM_BOX,
                   size=list(size))
     corner_cls = spec.find_default("corner")
