@@ -208,9 +208,14 @@ class ChainNewton(Newton):
                 self._update_kc(cm.join(q, ph, ww))
                 self.kc_dl = self.kc * L / W
 
+        def stiffen(NN):  # a contact the forces would press deeper than PEN_STIFFEN: stiffer (Newton.stiffen)
+            if contacts and self.stiffen(NN * W, grow_only=True):
+                self.kc_dl = self.kc * L / W
+
         read_kc(phi, w)
         if (N.size and not np.all(N)) or (lam.size and not np.all(lam)):
             N, lam = self._estimate_multipliers(phi, w, N, lam, stick_act)
+        stiffen(N)
 
         def state_q(ph, ww):
             return cm.join(q, ph, ww)
@@ -277,6 +282,7 @@ class ChainNewton(Newton):
                 return finish(False, "stalled", state_q(phi, w), N, lam)
             phi, w, N, lam = ph, ww, Nn, ln
             read_kc(phi, w)
+            stiffen(N)
             if contacts:  # a pair that starts touching joins the set at once
                 dn = cm.pair_distances(phi, cm.nodes(phi), w)
                 newp = [p for p in range(len(self.pairs)) if p not in self.normal_active and dn[p] < 0.0]

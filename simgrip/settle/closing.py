@@ -243,7 +243,7 @@ def close_grip(scene: Scene, run: Newton, tol: float, max_steps: int) -> bool:
     s, h = t, (1.0 - t) / CLOSE_STAGES
     while s < 1.0:
         s_next = min(1.0, s + h)
-        q_prev, N_prev, act_prev = scene.data.qpos.copy(), run.N.copy(), list(run.normal_active)
+        q_prev, contact_prev = scene.data.qpos.copy(), run.contact_snapshot()
         set_curvature(scene, target.scaled(s_next))
         conv, why = run.solve(loose, min(max_steps, CLOSE_STAGE_ITERS), frozen=wdofs)
         if conv:
@@ -252,7 +252,7 @@ def close_grip(scene: Scene, run: Newton, tol: float, max_steps: int) -> bool:
         if h < (1.0 - t) / CLOSE_STAGES / 8:
             raise SettleError(f"closing on the held workpiece did not converge ({why}, curvature factor {s_next:g})")
         scene.data.qpos[:] = q_prev
-        run.N, run.normal_active = N_prev, act_prev
+        run.restore_contact(contact_prev)
         h *= 0.5
     set_curvature(scene, target)
     return True
@@ -312,7 +312,7 @@ def _close_predicted(scene: Scene, run: Newton, target, t: float, z0: float, tol
                 step is not None and np.max(np.abs(new_step - step)) > FOLD_KINK * np.max(np.abs(step))):
             return False
         phi, step = ch.link_angles, new_step
-    q_prev, N_prev, act_prev, kc_prev = d.qpos.copy(), run.N.copy(), list(run.normal_active), run.kc.copy()
+    q_prev, contact_prev = d.qpos.copy(), run.contact_snapshot()  # stiffness and solref too (Newton.stiffen)
     profile = scene.profile
     d.qpos[scene.joint_qpos] = ch.joint_angles[None, :]
     mujoco.mj_forward(m, d)
@@ -332,7 +332,7 @@ def _close_predicted(scene: Scene, run: Newton, target, t: float, z0: float, tol
     if ok:
         return True
     d.qpos[:] = q_prev
-    run.N, run.normal_active, run.kc[:] = N_prev, act_prev, kc_prev
+    run.restore_contact(contact_prev)
     set_curvature(scene, profile)
     mujoco.mj_forward(m, d)
     return False

@@ -20,6 +20,13 @@ decides hold or slip) and MuJoCo's residual as the judge.  The inner Newton
 iteration, exact and ``O(n)``, is :class:`~simgrip.settle.chain_newton.ChainNewton`'s.
 Contact-law rows are accepted at their round-off floor (:data:`FLOOR_ULPS` ulps
 of ``K_c l``, more for a long, much-turned chain: :meth:`Newton.floor_ulps`).
+
+Contact depth: :func:`~simgrip.settle.statics.configure_statics` sizes ``K_c`` for a
+force of ``rho g l`` (``p ~ 1e-6 l``), but a stiff finger pinches far harder (Grip I at
+``D = 1e4``: ``N ~ 7e4 rho g l``, ``p = N / K_c ~ 4e-3 l``, deeper than the tip's radius:
+the tip's centre passes the face and the solve fails).  A pair whose normal force would
+press it deeper than :data:`PEN_STIFFEN` is made stiffer by a power of :data:`STIFFEN_STEP`
+(:meth:`Newton.stiffen`: MuJoCo's ``solref`` time constant shrinks) and solved again.
 """
 
 from __future__ import annotations
@@ -35,7 +42,7 @@ from simgrip.settle.statics import CONTACT_STIFFNESS, Statics, Stick, centreline
 from simgrip.sim.contacts import normal_force, pair_contacts
 from simgrip.sim.scene import Scene
 
-__all__ = ["FLOOR_ULPS", "Newton", "PEN_MAX", "SOLVE_ITERS", "read_newton"]
+__all__ = ["FLOOR_ULPS", "Newton", "PEN_MAX", "PEN_STIFFEN", "SOLVE_ITERS", "STIFFEN_STEP", "read_newton"]
 
 #: A Newton step may not push a pair that was not touching deeper than this (over l).
 PEN_MAX = 1e-4
@@ -46,6 +53,16 @@ FLOOR_ULPS = 64.0
 KC_RTOL = 1e-13
 #: Newton iterations allowed to one solve (quadratic convergence: a solve needing more is failing).
 SOLVE_ITERS = 200
+#: A pair pressed deeper than this (over l) is stiffened (:meth:`Newton.stiffen`); pairs of the paper's
+#: standard cases (``p <= 3e-6 l``) keep the configured stiffness and their results.  A stiffened pair
+#: settles between ``PEN_STIFFEN / STIFFEN_STEP`` and ``PEN_STIFFEN`` deep: ``<= 1e-5 l``, 30 times
+#: below the ``n = 32`` chain's tip error (~3e-4 l) that the comparison with the BVP tolerates.
+PEN_STIFFEN = 1e-5
+#: Contact stiffness factors are powers of this (path-independent settled states, :meth:`Newton.stiffen`).
+STIFFEN_STEP = 10.0
+#: A factor falls back a step only when the force fits the lower one with this relative margin (the force
+#: moves by ~``PEN_STIFFEN`` relative between factors: 100 times less).
+STIFFEN_HYSTERESIS = 1e-3
 
 
 # ---------------------------------------------------------------------------
@@ -88,6 +105,12 @@ class Newton:
         self.friction_at = "centreline"
         #: Total Newton iterations allowed (all solves together); None: unlimited.
         self.budget: int | None = None
+        #: Largest factor by which :meth:`stiffen` raised a pair's contact stiffness (1: none); the
+        #: contact floor's cap scales with it (:func:`simgrip.settle.settle`).
+        self.stiffening = 1.0
+        #: Per pair: the factor :meth:`stiffen` applied to its configured stiffness.
+        self.kc_factor = np.ones(m.npair)
+        self._tc0 = None  # the configured solref time constants (read at the first stiffen)
 
     def spent(self) -> bool:
         """The settle's Newton iteration budget is used up."""
@@ -155,6 +178,8 @@ class Newton:
                     self.normal_active.append(p)
                     self.N = np.append(self.N, 0.0)
                     changed = True
+            if not changed and self.stiffen(self.N):
+                changed = True  # the contact pressed deeper than PEN_STIFFEN: solve again, stiffer
             if not changed and self._update_kc(q):
                 changed = True
             if not changed:
@@ -182,6 +207,59 @@ class Newton:
         phi = np.cumsum(np.asarray(sc.data.qpos)[np.asarray(sc.joint_qpos)], axis=-1)
         big = float(np.max(np.abs(phi))) if phi.size else 0.0
         return max(FLOOR_ULPS, sc.n * (1.0 + 0.5 * big))
+
+    def stiffen(self, N, *, grow_only: bool = False) -> bool:
+        """Size every active pair's contact stiffness for its normal force ``N`` [N]; True if any changed.
+
+        A pair's factor over the configured ``K_c`` (:attr:`kc_factor`) is the
+        smallest power of :data:`STIFFEN_STEP` that keeps its depth ``N / K_c``
+        at most :data:`PEN_STIFFEN` (1 where the configured stiffness does).
+        Powers of a fixed step make the settled state a function of the final
+        force alone, not of the path the solve took to it (a stiffness sized
+        for a transient force would leave another depth).  A factor falls back
+        only when the force fits the lower factor with a margin of
+        :data:`STIFFEN_HYSTERESIS` (no cycling at a step's edge, where the
+        force changes by ~``PEN_STIFFEN`` relative with the factor).  ``grow_only``: only raise factors (inside
+        a solve, so that a hard-pressed contact does not pass its face before
+        it converges).  MuJoCo's ``K_c`` at rest goes as the inverse square of
+        ``solref``'s time constant: that is divided by ``sqrt(factor)``;
+        ``kc`` is scaled to match (and read back at the next accepted state).
+        The model's ``pair_solref`` is restored by the settle
+        (:func:`.statics.restore_options`).
+        """
+        m, L = self.scene.model, self.scene.length
+        if self._tc0 is None:
+            self._tc0 = m.pair_solref[:, 0].copy()  # as configure_statics set it
+        changed = False
+        for k, p in enumerate(self.normal_active):
+            if k >= len(N) or not N[k] > 0.0:
+                continue
+            base = float(self.kc[p]) / float(self.kc_factor[p])
+            need = float(N[k]) / (base * PEN_STIFFEN * L)  # factor that brings the depth to PEN_STIFFEN
+            f = 1.0 if need <= 1.0 else STIFFEN_STEP ** math.ceil(math.log(need) / math.log(STIFFEN_STEP) - 1e-12)
+            old = float(self.kc_factor[p])
+            if f == old or (f < old and (grow_only or need > (1.0 - STIFFEN_HYSTERESIS) * f)):
+                continue
+            m.pair_solref[p, 0] = self._tc0[p] / math.sqrt(f)
+            self.kc[p] = base * f
+            self.kc_factor[p] = f
+            changed = True
+        self.stiffening = float(np.max(self.kc_factor)) if self.kc_factor.size else 1.0
+        return changed
+
+    def contact_snapshot(self) -> tuple:
+        """The solve's contact state (set, forces, stiffness and its factors, the model's ``solref``), for
+        :meth:`restore_contact`."""
+        return (list(self.normal_active), self.N.copy(), self.kc.copy(), self.kc_factor.copy(),
+                self.scene.model.pair_solref.copy())
+
+    def restore_contact(self, snap: tuple) -> None:
+        """Put back a :meth:`contact_snapshot`."""
+        act, N, kc, fac, solref = snap
+        self.normal_active, self.N = list(act), N.copy()
+        self.kc[:], self.kc_factor[:] = kc, fac
+        self.scene.model.pair_solref[:] = solref
+        self.stiffening = float(np.max(self.kc_factor)) if self.kc_factor.size else 1.0
 
     def _update_kc(self, q) -> bool:
         """Read MuJoCo's contact stiffness at ``q``; True if it moved enough to matter."""
