@@ -258,9 +258,10 @@ def _settle(
                 # settles like any other, and a bistable rod takes the same branch with both methods
                 start_free(scene)
             converged, why = run.solve(tol, per, frozen=wdofs)
-        if scene.has_workpiece and not held and not run.spent():
+        if scene.has_workpiece and not held and (converged or why == "stalled") and not run.spent():
             # dropped: a release without an equilibrium (Newton stalls as the workpiece falls) is a
-            # drop too; a spent budget is not
+            # drop too; a spent budget or a solve that ran out of iterations is not (issue 16: a Grip I
+            # release at D = 1e4 that hit max_iter was reported dropped, the finger through the box)
             converged, why = finger_alone(scene, run, tol, per)
         if not converged and not allow_unconverged:
             raise SettleError(f"settle did not converge ({why} after {run.iterations} Newton iterations)")
@@ -269,7 +270,8 @@ def _settle(
         # tolerance is raised to its contact round-off floor
         tolerance = max(tol, angle_floor(scene))  # the joint angles' round-off (stiff fine chains)
         if held:
-            tolerance = max(tolerance, min(run.noise_floor(), RESIDUAL_FLOOR_MAX))
+            # (the cap scales with the stiffness the solve chose for a hard-pressed contact: Newton.stiffen)
+            tolerance = max(tolerance, min(run.noise_floor(), RESIDUAL_FLOOR_MAX * run.stiffening))
         state = _finish(scene, state, tolerance, allow_unconverged, "settle", f"{run.iterations} Newton iterations")
     finally:
         restore_options(m, saved)
