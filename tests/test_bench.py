@@ -33,6 +33,9 @@ def test_files_exist_and_parse(bench):
     res, out = bench
     for name in ("bench.csv", "bench.json", "pareto.png", "summary.md", "skips.md", "sweep.json"):
         assert (out / name).is_file() and (out / name).stat().st_size > 0, name
+    from simgrip.harness.bench import OUTPUT_FILES  # the names checked before the work: exactly what is written
+
+    assert sorted(p.name for p in out.iterdir() if p.is_file()) == sorted(OUTPUT_FILES)
     with open(out / "bench.csv", newline="") as fh:
         rows = list(csv.DictReader(fh))
     assert len(rows) == len(res.rows)

@@ -436,3 +436,19 @@ def test_train_sb3_refuses_a_folder_at_a_result_name(tmp_path, capsys):
     err = capsys.readouterr().err
     assert exc.value.code == 2 and "--out" in err and "sac_curve.csv" in err
     assert sorted(p.name for p in tmp_path.iterdir()) == ["sac_curve.csv"]
+
+
+def test_render_png_alone_writes_only_the_png(tmp_path):
+    """The issue's ``render --png X`` also dropped pick.gif into the current folder; now only X (real rendering)."""
+    from simgrip.sim.gl import RenderingUnavailable, choose_backend
+
+    try:
+        choose_backend(dict(os.environ))  # decided on a copy: this process's environment is left as it is
+    except RenderingUnavailable as exc:
+        pytest.skip(str(exc))
+    out = subprocess.run([sys.executable, "-m", "simgrip.cli", "render", "--png", "x.png"], cwd=tmp_path,
+                         capture_output=True, text=True, timeout=240)
+    assert out.returncode == 0, out.stderr[-2000:]
+    assert out.stdout.split() == ["x.png"]
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["x.png"]
+    assert (tmp_path / "x.png").read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
