@@ -57,8 +57,10 @@ from __future__ import annotations
 
 import contextlib
 import ctypes
+import dataclasses
 import math
 import re
+import sys
 import threading
 import time
 import traceback
@@ -330,12 +332,16 @@ def run_stress(
     out_dir : path
         Destination folder (created; checked before any work).
     cases : int
-        Number of cases (grid and random draws, see :mod:`simgrip.harness.stress_cases`).
+        Number of cases (grid and random draws, see :mod:`simgrip.harness.stress_cases`); with
+        ``gripper_cases`` bounded before any case is made (:func:`simgrip.sweep.budget.check_stress`:
+        at most 10^6, half the available memory, 7 days at 0.15 s a case and worker; ValueError naming it).
     seed : int
         Seed of the random draws.
     jobs : int, optional
         Worker processes (default: all cores); 1 runs in this process.
-        The outcome of every case does not depend on ``jobs``.
+        The outcome of every case does not depend on ``jobs``.  Capped at the
+        number of cases, 4 per core and what memory holds (a note on stderr),
+        refused above :data:`simgrip.sweep.budget.MAX_JOBS`.
     progress : bool
         Progress bar.
     timeout_s, max_steps
@@ -352,13 +358,25 @@ def run_stress(
     from simgrip.harness.plots import stability_map
     from simgrip.parallel.runner import RunnerOptions, run_tasks
 
+    from simgrip.sweep.budget import cap_jobs, check_stress
+
     options = RunnerOptions(jobs=jobs, progress=progress) if options is None else options
-    todo = make_cases(cases, seed, grid_cases, max_links)
+    if isinstance(cases, bool) or not isinstance(cases, (int, np.integer)) or cases < 1:
+        raise ValueError(f"cases must be an integer >= 1, got {cases!r}")
     from simgrip.harness import stress_gripper as sg
 
     n_gripper = sg.default_gripper_cases(cases) if gripper_cases is None else gripper_cases
     if isinstance(n_gripper, bool) or not isinstance(n_gripper, (int, np.integer)) or n_gripper < 0:
         raise ValueError(f"gripper_cases must be an integer >= 0, got {gripper_cases!r}")
+    if not options.remote:  # jobs: at most the tasks, 4 per core, what memory holds; refused above MAX_JOBS
+        capped, why = cap_jobs(options.jobs, int(cases) + int(n_gripper))
+        if why:
+            print(f"simgrip stress: {why}", file=sys.stderr, flush=True)
+        if capped != options.jobs:
+            options = dataclasses.replace(options, jobs=capped)
+    workers = None if options.remote else (1 if options.in_process else options.local_workers)
+    check_stress(int(cases), int(n_gripper), workers=workers)  # before any case is made: memory and time bounded
+    todo = make_cases(cases, seed, grid_cases, max_links)
     g_todo = sg.make_gripper_cases(n_gripper, seed, max_links=min(32, max_links))
     out = check_output_dir(out_dir, option="out_dir")
     check_output_files_in(out, ("stress.json", "stability_map.png"), "out_dir")  # refused before the cases run
