@@ -11,6 +11,7 @@ checks, same messages) and set them on the environment.
 from __future__ import annotations
 
 import math
+from collections.abc import Mapping
 
 import mujoco
 import numpy as np
@@ -18,7 +19,7 @@ import numpy as np
 from simgrip.chain import check_links
 
 __all__ = ["check_action", "check_bool", "check_camera", "check_int", "check_number", "check_positive", "check_range",
-           "set_finger_arguments", "set_task_arguments"]
+           "check_reset", "set_finger_arguments", "set_task_arguments"]
 
 
 def check_range(name, value, lo=-math.inf, hi=math.inf, positive=True, strict=False) -> tuple[float, float]:
@@ -75,6 +76,25 @@ def check_bool(name, value) -> bool:
     if not isinstance(value, (bool, np.bool_)):
         raise ValueError(f"{name} must be True or False, got {value!r}")
     return bool(value)
+
+
+def check_reset(seed, options, known) -> tuple[int | None, dict]:
+    """``reset``'s ``(seed, options)`` checked: ``seed`` None or an integer >= 0 (Python's or NumPy's, returned
+    as a Python ``int``: Gymnasium refuses ``np.int64``), ``options`` None or a mapping whose keys are in
+    ``known`` (returned as a new dict).  ValueError naming ``seed`` or ``options`` otherwise."""
+    if seed is not None:
+        if isinstance(seed, (bool, np.bool_)) or not isinstance(seed, (int, np.integer)) or seed < 0:
+            raise ValueError(f"seed must be None or an integer >= 0 (int or NumPy integer), got {seed!r}")
+        seed = int(seed)
+    if options is None:
+        return seed, {}
+    if not isinstance(options, Mapping):
+        raise ValueError(f"options must be None or a dict of reset options ({', '.join(sorted(known))}), "
+                         f"got {type(options).__name__} {options!r}")
+    unknown = set(options) - set(known)
+    if unknown:
+        raise ValueError(f"unknown reset options {sorted(map(str, unknown))}; use {', '.join(sorted(known))}")
+    return seed, dict(options)
 
 
 def check_action(action, shape: tuple) -> list:

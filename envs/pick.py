@@ -27,7 +27,7 @@ import numpy as np
 from gymnasium import spaces
 from gymnasium.error import ResetNeeded
 
-from simgrip.envs.arguments import check_action, check_camera, set_finger_arguments, set_task_arguments
+from simgrip.envs.arguments import check_action, check_camera, check_reset, set_finger_arguments, set_task_arguments
 from simgrip.envs.arguments import check_bool as _bool
 from simgrip.envs.arguments import check_positive as _pos
 from simgrip.envs.arguments import check_range as _range
@@ -465,11 +465,8 @@ class PickEnv(gym.Env):
 
     # --------------------------------------------------------------- API
     def reset(self, *, seed=None, options=None):
+        seed, options = check_reset(seed, options, ("box_width", "box_mass", "friction", "palm_height"))
         super().reset(seed=seed)
-        options = dict(options or {})
-        unknown = set(options) - {"box_width", "box_mass", "friction", "palm_height"}
-        if unknown:
-            raise ValueError(f"unknown reset options {sorted(unknown)}; use box_width, box_mass, friction, palm_height")
         rng = self.np_random
         width = float(rng.uniform(*self.box_width_range))
         mass = float(rng.uniform(*self.box_mass_range))

@@ -20,7 +20,7 @@ import numpy as np
 from gymnasium import spaces
 from gymnasium.error import ResetNeeded
 
-from simgrip.envs.arguments import check_action, check_camera, set_finger_arguments, set_task_arguments
+from simgrip.envs.arguments import check_action, check_camera, check_reset, set_finger_arguments, set_task_arguments
 from simgrip.envs.arguments import check_bool as _bool
 from simgrip.envs.arguments import check_number as _num
 from simgrip.envs.arguments import check_positive as _pos
@@ -358,12 +358,8 @@ class PickMultiEnv(gym.Env):
 
     # --------------------------------------------------------------- API
     def reset(self, *, seed=None, options=None):
+        seed, options = check_reset(seed, options, (*WORKPIECE_OPTIONS, "palm_height"))
         super().reset(seed=seed)
-        options = dict(options or {})
-        known = (*WORKPIECE_OPTIONS, "palm_height")
-        unknown = set(options) - set(known)
-        if unknown:
-            raise ValueError(f"unknown reset options {sorted(unknown)}; use {sorted(known)}")
         rng = self.np_random
         work = draw_workpiece(rng, options, shapes=self.shapes, fingers=self.K, size_range=self.size_range,
                               mass_range=self.mass_range, friction_range=self.friction_range,

@@ -105,3 +105,33 @@ def test_shared_arguments_are_refused_alike_by_both_pick_envs(name):
             PickMultiEnv(**{name: value})
         if name != "camera" or not isinstance(value, str) or value == "":  # a missing camera lists the model's
             assert str(one.value) == str(other.value)
+
+
+# -------------------------------------------------------- reset's seed and options (issue 16, section 8)
+@pytest.mark.parametrize("env_id", ["simgrip/Pick-v1", "simgrip/PickMulti-v0"])
+def test_reset_takes_numpy_integer_seeds_as_the_same_seed(env_id):
+    """The README says seeds are integers >= 0: NumPy's integers are (Gymnasium itself refuses np.int64)."""
+    env = gym.make(env_id)
+    try:
+        a, _ = env.reset(seed=3)
+        for seed in (np.int64(3), np.uint8(3), np.int32(3)):
+            b, _ = env.reset(seed=seed)
+            assert np.array_equal(a, b)
+    finally:
+        env.close()
+
+
+@pytest.mark.parametrize("env_id", ["simgrip/Pick-v1", "simgrip/PickMulti-v0"])
+@pytest.mark.parametrize("kwargs, name", [
+    ({"seed": -1}, "seed"), ({"seed": 3.0}, "seed"), ({"seed": True}, "seed"), ({"seed": "3"}, "seed"),
+    ({"options": "str"}, "options"), ({"options": ["box_width"]}, "options"), ({"options": 3}, "options"),
+    ({"options": {"nonsense": 1}}, "unknown reset options"),
+])
+def test_reset_refuses_bad_seeds_and_options_by_name(env_id, kwargs, name):
+    """``reset(options='str')`` said "dictionary update sequence element #0"; now ValueError naming it."""
+    env = gym.make(env_id)
+    try:
+        with pytest.raises(ValueError, match=rf"^{name}\b"):
+            env.reset(**kwargs)
+    finally:
+        env.close()
