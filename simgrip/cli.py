@@ -123,7 +123,7 @@ def build_parser() -> argparse.ArgumentParser:
         p.add_argument("--target-error", type=float, default=None,
                        help="settle to this error (tip over l, forces relative) by Richardson extrapolation over "
                        "resolutions it chooses (free, I, II; --links is then ignored)")
-        if name == "simulate":
+        if name in ("simulate", "compare"):  # compare: symmetric scenes only (simgrip.compare_gripper)
             p.add_argument("--fingers", type=int, default=None,
                            help="K >= 2 fingers around the palm axis holding a workpiece free in 3-D (Grips I, II: "
                            "the symmetry skip where exactly symmetric, else dynamics, see --method; III: a box with "
@@ -231,15 +231,31 @@ def _cmd_simulate(args) -> dict:
 
 
     grip = check_grip(args.grip)
-    per_finger = args.kappa_per_finger is not None
     params, links = _params(args), _links(args.links)
-    profile = None if per_finger else _profile(args, grip)
+    gripper = _gripper_arguments(args, grip)
+    if gripper is not None:
+        from simgrip.gripper import gripper_record, simulate_gripper
+
+        profile = gripper.pop("profile")
+        state = simulate_gripper(grip, params, profile, links, **gripper)
+        return gripper_record(state, params, profile)
+    profile = _profile(args, grip)
+    return settled_record(simulate(grip, params, profile, links, method=args.method or "newton",
+                                   target_error=args.target_error, contact=args.contact),
+                          params, profile)
+
+
+def _gripper_arguments(args, grip: str) -> dict | None:
+    """The K-finger options of simulate/compare checked, as keywords of ``simulate_gripper`` (with ``profile``);
+    None when none is given (the planar finger)."""
+    per_finger = args.kappa_per_finger is not None
     if (args.fingers is not None or args.workpiece is not None or args.contact_angle is not None or per_finger
             or args.offset is not None or args.workpiece_yaw is not None):
-        from simgrip.gripper import gripper_record, simulate_gripper
         from simgrip.sim.gripper import uniform_profiles
 
         from simgrip.settle.gripper_symmetry import GRIPPER_METHODS
+
+        profile = None if per_finger else _profile(args, grip)
 
         if args.method is not None and args.method not in GRIPPER_METHODS:
             raise ValueError(f"method: a K-finger gripper (--fingers) settles by {' or '.join(GRIPPER_METHODS)} "
@@ -260,16 +276,11 @@ def _cmd_simulate(args) -> dict:
         beta_deg = 0.0 if args.contact_angle is None else args.contact_angle
         if not (math.isfinite(beta_deg) and abs(beta_deg) < 90.0):
             raise ValueError(f"contact_angle must lie in (-90, 90) degrees, got {beta_deg!r}")
-        state = simulate_gripper(grip, params, profile, links, fingers=args.fingers,
-                                 workpiece=args.workpiece or "cylinder",
-                                 contact_angle=math.radians(beta_deg),
-                                 offset=args.offset if args.offset is not None else (0.0, 0.0),
-                                 workpiece_yaw=math.radians(yaw_deg), method=args.method or "auto",
-                                 contact=args.contact)
-        return gripper_record(state, params, profile)
-    return settled_record(simulate(grip, params, profile, links, method=args.method or "newton",
-                                   target_error=args.target_error, contact=args.contact),
-                          params, profile)
+        return dict(profile=profile, fingers=args.fingers, workpiece=args.workpiece or "cylinder",
+                    contact_angle=math.radians(beta_deg),
+                    offset=args.offset if args.offset is not None else (0.0, 0.0),
+                    workpiece_yaw=math.radians(yaw_deg), method=args.method or "auto", contact=args.contact)
+    return None
 
 
 def _cmd_compare(args) -> str:
@@ -278,9 +289,24 @@ def _cmd_compare(args) -> str:
     from simgrip.report import format_comparison
 
     grip = check_grip(args.grip)
-    result = compare(grip, _params(args), _profile(args, grip), _links(args.links), method=args.method or "newton",
-                     target_error=args.target_error, contact=args.contact)
-    return json.dumps(to_jsonable(result), allow_nan=False) if args.json else format_comparison(result)
+    params, links = _params(args), _links(args.links)
+    gripper = _gripper_arguments(args, grip)
+    if gripper is not None:
+        from simgrip.compare_gripper import compare_gripper
+
+        result = compare_gripper(grip, params, gripper.pop("profile"), links, **gripper)
+    else:
+        result = compare(grip, params, _profile(args, grip), links, method=args.method or "newton",
+                         target_error=args.target_error, contact=args.contact)
+    if args.json:
+        return json.dumps(to_jsonable(result), allow_nan=False)
+    if gripper is None:
+        return format_comparison(result)
+    sim = {k: v for k, v in result["simulation"].items() if k != "fingers"}  # one line per finger below instead
+    lines = [f"finger {f['finger']}: N {f['normal_force']:.5g}"
+             + ("" if f["relative_difference"] is None else f" ({100 * f['relative_difference']:+.2g} % of the BVP's)")
+             for f in result["fingers"]]
+    return format_comparison({**result, "simulation": sim}) + "\n" + "\n".join(lines)
 
 
 def _cmd_render(args):

@@ -71,6 +71,7 @@ __all__ = [
     "DimensionlessParams",
     "GRIPS",
     "check_grip",
+    "check_grip_iii_reach",
     "STANDARD",
     "D_MIN",
     "D_MAX",
@@ -110,6 +111,17 @@ def check_grip(grip: str) -> str:
     if g not in GRIPS:
         raise ValueError(f"grip must be one of {GRIPS}, got {grip!r}")
     return g
+
+
+def check_grip_iii_reach(gamma: float, b: float) -> None:
+    """Grip III needs ``gamma > b/2`` (both over ``l``): the contact point at arc length ``gamma`` must reach
+    the box's corner at ``X = b/2``, and an arc of length ``gamma`` reaches at most ``X = gamma`` (straight).
+
+    Raises ``ValueError`` naming ``gamma`` (the BVP, the scenes and the settle share this one message).
+    """
+    if not gamma > b / 2.0:
+        raise ValueError(f"gamma = {gamma!r} must exceed b/2 = {b / 2.0!r} for Grip III "
+                         "(the contact at arc length gamma cannot reach X = b/2)")
 
 
 def _finite(name: str, value, unit: str | None = None) -> float:

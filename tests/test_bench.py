@@ -178,3 +178,20 @@ def test_error_targeted_settle_is_a_series_of_the_pareto_plot(bench):
             assert r["converged"] and r["extrapolated"] and r["time_s"] > 0
             assert r["tip_err"] <= 3 * r["target_error"], r
     assert "settle_target" in (out / "summary.md").read_text()
+
+
+def _overlap(a, b) -> bool:
+    return a.x0 < b.x1 and b.x0 < a.x1 and a.y0 < b.y1 and b.y0 < a.y1
+
+
+def test_the_pareto_legend_covers_no_panel(bench):
+    """Issue 16: the legend sat on Grip III's panel and hid its points; now it lies below all panels."""
+    from simgrip.harness.plots import pareto_figure
+
+    res, _ = bench
+    fig = pareto_figure(res, STANDARD_CASES)
+    fig.canvas.draw()
+    renderer = fig.canvas.get_renderer()
+    assert all(ax.get_legend() is None for ax in fig.axes) and len(fig.legends) == 1
+    box = fig.legends[0].get_window_extent(renderer)
+    assert not any(_overlap(box, ax.get_window_extent(renderer)) for ax in fig.axes)

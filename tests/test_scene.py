@@ -183,7 +183,7 @@ def test_a_grip_i_box_too_narrow_for_the_tip_names_b():
 
 
 def test_grip_iii_needs_gamma_beyond_half_the_box():
-    with pytest.raises(ValueError, match="b/2 must be below gamma"):
+    with pytest.raises(ValueError, match=r"gamma = 0.8 must exceed b/2 = 0.85 for Grip III"):
         build_scene("III", STANDARD.replace(b=1.7, gamma=0.8), Uniform(-6.0), N)
 
 

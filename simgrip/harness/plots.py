@@ -16,7 +16,7 @@ from matplotlib.figure import Figure
 
 from simgrip.io import atomic_write
 
-__all__ = ["pareto_plot", "stability_map"]
+__all__ = ["pareto_figure", "pareto_plot", "stability_map"]
 
 #: Errors below this are drawn at it (the BVP reference has error 0 against itself).
 ERROR_FLOOR = 1e-13
@@ -48,6 +48,11 @@ def _curve(res, grip, method):
 
 
 def pareto_plot(res, cases: dict, path: Path) -> None:
+    """Write :func:`pareto_figure` of ``res`` and ``cases`` to ``path`` (PNG, whole or not at all)."""
+    _save_png(pareto_figure(res, cases), path)
+
+
+def pareto_figure(res, cases: dict) -> Figure:
     """Tip error against wall time per grip and method (``res``: a :class:`~simgrip.harness.bench.BenchResult`).
 
     Measured points are joined by lines; naive points extrapolated within the
@@ -98,8 +103,9 @@ def pareto_plot(res, cases: dict, path: Path) -> None:
     for ax in axes:
         for h, lab in zip(*ax.get_legend_handles_labels()):
             legend.setdefault(lab, h)
-    axes[-1].legend(list(legend.values()), list(legend), fontsize=7)
-    _save_png(fig, path)
+    # below the panels, not on one: inside, it covered Grip III's points
+    fig.legend(list(legend.values()), list(legend), fontsize=7, loc="outside lower center", ncol=4)
+    return fig
 
 
 _COLORS = {"easy": "tab:green", "slow": "gold", "dropped": "tab:blue", "flagged": "tab:purple",
@@ -123,6 +129,9 @@ def stability_map(cases, grips, slow_steps: int, path: Path) -> None:
         if ax.get_legend_handles_labels()[0]:
             ax.legend(fontsize=6, loc="upper left")
     axes[0].set_ylabel("log10 D")
-    fig.suptitle(f"settle stability map: easy (≤ {slow_steps} steps), slow, dropped workpiece, flagged invalid, "
-                 "rejected (ValueError), unsettled (SettleError), failed; dotted: a full turn")
+    totals = ", ".join(f"{cat} {sum(c['category'] == cat for c in cases)}" for cat in _COLORS
+                       if any(c["category"] == cat for c in cases))
+    fig.suptitle(f"settle stability map: easy (≤ {slow_steps} steps), slow, dropped workpiece (valid state), flagged "
+                 "invalid (any flag, dropped or not: stress.json's 'flagged'), rejected (ValueError), unsettled "
+                 f"(SettleError), failed; dotted: a full turn\nall grips: {totals}", fontsize=9)
     _save_png(fig, path)

@@ -415,10 +415,10 @@ def run_stress(
 def _category(c) -> str:
     if c["outcome"] != "settled":
         return c["outcome"]
+    if any(c["flags"].values()):  # before "dropped": an invalid state's verdict means nothing (stress.json's count)
+        return "flagged"
     if c["grip"] != "free" and c["held"] is False:
         return "dropped"
-    if any(c["flags"].values()):
-        return "flagged"
     return "slow" if (c["steps"] or 0) > SLOW_STEPS else "easy"
 
 

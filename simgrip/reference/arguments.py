@@ -14,7 +14,7 @@ import math
 import numpy as np
 
 from simgrip.chain import check_links
-from simgrip.params import DimensionlessParams, _finite, check_grip
+from simgrip.params import DimensionlessParams, _finite, check_grip, check_grip_iii_reach
 from simgrip.profiles import CurvatureProfile, as_profile
 
 __all__ = ["MAX_COUNT", "check_count", "check_discrete", "check_failures", "check_gamma", "check_gravity", "check_params", "check_tip_load", "check_tol"]
@@ -96,5 +96,7 @@ def check_discrete(grip, params, profile, count_name: str, count, gamma, gravity
                    ) -> tuple[str, DimensionlessParams, CurvatureProfile, int, float, float]:
     """The common arguments of the discrete solvers: ``(grip, params, profile, count, gamma, gravity)``."""
     grip, params = check_grip(grip), check_params(params)
-    return (grip, params, as_profile(profile), check_count(count_name, count),
-            check_gamma(gamma, params), check_gravity(gravity))
+    gam = check_gamma(gamma, params)
+    if grip == "III":
+        check_grip_iii_reach(gam, params.b)
+    return (grip, params, as_profile(profile), check_count(count_name, count), gam, check_gravity(gravity))

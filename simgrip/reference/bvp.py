@@ -52,6 +52,7 @@ import numpy as np
 from scipy import special as _sp
 from scipy.integrate import solve_bvp
 
+from simgrip.params import check_grip_iii_reach
 from simgrip.profiles import Concentrated, CurvatureProfile, Uniform
 
 __all__ = ["Blend", "BvpProblem", "ElasticaError", "BvpSolution", "TOL_MID", "antiderivative", "grip_problem", "run_bvp", "system"]
@@ -142,11 +143,8 @@ def grip_problem(grip: str, params, profile: CurvatureProfile, *, gravity: bool,
     ``tip_load = (t1, t2)`` and ``C`` are checked floats; ``gamma`` is the Grip III
     contact arc length (ignored by the other grips).
     """
-    if grip == "III" and gamma <= params.b / 2.0:
-        raise ValueError(
-            f"gamma = {gamma!r} must exceed b/2 = {params.b / 2.0!r} for Grip III "
-            "(the contact at arc length gamma cannot reach X = b/2)"
-        )
+    if grip == "III":
+        check_grip_iii_reach(gamma, params.b)
     return BvpProblem(
         two_seg=grip == "III",
         D=params.D,

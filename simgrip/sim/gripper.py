@@ -317,6 +317,12 @@ def build_gripper(
                          f"b = {dimless.b:g} l")
     if not 0.5 * dimless.b - r_tip > 0.0:
         raise ValueError(f"b must exceed 2 r_tip = {2 * r_tip:g}, got b = {dimless.b:g}")
+    if shape == "sphere" and not 0.5 * dimless.b * math.cos(beta) - r_tip > 0.0:
+        limit = math.acos(2.0 * r_tip / dimless.b)
+        raise ValueError(f"contact_angle: at {beta:.6g} rad ({math.degrees(beta):.6g} deg) the contact on the sphere "
+                         f"lies at X = (b/2) cos(contact_angle) = {0.5 * dimless.b * math.cos(beta):.3g} l from the "
+                         f"palm axis, inside the tip sphere's radius {r_tip:g} l; |contact_angle| must stay below "
+                         f"acos(2 r_tip / b) = {limit:.6g} rad ({math.degrees(limit):.6g} deg) for b = {dimless.b:g}")
     off = check_offset(offset)
     psi = check_workpiece_yaw(workpiece_yaw)
     finger_springs = tuple(chain_springs(p, n) for p in profs)

@@ -99,18 +99,18 @@ def place_fingers(shape: str, azimuths, size_l, r_tip: float, offset, workpiece_
     reach, normal, face = np.zeros(K), np.zeros((K, 2)), np.full(K, -1)
     if shape == "sphere":
         if np.any(c != 0.0):
-            raise ValueError(f"offset must be (0, 0) for workpiece 'sphere' (held centred only), got {tuple(float(v) for v in c)}")
+            raise ValueError(f"offset must be (0, 0) for workpiece 'sphere' (held centred only), got ({float(c[0]):g}, {float(c[1]):g})")
         reach[:] = size_l[0] + r_tip
         normal[:, 0] = 1.0
         return Placement(reach, normal, face)
     if K == 2 and abs(float(c @ np.array([-math.sin(az[0]), math.cos(az[0])]))) > 0.0:
         raise ValueError(f"offset must lie along the fingers' plane for fingers = 2 (across it the workpiece hangs "
-                         f"from the line through the two contacts and swings about it), got {tuple(float(v) for v in c)}")
+                         f"from the line through the two contacts and swings about it), got ({float(c[0]):g}, {float(c[1]):g})")
     if shape == "cylinder":
         R = size_l[0] + r_tip
         if not math.hypot(*c) < size_l[0]:
             raise ValueError(f"offset must keep the palm axis inside the cylinder (|offset| < {size_l[0]:g} l), "
-                             f"got {tuple(float(v) for v in c)}")
+                             f"got ({float(c[0]):g}, {float(c[1]):g})")
         for k, a in enumerate(az):
             e1, e3 = np.array([math.cos(a), math.sin(a)]), np.array([-math.sin(a), math.cos(a)])
             along, across = float(c @ e1), float(c @ e3)
@@ -125,7 +125,7 @@ def place_fingers(shape: str, azimuths, size_l, r_tip: float, offset, workpiece_
     o = rot.T @ (-c)  # the palm axis in the box's frame
     if not np.all(np.abs(o) < half):
         raise ValueError(f"offset must keep the palm axis inside the box's footprint (|dx|, |dy| within its half "
-                         f"sizes {tuple(half)} l, turned by workpiece_yaw), got {tuple(float(v) for v in c)}")
+                         f"sizes ({half[0]:g}, {half[1]:g}) l, turned by workpiece_yaw), got ({float(c[0]):g}, {float(c[1]):g})")
     for k, a in enumerate(az):
         e1, e3 = np.array([math.cos(a), math.sin(a)]), np.array([-math.sin(a), math.cos(a)])
         u = rot.T @ e1

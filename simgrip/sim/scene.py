@@ -36,7 +36,7 @@ import numpy as np
 
 from simgrip.chain import ChainSprings, chain_springs, link_positions
 from simgrip.models import model_path
-from simgrip.params import DimensionlessParams, PhysicalParams, check_grip
+from simgrip.params import DimensionlessParams, PhysicalParams, check_grip, check_grip_iii_reach
 from simgrip.profiles import CurvatureProfile, as_profile
 from simgrip.sim.contacts import add_pair
 from simgrip.sim.fingers import FingerIndex, add_fingers, check_finger_links, index_fingers
@@ -305,6 +305,8 @@ def build_scene(
     r_link = check_positive("r_link", r_link, 0.05)
     r_corner = check_positive("r_corner", r_corner, 0.05)
     contact_window = check_positive("contact_window", contact_window, 1.0)
+    if grip == "III":
+        check_grip_iii_reach(dimless.gamma, dimless.b)
     springs = chain_springs(prof, n)
     q0 = _start_angles(grip, dimless, prof, n, initial_angles)
     place = _placement(grip, q0, springs, dimless, phys, r_tip, r_link, r_corner, contact_window,
