@@ -178,3 +178,12 @@ def test_resume_on_a_finished_sweep_computes_nothing(tmp_path, reference, capsys
     assert rc == 2 and "--resume" in err and "different grid" in err
     meta = json.loads((out / "sweep.json").read_text())
     assert meta["counts"]["points"] == 6 and (out / "sweep.csv").read_bytes() == before
+
+
+def test_every_point_saved_resume_only_writes_the_table(tmp_path, reference):
+    """Interrupted while writing sweep.csv: every point is in .partial, so --resume computes none."""
+    out = tmp_path / "o"
+    save(out, reference.records, [(0, 2), (3, 5)])
+    res, computed, notes = resume(out)
+    assert computed == [] and notes == [] and res.resumed == 6 and res.computed == 0
+    check_final(out, reference)
