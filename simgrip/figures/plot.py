@@ -399,7 +399,7 @@ def _plot_fig16(data, overlay=None):
     inset.tick_params(labelsize=7)
     a.legend(fontsize=8)
     # below the panel: inside it, every corner holds points (Grips I/II near 6, the M line, Grip III's rise)
-    b.legend(fontsize=7, loc="upper center", bbox_to_anchor=(0.5, -0.13), ncol=3)
+    b.legend(fontsize=7, loc="upper center", bbox_to_anchor=(0.5, -0.16), ncol=3)
     fig.suptitle(rf"Fig. 16 - load capability of the three grips; $D = {data['D']:g}$, "
                  rf"$b/\ell = {data['b']:g}$, $\gamma/\ell = {data['gamma']:g}$ (Grip III)")
     return fig
