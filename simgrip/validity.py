@@ -13,18 +13,45 @@ records what it finds on the state (a flag and a message in ``warnings``):
   ``held`` is set False, ``grip_matched`` False and a ``wrong grip`` message
   goes to ``warnings``.
 * :func:`check_condition_23` -- Grip III: the rod beyond the contact stays below
-  the workpiece (the paper's condition (23); MuJoCo has no contact pair there).
+  the workpiece (MuJoCo has no contact pair there) and the tip stays below the
+  contact, ``Y(l) < Y(gamma)`` (the paper's condition (23) as the BVP applies it).
+  Either violation sets ``tip_clear`` False with a message in ``warnings``.
+* :func:`check_contact_depth` -- every grip: no contact is pressed deeper than
+  :data:`DEPTH_FRACTION` of the finger geom's radius, and (Grips I/II) no tip's
+  centre lies past the workpiece's face.  A violation sets ``contact_ok`` False
+  with a message in ``warnings``: the state is not a surface contact of the rod
+  (issue 16: a stiff finger's tip pressed through the face).
+
+Why condition (23) is the paper's ``Y(l) < Y(gamma)`` and not only "no link
+touches the box": a tip that curls up beyond the contact has to pass under the
+box, and one that ends beyond its far edge (``X(l) < -b/2``, e.g. Grip III at
+``kappa = -4, b = 0.1``: ``X(l) = -0.144``) has crossed the palm axis ``X = 0``,
+where the mirror finger (the symmetric reduction's other half, in the same
+plane) crosses too: the two rods pass through each other.  The paper excludes
+those shapes with (23); so does the reference (``feasibility["tip_clear"]``),
+and so the simulation's verdict agrees with it.
 """
 
 from __future__ import annotations
 
 import numpy as np
 
-__all__ = ["check_condition_23", "check_grip_shape"]
+__all__ = ["DEPTH_FRACTION", "check_condition_23", "check_contact_depth", "check_grip_shape"]
+
+#: A contact pressed deeper than this fraction of the finger geom's radius (``r_tip`` for Grips I/II,
+#: ``r_link`` for III) is not a surface contact of the rod: half its cross-section is inside the
+#: workpiece and the reading of the contact on the centreline is off by more than half a radius
+#: (``1e-3 l`` by default, three times the ``n = 32`` chain's tip error vs the BVP).  The static settle
+#: keeps contacts ``<= 1e-5 l`` deep (:data:`simgrip.settle.newton.PEN_STIFFEN`); the dynamics
+#: ``~1e-5 l`` at the standard case.
+DEPTH_FRACTION = 0.5
 
 
 def check_condition_23(scene, state) -> None:
-    """Grip III condition (23): flag links beyond the contact that reach the workpiece's bottom face.
+    """Grip III condition (23): the tip below the contact, and no link beyond the contact in the workpiece.
+
+    ``Y(l) < Y(gamma)`` for every finger (the paper's (23), as the reference's
+    ``feasibility["tip_clear"]``; see the module docstring), and:
 
     The corner contact is only on the links near the initial contact (no pair
     elsewhere), so MuJoCo lets a curling tip pass through the workpiece; the
@@ -34,6 +61,16 @@ def check_condition_23(scene, state) -> None:
     """
     if scene.grip != "III" or not state.held or state.workpiece_pose is None:
         return
+    for f, c in enumerate(state.contacts):
+        tip_y, at_y = float(state.tip[f][1]), float(c.point[1])
+        if not tip_y < at_y:
+            state.tip_clear = False
+            state.warnings.append(
+                f"finger {f}: condition (23) violated: the tip (Y(l) = {tip_y:.4g} l, X(l) = {float(state.tip[f][0]):.4g} l) "
+                f"is not below the contact (Y(gamma) = {at_y:.4g} l at gamma = {c.gamma:.4f}); the paper's Grip III "
+                f"assumes it is" + (" (this tip has crossed the palm axis X = 0, where the mirror finger's rod is)"
+                                    if float(state.tip[f][0]) < 0.0 else "")
+            )
     L = scene.length
     bottom = state.workpiece_pose[1] - scene.box_half[2] / L
     half = scene.box_half[0] / L
@@ -73,3 +110,40 @@ def check_grip_shape(scene, state) -> None:
             )
             return
 
+
+
+def check_contact_depth(scene, state) -> None:
+    """Flag a held state whose contact is deeper than :data:`DEPTH_FRACTION` of its radius or whose tip passed the face.
+
+    Depth: each finger's ``contact.penetration`` (over ``l``) against
+    ``DEPTH_FRACTION * r`` with ``r`` the radius of the finger's contact geom
+    (``r_tip`` for Grips I/II, ``r_link`` for III).  Grips I/II also check the
+    geometry itself: the tip's centre must stay outside the workpiece's face
+    (``X(l) >= x_c + half``, ``x_c`` the workpiece's centre in the finger's frame),
+    whether or not MuJoCo reports the contact.  A violation sets ``contact_ok``
+    False and puts a message naming it in ``warnings``; ``held`` is left as the
+    solve found it (the comparison with the reference reports the state not feasible).
+    """
+    if not state.held or state.workpiece_pose is None:
+        return
+    L = scene.length
+    r = float(scene.r_tip if scene.grip in ("I", "II") else scene.r_link)
+    for f, c in enumerate(state.contacts):
+        if c.penetration > DEPTH_FRACTION * r:
+            state.contact_ok = False
+            state.warnings.append(
+                f"finger {f}: contact {c.penetration:.3g} l deep, more than {DEPTH_FRACTION:g} of the finger's radius "
+                f"({r:.3g} l): the rod is pressed into the workpiece, not a surface contact (the verdict is not trusted)"
+            )
+    if scene.grip not in ("I", "II"):
+        return
+    half = float(scene.box_half[0]) / L
+    for f in range(state.fingers):
+        face = float(state.workpiece_pose[0]) * float(scene.mirror[f]) + half
+        x = float(state.tip[f][0])
+        if x < face:
+            state.contact_ok = False
+            state.warnings.append(
+                f"finger {f}: the tip passed the workpiece's face (tip centre X(l) = {x:.4g} l, face at {face:.4g} l): "
+                f"the state is not a grip (the verdict is not trusted)"
+            )

@@ -51,7 +51,7 @@ from simgrip.settle.statics import (RestResidual, angle_floor, configure_statics
 from simgrip.sim.checks import clear_warnings
 from simgrip.sim.scene import Scene, set_curvature
 from simgrip.threads import blas_threads
-from simgrip.validity import check_condition_23, check_grip_shape
+from simgrip.validity import check_condition_23, check_contact_depth, check_grip_shape
 
 __all__ = [
     "DEFAULT_TOL",
@@ -128,6 +128,7 @@ def _finish(scene: Scene, state: SettledState, tolerance: float, allow_unconverg
             raise SettleError(f"{what} did not converge (static residual {state.residual:.3g} above the "
                               f"tolerance {tolerance:.3g} after {effort})")
     check_condition_23(scene, state)
+    check_contact_depth(scene, state)
     check_grip_shape(scene, state)
     state.rest = scene.springs.rest.copy()
     return state

@@ -99,6 +99,9 @@ class SettledState:
     extrapolated: bool = False
     #: Estimated error of the extrapolated values: ``{"tip": over l, "force": relative}``; None otherwise.
     error_estimate: dict | None = None
+    #: No contact pressed deeper than half the finger's radius, no Grip I/II tip past the face
+    #: (:func:`simgrip.validity.check_contact_depth`); False: the verdict is not trusted (see ``warnings``).
+    contact_ok: bool = True
     #: Grips I/II: the state has the shape of the grip asked for (:func:`simgrip.validity.check_grip_shape`).
     grip_matched: bool = True
     #: Conditions the state violates that the solve itself does not enforce (e.g. condition (23)).
