@@ -19,7 +19,7 @@ from simgrip.params import DimensionlessParams, check_grip
 from simgrip.profiles import as_profile
 from simgrip.report import difference, elastica_record
 
-__all__ = ["simulate", "settled_record", "reference_for", "compare"]
+__all__ = ["simulate", "settled_record", "reference_for", "compare", "verdict_warnings"]
 
 
 def simulate(grip: str, params: DimensionlessParams, profile, links: int, **settle_kw):
@@ -62,8 +62,11 @@ def settled_record(state, params: DimensionlessParams, profile=None) -> dict:
     Adds ``wall_time_s`` (the settle alone), ``steps``, ``held``, ``penetration`` (over ``l``),
     ``residual``, ``links`` (the finest used), ``method``, ``warnings``, ``extrapolated`` and
     ``error_estimate`` (``settle(..., target_error=E)``: tip over ``l``, forces relative; else None).  ``feasible`` is the
-    simulation's verdict: the workpiece is held (and, Grip III, no part of the
-    rod beyond the contact reaches the workpiece: condition (23)).  ``min_eigenvalue`` is the hinge chain's stability
+    simulation's verdict: the workpiece is held, its contacts are surface contacts
+    (``contact_ok``: none deeper than half the finger's radius, no Grip I/II tip past
+    the face; the record then carries ``contact_ok: False``) and, Grip III, condition
+    (23) holds (``tip_clear``: the tip below the contact, no part of the rod beyond the
+    contact in the workpiece).  ``min_eigenvalue`` is the hinge chain's stability
     eigenvalue at this shape when ``profile`` is given.
     """
     c = state.contact
@@ -76,7 +79,7 @@ def settled_record(state, params: DimensionlessParams, profile=None) -> dict:
         "normal_force": float(state.normal_force),
         "friction_force": float(state.friction_force),
         "required_mu": float(state.required_mu) if c is not None else 0.0,
-        "feasible": bool(state.held and state.tip_clear) if grip != "free" else True,
+        "feasible": bool(state.held and state.tip_clear and getattr(state, "contact_ok", True)) if grip != "free" else True,
         "min_eigenvalue": None if profile is None else _stability(state, grip, params, as_profile(profile)),
         "N1": float(state.N1),
         "N2": float(state.N2),
@@ -95,7 +98,11 @@ def settled_record(state, params: DimensionlessParams, profile=None) -> dict:
             f=float(c.friction),
             contact_moment=float(c.moment),
         )
-    elif c is not None:
+    if grip == "III" and c is not None and state.held:
+        rec["tip_clear"] = bool(state.tip_clear)  # condition (23) (simgrip.validity), beside the reference's
+    if not getattr(state, "contact_ok", True):
+        rec["contact_ok"] = False  # a contact too deep or a tip past the face (simgrip.validity.check_contact_depth)
+    if grip != "III" and c is not None:
         rec["contact_moment"] = float(c.moment)
     return rec
 
@@ -136,4 +143,42 @@ def compare(grip: str, params: DimensionlessParams, profile, links: int, **settl
     state = simulate(grip, params, profile, links, **settle_kw)
     sim = settled_record(state, params, profile)
     ref = elastica_record(reference_for(state, params, profile))
-    return {"simulation": sim, "reference": ref, "difference": difference(sim, ref)}
+    return {"simulation": sim, "reference": ref, "difference": difference(sim, ref),
+            "warnings": verdict_warnings(sim, ref)}
+
+
+def verdict_warnings(sim: dict, ref: dict) -> list[str]:
+    """Messages for every verdict on which a simulation record and its reference record disagree.
+
+    ``feasible`` and (Grip III) ``tip_clear``; each message names the
+    quantities that decide the verdict on both sides (friction: the required
+    ``mu`` against ``mu_s``; condition (23): ``Y(l) - Y(gamma)``), so that a
+    disagreement at the edge of the feasible region (within the chain's
+    discretisation error) reads as such and no disagreement is silent.  Empty
+    when they agree (or the grip is ``free``).
+    """
+    out: list[str] = []
+    if sim.get("grip") == "free" or ref.get("grip") == "free":
+        return out
+
+    def yn(v) -> str:
+        return "yes" if v else "no"
+
+    if "tip_clear" in sim and "tip_clear" in ref and bool(sim["tip_clear"]) != bool(ref["tip_clear"]):
+        hs = float(sim["tip"][1]) - float(sim["contact"][1]) if "contact" in sim else math.nan
+        hr = float(ref["tip"][1]) - float(ref["contact"][1]) if "contact" in ref else math.nan
+        out.append(f"condition (23) disagrees: simulation tip clear {yn(sim['tip_clear'])} "
+                   f"(Y(l) - Y(gamma) = {hs:.3g}), reference {yn(ref['tip_clear'])} ({hr:.3g})")
+    if bool(sim.get("feasible")) != bool(ref.get("feasible")):
+        why = []
+        if not sim.get("held", True):
+            why.append("the simulation dropped the workpiece")
+        if sim.get("contact_ok") is False:
+            why.append("the simulation's contact is not a surface contact (see its warnings)")
+        mu = (sim.get("params") or ref.get("params") or {}).get("mu_s")
+        if mu is not None:
+            why.append(f"required mu: simulation {float(sim.get('required_mu', math.nan)):.4g}, "
+                       f"reference {float(ref.get('required_mu', math.nan)):.4g}, mu_s {float(mu):.4g}")
+        out.append(f"verdicts disagree: simulation feasible {yn(sim.get('feasible'))}, reference feasible "
+                   f"{yn(ref.get('feasible'))}" + (" (" + "; ".join(why) + ")" if why else ""))
+    return out

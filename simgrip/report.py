@@ -139,7 +139,9 @@ def format_comparison(result: dict) -> str:
     forces and ``μ`` (absolute where the reference is 0).  ``N1``/``N2`` appear for
     Grip III only (for Grips I/II they are the normal and friction forces again).
     Diagnostics (method, steps, time, residuals, ...) go on footer lines; any key
-    not placed in a row goes there too, so nothing of the record is lost.
+    not placed in a row goes there too, so nothing of the record is lost.  The
+    simulation's warnings and the comparison's (``result["warnings"]``: verdicts
+    that disagree) are printed as ``WARNING:`` lines.
     """
     sim, ref = result["simulation"], result["reference"]
 
@@ -228,6 +230,8 @@ def format_comparison(result: dict) -> str:
     warnings = sim.get("warnings")
     used.add("warnings")
     for w in warnings or []:
+        lines.append(f"WARNING: {w}")
+    for w in result.get("warnings") or []:  # the comparison's own: verdicts that disagree (simgrip.compare)
         lines.append(f"WARNING: {w}")
 
     def footer(name, rec):
