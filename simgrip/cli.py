@@ -413,7 +413,7 @@ def _check_outputs(args) -> list[Path]:
     folder, FIFO, device or socket where a file belongs), cannot be written, or
     when two outputs are one file.
     """
-    from simgrip.io import check_distinct_outputs, check_output_dir, check_output_file
+    from simgrip.io import check_distinct_outputs, check_output_dir, check_output_file, check_output_files_in
 
     folders = []
     files = _render_outputs(args) if args.command == "render" else {}
@@ -423,12 +423,36 @@ def _check_outputs(args) -> list[Path]:
             continue
         if is_dir:
             folders.append(check_output_dir(value, option, create=False))
+            check_output_files_in(value, _files_in_out(args), option)  # e.g. a folder or FIFO at OUT/bench.csv
         else:
             files[option] = value
     for option, value in files.items():
         folders.append(check_output_file(value, option, create=False).parent)
     check_distinct_outputs(files)
     return folders
+
+
+def _files_in_out(args) -> list[str]:
+    """The files bench, stress and figures will write into ``--out``, as far as known before any work.
+
+    (The sweep checks its own, naming ``--out``; the libraries check theirs too, naming ``out_dir``.)
+    """
+    if args.command == "bench":
+        from simgrip.harness.bench import OUTPUT_FILES
+
+        return list(OUTPUT_FILES)
+    if args.command == "stress":
+        from simgrip.harness.stress import OUTPUT_FILES
+
+        return list(OUTPUT_FILES)
+    if args.command == "figures":
+        from simgrip.figures.catalog import FIGURES, figure_key
+
+        try:
+            return [f"{figure_key(w)}.png" for w in args.which] if args.which else [f"{k}.png" for k in FIGURES]
+        except ValueError:  # an unknown figure: the command names it
+            return []
+    return []
 
 
 def _clean_after_interrupt(folders: list[Path], created: list[Path]) -> None:

@@ -358,11 +358,11 @@ def test_an_out_folder_that_is_a_fifo_is_refused(tmp_path, capsys, monkeypatch, 
 @pytest.mark.parametrize("command, name, option", [
     (["sweep", "I", "--kappa", "-5", "--links", "4"], "sweep.csv", "--out"),  # was IsADirectoryError after the work
     (["sweep", "I", "--kappa", "-5", "--links", "4"], "map.png", "--out"),
-    (["stress", "--cases", "1"], "stress.json", "out_dir"),
-    (["stress", "--cases", "1"], "stability_map.png", "out_dir"),
-    (["figures", "--which", "6"], "fig06.png", "out_dir"),
-    (["bench", "--quick"], "bench.csv", "out_dir"),
-    (["bench", "--quick"], "gripper.md", "out_dir"),
+    (["stress", "--cases", "1"], "stress.json", "--out"),
+    (["stress", "--cases", "1"], "stability_map.png", "--out"),
+    (["figures", "--which", "6"], "fig06.png", "--out"),
+    (["bench", "--quick"], "bench.csv", "--out"),
+    (["bench", "--quick"], "gripper.md", "--out"),
 ])
 @pytest.mark.parametrize("blocker", ["folder", "fifo"])
 def test_a_result_name_inside_out_that_is_not_a_file_is_refused_before_work(tmp_path, capsys, monkeypatch,
@@ -377,6 +377,24 @@ def test_a_result_name_inside_out_that_is_not_a_file_is_refused_before_work(tmp_
     err = _one_line_exit_2(capsys, [*command, "--out", str(out), "--jobs", "1"], option)
     assert name in err
     assert sorted(p.name for p in out.iterdir()) == [name]  # nothing started: no .partial, no other file
+
+
+@pytest.mark.parametrize("function, name", [("stress", "stress.json"), ("figures", "fig06.png"),
+                                            ("bench", "settle_targets.md")])
+def test_library_writers_check_their_files_before_work(tmp_path, monkeypatch, function, name):
+    """run_stress, make_figures and run_bench refuse a folder at one of their result names, naming out_dir."""
+    from simgrip.figures import make_figures
+    from simgrip.harness.bench import run_bench
+    from simgrip.harness.stress import run_stress
+
+    _no_work(monkeypatch)
+    (tmp_path / name).mkdir()
+    call = {"stress": lambda: run_stress(tmp_path, cases=1, jobs=1, progress=False),
+            "figures": lambda: make_figures(tmp_path, which=[6], jobs=1, progress=False),
+            "bench": lambda: run_bench(tmp_path, quick=True, jobs=1, progress=False)}[function]
+    with pytest.raises(ValueError, match=f"out_dir: .*{name}' is a folder"):
+        call()
+    assert [p.name for p in tmp_path.iterdir()] == [name]
 
 
 def test_sweep_no_map_does_not_check_map_png(tmp_path, monkeypatch):

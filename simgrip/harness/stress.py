@@ -88,6 +88,8 @@ __all__ = [
     "cli_stress",
 ]
 
+#: The files run_stress writes into its folder (checked before any case runs).
+OUTPUT_FILES = ("stress.json", "stability_map.png")
 #: Contact penetration (over l) above which a settled state is flagged.
 PENETRATION_TOL = 1e-3
 #: Wall-clock guard of one case (s); a case that runs longer is a failure (hang).
@@ -379,7 +381,7 @@ def run_stress(
     todo = make_cases(cases, seed, grid_cases, max_links)
     g_todo = sg.make_gripper_cases(n_gripper, seed, max_links=min(32, max_links))
     out = check_output_dir(out_dir, option="out_dir")
-    check_output_files_in(out, ("stress.json", "stability_map.png"), "out_dir")  # refused before the cases run
+    check_output_files_in(out, OUTPUT_FILES, "out_dir")  # refused before the cases run
     t0 = time.perf_counter()
     heavy_first = sorted(todo, key=lambda c: -c["n"])  # large n first: the last batches finish together
     tasks = [(c, timeout_s, max_steps) for c in g_todo + heavy_first]  # one run: the K-finger cases first
