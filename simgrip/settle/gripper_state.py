@@ -22,7 +22,7 @@ import numpy as np
 from simgrip.chain import link_positions
 from simgrip.sim.gripper import GripperScene
 
-__all__ = ["FingerRecord", "GripperState", "read_gripper_state"]
+__all__ = ["warn_friction_boundary", "FingerRecord", "GripperState", "read_gripper_state"]
 
 
 @dataclass
@@ -93,6 +93,9 @@ class GripperState:
     timestep: float
     wall_time_s: float
     qpos: np.ndarray = field(repr=False)
+    #: Seconds to build and compile the model (:func:`simgrip.gripper.simulate_gripper`);
+    #: ``wall_time_s`` is the settle alone.  None when the state was settled from a scene built elsewhere.
+    build_time_s: float | None = None
     #: Every finger's tip on its grip's side of the palm (:func:`simgrip.validity.check_grip_shape`).
     grip_matched: bool = True
     #: Grip III: the rod beyond the contact stays below the workpiece (condition (23),
@@ -186,3 +189,18 @@ def read_gripper_state(scene: GripperScene, dyn, held: bool, converged: bool, st
         workpiece_position=centre / L, workpiece_quat=np.array(d.xquat[wb]), steps=steps, timestep=dyn.h,
         wall_time_s=time.perf_counter() - t0, qpos=np.array(d.qpos), offset=np.array(scene.offset),
         workpiece_yaw=float(scene.workpiece_yaw))
+
+
+def warn_friction_boundary(scene, state: GripperState) -> None:
+    """``M = 0`` with ``mu_s = 0``: a warning that the hold is the friction cone's boundary.
+
+    A weightless workpiece needs no friction and a frictionless contact has none: ``|F_f| = mu_s N = 0``.
+    The paper's criterion ``|F_f| <= mu_s N`` counts it feasible (the BVP's verdict), the point-contact
+    Newton settle drops it, and the dynamics holds or loses it on round-off (nothing resists a sideways
+    or vertical drift): the methods may answer differently, and the state says why.
+    """
+    p = scene.params
+    if float(p.M) == 0.0 and float(p.mu_s) == 0.0:
+        state.warnings.append("M = 0 with mu_s = 0: the workpiece needs no friction and has none (|F_f| = mu_s N = 0, "
+                              "the friction cone's boundary); the hold is neutral, so the settles and the BVP "
+                              "(which counts the boundary as feasible) may give different verdicts")
