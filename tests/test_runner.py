@@ -281,19 +281,18 @@ def test_dask_cli_cluster(cli_cluster):
     assert len(addresses) >= 5 and _all_loopback(addresses), addresses
 
 
-def test_unreachable_scheduler_is_a_runner_error(monkeypatch):
+def test_unreachable_scheduler_is_a_named_scheduler_error():
     import socket
 
-    from simgrip.parallel import dask_cluster
-
-    monkeypatch.setattr(dask_cluster, "CONNECT_TIMEOUT_S", 1.0)
+    from simgrip.parallel.runner import SchedulerError
 
     with socket.socket() as s:  # a free port nobody listens on
         s.bind(("127.0.0.1", 0))
         port = s.getsockname()[1]
     t0 = time.monotonic()
-    with pytest.raises(RunnerError, match="cannot reach"):
-        run_tasks(square, [1, 2], options=RunnerOptions(scheduler=f"tcp://127.0.0.1:{port}", **QUIET))
+    with pytest.raises(SchedulerError, match="cannot reach the Dask scheduler.*nothing accepted a connection") as exc:
+        run_tasks(square, [1, 2], options=RunnerOptions(scheduler=f"tcp://127.0.0.1:{port}", connect_timeout=1.0, **QUIET))
+    assert isinstance(exc.value, RunnerError) and isinstance(exc.value, ValueError)  # a cluster failure; bad input
     assert time.monotonic() - t0 < 10
 
 

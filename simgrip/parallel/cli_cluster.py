@@ -52,13 +52,13 @@ def dask_cli_cluster(workers: int = 2, *, env: dict | None = None, log_dir=None)
 
     Yields ``(address, scheduler_file, worker_process)``; ``worker_process`` is
     the ``dask worker`` command's process (its worker processes are its
-    descendants).  ``env`` adds environment variables of the workers (e.g.
-    ``PYTHONPATH``).  Each command runs in its own process group, which is
-    stopped on exit.  Raises ``RuntimeError`` if the cluster does not come up
+    descendants), ``None`` for ``workers=0`` (a scheduler without workers).
+    ``env`` adds environment variables of the workers (e.g. ``PYTHONPATH``).
+    Each command runs in its own process group, which is stopped on exit.  Raises ``RuntimeError`` if the cluster does not come up
     within :data:`START_TIMEOUT_S`.
     """
-    if workers < 1:
-        raise ValueError(f"workers must be a positive integer, got {workers!r}")
+    if isinstance(workers, bool) or not isinstance(workers, int) or workers < 0:
+        raise ValueError(f"workers must be an integer >= 0, got {workers!r}")
     tmp = Path(tempfile.mkdtemp(prefix="simgrip-dask-"))
     logs = Path(log_dir) if log_dir is not None else tmp
     sfile = tmp / "scheduler.json"
@@ -80,6 +80,9 @@ def dask_cli_cluster(workers: int = 2, *, env: dict | None = None, log_dir=None)
             time.sleep(0.05)
         time.sleep(0.1)  # the file is written whole before this is needed, but be safe
         address = json.loads(sfile.read_text())["address"]
+        if workers == 0:
+            yield address, str(sfile), None
+            return
         with open(logs / "worker.log", "wb") as log:
             procs.append(subprocess.Popen(
                 dask + ["worker", "--scheduler-file", str(sfile), "--nworkers", str(workers), "--nthreads", "1",

@@ -1,17 +1,26 @@
-"""The Dask clusters of the runner (:mod:`simgrip.parallel.runner`): start, reach and stop them, and own their processes.
+"""The local Dask cluster of the runner (:mod:`simgrip.parallel.runner`): start it, stop it, and own its processes.
 
 * :class:`LocalDask`: a ``LocalCluster`` of single-threaded worker processes on
   127.0.0.1 (no dashboard; the scheduler's HTTP server on 127.0.0.1 and a free
-  port), started in a helper thread with SIGINT blocked, so that the workers
-  inherit the block (they leave a terminal's Ctrl-C to the runner) while the
-  calling thread stays interruptible; :meth:`LocalDask.stop` closes it, and
-  after an interrupt kills its processes first (found in ``/proc`` as the
-  descendants this process gained since the start).
-* :class:`RemoteDask`: a ``Client`` of an existing cluster; :meth:`RemoteDask.stop`
-  cancels this run's tasks and disconnects, leaving the cluster running.
+  port), never more of them than :func:`worker_cap` allows (a stated multiple
+  of the cores, and the number of tasks).  It is started in a helper thread
+  with SIGINT blocked, so that the workers inherit the block (they leave a
+  terminal's Ctrl-C to the runner) while the calling thread stays
+  interruptible; :meth:`LocalDask.stop` closes it, and after an interrupt kills
+  its processes first (found in ``/proc`` as the descendants this process
+  gained since the start).
+* The cluster is one that distributed's exit handler leaves alone
+  (``shutdown_on_close`` false): the runner closes or kills its own
+  processes.  Otherwise, after a Ctrl-C during the start, that handler closed
+  the cluster at exit (waiting up to 10 s) while the abandoned start closed it
+  too; whichever finished first stopped the event loop under the other, whose
+  ``distributed.utils.sync`` then ended in ``UnboundLocalError`` (a cancelled
+  wait leaves its ``result`` unset): the ``Exception ignored in atexit
+  callback ... UnboundLocalError`` of issue 16.
 * :func:`quiet_dask_logs`: distributed logs a lost scheduler or worker with
   tracebacks; the runner reports it once, as a ``RunnerError``.
 
+The remote cluster (``--scheduler``) is :mod:`simgrip.parallel.remote`.
 ``distributed`` is imported inside the functions: importing this module costs nothing.
 """
 
@@ -20,57 +29,70 @@ from __future__ import annotations
 import contextlib
 import os
 import signal
-import sys
 import threading
 
-__all__ = ["LocalDask", "RemoteDask", "descendants", "quiet_dask_logs"]
+from simgrip.parallel.helper_thread import call_in_helper
 
-#: Seconds allowed to reach a remote scheduler.
-CONNECT_TIMEOUT_S = 10.0
+__all__ = ["LocalDask", "MAX_WORKERS_PER_CORE", "available_cores", "worker_cap", "descendants", "quiet_dask_logs"]
+
 #: Seconds allowed to close the local cluster after an interrupt before its processes are killed.
 CLOSE_TIMEOUT_S = 1.0
 #: Seconds allowed to close it after a normal end (a busy machine needs several).
 CLOSE_GRACEFUL_S = 15.0
+#: Seconds an interrupted start is given to end (what it made is then closed by its own thread).
+START_ABORT_S = 1.0
+#: Local worker processes per core at most.  A task (a settle, a BVP solve) is one CPU-bound thread, so more
+#: processes than cores only share the cores (and cost ~150 MB each); two per core still lets a task that waits
+#: (I/O, a figure's file) overlap with one that computes.  ``--jobs`` above this is capped, not refused.
+MAX_WORKERS_PER_CORE = 2
 
 
-def _in_blocked_thread(make):
-    """``make()`` run in a helper thread with SIGINT blocked; this thread waits, interruptibly.
+def available_cores() -> int:
+    """Cores this process may run on (its CPU affinity; ``os.cpu_count()`` where there is none), at least 1."""
+    try:
+        return max(1, len(os.sched_getaffinity(0)))
+    except AttributeError:  # pragma: no cover - not Linux
+        return max(1, os.cpu_count() or 1)
 
-    Threads and processes that ``make`` starts inherit the blocked mask (across
-    exec too): the cluster's worker processes leave a terminal's Ctrl-C (sent to
-    the whole process group) to this process, which stops them; and this
-    thread, not blocking it, raises KeyboardInterrupt at once, even while the
-    cluster is still starting.
+
+def worker_cap(requested: int, tasks: int | None = None) -> int:
+    """Worker processes to start for ``requested`` (``--jobs``) and ``tasks`` tasks.
+
+    ``min(requested, tasks, MAX_WORKERS_PER_CORE * available_cores())``, at
+    least 1: a worker without a task, or beyond what the cores can run, only
+    costs memory and start-up time.
     """
-    box = {}
+    if isinstance(requested, bool) or not isinstance(requested, int) or requested < 1:
+        raise ValueError(f"jobs must be a positive integer, got {requested!r}")
+    n = min(requested, MAX_WORKERS_PER_CORE * available_cores())
+    if tasks is not None:
+        n = min(n, max(1, int(tasks)))
+    return n
 
-    def target():
-        if hasattr(signal, "pthread_sigmask"):
-            signal.pthread_sigmask(signal.SIG_BLOCK, {signal.SIGINT})
-        try:
-            box["value"] = make()
-        except BaseException as exc:  # handed to the waiting thread
-            box["error"] = exc
 
-    helper = threading.Thread(target=target, name="simgrip-cluster-start", daemon=True)
-    helper.start()
-    while helper.is_alive():
-        helper.join(0.05)
-    if "error" in box:
-        raise box["error"]
-    return box["value"]
+def _owned_local_cluster():
+    """``LocalCluster`` that distributed's exit handler (``close_clusters``) leaves alone: the runner closes it."""
+    from distributed import LocalCluster
+
+    class OwnedLocalCluster(LocalCluster):
+        """A LocalCluster closed (or killed) by :class:`LocalDask` only, never again at interpreter exit."""
+
+        # SpecCluster.__init__ sets shutdown_on_close=True; atexit's close_clusters closes such clusters
+        shutdown_on_close = property(lambda self: False, lambda self, value: None)
+
+    return OwnedLocalCluster
 
 
 def _start_local(workers: int):
     """``(LocalCluster, Client)``: ``workers`` processes of one thread on 127.0.0.1, no dashboard."""
     import dask
-    from distributed import Client, LocalCluster
+    from distributed import Client
 
     # distributed's nannies set MALLOC_TRIM_THRESHOLD_=65536 in their workers: glibc then trims (and stops
     # adapting its mmap threshold) so often that a settle costs ~10 % more CPU (measured: 30 vs 27 ms per
     # point at n = 32); the workers keep glibc's adaptive default, and the single-threaded BLAS variables
     with dask.config.set({"distributed.nanny.pre-spawn-environ.MALLOC_TRIM_THRESHOLD_": None}):
-        cluster = LocalCluster(
+        cluster = _owned_local_cluster()(
             n_workers=workers, threads_per_worker=1, processes=True, host="127.0.0.1",
             # the scheduler always serves HTTP (/health, /metrics): on 127.0.0.1 and a free port, so
             # that a busy 8787 (another cluster) neither fails the start nor warns; no dashboard on it
@@ -80,7 +102,8 @@ def _start_local(workers: int):
     try:
         return cluster, Client(cluster, set_as_default=False)
     except BaseException:
-        cluster.close(timeout=CLOSE_TIMEOUT_S)
+        with contextlib.suppress(Exception):
+            cluster.close(timeout=CLOSE_TIMEOUT_S)
         raise
 
 
@@ -126,41 +149,37 @@ def _kill(pids) -> None:
 
 
 class LocalDask:
-    """A LocalCluster of ``workers`` processes and its Client, for one run; :meth:`stop` closes it (and kills its
-    processes if need be)."""
+    """A LocalCluster of at most ``workers`` processes (:func:`worker_cap`, given ``tasks``) and its Client, for one
+    run; :meth:`stop` closes it (and kills its processes if need be).
 
-    def __init__(self, workers: int):
+    ``workers`` is the number of processes actually started.  Ctrl-C or
+    SIGTERM (as ``KeyboardInterrupt``) during the start kills the processes
+    started so far and re-raises within ~:data:`START_ABORT_S`; the start's
+    own thread closes whatever it still makes.
+    """
+
+    def __init__(self, workers: int, tasks: int | None = None):
         # multiprocessing starts its resource tracker with the first worker and then UNBLOCKS SIGINT in the
         # spawning thread (resource_tracker.ensure_running): start it first, so the workers' block holds
         from multiprocessing import resource_tracker
 
+        self.workers = worker_cap(workers, tasks)
         resource_tracker.ensure_running()
         self.before = descendants()
-        spec = sys.modules.get("distributed.deploy.spec")
-        self.known = {id(c) for c in spec.SpecCluster._instances} if spec else set()
-        try:
-            self.cluster, self.client = _in_blocked_thread(lambda: _start_local(workers))
-        except BaseException:  # Ctrl-C or a failure while starting: no worker may outlive it
-            self._abandon()
-            raise
+        self.cluster = self.client = None
+        self.cluster, self.client = call_in_helper(
+            lambda: _start_local(self.workers), name="simgrip-cluster-start", block_sigint=True,
+            discard=self._discard, on_give_up=lambda: _kill(self.spawned()), settle=START_ABORT_S)
 
-    def _abandon(self) -> None:
-        """After a failed start: close what was started (briefly), kill its processes, and keep distributed's
-        exit handler from waiting for it again."""
-        spec = sys.modules.get("distributed.deploy.spec")
-        started = [c for c in (list(spec.SpecCluster._instances) if spec else []) if id(c) not in self.known]
+    def _discard(self, made) -> None:
+        """In the start's thread, after the caller gave up: close what the start made, kill its processes."""
+        cluster, client = made
+        from simgrip.parallel.remote import close_client
 
-        def close():
-            for c in started:
-                with contextlib.suppress(Exception):
-                    c.close(timeout=CLOSE_TIMEOUT_S)
-
-        closer = threading.Thread(target=close, daemon=True)
-        closer.start()
-        closer.join(CLOSE_TIMEOUT_S)
+        close_client(client, CLOSE_TIMEOUT_S)
         _kill(self.spawned())
-        for c in started:
-            spec.SpecCluster._instances.discard(c)
+        with contextlib.suppress(Exception):
+            cluster.close(timeout=CLOSE_TIMEOUT_S)
 
     def spawned(self) -> set[int]:
         """Processes started since the cluster was (its workers), except multiprocessing's resource
@@ -177,6 +196,7 @@ class LocalDask:
         return out
 
     def stop(self, interrupted: bool) -> None:
+        """Close the cluster: after an interrupt or failure within ~2 s, its worker processes killed first."""
         if interrupted:
             # no restarts: the nannies are told the workers may go away, then the workers are killed
             for nanny in list(self.cluster.workers.values()):
@@ -184,54 +204,21 @@ class LocalDask:
                     nanny.close_gracefully(reason="simgrip interrupted")
             _kill(self.spawned())
         timeout = CLOSE_TIMEOUT_S if interrupted else CLOSE_GRACEFUL_S
-        closer = threading.Thread(target=self._close, args=(timeout,), daemon=True)
+        closer = threading.Thread(target=self._close, args=(timeout,), name="simgrip-cluster-close", daemon=True)
         closer.start()
         closer.join(2 * timeout)
         _kill(self.spawned())  # whatever is still alive (a worker stuck in C code, a restarted one)
-        if closer.is_alive() or getattr(getattr(self.cluster, "status", None), "name", "") != "closed":
-            # its processes are gone: distributed's own exit handler must not wait for it again (10 s)
-            with contextlib.suppress(Exception):
-                from distributed.deploy.spec import SpecCluster
+        if getattr(self.client, "status", None) != "closed":
+            # its close timed out: distributed's Client.__del__ must not wait for it again (2 x 30 s)
+            from simgrip.parallel.remote import forget_client
 
-                SpecCluster._instances.discard(self.cluster)
+            forget_client(self.client)
 
     def _close(self, timeout: float) -> None:
         with contextlib.suppress(Exception):
             self.client.close(timeout=timeout)
         with contextlib.suppress(Exception):
             self.cluster.close(timeout=timeout)
-
-
-class RemoteDask:
-    """A Client of an existing cluster (``scheduler`` address or ``scheduler_file``); :meth:`stop` cancels this
-    call's work (``futures``) and disconnects."""
-
-    def __init__(self, scheduler: str | None = None, scheduler_file: str | None = None):
-        from distributed import Client
-
-        from simgrip.parallel.runner import RunnerError
-
-        self.where = scheduler if scheduler is not None else f"scheduler file {scheduler_file}"
-        try:
-            if scheduler is not None:
-                self.client = Client(scheduler, timeout=CONNECT_TIMEOUT_S, set_as_default=False)
-            else:
-                self.client = Client(scheduler_file=scheduler_file, timeout=CONNECT_TIMEOUT_S, set_as_default=False)
-        except (OSError, TimeoutError) as exc:
-            raise RunnerError(f"cannot reach the Dask scheduler at {self.where}: {exc}") from None
-        self.futures = []
-
-    def stop(self, interrupted: bool) -> None:
-        def close():
-            with contextlib.suppress(Exception):
-                if interrupted and self.futures:
-                    self.client.cancel(self.futures, force=True)
-            with contextlib.suppress(Exception):
-                self.client.close(timeout=CLOSE_TIMEOUT_S)
-
-        closer = threading.Thread(target=close, daemon=True)
-        closer.start()
-        closer.join(2 * CLOSE_TIMEOUT_S)
 
 
 @contextlib.contextmanager

@@ -6,10 +6,23 @@ to spread independent work (settles, solves, figures) over processes:
 * ``jobs=1`` (and no scheduler): a plain in-process loop; Dask is not imported.
 * otherwise a :mod:`dask.distributed` cluster: by default a ``LocalCluster`` of
   ``jobs`` worker processes (one thread each) on 127.0.0.1 with no dashboard,
-  started for the call and closed after it; or an existing cluster reached by
+  started for the call and closed after it -- never more processes than there
+  are tasks, nor than :data:`~simgrip.parallel.dask_cluster.MAX_WORKERS_PER_CORE`
+  per core (:func:`~simgrip.parallel.dask_cluster.worker_cap`; a larger
+  ``jobs`` is capped, not refused); or an existing cluster reached by
   ``scheduler`` (address, e.g. ``tcp://127.0.0.1:8786``) or ``scheduler_file``
   (``dask scheduler --scheduler-file``), which is left running
-  (:mod:`simgrip.parallel.dask_cluster` starts, reaches and stops them).
+  (:mod:`simgrip.parallel.dask_cluster` starts and stops the local one,
+  :mod:`simgrip.parallel.remote` reaches the existing one).
+
+An existing cluster is reached within ``connect_timeout`` (10 s,
+``--connect-timeout``) or not at all: a bad address or scheduler file,
+nothing listening, a server that is not a Dask scheduler, each raise a named
+:class:`SchedulerError` (a ``ValueError``: the command exits with status 2)
+within that time, and no traceback follows at exit.  A scheduler that has had
+no worker for ``worker_wait`` seconds (30 s, ``--worker-wait``) while the run
+waits for results raises :class:`RunnerError` (exit status 1) instead of
+waiting at 0 % forever.
 
 Items are grouped into contiguous batches, one Dask task per batch, so that the
 scheduler's per-task overhead (~ms) stays small against the work; results come
@@ -42,11 +55,24 @@ import time
 from dataclasses import dataclass
 from typing import Callable, Iterable
 
+from simgrip.parallel.dask_cluster import MAX_WORKERS_PER_CORE, available_cores, worker_cap
+from simgrip.parallel.errors import RunnerError, SchedulerError
+from simgrip.parallel.remote import (
+    DEFAULT_CONNECT_TIMEOUT_S,
+    DEFAULT_WORKER_WAIT_S,
+    MAX_CONNECT_TIMEOUT_S,
+    check_address,
+    check_seconds,
+    read_scheduler_file,
+)
 from simgrip.threads import blas_threads
 
 __all__ = [
     "RunnerOptions",
     "RunnerError",
+    "SchedulerError",
+    "MAX_WORKERS_PER_CORE",
+    "worker_cap",
     "add_runner_arguments",
     "runner_options",
     "run_tasks",
@@ -59,10 +85,6 @@ MAX_BATCH = 32
 BATCHES_PER_WORKER = 4
 
 
-class RunnerError(RuntimeError):
-    """The cluster failed (scheduler unreachable or gone, workers lost repeatedly); ``fn`` did not raise."""
-
-
 @dataclass(frozen=True)
 class RunnerOptions:
     """How :func:`run_tasks` runs.
@@ -71,19 +93,30 @@ class RunnerOptions:
     ----------
     jobs : int or None
         Local worker processes (default: all cores available to this process);
-        ``1`` runs a plain in-process loop without Dask.  Unused with a scheduler.
+        ``1`` runs a plain in-process loop without Dask.  Capped at
+        :data:`MAX_WORKERS_PER_CORE` per core and at the number of tasks.
+        Unused with a scheduler.
     scheduler : str or None
-        Address of an existing ``dask.distributed`` scheduler, e.g. ``"tcp://127.0.0.1:8786"``.
+        Address of an existing ``dask.distributed`` scheduler, e.g. ``"tcp://127.0.0.1:8786"``
+        (checked here, without the network: :class:`SchedulerError` when malformed).
     scheduler_file : str or None
-        Or the scheduler file it wrote (``dask scheduler --scheduler-file FILE``).
+        Or the scheduler file it wrote (``dask scheduler --scheduler-file FILE``; read here:
+        :class:`SchedulerError` when missing, not JSON or without an address).
     progress : bool
         One tqdm progress bar on stderr.
+    connect_timeout : float
+        Seconds allowed to reach the scheduler, in (0, 3600] [default 10].
+    worker_wait : float
+        Seconds the scheduler may have no worker while the run waits before it fails;
+        ``inf`` waits for ever [default 30].
     """
 
     jobs: int | None = None
     scheduler: str | None = None
     scheduler_file: str | None = None
     progress: bool = True
+    connect_timeout: float = DEFAULT_CONNECT_TIMEOUT_S
+    worker_wait: float = DEFAULT_WORKER_WAIT_S
 
     def __post_init__(self):
         if self.jobs is not None:
@@ -91,10 +124,12 @@ class RunnerOptions:
                 raise ValueError(f"jobs must be a positive integer, got {self.jobs!r}")
         if self.scheduler is not None and self.scheduler_file is not None:
             raise ValueError("scheduler and scheduler_file are exclusive: give one of --scheduler, --scheduler-file")
-        if self.scheduler is not None and (not isinstance(self.scheduler, str) or not self.scheduler.strip()):
-            raise ValueError(f"scheduler must be an address such as tcp://127.0.0.1:8786, got {self.scheduler!r}")
-        if self.scheduler_file is not None and not os.path.isfile(self.scheduler_file):
-            raise ValueError(f"scheduler-file {self.scheduler_file!r} does not exist (dask scheduler --scheduler-file FILE)")
+        check_seconds(self.connect_timeout, "connect-timeout", upper=MAX_CONNECT_TIMEOUT_S)
+        check_seconds(self.worker_wait, "worker-wait", allow_inf=True)
+        if self.scheduler is not None:
+            check_address(self.scheduler)
+        if self.scheduler_file is not None:
+            read_scheduler_file(self.scheduler_file)
 
     @property
     def remote(self) -> bool:
@@ -103,13 +138,9 @@ class RunnerOptions:
 
     @property
     def local_workers(self) -> int:
-        """Worker processes of the local cluster (``jobs`` or all available cores)."""
-        if self.jobs is not None:
-            return self.jobs
-        try:
-            return max(1, len(os.sched_getaffinity(0)))
-        except AttributeError:  # pragma: no cover - not Linux
-            return max(1, os.cpu_count() or 1)
+        """Worker processes of the local cluster: ``jobs`` (default all available cores), at most
+        :data:`MAX_WORKERS_PER_CORE` per core (a run with fewer tasks starts fewer)."""
+        return worker_cap(self.jobs if self.jobs is not None else available_cores())
 
     @property
     def in_process(self) -> bool:
@@ -118,29 +149,46 @@ class RunnerOptions:
 
 
 def add_runner_arguments(parser) -> None:
-    """Add ``--jobs N``, ``--scheduler ADDRESS``, ``--scheduler-file FILE`` and ``--no-progress`` to ``parser``."""
+    """Add ``--jobs N``, ``--scheduler ADDRESS``, ``--scheduler-file FILE``, ``--connect-timeout SECONDS``,
+    ``--worker-wait SECONDS`` and ``--no-progress`` to ``parser``."""
     g = parser.add_argument_group("parallel runner (Dask)")
     g.add_argument("--jobs", type=int, default=None,
-                   help="local worker processes [default: all cores]; 1 = in-process, no Dask")
+                   help=f"local worker processes [default: all cores]; 1 = in-process, no Dask; at most "
+                        f"{MAX_WORKERS_PER_CORE} per core and one per task are started")
     g.add_argument("--scheduler", default=None, metavar="ADDRESS",
                    help="run on an existing dask.distributed cluster, e.g. tcp://127.0.0.1:8786")
     g.add_argument("--scheduler-file", default=None, metavar="FILE",
                    help="or reach it through its scheduler file (dask scheduler --scheduler-file FILE)")
+    g.add_argument("--connect-timeout", type=float, default=None, metavar="SECONDS",
+                   help=f"with --scheduler/--scheduler-file: give up (exit 2) when no Dask scheduler answers "
+                        f"within this time [default {DEFAULT_CONNECT_TIMEOUT_S:g}]")
+    g.add_argument("--worker-wait", type=float, default=None, metavar="SECONDS",
+                   help=f"with --scheduler/--scheduler-file: fail (exit 1) when the scheduler has had no worker "
+                        f"for this long; inf waits for ever [default {DEFAULT_WORKER_WAIT_S:g}]")
     g.add_argument("--no-progress", action="store_true", help="no progress bar")
 
 
 def runner_options(args) -> RunnerOptions:
     """:class:`RunnerOptions` from arguments parsed with :func:`add_runner_arguments`.
 
-    Raises ``ValueError`` naming the option (``jobs``, ``scheduler``, ``scheduler-file``).
+    Raises ``ValueError`` naming the option (``jobs``, ``scheduler``,
+    ``scheduler-file``, ``connect-timeout``, ``worker-wait``), before any work.
     """
     jobs = getattr(args, "jobs", None)
     scheduler = getattr(args, "scheduler", None)
     scheduler_file = getattr(args, "scheduler_file", None)
-    if jobs is not None and (scheduler is not None or scheduler_file is not None):
+    remote = scheduler is not None or scheduler_file is not None
+    if jobs is not None and remote:
         raise ValueError("jobs is not used with --scheduler/--scheduler-file (the cluster's workers run the tasks)")
+    extra = {}
+    for attr, option in (("connect_timeout", "connect-timeout"), ("worker_wait", "worker-wait")):
+        value = getattr(args, attr, None)
+        if value is not None:
+            if not remote:
+                raise ValueError(f"{option} is used only with --scheduler/--scheduler-file")
+            extra[attr] = value
     return RunnerOptions(jobs=jobs, scheduler=scheduler, scheduler_file=scheduler_file,
-                         progress=not getattr(args, "no_progress", False))
+                         progress=not getattr(args, "no_progress", False), **extra)
 
 
 def default_batch_size(n_items: int, workers: int) -> int:
@@ -245,16 +293,25 @@ def _run_dask(fn, items, options, batch_size, on_result, bar) -> list:
 def _run_dask_quietly(fn, items, options, batch_size, on_result, bar) -> list:
     from distributed import KilledWorker, as_completed
 
-    from simgrip.parallel.dask_cluster import LocalDask, RemoteDask
+    from simgrip.parallel.dask_cluster import LocalDask
+    from simgrip.parallel.remote import RemoteDask, WorkerWatch
 
     interrupted = False
-    env = RemoteDask(options.scheduler, options.scheduler_file) if options.remote else LocalDask(options.local_workers)
+    watch = None
+    if options.remote:
+        env = RemoteDask(options.scheduler, options.scheduler_file, timeout=options.connect_timeout)
+        workers = max(1, len(env.identity.get("workers", {})))
+    else:
+        workers = min(options.local_workers, len(items))
+    if batch_size is None:
+        batch_size = default_batch_size(len(items), workers)
+    starts = list(range(0, len(items), batch_size))
+    if not options.remote:
+        env = LocalDask(workers, tasks=len(starts))  # no more processes than tasks
     try:
         client = env.client
-        if batch_size is None:
-            workers = options.local_workers if not options.remote else max(1, len(client.scheduler_info()["workers"]))
-            batch_size = default_batch_size(len(items), workers)
-        starts = list(range(0, len(items), batch_size))
+        if options.remote:
+            watch = WorkerWatch(client, env.where, options.worker_wait, workers=len(env.identity.get("workers", {})))
         futures = [client.submit(_run_batch, fn, items[s:s + batch_size], pure=False, key=f"simgrip-batch-{s}-{_token()}")
                    for s in starts]
         env.futures = futures
@@ -262,7 +319,10 @@ def _run_dask_quietly(fn, items, options, batch_size, on_result, bar) -> list:
         out = [None] * len(items)
         losses = {}
         pending = as_completed(futures, loop=client.loop)
-        for fut in pending:
+        while True:
+            fut = _next_done(pending, watch)
+            if fut is None:
+                break
             if fut.status in ("lost", "pending") and _connected(client) and losses.get(fut.key, 0) < _MAX_LOSSES:
                 # its result sat on a worker that died after the batch finished: the scheduler recomputes it
                 losses[fut.key] = losses.get(fut.key, 0) + 1
@@ -295,6 +355,21 @@ def _run_dask_quietly(fn, items, options, batch_size, on_result, bar) -> list:
         raise
     finally:
         env.stop(interrupted)
+
+
+#: Seconds between checks while no batch is done (signals are handled at once; this only paces the worker watch).
+_POLL_S = 0.05
+
+
+def _next_done(pending, watch):
+    """The next completed future of ``pending`` (``None`` when all are done), checking ``watch`` while waiting."""
+    while not pending.has_ready():
+        if pending.is_empty():
+            return None
+        if watch is not None:
+            watch.check()
+        time.sleep(_POLL_S)
+    return next(pending)
 
 
 _MAX_LOSSES = 5  # times one batch's result may be lost with its worker before the run gives up
