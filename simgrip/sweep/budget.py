@@ -275,7 +275,8 @@ def check_sweep(counts: dict, links: int, method: str = "newton", *, workers: in
     for name, c in counts.items():
         if c > MAX_AXIS_VALUES:
             raise ValueError(f"{name}: {count_text(c)} values on one axis; at most {MAX_AXIS_VALUES} "
-                             f"(every value is listed in sweep.json)")
+                             f"(every value is listed in sweep.json; the grid's {count_text(est.points)} points "
+                             f"would need {est.describe()})")
     return est
 
 
