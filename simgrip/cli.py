@@ -336,7 +336,7 @@ def _cmd_bench(args) -> dict:
 
     if args.jobs is not None and args.jobs < 1:
         raise ValueError(f"jobs must be a positive integer, got {args.jobs!r}")
-    if args.jobs is not None:  # at most 4 per core and what memory holds (a note), refused above MAX_JOBS
+    if args.jobs is not None:  # at most 2 per core and what memory holds (a note), refused above MAX_JOBS
         from simgrip.sweep.budget import MAX_JOBS, cap_jobs
 
         args.jobs, why = cap_jobs(args.jobs, MAX_JOBS)

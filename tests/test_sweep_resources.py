@@ -5,7 +5,7 @@
   naming the option(s) and the estimate (exit 2), fast and without allocating;
 * the estimate's bounds (points, memory, disk, time) each refuse, on a stated
   machine (:class:`simgrip.sweep.budget.Machine`);
-* ``--jobs`` above the bound is refused, above the tasks or 4 per core capped
+* ``--jobs`` above the bound is refused, above the tasks or 2 per core capped
   with a note; ``stress --cases 1000000000`` is refused;
 * a running sweep streams its rows: the client's memory does not grow with
   the number of points (measured with tracemalloc on a fast stand-in for the
@@ -22,7 +22,7 @@ import pytest
 from simgrip.cli import main
 from simgrip.parallel.runner import RunnerOptions
 from simgrip.sweep import budget, run as sweep_run
-from simgrip.sweep.budget import MAX_JOBS, MAX_POINTS, Machine, cap_jobs, check_stress, check_sweep
+from simgrip.sweep.budget import JOBS_PER_CORE, MAX_JOBS, MAX_POINTS, Machine, cap_jobs, check_stress, check_sweep
 from simgrip.sweep.grid import AXES, make_grid
 from simgrip.sweep.point import COLUMNS
 from simgrip.sweep.store import PARTIAL, read_csv
@@ -94,9 +94,9 @@ def test_run_sweep_checks_the_disk_of_out_before_work(tmp_path, monkeypatch):
 
 
 def test_jobs_capped_with_a_note_or_refused():
-    assert cap_jobs(1000, 6, here=SMALL) == (6, "jobs 1000 lowered to 6 (6 tasks to run)")
+    assert cap_jobs(1000, 3, here=SMALL) == (3, "jobs 1000 lowered to 3 (3 tasks to run)")
     jobs, note = cap_jobs(1000, 10**6, here=SMALL)
-    assert jobs == 8 and "4 per core on 2 cores" in note
+    assert jobs == 2 * JOBS_PER_CORE and f"{JOBS_PER_CORE} per core on 2 cores" in note
     jobs, note = cap_jobs(64, 10**6, here=Machine(memory=2 * 2**30, cores=64))
     assert jobs == 3 and "memory" in note  # 1 GB of the 2 GB available at 300 MB a worker
     assert cap_jobs(2, 100, here=SMALL) == (2, None)

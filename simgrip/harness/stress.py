@@ -342,7 +342,7 @@ def run_stress(
     jobs : int, optional
         Worker processes (default: all cores); 1 runs in this process.
         The outcome of every case does not depend on ``jobs``.  Capped at the
-        number of cases, 4 per core and what memory holds (a note on stderr),
+        number of cases, 2 per core and what memory holds (a note on stderr),
         refused above :data:`simgrip.sweep.budget.MAX_JOBS`.
     progress : bool
         Progress bar.
@@ -370,7 +370,7 @@ def run_stress(
     n_gripper = sg.default_gripper_cases(cases) if gripper_cases is None else gripper_cases
     if isinstance(n_gripper, bool) or not isinstance(n_gripper, (int, np.integer)) or n_gripper < 0:
         raise ValueError(f"gripper_cases must be an integer >= 0, got {gripper_cases!r}")
-    if not options.remote:  # jobs: at most the tasks, 4 per core, what memory holds; refused above MAX_JOBS
+    if not options.remote:  # jobs: at most the tasks, 2 per core, what memory holds; refused above MAX_JOBS
         capped, why = cap_jobs(options.jobs, int(cases) + int(n_gripper))
         if why:
             print(f"simgrip stress: {why}", file=sys.stderr, flush=True)

@@ -26,7 +26,7 @@ memory available now (``MemAvailable`` in ``/proc/meminfo``), the free space
 of the output folder's file system, :data:`MAX_WALL_DAYS` of wall time on the
 local workers, and never more than :data:`MAX_POINTS` points or
 :data:`MAX_AXIS_VALUES` values on one axis (the axes are listed in
-``sweep.json``).  Worker processes: at most :data:`JOBS_PER_CORE` per core
+``sweep.json``).  Worker processes: at most :data:`JOBS_PER_CORE` (2) per core
 and no more than there are tasks, and no more than fit in memory at
 :data:`WORKER_BYTES` each (a note says so when ``--jobs`` is lowered); a
 ``--jobs`` above :data:`MAX_JOBS` is refused.
@@ -37,6 +37,8 @@ from __future__ import annotations
 import math
 import os
 from dataclasses import dataclass
+
+from simgrip.parallel.dask_cluster import MAX_WORKERS_PER_CORE
 
 __all__ = [
     "MAX_POINTS", "MAX_AXIS_VALUES", "MAX_WALL_DAYS", "MAX_JOBS", "JOBS_PER_CORE", "MAX_CASES",
@@ -68,8 +70,9 @@ CHUNK_DASK = 8192
 #: Client memory of one chunk in flight (points and records of the larger chunk).
 CHUNK_BYTES = CHUNK_DASK * (POINT_BYTES + RECORD_BYTES)
 #: Settles are CPU-bound single-threaded tasks: beyond one worker per core nothing is gained; up to this many per
-#: core are started (a small machine can still run a cluster of a few workers), more are capped with a note.
-JOBS_PER_CORE = 4
+#: core are started (the runner's own cap, :data:`simgrip.parallel.dask_cluster.MAX_WORKERS_PER_CORE`), more are
+#: capped with a note.
+JOBS_PER_CORE = MAX_WORKERS_PER_CORE
 #: A --jobs above this is refused: no machine this runs on has use for more local worker processes.
 MAX_JOBS = 1024
 #: Memory of one local worker process with simgrip, MuJoCo, SciPy and distributed imported (~250 MB), rounded up.

@@ -156,7 +156,7 @@ def run_sweep(grid: SweepGrid, *, out=None, options: RunnerOptions = RunnerOptio
         (:attr:`SweepResult.records`).
     options : RunnerOptions
         In-process, local Dask cluster or existing cluster.  A local ``jobs``
-        is capped (:func:`simgrip.sweep.budget.cap_jobs`: the tasks, 4 per
+        is capped (:func:`simgrip.sweep.budget.cap_jobs`: the tasks, 2 per
         core, memory; a note says so) and refused above
         :data:`~simgrip.sweep.budget.MAX_JOBS`.
     batch_size : int, optional
