@@ -50,7 +50,9 @@ EXIT_USAGE = 2
 EXIT_INTERRUPTED = 130  # 128 + SIGINT, what shells report for a Ctrl-C
 #: Most nodes of solve's discrete stability check: its error falls as 1/K^2, ~1e-8 relative here, in about 2 s.
 MAX_K = 16384
-#: Links above which simulate/compare say on stderr that the settle takes a while (~3 s at 512 links).
+#: simulate/compare print progress lines on stderr (model build, settle) for a model whose compile takes
+#: seconds: MuJoCo's compile solves the mass matrix once per body, work ~ fingers * links^3, about 3 s for
+#: one finger of SLOW_LINKS links (the threshold: fingers * links^3 > SLOW_LINKS^3).
 SLOW_LINKS = 512
 #: Output options and whether each names a folder (True) or a file (False), checked before any work.
 OUTPUT_OPTIONS = {"out": ("--out", True), "png": ("--png", False), "gif": ("--gif", False)}
@@ -204,9 +206,16 @@ def _links(value) -> int:
             f"links must be at most {MAX_LINKS}, got {n!r} (the chain's error at {MAX_LINKS} links is "
             f"already below the contact tolerance; see simgrip.params)"
         )
-    if n > SLOW_LINKS:
-        print(f"simgrip: {n} links per finger: building and settling take several seconds", file=sys.stderr, flush=True)
     return n
+
+
+def _progress(args, links: int):
+    """Progress lines on stderr (:class:`simgrip.progress.StderrProgress`) for a model whose build and settle
+    take seconds (see :data:`SLOW_LINKS`), else None (silent)."""
+    from simgrip.progress import StderrProgress
+
+    fingers = getattr(args, "fingers", None) or 1
+    return StderrProgress(f"simgrip {args.command}") if fingers * links ** 3 > SLOW_LINKS ** 3 else None
 
 
 def _seed(value) -> int:
@@ -237,11 +246,12 @@ def _cmd_simulate(args) -> dict:
         from simgrip.gripper import gripper_record, simulate_gripper
 
         profile = gripper.pop("profile")
-        state = simulate_gripper(grip, params, profile, links, **gripper)
+        state = simulate_gripper(grip, params, profile, links, progress=_progress(args, links), **gripper)
         return gripper_record(state, params, profile)
     profile = _profile(args, grip)
     return settled_record(simulate(grip, params, profile, links, method=args.method or "newton",
-                                   target_error=args.target_error, contact=args.contact),
+                                   target_error=args.target_error, contact=args.contact,
+                                   progress=_progress(args, links)),
                           params, profile)
 
 
@@ -294,10 +304,11 @@ def _cmd_compare(args) -> str:
     if gripper is not None:
         from simgrip.compare_gripper import compare_gripper
 
-        result = compare_gripper(grip, params, gripper.pop("profile"), links, **gripper)
+        result = compare_gripper(grip, params, gripper.pop("profile"), links, progress=_progress(args, links),
+                                 **gripper)
     else:
         result = compare(grip, params, _profile(args, grip), links, method=args.method or "newton",
-                         target_error=args.target_error, contact=args.contact)
+                         target_error=args.target_error, contact=args.contact, progress=_progress(args, links))
     if args.json:
         return json.dumps(to_jsonable(result), allow_nan=False)
     if gripper is None:
@@ -466,28 +477,13 @@ def _clean_after_interrupt(folders: list[Path], created: list[Path]) -> None:
             folder.rmdir()  # only if empty
 
 
-@contextlib.contextmanager
-def _signals_as_interrupt():
-    """Within the block, SIGINT and SIGTERM raise ``KeyboardInterrupt`` (main thread only).
+def _signals_as_interrupt(on_stuck=None):
+    """Within the block, SIGINT and SIGTERM raise ``KeyboardInterrupt`` (main thread only), and with
+    ``on_stuck`` a watchdog ends a run whose main thread is inside a long C call: see
+    :func:`simgrip.interrupt.signals_as_interrupt`."""
+    from simgrip.interrupt import signals_as_interrupt
 
-    SIGINT gets Python's own handler even when the process started with SIGINT
-    ignored (as commands started in the background by a non-interactive shell
-    are, e.g. under ``timeout -s INT``): an interrupt must always stop the run.
-    """
-    if threading.current_thread() is not threading.main_thread():
-        yield
-        return
-
-    def _raise(signum, frame):
-        raise KeyboardInterrupt
-
-    previous = {sig: signal.signal(sig, handler) for sig, handler in
-                ((signal.SIGINT, signal.default_int_handler), (signal.SIGTERM, _raise))}
-    try:
-        yield
-    finally:
-        for sig, handler in previous.items():
-            signal.signal(sig, handler)
+    return signals_as_interrupt(on_stuck)
 
 
 def _command_name(argv: list[str]) -> str:
@@ -502,18 +498,45 @@ def _quiet_stdout() -> None:
         os.dup2(os.open(os.devnull, os.O_WRONLY), sys.stdout.fileno())
 
 
+def _say_interrupted(prefix: str) -> None:
+    """The one line of an interrupted run on stderr (off a progress bar's line on a terminal)."""
+    with contextlib.suppress(OSError, ValueError):
+        start = "\n" if sys.stderr.isatty() else ""
+        sys.stderr.write(f"{start}{prefix}: interrupted\n")
+        sys.stderr.flush()
+
+
 def main(argv=None) -> int:
     """Entry point of the ``simgrip`` command; returns the exit status.
 
     0: done; 1: a solver or the cluster failed (named); 2: bad input (named);
-    130: interrupted (Ctrl-C or SIGTERM).
+    130: interrupted (Ctrl-C or SIGTERM), within 2 s of the signal even when
+    the main thread is inside one long C call (MuJoCo's compile of a large
+    model): a watchdog (:mod:`simgrip.interrupt`) then cleans up, prints the
+    same one line, stops the run's worker processes and ends the process.
     """
+    import os
+
+    import simgrip.io  # noqa: F401  (now: the watchdog's clean-up must not wait on an import of the main thread)
+    from simgrip.interrupt import Finish, kill_descendants
+
     argv = list(sys.argv[1:] if argv is None else argv)
     command = _command_name(argv)
     prefix = f"simgrip {command}" if command else "simgrip"
-    folders: list[Path] = []
-    created: list[Path] = []
-    with _signals_as_interrupt():
+    outputs: dict[str, list[Path]] = {"folders": [], "created": []}  # read by the watchdog's clean-up too
+    finish = Finish()
+
+    def on_stuck(signum: int) -> None:  # watchdog thread: the main thread is inside a long C call
+        if not finish.claim():
+            return
+        with contextlib.suppress(Exception):
+            _clean_after_interrupt(outputs["folders"], outputs["created"])
+        _say_interrupted(prefix)
+        with contextlib.suppress(Exception):
+            kill_descendants()
+        os._exit(EXIT_INTERRUPTED)
+
+    with _signals_as_interrupt(on_stuck):
         try:
             try:
                 parser = build_parser()
@@ -521,8 +544,8 @@ def main(argv=None) -> int:
             except SystemExit as exc:  # --help, or argparse's own message (exit 2)
                 return exc.code if isinstance(exc.code, int) else (0 if exc.code is None else EXIT_USAGE)
             try:
-                folders = _check_outputs(args)
-                created = [f for f in folders if not f.exists()]
+                outputs["folders"] = _check_outputs(args)
+                outputs["created"] = [f for f in outputs["folders"] if not f.exists()]
                 if args.command not in _NO_MUJOCO_IMPORT:
                     from simgrip.sim.gl import import_mujoco
 
@@ -541,15 +564,16 @@ def main(argv=None) -> int:
                 _quiet_stdout()
             return 0
         except KeyboardInterrupt:
-            previous = signal.signal(signal.SIGINT, signal.SIG_IGN)  # a second Ctrl-C must not cut the clean-up short
+            if not finish.claim():  # the watchdog is cleaning up and ends the process
+                threading.Event().wait()
+            # a second Ctrl-C or SIGTERM must not cut the clean-up short
+            previous = {sig: signal.signal(sig, signal.SIG_IGN) for sig in (signal.SIGINT, signal.SIGTERM)}
             try:
-                _clean_after_interrupt(folders, created)
-                with contextlib.suppress(OSError, ValueError):
-                    start = "\n" if sys.stderr.isatty() else ""  # off a progress bar's line
-                    sys.stderr.write(f"{start}{prefix}: interrupted\n")
-                    sys.stderr.flush()
+                _clean_after_interrupt(outputs["folders"], outputs["created"])
+                _say_interrupted(prefix)
             finally:
-                signal.signal(signal.SIGINT, previous)
+                for sig, handler in previous.items():
+                    signal.signal(sig, handler)
             return EXIT_INTERRUPTED
 
 

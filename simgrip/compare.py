@@ -14,6 +14,7 @@ All numbers are dimensionless (lengths over ``l``, forces on the rod over
 from __future__ import annotations
 
 import math
+import time
 
 from simgrip.params import DimensionlessParams, check_grip
 from simgrip.profiles import as_profile
@@ -22,18 +23,27 @@ from simgrip.report import difference, elastica_record
 __all__ = ["simulate", "settled_record", "reference_for", "compare", "verdict_warnings"]
 
 
-def simulate(grip: str, params: DimensionlessParams, profile, links: int, **settle_kw):
+def simulate(grip: str, params: DimensionlessParams, profile, links: int, *, progress=None, **settle_kw):
     """Build the symmetric-reduction scene of ``grip`` with ``links`` links per finger and settle it.
 
-    Returns the :class:`~simgrip.settle.SettledState`.  Extra keywords go to
-    :func:`~simgrip.settle.settle`.
+    Returns the :class:`~simgrip.settle.SettledState`, its ``build_time_s`` the
+    build and compile of the model [s] (``wall_time_s`` is the settle alone).
+    ``progress`` (:mod:`simgrip.progress`; None: silent) is told the phases.
+    Extra keywords go to :func:`~simgrip.settle.settle`.
     """
+    from simgrip.progress import phase
     from simgrip.scenes import build_scene
     from simgrip.settle import settle
 
     grip = check_grip(grip)
-    scene = build_scene(grip, params, as_profile(profile), links)
-    return settle(scene, **settle_kw)
+    t0 = time.perf_counter()
+    with phase(progress, f"building the model ({links} links per finger)"):
+        scene = build_scene(grip, params, as_profile(profile), links)
+    build_time_s = time.perf_counter() - t0
+    with phase(progress, "settling"):
+        state = settle(scene, **settle_kw)
+    state.build_time_s = build_time_s
+    return state
 
 
 def _stability(state, grip, params, profile) -> float:
@@ -59,7 +69,8 @@ def _stability(state, grip, params, profile) -> float:
 def settled_record(state, params: DimensionlessParams, profile=None) -> dict:
     """Record of a settled state in the fields of :func:`simgrip.report.elastica_record`.
 
-    Adds ``wall_time_s`` (the settle alone), ``steps``, ``held``, ``penetration`` (over ``l``),
+    Adds ``wall_time_s`` (the settle alone), ``build_time_s`` (the model's build and compile),
+    ``steps``, ``held``, ``penetration`` (over ``l``),
     ``residual``, ``links`` (the finest used), ``method``, ``warnings``, ``extrapolated`` and
     ``error_estimate`` (``settle(..., target_error=E)``: tip over ``l``, forces relative; else None).  ``feasible`` is the
     simulation's verdict: the workpiece is held, its contacts are surface contacts
@@ -108,10 +119,14 @@ def settled_record(state, params: DimensionlessParams, profile=None) -> dict:
 
 
 def settle_fields(state) -> dict:
-    """The fields every simulation record shares: held, wall time [s], steps, penetration [m], residual, converged."""
+    """The fields every simulation record shares: held, wall time [s] (the settle), build time [s] (the model's
+    build and compile; None when the state was settled from a scene built elsewhere), steps, penetration [m],
+    residual, converged."""
+    build = getattr(state, "build_time_s", None)
     return {
         "held": bool(state.held),
         "wall_time_s": float(state.wall_time_s),
+        "build_time_s": None if build is None else float(build),
         "steps": int(state.steps),
         "penetration": float(state.penetration),
         "residual": float(state.residual),

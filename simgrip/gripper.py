@@ -10,6 +10,7 @@ first finger at the top level, plus ``fingers``: one record per finger.
 from __future__ import annotations
 
 import math
+import time
 
 from simgrip.compare import settle_fields
 from simgrip.params import DimensionlessParams
@@ -20,14 +21,17 @@ __all__ = ["gripper_record", "simulate_gripper"]
 
 def simulate_gripper(grip: str, params: DimensionlessParams, profile, links: int, *, fingers: int, workpiece: str,
                      yaw: float = 0.0, contact_angle: float = 0.0, offset=(0.0, 0.0), workpiece_yaw: float = 0.0,
-                     **settle_kw):
+                     progress=None, **settle_kw):
     """Build the K-finger gripper and settle it; returns its :class:`~simgrip.settle.gripper.GripperState`.
 
     ``profile`` is one profile or one per finger; ``yaw``, ``contact_angle`` [rad], ``offset`` (over l)
     and ``workpiece_yaw`` [rad] go to :func:`~simgrip.sim.gripper.build_gripper`, extra keywords
     (``method``: default ``"auto"``, the symmetry skip where the scene is exactly symmetric, else the
-    dynamics; ``contact``, ``tol``, ...) to :func:`~simgrip.settle.gripper.settle_gripper`.
+    dynamics; ``contact``, ``tol``, ...) to :func:`~simgrip.settle.gripper.settle_gripper`.  The state's
+    ``build_time_s`` is the build and compile of the model [s] (``wall_time_s`` the settle alone);
+    ``progress`` (:mod:`simgrip.progress`; None: silent) is told the phases.
     """
+    from simgrip.progress import phase
     from simgrip.settle.gripper import settle_gripper
     from simgrip.sim.gripper import build_gripper
 
@@ -38,9 +42,15 @@ def simulate_gripper(grip: str, params: DimensionlessParams, profile, links: int
         from simgrip.scenes import start_angles  # the cradle starts where the theory does (the planar simulate's)
 
         start["initial_angles"] = start_angles("III", params, profile, links)
-    scene = build_gripper(grip, params, profile, links, fingers=fingers, workpiece=workpiece, yaw=yaw,
-                          contact_angle=contact_angle, offset=offset, workpiece_yaw=workpiece_yaw, **start)
-    return settle_gripper(scene, **settle_kw)
+    t0 = time.perf_counter()
+    with phase(progress, f"building the model ({fingers} fingers x {links} links)"):
+        scene = build_gripper(grip, params, profile, links, fingers=fingers, workpiece=workpiece, yaw=yaw,
+                              contact_angle=contact_angle, offset=offset, workpiece_yaw=workpiece_yaw, **start)
+    build_time_s = time.perf_counter() - t0
+    with phase(progress, "settling"):
+        state = settle_gripper(scene, **settle_kw)
+    state.build_time_s = build_time_s
+    return state
 
 
 def _finger(state, k: int) -> dict:
@@ -89,7 +99,7 @@ def gripper_record(state, params: DimensionlessParams, profile=None) -> dict:
     (``tip``, ``normal_force``, ``friction_force``, ``required_mu``, ``N1``,
     ``N2``; zeros when dropped), ``held`` and ``feasible`` for the workpiece
     (``feasible``: held and, Grip III, condition (23) met: ``state.tip_clear``),
-    the settle's ``steps``, ``residual``, ``penetration``, ``wall_time_s``,
+    the settle's ``steps``, ``residual``, ``penetration``, ``wall_time_s``, ``build_time_s`` (the model's),
     ``method`` (which settle ran: ``"symmetric"``, the symmetry skip, or
     ``"dynamics"``) and ``contact`` (where the friction acts: ``"point"`` or
     ``"surface"``); then ``fingers``: one record per finger (``normal_force``,

@@ -235,7 +235,8 @@ def format_comparison(result: dict) -> str:
         lines.append(f"WARNING: {w}")
 
     def footer(name, rec):
-        items = [f"time {num(v, 2, '')} s" if k == "wall_time_s" else f"{k.replace('_', ' ')} {num(v, 2, '')}"
+        times = {"wall_time_s": "time", "build_time_s": "build"}
+        items = [f"{times[k]} {num(v, 2, '')} s" if k in times else f"{k.replace('_', ' ')} {num(v, 2, '')}"
                  for k, v in rec.items() if k not in used and v is not None]
         if name == "simulation":
             items.append("warnings " + ("none" if not warnings else str(len(warnings))))

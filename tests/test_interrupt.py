@@ -11,15 +11,22 @@ does) or SIGTERM, and checks:
   of every process, so workers re-parented to init are found too);
 * ``--out`` holds no partial file: no temporary file of
   :func:`simgrip.io.atomic_write`, and every result file present is whole.
+
+:func:`test_interrupt_inside_one_long_solve` does the same to ``simulate``
+inside one long phase: MuJoCo's compile of a large model (one C call, where
+Python cannot run the signal handler: the watchdog of
+:mod:`simgrip.interrupt` ends the run) and a long settle.
 """
 
 from __future__ import annotations
 
 import json
 import os
+import re
 import signal
 import subprocess
 import sys
+import threading
 import time
 from pathlib import Path
 
@@ -136,3 +143,71 @@ def test_interrupt_stops_the_command_and_its_workers(tmp_path, command, how):
     lines = [line for line in stderr.splitlines() if line.strip()]
     assert lines == [f"simgrip {command}: interrupted"], stderr
     assert_no_partial_files(out)
+
+
+# --- inside one long solve: the model's compile (one long C call) and the settle ---------------------------
+
+#: Seconds from the signal to the exit of ``simulate`` inside one long compile or settle.  The promise is 2 s:
+#: the main thread takes a signal at its next bytecode, or, inside a C call, the watchdog acts after
+#: simgrip.interrupt.GRACE_S = 1.5 s and its clean-up and os._exit take milliseconds; 1 s more because on a
+#: 2-core machine shared with other jobs the watchdog thread and the test's own wait may each wait for a core.
+SOLVE_EXIT_WITHIN_S = 3.0
+
+#: phase -> (simulate's options, the progress line that says the phase started, seconds to wait after it).
+#: 8 fingers x 350 links: the Python spec takes < 0.5 s, then MuJoCo's compile (work ~ fingers x links^3,
+#: ~7 s on the 2-core test machine) runs in one C call, so 1.5 s after the line the signal finds the
+#: main thread inside spec.compile().  700 links, dynamics: the settle runs ~4 s, < 0.1 s a step.
+PHASES = {
+    "compile": (["--links", "350", "--fingers", "8"], "building the model (8 fingers x 350 links) ...", 1.5),
+    "settle": (["--links", "700", "--method", "dynamics"], "settling ...", 1.0),
+}
+PROGRESS_LINE = re.compile(r"^simgrip simulate: (building the model|settling)\b")
+
+
+@pytest.mark.parametrize("phase, how", [("compile", "Ctrl-C"), ("settle", "SIGTERM")])
+def test_interrupt_inside_one_long_solve(tmp_path, phase, how):
+    options, marker, wait_s = PHASES[phase]
+    argv = [sys.executable, "-m", "simgrip.cli", "simulate", "I", "--kappa", "-6", *options, "--json"]
+    env = dict(os.environ, PYTHONUNBUFFERED="1")
+    proc = subprocess.Popen(argv, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True, env=env,
+                            cwd=tmp_path, start_new_session=True)
+    lines: list[str] = []
+    started = threading.Event()
+
+    def read_stderr():
+        for line in proc.stderr:
+            lines.append(line.rstrip("\n"))
+            if line.rstrip("\n").endswith(marker):
+                started.set()
+
+    reader = threading.Thread(target=read_stderr, daemon=True)
+    reader.start()
+    try:
+        if not started.wait(START_WITHIN_S):
+            pytest.fail(f"no {marker!r} on stderr within {START_WITHIN_S} s: {lines}")
+        time.sleep(wait_s)
+        done = marker.removesuffix(" ...") + ": done in"
+        if proc.poll() is not None or any(done in line for line in lines):
+            pytest.fail(f"the {phase} ended before the signal: {lines}")
+        sent = time.monotonic()
+        if how == "Ctrl-C":
+            os.killpg(proc.pid, signal.SIGINT)
+        else:
+            proc.send_signal(signal.SIGTERM)
+        try:
+            proc.wait(timeout=SOLVE_EXIT_WITHIN_S)
+        except subprocess.TimeoutExpired:
+            pytest.fail(f"simulate still running {SOLVE_EXIT_WITHIN_S} s after {how} in the {phase}")
+        took = time.monotonic() - sent
+        stdout = proc.stdout.read()
+        reader.join(timeout=5.0)
+    finally:
+        if proc.poll() is None:
+            proc.kill()
+        proc.communicate()
+    assert proc.returncode == 130, lines
+    assert took < SOLVE_EXIT_WITHIN_S, f"{took:.1f} s"
+    assert stdout == "", stdout  # no partial JSON on stdout
+    assert lines[-1] == "simgrip simulate: interrupted", lines
+    assert all(PROGRESS_LINE.match(line) for line in lines[:-1]), lines  # progress lines only: no traceback
+    assert not session_processes(proc.pid)

@@ -87,6 +87,9 @@ class SettledState:
     penetration: float
     converged: bool
     qpos: np.ndarray = field(repr=False)
+    #: Seconds to build and compile the model (:func:`simgrip.compare.simulate`);
+    #: ``wall_time_s`` is the settle alone.  None when the state was settled from a scene built elsewhere.
+    build_time_s: float | None = None
     #: ``"newton"`` or ``"dynamics"``.
     method: str = "newton"
     #: Largest velocity at the end (dynamics; rad or l per sqrt(l/g)); 0 for Newton.
