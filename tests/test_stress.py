@@ -140,8 +140,9 @@ def test_runs_on_an_existing_dask_cluster(tmp_path):
 
     kw = dict(cases=6, seed=2, timeout_s=60.0, max_links=16)
     local = run_stress(tmp_path / "local", jobs=1, progress=False, **kw)
-    with LocalCluster(n_workers=1, threads_per_worker=1, processes=False, dashboard_address="127.0.0.1:0",
-                      scheduler_kwargs={"dashboard": False}) as cluster:
+    # tcp on 127.0.0.1: the runner refuses inproc:// addresses (they exist only inside one process)
+    with LocalCluster(n_workers=1, threads_per_worker=1, processes=False, protocol="tcp", host="127.0.0.1",
+                      dashboard_address="127.0.0.1:0", scheduler_kwargs={"dashboard": False}) as cluster:
         remote = run_stress(tmp_path / "remote", options=RunnerOptions(scheduler=cluster.scheduler_address,
                                                                        progress=False), **kw)
     strip = ("time_s",)
