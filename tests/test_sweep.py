@@ -216,6 +216,21 @@ def test_dask_cli_cluster_equals_the_loop(cli_cluster, reference):
     assert same_results(res.rows, reference.rows)
 
 
+def test_points_go_to_the_cluster_in_chunks_rows_unchanged(cli_cluster, reference, tmp_path, monkeypatch):
+    """A big sweep reaches Dask in chunks of CHUNK_DASK points (bounded client memory); 4 here: 2 chunks."""
+    import simgrip.sweep.run as sweep_run
+
+    address, _, _ = cli_cluster
+    monkeypatch.setattr(sweep_run, "CHUNK_DASK", 4)
+    calls = []
+    real = sweep_run.run_tasks
+    monkeypatch.setattr(sweep_run, "run_tasks", lambda fn, items, **kw: calls.append(len(items)) or real(fn, items, **kw))
+    res = run_sweep(small_grid(), out=tmp_path / "c", options=RunnerOptions(scheduler=address, progress=False),
+                    batch_size=1)
+    assert calls == [4, 2] and res.computed == 6
+    assert same_results(read_csv(tmp_path / "c" / "sweep.csv"), reference.rows)
+
+
 def test_a_worker_killed_mid_sweep_loses_and_doubles_nothing(cli_cluster, tmp_path):
     address, _, worker = cli_cluster
     grid = make_grid("I", kappa=(-7, -3, 6), M=(2, 8, 2), links=LINKS)
