@@ -93,3 +93,15 @@ def test_the_stability_map_counts_flagged_states_as_stress_json_does():
     ]
     assert sum(_category(c) == "flagged" for c in cases) == _counts(cases)["flagged"] == 3
     assert [_category(c) for c in cases] == ["flagged", "flagged", "dropped", "easy", "flagged"]
+
+
+def test_sweeps_timing_run_is_throughput_not_profile(capsys, tmp_path):
+    """``--profile`` was a curvature profile in solve and a timing run in sweep: the sweep's is ``--throughput``."""
+    assert main(["sweep", "I", "--kappa", "-7", "-3", "3", "--links", "8", "--out", str(tmp_path / "o"),
+                 "--profile"]) == 2
+    assert "sweep has no --profile: the points/s measurement is --throughput" in capsys.readouterr().err
+    assert not (tmp_path / "o").exists()
+    from simgrip.cli import build_parser
+
+    args = build_parser().parse_args(["sweep", "I", "--kappa", "-7", "--links", "8", "--out", "o", "--throughput"])
+    assert args.throughput is True

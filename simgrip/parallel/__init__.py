@@ -4,5 +4,5 @@
 ``bench``, ``stress`` and ``figures`` use; :mod:`simgrip.parallel.dask_cluster`
 starts, reaches and stops the clusters; :mod:`simgrip.parallel.cli_cluster`
 starts a ``dask scheduler`` + ``dask worker`` cluster on 127.0.0.1 (tests and
-``sweep --profile``).
+``sweep --throughput``).
 """

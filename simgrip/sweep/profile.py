@@ -1,6 +1,6 @@
 """Scale of a sweep, measured: points per second in-process, on local Dask workers and on a dask-CLI cluster.
 
-``simgrip sweep ... --profile`` runs the same grid several ways in one process
+``simgrip sweep ... --throughput`` runs the same grid several ways in one process
 and reports, for each, the wall time, points/s, and whether the rows are
 identical to the plain loop's (every column but the times).  Each run starts
 with one point per worker (not timed: a fresh worker process pays its imports
@@ -150,20 +150,20 @@ def format_profile(prof: dict) -> str:
 
 
 def cli_profile(args, grid, options: RunnerOptions):
-    """``simgrip sweep ... --profile``: print the table, write ``OUT/profile.json``."""
+    """``simgrip sweep ... --throughput``: print the table, write ``OUT/throughput.json``."""
     from pathlib import Path
 
     from simgrip.io import check_output_dir, check_output_files_in, write_json
 
     out = check_output_dir(args.out, "--out")
-    check_output_files_in(out, ("profile.json",), "--out")  # before the timing runs
+    check_output_files_in(out, ("throughput.json",), "--out")  # before the timing runs
     workers = options.jobs if options.jobs is not None and options.jobs > 1 else 2
     prof = profile_sweep(grid, workers=workers, batch_size=args.batch_size, progress=options.progress,
                          remote=options if options.remote else None)
     from simgrip.sweep.run import versions
 
     prof["versions"] = versions()
-    write_json(Path(out) / "profile.json", prof)
+    write_json(Path(out) / "throughput.json", prof)
     print(format_profile(prof))
-    print(Path(out) / "profile.json", file=sys.stderr)
+    print(Path(out) / "throughput.json", file=sys.stderr)
     return None

@@ -35,6 +35,8 @@ made on the way: with an output folder this process keeps one byte per point.
 
 from __future__ import annotations
 
+import argparse
+
 import itertools
 import json
 import math
@@ -326,9 +328,21 @@ def add_arguments(p) -> None:
                    "and recomputed; a finished sweep computes nothing)")
     p.add_argument("--batch-size", type=int, default=None, help="points per Dask task [default: automatic]")
     p.add_argument("--no-map", action="store_true", help="do not draw map.png")
-    p.add_argument("--profile", action="store_true",
-                   help="measure points/s instead: plain loop, local cluster and dask-CLI cluster (no files but OUT/profile.json)")
+    p.add_argument("--throughput", action="store_true",
+                   help="measure points/s instead: plain loop, local cluster and dask-CLI cluster (no files but "
+                   "OUT/throughput.json)")
+    # solve/simulate/compare's --profile is the curvature profile: here it would mean something else, so it is
+    # refused by name (it was this command's throughput run until the rename)
+    p.add_argument("--profile", action=_RenamedOption, nargs=0, help=argparse.SUPPRESS)
     add_runner_arguments(p)
+
+
+class _RenamedOption(argparse.Action):
+    """``sweep --profile``: an error saying it is ``--throughput`` now (``--profile`` is a curvature profile elsewhere)."""
+
+    def __call__(self, parser, namespace, values, option_string=None):
+        parser.error("sweep has no --profile: the points/s measurement is --throughput (--profile names the "
+                     "curvature profile of solve, simulate and compare; a sweep's curvature is uniform)")
 
 
 def grid_from_args(args) -> SweepGrid:
@@ -343,7 +357,7 @@ def cli_sweep(args):
     options = runner_options(args)
     if args.batch_size is not None and args.batch_size < 1:
         raise ValueError(f"batch-size must be a positive integer, got {args.batch_size!r}")
-    if args.profile:
+    if args.throughput:
         from simgrip.sweep.profile import cli_profile
 
         return cli_profile(args, grid, _cap(options, grid.size, args.batch_size, stderr_note))
