@@ -22,6 +22,11 @@ MuJoCo's bindings release the GIL in those calls (``spec.compile``,
 :class:`Finish` lets exactly one of the two (the main thread's
 ``except KeyboardInterrupt`` or the watchdog) do the clean-up and print.
 
+A handler installed inside the block replaces ours for its signal: it
+should call ours first (as :func:`simgrip.parallel.runner` does for
+SIGTERM) so that the signal counts as handled; the watchdog leaves a signal
+whose handler is not ours alone.
+
 Limitation: a C call that *holds* the GIL blocks the watchdog thread too;
 then the signal waits for the call (none of simgrip's long calls does).
 """
@@ -64,6 +69,7 @@ class _Watchdog:
     def __init__(self, on_stuck: Callable[[int], None], grace_s: float):
         self.on_stuck = on_stuck
         self.grace_s = float(grace_s)
+        self.handler = None  # the Python handler of SIGINT and SIGTERM that sets handled
         self.handled = threading.Event()
         self.closed = threading.Event()
         self.read_end, self.write_end = socket.socketpair()
@@ -91,9 +97,12 @@ class _Watchdog:
             if self.handled.wait(self.grace_s):
                 self._drain()
                 continue
-            if not self.closed.is_set():
-                self.on_stuck(data[-1])
+            if self.closed.is_set():
                 return
+            if signal.getsignal(data[-1]) is not self.handler:
+                continue  # a handler installed later that does not chain to ours is in charge of this signal
+            self.on_stuck(data[-1])
+            return
 
     def close(self) -> None:
         self.closed.set()
@@ -130,6 +139,8 @@ def signals_as_interrupt(on_stuck: Callable[[int], None] | None = None, grace_s:
         raise KeyboardInterrupt
 
     previous = {sig: signal.signal(sig, _raise) for sig in _SIGNALS}
+    if dog is not None:
+        dog.handler = _raise
     previous_fd = None
     try:
         if dog is not None:

@@ -93,6 +93,24 @@ def test_a_handled_signal_raises_and_the_watchdog_stays_quiet(signum):
     assert signal.set_wakeup_fd(-1) == -1  # restored (none was set)
 
 
+@pytest.mark.skipif(threading.current_thread() is not threading.main_thread(), reason="signals need the main thread")
+def test_the_watchdog_leaves_a_main_thread_that_runs_another_handler():
+    """A handler installed later that does not chain to ours (the main thread still runs Python): no hard exit."""
+    stuck = []
+
+    def other(signum, frame):
+        raise KeyboardInterrupt
+
+    with signals_as_interrupt(stuck.append, grace_s=0.05):
+        signal.signal(signal.SIGTERM, other)  # until the block ends (which restores the handlers)
+        try:
+            os.kill(os.getpid(), signal.SIGTERM)
+            time.sleep(WAIT_S)  # the handler interrupts this sleep
+        except KeyboardInterrupt:
+            time.sleep(0.2)  # 4 x grace_s: a watchdog that took the main thread for stuck would have fired
+    assert stuck == []
+
+
 @pytest.mark.skipif(not sys.platform.startswith("linux"), reason="glibc's pthread_mutex_t (Linux)")
 @pytest.mark.skipif(threading.current_thread() is not threading.main_thread(), reason="signals need the main thread")
 def test_the_watchdog_acts_when_the_main_thread_sits_in_a_c_call():
