@@ -29,6 +29,7 @@ from __future__ import annotations
 import contextlib
 import os
 import signal
+import sys
 import threading
 
 from simgrip.parallel.helper_thread import call_in_helper
@@ -83,8 +84,9 @@ def _owned_local_cluster():
     return OwnedLocalCluster
 
 
-def _start_local(workers: int):
-    """``(LocalCluster, Client)``: ``workers`` processes of one thread on 127.0.0.1, no dashboard."""
+def _start_local(cls, workers: int):
+    """``(cluster, Client)``: a ``cls`` (:func:`_owned_local_cluster`) of ``workers`` processes of one thread on
+    127.0.0.1, no dashboard."""
     import dask
     from distributed import Client
 
@@ -92,7 +94,7 @@ def _start_local(workers: int):
     # adapting its mmap threshold) so often that a settle costs ~10 % more CPU (measured: 30 vs 27 ms per
     # point at n = 32); the workers keep glibc's adaptive default, and the single-threaded BLAS variables
     with dask.config.set({"distributed.nanny.pre-spawn-environ.MALLOC_TRIM_THRESHOLD_": None}):
-        cluster = _owned_local_cluster()(
+        cluster = cls(
             n_workers=workers, threads_per_worker=1, processes=True, host="127.0.0.1",
             # the scheduler always serves HTTP (/health, /metrics): on 127.0.0.1 and a free port, so
             # that a busy 8787 (another cluster) neither fails the start nor warns; no dashboard on it
@@ -167,9 +169,28 @@ class LocalDask:
         resource_tracker.ensure_running()
         self.before = descendants()
         self.cluster = self.client = None
+        self._cls = _owned_local_cluster()  # a class of its own: this run's cluster is found even mid-start
         self.cluster, self.client = call_in_helper(
-            lambda: _start_local(self.workers), name="simgrip-cluster-start", block_sigint=True,
-            discard=self._discard, on_give_up=lambda: _kill(self.spawned()), settle=START_ABORT_S)
+            lambda: _start_local(self._cls, self.workers), name="simgrip-cluster-start", block_sigint=True,
+            discard=self._discard, on_give_up=self._end_workers, settle=START_ABORT_S)
+
+    def _nannies(self) -> list:
+        """The nannies of this run's cluster, also those still starting (distributed keeps them in ``_created``)."""
+        spec = sys.modules.get("distributed.deploy.spec")
+        out = []
+        for c in list(spec.SpecCluster._instances) if spec else []:
+            if type(c) is self._cls:
+                with contextlib.suppress(Exception):
+                    out.extend(list(getattr(c, "_created", ())) + list(c.workers.values()))
+        return out
+
+    def _end_workers(self) -> None:
+        """Tell the nannies not to restart their workers (a restart spawned while this process exits prints a
+        multiprocessing traceback), then kill the worker processes."""
+        for nanny in self._nannies():
+            with contextlib.suppress(Exception):
+                nanny.close_gracefully(reason="simgrip interrupted")
+        _kill(self.spawned())
 
     def _discard(self, made) -> None:
         """In the start's thread, after the caller gave up: close what the start made, kill its processes."""
@@ -177,7 +198,7 @@ class LocalDask:
         from simgrip.parallel.remote import close_client
 
         close_client(client, CLOSE_TIMEOUT_S)
-        _kill(self.spawned())
+        self._end_workers()
         with contextlib.suppress(Exception):
             cluster.close(timeout=CLOSE_TIMEOUT_S)
 
@@ -198,11 +219,7 @@ class LocalDask:
     def stop(self, interrupted: bool) -> None:
         """Close the cluster: after an interrupt or failure within ~2 s, its worker processes killed first."""
         if interrupted:
-            # no restarts: the nannies are told the workers may go away, then the workers are killed
-            for nanny in list(self.cluster.workers.values()):
-                with contextlib.suppress(Exception):
-                    nanny.close_gracefully(reason="simgrip interrupted")
-            _kill(self.spawned())
+            self._end_workers()  # no restarts: the nannies are told the workers may go away, then they are killed
         timeout = CLOSE_TIMEOUT_S if interrupted else CLOSE_GRACEFUL_S
         closer = threading.Thread(target=self._close, args=(timeout,), name="simgrip-cluster-close", daemon=True)
         closer.start()

@@ -268,12 +268,20 @@ def run_tasks(fn: Callable, items: Iterable, *, options: RunnerOptions = RunnerO
 
 @contextlib.contextmanager
 def _sigterm_as_interrupt():
-    """Within the block, SIGTERM raises KeyboardInterrupt (main thread only; elsewhere a no-op)."""
+    """Within the block, SIGTERM raises KeyboardInterrupt (main thread only; elsewhere a no-op).
+
+    A Python handler already installed for SIGTERM runs first (the command
+    line's records that the signal was handled, so that its watchdog does not
+    take the main thread for stuck and end the process the hard way).
+    """
     if threading.current_thread() is not threading.main_thread():
         yield
         return
+    previous = signal.getsignal(signal.SIGTERM)
 
     def handler(signum, frame):
+        if callable(previous):
+            previous(signum, frame)  # may raise KeyboardInterrupt itself
         raise KeyboardInterrupt(f"signal {signum}")
 
     old = signal.signal(signal.SIGTERM, handler)
