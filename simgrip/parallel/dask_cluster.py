@@ -33,8 +33,9 @@ import sys
 import threading
 
 from simgrip.parallel.helper_thread import call_in_helper
+from simgrip.parallel.remote import RemoteDask  # noqa: F401  (its home was this module; imported from here)
 
-__all__ = ["LocalDask", "MAX_WORKERS_PER_CORE", "available_cores", "worker_cap", "descendants", "quiet_dask_logs"]
+__all__ = ["LocalDask", "RemoteDask", "MAX_WORKERS_PER_CORE", "available_cores", "worker_cap", "descendants", "quiet_dask_logs"]
 
 #: Seconds allowed to close the local cluster after an interrupt before its processes are killed.
 CLOSE_TIMEOUT_S = 1.0
