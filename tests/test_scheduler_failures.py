@@ -64,11 +64,14 @@ def run_sweep_cli(out: Path, *args: str, limit: float = 120.0):
 
 
 def assert_one_named_line(err: str, *words: str, kind: str = "error") -> str:
-    """stderr is exactly one line ``simgrip sweep: <kind>: ...`` holding ``words``, with no traceback."""
+    """stderr is exactly one line ``simgrip sweep: <kind>: ...`` holding ``words``, with no traceback; an
+    error names the option first (``scheduler``, ``scheduler-file``, ``connect-timeout``)."""
     assert "Traceback" not in err and "Exception ignored" not in err, err
     lines = err.strip().splitlines()
     assert len(lines) == 1, err
     assert lines[0].startswith(f"simgrip sweep: {kind}: "), err
+    if kind == "error":
+        assert lines[0].split(": ", 2)[2].startswith(("scheduler ", "scheduler-file ", "connect-timeout ")), err
     for w in words:
         assert w in lines[0], (w, err)
     return lines[0]
@@ -204,12 +207,19 @@ def test_cli_refuses_a_bad_scheduler_before_any_work(tmp_path, args, words):
 
 # the network ----------------------------------------------------------------------------------
 
-def test_nothing_listening(tmp_path):
+@pytest.mark.parametrize("via", ["--scheduler", "--scheduler-file"])
+def test_nothing_listening(tmp_path, via):
     port = free_port()
-    rc, err, seconds = run_sweep_cli(tmp_path / "o", "--scheduler", f"tcp://127.0.0.1:{port}",
-                                     "--connect-timeout", str(FAST_TIMEOUT_S))
+    address = f"tcp://127.0.0.1:{port}"
+    if via == "--scheduler":
+        given, label = address, f"scheduler {address}"
+    else:
+        given = tmp_path / "sched.json"
+        given.write_text(f'{{"type": "Scheduler", "address": "{address}"}}')
+        label = f"scheduler-file '{given}' (address {address})"
+    rc, err, seconds = run_sweep_cli(tmp_path / "o", via, str(given), "--connect-timeout", str(FAST_TIMEOUT_S))
     assert rc == 2, err
-    assert_one_named_line(err, f"127.0.0.1:{port}", "nothing accepted a connection", "connection refused")
+    assert_one_named_line(err, f"{label} cannot be reached", "nothing accepted a connection", "connection refused")
     assert FAST_TIMEOUT_S <= seconds < FAST_TIMEOUT_S + STARTUP_S, seconds  # refusals are retried to the deadline
 
 
@@ -218,7 +228,7 @@ def test_an_http_server_is_not_a_scheduler(tmp_path):
         rc, err, seconds = run_sweep_cli(tmp_path / "o", "--scheduler", f"tcp://127.0.0.1:{port}",
                                          "--connect-timeout", str(FAST_TIMEOUT_S))
     assert rc == 2, err
-    assert_one_named_line(err, f"127.0.0.1:{port}", "not a Dask scheduler")
+    assert_one_named_line(err, f"scheduler tcp://127.0.0.1:{port} is not a Dask scheduler")
     assert seconds < FAST_TIMEOUT_S + STARTUP_S, seconds  # was: a hang of minutes
 
 
@@ -228,8 +238,8 @@ def test_a_silent_listener_at_the_default_timeout(tmp_path):
         port = srv.getsockname()[1]
         rc, err, seconds = run_sweep_cli(tmp_path / "o", "--scheduler", f"tcp://127.0.0.1:{port}")
     assert rc == 2, err
-    assert_one_named_line(err, f"127.0.0.1:{port}", f"no Dask answer within {DEFAULT_CONNECT_TIMEOUT_S:g} s",
-                          "not a Dask scheduler")
+    assert_one_named_line(err, f"scheduler tcp://127.0.0.1:{port} is not a Dask scheduler",
+                          f"no Dask answer within {DEFAULT_CONNECT_TIMEOUT_S:g} s")
     assert DEFAULT_CONNECT_TIMEOUT_S <= seconds < DEFAULT_CONNECT_TIMEOUT_S + STARTUP_S, seconds
 
 

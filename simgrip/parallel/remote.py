@@ -187,13 +187,13 @@ def read_scheduler_file(path) -> str:
 
 # probing ------------------------------------------------------------------------------------
 
-def _tcp_connect(host: str, port: int, address: str, deadline: float, timeout: float) -> None:
+def _tcp_connect(host: str, port: int, label: str, deadline: float, timeout: float) -> None:
     """Open (and close) one TCP connection to ``host:port``, retrying refusals until ``deadline``."""
     try:
         infos = socket.getaddrinfo(host, port, type=socket.SOCK_STREAM)
     except (socket.gaierror, UnicodeError) as exc:
         why = exc.strerror if isinstance(exc, socket.gaierror) else str(exc)
-        raise SchedulerError(f"cannot reach the Dask scheduler at {address}: host {host!r} not found ({why})") from None
+        raise SchedulerError(f"{label} cannot be reached: host {host!r} not found ({why})") from None
     last, pause = None, 0.05
     while True:
         for family, kind, proto, _, addr in infos:
@@ -211,8 +211,8 @@ def _tcp_connect(host: str, port: int, address: str, deadline: float, timeout: f
         if left <= 0:
             why = "connection refused" if isinstance(last, ConnectionRefusedError) else (
                 "no answer" if last is None or isinstance(last, TimeoutError) else (last.strerror or str(last)))
-            raise SchedulerError(f"cannot reach the Dask scheduler at {address}: nothing accepted a connection "
-                                 f"within {timeout:g} s ({why}); is the scheduler running at this address?")
+            raise SchedulerError(f"{label} cannot be reached: nothing accepted a connection within {timeout:g} s "
+                                 f"({why}); is the Dask scheduler running at this address?")
         time.sleep(min(pause, left))
         pause = min(2 * pause, 0.5)
 
@@ -232,7 +232,7 @@ async def _identity(address: str, deadline: float, connection_args: dict) -> dic
         comm.abort()
 
 
-def _probe(address: str, deadline: float, timeout: float) -> dict:
+def _probe(address: str, label: str, deadline: float, timeout: float) -> dict:
     import asyncio
 
     from distributed.comm.core import CommClosedError
@@ -241,43 +241,46 @@ def _probe(address: str, deadline: float, timeout: float) -> dict:
     scheme, loc = _split(address)
     if scheme in TCP_SCHEMES:
         host, port = _host_port(loc, address, "scheduler")
-        _tcp_connect(host, port, address, deadline, timeout)
+        _tcp_connect(host, port, label, deadline, timeout)
     try:
         info = asyncio.run(_identity(address, deadline, Security().get_connection_args("client")))
     except (asyncio.TimeoutError, TimeoutError):
-        raise SchedulerError(f"{address} accepted a connection but gave no Dask answer within {timeout:g} s: not a "
-                             "Dask scheduler (another kind of server?)") from None
+        raise SchedulerError(f"{label} is not a Dask scheduler: it accepted a connection but gave no Dask answer "
+                             f"within {timeout:g} s (another kind of server?)") from None
     except CommClosedError:
-        raise SchedulerError(f"{address} is not a Dask scheduler: it closed the connection without a Dask "
+        raise SchedulerError(f"{label} is not a Dask scheduler: it closed the connection without a Dask "
                              "handshake (another kind of server?)") from None
     except Exception as exc:  # garbage where Dask's frames belong, a refused TLS handshake, ...
-        raise SchedulerError(f"{address} is not a Dask scheduler: its answer is not Dask's protocol "
+        raise SchedulerError(f"{label} is not a Dask scheduler: its answer is not Dask's protocol "
                              f"({type(exc).__name__}: {exc})"[:400]) from None
     kind = info.get("type") if isinstance(info, dict) else None
     if not isinstance(kind, str) or not kind.endswith("Scheduler") or "workers" not in info:
         what = f"a Dask {kind}" if isinstance(kind, str) else "not Dask's"
-        raise SchedulerError(f"{address} answers, but as {what}, not as a scheduler (give the scheduler's address)")
+        raise SchedulerError(f"{label} answers, but as {what}, not as a Dask scheduler (give the scheduler's "
+                             "address)")
     return info
 
 
-def probe(address: str, timeout: float = DEFAULT_CONNECT_TIMEOUT_S) -> dict:
+def probe(address: str, timeout: float = DEFAULT_CONNECT_TIMEOUT_S, *, label: str | None = None) -> dict:
     """The identity of the Dask scheduler at ``address`` (its ``"workers"``, ...), or a named ``SchedulerError``.
 
     Resolves the host, connects (refusals retried until the deadline), speaks
     Dask's handshake and asks the scheduler who it is, in a daemon thread,
     all within ``timeout`` seconds; this thread waits interruptibly.  No
-    ``Client`` is made.
+    ``Client`` is made.  Errors begin with ``label`` (default ``scheduler
+    ADDRESS``: the option that gave it).
     """
     address = check_address(address)
+    label = label or f"scheduler {address}"
     timeout = check_seconds(timeout, "connect-timeout", upper=MAX_CONNECT_TIMEOUT_S)
     deadline = time.monotonic() + timeout
     try:
         # the probe keeps its own deadline; the extra second only covers a resolver that ignores it
-        return call_in_helper(lambda: _probe(address, deadline, timeout), name="simgrip-scheduler-probe",
+        return call_in_helper(lambda: _probe(address, label, deadline, timeout), name="simgrip-scheduler-probe",
                               timeout=timeout + 1.0)
     except HelperTimeout:
-        raise SchedulerError(f"cannot reach the Dask scheduler at {address} within {timeout:g} s "
-                             "(the host name did not resolve in time?)") from None
+        raise SchedulerError(f"{label} cannot be reached within {timeout:g} s (the host name did not resolve in "
+                             "time?)") from None
 
 
 # the client ----------------------------------------------------------------------------------
@@ -333,13 +336,15 @@ class RemoteDask:
                  timeout: float = DEFAULT_CONNECT_TIMEOUT_S):
         timeout = check_seconds(timeout, "connect-timeout", upper=MAX_CONNECT_TIMEOUT_S)
         if scheduler is not None:
-            address, self.where = check_address(scheduler), scheduler
+            address = check_address(scheduler)
+            self.where, label = address, f"scheduler {address}"
         else:
             address = read_scheduler_file(scheduler_file)
             self.where = f"{address} (scheduler file {scheduler_file})"
+            label = f"scheduler-file {str(scheduler_file)!r} (address {address})"
         self.address = address
         t0 = time.monotonic()
-        self.identity = probe(address, timeout)
+        self.identity = probe(address, timeout, label=label)
         left = max(1.0, timeout - (time.monotonic() - t0))
         try:
             self.client = call_in_helper(lambda: _make_client(address, left), name="simgrip-dask-client",
