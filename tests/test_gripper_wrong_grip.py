@@ -155,3 +155,32 @@ def test_weight_relief_keeps_the_true_weight():
     assert light.weight_relief == pytest.approx(float(light.model.body_mass[light.workpiece_body]) * light.physical.g,
                                                 rel=1e-12)
     assert light.weight_relief > 0.0
+
+
+def test_a_finger_that_does_not_reach_says_so():
+    # issue 16 audit: kappa = -1 curls too little to bring the tip back to the face (free tip at X = 0.78 l);
+    # both methods drop it, the BVP (tip prescribed on the face) finds the finger pulled onto it by a heavy
+    # workpiece and calls it feasible: the dropped states say why they may differ
+    from simgrip.params import DimensionlessParams
+
+    p = DimensionlessParams(D=1.0, M=1e4, mu_s=100.0, b=0.6)
+    for method in ("auto", "dynamics"):
+        st = settle_gripper(build_gripper("I", p, Uniform(-1.0), 16, fingers=3, workpiece="cylinder"), method=method)
+        assert not st.held and st.converged
+        assert any(w.startswith("not held: finger 0's free shape has its tip at X = 0.78") for w in st.warnings)
+    held = settle_gripper(_scene("I", -6.0, 3, "cylinder"))  # a finger that reaches: no such warning
+    assert held.held and not held.warnings
+
+
+def test_frictionless_vertical_faces_drop_without_stepping():
+    # issue 16 audit: D = 1e4, mu_s = 0 ran the K-finger dynamics out of its step budget (SettleError)
+    from simgrip.params import DimensionlessParams
+
+    p = DimensionlessParams(D=1e4, M=5.0, mu_s=0.0, b=0.6)
+    for K, workpiece in ((3, "cylinder"), (2, "box")):
+        st = settle_gripper(build_gripper("I", p, Uniform(-6.0), 16, fingers=K, workpiece=workpiece),
+                            method="dynamics")
+        assert not st.held and st.converged
+        assert st.method == "dynamics"
+    skip = settle_gripper(build_gripper("I", p, Uniform(-6.0), 16, fingers=3, workpiece="cylinder"))
+    assert not skip.held  # the Newton skip agrees

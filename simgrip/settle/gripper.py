@@ -68,7 +68,7 @@ from simgrip.settle import check_tol_steps
 from simgrip.settle.dynamics import DYN_PEN_LIMIT, DYN_TOL, DYN_TOL_PER_WEIGHT
 # FingerRecord, GripperState, contact_rest_depth and straight_frequency are re-exported (__all__)
 from simgrip.settle.gripper_dynamics import GripperDynamics, contact_rest_depth, settle_once, straight_frequency
-from simgrip.settle.gripper_start import is_symmetric, start_qpos
+from simgrip.settle.gripper_start import is_symmetric, start_qpos, warn_unreached
 from simgrip.settle.gripper_state import FingerRecord, GripperState, read_gripper_state, warn_friction_boundary
 from simgrip.settle.state import SettleError
 from simgrip.settle.statics import restore_options, save_options
@@ -230,6 +230,7 @@ def _settle_dynamics(scene: GripperScene, tol: float | None, max_steps: int | No
             state = read_gripper_state(scene, dyn, held, converged, steps, t0, tol)
             check_grip_shape(scene, state)
             warn_friction_boundary(scene, state)
+            warn_unreached(scene, state)
             if reach and not held and not retried_drop and state.converged and steps < max_steps:
                 # dropped from a start that touched: once more at half the step, as the planar dynamic settle
                 # does (a growing two-step oscillation of the contacts at h can throw the workpiece off)

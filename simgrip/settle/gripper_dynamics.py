@@ -212,6 +212,18 @@ def contact_rest_depth(scene: GripperScene, N1, timestep: float) -> np.ndarray:
     return np.asarray(N1, dtype=float) * scene.force_scale * tc * tc * depth / scene.length
 
 
+def _frictionless_faces(scene: GripperScene) -> bool:
+    """A weight on vertical faces without friction: nothing can carry it (dropped without stepping).
+
+    Box and cylinder faces are vertical, so the contact normals are horizontal; with ``mu_s = 0`` no
+    contact force has a vertical component and a workpiece of weight ``M > 0`` falls.  Stepping it there
+    took longer than the step budget for a stiff finger (D = 1e4: the over-damped slide at the stiff
+    chain's short step), so it is decided here, as statics decides it.
+    """
+    p = scene.params
+    return scene.workpiece in ("box", "cylinder") and float(p.mu_s) == 0.0 and float(p.M) > 0.0
+
+
 def _tips_on_workpiece(scene: GripperScene) -> np.ndarray:
     """Every tip's centre in the workpiece's body frame [m], (K, 3)."""
     d = scene.data
@@ -235,7 +247,7 @@ def settle_once(scene: GripperScene, dyn: GripperDynamics, tol: float, budget: i
     """
     m, d = scene.model, scene.data
     converged, why = True, "ok"
-    held = reach and _touching(scene)
+    held = reach and _touching(scene) and not _frictionless_faces(scene)
     if held:
         wb = scene.workpiece_body
         z0 = float(d.xpos[wb][2])

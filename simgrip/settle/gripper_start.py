@@ -73,7 +73,8 @@ from simgrip.reference import DiscreteError, solve_chain
 from simgrip.settle.state import SettleError
 from simgrip.sim.gripper import GripperScene
 
-__all__ = ["StartForces", "balance_shares", "finger_chain", "is_symmetric", "rest_depth", "start_forces", "start_qpos"]
+__all__ = ["StartForces", "balance_shares", "contact_reach", "finger_chain", "is_symmetric", "rest_depth",
+           "start_forces", "start_qpos", "unreached_fingers", "warn_unreached"]
 
 #: Newton iterations balancing the start's shares (each ``K + 1`` solves of every chain).
 BALANCE_ITERATIONS = 8
@@ -100,6 +101,48 @@ def finger_chain(scene: GripperScene, grip: str, X: float | None = None, guess=N
                            load=None if M is None or grip == "free" else float(M))
     except (DiscreteError, ValueError):
         return None
+
+
+def contact_reach(scene: GripperScene) -> np.ndarray:
+    """Every finger's tip ``X`` (over ``l``, its own frame) on the workpiece: ``b/2`` or the placement's reach,
+    times ``cos(beta)`` on a sphere (``beta`` the contact angle)."""
+    K = scene.fingers
+    X = np.full(K, 0.5 * scene.params.b) if scene.reach is None else np.array(scene.reach, dtype=float)
+    return X * math.cos(float(np.atleast_1d(scene.contact_angle)[0]))
+
+
+def unreached_fingers(scene: GripperScene, X=None, fingers: int | None = None) -> list[tuple[int, float, float]]:
+    """``[(k, X_free, X_k)]``: the fingers whose free shape (the hinge chain's, no workpiece) has its tip
+    outside their contact ``X_k`` (:func:`contact_reach` by default): closing from it they never press on
+    the workpiece.  ``fingers``: check only the first ones (equal fingers: one)."""
+    X = contact_reach(scene) if X is None else np.asarray(X, dtype=float)
+    out = []
+    for k in range(scene.fingers if fingers is None else fingers):
+        free = finger_chain(scene, "free", finger=k)
+        if free is not None:
+            tip_x = float(np.sum(np.cos(free.link_angles))) / scene.n
+            if tip_x > X[k]:
+                out.append((k, tip_x, float(X[k])))
+    return out
+
+
+def warn_unreached(scene: GripperScene, state) -> None:
+    """A dropped state whose fingers do not reach the workpiece says so (``state.warnings``).
+
+    The gripper closes from the fingers' free shape: a finger whose free tip lies outside the face never presses
+    on it, so nothing holds.  The elastica BVP prescribes the tip on the face (``X(l) = b/2``) and can still
+    find a held equilibrium there (the finger pulled onto the face, e.g. hanging from a heavy workpiece or
+    sagging, for a soft one), which this gripper cannot close into: the verdicts may differ, and why is stated.
+    """
+    if scene.grip not in ("I", "II") or state.held or not state.grip_matched:
+        return
+    far = unreached_fingers(scene, fingers=1 if is_symmetric(scene) else None)
+    if far:
+        k, tip_x, X = far[0]
+        state.warnings.append(
+            f"not held: finger {k}'s free shape has its tip at X = {tip_x:.4g} l, outside the workpiece's face at "
+            f"X = {X:.4g} l, so closing from it the finger never presses on the workpiece; the BVP, which puts "
+            f"the tip on the face, may find a held equilibrium there that this gripper cannot close into")
 
 
 def is_symmetric(scene: GripperScene) -> bool:
@@ -291,10 +334,8 @@ def _start(scene: GripperScene, timestep: float | None):
     centre = np.array(scene.model.qpos0[wq[:2]]) / scene.length  # the builder's (offset, turned by yaw)
     equal_shares = is_symmetric(scene) or scene.workpiece == "sphere"  # (a sphere's fingers are equal)
     alike = equal_shares and bool(np.all(X == X[0]))  # every finger the same problem: solve one, share it
-    for k in range(1 if alike else K):
-        free = finger_chain(scene, "free", finger=k)
-        if free is not None and float(np.sum(np.cos(free.link_angles))) / scene.n > X[k]:
-            return None
+    if unreached_fingers(scene, X, fingers=1 if alike else K):
+        return None
     if equal_shares:  # (alike: one finger's chain serves all, the same arrays, read only)
         chains = _chains(scene, X, np.full(K, float(p.M)), [None] * K, couple=False, fingers=1 if alike else None)
         chains = chains * K if alike else chains

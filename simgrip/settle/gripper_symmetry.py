@@ -327,6 +327,7 @@ def _replicate(scene: GripperScene, pst, held: bool, converged: bool, steps: int
                allow_unconverged: bool, t0: float):
     """The K-finger state from the planar state ``pst`` (see the module docstring)."""
     from simgrip.settle.gripper import FingerRecord, GripperState
+    from simgrip.settle.gripper_start import warn_unreached
     from simgrip.settle.gripper_state import warn_friction_boundary
 
     m, d, K = scene.model, scene.data, scene.fingers
@@ -438,6 +439,7 @@ def _replicate(scene: GripperScene, pst, held: bool, converged: bool, steps: int
     if scene.grip == "III" and held:
         _check_cradle(scene, state, phi, float(pst.contact.gamma))
     warn_friction_boundary(scene, state)
+    warn_unreached(scene, state)
     if not state.converged and not allow_unconverged:
         raise SettleError(f"symmetric settle did not converge (K-finger residual {residual:.3g} above the tolerance "
                           f"{tolerance:.3g}, {steps} planar Newton iterations)")
