@@ -149,3 +149,16 @@ def test_verdict_warnings_on_records():
     assert len(out) == 2 and out[0].startswith("condition (23) disagrees") and "verdicts disagree" in out[1]
     assert verdict_warnings(sim, dict(sim)) == []
     assert verdict_warnings({"grip": "free"}, {"grip": "free", "feasible": False}) == []
+
+
+def test_weightless_cradle_on_a_stiff_finger_answers():
+    """Grip III, D = 1e4, M = 0: MuJoCo's contact on the near-massless workpiece is ~1e-10 as stiff as configured
+    (its inverse mass dominates); sizing the stiffness from that read-back must neither run away (the solve
+    ended 'contact set did not settle') nor pass silently: dropped as the BVP says, or held with a warning."""
+    res = compare("III", STIFF.replace(M=0.0), Uniform(-4.0), N)
+    assert res["simulation"]["converged"] and not res["simulation"]["feasible"] and not res["reference"]["feasible"]
+    assert res["warnings"] == []
+    res = compare("III", STIFF.replace(M=0.0, mu_s=100.0), Uniform(-4.0), N)
+    sim = res["simulation"]
+    if sim["feasible"] != res["reference"]["feasible"]:
+        assert res["warnings"] and (sim.get("contact_ok") is False or not sim["held"])

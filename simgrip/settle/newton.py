@@ -42,7 +42,7 @@ from simgrip.settle.statics import CONTACT_STIFFNESS, Statics, Stick, centreline
 from simgrip.sim.contacts import normal_force, pair_contacts
 from simgrip.sim.scene import Scene
 
-__all__ = ["FLOOR_ULPS", "Newton", "PEN_MAX", "PEN_STIFFEN", "SOLVE_ITERS", "STIFFEN_STEP", "read_newton"]
+__all__ = ["FLOOR_ULPS", "Newton", "PEN_MAX", "PEN_STIFFEN", "SOLVE_ITERS", "STIFFEN_MAX", "STIFFEN_STEP", "read_newton"]
 
 #: A Newton step may not push a pair that was not touching deeper than this (over l).
 PEN_MAX = 1e-4
@@ -60,6 +60,9 @@ SOLVE_ITERS = 200
 PEN_STIFFEN = 1e-5
 #: Contact stiffness factors are powers of this (path-independent settled states, :meth:`Newton.stiffen`).
 STIFFEN_STEP = 10.0
+#: Largest stiffness factor (MuJoCo's time constant ``1e-6`` of the configured one; a contact needing more is
+#: flagged by :func:`simgrip.validity.check_contact_depth`, never silently deep).
+STIFFEN_MAX = 1e12
 #: A factor falls back a step only when the force fits the lower one with this relative margin (the force
 #: moves by ~``PEN_STIFFEN`` relative between factors: 100 times less).
 STIFFEN_HYSTERESIS = 1e-3
@@ -111,6 +114,7 @@ class Newton:
         #: Per pair: the factor :meth:`stiffen` applied to its configured stiffness.
         self.kc_factor = np.ones(m.npair)
         self._tc0 = None  # the configured solref time constants (read at the first stiffen)
+        self._kc_raised: list = [None] * m.npair  # per pair: K_c read before its last raise (saturation test)
 
     def spent(self) -> bool:
         """The settle's Newton iteration budget is used up."""
@@ -211,37 +215,50 @@ class Newton:
     def stiffen(self, N, *, grow_only: bool = False) -> bool:
         """Size every active pair's contact stiffness for its normal force ``N`` [N]; True if any changed.
 
-        A pair's factor over the configured ``K_c`` (:attr:`kc_factor`) is the
-        smallest power of :data:`STIFFEN_STEP` that keeps its depth ``N / K_c``
-        at most :data:`PEN_STIFFEN` (1 where the configured stiffness does).
-        Powers of a fixed step make the settled state a function of the final
-        force alone, not of the path the solve took to it (a stiffness sized
-        for a transient force would leave another depth).  A factor falls back
-        only when the force fits the lower factor with a margin of
-        :data:`STIFFEN_HYSTERESIS` (no cycling at a step's edge, where the
-        force changes by ~``PEN_STIFFEN`` relative with the factor).  ``grow_only``: only raise factors (inside
-        a solve, so that a hard-pressed contact does not pass its face before
-        it converges).  MuJoCo's ``K_c`` at rest goes as the inverse square of
-        ``solref``'s time constant: that is divided by ``sqrt(factor)``;
-        ``kc`` is scaled to match (and read back at the next accepted state).
-        The model's ``pair_solref`` is restored by the settle
-        (:func:`.statics.restore_options`).
+        A pair's factor over the configured stiffness (:attr:`kc_factor`) is a
+        power of :data:`STIFFEN_STEP`: the smallest that keeps its depth ``N /
+        K_c`` at most :data:`PEN_STIFFEN` (1 where the configured stiffness does).
+        ``K_c`` is MuJoCo's, read back (:meth:`_update_kc`); MuJoCo's ``K_c`` at
+        rest goes as the inverse square of ``solref``'s time constant, which is
+        divided by ``sqrt(factor)``, so a pair too deep by ``r`` goes up by
+        ``ceil(log r)`` steps and one that would fit a lower factor comes down
+        to it.  Powers of a fixed step make the settled state a function of the
+        final force alone, not of the path the solve took to it.  A factor
+        falls back only when the force fits the lower one with a margin of
+        :data:`STIFFEN_HYSTERESIS` (no cycling at a step's edge), never while
+        ``grow_only`` (inside a solve, so that a hard-pressed contact does not
+        pass its face before it converges).  A pair whose read-back ``K_c`` did
+        not follow its last raise (MuJoCo's soft contact saturates where the
+        workpiece's inverse mass dominates, e.g. ``M = 0``) is not raised again;
+        none goes above :data:`STIFFEN_MAX` (the depth check of
+        :func:`simgrip.validity.check_contact_depth` then speaks).  The model's
+        ``pair_solref`` is restored by the settle (:func:`.statics.restore_options`).
         """
         m, L = self.scene.model, self.scene.length
         if self._tc0 is None:
             self._tc0 = m.pair_solref[:, 0].copy()  # as configure_statics set it
+        lstep = math.log(STIFFEN_STEP)
         changed = False
         for k, p in enumerate(self.normal_active):
             if k >= len(N) or not N[k] > 0.0:
                 continue
-            base = float(self.kc[p]) / float(self.kc_factor[p])
-            need = float(N[k]) / (base * PEN_STIFFEN * L)  # factor that brings the depth to PEN_STIFFEN
-            f = 1.0 if need <= 1.0 else STIFFEN_STEP ** math.ceil(math.log(need) / math.log(STIFFEN_STEP) - 1e-12)
             old = float(self.kc_factor[p])
-            if f == old or (f < old and (grow_only or need > (1.0 - STIFFEN_HYSTERESIS) * f)):
+            over = float(N[k]) / float(self.kc[p]) / (PEN_STIFFEN * L)  # depth over the largest allowed
+            if over > 1.0:
+                raised = self._kc_raised[p]
+                if raised is not None and float(self.kc[p]) < 2.0 * raised:
+                    continue  # the last raise did not take (saturated): no further
+                f = min(old * STIFFEN_STEP ** math.ceil(math.log(over) / lstep - 1e-12), STIFFEN_MAX)
+            elif grow_only or old <= 1.0:
                 continue
+            else:
+                down = math.floor(math.log((1.0 - STIFFEN_HYSTERESIS) / over) / lstep + 1e-12) if over > 0 else 0
+                f = max(old / STIFFEN_STEP ** max(down, 0), 1.0)
+            if f == old:
+                continue
+            self._kc_raised[p] = float(self.kc[p]) if f > old else None
             m.pair_solref[p, 0] = self._tc0[p] / math.sqrt(f)
-            self.kc[p] = base * f
+            self.kc[p] *= f / old  # until read back
             self.kc_factor[p] = f
             changed = True
         self.stiffening = float(np.max(self.kc_factor)) if self.kc_factor.size else 1.0
@@ -251,12 +268,12 @@ class Newton:
         """The solve's contact state (set, forces, stiffness and its factors, the model's ``solref``), for
         :meth:`restore_contact`."""
         return (list(self.normal_active), self.N.copy(), self.kc.copy(), self.kc_factor.copy(),
-                self.scene.model.pair_solref.copy())
+                self.scene.model.pair_solref.copy(), list(self._kc_raised))
 
     def restore_contact(self, snap: tuple) -> None:
         """Put back a :meth:`contact_snapshot`."""
-        act, N, kc, fac, solref = snap
-        self.normal_active, self.N = list(act), N.copy()
+        act, N, kc, fac, solref, raised = snap
+        self.normal_active, self.N, self._kc_raised = list(act), N.copy(), list(raised)
         self.kc[:], self.kc_factor[:] = kc, fac
         self.scene.model.pair_solref[:] = solref
         self.stiffening = float(np.max(self.kc_factor)) if self.kc_factor.size else 1.0
