@@ -33,7 +33,7 @@ import sys
 import threading
 
 from simgrip.parallel.helper_thread import call_in_helper
-from simgrip.parallel.remote import RemoteDask  # noqa: F401  (its home was this module; imported from here)
+from simgrip.parallel.remote import RemoteDask, close_client, forget_client  # RemoteDask: its old home was here
 
 __all__ = ["LocalDask", "RemoteDask", "MAX_WORKERS_PER_CORE", "available_cores", "worker_cap", "descendants", "quiet_dask_logs"]
 
@@ -196,8 +196,6 @@ class LocalDask:
     def _discard(self, made) -> None:
         """In the start's thread, after the caller gave up: close what the start made, kill its processes."""
         cluster, client = made
-        from simgrip.parallel.remote import close_client
-
         close_client(client, CLOSE_TIMEOUT_S)
         self._end_workers()
         with contextlib.suppress(Exception):
@@ -227,10 +225,7 @@ class LocalDask:
         closer.join(2 * timeout)
         _kill(self.spawned())  # whatever is still alive (a worker stuck in C code, a restarted one)
         if getattr(self.client, "status", None) != "closed":
-            # its close timed out: distributed's Client.__del__ must not wait for it again (2 x 30 s)
-            from simgrip.parallel.remote import forget_client
-
-            forget_client(self.client)
+            forget_client(self.client)  # its close timed out: Client.__del__ must not wait for it again (2 x 30 s)
 
     def _close(self, timeout: float) -> None:
         with contextlib.suppress(Exception):

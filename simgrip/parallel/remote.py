@@ -250,6 +250,8 @@ def _probe(address: str, label: str, deadline: float, timeout: float) -> dict:
     except CommClosedError:
         raise SchedulerError(f"{label} is not a Dask scheduler: it closed the connection without a Dask "
                              "handshake (another kind of server?)") from None
+    except OSError as exc:  # it accepted the TCP check, then no connection (it went away meanwhile)
+        raise SchedulerError(f"{label} cannot be reached: {exc.strerror or exc}"[:400]) from None
     except Exception as exc:  # garbage where Dask's frames belong, a refused TLS handshake, ...
         raise SchedulerError(f"{label} is not a Dask scheduler: its answer is not Dask's protocol "
                              f"({type(exc).__name__}: {exc})"[:400]) from None
