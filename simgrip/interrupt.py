@@ -44,10 +44,11 @@ from typing import Callable
 __all__ = ["GRACE_S", "Finish", "kill_descendants", "signals_as_interrupt"]
 
 #: Seconds the main thread gets to run the handler of a signal before the watchdog acts.  Python
-#: runs pending handlers at its next bytecode (microseconds when the main thread runs Python, at
-#: most a few ms of GIL hand-over on a loaded machine), so 1.5 s means "inside a C call", and the
-#: command still ends within 2 s of the signal.
-GRACE_S = 1.5
+#: runs pending handlers at its next bytecode (microseconds when the main thread runs Python, some
+#: ms of GIL hand-over and scheduling on a loaded machine), so 1 s means "inside a C call"; the
+#: hard exit then takes ~0.3 s (freeing a model of 8000 bodies), within 2 s of the signal with
+#: room for a loaded machine (measured 1.65-1.83 s with a 1.5 s grace at load 7 on 2 cores).
+GRACE_S = 1.0
 
 _SIGNALS = (signal.SIGINT, signal.SIGTERM)
 

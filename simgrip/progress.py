@@ -4,8 +4,9 @@ Library functions that build and settle a model (:func:`simgrip.compare.simulate
 :func:`simgrip.gripper.simulate_gripper`) take ``progress``: None (silent, the
 default), or a callable that takes a phase's description and returns a context
 manager entered for the phase's duration.  :class:`StderrProgress` is the
-command line's: a line when a phase starts, one every ``every_s`` seconds while
-it lasts (from a thread, so it also ticks while the main thread is inside one
+command line's: a line when a phase starts, lines while it lasts (after
+``every_s`` seconds, then at gaps that double up to :data:`MOST_EVERY_S`: 5, 10, 20,
+40, 70, 100 s, ...; from a thread, so it also ticks while the main thread is inside one
 long C call such as MuJoCo's compile, which releases the GIL), and one when it
 ends with its duration.  Nothing goes to stdout.
 """
@@ -17,10 +18,12 @@ import sys
 import threading
 import time
 
-__all__ = ["EVERY_S", "StderrProgress", "phase"]
+__all__ = ["EVERY_S", "MOST_EVERY_S", "StderrProgress", "phase"]
 
-#: Seconds between two "still running" lines of one phase.
+#: Seconds to the first "still running" line of a phase (the gap then doubles).
 EVERY_S = 5.0
+#: Largest gap between two "still running" lines [s] (a compile of minutes prints a line a half-minute).
+MOST_EVERY_S = 30.0
 
 
 def phase(progress, what: str):
@@ -29,7 +32,8 @@ def phase(progress, what: str):
 
 
 class StderrProgress:
-    """Phase lines ``<prefix>: <what> ...``, ``<prefix>: <what>: 5 s ...``, ``<prefix>: <what>: done in 7.3 s``.
+    """Phase lines ``<prefix>: <what> ...``, ``<prefix>: <what>: 5 s ...``, ``<prefix>: <what>: done in 7.3 s``
+    (see the module docstring for when).
 
     ``stream`` defaults to ``sys.stderr`` (read when a line is written).  A
     phase left by an exception (e.g. ``KeyboardInterrupt``) prints no end line.
@@ -52,8 +56,11 @@ class StderrProgress:
         done = threading.Event()
 
         def tick():
-            while not done.wait(self.every_s):
-                self._say(f"{what}: {time.monotonic() - t0:.0f} s ...")
+            gap = self.every_s
+            while not done.wait(gap):
+                elapsed = time.monotonic() - t0
+                self._say(f"{what}: {elapsed:.0f} s ...")
+                gap = min(max(self.every_s, elapsed), max(self.every_s, MOST_EVERY_S))
 
         self._say(f"{what} ...")
         ticker = threading.Thread(target=tick, name="simgrip-progress", daemon=True)

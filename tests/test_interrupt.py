@@ -149,7 +149,7 @@ def test_interrupt_stops_the_command_and_its_workers(tmp_path, command, how):
 
 #: Seconds from the signal to the exit of ``simulate`` inside one long compile or settle.  The promise is 2 s:
 #: the main thread takes a signal at its next bytecode, or, inside a C call, the watchdog acts after
-#: simgrip.interrupt.GRACE_S = 1.5 s and its clean-up and os._exit take milliseconds; 1 s more because on a
+#: simgrip.interrupt.GRACE_S = 1 s and its clean-up and os._exit take < 0.4 s; 1 s more because on a
 #: 2-core machine shared with other jobs the watchdog thread and the test's own wait may each wait for a core.
 SOLVE_EXIT_WITHIN_S = 3.0
 
