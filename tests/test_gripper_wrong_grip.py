@@ -184,3 +184,21 @@ def test_frictionless_vertical_faces_drop_without_stepping():
         assert st.method == "dynamics"
     skip = settle_gripper(build_gripper("I", p, Uniform(-6.0), 16, fingers=3, workpiece="cylinder"))
     assert not skip.held  # the Newton skip agrees
+
+
+def test_holds_at_the_friction_cone_say_so():
+    from simgrip.params import DimensionlessParams
+    from simgrip.settle.gripper_state import FRICTION_MARGIN
+
+    need = settle_gripper(_scene("I", -6.0, 3, "cylinder")).records[0].required_mu
+    edge = settle_gripper(build_gripper("I", STANDARD.replace(mu_s=need * (1 + FRICTION_MARGIN / 2)), Uniform(-6.0),
+                                        16, fingers=3, workpiece="cylinder"))
+    assert edge.held and any("friction cone's edge" in w for w in edge.warnings)
+    inside = settle_gripper(build_gripper("I", STANDARD.replace(mu_s=need * (1 + 3 * FRICTION_MARGIN)),
+                                          Uniform(-6.0), 16, fingers=3, workpiece="cylinder"))
+    assert inside.held and not inside.warnings
+    # issue 16 audit: the cradle's Newton holds a weightless box at D = 1 with mu_s = 1, its corner contact
+    # saturated in MuJoCo's frame while the rod's frame at gamma needs mu = 1.11 (the BVP: infeasible)
+    st = settle_gripper(_cradle(DimensionlessParams(D=1.0, M=0.0, mu_s=1.0, b=0.6), 32))
+    assert st.held and st.records[0].required_mu > 1.0
+    assert any("friction cone's edge" in w for w in st.warnings)

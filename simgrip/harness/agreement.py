@@ -32,10 +32,13 @@ import sys
 import time
 from concurrent.futures import ProcessPoolExecutor
 
+from simgrip.settle.gripper_state import FRICTION_MARGIN
+
 __all__ = ["MARGIN", "agreement_case", "couple_rotation", "method_agreement"]
 
-#: Disagreements of the methods closer than this to the friction cone (relative) are the threshold.
-MARGIN = 0.02
+#: Disagreements of the methods closer than this to the friction cone (relative) are the threshold (the K-finger
+#: states warn there: :data:`simgrip.settle.gripper_state.FRICTION_MARGIN`, the same value).
+MARGIN = FRICTION_MARGIN
 
 
 def couple_rotation(state, D: float) -> float:

@@ -22,7 +22,7 @@ import numpy as np
 from simgrip.chain import link_positions
 from simgrip.sim.gripper import GripperScene
 
-__all__ = ["warn_friction_boundary", "FingerRecord", "GripperState", "read_gripper_state"]
+__all__ = ["FRICTION_MARGIN", "warn_friction_boundary", "FingerRecord", "GripperState", "read_gripper_state"]
 
 
 @dataclass
@@ -55,6 +55,12 @@ class FingerRecord:
     moment: float
     penetration: float
     required_mu: float
+
+
+#: A hold this close to the friction cone (relative: ``required_mu >= (1 - FRICTION_MARGIN) mu_s``) is the
+#: threshold, where the methods' friction models may differ (:func:`warn_friction_boundary`; the same margin
+#: as the planar agreement check, :data:`simgrip.harness.agreement.MARGIN`).
+FRICTION_MARGIN = 0.02
 
 
 @dataclass
@@ -192,7 +198,12 @@ def read_gripper_state(scene: GripperScene, dyn, held: bool, converged: bool, st
 
 
 def warn_friction_boundary(scene, state: GripperState) -> None:
-    """``M = 0`` with ``mu_s = 0``: a warning that the hold is the friction cone's boundary.
+    """Warnings where the hold is at the friction cone's boundary, where the methods may disagree.
+
+    A held state whose largest ``required_mu`` (the paper's frame at the contact) is within
+    :data:`FRICTION_MARGIN` of ``mu_s`` or beyond (a sticking contact saturated in
+    MuJoCo's contact frame, whose normal at a Grip III corner is not the rod's), and ``M = 0`` with
+    ``mu_s = 0``:
 
     A weightless workpiece needs no friction and a frictionless contact has none: ``|F_f| = mu_s N = 0``.
     The paper's criterion ``|F_f| <= mu_s N`` counts it feasible (the BVP's verdict), the point-contact
@@ -200,7 +211,17 @@ def warn_friction_boundary(scene, state: GripperState) -> None:
     or vertical drift): the methods may answer differently, and the state says why.
     """
     p = scene.params
-    if float(p.M) == 0.0 and float(p.mu_s) == 0.0:
+    mu = float(p.mu_s)
+    if state.held and mu > 0.0:
+        need = max((r.required_mu for r in state.records), default=0.0)
+        if need >= (1.0 - FRICTION_MARGIN) * mu:
+            state.warnings.append(
+                f"held at the friction cone's edge: a contact needs mu = {need:.4g} of mu_s = {mu:g} (within "
+                f"{FRICTION_MARGIN:.0%} or beyond; the record's frame: the rod's at a Grip III corner, else the "
+                f"contact's); there the settles' friction models "
+                f"(a sticking contact saturated in MuJoCo's contact frame, MuJoCo's soft cone that creeps) and "
+                f"the BVP's |f| <= mu_s n may give different verdicts")
+    if float(p.M) == 0.0 and mu == 0.0:
         state.warnings.append("M = 0 with mu_s = 0: the workpiece needs no friction and has none (|F_f| = mu_s N = 0, "
                               "the friction cone's boundary); the hold is neutral, so the settles and the BVP "
                               "(which counts the boundary as feasible) may give different verdicts")
