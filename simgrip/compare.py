@@ -192,8 +192,9 @@ def verdict_warnings(sim: dict, ref: dict) -> list[str]:
             why.append("the simulation's contact is not a surface contact (see its warnings)")
         mu = (sim.get("params") or ref.get("params") or {}).get("mu_s")
         if mu is not None:
-            why.append(f"required mu: simulation {float(sim.get('required_mu', math.nan)):.4g}, "
-                       f"reference {float(ref.get('required_mu', math.nan)):.4g}, mu_s {float(mu):.4g}")
+            at = (f"simulation {float(sim.get('required_mu', math.nan)):.4g}, " if sim.get("held", True)
+                  else "")  # a dropped state has no contact to need friction at
+            why.append(f"required mu: {at}reference {float(ref.get('required_mu', math.nan)):.4g}, mu_s {float(mu):.4g}")
         out.append(f"verdicts disagree: simulation feasible {yn(sim.get('feasible'))}, reference feasible "
                    f"{yn(ref.get('feasible'))}" + (" (" + "; ".join(why) + ")" if why else ""))
     return out
