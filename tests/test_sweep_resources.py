@@ -173,3 +173,30 @@ def test_stress_case_count_bounded_before_any_case(tmp_path, capsys):
 def test_machine_is_read():
     here = budget.machine(".")
     assert here.memory > 0 and here.cores >= 1 and here.disk is not None and here.disk > 0
+
+
+def test_a_default_sweep_too_small_for_a_cluster_runs_in_process(monkeypatch):
+    """Default ``--jobs`` (all cores) on a few fast points: a local cluster would cost more to start than it
+    saves (``worth_a_cluster``), so the runner gets ``jobs=1``; an explicit ``--jobs 2`` is honoured."""
+    seen = []
+
+    def fake_run_tasks(fn, items, *, options, **kw):
+        seen.append(options.jobs)
+        out = [fn(x) for x in items]
+        for i, r in enumerate(out):
+            if kw.get("on_result"):
+                kw["on_result"](i, r)
+        return out
+
+    monkeypatch.setattr(sweep_run, "run_tasks", fake_run_tasks)
+    monkeypatch.setattr(sweep_run, "evaluate_point", _fake_point)
+    monkeypatch.setattr(sweep_run, "machine", lambda out=None: Machine(memory=8 * 2**30, cores=2, disk=4000))
+    grid = make_grid("I", kappa=(-7, -3, 3), links=LINKS)
+    sweep_run.run_sweep(grid, options=RunnerOptions(jobs=None, progress=False))
+    sweep_run.run_sweep(grid, options=RunnerOptions(jobs=2, progress=False))
+    assert seen == [1, 2]
+    per_point = budget.seconds_per_point(LINKS)
+    assert not budget.worth_a_cluster(3, LINKS, "newton", 2)
+    # worth it once the saved half of the work exceeds the start: T/2 > LOCAL_CLUSTER_START_S
+    n = int(2 * budget.LOCAL_CLUSTER_START_S / per_point) + 2
+    assert budget.worth_a_cluster(n, LINKS, "newton", 2) and not budget.worth_a_cluster(n, LINKS, "newton", 1)

@@ -73,6 +73,11 @@ CHUNK_BYTES = CHUNK_DASK * (POINT_BYTES + RECORD_BYTES)
 #: core are started (the runner's own cap, :data:`simgrip.parallel.dask_cluster.MAX_WORKERS_PER_CORE`), more are
 #: capped with a note.
 JOBS_PER_CORE = MAX_WORKERS_PER_CORE
+#: Wall time a local Dask cluster costs before its first point and at its close [s]: a sweep whose whole work
+#: in-process is shorter than what parallel workers would save of it minus this runs in-process
+#: (:func:`worth_a_cluster`).  Measured with ``simgrip sweep I --kappa -7 -3 3 --links 16 --jobs 2`` against
+#: ``--jobs 1`` on an idle 2-core machine (see the note of issue 16).
+LOCAL_CLUSTER_START_S = 3.0
 #: A --jobs above this is refused: no machine this runs on has use for more local worker processes.
 MAX_JOBS = 1024
 #: Memory of one local worker process with simgrip, MuJoCo, SciPy and distributed imported (~250 MB), rounded up.
@@ -281,6 +286,16 @@ def check_sweep(counts: dict, links: int, method: str = "newton", *, workers: in
                              f"(every value is listed in sweep.json; the grid's {count_text(est.points)} points "
                              f"would need {est.describe()})")
     return est
+
+
+def worth_a_cluster(points: int, links: int, method: str, jobs: int) -> bool:
+    """Whether ``jobs`` local workers finish ``points`` sooner than one process does.
+
+    In-process the work takes ``T = points * seconds_per_point``; ``jobs`` workers save at most
+    ``T (1 - 1/jobs)`` of it and cost :data:`LOCAL_CLUSTER_START_S` to start and stop.
+    """
+    work = max(0, int(points)) * seconds_per_point(links, method)
+    return jobs > 1 and work * (1.0 - 1.0 / jobs) > LOCAL_CLUSTER_START_S
 
 
 def cap_jobs(jobs, tasks: int, *, option: str = "jobs", here: Machine | None = None) -> tuple[int | None, str | None]:

@@ -47,7 +47,7 @@ from dataclasses import dataclass, field, replace
 from pathlib import Path
 
 from simgrip.parallel.runner import RunnerOptions, add_runner_arguments, run_tasks, runner_options
-from simgrip.sweep.budget import CHUNK_DASK, CHUNK_IN_PROCESS, cap_jobs, check_sweep, machine
+from simgrip.sweep.budget import CHUNK_DASK, CHUNK_IN_PROCESS, cap_jobs, check_sweep, machine, worth_a_cluster
 from simgrip.sweep.grid import SweepGrid, make_grid
 from simgrip.sweep.map import check_map
 from simgrip.sweep.point import COLUMNS, evaluate_point
@@ -129,12 +129,20 @@ def _workers(options: RunnerOptions) -> int | None:
     return None if options.remote else (1 if options.in_process else options.local_workers)
 
 
-def _cap(options: RunnerOptions, todo: int, batch_size, note) -> RunnerOptions:
-    """``options`` with ``jobs`` capped for ``todo`` points (:func:`simgrip.sweep.budget.cap_jobs`)."""
+def _cap(options: RunnerOptions, todo: int, batch_size, note, grid: SweepGrid | None = None) -> RunnerOptions:
+    """``options`` with ``jobs`` capped for ``todo`` points (:func:`simgrip.sweep.budget.cap_jobs`).
+
+    With ``grid`` and the default ``jobs`` (None: all cores), a sweep whose work a local cluster would not
+    shorten (:func:`simgrip.sweep.budget.worth_a_cluster`) runs in-process; an explicit ``jobs`` is honoured
+    up to the caps.
+    """
     if options.remote:
         return options
     tasks = todo if batch_size is None else math.ceil(todo / batch_size)
     jobs, why = cap_jobs(options.jobs, tasks)
+    if (grid is not None and options.jobs is None
+            and not worth_a_cluster(todo, grid.links, grid.method, jobs or machine().cores)):
+        return replace(options, jobs=1)
     if why and note is not None:
         note(why)
     return options if jobs == options.jobs else replace(options, jobs=jobs)
@@ -209,7 +217,7 @@ def run_sweep(grid: SweepGrid, *, out=None, options: RunnerOptions = RunnerOptio
         if resume and not store.exists() and (out / "sweep.csv").exists():
             return _finished(out, grid, note, t0)
         resumed = store.open(resume, note)
-    options = _cap(options, grid.size - resumed, batch_size, note)
+    options = _cap(options, grid.size - resumed, batch_size, note, grid)
     done = store.done if store is not None else bytearray(grid.size)
     records = None if store is not None else [None] * grid.size
     computed = 0
