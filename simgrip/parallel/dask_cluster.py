@@ -170,6 +170,8 @@ class LocalDask:
         resource_tracker.ensure_running()
         self.before = descendants()
         self.cluster = self.client = None
+        self._held: list = []
+        self._exit_kill = None
         self._cls = _owned_local_cluster()  # a class of its own: this run's cluster is found even mid-start
         self.cluster, self.client = call_in_helper(
             lambda: _start_local(self._cls, self.workers), name="simgrip-cluster-start", block_sigint=True,
@@ -187,11 +189,31 @@ class LocalDask:
 
     def _end_workers(self) -> None:
         """Tell the nannies not to restart their workers (a restart spawned while this process exits prints a
-        multiprocessing traceback), then kill the worker processes."""
+        multiprocessing traceback), then kill the worker processes; and once more at exit (see below)."""
+        if self._exit_kill is None:
+            # A start given up on may still spawn a worker (its nanny was mid-start).  At exit multiprocessing
+            # unlinks its semaphores first (finalizers of priority 0) and only then ends its children: a child
+            # still unpickling them printed "FileNotFoundError" with a traceback.  This finalizer runs before.
+            from multiprocessing import util
+
+            self._exit_kill = util.Finalize(None, self._kill_left, exitpriority=100)
         for nanny in self._nannies():
             with contextlib.suppress(Exception):
                 nanny.close_gracefully(reason="simgrip interrupted")
+            # held here, so that their multiprocessing queues are not freed in a closing thread that the exit
+            # then stops half-way (after unlinking a semaphore, before telling the resource tracker, which then
+            # warned of a "leaked semaphore" at exit): they go with this object, or at exit, in the main thread
+            self._held.append((nanny, getattr(nanny, "process", None)))
         _kill(self.spawned())
+
+    def _kill_left(self) -> None:
+        """Kill this cluster's worker processes still alive: those its nannies started, and its descendants."""
+        pids = set(self.spawned())
+        for nanny in self._nannies():
+            pid = getattr(getattr(getattr(nanny, "process", None), "process", None), "pid", None)
+            if isinstance(pid, int):
+                pids.add(pid)
+        _kill(pids)
 
     def _discard(self, made) -> None:
         """In the start's thread, after the caller gave up: close what the start made, kill its processes."""
