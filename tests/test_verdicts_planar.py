@@ -152,16 +152,12 @@ def test_verdict_warnings_on_records():
 
 
 def test_weightless_cradle_on_a_stiff_finger_answers():
-    """Grip III, D = 1e4, M = 0: MuJoCo's contact on the near-massless workpiece is ~1e-10 as stiff as configured
-    (its inverse mass dominates); sizing the stiffness from that read-back must neither run away (the solve
-    ended 'contact set did not settle') nor pass silently: dropped as the BVP says, or held with a warning."""
-    res = compare("III", STIFF.replace(M=0.0), Uniform(-4.0), N)
-    assert res["simulation"]["converged"] and not res["simulation"]["feasible"] and not res["reference"]["feasible"]
-    assert res["warnings"] == []
-    # mu_s = 100: held, but MuJoCo's contact cannot be made stiff enough for the pinch (~1e-3 l deep, more
-    # than half the link radius): the state says so, and the disagreement with the BVP is flagged
-    res = compare("III", STIFF.replace(M=0.0, mu_s=100.0), Uniform(-4.0), N)
-    sim = res["simulation"]
-    assert sim["held"] and sim["contact_ok"] is False and not sim["feasible"] and res["reference"]["feasible"]
-    assert any("not a surface contact" in w for w in sim["warnings"])
-    assert any(w.startswith("verdicts disagree") for w in res["warnings"])
+    """Grip III, D = 1e4, M = 0: MuJoCo weighs the contact by the near-massless workpiece's inverse mass, so it
+    is ~1e-10 as stiff as configured and needs a factor ~1e14, beyond the time-constant form's clamp (the
+    factor ran away: 'contact set did not settle'; then, clamped, 1e-3 l deep: 'max_iter').  The direct
+    (stiffness, damping) form reaches it: the verdicts are the BVP's, the contacts <= PEN_STIFFEN deep."""
+    for mu, kappa, feasible in ((0.0, -4.0, False), (100.0, -4.0, True), (100.0, -6.0, False)):
+        res = compare("III", STIFF.replace(M=0.0, mu_s=mu), Uniform(kappa), 16)
+        sim = res["simulation"]
+        assert sim["converged"] and sim["penetration"] <= PEN_STIFFEN
+        assert sim["feasible"] is feasible and res["reference"]["feasible"] is feasible and res["warnings"] == []

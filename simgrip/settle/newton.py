@@ -60,9 +60,9 @@ SOLVE_ITERS = 200
 PEN_STIFFEN = 1e-5
 #: Contact stiffness factors are powers of this (path-independent settled states, :meth:`Newton.stiffen`).
 STIFFEN_STEP = 10.0
-#: Largest stiffness factor (MuJoCo's time constant ``1e-6`` of the configured one; a contact needing more is
-#: flagged by :func:`simgrip.validity.check_contact_depth`, never silently deep).
-STIFFEN_MAX = 1e12
+#: Largest stiffness factor (a weightless workpiece needs ~1e14: MuJoCo weighs its contact by the workpiece's
+#: inverse mass; a contact needing more is flagged by :func:`simgrip.validity.check_contact_depth`).
+STIFFEN_MAX = 1e16
 #: A factor falls back a step only when the force fits the lower one with this relative margin (the force
 #: moves by ~``PEN_STIFFEN`` relative between factors: 100 times less).
 STIFFEN_HYSTERESIS = 1e-3
@@ -257,12 +257,28 @@ class Newton:
             if f == old:
                 continue
             self._kc_raised[p] = float(self.kc[p]) if f > old else None
-            m.pair_solref[p, 0] = self._tc0[p] / math.sqrt(f)
+            self._set_solref(p, f)
             self.kc[p] *= f / old  # until read back
             self.kc_factor[p] = f
             changed = True
         self.stiffening = float(np.max(self.kc_factor)) if self.kc_factor.size else 1.0
         return changed
+
+    def _set_solref(self, p: int, f: float) -> None:
+        """Pair ``p``'s ``solref`` for ``f`` times the configured stiffness, in MuJoCo's direct form.
+
+        MuJoCo's reference stiffness from a time constant is ``1 / (dmax^2 tc^2)``
+        with the product clamped at ``1e-15`` (a limit a weightless workpiece reaches:
+        its contact is ``~1e-10`` as stiff, MuJoCo weighing it by its inverse mass);
+        the direct form ``(-stiffness, -damping)`` has no such clamp:
+        ``stiffness = f / tc0^2`` (times ``dmax^2`` in MuJoCo's convention: the same
+        constraint stiffness) and the damping of a time constant ``tc0 / sqrt(f)``
+        (critical, as the configured ``dampratio`` 1; it does not enter the balance at rest).
+        """
+        m = self.scene.model
+        tc = self._tc0[p] / math.sqrt(f)
+        m.pair_solref[p, 0] = -1.0 / tc ** 2
+        m.pair_solref[p, 1] = -2.0 / tc
 
     def contact_snapshot(self) -> tuple:
         """The solve's contact state (set, forces, stiffness and its factors, the model's ``solref``), for
