@@ -26,7 +26,8 @@ force of ``rho g l`` (``p ~ 1e-6 l``), but a stiff finger pinches far harder (Gr
 ``D = 1e4``: ``N ~ 7e4 rho g l``, ``p = N / K_c ~ 4e-3 l``, deeper than the tip's radius:
 the tip's centre passes the face and the solve fails).  A pair whose normal force would
 press it deeper than :data:`PEN_STIFFEN` is made stiffer by a power of :data:`STIFFEN_STEP`
-(:meth:`Newton.stiffen`: MuJoCo's ``solref`` time constant shrinks) and solved again.
+(:meth:`Newton.stiffen`: the pair's ``solref`` in MuJoCo's direct stiffness form) and solved
+again; the stiffness is read back from MuJoCo as before.
 """
 
 from __future__ import annotations
@@ -219,8 +220,8 @@ class Newton:
         power of :data:`STIFFEN_STEP`: the smallest that keeps its depth ``N /
         K_c`` at most :data:`PEN_STIFFEN` (1 where the configured stiffness does).
         ``K_c`` is MuJoCo's, read back (:meth:`_update_kc`); MuJoCo's ``K_c`` at
-        rest goes as the inverse square of ``solref``'s time constant, which is
-        divided by ``sqrt(factor)``, so a pair too deep by ``r`` goes up by
+        rest goes as its reference stiffness, set to ``factor`` times the
+        configured one (:meth:`_set_solref`), so a pair too deep by ``r`` goes up by
         ``ceil(log r)`` steps and one that would fit a lower factor comes down
         to it.  Powers of a fixed step make the settled state a function of the
         final force alone, not of the path the solve took to it.  A factor
