@@ -182,7 +182,10 @@ def read_scheduler_file(path) -> str:
     if not isinstance(address, str) or not address.strip():
         raise SchedulerError(f"{name} holds no scheduler address (JSON with an \"address\" such as {EXAMPLE!r}, "
                              "as dask scheduler --scheduler-file writes)")
-    return check_address(address, f"the address in {name}")
+    try:
+        return check_address(address, "its address")
+    except SchedulerError as exc:
+        raise SchedulerError(f"{name} holds no usable scheduler address: {exc}") from None
 
 
 # probing ------------------------------------------------------------------------------------
