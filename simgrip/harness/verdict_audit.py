@@ -69,10 +69,11 @@ MU_VALUES = (0.0, 1.0, 100.0)
 #: Curvatures per grip: across the paper's range (Fig. 7: I in [-6, 0], Fig. 8: II in [0, 6], Fig. 9: III in
 #: [-10, 0]) and, Grips I/II, a curl the wrong way (the other grip's shape).
 KAPPAS = {"I": (-1.0, -3.5, -6.0, 5.0), "II": (1.0, 3.5, 6.0, -5.0), "III": (-2.0, -4.0, -7.0, -10.0)}
-#: Near the limits of b (0 < b < 2; the K-finger tips need b > 2 r_tip = 0.004, the planar Grip III start
-#: b > ~0.02) and gamma (0 < gamma < 1; Grip III's start contact), at the standard M and mu_s.
+#: Near the limits of b (0 < b < 2; the K-finger tips need b > 2 r_tip = 0.004, the Grip III start b > ~0.02
+#: and b/2 < gamma: b < 1.6 at the standard gamma = 0.8) and gamma (Grip III's start contact, b/2 < gamma < 1:
+#: 0.3 < gamma at the standard b = 0.6), at the standard M and mu_s.
 EDGES = {"I": ({"b": 0.02}, {"b": 1.9}), "II": ({"b": 0.02}, {"b": 1.9}),
-         "III": ({"b": 0.05}, {"b": 1.9}, {"gamma": 0.3}, {"gamma": 0.97})}
+         "III": ({"b": 0.05}, {"b": 1.55}, {"gamma": 0.31}, {"gamma": 0.97})}
 #: (name, fingers, workpiece) per grip; ``workpiece`` None is the planar symmetric reduction.
 VARIANTS = {
     "I": (("planar", 2, None), ("box2", 2, "box"), ("cyl3", 3, "cylinder"), ("box4", 4, "box")),
