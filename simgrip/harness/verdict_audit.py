@@ -55,7 +55,6 @@ from __future__ import annotations
 
 import argparse
 import itertools
-import math
 import sys
 import time
 
