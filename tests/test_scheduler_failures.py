@@ -309,7 +309,7 @@ def test_worker_watch_counts_only_time_without_workers():
         clock.t = t
         w.check()
     clock.t = 5.0
-    with pytest.raises(RunnerError, match="no workers for 5 s"):
+    with pytest.raises(RunnerError, match="^tcp://x:1 has had no workers for 5 s: start workers"):
         w.check()
     # a worker that comes resets the wait; one that leaves starts it again
     clock = Clock()
@@ -432,3 +432,33 @@ def test_ctrl_c_during_the_cluster_start_exits_at_once_and_quietly(tmp_path, whe
     assert (fired, word) == ("fired", "interrupted"), out
     assert ended - float(at) < SIGNAL_S, ended - float(at)  # signal to exit; was >= 10 s (close_clusters' wait)
     assert "Traceback" not in err and "Exception ignored" not in err, err
+
+
+def slow_square(x):
+    time.sleep(0.2)
+    return x * x
+
+
+def test_a_local_cluster_whose_workers_stay_dead_fails_named(monkeypatch):
+    """A safety net (was: as_completed waited for ever): all workers killed and not restarted -> RunnerError."""
+    import distributed.deploy.spec as spec
+
+    from simgrip.parallel import runner
+    from simgrip.parallel.dask_cluster import _kill
+
+    monkeypatch.setattr(runner, "DEFAULT_WORKER_WAIT_S", 2.0)
+    done = []
+
+    def kill_all(i, res):  # after the first result: nannies told not to restart, their workers killed
+        done.append(i)
+        if len(done) == 1:
+            for c in list(spec.SpecCluster._instances):
+                for nanny in list(c.workers.values()):
+                    nanny.close_gracefully()
+                    _kill([nanny.process.process.pid])
+
+    t0 = time.monotonic()
+    with pytest.raises(RunnerError, match="^the local Dask cluster has had no workers for 2 s"):
+        runner.run_tasks(slow_square, range(40), options=RunnerOptions(jobs=2, progress=False), batch_size=1,
+                         on_result=kill_all)
+    assert time.monotonic() - t0 < 60

@@ -382,17 +382,23 @@ class RemoteDask:
             forget_client(client)
 
 
+#: What a run without workers says by default (an existing cluster); the local cluster says its own.
+START_WORKERS = "start workers for it (dask worker ADDRESS), or wait longer with --worker-wait SECONDS"
+
+
 class WorkerWatch:
     """Fails a run on a cluster that has had no worker for ``wait_s`` seconds.
 
     :meth:`check` is called while the run waits for results; at most every
     :data:`WORKER_POLL_S` it asks the scheduler how many workers it has.  A
     question that fails (the scheduler gone) counts as no answer, not as no
-    worker: the run's futures report a lost scheduler themselves.
+    worker: the run's futures report a lost scheduler themselves.  ``where``
+    names the cluster and ``hint`` says what to do, in the error.
     """
 
-    def __init__(self, client, where: str, wait_s: float, *, workers: int | None = None, clock=time.monotonic):
-        self.client, self.where, self.wait_s, self.clock = client, where, wait_s, clock
+    def __init__(self, client, where: str, wait_s: float, *, workers: int | None = None, clock=time.monotonic,
+                 hint: str = START_WORKERS):
+        self.client, self.where, self.wait_s, self.clock, self.hint = client, where, wait_s, clock, hint
         now = clock()
         self.asked = now
         self.empty_since = now if workers == 0 else None
@@ -417,5 +423,4 @@ class WorkerWatch:
             if n is not None:
                 self.empty_since = (self.empty_since if self.empty_since is not None else now) if n == 0 else None
         if self.empty_since is not None and now - self.empty_since >= self.wait_s:
-            raise RunnerError(f"the Dask scheduler at {self.where} has had no workers for {self.wait_s:g} s: start "
-                              "workers for it (dask worker ADDRESS), or wait longer with --worker-wait SECONDS")
+            raise RunnerError(f"{self.where} has had no workers for {self.wait_s:g} s: {self.hint}")

@@ -22,7 +22,8 @@ nothing listening, a server that is not a Dask scheduler, each raise a named
 within that time, and no traceback follows at exit.  A scheduler that has had
 no worker for ``worker_wait`` seconds (30 s, ``--worker-wait``) while the run
 waits for results raises :class:`RunnerError` (exit status 1) instead of
-waiting at 0 % forever.
+waiting at 0 % forever; so does a local cluster whose workers all died and
+stayed dead for 30 s.
 
 Items are grouped into contiguous batches, one Dask task per batch, so that the
 scheduler's per-task overhead (~ms) stays small against the work; results come
@@ -319,7 +320,11 @@ def _run_dask_quietly(fn, items, options, batch_size, on_result, bar) -> list:
     try:
         client = env.client
         if options.remote:
-            watch = WorkerWatch(client, env.where, options.worker_wait, workers=len(env.identity.get("workers", {})))
+            watch = WorkerWatch(client, f"the Dask scheduler at {env.where}", options.worker_wait,
+                                workers=len(env.identity.get("workers", {})))
+        else:  # its nannies restart a worker that dies within ~1 s; none for this long: they died and stayed dead
+            watch = WorkerWatch(client, "the local Dask cluster", DEFAULT_WORKER_WAIT_S, hint="its worker processes "
+                                "died and were not restarted (out of memory? killed?); run again, or with --jobs 1")
         futures = [client.submit(_run_batch, fn, items[s:s + batch_size], pure=False, key=f"simgrip-batch-{s}-{_token()}")
                    for s in starts]
         env.futures = futures
