@@ -28,6 +28,7 @@ from simgrip.reference.elastica import (
     ElasticaSolution,
     check_guess,
     checked_problem,
+    grip_side,
     march,
     solve,
     solve_problem,
@@ -50,8 +51,16 @@ def margin_terms(sol: ElasticaSolution) -> dict:
 
 
 def margin(sol: ElasticaSolution) -> float:
-    """Continuous feasibility margin: ``>= 0`` iff feasible (up to the strict ``n > 0``)."""
-    return min(margin_terms(sol).values())
+    """Continuous feasibility margin: ``>= 0`` iff feasible (up to the strict ``n > 0``).
+
+    The least of :func:`margin_terms`; a Grip I/II solution in the other grip's shape
+    (``feasibility["grip_shape"]`` False) has at most the tip's height on the wrong side,
+    ``grip_side * Y(1) <= 0`` (over ``l``), so that its margin is not positive either.
+    """
+    m = min(margin_terms(sol).values())
+    if sol.grip in ("I", "II") and not sol.feasibility.get("grip_shape", True):
+        m = min(m, float(grip_side(sol.grip) * sol.tip[1]))
+    return m
 
 
 def _grip_only(grip: str, what: str) -> None:
@@ -63,12 +72,12 @@ def least_mu(grip: str, params: DimensionlessParams, profile, **kw) -> float:
     """Least friction coefficient that holds ``params.M`` (paper Fig. 16a).
 
     ``|friction| / normal`` of the equilibrium; ``inf`` where the configuration
-    cannot hold at any friction (contact lost, or Grip III's tip touching the
-    workpiece).  Keyword arguments go to :func:`~simgrip.reference.elastica.solve`.
+    cannot hold at any friction (contact lost, Grip III's tip touching the
+    workpiece, or a Grip I/II solution in the other grip's shape).  Keyword arguments go to :func:`~simgrip.reference.elastica.solve`.
     """
     _grip_only(check_grip(grip), "least_mu")
     sol = solve(grip, params, profile, **kw)
-    if not sol.feasibility["contact"] or not sol.feasibility.get("tip_clear", True):
+    if not all(sol.feasibility.get(k, True) for k in ("contact", "tip_clear", "grip_shape")):
         return math.inf
     return sol.required_mu
 

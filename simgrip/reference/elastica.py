@@ -98,8 +98,10 @@ class ElasticaSolution:
         All of ``feasibility``'s entries (``True`` for the free rod).
     feasibility : dict
         ``"contact"``: normal force > 0; ``"friction"``: ``|f| <= mu_s n``; Grip III
-        also ``"tip_clear"``: ``Y(1) < Y(gamma)`` (paper's condition 23).  Empty for
-        the free rod.
+        also ``"tip_clear"``: ``Y(1) < Y(gamma)`` (paper's condition 23); Grips I/II
+        also ``"grip_shape"``: the tip on the grip's side of the palm (I: ``Y(1) <
+        0``, II: ``Y(1) > 0``, :func:`grip_side`; a solution in the other grip's
+        shape is not the grip asked for).  Empty for the free rod.
     residual : float
         Largest relative rms collocation residual of ``solve_bvp``.
     success, message
@@ -179,6 +181,8 @@ class ElasticaSolution:
             feas = {"contact": bool(n > 0), "friction": bool(n > 0 and abs(f) <= params.mu_s * n)}
             if grip == "III":
                 feas["tip_clear"] = bool(tip[1] < contact[1])
+            else:
+                feas["grip_shape"] = bool(grip_side(grip) * tip[1] > 0.0)
         return cls(
             grip=grip, params=params, profile=P.profile, s=s, theta=th, x=X, y=Y, moment=m, tip=tip,
             contact=contact, gamma=gamma, N1=float(N1), N2=float(N2), n=float(n), f=float(f),
@@ -186,6 +190,14 @@ class ElasticaSolution:
             feasible=all(feas.values()), feasibility=feas, residual=raw.rms, success=True,
             message=raw.message, gravity=P.g > 0, tip_load=(P.t1, P.t2), contact_moment=P.C, _raw=raw,
         )
+
+
+def grip_side(grip: str) -> float:
+    """The side of the palm a Grip I/II tip lies on: ``-1`` (Grip I hangs the workpiece below, ``Y(1) < 0``),
+    ``+1`` (Grip II carries it above, ``Y(1) > 0``; Fig. 2 of the paper).  Both grips are the same equations;
+    a solution on the other side is the other grip's shape, which the simulation reports as not held
+    (:func:`simgrip.validity.check_grip_shape`), so its ``feasibility["grip_shape"]`` is False."""
+    return -1.0 if grip == "I" else 1.0
 
 
 def _fine_grid(gamma: float | None) -> np.ndarray:
@@ -213,9 +225,14 @@ def checked_problem(grip, params, profile, *, gravity=True, tip_load=(0.0, 0.0),
 
 
 def check_guess(guess) -> BvpSolution | None:
-    """The BVP inside a warm start ``guess`` (an :class:`ElasticaSolution` or ``None``)."""
+    """The BVP inside a warm start ``guess``: an :class:`ElasticaSolution`, a settled hinge chain's shape
+    (:func:`simgrip.reference.chain_guess.chain_guess`) or ``None``."""
+    from simgrip.reference.chain_guess import ChainGuess
+
+    if isinstance(guess, ChainGuess):
+        return guess
     if guess is not None and not isinstance(guess, ElasticaSolution):
-        raise ValueError(f"guess must be an ElasticaSolution or None, got {type(guess).__name__}")
+        raise ValueError(f"guess must be an ElasticaSolution, a ChainGuess or None, got {type(guess).__name__}")
     return None if guess is None else guess._raw
 
 
@@ -274,8 +291,10 @@ def solve(
         ``m(gamma+) - m(gamma-) = -contact_moment`` for Grip III.
     gamma : float, optional
         Grip III contact arc length; ``params.gamma`` when ``None``.
-    guess : ElasticaSolution, optional
-        A solution to start from (any grip); continuation from its problem to this
+    guess : ElasticaSolution or ChainGuess, optional
+        A solution to start from (any grip), or a settled hinge chain's shape
+        (:func:`simgrip.reference.chain_guess.chain_guess`, built for this problem:
+        the branch the chain settled on); continuation from its problem to this
         one is used if the direct start fails.
     tol : float
         ``solve_bvp`` tolerance (relative collocation residual and boundary residual).
