@@ -16,6 +16,17 @@ records what it finds on the state (a flag and a message in ``warnings``):
   the workpiece (MuJoCo has no contact pair there) and the tip stays below the
   contact, ``Y(l) < Y(gamma)`` (the paper's condition (23) as the BVP applies it).
   Either violation sets ``tip_clear`` False with a message in ``warnings``.
+* :func:`check_reach` -- Grips I/II: a dropped state whose finger, unloaded, has its
+  tip outside the workpiece's face (``X(l) > b/2``) never pressed on it; the
+  BVP, which prescribes the tip on the face, may still hold there.  A message
+  says so (the verdicts may differ, and why).
+* :func:`check_tip_contact` -- Grip III: a contact at the tip (``gamma = 1``) is
+  Grip III degenerated to a tip contact, outside the Grip III BVP (``0 < gamma <
+  1``); a message says so (the comparison then has no reference).
+* :func:`check_friction_cone` -- every grip: a hold at the friction cone's edge
+  (the required ``mu`` within ``FRICTION_MARGIN`` of ``mu_s``, or beyond; the K-finger
+  gripper's margin, :data:`simgrip.settle.gripper_state.FRICTION_MARGIN`),
+  where the settles' friction models and the BVP's may answer differently.
 * :func:`check_contact_depth` -- every grip: no contact is pressed deeper than
   :data:`DEPTH_FRACTION` of the finger geom's radius, and (Grips I/II) no tip's
   centre lies past the workpiece's face.  A violation sets ``contact_ok`` False
@@ -36,7 +47,8 @@ from __future__ import annotations
 
 import numpy as np
 
-__all__ = ["DEPTH_FRACTION", "check_condition_23", "check_contact_depth", "check_grip_shape"]
+__all__ = ["DEPTH_FRACTION", "check_condition_23", "check_contact_depth", "check_friction_cone", "check_grip_shape",
+           "check_reach", "check_tip_contact"]
 
 #: A contact pressed deeper than this fraction of the finger geom's radius (``r_tip`` for Grips I/II,
 #: ``r_link`` for III) is not a surface contact of the rod: half its cross-section is inside the
@@ -147,3 +159,76 @@ def check_contact_depth(scene, state) -> None:
                 f"finger {f}: the tip passed the workpiece's face (tip centre X(l) = {x:.4g} l, face at {face:.4g} l): "
                 f"the state is not a grip (the verdict is not trusted)"
             )
+
+
+
+def check_reach(scene, state) -> None:
+    """Grips I/II: a dropped state whose unloaded finger does not reach the workpiece's face says so.
+
+    A dropped state's finger is at its unloaded equilibrium (the workpiece gone):
+    if that tip lies outside the face (``X(l) > b/2``, the finger's frame), closing
+    from it the finger never presses on the workpiece, so nothing holds it.  The
+    elastica BVP prescribes the tip on the face (``X(l) = b/2``) and can still
+    find a held equilibrium there (the finger pulled onto the face), which the
+    simulation cannot close into: the verdicts may differ, and the message says
+    why (the K-finger gripper's :func:`simgrip.settle.gripper_start.warn_unreached`).
+    """
+    if scene.grip not in ("I", "II") or state.held or not state.grip_matched or not scene.has_workpiece:
+        return
+    face = 0.5 * float(scene.params.b)
+    tip_x = float(state.tip[0][0])
+    if tip_x > face:
+        state.warnings.append(
+            f"not held: the unloaded finger's tip is at X = {tip_x:.4g} l, outside the workpiece's face at "
+            f"X = {face:.4g} l, so closing from it the finger never presses on the workpiece; the BVP, which puts "
+            f"the tip on the face, may find a held equilibrium there that this finger cannot close into")
+
+
+def check_tip_contact(scene, state) -> None:
+    """Grip III: a held state whose contact is at the tip (``gamma = 1``) says so.
+
+    The corner then rests on the finger's tip: Grip III degenerated to a tip
+    contact, which the Grip III BVP (the contact inside the rod, ``0 < gamma <
+    1``) does not describe; :func:`simgrip.compare.compare` gives no reference.
+    """
+    if scene.grip != "III" or not state.held:
+        return
+    for f, c in enumerate(state.contacts):
+        if float(c.gamma) >= 1.0:
+            state.warnings.append(
+                f"finger {f}: the contact is at the tip (gamma = {float(c.gamma):.4g}): Grip III has degenerated to "
+                f"a tip contact, which the Grip III BVP (0 < gamma < 1) does not describe; there is no reference "
+                f"for this state")
+            return
+
+
+def check_friction_cone(scene, state) -> None:
+    """A held state at the friction cone's edge says so (``state.warnings``).
+
+    The required ``mu`` in the theory's frame (``contact.required_mu``: the rod's
+    at a Grip III corner) within :data:`simgrip.settle.gripper_state.FRICTION_MARGIN` (2 %) of ``mu_s`` or beyond: a
+    sticking contact saturated in MuJoCo's contact frame (whose normal at a Grip
+    III corner is the carrying link's, not the rod's at ``gamma``) holds where the
+    BVP's ``|f| <= mu_s n`` may not, and MuJoCo's soft cone creeps; the settles
+    and the BVP may give different verdicts there.  ``M = 0`` with ``mu_s = 0`` is the
+    cone's boundary itself (``|F_f| = mu_s N = 0``), held or not: the K-finger
+    gripper's message (:func:`simgrip.settle.gripper_state.warn_friction_boundary`).
+    """
+    from simgrip.settle.gripper_state import FRICTION_MARGIN  # one margin for every settle (lazy: no cycle)
+
+    mu = float(scene.params.mu_s)
+    if scene.has_workpiece and float(scene.params.M) == 0.0 and mu == 0.0:
+        state.warnings.append("M = 0 with mu_s = 0: the workpiece needs no friction and has none (|F_f| = mu_s N = 0, "
+                              "the friction cone's boundary); the hold is neutral, so the settles and the BVP "
+                              "(which counts the boundary as feasible) may give different verdicts")
+        return
+    if not state.held or mu <= 0.0 or not state.contacts:
+        return
+    need = max(float(c.required_mu) for c in state.contacts)
+    if need >= (1.0 - FRICTION_MARGIN) * mu:
+        state.warnings.append(
+            f"held at the friction cone's edge: the contact needs mu = {need:.4g} of mu_s = {mu:g} (within "
+            f"{FRICTION_MARGIN:.0%} or beyond; the rod's frame"
+            + (" at the corner; MuJoCo's contact frame: "
+               f"{max(float(c.required_mu_contact) for c in state.contacts):.4g}" if scene.grip == "III" else "")
+            + "); there the settles' friction models and the BVP's |f| <= mu_s n may give different verdicts")

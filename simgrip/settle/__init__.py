@@ -51,7 +51,8 @@ from simgrip.settle.statics import (RestResidual, angle_floor, configure_statics
 from simgrip.sim.checks import clear_warnings
 from simgrip.sim.scene import Scene, set_curvature
 from simgrip.threads import blas_threads
-from simgrip.validity import check_condition_23, check_contact_depth, check_grip_shape
+from simgrip.validity import (check_condition_23, check_contact_depth, check_friction_cone, check_grip_shape,
+                              check_reach, check_tip_contact)
 
 __all__ = [
     "DEFAULT_TOL",
@@ -130,6 +131,9 @@ def _finish(scene: Scene, state: SettledState, tolerance: float, allow_unconverg
     check_condition_23(scene, state)
     check_contact_depth(scene, state)
     check_grip_shape(scene, state)
+    check_reach(scene, state)
+    check_tip_contact(scene, state)
+    check_friction_cone(scene, state)
     state.rest = scene.springs.rest.copy()
     return state
 
