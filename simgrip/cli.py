@@ -113,7 +113,8 @@ def build_parser() -> argparse.ArgumentParser:
         p.add_argument(
             "--method", default=None,
             help="settle method: newton (static solve, residual 1e-10) or dynamics "
-            "(over-damped MuJoCo dynamics with MuJoCo's own friction) [default newton]; with --fingers: "
+            "(over-damped MuJoCo dynamics with MuJoCo's own friction) [default: newton, and where it fails the "
+            "dynamics, with a warning; an explicit --method newton does not fall back]; with --fingers: "
             "auto (the symmetry skip where the scene is exactly symmetric, else dynamics), symmetric or "
             "dynamics [default auto]",
         )
@@ -249,7 +250,7 @@ def _cmd_simulate(args) -> dict:
         state = simulate_gripper(grip, params, profile, links, progress=_progress(args, links), **gripper)
         return gripper_record(state, params, profile)
     profile = _profile(args, grip)
-    return settled_record(simulate(grip, params, profile, links, method=args.method or "newton",
+    return settled_record(simulate(grip, params, profile, links, method=args.method,
                                    target_error=args.target_error, contact=args.contact,
                                    progress=_progress(args, links)),
                           params, profile)
@@ -307,7 +308,7 @@ def _cmd_compare(args) -> str:
         result = compare_gripper(grip, params, gripper.pop("profile"), links, progress=_progress(args, links),
                                  **gripper)
     else:
-        result = compare(grip, params, _profile(args, grip), links, method=args.method or "newton",
+        result = compare(grip, params, _profile(args, grip), links, method=args.method,
                          target_error=args.target_error, contact=args.contact, progress=_progress(args, links))
     if args.json:
         return json.dumps(to_jsonable(result), allow_nan=False)

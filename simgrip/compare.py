@@ -16,32 +16,73 @@ from __future__ import annotations
 import math
 import time
 
+import numpy as np
+
 from simgrip.params import DimensionlessParams, check_grip
 from simgrip.profiles import as_profile
 from simgrip.report import difference, elastica_record
 
-__all__ = ["simulate", "settled_record", "reference_for", "compare", "verdict_warnings"]
+__all__ = ["BRANCH_LINKS", "simulate", "settled_record", "reference_for", "reference_of", "branch_warnings",
+           "cone_warnings", "compare", "verdict_warnings"]
+
+#: A reference whose tip lies farther than this many link lengths (``BRANCH_LINKS / n`` over ``l``) from the
+#: simulated tip describes another equilibrium.  The settled ``n``-link chain is the midpoint discretisation of
+#: the elastica, whose tip it matches to ``O(1/n^2)`` (``~3e-4 l`` at ``n = 32``, the standard case; README's
+#: convergence table): a whole link, ``1/n``, is ``n`` times that bound (32 at the default), so a tip that far
+#: off is not the chain's discretisation error but another branch of the BVP.
+BRANCH_LINKS = 1.0
 
 
-def simulate(grip: str, params: DimensionlessParams, profile, links: int, *, progress=None, **settle_kw):
+def simulate(grip: str, params: DimensionlessParams, profile, links: int, *, progress=None, method=None,
+             **settle_kw):
     """Build the symmetric-reduction scene of ``grip`` with ``links`` links per finger and settle it.
 
     Returns the :class:`~simgrip.settle.SettledState`, its ``build_time_s`` the
     build and compile of the model [s] (``wall_time_s`` is the settle alone).
     ``progress`` (:mod:`simgrip.progress`; None: silent) is told the phases.
     Extra keywords go to :func:`~simgrip.settle.settle`.
+
+    ``method``: ``"newton"`` or ``"dynamics"`` settle that way (an explicit
+    choice: a failure raises :class:`~simgrip.settle.SettleError`).  ``None``
+    (the default, also ``"auto"``) is Newton, and where Newton fails, the
+    over-damped dynamics with a warning saying so (issue 16: the default must
+    not fail where another method answers; the K-finger ``auto`` does the same).
+    The fallback needs a contact the dynamics has (``contact`` None or
+    ``"surface"``) and no ``target_error`` (which extrapolates Newton only);
+    otherwise Newton's failure is raised.
     """
     from simgrip.progress import phase
     from simgrip.scenes import build_scene
-    from simgrip.settle import settle
+    from simgrip.settle import SettleError, settle
 
     grip = check_grip(grip)
+    profile = as_profile(profile)
+    auto = method in (None, "auto")
+
+    def build():
+        with phase(progress, f"building the model ({links} links per finger)"):
+            return build_scene(grip, params, profile, links)
+
     t0 = time.perf_counter()
-    with phase(progress, f"building the model ({links} links per finger)"):
-        scene = build_scene(grip, params, as_profile(profile), links)
+    scene = build()
     build_time_s = time.perf_counter() - t0
-    with phase(progress, "settling"):
-        state = settle(scene, **settle_kw)
+    try:
+        with phase(progress, "settling"):
+            state = settle(scene, method="newton" if auto else method, **settle_kw)
+    except SettleError as exc:
+        if not (auto and settle_kw.get("contact") in (None, "surface") and settle_kw.get("target_error") is None):
+            raise
+        kw = {k: v for k, v in settle_kw.items() if k not in ("contact", "tol", "max_steps")}
+        t1 = time.perf_counter()
+        scene = build()  # from the built state, not where the failed solve left the chain
+        build_time_s += time.perf_counter() - t1
+        try:
+            with phase(progress, "settling by the dynamics (Newton failed)"):
+                state = settle(scene, method="dynamics", **kw)
+        except SettleError as exc2:
+            raise SettleError(f"{exc}; the fallback to the dynamics failed too: {exc2}") from exc2
+        state.warnings.insert(0, f"the default settle (Newton) failed ({exc}); this state is the over-damped "
+                                 f"dynamics' (method 'dynamics', MuJoCo's surface contact and friction) instead")
     state.build_time_s = build_time_s
     return state
 
@@ -134,32 +175,123 @@ def settle_fields(state) -> dict:
     }
 
 
-def reference_for(state, params: DimensionlessParams, profile):
-    """The elastica solution of the state ``state`` describes (see the module docstring)."""
+def reference_of(state, params: DimensionlessParams, profile):
+    """``(solution, warnings)``: the elastica solution of the state ``state`` describes (see the module docstring).
+
+    A held state's reference is solved from the settled chain's own shape
+    (:func:`simgrip.reference.chain_guess.chain_guess`: the branch the chain
+    settled on), then, if that start does not converge, cold.  ``warnings``
+    names a reference on another branch (:func:`branch_warnings`) and a Grip III
+    reference at the friction cone's edge as the chain resolves it
+    (:func:`cone_warnings`): why the verdicts may differ.  A Grip III
+    contact at the tip (``gamma = 1``) has no reference: ``(None, [why])``.
+    A dropped state (or the free rod) is referenced at ``params``, cold.
+    """
     from simgrip.reference import elastica
+    from simgrip.reference.bvp import ElasticaError
+    from simgrip.reference.chain_guess import chain_guess
 
     grip = state.grip
     c = state.contact
+    profile = as_profile(profile)
     if grip == "free" or c is None or not state.held:
-        return elastica.solve(grip, params, profile)
+        sol = elastica.solve(grip, params, profile)
+        return sol, cone_warnings(sol, state.links)
+    kw = {"contact_moment": float(c.moment)}
+    p = params
     if grip == "III":
+        if float(c.gamma) >= 1.0:
+            return None, [f"no reference: the simulation's contact is at the tip (gamma = {float(c.gamma):.4g}), "
+                          f"Grip III degenerated to a tip contact, which the Grip III BVP (0 < gamma < 1) does not "
+                          f"describe"]
         p = params.replace(b=2.0 * float(c.point[0]))
-        return elastica.solve(grip, p, profile, gamma=float(c.gamma), contact_moment=float(c.moment))
-    return elastica.solve(grip, params, profile, contact_moment=float(c.moment))
+        kw["gamma"] = float(c.gamma)
+    _, _, problem = elastica.checked_problem(grip, p, profile, **kw)
+    try:
+        guess = chain_guess(problem, state.link_angles[0], state.nodes[0], float(c.N1), float(c.moment))
+        sol = elastica.solve(grip, p, profile, guess=guess, fallback=False, **kw)
+    except (ElasticaError, ValueError):
+        sol = elastica.solve(grip, p, profile, **kw)  # the chain's shape did not converge: cold
+    return sol, branch_warnings(state, sol) + cone_warnings(sol, state.links)
+
+
+def reference_for(state, params: DimensionlessParams, profile):
+    """The elastica solution of the state ``state`` describes (:func:`reference_of` without its warnings).
+
+    ``ElasticaError`` when there is none (a Grip III contact at the tip)."""
+    from simgrip.reference.bvp import ElasticaError
+
+    sol, warnings = reference_of(state, params, profile)
+    if sol is None:
+        raise ElasticaError(warnings[0])
+    return sol
+
+
+def branch_warnings(state, sol) -> list[str]:
+    """A reference on another equilibrium branch than the held simulated state says so.
+
+    The tips further apart than :data:`BRANCH_LINKS` link lengths (``1/n``):
+    beyond the chain's ``O(1/n^2)`` discretisation error, so the two are
+    different equilibria and their verdicts need not agree.
+    """
+    if sol is None or not state.held or state.contact is None:
+        return []
+    tip = np.asarray(state.tip[0] if np.ndim(state.tip) == 2 else state.tip, dtype=float)
+    gap = float(np.hypot(*(tip - np.asarray(sol.tip, dtype=float))))
+    limit = BRANCH_LINKS / int(state.links)
+    if not gap > limit:
+        return []
+    return [f"the reference converged to another equilibrium branch: its tip ({sol.tip[0]:.4g}, {sol.tip[1]:.4g}) l "
+            f"is {gap:.3g} l from the simulation's ({tip[0]:.4g}, {tip[1]:.4g}) l, more than a link (1/n = "
+            f"{limit:.3g} l; the chain's own error is O(1/n^2)); the verdicts compare different equilibria"]
+
+
+def cone_warnings(sol, links: int) -> list[str]:
+    """A Grip III reference within the chain's frame error of the friction cone says so.
+
+    The simulated corner rests on one link, whose normal is MuJoCo's contact
+    frame; the rod's normal at ``gamma`` (the BVP's frame) differs from it by up
+    to half a link's turn, ``|theta'(gamma)| / (2 n)`` (the contact anywhere on
+    the link).  A reference whose friction angle ``atan(|f| / n)`` lies within
+    that of ``atan(mu_s)`` is at the cone's edge as the chain resolves it: the
+    settles may slip where the BVP holds, or hold where it does not.
+    """
+    if sol is None or sol.grip != "III" or not sol.normal_force > 0.0:
+        return []
+    g = float(sol.gamma)
+    curvature = float(sol.profile(np.array([g]))[0]) + float(sol.moment_at(np.array([g]))[0]) / sol.params.D
+    band = abs(curvature) / (2.0 * int(links))
+    mu = float(sol.params.mu_s)
+    gap = math.atan(float(sol.required_mu)) - math.atan(mu)
+    if abs(gap) > band:
+        return []
+    return [f"the reference is at the friction cone's edge as the {int(links)}-link chain resolves it: it needs mu = "
+            f"{float(sol.required_mu):.4g} of mu_s = {mu:g} (friction angles {abs(gap):.3g} rad apart) while the "
+            f"corner's link turns the contact frame by up to |theta'(gamma)| / (2 n) = {band:.3g} rad from the rod's; "
+            f"the settles may slip where the BVP holds, or hold where it does not"]
 
 
 def compare(grip: str, params: DimensionlessParams, profile, links: int, **settle_kw) -> dict:
-    """Simulate, solve the matching reference, and return ``{"simulation", "reference", "difference"}``.
+    """Simulate, solve the matching reference, and return ``{"simulation", "reference", "difference", "warnings"}``.
 
-    ``difference`` is simulation minus reference for every shared numeric field.
-    Extra keywords (e.g. ``method="dynamics"``) go to :func:`~simgrip.settle.settle`.
+    ``difference`` is simulation minus reference for every shared numeric field;
+    ``warnings`` names the verdicts that disagree (:func:`verdict_warnings`), a
+    reference on another branch (:func:`branch_warnings`) and one at the friction
+    cone's edge as the chain resolves it (:func:`cone_warnings`).  A state without a
+    reference (a Grip III contact at the tip) has ``reference`` ``{"source":
+    "elastica", "grip", "available": False, "why"}`` and an empty difference.
+    Extra keywords (e.g. ``method="dynamics"``) go to :func:`simulate`.
     """
     profile = as_profile(profile)
     state = simulate(grip, params, profile, links, **settle_kw)
     sim = settled_record(state, params, profile)
-    ref = elastica_record(reference_for(state, params, profile))
+    sol, ref_warnings = reference_of(state, params, profile)
+    if sol is None:
+        ref = {"source": "elastica", "grip": state.grip, "available": False, "why": ref_warnings[0]}
+        return {"simulation": sim, "reference": ref, "difference": {}, "warnings": ref_warnings}
+    ref = elastica_record(sol)
     return {"simulation": sim, "reference": ref, "difference": difference(sim, ref),
-            "warnings": verdict_warnings(sim, ref)}
+            "warnings": ref_warnings + verdict_warnings(sim, ref)}
 
 
 def verdict_warnings(sim: dict, ref: dict) -> list[str]:

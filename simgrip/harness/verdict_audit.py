@@ -22,8 +22,9 @@ Each row compares three verdicts, ``"held"`` or ``"dropped"`` (``feasible``:
 held and, Grip III, condition (23) met):
 
 ``default``
-    the method a user gets: the planar settle's Newton
-    (:func:`simgrip.settle.settle`), the K-finger ``settle_gripper`` with
+    the method a user gets: the planar settle's default
+    (:func:`simgrip.compare.simulate` without ``method``: Newton, and where it
+    fails, the dynamics with a warning), the K-finger ``settle_gripper`` with
     ``method="auto"`` (the symmetry skip: the planar Newton replicated; where
     it fails, the dynamics, with a warning);
 ``dynamics``
@@ -31,16 +32,21 @@ held and, Grip III, condition (23) met):
     ``method="dynamics"``; the cradle: one finger's planar dynamics,
     replicated, :func:`~simgrip.settle.gripper_symmetry.settle_cradle_dynamics`);
 ``bvp``
-    the elastica BVP of the state the planar Newton settle describes
-    (:func:`simgrip.compare.reference_for`: its contact couple, Grip III its
-    own ``gamma``; the BVP at the parameters where the settle drops or fails),
-    as ``simgrip compare`` reports it.  The BVP's ``feasible`` has no grip-shape
-    test: a wrong-way curl can be "feasible" in the other grip's shape.
+    the elastica BVP of the state the planar default describes
+    (:func:`simgrip.compare.reference_of`: started from the settled chain's
+    shape, its contact couple, Grip III its own ``gamma``; the BVP at the
+    parameters where the settle drops or fails), as ``simgrip compare`` reports
+    it, with its warnings (a reference on another branch, one at the friction
+    cone's edge as the chain resolves it).  Its ``feasible`` includes the grip's
+    shape (Grips I/II: a solution in the other grip's shape is not feasible).
+    A Grip III contact at the tip has no reference (no verdict, named).
 
 A row is an **agreement** when the three verdicts are one; a **warned
 disagreement** when they differ and a simulated state (default or dynamics)
-carries a warning (``warnings``: the other grip's shape, condition (23), the
-skip's fallback, ...) that says why; a **silent disagreement** otherwise.  A
+or the reference carries a warning (``warnings``: the other grip's shape,
+condition (23), the skip's fallback, a finger that does not reach the face, the
+friction cone's edge, a reference on another branch, ...) that says why (the
+comparison's bare "verdicts disagree" is not one); a **silent disagreement** otherwise.  A
 row where a method raised a named error (``SettleError``, ``ElasticaError``)
 has **no verdict** from it: listed apart (the default's own failures are the
 ones that matter: the default must answer where another method does).
@@ -143,11 +149,11 @@ def _run(fn):
 
 
 def _planar(grip, params, prof, n, method):
-    from simgrip.scenes import build_scene
-    from simgrip.settle import settle
+    """The planar settle as ``simgrip simulate`` runs it (:func:`simgrip.compare.simulate`; ``method`` None: the
+    default, Newton with the dynamics as its fallback)."""
+    from simgrip.compare import simulate
 
-    st = settle(build_scene(grip, params, prof, n), method=method)
-    return st
+    return simulate(grip, params, prof, n, method=method)
 
 
 def _gripper_scene(grip, params, prof, n, K, workpiece):
@@ -161,7 +167,7 @@ def _gripper_scene(grip, params, prof, n, K, workpiece):
 
 def audit_point(point: dict, links: int = LINKS) -> list[dict]:
     """Settle one parameter point every way (:data:`VARIANTS`); one row per variant (see the module docstring)."""
-    from simgrip.compare import reference_for
+    from simgrip.compare import reference_of
     from simgrip.params import DimensionlessParams
     from simgrip.profiles import Uniform
     from simgrip.settle.gripper import settle_gripper
@@ -172,10 +178,10 @@ def audit_point(point: dict, links: int = LINKS) -> list[dict]:
     prof = Uniform(point["kappa"])
     planar = {}
 
-    def planar_newton():
-        st = _planar(grip, params, prof, links, "newton")
+    def planar_default():
+        st = _planar(grip, params, prof, links, None)
         planar["state"] = st
-        return _verdict(st.held, st.tip_clear), st.warnings, "newton"
+        return _verdict(st.held, st.tip_clear), st.warnings, st.method
 
     def planar_dynamics():
         st = _planar(grip, params, prof, links, "dynamics")
@@ -183,12 +189,15 @@ def audit_point(point: dict, links: int = LINKS) -> list[dict]:
 
     def bvp():
         from simgrip.reference import elastica
+        from simgrip.reference.bvp import ElasticaError
 
         st = planar.get("state")
-        sol = reference_for(st, params, prof) if st is not None else elastica.solve(grip, params, prof)
-        return _verdict(sol.feasible), [], "bvp"
+        sol, warnings = reference_of(st, params, prof) if st is not None else (elastica.solve(grip, params, prof), [])
+        if sol is None:  # no reference (a Grip III contact at the tip): no verdict, the reason named
+            raise ElasticaError(warnings[0])
+        return _verdict(sol.feasible), warnings, "bvp"
 
-    newton = _run(planar_newton)
+    newton = _run(planar_default)
     ref = _run(bvp)
     rows = []
     for name, K, workpiece in VARIANTS[grip]:
@@ -229,7 +238,7 @@ def _classify(row: dict, default: dict, dyn: dict, ref: dict) -> dict:
         row["outcome"] = "no_verdict"
     elif len(set(verdicts)) == 1:
         row["outcome"] = "agree"
-    elif default["warnings"] or dyn["warnings"]:
+    elif default["warnings"] or dyn["warnings"] or ref["warnings"]:
         row["outcome"] = "warned"
     else:
         row["outcome"] = "silent"
