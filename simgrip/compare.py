@@ -22,8 +22,8 @@ from simgrip.params import DimensionlessParams, check_grip
 from simgrip.profiles import as_profile
 from simgrip.report import difference, elastica_record
 
-__all__ = ["BRANCH_LINKS", "simulate", "settled_record", "reference_for", "reference_of", "branch_warnings",
-           "cone_warnings", "compare", "verdict_warnings"]
+__all__ = ["BRANCH_LINKS", "simulate", "settled_record", "reference_for", "reference_of", "chain_reference",
+           "branch_warnings", "cone_warnings", "compare", "verdict_warnings"]
 
 #: A reference whose tip lies farther than this many link lengths (``BRANCH_LINKS / n`` over ``l``) from the
 #: simulated tip describes another equilibrium.  The settled ``n``-link chain is the midpoint discretisation of
@@ -178,9 +178,9 @@ def settle_fields(state) -> dict:
 def reference_of(state, params: DimensionlessParams, profile):
     """``(solution, warnings)``: the elastica solution of the state ``state`` describes (see the module docstring).
 
-    A held state's reference is solved from the settled chain's own shape
-    (:func:`simgrip.reference.chain_guess.chain_guess`: the branch the chain
-    settled on), then, if that start does not converge, cold.  ``warnings``
+    A held state's reference is on the branch the settled chain lies on
+    (:func:`chain_reference`: cold, and where that lands on another branch,
+    from the chain's own shape).  ``warnings``
     names a reference on another branch (:func:`branch_warnings`) and a Grip III
     reference at the friction cone's edge as the chain resolves it
     (:func:`cone_warnings`): why the verdicts may differ.  A Grip III
@@ -188,8 +188,6 @@ def reference_of(state, params: DimensionlessParams, profile):
     A dropped state (or the free rod) is referenced at ``params``, cold.
     """
     from simgrip.reference import elastica
-    from simgrip.reference.bvp import ElasticaError
-    from simgrip.reference.chain_guess import chain_guess
 
     grip = state.grip
     c = state.contact
@@ -206,13 +204,53 @@ def reference_of(state, params: DimensionlessParams, profile):
                           f"describe"]
         p = params.replace(b=2.0 * float(c.point[0]))
         kw["gamma"] = float(c.gamma)
-    _, _, problem = elastica.checked_problem(grip, p, profile, **kw)
+    sol = chain_reference(grip, p, profile, state.link_angles[0], float(c.N1), state.nodes[0], **kw)
+    return sol, branch_warnings(state.tip, state.links, sol) + cone_warnings(sol, state.links, c)
+
+
+def chain_reference(grip: str, params: DimensionlessParams, profile, link_angles, N1: float, nodes=None, *,
+                    contact_moment: float = 0.0, gamma: float | None = None):
+    """The elastica solution of ``grip`` on the branch a settled chain lies on.
+
+    ``link_angles`` (rad) and ``nodes`` (over ``l``; None: from the angles) of
+    the chain, ``N1`` its horizontal contact force on the rod (over ``rho g l``).
+    The BVP is solved as always (:func:`simgrip.reference.elastica.solve`, cold);
+    where that lands on another branch (its tip more than :data:`BRANCH_LINKS`
+    links from the chain's) or fails, it is solved again from the chain's own
+    shape (:func:`simgrip.reference.chain_guess.chain_guess`), and the solution
+    nearer the chain is returned.  ``ElasticaError`` when both fail.
+    """
+    from simgrip.reference import elastica
+    from simgrip.reference.bvp import ElasticaError
+    from simgrip.reference.chain_guess import chain_guess
+
+    kw = {"contact_moment": float(contact_moment)} | ({} if gamma is None else {"gamma": float(gamma)})
+    angles = np.asarray(link_angles, dtype=float).ravel()
+    cold = error = None
     try:
-        guess = chain_guess(problem, state.link_angles[0], state.nodes[0], float(c.N1), float(c.moment))
-        sol = elastica.solve(grip, p, profile, guess=guess, fallback=False, **kw)
-    except (ElasticaError, ValueError):
-        sol = elastica.solve(grip, p, profile, **kw)  # the chain's shape did not converge: cold
-    return sol, branch_warnings(state, sol) + cone_warnings(sol, state.links)
+        cold = elastica.solve(grip, params, profile, **kw)
+    except ElasticaError as exc:
+        error = exc
+    try:
+        _, _, problem = elastica.checked_problem(grip, params, profile, **kw)
+        guess = chain_guess(problem, angles, nodes, float(N1), float(contact_moment))
+    except ValueError:
+        guess = None
+    tip = guess.states(np.array([1.0]))[2:, 0] if guess is not None else None
+    if guess is None or (cold is not None and not branch_warnings(tip, angles.size, cold)):
+        if cold is None:
+            raise error
+        return cold
+    try:
+        warm = elastica.solve(grip, params, profile, guess=guess, fallback=False, **kw)
+    except ElasticaError:
+        warm = None
+    if warm is None or cold is None:
+        if warm is None and cold is None:
+            raise error
+        return cold if warm is None else warm
+    gap = lambda sol: float(np.hypot(*(tip - np.asarray(sol.tip, dtype=float))))  # noqa: E731
+    return warm if gap(warm) <= gap(cold) else cold
 
 
 def reference_for(state, params: DimensionlessParams, profile):
@@ -227,18 +265,21 @@ def reference_for(state, params: DimensionlessParams, profile):
     return sol
 
 
-def branch_warnings(state, sol) -> list[str]:
+def branch_warnings(tip, links: int, sol) -> list[str]:
     """A reference on another equilibrium branch than the held simulated state says so.
 
-    The tips further apart than :data:`BRANCH_LINKS` link lengths (``1/n``):
-    beyond the chain's ``O(1/n^2)`` discretisation error, so the two are
-    different equilibria and their verdicts need not agree.
+    ``tip``: the simulated tip ``(X, Y)`` over ``l`` (or one per finger: finger
+    0's is used), ``links`` the chain's ``n``.  The tips further apart than
+    :data:`BRANCH_LINKS` link lengths (``1/n``): beyond the chain's ``O(1/n^2)``
+    discretisation error, so the two are different equilibria and their
+    verdicts need not agree.  Empty when ``sol`` is None.
     """
-    if sol is None or not state.held or state.contact is None:
+    if sol is None:
         return []
-    tip = np.asarray(state.tip[0] if np.ndim(state.tip) == 2 else state.tip, dtype=float)
+    tip = np.asarray(tip, dtype=float)
+    tip = tip[0] if tip.ndim == 2 else tip
     gap = float(np.hypot(*(tip - np.asarray(sol.tip, dtype=float))))
-    limit = BRANCH_LINKS / int(state.links)
+    limit = BRANCH_LINKS / int(links)
     if not gap > limit:
         return []
     return [f"the reference converged to another equilibrium branch: its tip ({sol.tip[0]:.4g}, {sol.tip[1]:.4g}) l "
@@ -246,29 +287,39 @@ def branch_warnings(state, sol) -> list[str]:
             f"{limit:.3g} l; the chain's own error is O(1/n^2)); the verdicts compare different equilibria"]
 
 
-def cone_warnings(sol, links: int) -> list[str]:
+def cone_warnings(sol, links: int, contact=None) -> list[str]:
     """A Grip III reference within the chain's frame error of the friction cone says so.
 
     The simulated corner rests on one link, whose normal is MuJoCo's contact
-    frame; the rod's normal at ``gamma`` (the BVP's frame) differs from it by up
-    to half a link's turn, ``|theta'(gamma)| / (2 n)`` (the contact anywhere on
-    the link).  A reference whose friction angle ``atan(|f| / n)`` lies within
-    that of ``atan(mu_s)`` is at the cone's edge as the chain resolves it: the
-    settles may slip where the BVP holds, or hold where it does not.
+    frame (the one the settles' friction cone uses); the rod's normal at
+    ``gamma`` (the BVP's frame) differs from it.  With the simulated ``contact``
+    (a held state's :class:`~simgrip.settle.FingerContact`) the difference is
+    measured: the friction angles ``atan(required_mu)`` in the two frames.
+    Without one (a dropped state) it is bounded by half a link's turn,
+    ``|theta'(gamma)| / (2 n)`` (the contact anywhere on the link).  A reference
+    whose friction angle ``atan(|f| / n)`` lies within that of ``atan(mu_s)`` is
+    at the cone's edge as the chain resolves it: the settles may slip where the
+    BVP holds, or hold where it does not.
     """
     if sol is None or sol.grip != "III" or not sol.normal_force > 0.0:
         return []
-    g = float(sol.gamma)
-    curvature = float(sol.profile(np.array([g]))[0]) + float(sol.moment_at(np.array([g]))[0]) / sol.params.D
-    band = abs(curvature) / (2.0 * int(links))
+    if contact is not None:
+        turn = abs(math.atan(float(contact.required_mu)) - math.atan(float(contact.required_mu_contact)))
+        how = "the corner's link turns the contact frame by"
+    else:
+        g = float(sol.gamma)
+        curvature = float(sol.profile(np.array([g]))[0]) + float(sol.moment_at(np.array([g]))[0]) / sol.params.D
+        turn = abs(curvature) / (2.0 * int(links))
+        how = "the corner's link can turn the contact frame by up to |theta'(gamma)| / (2 n) ="
+    if not math.isfinite(turn):
+        return []
     mu = float(sol.params.mu_s)
     gap = math.atan(float(sol.required_mu)) - math.atan(mu)
-    if abs(gap) > band:
+    if abs(gap) > turn:
         return []
     return [f"the reference is at the friction cone's edge as the {int(links)}-link chain resolves it: it needs mu = "
-            f"{float(sol.required_mu):.4g} of mu_s = {mu:g} (friction angles {abs(gap):.3g} rad apart) while the "
-            f"corner's link turns the contact frame by up to |theta'(gamma)| / (2 n) = {band:.3g} rad from the rod's; "
-            f"the settles may slip where the BVP holds, or hold where it does not"]
+            f"{float(sol.required_mu):.4g} of mu_s = {mu:g} (friction angles {abs(gap):.3g} rad apart) while {how} "
+            f"{turn:.3g} rad from the rod's; the settles may slip where the BVP holds, or hold where it does not"]
 
 
 def compare(grip: str, params: DimensionlessParams, profile, links: int, **settle_kw) -> dict:

@@ -43,7 +43,7 @@ def compare_gripper(grip: str, params: DimensionlessParams, profile, links: int,
                     workpiece_yaw: float = 0.0, **settle_kw) -> dict:
     """Settle the K-finger gripper and compare every finger with the planar BVP.
 
-    Returns ``{"simulation", "reference", "difference", "fingers"}``:
+    Returns ``{"simulation", "reference", "difference", "fingers", "warnings"}``:
     ``simulation`` is :func:`simgrip.gripper.gripper_record` (finger 0's fields
     at the top level), ``reference`` the planar BVP's record
     (:func:`simgrip.report.elastica_record`, with finger 0's contact couple),
@@ -52,8 +52,13 @@ def compare_gripper(grip: str, params: DimensionlessParams, profile, links: int,
     "relative_difference"}`` per finger (forces over ``rho g l``).  Dropped
     workpieces are compared with the BVP's verdict only (``feasible``).
     ``ValueError`` names the option of a scene without one planar reference
-    (see the module docstring).
+    (see the module docstring).  ``warnings``, as the planar compare's
+    (:func:`simgrip.compare.compare`): a reference on another branch than finger
+    0's settled shape (:func:`simgrip.compare.branch_warnings`; a held state's
+    reference starts from that shape, :func:`simgrip.compare.chain_reference`)
+    and the verdicts that disagree (:func:`simgrip.compare.verdict_warnings`).
     """
+    from simgrip.compare import branch_warnings, chain_reference, verdict_warnings
     from simgrip.gripper import gripper_record, simulate_gripper
     from simgrip.reference import elastica
     from simgrip.report import difference, elastica_record
@@ -67,7 +72,12 @@ def compare_gripper(grip: str, params: DimensionlessParams, profile, links: int,
     sim = gripper_record(state, params, profile)
     first = state.records[0] if (state.held and state.records) else None
     moment = float(first.moment) if first is not None else 0.0
-    ref = elastica_record(elastica.solve(grip, params, profile, contact_moment=moment))
+    if first is not None:
+        sol = chain_reference(grip, params, profile, state.link_angles[0], float(first.N1), contact_moment=moment)
+        ref_warnings = branch_warnings(state.tip, state.links, sol)
+    else:
+        sol, ref_warnings = elastica.solve(grip, params, profile), []
+    ref = elastica_record(sol)
     per_finger = []
     for rec in sim["fingers"]:
         n_ref = ref.get("normal_force")
@@ -77,4 +87,5 @@ def compare_gripper(grip: str, params: DimensionlessParams, profile, links: int,
             rel = (n_sim - n_ref) / abs(n_ref)
         per_finger.append({"finger": len(per_finger), "normal_force": n_sim, "reference_normal_force": n_ref,
                            "relative_difference": rel})
-    return {"simulation": sim, "reference": ref, "difference": difference(sim, ref), "fingers": per_finger}
+    return {"simulation": sim, "reference": ref, "difference": difference(sim, ref), "fingers": per_finger,
+            "warnings": ref_warnings + verdict_warnings(sim, ref)}

@@ -161,3 +161,111 @@ def test_weightless_cradle_on_a_stiff_finger_answers():
         sim = res["simulation"]
         assert sim["converged"] and sim["penetration"] <= PEN_STIFFEN
         assert sim["feasible"] is feasible and res["reference"]["feasible"] is feasible and res["warnings"] == []
+
+
+# --- issue 16 section 6: the audit's planar groups (unreached face, wrong branch, cone, fallback, tip contact) ---
+
+
+@pytest.mark.parametrize("grip,kappa,D,M", [("I", -1.0, 1.0, 1e4), ("I", 5.0, 1e-2, 5.0)])
+def test_a_finger_that_does_not_reach_the_face_says_so(grip, kappa, D, M):
+    """Both settles drop, the BVP (tip prescribed on the face) holds: the dropped state names why -- its
+    unloaded tip lies outside the face, X(l) > b/2, so closing from it the finger never presses on it."""
+    p = STANDARD.replace(D=D, M=M, mu_s=100.0)
+    for method in ("newton", "dynamics"):
+        st = settle(build_scene(grip, p, Uniform(kappa), N), method=method)
+        assert not st.held and st.grip_matched and st.tip[0, 0] > 0.5 * p.b
+        assert any(w.startswith("not held: the unloaded finger's tip") for w in st.warnings), st.warnings
+    assert elastica.solve(grip, p, Uniform(kappa)).feasible  # the BVP holds: the disagreement is the named one
+
+
+def test_a_reached_face_is_not_warned():
+    st = settle(build_scene("I", STANDARD.replace(mu_s=0.1), Uniform(-6.0), N))  # dropped by friction
+    assert not st.held and st.tip[0, 0] < 0.5 * STANDARD.b
+    assert not any("unloaded finger" in w for w in st.warnings)
+
+
+def test_grip_ii_bvp_in_grip_is_shape_is_not_feasible():
+    """Grip II at D = 1e-2, kappa = 3.5, mu_s = 100: the BVP's 'held' solution hangs below the palm (Grip I's
+    shape, Y(l) = -0.94), which the settle calls 'wrong grip'; the BVP says not feasible too."""
+    p = STANDARD.replace(D=1e-2, mu_s=100.0)
+    sol = elastica.solve("II", p, Uniform(3.5))
+    assert sol.tip[1] < 0 and sol.feasibility["contact"] and sol.feasibility["friction"]
+    assert sol.feasibility["grip_shape"] is False and not sol.feasible
+    res = compare("II", p, Uniform(3.5), N)
+    assert not res["simulation"]["feasible"] and not res["reference"]["feasible"] and res["warnings"] == []
+
+
+def test_the_reference_follows_the_settled_branch():
+    """Grip I, kappa = -6, D = 1e4, b = 0.02: the settle holds (tip Y = -2e-4, N = 14385); the cold BVP landed on
+    another branch (tip Y = +0.85, n = -1.5e5: 'dropped').  Started from the settled chain it is the same
+    equilibrium (tips within the chain's O(1/n^2) error) and holds."""
+    from simgrip.compare import branch_warnings
+
+    p = STIFF.replace(b=0.02)
+    res = compare("I", p, Uniform(-6.0), N)
+    sim, ref = res["simulation"], res["reference"]
+    assert sim["feasible"] and ref["feasible"] and res["warnings"] == []
+    assert abs(sim["tip"][1] - ref["tip"][1]) < 1.0 / N**2  # within the chain's O(1/n^2) error: the same branch
+    assert ref["normal_force"] == pytest.approx(sim["normal_force"], rel=5e-3)
+    cold = elastica.solve("I", p, Uniform(-6.0), contact_moment=sim["contact_moment"])
+    assert cold.tip[1] > 0.5 and not cold.feasible  # the other branch, which the check names
+    (w,) = branch_warnings(sim["tip"], N, cold)
+    assert w.startswith("the reference converged to another equilibrium branch")
+
+
+def test_the_grip_iii_reference_follows_the_settled_branch():
+    """Grip III, kappa = -10, D = 1e-2, M = 5, mu_s = 100: Newton holds; at its gamma the cold BVP found another
+    shape with n < 0 (dropped); from the settled chain the reference holds too."""
+    res = compare("III", STANDARD.replace(D=1e-2, mu_s=100.0), Uniform(-10.0), N)
+    assert res["simulation"]["feasible"] and res["reference"]["feasible"]
+    assert not any("another equilibrium branch" in w for w in res["warnings"])
+
+
+def test_grip_iii_at_the_friction_cone_says_so():
+    """Grip III, kappa = -4, D = 1, M = 0, mu_s = 1: Newton's corner contact saturates in MuJoCo's frame (the
+    carrying link's) while the rod's frame needs 1.108: held, with the cone's edge named (the BVP drops)."""
+    st = settle(build_scene("III", STANDARD.replace(M=0.0), Uniform(-4.0), N))
+    assert st.held and st.contact.required_mu > 1.0
+    assert any(w.startswith("held at the friction cone's edge") for w in st.warnings), st.warnings
+
+
+def test_weightless_frictionless_planar_state_says_so():
+    st = settle(build_scene("I", STANDARD.replace(D=1e-2, M=0.0, mu_s=0.0), Uniform(-1.0), N))
+    assert any("M = 0 with mu_s = 0" in w for w in st.warnings)
+
+
+def test_the_default_falls_back_to_the_dynamics_where_newton_fails():
+    """Grip III, kappa = -7, D = 1e-2, M = 1e4: Newton stops at max_iter.  The default (no method) answers with
+    the dynamics and says so; an explicit method='newton' stays strict."""
+    from simgrip.compare import simulate
+
+    p = STANDARD.replace(D=1e-2, M=1e4)
+    with pytest.raises(SettleError, match="max_iter"):
+        simulate("III", p, Uniform(-7.0), N, method="newton")
+    st = simulate("III", p, Uniform(-7.0), N)
+    assert st.method == "dynamics" and st.converged
+    assert st.warnings[0].startswith("the default settle (Newton) failed (settle did not converge (max_iter")
+    with pytest.raises(SettleError, match="max_iter"):  # the point contact is Newton's only: no fallback
+        simulate("III", p, Uniform(-7.0), N, contact="point")
+
+
+def test_a_grip_iii_contact_at_the_tip_has_no_reference(capsys):
+    """``simgrip compare III --kappa -7 --gamma 0.97`` exited 2 ('gamma must lie in (0, 1), got 1.0'): the
+    settled contact is at the tip.  Now the state and the comparison say so, and there is no reference."""
+    from simgrip.cli import main
+    from simgrip.compare import reference_for
+    from simgrip.reference.bvp import ElasticaError
+
+    p = STANDARD.replace(gamma=0.97)
+    res = compare("III", p, Uniform(-7.0), N)
+    sim, ref = res["simulation"], res["reference"]
+    assert sim["held"] and sim["gamma"] == 1.0
+    assert any("contact is at the tip" in w for w in sim["warnings"])
+    assert ref["available"] is False and res["difference"] == {}
+    assert res["warnings"][0].startswith("no reference: the simulation's contact is at the tip")
+    st = settle(build_scene("III", p, Uniform(-7.0), N))
+    with pytest.raises(ElasticaError, match="no reference"):
+        reference_for(st, p, Uniform(-7.0))
+    assert main(["compare", "III", "--kappa", "-7", "--gamma", "0.97"]) == 0
+    out = capsys.readouterr().out
+    assert "WARNING: no reference" in out and "Traceback" not in out

@@ -109,7 +109,8 @@ def audit_points() -> list[dict]:
 
 def quick_points() -> list[dict]:
     """The test suite's subset: each grip's corners of D x M x mu_s that have answered differently, the
-    standard case, a wrong-way curl and the issue's reproductions (each grip at one paper curvature)."""
+    standard case, a wrong-way curl, the issue's reproductions (each grip at one paper curvature) and one
+    point of each group of the full audit's former silent disagreements (see the comments)."""
     pts = []
     for grip, kappa in (("I", -6.0), ("II", 6.0), ("III", -4.0)):
         pts.append(_point(grip, kappa, 1.0, 5.0, 1.0))  # the paper's standard case
@@ -120,6 +121,14 @@ def quick_points() -> list[dict]:
     pts.append(_point("I", 5.0, 1.0, 5.0, 1.0))  # wrong-way curls (issue 16 §6, third bullet)
     pts.append(_point("II", -5.0, 1.0, 5.0, 1.0))
     pts.append(_point("III", -4.0, 1.0, 5.0, 1.0, b=0.1, where="edge"))  # issue 16 §6, second bullet
+    # the full audit's planar groups, one representative each:
+    pts.append(_point("I", -1.0, 1.0, 1e4, 100.0))  # the unloaded finger does not reach the face (warned)
+    pts.append(_point("II", 3.5, 1e-2, 5.0, 100.0))  # the BVP in the other grip's shape (not feasible)
+    pts.append(_point("I", -6.0, 1e4, 5.0, 1.0, b=0.02, where="edge"))  # the reference on the settled branch
+    pts.append(_point("III", -10.0, 1e-2, 5.0, 100.0))  # the same, Grip III at its own gamma
+    pts.append(_point("III", -4.0, 1.0, 0.0, 1.0))  # Grip III at the friction cone's edge (warned)
+    pts.append(_point("III", -7.0, 1e-2, 1e4, 1.0))  # Newton fails: the default falls back to the dynamics
+    pts.append(_point("III", -7.0, 1.0, 5.0, 1.0, gamma=0.97, where="edge"))  # a contact at the tip: no reference
     return pts
 
 

@@ -57,19 +57,23 @@ class ChainGuess(BvpSolution):
         return self.states(np.array([self.prob.gamma]))[:, 0]
 
 
-def chain_guess(prob: BvpProblem, link_angles, nodes, N1: float, contact_moment: float = 0.0) -> ChainGuess:
+def chain_guess(prob: BvpProblem, link_angles, nodes=None, N1: float = 0.0, contact_moment: float = 0.0) -> ChainGuess:
     """The warm start of ``prob`` from a settled chain of ``n`` links.
 
     ``link_angles``: the ``n`` link angles [rad] from ``E1``, counter-clockwise;
     ``nodes``: the ``n + 1`` joint and tip positions ``(X, Y)`` over ``l``, the
-    first at the clamp; ``N1``: the horizontal contact force on the rod (over
+    first at the clamp (None: the chain's own, the links of length ``1/n`` laid
+    end to end from the clamp at the origin); ``N1``: the horizontal contact force on the rod (over
     ``rho g l``; the BVP's unknown); ``contact_moment``: the workpiece's couple on
     the rod (the tip's moment for Grips I/II).  ``ValueError`` if the arrays do
     not describe one chain.
     """
     th = np.asarray(link_angles, dtype=float).ravel()
-    xy = np.asarray(nodes, dtype=float)
     n = th.size
+    if nodes is None:
+        steps = np.stack((np.cos(th), np.sin(th)), axis=1) / max(n, 1)
+        nodes = np.vstack((np.zeros((1, 2)), np.cumsum(steps, axis=0)))
+    xy = np.asarray(nodes, dtype=float)
     if n < 2 or xy.shape != (n + 1, 2) or not (np.all(np.isfinite(th)) and np.all(np.isfinite(xy))):
         raise ValueError(f"chain_guess: need n >= 2 finite link angles and n + 1 finite nodes (X, Y), got "
                          f"{th.shape} and {xy.shape}")

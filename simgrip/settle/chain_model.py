@@ -142,7 +142,9 @@ class ChainModel:
         self.nw = len(self.wnames)
         self.wq = np.asarray(scene.workpiece_qpos, int)
         self.wd = np.asarray(scene.workpiece_dof, int)
-        self.weight = float(m.body_mass[scene.workpiece_body]) * g / W if scene.has_workpiece else 0.0
+        # the true weight (the model's body_mass may be a floored inertia whose extra weight gravity
+        # compensation relieves: simgrip.sim.workpiece.inertial_mass)
+        self.weight = float(scene.workpiece_mass) * g / W if scene.has_workpiece else 0.0
         #: the workpiece dofs' scale: slides over l, the hinge in radians
         self.wscale = np.array([1.0 if nm == "ry" else L for nm in self.wnames])
         if scene.has_workpiece:

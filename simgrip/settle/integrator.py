@@ -202,7 +202,7 @@ class Dyn:
                     mujoco.mj_mulM(m, d, col, e)  # the rotation's inertia M[j, j]
                     self.wp_damping[j] = DYN_WORKPIECE_DAMPING * float(col[j]) / h
                 else:
-                    self.wp_damping[j] = dw * scene.workpiece_mass
+                    self.wp_damping[j] = dw * scene.workpiece_inertial_mass  # over-damps its inertia
                     self.wp_guarded[j] = True
         #: the fall guard's current factor on the damping, in [1, slow] (:meth:`_guard`)
         self.factor = self.slow

@@ -40,7 +40,8 @@ from simgrip.params import DimensionlessParams, PhysicalParams, check_grip, chec
 from simgrip.profiles import CurvatureProfile, as_profile
 from simgrip.sim.contacts import add_pair
 from simgrip.sim.fingers import FingerIndex, add_fingers, check_finger_links, index_fingers
-from simgrip.sim.workpiece import BOX_DEPTH, BOX_HEIGHT, add_workpiece, contact_links, corner_placement, cradle_start
+from simgrip.sim.workpiece import (BOX_DEPTH, BOX_HEIGHT, add_workpiece, contact_links, corner_placement, cradle_start,
+                                   inertial_mass)
 
 __all__ = [
     "BOX_DEPTH",
@@ -194,8 +195,18 @@ class Scene(FingerScene):
 
     @property
     def workpiece_mass(self) -> float:
-        """Mass of the workpiece in this scene [kg] (``m`` or ``2 m``)."""
+        """Mass of the workpiece in this scene [kg] (``m`` or ``2 m``): its weight over ``g``.
+
+        The model's inertial mass (``model.body_mass``, :attr:`workpiece_inertial_mass`) may be larger: a
+        light workpiece's inertia is floored (:func:`simgrip.sim.workpiece.inertial_mass`) and the extra
+        weight relieved by gravity compensation; read the weight from here, never from ``body_mass``.
+        """
         return self.physical.m * (1 if self.fingers == 1 else 2)
+
+    @property
+    def workpiece_inertial_mass(self) -> float:
+        """The workpiece body's inertial mass in the model [kg] (>= :attr:`workpiece_mass`; 0 without one)."""
+        return float(self.model.body_mass[self.workpiece_body]) if self.has_workpiece else 0.0
 
 
 # ---------------------------------------------------------------------------
@@ -320,8 +331,10 @@ def build_scene(
     if place is not None:
         joints = (("z",) if fingers == 1 else ("x", "z", "ry")) if free_workpiece else ()
         mass = phys.m * fingers
+        # a light workpiece's inertia is floored (MuJoCo's soft contact sinks without bound under a nearly
+        # massless body), its weight stays m g per finger (gravity compensation: Scene.workpiece_mass)
         body = add_workpiece(spec, half_size=place.half, center_z=place.center_z,
-                             mass=max(mass, 1e-12 * phys.rho * L), joints=joints)
+                             mass=inertial_mass(mass, fingers, phys.rho, L), joints=joints, weight_mass=mass)
         if grip == "III":
             _add_corners(spec, body, place.half, fingers, r_corner * L)
         _add_pairs(spec, grip, fingers, place.links, phys.mu_s)

@@ -47,7 +47,9 @@ __all__ = [
     "corner_placement",
     "cradle_contact",
     "cradle_start",
+    "MIN_WORKPIECE_MASS",
     "hold_workpiece",
+    "inertial_mass",
     "lower_onto_fingers",
     "place_workpiece",
     "slip_coordinate",
@@ -58,6 +60,14 @@ __all__ = [
 #: Box height and depth over ``l``.
 BOX_HEIGHT = 2.0  # tall: a frictionless tip slides along the face while closing
 BOX_DEPTH = 0.2
+
+#: Least inertial mass of the workpiece per finger over ``rho l`` (:func:`inertial_mass`; its weight stays
+#: ``M``).  The K-finger gripper's floor (:data:`simgrip.sim.gripper.MIN_WORKPIECE_MASS`, the same value):
+#: MuJoCo's soft contact rests at a depth proportional to the contact's mobility, i.e. to the workpiece's
+#: inverse mass, so a nearly massless workpiece sinks into the finger without bound (the planar dynamics
+#: dropped every weightless Grip III workpiece: the corner passed the rod).  Measured on the planar Grip III
+#: (kappa = -4, mu_s = 100, D = 1e-2, 1, 1e4; tests/test_dynamics_verdicts.py): held from a floor of 1e-3.
+MIN_WORKPIECE_MASS = 1e-2
 
 _TURN = 0.75 * math.pi  # turn of the arc of cradle_start (heading 45 degrees inwards at gamma)
 _SINC_TURN = math.sin(_TURN) / _TURN
@@ -157,11 +167,27 @@ def workpiece_inertia(shape: str, size, mass: float) -> list[float]:
     return [0.4 * mass * r**2] * 3
 
 
-def add_workpiece(spec: mujoco.MjSpec, *, half_size, center_z: float, mass: float, joints: tuple) -> mujoco.MjsBody:
+def inertial_mass(mass: float, fingers: int, rho: float, length: float) -> float:
+    """The workpiece body's inertial mass [kg]: ``mass``, at least ``fingers`` :data:`MIN_WORKPIECE_MASS` ``rho l``.
+
+    ``mass`` [kg] is the workpiece's true mass (its weight over ``g``); ``rho`` [kg/m] and ``length`` [m] the
+    finger's.  Only the inertia is floored: :func:`add_workpiece` relieves the extra weight by MuJoCo's
+    gravity compensation, so every balance sees the weight of ``mass`` (``0`` included).
+    """
+    return max(float(mass), fingers * MIN_WORKPIECE_MASS * rho * length)
+
+
+def add_workpiece(spec: mujoco.MjSpec, *, half_size, center_z: float, mass: float, joints: tuple,
+                  weight_mass: float | None = None) -> mujoco.MjsBody:
     """Attach ``models/workpiece.xml`` as ``workpiece_body`` with box ``half_size`` [m] centred at ``(0, 0, center_z)``.
 
     ``mass`` [kg] with the solid box's inertia; ``joints`` any of ``"x"``,
     ``"z"`` (slides) and ``"ry"`` (hinge about ``-y``), named ``workpiece_{name}``.
+    ``weight_mass`` [kg] (default ``mass``, at most ``mass``): the mass whose weight gravity puts on the body;
+    below ``mass`` the difference is relieved by MuJoCo's gravity compensation (``gravcomp = 1 -
+    weight_mass / mass``, a passive force: in ``qfrc_passive``, hence in every ``mj_forward``/``mj_inverse``
+    balance and ``mj_step``), so that a floored inertia (:func:`inertial_mass`) keeps the true weight.
+    ``weight_mass = 0`` gives ``gravcomp = 1``: exactly weightless.
     """
     part = mujoco.MjSpec.from_file(str(model_path("workpiece.xml")))
     body = spec.worldbody.add_frame().attach_body(part.body("body"), "workpiece_", "")
@@ -171,6 +197,11 @@ def add_workpiece(spec: mujoco.MjSpec, *, half_size, center_z: float, mass: floa
     body.mass = mass
     body.ipos = [0.0, 0.0, 0.0]
     body.inertia = workpiece_inertia("box", (hx, hy, hz), mass)
+    if weight_mass is not None:
+        if not 0.0 <= weight_mass <= mass:
+            raise ValueError(f"weight_mass must lie in [0, mass = {mass:g}] kg, got {weight_mass!r}")
+        if weight_mass < mass:
+            body.gravcomp = 1.0 - weight_mass / mass
     body.first_geom().size = [hx, hy, hz]
     axes = {"x": [1, 0, 0], "z": [0, 0, 1], "ry": [0, -1, 0]}
     for name in joints:
