@@ -66,7 +66,8 @@ BOX_DEPTH = 0.2
 #: MuJoCo's soft contact rests at a depth proportional to the contact's mobility, i.e. to the workpiece's
 #: inverse mass, so a nearly massless workpiece sinks into the finger without bound (the planar dynamics
 #: dropped every weightless Grip III workpiece: the corner passed the rod).  Measured on the planar Grip III
-#: (kappa = -4, mu_s = 100, D = 1e-2, 1, 1e4; tests/test_dynamics_verdicts.py): held from a floor of 1e-3.
+#: at M = 0, mu_s = 100 (kappa = -2, -4, -7 at D = 1e-2; -4 at D = 1): from a floor of 1e-3 every one is held in
+#: contact where the Newton settle puts it; at 1e-4 one is dropped, below 1e-6 the corner leaves the rod.
 MIN_WORKPIECE_MASS = 1e-2
 
 _TURN = 0.75 * math.pi  # turn of the arc of cradle_start (heading 45 degrees inwards at gamma)
