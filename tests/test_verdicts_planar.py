@@ -269,3 +269,17 @@ def test_a_grip_iii_contact_at_the_tip_has_no_reference(capsys):
     assert main(["compare", "III", "--kappa", "-7", "--gamma", "0.97"]) == 0
     out = capsys.readouterr().out
     assert "WARNING: no reference" in out and "Traceback" not in out
+
+
+def test_compare_fingers_reference_is_on_the_settled_branch_and_warns_as_the_planar():
+    """The K-finger compare had the planar one's wrong branch (I, kappa = -6, D = 1e4, b = 0.02: the BVP
+    'dropped' with n = -1.5e5) and no warnings; it now follows finger 0's settled shape and carries the
+    planar compare's verdict warnings."""
+    from simgrip.compare_gripper import compare_gripper
+
+    res = compare_gripper("I", STIFF.replace(b=0.02), Uniform(-6.0), N, fingers=2, workpiece="box")
+    sim, ref = res["simulation"], res["reference"]
+    assert sim["feasible"] and ref["feasible"] and res["warnings"] == []
+    assert ref["normal_force"] == pytest.approx(sim["normal_force"], rel=5e-3)
+    low = compare_gripper("I", STANDARD.replace(mu_s=0.1), Uniform(-6.0), 8, fingers=2, workpiece="box")
+    assert not low["simulation"]["feasible"] and not low["reference"]["feasible"] and low["warnings"] == []
