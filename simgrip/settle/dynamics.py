@@ -20,6 +20,8 @@ The settle drives the over-damped integrator from a start to rest:
 
 from __future__ import annotations
 
+import copy
+import dataclasses
 import math
 import time
 
@@ -33,8 +35,9 @@ from simgrip.settle.integrator import (DYN_BATCH, DYN_DAMPING, DYN_FALL_STEP, DY
                                        DYN_TIMECONST, DYN_WORKPIECE_DAMPING, Dyn, geometric_stiffness_bound,
                                        lowest_frequency, run_to_rest)
 from simgrip.settle.state import SettledState, SettleError, read_state
+from simgrip.settle.statics import restore_options, save_options
 from simgrip.sim.scene import Scene, set_curvature
-from simgrip.sim.workpiece import lower_onto_fingers, slip_coordinate
+from simgrip.sim.workpiece import corners_over_fingers, lower_onto_fingers, slip_coordinate
 
 __all__ = ["DYN_TOL", "DYN_TOL_PER_WEIGHT", "Dyn", "dynamics_tolerance", "settle_dynamics"]
 
@@ -83,6 +86,15 @@ def _finger_pairs_touching(scene: Scene) -> bool:
     return any((int(d.contact.geom1[i]) in mine and int(d.contact.geom2[i]) in wg) for i in range(d.ncon))
 
 
+def _descending(scene: Scene, wz_dof) -> bool:
+    """Whether the workpiece moves down faster than the settle's rest tolerance :data:`DYN_VTOL` (l per
+    sqrt(l/g)) along its ``z`` slide (``wz_dof``: that dof, or none when it has no such joint)."""
+    if not wz_dof:
+        return False
+    v = float(scene.data.qvel[wz_dof[0]]) / math.sqrt(scene.length * scene.physical.g)
+    return v < -DYN_VTOL
+
+
 def _deepest_contact(scene: Scene) -> float:
     """Deepest penetration [m] of the contacts in the scene's data (0 without contacts)."""
     d = scene.data
@@ -97,6 +109,52 @@ def _put_back(scene: Scene, state: SettledState) -> None:
     mujoco.mj_forward(scene.model, d)
 
 
+def _static_verdicts(scene: Scene, q_start, saved) -> dict:
+    """Whether the static settle holds the workpiece from the dynamics' start ``q_start``: ``{"point": held,
+    "surface": held}`` (``None``: that settle raised :class:`SettleError`; ``"surface"`` only where the point
+    contact holds).  Each settle runs on a copy of the model with the options ``saved`` before the dynamics
+    changed them (the scene's own model and data are left as the dynamics leaves them)."""
+    from simgrip.settle import settle  # simgrip.settle imports this module
+
+    out = {}
+    for contact in ("point", "surface"):
+        m = copy.copy(scene.model)
+        restore_options(m, saved)
+        chk = dataclasses.replace(scene, model=m, data=mujoco.MjData(m))
+        chk.data.qpos[:] = q_start
+        mujoco.mj_forward(m, chk.data)
+        try:
+            out[contact] = bool(settle(chk, contact=contact).held)
+        except SettleError:
+            out[contact] = None
+        if not out["point"]:
+            break
+    return out
+
+
+def drop_warning(scene: Scene, verdicts: dict) -> str | None:
+    """The warning of a dynamics drop given the static settle's :func:`_static_verdicts` (None: they drop too).
+
+    The dynamics has MuJoCo's surface contact: the friction acts on the geoms' surface, ``r`` off the
+    centreline (``r_tip``, Grips I/II; ``r_link``, III), and adds a couple ``r f`` that the point contact
+    (the default settle's and the BVP's) leaves out; under a heavy load that couple alone can decide the
+    verdict.  Where the static settle with ``contact="surface"`` holds too, the workpiece was lost on the
+    over-damped flow's way from the start (a path whose damping is chosen for speed), not at an equilibrium.
+    """
+    if not verdicts.get("point"):
+        return None
+    r = scene.r_tip if scene.grip in ("I", "II") else scene.r_link
+    head = "dropped by the dynamics where the static settle (point contact) holds: "
+    if verdicts.get("surface") is False:
+        return head + (f"the static settle with MuJoCo's surface contact (contact='surface') drops it too: the "
+                       f"friction acting r = {r:g} l off the centreline adds a couple that the point contact (the "
+                       f"BVP's) leaves out, and it decides this verdict")
+    if verdicts.get("surface"):
+        return head + ("the static settle with MuJoCo's surface contact holds it too: the workpiece was lost on "
+                       "the over-damped flow's way to rest from the start (a path, not an equilibrium)")
+    return head + "the static settle with MuJoCo's surface contact did not converge"
+
+
 def settle_dynamics(scene: Scene, tol: float, max_steps: int, warm_start, close: bool,
                      allow_unconverged: bool, t0: float) -> SettledState:
     """Over-damped settle; the time step halves (from the start) while penetration >= DYN_PEN_LIMIT,
@@ -107,6 +165,7 @@ def settle_dynamics(scene: Scene, tol: float, max_steps: int, warm_start, close:
     at ``h = 1/omega_min`` that throws it off the tip; at ``h/2`` it holds)."""
     d = scene.data
     q0 = d.qpos.copy()
+    saved = save_options(scene.model)  # for the static settles that check a drop (_static_verdicts)
     flags0 = int(scene.model.opt.disableflags)  # a drop leaves contact off (the finger settles alone)
     steps = calls = 0
     factor = 1.0
@@ -150,6 +209,11 @@ def settle_dynamics(scene: Scene, tol: float, max_steps: int, warm_start, close:
         raise SettleError(f"dynamic settle tunnelled (a contact deeper than the finger geom) at every "
                           f"step down to h/{round(1 / factor)}")
     state.steps, state.forward_calls = steps, calls
+    if not state.held and (dropped or first_drop is not None):
+        # a drop is checked against the static settle from the same start: a disagreement says why
+        why = drop_warning(scene, _static_verdicts(scene, q0, saved))
+        if why:
+            state.warnings.append(why)
     return state
 
 
@@ -237,12 +301,23 @@ def _settle_dynamics_once(scene: Scene, tol: float, max_steps: int, warm_start, 
                     dyn.step()
                 m.qpos_spring[scene.joint_qpos] = target[None, :]
 
+            wz_dof = [dof for name, dof in zip(scene.workpiece_joints, scene.workpiece_dof) if name == "z"]
+
             def watch():
-                drop = (z0 - float(d.xpos[scene.workpiece_body][2])) / scene.length
-                if drop > DYN_DROP_FALL or (drop > DYN_DROP_SLIP and not _finger_pairs_touching(scene)):
-                    return "lost contact"  # out of contact, or sliding down the rod far past any hold
-                if scene.grip in ("I", "II") and abs(slip_coordinate(scene) - s0) > DYN_DROP_SLIP:
-                    return "slipped"
+                if scene.grip == "III":
+                    # carried while a corner touches the rod (however far the workpiece has come down: a
+                    # heavy one sinks with the finger it loads); out of contact it is caught again while
+                    # each corner has its finger beneath it, and falls away once one has none and it
+                    # moves down (a weightless workpiece left hovering has not fallen)
+                    if (not _finger_pairs_touching(scene) and _descending(scene, wz_dof)
+                            and not corners_over_fingers(scene)):
+                        return "lost contact"
+                else:
+                    drop = (z0 - float(d.xpos[scene.workpiece_body][2])) / scene.length
+                    if drop > DYN_DROP_FALL or (drop > DYN_DROP_SLIP and not _finger_pairs_touching(scene)):
+                        return "lost contact"  # out of contact
+                    if abs(slip_coordinate(scene) - s0) > DYN_DROP_SLIP:
+                        return "slipped"
                 if _deepest_contact(scene) > tunnel:
                     return "tunnelled"
                 return None

@@ -45,6 +45,7 @@ __all__ = [
     "add_workpiece",
     "contact_links",
     "corner_placement",
+    "corners_over_fingers",
     "cradle_contact",
     "cradle_start",
     "MIN_WORKPIECE_MASS",
@@ -250,6 +251,55 @@ def lower_onto_fingers(scene: Scene) -> None:
             break
         d.qpos[wz[0]] -= gap + 1e-9 * L
     mujoco.mj_forward(m, d)
+
+
+def _ray_segment_distance(c, a, b) -> float:
+    """Distance in the ``x``-``z`` plane from the downward vertical ray from ``c`` to the segment ``ab``."""
+    cx, cz = c
+    (ax, az), (bx, bz) = a, b
+    if (ax - cx) * (bx - cx) <= 0.0 and ax != bx:  # the segment spans the ray's line: crossing below c?
+        z = az + (bz - az) * (cx - ax) / (bx - ax)
+        if z <= cz:
+            return 0.0
+
+    def to_ray(px, pz):
+        return abs(px - cx) if pz <= cz else math.hypot(px - cx, pz - cz)
+
+    ab = np.array([bx - ax, bz - az])
+    t = float(np.clip(np.dot([cx - ax, cz - az], ab) / max(float(ab @ ab), 1e-300), 0.0, 1.0))
+    return min(to_ray(ax, az), to_ray(bx, bz), math.hypot(ax + t * ab[0] - cx, az + t * ab[1] - cz))
+
+
+def corners_over_fingers(scene: Scene, data: mujoco.MjData | None = None) -> bool:
+    """Grip III: whether each corner of the workpiece would land on its finger if it fell straight down.
+
+    True when, for every finger ``f``, some link capsule paired with corner ``f``
+    (``scene.contact_geoms[f]``: only those collide with it) comes within ``r_link + r_corner`` of the
+    vertical ray down from the corner's axis, in the ``x``-``z`` plane of the fingers.  A workpiece out of
+    contact with a finger beneath each corner is caught again (a momentary separation: the loaded finger
+    moving faster than the damped workpiece); one with a corner over nothing falls away (past the finger's
+    tip, or past the links it is paired with).  Positions from ``data`` (default the scene's), current
+    kinematics; True for grips other than III.
+    """
+    if scene.grip != "III" or not scene.has_workpiece:
+        return True
+    m, d = scene.model, scene.data if data is None else data
+    reach = (scene.r_link + scene.r_corner) * scene.length
+    for f in range(scene.fingers):
+        cg = int(scene.workpiece_geoms[f])
+        c = (float(d.geom_xpos[cg][0]), float(d.geom_xpos[cg][2]))
+        near = False
+        for g in scene.contact_geoms[f]:
+            g = int(g)
+            axis = d.geom_xmat[g].reshape(3, 3)[:, 2] * float(m.geom_size[g][1])  # capsule half segment
+            p = d.geom_xpos[g]
+            a, b = (float(p[0] - axis[0]), float(p[2] - axis[2])), (float(p[0] + axis[0]), float(p[2] + axis[2]))
+            if _ray_segment_distance(c, a, b) < reach:
+                near = True
+                break
+        if not near:
+            return False
+    return True
 
 
 def workpiece_pose(scene: Scene):
