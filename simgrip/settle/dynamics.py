@@ -15,7 +15,11 @@ The settle drives the over-damped integrator from a start to rest:
 * **Stop**: the static residual at rest below ``tol`` and velocities below
   :data:`DYN_VTOL`, tested every :data:`~simgrip.settle.integrator.DYN_BATCH` steps (one ``mj_step`` call
   between tests; the residual only once the velocity is small).  Drop: the tip slips :data:`DYN_DROP_SLIP` along the face
-  (I/II) or the workpiece falls out of contact; then the finger settles alone.
+  or the workpiece falls out of contact (I/II); Grip III: the workpiece falls away (out of contact, moving
+  down, a corner with no link it is paired with beneath it:
+  :func:`~simgrip.sim.workpiece.corners_over_fingers`), however far it sank while a corner carried it.
+  Then the finger settles alone.  A drop the static settle from the same start does not share carries a
+  warning that says why (:func:`drop_warning`: MuJoCo's surface contact couple, or the flow's path).
 """
 
 from __future__ import annotations
@@ -39,7 +43,7 @@ from simgrip.settle.statics import restore_options, save_options
 from simgrip.sim.scene import Scene, set_curvature
 from simgrip.sim.workpiece import corners_over_fingers, lower_onto_fingers, slip_coordinate
 
-__all__ = ["DYN_TOL", "DYN_TOL_PER_WEIGHT", "Dyn", "dynamics_tolerance", "settle_dynamics"]
+__all__ = ["DYN_TOL", "DYN_TOL_PER_WEIGHT", "Dyn", "drop_warning", "dynamics_tolerance", "settle_dynamics"]
 
 #: Default static residual tolerance of the dynamic settle (the creep floor is ~2e-6 at the
 #: standard workpiece weight M = 5).
@@ -58,8 +62,9 @@ DYN_CLOSE_RATE = 0.05
 DYN_PEN_LIMIT = 1e-4
 #: Physics steps over which the workpiece's holding force fades out at release.
 DYN_RELEASE_STEPS = 20
-#: Fall (over l) of the workpiece after release that counts as a drop even while it still brushes the
-#: rod (a soft Grip III finger lets the corner slide down slowly: measured 0.015 l per 1000 steps).
+#: Grips I/II (and the K-finger dynamics): fall (over l) of the workpiece after release that counts as a drop
+#: even while the tip still brushes it.  Grip III has no such threshold: a corner that carries the workpiece
+#: may sink with a soft, loaded finger; it is dropped when it falls away (corners_over_fingers).
 DYN_DROP_FALL = 0.2
 #: Physics steps allowed to the h/2 rerun that confirms a drop (a state that does not come to rest
 #: in them keeps the drop found at h).
