@@ -40,6 +40,7 @@ def quick():
 def test_no_silent_disagreement_in_the_subset(quick):
     s = quick["summary"]
     assert s["silent"] == 0, [va._brief(r) for r in s["silent_rows"]]
+    assert s["crashed"] == 0, [va._brief(r) for r in s["no_verdict_rows"] if r["crashed"]]
     # the default answers wherever another method does (issue 16 §6, third bullet)
     assert s["default_failed_where_another_answered"] == 0, [va._brief(r) for r in s["no_verdict_rows"]]
     assert s["cases"] == s["agree"] + s["warned"] + s["silent"] + s["no_verdict"]
@@ -95,6 +96,10 @@ def test_classification():
     assert va._classify({}, res(None, error="SettleError: x"), res("held"), res("held"))["outcome"] == "no_verdict"
     assert va._classify({}, res(None, error="ValueError: b"), res(None, error="ValueError: b"),
                         res("held"))["outcome"] == "refused"
+    crash = va._run(lambda: None.N1)  # an unnamed exception is a crash, recorded, not raised
+    assert crash["crashed"] and crash["error"].startswith("CRASH AttributeError") and crash["verdict"] is None
+    row = va._classify({"grip": "I"}, crash, res("held"), res("held"))
+    assert row["outcome"] == "no_verdict" and row["crashed"] and va.summarise([row])["crashed"] == 1
     rows = [va._classify({"grip": "I"}, res("held"), res("held"), res("held")),
             va._classify({"grip": "I"}, res(None, error="SettleError: x"), res("held"), res("held"))]
     s = va.summarise(rows)

@@ -49,7 +49,10 @@ friction cone's edge, a reference on another branch, ...) that says why (the
 comparison's bare "verdicts disagree" is not one); a **silent disagreement** otherwise.  A
 row where a method raised a named error (``SettleError``, ``ElasticaError``)
 has **no verdict** from it: listed apart (the default's own failures are the
-ones that matter: the default must answer where another method does).
+ones that matter: the default must answer where another method does).  Any
+other exception is a bug: the row is no verdict too, its error marked
+``CRASH`` and counted (``crashed``), so that one bad point does not end the
+audit.
 
 Run: ``python -m simgrip.harness.verdict_audit --out DIR [--jobs N] [--quick]``
 writes ``DIR/verdict_audit.json`` (every row) and ``DIR/verdict_audit.md``
@@ -63,6 +66,7 @@ import argparse
 import itertools
 import sys
 import time
+import traceback
 
 __all__ = ["D_VALUES", "M_VALUES", "MU_VALUES", "KAPPAS", "EDGES", "VARIANTS", "LINKS", "audit_points",
            "quick_points", "audit_point", "summarise", "run_audit", "format_table", "main"]
@@ -146,13 +150,17 @@ def _run(fn):
     from simgrip.settle import SettleError
 
     t0 = time.perf_counter()
-    res = {"verdict": None, "warnings": [], "method": None, "error": None, "refused": False}
+    res = {"verdict": None, "warnings": [], "method": None, "error": None, "refused": False, "crashed": False}
     try:
         res["verdict"], warnings, res["method"] = fn()
         res["warnings"] = list(warnings)
     except (SettleError, ElasticaError, ValueError) as exc:
         res["error"] = f"{type(exc).__name__}: {exc}"
         res["refused"] = isinstance(exc, ValueError)
+    except Exception as exc:  # a bug, not a named answer: the row says so and the audit goes on (counted apart)
+        where = traceback.extract_tb(exc.__traceback__)[-1]
+        res["error"] = f"CRASH {type(exc).__name__}: {exc} ({where.filename.rsplit('/', 1)[-1]}:{where.lineno})"
+        res["crashed"] = True
     res["time_s"] = time.perf_counter() - t0
     return res
 
@@ -240,6 +248,7 @@ def _classify(row: dict, default: dict, dyn: dict, ref: dict) -> dict:
         row[f"{name}_warnings"] = res["warnings"]
         row[f"time_{name}_s"] = res["time_s"]
     row["default_method"] = default["method"]
+    row["crashed"] = any(res.get("crashed") for res in (default, dyn, ref))
     verdicts = [default["verdict"], dyn["verdict"], ref["verdict"]]
     if default["refused"] and dyn["refused"]:  # the simulation refuses the input (named): not a case
         row["outcome"] = "refused"
@@ -267,6 +276,7 @@ def summarise(rows: list[dict]) -> dict:
     failed_by = {m: sum(1 for r in settled if r.get(f"{m}_error")) for m in ("default", "dynamics", "bvp")}
     default_alone = [r for r in settled if r.get("default_error") and (r.get("dynamics") or r.get("bvp"))]
     return {"cases": len(settled), **count, "refused": len(rows) - len(settled), "no_verdict_by": failed_by,
+            "crashed": sum(1 for r in settled if r.get("crashed")),
             "default_failed_where_another_answered": len(default_alone),
             "silent_rows": [r for r in settled if r["outcome"] == "silent"],
             "no_verdict_rows": [r for r in settled if r["outcome"] == "no_verdict"]}
@@ -301,7 +311,9 @@ def format_table(result: dict, command: str = "") -> str:
               "refused inputs |", "|---|---|---|---|---|---|",
               f"| {s['cases']} | {s['agree']} | {s['warned']} | {s['silent']} | {s['no_verdict']} | {s['refused']} |",
               "", f"No verdict by method: {s['no_verdict_by']}; the default failed where another method answered: "
-              f"{s['default_failed_where_another_answered']}.", f"Wall time: {result['wall_time_s']:.0f} s.", ""]
+              f"{s['default_failed_where_another_answered']}; rows where a method crashed (an unnamed exception, "
+              f"a bug; counted as no verdict, marked CRASH below): {s.get('crashed', 0)}.",
+              f"Wall time: {result['wall_time_s']:.0f} s.", ""]
     by = {}
     for r in result["rows"]:
         if r["outcome"] != "refused":
