@@ -3,10 +3,12 @@
 The hostile inputs below once took 26-62 s (a final-tolerance polish that
 refined a coarse mesh up to the node limit, retried at every halved step) or
 1-5 s a point (folds met by the first cold-start strategy, approached in a
-dozen halvings).  The tests are not timings: a ``SIGALRM`` of 20 s guards
-against a hang, and each outcome must be either a verified solution (residual
-within ``tol``, contact at ``b/2``, moments agreeing with an independent global
-balance) or the named :class:`ElasticaError`.
+dozen halvings).  The tests are not timings (speed is ``simgrip bench``'s): the
+work is counted (``solve_bvp`` runs), a ``SIGALRM`` of 300 s only guards against
+a hang (the slowest case takes ~1 s alone, so a machine loaded 100-fold still
+passes), and each must end in a verified solution (residual within ``tol``,
+contact at ``b/2``, moments agreeing with an independent global balance): a
+solver that gives up on them fails (issue 22, item 2).
 """
 
 from __future__ import annotations
@@ -23,7 +25,10 @@ from simgrip.reference.elastica import checked_problem, solve
 
 from test_elastica import _balance_moment
 
-_GUARD_S = 20
+_GUARD_S = 300  # a hang guard only (see the module docstring)
+#: ``solve_bvp`` runs one hostile solve may spend: measured 5 (the first three) to 62 (Grip I, kappa -9); half of
+#: MAX_BVP_RUNS, so a solve that wanders towards the budget (the old fold halvings) fails here, not in a timing.
+HOSTILE_RUNS = MAX_BVP_RUNS // 2
 
 
 class _Hang(Exception):
@@ -56,13 +61,17 @@ HOSTILE = [
 
 
 @pytest.mark.parametrize("grip, changes, kappa", HOSTILE)
-def test_hostile_solves_end_verified_or_named(guard, grip, changes, kappa):
+def test_hostile_solves_end_verified(guard, monkeypatch, grip, changes, kappa):
+    """Every hostile case has a solution, and the solver must find it (the first three are infeasible as
+    grips, which is the solution's verdict, not a failure); an ElasticaError fails the test."""
+    import simgrip.reference.continuation as C
+
+    runs = []
+    real = C.run_bvp
+    monkeypatch.setattr(C, "run_bvp", lambda *a, **k: runs.append(1) or real(*a, **k))
     p = STANDARD.replace(**changes)
-    try:
-        sol = solve(grip, p, Uniform(kappa))
-    except ElasticaError as exc:
-        assert "elastica" in str(exc)
-        return
+    sol = solve(grip, p, Uniform(kappa))
+    assert 0 < len(runs) <= HOSTILE_RUNS
     assert sol.success and sol.residual <= 1e-8
     assert sol.contact[0] == pytest.approx(p.b / 2, abs=1e-9)
     scale = max(1.0, float(np.max(np.abs(sol.moment))))

@@ -251,10 +251,13 @@ def test_a_worker_killed_mid_sweep_loses_and_doubles_nothing(cli_cluster, tmp_pa
     ref = run_sweep(grid, options=ONE)
     assert same_results(res.rows, ref.rows)
     assert same_results(read_csv(tmp_path / "k" / "sweep.csv"), ref.rows)
-    # the nanny replaced the killed worker: the cluster still has two
+    # the nanny replaced the killed worker: the cluster still has two (30 s only guards a hang; the nanny
+    # restarts a worker in ~1 s), the killed one not among them
     deadline = time.monotonic() + 30
     while len(_worker_processes(worker.pid)) < 2 and time.monotonic() < deadline:
         time.sleep(0.1)
+    now = _worker_processes(worker.pid)
+    assert len(now) == 2 and killed[0] not in now, now
 
 
 # interrupt and resume -------------------------------------------------------------------------
