@@ -125,11 +125,29 @@ def test_light_grip_i_is_held_by_the_dynamics_as_by_newton():
     assert st.converged and st.held and settle(build_scene("I", p, Uniform(-3.5), N)).held
 
 
-def test_weightless_workpiece_left_hovering_is_not_dropped():
-    # M = 0: out of contact, it does not fall (nothing pulls it down), so it is not a drop
+def test_workpiece_at_rest_touching_no_finger_is_not_held():
+    """M = 0, mu_s = 1 (the friction cone's edge for the point contact): the corner slips, the finger springs
+    off, and the weightless workpiece stays where it was, at rest and touching nothing.  Nothing holds it: not
+    held (it was reported held without a contact, which the K = 4 cradle could not replicate: AttributeError
+    at M = 0, mu_s = 0), and the state says the static settle holds it.  The Newton settle holds it at the
+    cone's edge (with its own warning), the BVP does not."""
     p = _params(1.0, 0.0, 1.0)
     st = settle(build_scene("III", p, Uniform(-4.0), N), method="dynamics")
-    assert st.converged and st.held
+    assert st.converged and not st.held and st.contact is None
+    assert any(w.startswith("dropped by the dynamics where the static settle") for w in st.warnings)
+    assert not elastica.solve("III", p, Uniform(-4.0)).feasible
+
+
+def test_weightless_frictionless_four_finger_cradle_dynamics_answers():
+    from simgrip.scenes import start_angles
+    from simgrip.settle.gripper_symmetry import settle_cradle_dynamics
+    from simgrip.sim.gripper import build_gripper
+
+    p = _params(1.0, 0.0, 0.0)
+    sc = build_gripper("III", p, Uniform(-4.0), N, fingers=4, workpiece="box",
+                       initial_angles=start_angles("III", p, Uniform(-4.0), N))
+    st = settle_cradle_dynamics(sc)
+    assert st.converged and not st.held  # as the Newton settle and the BVP
 
 
 # ---------------------------------------------------------------------------

@@ -331,6 +331,9 @@ def _settle_dynamics_once(scene: Scene, tol: float, max_steps: int, warm_start, 
             tunnel = scene.length * (2.0 * scene.r_tip if scene.grip in ("I", "II")
                                      else scene.r_link + scene.r_corner)
             converged, why = dyn.run(tol, vtol, max_steps, watch)
+            if converged and not _finger_pairs_touching(scene):
+                # at rest and touching no finger (a weightless workpiece left where it was): nothing holds it
+                why = "lost contact"
             if why in ("lost contact", "slipped"):
                 held, converged, dropped = False, True, True
             elif why == "tunnelled":
