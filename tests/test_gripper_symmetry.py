@@ -42,6 +42,7 @@ from simgrip.settle import settle
 from simgrip.settle.gripper import GripperState, settle_gripper
 from simgrip.settle.gripper_symmetry import planar_scene, settle_symmetric, symmetry
 from simgrip.sim.gripper import build_gripper
+from settle_cases import PEN_LIMIT
 
 KAPPA = {"I": -6.0, "II": 5.0}
 N = 16
@@ -177,9 +178,16 @@ def test_skip_agrees_with_the_k_finger_dynamics(pairs, sensitivity, grip, K, sha
     assert dyn.held and dyn.converged and len(dyn.records) == K
     s_n, s_y, nx, yx, nc, yc = sensitivity[grip]
     tols = sym.tolerance + dyn.tolerance
+    # the bounds below are built from both states' own tolerances, penetrations and contact differences: those
+    # are capped by fixed numbers first, so a state far off cannot widen its own bound (issue 22, item 3):
+    # skip K x the planar (<= 1e-6 K), dynamics max(DYN_TOL, 2e-6 K M) = 5e-5 at K = 5, M = 5
+    assert tols <= 1e-4
     for a, b in zip(sym.records, dyn.records):
+        assert max(a.penetration, b.penetration) < PEN_LIMIT  # measured 1e-6 (skip), 2e-5 - 4e-5 (dynamics)
         dX, dC = a.tip[0] - b.tip[0], a.moment - b.moment
         assert abs(dX) <= 2 * max(a.penetration, b.penetration)  # both on the surface, up to their penetration
+        # both MuJoCo's surface couple (r_tip - p) F_f: the arms differ by the penetrations' difference
+        assert abs(dC) <= 2 * max(a.penetration, b.penetration) * abs(b.N2)
         # first order in the contact's difference, the rest within the residuals' response
         pn, py = nx * dX + nc * dC, yx * dX + yc * dC
         assert abs(a.N1 - b.N1 - pn) <= tols * s_n + ORDER2 * abs(pn)
@@ -204,9 +212,14 @@ def test_sphere_skip_agrees_with_the_dynamics_and_the_inclined_elastica(sensitiv
     s_n, s_y, nx, yx, nc, yc = sensitivity[grip]
     tols = sym.tolerance + dyn.tolerance
     ref = solve_inclined(grip, STANDARD, Uniform(KAPPA[grip]), beta)
+    assert tols <= 1e-4  # fixed caps on what the bound is built from (issue 22, item 3; as above)
+    r_tip = sc.r_tip / sc.length
     for a, b in zip(sym.records, dyn.records):
+        assert max(a.penetration, b.penetration) < PEN_LIMIT
         assert a.contact_angle == pytest.approx(beta, abs=10 * a.penetration)
         dX, dC = abs(a.tip[0] - b.tip[0]), abs(a.moment - b.moment)
+        assert dX <= 2 * max(a.penetration, b.penetration)  # both on the sphere, up to their penetration
+        assert abs(a.moment) <= 1e-12 and dC <= r_tip * math.hypot(b.N1, b.N2)  # point contact; a couple r_tip |F| at most
         bound = 2 * (tols * s_n + 2 * (abs(nx) * dX + abs(nc) * dC))
         assert abs(a.N1 - b.N1) <= bound and abs(a.normal - b.normal) <= bound
         assert abs(a.friction - b.friction) <= bound

@@ -219,11 +219,17 @@ def test_grip_iii_matches_bvp_at_its_own_gamma(grip_states):
         p = STANDARD.replace(b=2 * c.point[0])  # the simulation's own X(gamma)
         ch = solve_chain("III", p, Uniform(KAPPA["III"]), n, gamma=c.gamma, contact_moment=c.moment)
         np.testing.assert_allclose(st.link_angles[0], ch.link_angles, atol=2e-5)
+        # the same chain at the same contact: N1 to the settle's residual (measured 1e-11 - 1e-10 relative)
+        assert c.N1 == pytest.approx(ch.N1, rel=1e-8)
         ref = elastica.solve("III", p, Uniform(KAPPA["III"]), gamma=c.gamma, contact_moment=c.moment)
         assert c.N2 == pytest.approx(-STANDARD.M, abs=1e-8)
-        assert c.N1 == pytest.approx(ref.N1, rel=1e-2)
-        assert c.normal == pytest.approx(ref.n, rel=1e-2)
-        assert c.friction == pytest.approx(ref.f, rel=1e-2)
+        # the chain vs the BVP at the same gamma and X(gamma): the friction's error halves per halving of ds
+        # (1.6e-3, 8.8e-4, 4.4e-4 at n = 16, 32, 64: first order, the contact's place within its link), N1's
+        # and the normal's are at most 0.032 ds (n = 32): bounded by 0.05 ds (3.1e-3 at n = 16, 1.6e-3 at 32)
+        rel = 0.05 / n
+        assert c.N1 == pytest.approx(ref.N1, rel=rel)
+        assert c.normal == pytest.approx(ref.n, rel=rel)
+        assert c.friction == pytest.approx(ref.f, rel=rel)
 
 
 # ---------------------------------------------------------------------------
@@ -393,7 +399,9 @@ def test_newton_settle_is_bounded_by_max_steps():
     sc = stress_scene("I", 20.04, -8.05, 18.76, 0.215, 0.688, 7)
     t0 = time.perf_counter()
     st = settle(sc, max_steps=20000)
-    assert time.perf_counter() - t0 < 10.0  # ~0.5 s
+    # the guarantee is the work count (the whole settle's iterations, every stage included); the time is only
+    # a hang guard (~0.5 s alone: a 2-core machine shared by many jobs stays far below it; speed: simgrip bench)
+    assert time.perf_counter() - t0 < 300.0
     assert st.converged and st.newton_iterations <= 1000
     # max_steps is the budget of the whole settle, with a clear error when spent
     with pytest.raises(SettleError, match="budget"):
