@@ -5,7 +5,9 @@ from __future__ import annotations
 import pytest
 
 from simgrip.harness.agreement import MARGIN, agreement_case, method_agreement
-from simgrip.reference import elastica
+from simgrip.reference import elastica, solve_chain
+from simgrip.scenes import build_scene
+from simgrip.settle import settle
 from simgrip import STANDARD, Uniform
 
 
@@ -18,8 +20,15 @@ def test_margin_is_that_of_the_held_state():
     need = elastica.solve("I", STANDARD, Uniform(-6.0)).required_mu
     rec = agreement_case(_case(0, "I", -6.0, 1.1 * need))
     assert rec["agree"] and rec["newton"] == rec["dynamics"] == "held"
-    # 1 - mu_req / mu_s of the held state: 1 - 1/1.1 up to the chain's O(ds^2) and the tip couple
-    assert rec["margin_newton"] == pytest.approx(1.0 - 1.0 / 1.1, abs=0.01)
+    # 1 - mu_req / mu_s of the held state, mu_req the required mu of the chain the finger is, at the state's own
+    # tip X and couple (the settle agrees with it to 1e-6 relative: tests/test_hold_band.py), so to 1e-6
+    # absolute (was: 1 - 1/1.1 to 0.01, which hid the tip couple's and the chain's 0.6 % shift of mu_req)
+    for key, contact in (("margin_newton", "surface"), ("margin_newton_point", "point")):
+        st = settle(build_scene("I", STANDARD.replace(mu_s=1.1 * need), Uniform(-6.0), 16), contact=contact)
+        ch = solve_chain("I", STANDARD.replace(b=2 * st.tip[0, 0]), Uniform(-6.0), 16,
+                         contact_moment=st.contact.moment)
+        assert rec[key] == pytest.approx(1.0 - (-ch.N2 / ch.N1) / (1.1 * need), abs=1e-6)
+    assert abs(rec["margin_newton"] - (1.0 - 1.0 / 1.1)) > 1e-3  # the couple and the chain's error do show
 
 
 def test_counts_and_lists():
