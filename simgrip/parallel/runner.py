@@ -336,25 +336,24 @@ def _run_dask_quietly(fn, items, options, batch_size, on_result, bar) -> list:
             fut = _next_done(pending, watch)
             if fut is None:
                 break
-            if fut.status in ("lost", "pending") and _connected(client) and losses.get(fut.key, 0) < _MAX_LOSSES:
-                # its result sat on a worker that died after the batch finished: the scheduler recomputes it
-                losses[fut.key] = losses.get(fut.key, 0) + 1
-                pending.add(fut)
-                continue
             if fut.status == "error":
                 exc = fut.exception()
                 if isinstance(exc, KilledWorker):  # the scheduler gave up: the batch crashed workers again and again
                     raise RunnerError(f"a batch killed its worker process each time it ran (a crash or out of memory "
                                       f"in the task): {exc}") from None
                 raise exc.with_traceback(fut.traceback())
-            if fut.status != "finished":
+            chunk = _fetch(fut, watch) if fut.status == "finished" else _LOST
+            if chunk is _LOST:
+                if fut.status in ("lost", "pending", "finished") and _connected(client) \
+                        and losses.get(fut.key, 0) < _MAX_LOSSES:
+                    # its result sat on a worker that died after the batch finished (before or while it was
+                    # fetched): the scheduler recomputes it, and it is waited for again
+                    losses[fut.key] = losses.get(fut.key, 0) + 1
+                    pending.add(fut)
+                    continue
                 where = f"at {env.where} " if options.remote else ""
                 raise RunnerError(f"the Dask cluster {where}went away (scheduler gone or its workers lost: a batch "
                                   f"was {fut.status})")
-            try:
-                chunk = fut.result()
-            except Exception as exc:  # cancelled/lost: the cluster's failure, not fn's
-                raise RunnerError(f"the Dask cluster failed: {type(exc).__name__}: {exc}") from None
             s = start_of[fut.key]
             for j, res in enumerate(chunk):
                 out[s + j] = res
@@ -372,6 +371,31 @@ def _run_dask_quietly(fn, items, options, batch_size, on_result, bar) -> list:
 
 #: Seconds between checks while no batch is done (signals are handled at once; this only paces the worker watch).
 _POLL_S = 0.05
+
+
+_LOST = object()  # a batch whose result went away with its worker
+#: Seconds one wait for a finished batch's result lasts before its status and the workers are looked at again.
+_FETCH_S = 1.0
+
+
+def _fetch(fut, watch):
+    """The result of the finished future ``fut``, or :data:`_LOST` if it went with its worker while fetched.
+
+    A result lives on the worker that computed it; a worker that dies before
+    the client has it turns the future back to lost/pending, and a plain
+    ``result()`` would then wait for its recomputation for ever -- also on a
+    cluster with no worker left (``watch`` fails the run then).
+    """
+    while True:
+        try:
+            return fut.result(timeout=_FETCH_S)
+        except TimeoutError:
+            if fut.status != "finished":
+                return _LOST
+            if watch is not None:
+                watch.check()
+        except Exception as exc:  # cancelled/lost: the cluster's failure, not fn's
+            raise RunnerError(f"the Dask cluster failed: {type(exc).__name__}: {exc}") from None
 
 
 def _next_done(pending, watch):
