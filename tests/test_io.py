@@ -1,6 +1,9 @@
 """Results files are written whole or not at all."""
 
 import json
+import re
+import shutil
+from pathlib import Path
 
 import numpy as np
 import pytest
@@ -71,21 +74,62 @@ def test_check_output_dir_names_the_option(tmp_path, make):
         check_output_dir(path, "--where")
 
 
-def test_check_output_dir_refuses_a_read_only_folder(tmp_path):
+def _refusal_in_a_read_only_folder(folder):
+    """The message of ``check_output_dir(folder / "sub")`` with ``folder`` read-only (mode 0o555), or None if it
+    passes.  As root (CI) it runs in a forked child that drops to the ``nobody`` user (65534), so the
+    file system's own refusal is tested there too (root writes into read-only folders)."""
     import os
 
     from simgrip.io import check_output_dir
 
-    ro = tmp_path / "ro"
-    ro.mkdir()
-    ro.chmod(0o500)
+    folder.chmod(0o555)
+    if os.geteuid() != 0:
+        try:
+            check_output_dir(folder / "sub")
+        except ValueError as exc:
+            return str(exc)
+        return None
+    r, w = os.pipe()
+    pid = os.fork()
+    if pid == 0:  # the child: no pytest machinery, only os._exit
+        code = 0
+        try:
+            os.close(r)
+            os.setgid(65534)
+            os.setuid(65534)
+            try:
+                check_output_dir(folder / "sub")
+                msg = ""
+            except ValueError as exc:
+                msg = str(exc)
+            os.write(w, msg.encode())
+        except BaseException:
+            code = 1
+        os._exit(code)
+    os.close(w)
+    with os.fdopen(r, "rb") as f:
+        msg = f.read().decode()
+    _, status = os.waitpid(pid, 0)
+    assert os.waitstatus_to_exitcode(status) == 0
+    return msg or None
+
+
+def test_check_output_dir_refuses_a_read_only_folder(tmp_path):
+    import os
+    import tempfile
+
+    # a folder the nobody user can reach (pytest's tmp_path is 0700 for its owner)
+    base = Path(tempfile.mkdtemp(prefix="simgrip-ro-"))
     try:
-        if os.access(ro, os.W_OK) and os.geteuid() == 0:
-            pytest.skip("root writes into read-only folders")
-        with pytest.raises(ValueError, match="--out.*not writable"):
-            check_output_dir(ro / "sub")
+        base.chmod(0o755)
+        ro = base / "ro"
+        ro.mkdir()
+        msg = _refusal_in_a_read_only_folder(ro)
+        assert msg is not None and re.match(r"--out: cannot write results to .*ro/sub.*\(Permission denied\)", msg), msg
+        assert not (ro / "sub").exists()
     finally:
-        ro.chmod(0o700)
+        os.chmod(base / "ro", 0o700)
+        shutil.rmtree(base)
 
 
 def test_check_output_file_names_the_option(tmp_path):
