@@ -221,6 +221,8 @@ def test_nothing_listening(tmp_path, via):
     assert rc == 2, err
     assert_one_named_line(err, f"{label} cannot be reached", "nothing accepted a connection", "connection refused")
     assert FAST_TIMEOUT_S <= seconds < FAST_TIMEOUT_S + STARTUP_S, seconds  # refusals are retried to the deadline
+    # nothing was saved, so nothing is left to resume: the same command (without --resume) is not refused later
+    assert not (tmp_path / "o" / ".partial").exists()
 
 
 def test_an_http_server_is_not_a_scheduler(tmp_path):

@@ -241,15 +241,21 @@ def run_sweep(grid: SweepGrid, *, out=None, options: RunnerOptions = RunnerOptio
     chunk = CHUNK_IN_PROCESS if options.in_process else CHUNK_DASK
     pending = (p for p in grid.points() if not done[p.index])
     try:
-        while True:
-            points = list(itertools.islice(pending, chunk))
-            if not points:
-                break
-            run_tasks(evaluate_point, points, options=quiet, desc="sweep", batch_size=batch_size, on_result=arrived)
-    finally:
-        bar.close()
-        if store is not None:
-            store.flush()
+        try:
+            while True:
+                points = list(itertools.islice(pending, chunk))
+                if not points:
+                    break
+                run_tasks(evaluate_point, points, options=quiet, desc="sweep", batch_size=batch_size,
+                          on_result=arrived)
+        finally:
+            bar.close()
+            if store is not None:
+                store.flush()
+    except BaseException:
+        if store is not None and resumed == 0 and not store.batch_files():
+            store.remove()  # nothing saved (e.g. the scheduler unreachable): no unfinished sweep to resume
+        raise
     result = SweepResult(grid=grid, counts={}, computed=computed, resumed=resumed, wall_time_s=0.0, records=records)
     if out is None:
         result.counts = counts(records)

@@ -374,6 +374,10 @@ class PartialStore:
         write_csv(csv_path, rows(), COLUMNS)
         return tally.as_dict()
 
+    def batch_files(self) -> list[Path]:
+        """The saved batch files in the folder (none when it does not exist)."""
+        return sorted(self.dir.glob("batch-*.csv")) if self.dir.is_dir() else []
+
     def remove(self) -> None:
         """Delete the folder (after the final files are written)."""
         shutil.rmtree(self.dir, ignore_errors=True)
