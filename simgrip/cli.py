@@ -537,7 +537,7 @@ def main(argv=None) -> int:
             kill_descendants()
         os._exit(EXIT_INTERRUPTED)
 
-    with _signals_as_interrupt(on_stuck):
+    with _signals_as_interrupt(on_stuck) as received:
         try:
             try:
                 parser = build_parser()
@@ -553,9 +553,13 @@ def main(argv=None) -> int:
                     import_mujoco()  # a MUJOCO_GL whose library is missing must not stop work that does not render
                 result = COMMANDS[args.command](args)
             except ValueError as exc:
+                if received.signum is not None:
+                    raise  # what an interrupt became on its way up: the handler below
                 print(f"{prefix}: error: {exc}", file=sys.stderr)
                 return EXIT_USAGE
             except RuntimeError as exc:  # ElasticaError, DiscreteError, SettleError, RunnerError: named, never silent
+                if received.signum is not None:
+                    raise
                 print(f"{prefix}: failed: {type(exc).__name__}: {exc}", file=sys.stderr)
                 return EXIT_FAILED
             try:
@@ -564,7 +568,10 @@ def main(argv=None) -> int:
             except BrokenPipeError:  # e.g. piped into head: not an error of ours
                 _quiet_stdout()
             return 0
-        except KeyboardInterrupt:
+        except BaseException as exc:
+            # a signal seen, whatever it became on its way up (an import cut short raises ImportError): interrupted
+            if not isinstance(exc, KeyboardInterrupt) and (received.signum is None or isinstance(exc, SystemExit)):
+                raise
             if not finish.claim():  # the watchdog is cleaning up and ends the process
                 threading.Event().wait()
             # a second Ctrl-C or SIGTERM must not cut the clean-up short

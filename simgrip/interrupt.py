@@ -53,6 +53,17 @@ GRACE_S = 1.0
 _SIGNALS = (signal.SIGINT, signal.SIGTERM)
 
 
+class Received:
+    """What :func:`signals_as_interrupt` yields: ``signum`` is the first signal whose handler ran (else None).
+
+    A ``KeyboardInterrupt`` raised inside an import or a library that turns it into another exception (an
+    ``ImportError`` of a module cut short) is still an interrupt: the caller asks ``received``.
+    """
+
+    def __init__(self):
+        self.signum: int | None = None
+
+
 class Finish:
     """Who ends an interrupted run: the first caller of :meth:`claim` gets True, every later one False."""
 
@@ -127,14 +138,16 @@ def signals_as_interrupt(on_stuck: Callable[[int], None] | None = None, grace_s:
     is inside a long C call); ``on_stuck`` should end the process
     (:func:`os._exit`).  Outside the main thread the block runs unchanged
     (signal handlers can only be set there).  Handlers and the wakeup fd are
-    restored on exit.
+    restored on exit.  Yields a :class:`Received` that records the signal.
     """
+    received = Received()
     if threading.current_thread() is not threading.main_thread():
-        yield
+        yield received
         return
     dog = _Watchdog(on_stuck, grace_s) if on_stuck is not None else None
 
     def _raise(signum, frame):
+        received.signum = signum
         if dog is not None:
             dog.handled.set()
         raise KeyboardInterrupt
@@ -147,7 +160,7 @@ def signals_as_interrupt(on_stuck: Callable[[int], None] | None = None, grace_s:
         if dog is not None:
             previous_fd = signal.set_wakeup_fd(dog.write_end.fileno(), warn_on_full_buffer=False)
             dog.thread.start()
-        yield
+        yield received
     finally:
         if dog is not None:
             signal.set_wakeup_fd(previous_fd if previous_fd is not None else -1)

@@ -153,3 +153,29 @@ def test_the_watchdog_acts_when_the_main_thread_sits_in_a_c_call():
     thread.join(WAIT_S)
     assert calls == [signal.SIGTERM]
     assert interrupted_after_stuck is True  # the handler ran once the C call returned, after the watchdog
+
+
+@pytest.mark.parametrize("becomes", [ImportError, RuntimeError, ValueError])
+def test_an_interrupt_that_becomes_another_exception_is_still_an_interrupt(monkeypatch, capsys, becomes):
+    """SIGTERM during ``import mujoco`` surfaced as an ImportError traceback, exit 1 (2 in 10 runs): an exception
+    raised after a signal was received is the interrupt's, whatever its type (exit 130, the one line)."""
+    import os
+    import signal
+    import time
+
+    from simgrip import cli
+
+    def command(args):
+        try:
+            os.kill(os.getpid(), signal.SIGTERM)
+            time.sleep(5)  # the handler raises KeyboardInterrupt here
+        except KeyboardInterrupt:
+            raise becomes("partially initialized module 'mujoco' (most likely due to a circular import)") from None
+        raise AssertionError("the signal was not delivered")
+
+    monkeypatch.setitem(cli.COMMANDS, "solve", command)
+    assert cli.main(["solve", "I", "--kappa", "-5"]) == 130
+    assert capsys.readouterr().err.strip().splitlines() == ["simgrip solve: interrupted"]
+    # without a signal the same exceptions keep their meaning
+    monkeypatch.setitem(cli.COMMANDS, "solve", lambda args: (_ for _ in ()).throw(ValueError("kappa: bad")))
+    assert cli.main(["solve", "I", "--kappa", "-5"]) == 2
