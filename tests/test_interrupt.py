@@ -5,7 +5,7 @@ session, waits until its worker processes are up (and ~2 s at least), sends
 SIGINT (to the process, or to its whole process group as a terminal's Ctrl-C
 does) or SIGTERM, and checks:
 
-* it exits within :data:`EXIT_WITHIN_S` with status 130;
+* it exits with status 130 (within :data:`EXIT_WITHIN_S`, a hang guard);
 * stderr is the one line ``simgrip <command>: interrupted`` (no traceback);
 * no process of its session is left (found through ``/proc``: the session id
   of every process, so workers re-parented to init are found too);
@@ -36,8 +36,10 @@ from simgrip.io import TEMP_PREFIX
 
 pytestmark = pytest.mark.skipif(not Path("/proc/self/stat").exists(), reason="needs /proc (Linux)")
 
-#: Seconds from the signal to the exit of the command and all its workers.
-EXIT_WITHIN_S = 5.0
+#: Seconds from the signal to the exit of the command and all its workers: a hang guard only (issue 22, item 8;
+#: ~1 s alone, but a 2-core machine shared by other jobs may take many times that).  The guarantee is the rest:
+#: status 130 (the signal, not the end of the run, ended it), no process of its session left, no partial file.
+EXIT_WITHIN_S = 30.0
 #: Seconds the command runs before the signal (at least; workers must be up too).
 RUN_BEFORE_S = 2.0
 #: Seconds allowed for the workers to start on a loaded machine.
@@ -147,11 +149,12 @@ def test_interrupt_stops_the_command_and_its_workers(tmp_path, command, how):
 
 # --- inside one long solve: the model's compile (one long C call) and the settle ---------------------------
 
-#: Seconds from the signal to the exit of ``simulate`` inside one long compile or settle.  The promise is 2 s:
-#: the main thread takes a signal at its next bytecode, or, inside a C call, the watchdog acts after
-#: simgrip.interrupt.GRACE_S = 1 s and its clean-up and os._exit take < 0.4 s; 1 s more because on a
-#: 2-core machine shared with other jobs the watchdog thread and the test's own wait may each wait for a core.
-SOLVE_EXIT_WITHIN_S = 3.0
+#: Seconds from the signal to the exit of ``simulate`` inside one long compile or settle: a hang guard only
+#: (issue 22, item 8).  The promise is 2 s: the main thread takes a signal at its next bytecode, or, inside a C
+#: call, the watchdog acts after simgrip.interrupt.GRACE_S = 1 s and its clean-up and os._exit take < 0.4 s;
+#: a shared machine may stretch that many-fold, so it is not timed here.  That the watchdog acts on a main
+#: thread stuck in a C call is tested without a clock in tests/test_progress.py (a mutex the test holds).
+SOLVE_EXIT_WITHIN_S = 30.0
 
 #: phase -> (simulate's options, the progress line that says the phase started, seconds to wait after it).
 #: 8 fingers x 350 links: the Python spec takes < 0.5 s, then MuJoCo's compile (work ~ fingers x links^3,

@@ -281,7 +281,7 @@ def test_dask_cli_cluster(cli_cluster):
     assert len(addresses) >= 5 and _all_loopback(addresses), addresses
 
 
-def test_unreachable_scheduler_is_a_named_scheduler_error():
+def test_unreachable_scheduler_is_a_named_scheduler_error(monkeypatch):
     import socket
 
     from simgrip.parallel.runner import SchedulerError
@@ -289,11 +289,19 @@ def test_unreachable_scheduler_is_a_named_scheduler_error():
     with socket.socket() as s:  # a free port nobody listens on
         s.bind(("127.0.0.1", 0))
         port = s.getsockname()[1]
+    import simgrip.parallel.remote as remote
+
+    waits = []
+    real_probe = remote.probe
+    monkeypatch.setattr(remote, "probe", lambda address, timeout, **kw: waits.append(timeout) or
+                        real_probe(address, timeout, **kw))
     t0 = time.monotonic()
     with pytest.raises(SchedulerError, match="^scheduler tcp:.* cannot be reached: nothing accepted") as exc:
         run_tasks(square, [1, 2], options=RunnerOptions(scheduler=f"tcp://127.0.0.1:{port}", connect_timeout=1.0, **QUIET))
     assert isinstance(exc.value, RunnerError) and isinstance(exc.value, ValueError)  # a cluster failure; bad input
-    assert time.monotonic() - t0 < 10
+    # the guarantee: the wait is the connect_timeout asked for (not the 10 s default); the clock only guards a hang
+    assert waits == [1.0]
+    assert time.monotonic() - t0 < 120
 
 
 # interrupts -----------------------------------------------------------------------------------
@@ -309,6 +317,7 @@ def busy(item):
     t = time.time()
     while time.time() - t < 60:  # busy like a settle, never returns in time
         pass
+    Path(folder, f"finished-{x}-{os.getpid()}").touch()
     return x
 
 if __name__ == "__main__":
@@ -320,6 +329,11 @@ if __name__ == "__main__":
         sys.exit(130)
     sys.exit(3)
 """
+
+
+#: Hang guard of the interrupt test [s]: below the tasks' 60 s, so letting them finish cannot pass; the promptness
+#: itself (~1 s) is not timed here (a loaded machine), its guarantee is that no task finishes.
+INTERRUPT_GUARD_S = 45.0
 
 
 @pytest.mark.parametrize("how", ["SIGINT", "SIGTERM", "Ctrl-C at a terminal", "Ctrl-C while the cluster starts"])
@@ -349,10 +363,12 @@ def test_interrupt_stops_the_runner_and_its_workers(tmp_path, how):
             proc.send_signal(signal.SIGTERM)
         else:  # a terminal sends SIGINT to the whole foreground process group
             os.killpg(proc.pid, signal.SIGINT)
-        while proc.poll() is None and time.monotonic() - t0 < 10:  # every process it starts, to the end
+        # every process it starts, to the end; the clock only guards a hang (issue 22, item 8): the guarantee
+        # is the work count below, each task runs 60 s, so a runner that waited for its tasks would take >= 60 s
+        while proc.poll() is None and time.monotonic() - t0 < INTERRUPT_GUARD_S:
             family |= descendants(proc.pid)
             time.sleep(0.02)
-        out, err = proc.communicate(timeout=10)
+        out, err = proc.communicate(timeout=INTERRUPT_GUARD_S)
         elapsed = time.monotonic() - t0
     finally:
         if proc.poll() is None:
@@ -360,6 +376,7 @@ def test_interrupt_stops_the_runner_and_its_workers(tmp_path, how):
             proc.wait()
     assert proc.returncode == 130, (out, err)
     assert out.strip() == "interrupted"  # ("go" was read)
-    assert elapsed < 5.0, elapsed
-    assert not _gone_within(family, 3.0), "worker processes left running"
+    assert elapsed < INTERRUPT_GUARD_S, elapsed
+    assert not _gone_within(family, INTERRUPT_GUARD_S), "worker processes left running"
+    assert not list(tmp_path.glob("finished-*")), "a task ran to its end after the signal"  # stopped, not drained
     assert "Traceback" not in err, err
