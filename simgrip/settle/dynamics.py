@@ -151,9 +151,9 @@ def drop_warning(scene: Scene, verdicts: dict) -> str | None:
     r = scene.r_tip if scene.grip in ("I", "II") else scene.r_link
     head = "dropped by the dynamics where the static settle (point contact) holds: "
     if verdicts.get("surface") is False:
-        return head + (f"the static settle with MuJoCo's surface contact (contact='surface') drops it too: the "
-                       f"friction acting r = {r:g} l off the centreline adds a couple that the point contact (the "
-                       f"BVP's) leaves out, and it decides this verdict")
+        return head + (f"the static settle with MuJoCo's surface contact (contact='surface', --contact surface) "
+                       f"drops it too: the friction acting r = {r:g} l off the centreline adds a couple that the "
+                       f"point contact (the BVP's) leaves out, and it decides this verdict")
     if verdicts.get("surface"):
         return head + ("the static settle with MuJoCo's surface contact holds it too: the workpiece was lost on "
                        "the over-damped flow's way to rest from the start (a path, not an equilibrium)")
