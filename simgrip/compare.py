@@ -27,9 +27,9 @@ __all__ = ["BRANCH_LINKS", "simulate", "settled_record", "reference_for", "refer
 
 #: A reference whose tip lies farther than this many link lengths (``BRANCH_LINKS / n`` over ``l``) from the
 #: simulated tip describes another equilibrium.  The settled ``n``-link chain is the midpoint discretisation of
-#: the elastica, whose tip it matches to ``O(1/n^2)`` (``~3e-4 l`` at ``n = 32``, the standard case; README's
-#: convergence table): a whole link, ``1/n``, is ``n`` times that bound (32 at the default), so a tip that far
-#: off is not the chain's discretisation error but another branch of the BVP.
+#: the elastica, whose tip it matches to ``O(1/n^2)`` (``~3e-4 l`` at ``n = 32`` in the standard case, see
+#: :data:`simgrip.validity.DEPTH_FRACTION`): a whole link, ``1/n``, is ``n`` times the ``1/n^2`` scale (32 at the
+#: default), so a tip that far off is not the chain's discretisation error but another branch of the BVP.
 BRANCH_LINKS = 1.0
 
 
@@ -249,7 +249,9 @@ def chain_reference(grip: str, params: DimensionlessParams, profile, link_angles
         if warm is None and cold is None:
             raise error
         return cold if warm is None else warm
-    gap = lambda sol: float(np.hypot(*(tip - np.asarray(sol.tip, dtype=float))))  # noqa: E731
+    def gap(sol) -> float:
+        return float(np.hypot(*(tip - np.asarray(sol.tip, dtype=float))))
+
     return warm if gap(warm) <= gap(cold) else cold
 
 

@@ -16,10 +16,11 @@ records what it finds on the state (a flag and a message in ``warnings``):
   the workpiece (MuJoCo has no contact pair there) and the tip stays below the
   contact, ``Y(l) < Y(gamma)`` (the paper's condition (23) as the BVP applies it).
   Either violation sets ``tip_clear`` False with a message in ``warnings``.
-* :func:`check_reach` -- Grips I/II: a dropped state whose finger, unloaded, has its
-  tip outside the workpiece's face (``X(l) > b/2``) never pressed on it; the
-  BVP, which prescribes the tip on the face, may still hold there.  A message
-  says so (the verdicts may differ, and why).
+* :func:`check_reach` -- a dropped state whose finger, unloaded, does not reach
+  the workpiece: Grips I/II its tip outside the face (``X(l) > b/2``), so it
+  never pressed on it; Grip III its whole rod short of the corner (``max X <
+  b/2``).  The BVP, which prescribes the contact at ``X = b/2``, may still hold
+  there.  A message says so (the verdicts may differ, and why).
 * :func:`check_tip_contact` -- Grip III: a contact at the tip (``gamma = 1``) is
   Grip III degenerated to a tip contact, outside the Grip III BVP (``0 < gamma <
   1``); a message says so (the comparison then has no reference).
@@ -163,7 +164,12 @@ def check_contact_depth(scene, state) -> None:
 
 
 def check_reach(scene, state) -> None:
-    """Grips I/II: a dropped state whose unloaded finger does not reach the workpiece's face says so.
+    """A dropped state whose unloaded finger does not reach the workpiece says so.
+
+    Grip III: the rod's largest ``X`` (its nodes) short of the corner at ``b/2``:
+    the BVP's held state has the rod pressed out to the corner (e.g. ``kappa =
+    -10, D = 1e4``: a curl of radius 0.1 l, ``n = 5e5``), which the settle, let
+    go there, does not keep.  Grips I/II:
 
     A dropped state's finger is at its unloaded equilibrium (the workpiece gone):
     if that tip lies outside the face (``X(l) > b/2``, the finger's frame), closing
@@ -173,9 +179,19 @@ def check_reach(scene, state) -> None:
     simulation cannot close into: the verdicts may differ, and the message says
     why (the K-finger gripper's :func:`simgrip.settle.gripper_start.warn_unreached`).
     """
-    if scene.grip not in ("I", "II") or state.held or not state.grip_matched or not scene.has_workpiece:
+    if state.held or not state.grip_matched or not scene.has_workpiece:
         return
     face = 0.5 * float(scene.params.b)
+    if scene.grip == "III":
+        reach = float(np.max(np.asarray(state.nodes[0], dtype=float)[:, 0]))
+        if reach < face:
+            state.warnings.append(
+                f"not held: the unloaded finger reaches at most X = {reach:.4g} l, short of the workpiece's corner at "
+                f"X = {face:.4g} l; the BVP, which puts the contact at X(gamma) = b/2, may find a held equilibrium "
+                f"with the rod pressed out to the corner that this finger, let go there, does not keep")
+        return
+    if scene.grip not in ("I", "II"):
+        return
     tip_x = float(state.tip[0][0])
     if tip_x > face:
         state.warnings.append(
@@ -206,7 +222,8 @@ def check_friction_cone(scene, state) -> None:
     """A held state at the friction cone's edge says so (``state.warnings``).
 
     The required ``mu`` in the theory's frame (``contact.required_mu``: the rod's
-    at a Grip III corner) within :data:`simgrip.settle.gripper_state.FRICTION_MARGIN` (2 %) of ``mu_s`` or beyond: a
+    at a Grip III corner) within :data:`simgrip.settle.gripper_state.FRICTION_MARGIN`
+    (2 %) of ``mu_s`` or beyond: a
     sticking contact saturated in MuJoCo's contact frame (whose normal at a Grip
     III corner is the carrying link's, not the rod's at ``gamma``) holds where the
     BVP's ``|f| <= mu_s n`` may not, and MuJoCo's soft cone creeps; the settles

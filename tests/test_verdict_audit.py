@@ -91,8 +91,8 @@ def test_classification():
     assert va._classify({}, res("held"), res("dropped"), res("held"))["outcome"] == "silent"
     assert va._classify({}, res("dropped", ["wrong grip: ..."]), res("dropped"), res("held"))["outcome"] == "warned"
     # a reference that names why (another branch, the cone's edge as the chain resolves it) warns too
-    assert va._classify({}, res("held"), res("held"), res("dropped", ["the reference converged to another "
-                                                                        "equilibrium branch: ..."]))["outcome"] == "warned"
+    branch = res("dropped", ["the reference converged to another equilibrium branch: ..."])
+    assert va._classify({}, res("held"), res("held"), branch)["outcome"] == "warned"
     assert va._classify({}, res(None, error="SettleError: x"), res("held"), res("held"))["outcome"] == "no_verdict"
     assert va._classify({}, res(None, error="ValueError: b"), res(None, error="ValueError: b"),
                         res("held"))["outcome"] == "refused"

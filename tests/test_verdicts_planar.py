@@ -283,3 +283,15 @@ def test_compare_fingers_reference_is_on_the_settled_branch_and_warns_as_the_pla
     assert ref["normal_force"] == pytest.approx(sim["normal_force"], rel=5e-3)
     low = compare_gripper("I", STANDARD.replace(mu_s=0.1), Uniform(-6.0), 8, fingers=2, workpiece="box")
     assert not low["simulation"]["feasible"] and not low["reference"]["feasible"] and low["warnings"] == []
+
+
+@pytest.mark.parametrize("kappa,D,mu", [(-10.0, 1e4, 1.0), (-2.0, 1e-2, 100.0)])
+def test_a_grip_iii_finger_that_does_not_reach_the_corner_says_so(kappa, D, mu):
+    """Both settles drop, the BVP holds with the rod pressed out to the corner at X(gamma) = b/2 (kappa = -10,
+    D = 1e4: a curl of radius 0.1 l, n = 5e5): the dropped state says its unloaded rod ends short of the corner."""
+    p = STANDARD.replace(D=D, mu_s=mu)
+    for method in ("newton", "dynamics"):
+        st = settle(build_scene("III", p, Uniform(kappa), N), method=method)
+        assert not st.held and st.nodes[0][:, 0].max() < 0.5 * p.b
+        assert any(w.startswith("not held: the unloaded finger reaches at most") for w in st.warnings), st.warnings
+    assert elastica.solve("III", p, Uniform(kappa)).feasible

@@ -73,7 +73,8 @@ def least_mu(grip: str, params: DimensionlessParams, profile, **kw) -> float:
 
     ``|friction| / normal`` of the equilibrium; ``inf`` where the configuration
     cannot hold at any friction (contact lost, Grip III's tip touching the
-    workpiece, or a Grip I/II solution in the other grip's shape).  Keyword arguments go to :func:`~simgrip.reference.elastica.solve`.
+    workpiece, or a Grip I/II solution in the other grip's shape).  Keyword
+    arguments go to :func:`~simgrip.reference.elastica.solve`.
     """
     _grip_only(check_grip(grip), "least_mu")
     sol = solve(grip, params, profile, **kw)
