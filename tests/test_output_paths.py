@@ -456,14 +456,9 @@ def test_train_sb3_refuses_a_folder_at_a_result_name(tmp_path, capsys):
     assert sorted(p.name for p in tmp_path.iterdir()) == ["sac_curve.csv"]
 
 
-def test_render_png_alone_writes_only_the_png(tmp_path):
-    """The issue's ``render --png X`` also dropped pick.gif into the current folder; now only X (real rendering)."""
-    from simgrip.sim.gl import RenderingUnavailable, choose_backend
-
-    try:
-        choose_backend(dict(os.environ))  # decided on a copy: this process's environment is left as it is
-    except RenderingUnavailable as exc:
-        pytest.skip(str(exc))
+def test_render_png_alone_writes_only_the_png(tmp_path, render_backend):
+    """The issue's ``render --png X`` also dropped pick.gif into the current folder; now only X (real rendering;
+    skipped only where conftest's ``render_backend`` finds no GL library at all)."""
     out = subprocess.run([sys.executable, "-m", "simgrip.cli", "render", "--png", "x.png"], cwd=tmp_path,
                          capture_output=True, text=True, timeout=240)
     assert out.returncode == 0, out.stderr[-2000:]
