@@ -202,3 +202,20 @@ def test_holds_at_the_friction_cone_say_so():
     st = settle_gripper(_cradle(DimensionlessParams(D=1.0, M=0.0, mu_s=1.0, b=0.6), 32))
     assert st.held and st.records[0].required_mu > 1.0
     assert any("friction cone's edge" in w for w in st.warnings)
+
+
+def test_the_cradle_says_each_warning_once():
+    """The replicated planar state's warnings and the K-finger's own overlapped (M = 0 with mu_s = 0 twice)."""
+    from simgrip.cli import main
+    import json
+
+    import contextlib
+    import io
+
+    buf = io.StringIO()
+    with contextlib.redirect_stdout(buf):
+        assert main(["simulate", "III", "--kappa", "-4", "--fingers", "4", "--workpiece", "box", "--M", "0",
+                     "--mu", "0", "--links", "16", "--json"]) == 0
+    warnings = json.loads(buf.getvalue())["warnings"]
+    assert any(w.startswith("M = 0 with mu_s = 0") for w in warnings)
+    assert len(warnings) == len(set(warnings))

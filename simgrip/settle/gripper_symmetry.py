@@ -444,4 +444,5 @@ def _replicate(scene: GripperScene, pst, held: bool, converged: bool, steps: int
         raise SettleError(f"symmetric settle did not converge (K-finger residual {residual:.3g} above the tolerance "
                           f"{tolerance:.3g}, {steps} planar Newton iterations)")
     check_grip_shape(scene, state)
+    state.warnings[:] = list(dict.fromkeys(state.warnings))  # the replicated planar state's and the K-finger's own
     return state
