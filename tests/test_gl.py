@@ -76,11 +76,10 @@ def test_glfw_without_a_working_display_fails_by_name_every_time(display):
     assert len(set(lines)) == 1  # the later attempts repeat the first error without touching GLFW again
 
 
-@pytest.mark.parametrize("value", ["bogus", "osmesa"])
-def test_commands_that_do_not_render_ignore_a_broken_mujoco_gl(value, tmp_path):
-    """``MUJOCO_GL=bogus`` (or osmesa without libOSMesa) makes ``import mujoco`` raise: simulate warns and works."""
-    if value == "osmesa" and gl.missing_library("osmesa") is None:
-        pytest.skip("libOSMesa is installed here: MUJOCO_GL=osmesa is not broken")
+def test_commands_that_do_not_render_ignore_a_broken_mujoco_gl(tmp_path):
+    """``MUJOCO_GL=bogus`` makes ``import mujoco`` raise (as osmesa without libOSMesa does, inside PyOpenGL): simulate
+    warns and works.  The value is one no machine has, so the test never forces a backend that may work or not."""
+    value = "bogus"
     env = {k: v for k, v in os.environ.items() if k not in ("PYOPENGL_PLATFORM",)}
     env["MUJOCO_GL"] = value
     proc = subprocess.run([sys.executable, "-m", "simgrip.cli", "simulate", "I", "--kappa", "-6", "--links", "8",
