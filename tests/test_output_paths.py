@@ -20,6 +20,7 @@ import sys
 from pathlib import Path
 
 import pytest
+from helpers import load_example
 
 from simgrip import io as sio
 from simgrip.cli import main
@@ -422,13 +423,7 @@ def test_cli_refusal_is_one_line_exit_2_in_a_fresh_process(tmp_path):
 # the examples ----------------------------------------------------------------------------------------------------
 
 def _example(name):
-    import importlib.util
-
-    path = Path(__file__).resolve().parents[1] / "examples" / f"{name}.py"
-    spec = importlib.util.spec_from_file_location(f"example_{name}_paths", path)
-    module = importlib.util.module_from_spec(spec)
-    spec.loader.exec_module(module)
-    return module
+    return load_example(name, "_paths")
 
 
 def test_scripted_pick_refuses_a_fifo_gif_before_the_episodes(tmp_path, capsys, monkeypatch):

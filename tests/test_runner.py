@@ -19,6 +19,7 @@ import time
 from pathlib import Path
 
 import pytest
+from helpers import alive
 
 from simgrip.parallel.dask_cluster import descendants
 from simgrip.parallel.runner import (
@@ -109,20 +110,12 @@ def _all_loopback(addresses) -> bool:
     return all(a.startswith(LOOPBACK) for a in addresses)
 
 
-def _alive(pid: int) -> bool:
-    try:
-        with open(f"/proc/{pid}/stat") as fh:
-            return fh.read().rsplit(")", 1)[1].split()[0] != "Z"
-    except OSError:
-        return False
-
-
 def _gone_within(pids, seconds: float) -> list[int]:
     deadline = time.monotonic() + seconds
-    left = [p for p in pids if _alive(p)]
+    left = [p for p in pids if alive(p)]
     while left and time.monotonic() < deadline:
         time.sleep(0.05)
-        left = [p for p in left if _alive(p)]
+        left = [p for p in left if alive(p)]
     return left
 
 

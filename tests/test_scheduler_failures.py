@@ -28,6 +28,7 @@ import time
 from pathlib import Path
 
 import pytest
+from helpers import alive
 
 from simgrip.parallel.dask_cluster import MAX_WORKERS_PER_CORE, LocalDask, available_cores, worker_cap
 from simgrip.parallel.remote import (
@@ -344,14 +345,6 @@ def test_worker_cap():
     assert RunnerOptions(jobs=10**5).local_workers == MAX_WORKERS_PER_CORE * cores
 
 
-def _alive(pid: int) -> bool:
-    try:
-        with open(f"/proc/{pid}/stat") as fh:
-            return fh.read().rsplit(")", 1)[1].split()[0] != "Z"
-    except OSError:
-        return False
-
-
 def test_local_cluster_starts_no_more_workers_than_tasks_or_cores():
     env = LocalDask(100000, tasks=3)
     try:
@@ -363,9 +356,9 @@ def test_local_cluster_starts_no_more_workers_than_tasks_or_cores():
     finally:
         env.stop(False)
     deadline = time.monotonic() + 10
-    while any(_alive(p) for p in pids) and time.monotonic() < deadline:
+    while any(alive(p) for p in pids) and time.monotonic() < deadline:
         time.sleep(0.05)
-    assert not any(_alive(p) for p in pids)
+    assert not any(alive(p) for p in pids)
 
 
 INTERRUPTED_START = """

@@ -1,0 +1,24 @@
+"""Small helpers shared by several test modules (not tests themselves): loading an example script, a process's life."""
+
+from __future__ import annotations
+
+import importlib.util
+from pathlib import Path
+
+
+def load_example(name: str, tag: str = ""):
+    """``examples/<name>.py`` imported as a module (the examples are scripts, not a package)."""
+    path = Path(__file__).resolve().parents[1] / "examples" / f"{name}.py"
+    spec = importlib.util.spec_from_file_location(f"example_{name}{tag}", path)
+    module = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(module)
+    return module
+
+
+def alive(pid: int) -> bool:
+    """Whether process ``pid`` exists and is not a zombie (``/proc``; Linux)."""
+    try:
+        with open(f"/proc/{pid}/stat") as fh:
+            return fh.read().rsplit(")", 1)[1].split()[0] != "Z"
+    except OSError:
+        return False
