@@ -38,7 +38,7 @@ import math
 import os
 from dataclasses import dataclass
 
-from simgrip.parallel.dask_cluster import MAX_WORKERS_PER_CORE
+from simgrip.parallel.dask_cluster import MAX_WORKERS_PER_CORE, available_cores
 
 __all__ = [
     "MAX_POINTS", "MAX_AXIS_VALUES", "MAX_WALL_DAYS", "MAX_JOBS", "JOBS_PER_CORE", "MAX_CASES",
@@ -114,13 +114,6 @@ def _available_memory() -> int:
         return 2**30
 
 
-def _cores() -> int:
-    try:
-        return max(1, len(os.sched_getaffinity(0)))
-    except AttributeError:  # pragma: no cover - not Linux
-        return max(1, os.cpu_count() or 1)
-
-
 def _free_disk(path) -> int | None:
     """Free bytes of the file system that holds ``path`` (its nearest existing parent); None if unknown."""
     if path is None:
@@ -137,7 +130,7 @@ def _free_disk(path) -> int | None:
 
 def machine(out=None) -> Machine:
     """This machine now: available memory, cores, and the free disk of ``out``'s file system."""
-    return Machine(memory=_available_memory(), cores=_cores(), disk=_free_disk(out))
+    return Machine(memory=_available_memory(), cores=available_cores(), disk=_free_disk(out))
 
 
 def _f(x) -> float:
