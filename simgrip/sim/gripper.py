@@ -61,6 +61,7 @@ from simgrip.sim.contacts import add_pair
 from simgrip.sim.fingers import FingerIndex, add_fingers, check_finger_links, index_fingers
 from simgrip.sim.gripper_placement import check_offset, check_workpiece_yaw, place_fingers
 from simgrip.sim.scene import FingerScene, check_params, check_positive, root_spec, set_joint_angles
+from simgrip.sim import workpiece as _workpiece
 from simgrip.sim.workpiece import BOX_DEPTH, BOX_HEIGHT, workpiece_inertia
 
 __all__ = ["GRIPPER_GRIPS", "WORKPIECES", "GripperScene", "build_gripper", "check_gripper", "finger_azimuths",
@@ -75,10 +76,8 @@ GRIPPER_GRIPS = ("I", "II", "III")
 DEFAULT_R_TIP = 2e-3
 #: Default link capsule radius over ``l``.
 DEFAULT_R_LINK = 2e-3
-#: Least inertial mass of the workpiece per finger over ``rho l`` (:func:`workpiece_body_mass`; its weight stays
-#: ``K M``).  Set by the K-finger dynamics: at 1e-4 a weightless workpiece was still dropped (the tips sank into
-#: it), from 1e-3 it is held at D = 1e-2, 1 and 1e4; 1e-2 keeps a decade of margin.
-MIN_WORKPIECE_MASS = 1e-2
+#: Least inertial mass of the workpiece per finger over ``rho l``: the planar scene's floor, one value for both.
+MIN_WORKPIECE_MASS = _workpiece.MIN_WORKPIECE_MASS
 
 _WORKPIECE_GEOM = "workpiece_geom"
 
@@ -461,7 +460,7 @@ def workpiece_body_mass(phys, K: int) -> float:
     (:func:`simgrip.settle.gripper_dynamics.contact_rest_depth`), which a nearly massless workpiece makes
     unbounded: the tips sank through it and the dynamics dropped every workpiece with ``M < ~1e-3``.
     """
-    return K * max(phys.m, MIN_WORKPIECE_MASS * phys.rho * phys.length)
+    return _workpiece.inertial_mass(K * phys.m, K, phys.rho, phys.length)
 
 
 def _add_workpiece(spec, shape: str, size, mass: float, centre, yaw: float) -> None:
