@@ -48,6 +48,7 @@ the main module).  The runner writes no files.
 from __future__ import annotations
 
 import contextlib
+import itertools
 import math
 import os
 import signal
@@ -84,6 +85,8 @@ __all__ = [
 MAX_BATCH = 32
 #: Default batches per worker (load balance: the last batches of a run finish at different times).
 BATCHES_PER_WORKER = 4
+#: Batches submitted ahead per worker: the client holds at most this many batches (items and results) per worker.
+IN_FLIGHT_PER_WORKER = 4
 
 
 @dataclass(frozen=True)
@@ -212,8 +215,9 @@ def _check_batch_size(batch_size):
 
 
 def run_tasks(fn: Callable, items: Iterable, *, options: RunnerOptions = RunnerOptions(), desc: str = "",
-              batch_size: int | None = None, on_result: Callable | None = None) -> list:
-    """Apply ``fn`` to every item and return the results in item order.
+              batch_size: int | None = None, on_result: Callable | None = None, collect: bool = True,
+              total: int | None = None) -> list | None:
+    """Apply ``fn`` to every item and return the results in item order (``None`` with ``collect=False``).
 
     Parameters
     ----------
@@ -221,7 +225,9 @@ def run_tasks(fn: Callable, items: Iterable, *, options: RunnerOptions = RunnerO
         A picklable top-level function of one item (Dask pickles it by reference,
         so a remote worker needs simgrip installed).
     items : iterable
-        The inputs (materialised into a list).
+        The inputs: materialised into a list when ``collect``; otherwise consumed
+        lazily, at most :data:`IN_FLIGHT_PER_WORKER` batches per worker ahead of
+        the results (a generator of any length keeps this process's memory flat).
     options : RunnerOptions
         In-process loop, local cluster or existing cluster (see the module docstring).
     desc : str
@@ -233,6 +239,13 @@ def run_tasks(fn: Callable, items: Iterable, *, options: RunnerOptions = RunnerO
         Called in this process as ``on_result(index, result)`` for every item as
         its batch completes (completion order, not item order): the hook for
         saving partial results.
+    collect : bool
+        Keep the results and return them (default).  ``False`` keeps none (each
+        goes to ``on_result`` and is dropped, and each finished Dask batch is
+        released at once) and returns ``None``: memory does not grow with the items.
+    total : int, optional
+        The number of items when ``items`` has no ``len`` and ``collect=False``
+        (progress bar, batch size, workers); required then.
 
     Raises
     ------
@@ -247,24 +260,32 @@ def run_tasks(fn: Callable, items: Iterable, *, options: RunnerOptions = RunnerO
     if not isinstance(options, RunnerOptions):
         raise ValueError(f"options must be a RunnerOptions, got {type(options).__name__}")
     batch_size = _check_batch_size(batch_size)
-    items = list(items)
-    if not items:
-        return []
+    if collect:
+        items = list(items)
+        n = len(items)
+    else:
+        n = len(items) if hasattr(items, "__len__") else total
+        if isinstance(n, bool) or not isinstance(n, int) or n < 0:
+            raise ValueError(f"total must be the number of items (an int >= 0) when items has no len and "
+                             f"collect=False, got {total!r}")
+    if n == 0:
+        return [] if collect else None
     from tqdm import tqdm
 
-    with _sigterm_as_interrupt(), tqdm(total=len(items), desc=desc or None, unit="task",
+    with _sigterm_as_interrupt(), tqdm(total=n, desc=desc or None, unit="task",
                                        disable=not options.progress) as bar:
         if options.in_process:
-            out = []
+            out = [] if collect else None
             with blas_threads(1):
                 for i, item in enumerate(items):
                     res = fn(item)
-                    out.append(res)
+                    if collect:
+                        out.append(res)
                     if on_result is not None:
                         on_result(i, res)
                     bar.update(1)
             return out
-        return _run_dask(fn, items, options, batch_size, on_result, bar)
+        return _run_dask(fn, iter(items), n, options, batch_size, on_result, bar, collect)
 
 
 @contextlib.contextmanager
@@ -292,14 +313,14 @@ def _sigterm_as_interrupt():
         signal.signal(signal.SIGTERM, old)
 
 
-def _run_dask(fn, items, options, batch_size, on_result, bar) -> list:
+def _run_dask(fn, items, n, options, batch_size, on_result, bar, collect) -> list | None:
     from simgrip.parallel.dask_cluster import quiet_dask_logs
 
     with quiet_dask_logs():
-        return _run_dask_quietly(fn, items, options, batch_size, on_result, bar)
+        return _run_dask_quietly(fn, items, n, options, batch_size, on_result, bar, collect)
 
 
-def _run_dask_quietly(fn, items, options, batch_size, on_result, bar) -> list:
+def _run_dask_quietly(fn, items, n, options, batch_size, on_result, bar, collect) -> list | None:
     from distributed import KilledWorker, as_completed
 
     from simgrip.parallel.dask_cluster import LocalDask
@@ -311,12 +332,12 @@ def _run_dask_quietly(fn, items, options, batch_size, on_result, bar) -> list:
         env = RemoteDask(options.scheduler, options.scheduler_file, timeout=options.connect_timeout)
         workers = max(1, len(env.identity.get("workers", {})))
     else:
-        workers = min(options.local_workers, len(items))
+        workers = min(options.local_workers, n)
     if batch_size is None:
-        batch_size = default_batch_size(len(items), workers)
-    starts = list(range(0, len(items), batch_size))
+        batch_size = default_batch_size(n, workers)
+    tasks = math.ceil(n / batch_size)
     if not options.remote:
-        env = LocalDask(workers, tasks=len(starts))  # no more processes than tasks
+        env = LocalDask(workers, tasks=tasks)  # no more processes than tasks
     try:
         client = env.client
         if options.remote:
@@ -325,13 +346,28 @@ def _run_dask_quietly(fn, items, options, batch_size, on_result, bar) -> list:
         else:  # its nannies restart a worker that dies within ~1 s; none for this long: they died and stayed dead
             watch = WorkerWatch(client, "the local Dask cluster", DEFAULT_WORKER_WAIT_S, hint="its worker processes "
                                 "died and were not restarted (out of memory? killed?); run again, or with --jobs 1")
-        futures = [client.submit(_run_batch, fn, items[s:s + batch_size], pure=False, key=f"simgrip-batch-{s}-{_token()}")
-                   for s in starts]
-        env.futures = futures
-        start_of = {f.key: s for f, s in zip(futures, starts)}
-        out = [None] * len(items)
+        # batches are cut from the items and submitted as earlier ones finish: at most `limit` in flight, so the
+        # items, the futures and the results held here are bounded whatever the number of items
+        limit = IN_FLIGHT_PER_WORKER * max(1, workers)
+        batches = _batches(items, batch_size)
+        env.futures = []
+        start_of = {}
+        out = [None] * n if collect else None
         losses = {}
-        pending = as_completed(futures, loop=client.loop)
+        pending = as_completed([], loop=client.loop)
+
+        def submit_more():
+            while len(start_of) < limit:
+                nxt = next(batches, None)
+                if nxt is None:
+                    return
+                s, chunk = nxt
+                f = client.submit(_run_batch, fn, chunk, pure=False, key=f"simgrip-batch-{s}-{_token()}")
+                start_of[f.key] = s
+                env.futures.append(f)
+                pending.add(f)
+
+        submit_more()
         while True:
             fut = _next_done(pending, watch)
             if fut is None:
@@ -354,13 +390,17 @@ def _run_dask_quietly(fn, items, options, batch_size, on_result, bar) -> list:
                 where = f"at {env.where} " if options.remote else ""
                 raise RunnerError(f"the Dask cluster {where}went away (scheduler gone or its workers lost: a batch "
                                   f"was {fut.status})")
-            s = start_of[fut.key]
+            s = start_of.pop(fut.key)
+            env.futures.remove(fut)
             for j, res in enumerate(chunk):
-                out[s + j] = res
+                if collect:
+                    out[s + j] = res
                 if on_result is not None:
                     on_result(s + j, res)
             bar.update(len(chunk))
             fut.release()
+            del chunk
+            submit_more()
         return out
     except BaseException:  # Ctrl-C, fn failed or the cluster did: stop the rest now
         interrupted = True
@@ -415,6 +455,17 @@ _MAX_LOSSES = 5  # times one batch's result may be lost with its worker before t
 def _connected(client) -> bool:
     """Whether the client still talks to its scheduler (a lost result is then recomputed)."""
     return getattr(client, "status", None) == "running"
+
+
+def _batches(items, batch_size: int):
+    """``(start, [items])`` of consecutive batches of ``batch_size``, cut lazily from the iterator ``items``."""
+    start = 0
+    while True:
+        chunk = list(itertools.islice(items, batch_size))
+        if not chunk:
+            return
+        yield start, chunk
+        start += len(chunk)
 
 
 def _token() -> str:
