@@ -221,6 +221,7 @@ def solve_chain(
     gravity=1.0,
     springs=None,
     load=None,
+    stability: str = "value",
 ) -> ChainEquilibrium:
     """Static equilibrium of the ``n``-link hinge chain (the MuJoCo finger's settled state).
 
@@ -251,15 +252,21 @@ def solve_chain(
         weight share; bit-identical to not passing it).  Either sign, ``|load| <=
         M_MAX``: a negative load pushes the contact up (the friction of a finger
         that pulls the workpiece down).  Grips only.
+    stability : {"value", "sign", "none"}
+        ``min_eigenvalue``: the smallest eigenvalue (default); a value with only its
+        sign (``> 0`` exactly when the eigenvalue's is: a start's stability test at a
+        fraction of the cost); or NaN (not computed: the angles and forces alone).
 
     Raises
     ------
     ValueError
-        Bad ``grip``, ``n``, ``gamma``, ``guess`` or ``load``.
+        Bad ``grip``, ``n``, ``gamma``, ``guess``, ``load`` or ``stability``.
     DiscreteError
         Newton failed to converge.
     """
     grip, params, prof, n, gam, prob_gravity = check_discrete(grip, params, profile, "n", n, gamma, gravity)
+    if stability not in ("value", "sign", "none"):
+        raise ValueError(f"stability must be 'value', 'sign' or 'none', got {stability!r}")
     sp = _springs_for(prof, n, springs)
     cm = _finite("contact_moment", contact_moment)
     M = check_load(load, grip, params)
@@ -280,7 +287,7 @@ def solve_chain(
     return ChainEquilibrium(
         grip=grip, n=n, params=params, link_angles=phi, joint_angles=np.diff(phi, prepend=0.0), nodes=nodes,
         tip=tip, contact=contact, gamma=gam_out, contact_moment=cm, gravity=prob_gravity,
-        **equilibrium_fields(prob, res, M),
+        **equilibrium_fields(prob, res, M, stability),
     )
 
 

@@ -455,13 +455,21 @@ class DiscreteEquilibrium:
     success: bool
 
 
-def equilibrium_fields(prob: DiscreteEnergy, res: NewtonResult, M: float) -> dict:
-    """The fields of :class:`DiscreteEquilibrium` for the converged ``res`` of ``prob`` (load ``M``)."""
+def equilibrium_fields(prob: DiscreteEnergy, res: NewtonResult, M: float, stability: str = "value") -> dict:
+    """The fields of :class:`DiscreteEquilibrium` for the converged ``res`` of ``prob`` (load ``M``).
+
+    ``stability``: ``"value"`` the smallest eigenvalue; ``"sign"`` a value of its sign only
+    (``tridiagonal_min_eigenvalue(sign_only=True)``); ``"none"`` NaN (not computed).
+    """
     if prob.constrained:
         N1, N2, a = -res.chi, -M, prob.c_gradient(res.x)
     else:
         N1, N2, a = 0.0, 0.0, None
-    lam = tridiagonal_min_eigenvalue(*prob.lagrange_tridiag(res.x, res.chi if prob.constrained else 0.0), a, prob.metric)
+    if stability == "none":
+        lam = math.nan
+    else:
+        lam = tridiagonal_min_eigenvalue(*prob.lagrange_tridiag(res.x, res.chi if prob.constrained else 0.0), a,
+                                         prob.metric, sign_only=stability == "sign")
     return dict(
         N1=float(N1),
         N2=float(N2),

@@ -133,13 +133,17 @@ def _count_below(diag, off, a, lam: float) -> int:
     return neg + (1 if q > 0 else 0) - 1
 
 
-def tridiagonal_min_eigenvalue(diag: np.ndarray, off: np.ndarray, a: np.ndarray | None = None, weights=None) -> float:
+def tridiagonal_min_eigenvalue(diag: np.ndarray, off: np.ndarray, a: np.ndarray | None = None, weights=None, *,
+                               sign_only: bool = False) -> float:
     """Smallest eigenvalue of a tridiagonal ``H`` or of ``Z^T H Z`` (``Z`` spans ``a``'s complement).
 
     Unconstrained: LAPACK bisection (:func:`scipy.linalg.eigvalsh_tridiagonal`).
     Constrained: bisection on the inertia count of :func:`_count_below`, to the
     absolute accuracy ``~ eps |H|`` that a dense symmetric eigensolver also has.
     O(m) per step, about 60 steps.  ``weights``: the metric, as in :func:`min_eigenvalue`.
+    ``sign_only`` (constrained): stop once zero has left the bracket and return its
+    end on the eigenvalue's side: a value whose sign (``> 0`` or not) is exactly that
+    of the full bisection's result (the bracket only shrinks), not the eigenvalue.
     """
     r = _weighted(weights, diag.size)
     diag, off = diag * r * r, off * r[:-1] * r[1:]
@@ -157,6 +161,8 @@ def tridiagonal_min_eigenvalue(diag: np.ndarray, off: np.ndarray, a: np.ndarray 
     lo -= 1e-12 * span
     hi += 1e-12 * span
     while hi - lo > 4.0 * np.finfo(float).eps * span:
+        if sign_only and (lo > 0.0 or hi <= 0.0):
+            return lo if lo > 0.0 else hi
         mid = 0.5 * (lo + hi)
         if mid <= lo or mid >= hi:
             break
