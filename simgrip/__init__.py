@@ -60,13 +60,16 @@ __all__ = [
 
 def __getattr__(name: str):
     """``from simgrip import elastica``: the BVP module; ``discrete``: the whole reference package
-    (``solve_discrete``, ``solve_chain``, ...); both imported lazily (SciPy)."""
+    (``solve_discrete``, ``solve_chain``, ...); ``modes``: natural frequencies (:mod:`simgrip.modes`, callable
+    as ``simgrip.modes(...)``); all imported lazily (SciPy, MuJoCo)."""
     import importlib
 
     if name == "elastica":
         return importlib.import_module("simgrip.reference.elastica")
     if name == "discrete":
         return importlib.import_module("simgrip.reference")
+    if name == "modes":  # the package, callable: simgrip.modes(grip, params, profile, links, ...)
+        return importlib.import_module("simgrip.modes")
     raise AttributeError(f"module 'simgrip' has no attribute {name!r}")
 
 
