@@ -204,6 +204,8 @@ def _settle(
     """
     if method not in ("newton", "dynamics"):
         raise ValueError(f"method must be 'newton' or 'dynamics', got {method!r}")
+    if isinstance(scene, Scene) and (scene.contact == "full" or contact == "full"):
+        return _settle_full(scene, tol, max_steps, warm_start, close, allow_unconverged, contact)
     if contact is None:
         contact = "point" if method == "newton" else "surface"
     if contact not in ("point", "surface") or (method == "dynamics" and contact != "surface"):
@@ -278,6 +280,37 @@ def _settle(
             # (the cap scales with the stiffness the solve chose for a hard-pressed contact: Newton.stiffen)
             tolerance = max(tolerance, min(run.noise_floor(), RESIDUAL_FLOOR_MAX * run.stiffening))
         state = _finish(scene, state, tolerance, allow_unconverged, "settle", f"{run.iterations} Newton iterations")
+    finally:
+        restore_options(m, saved)
+        d.qfrc_applied[:] = 0.0
+        d.qvel[:] = 0.0
+        sync_scene(scene)
+    return state
+
+
+def _settle_full(scene, tol, max_steps, warm_start, close, allow_unconverged, contact) -> SettledState:
+    """``contact="full"`` (:mod:`.full_contact`): the over-damped dynamics with every contact on, whatever
+    ``method`` (the full-contact Newton is not built); ``tol`` defaults to the dynamics' creep floor."""
+    from simgrip.settle.full_contact import settle_full
+
+    if scene.contact != "full":
+        raise ValueError("contact: 'full' needs a scene built with contact='full' (build_scene(..., contact='full'))")
+    if contact not in (None, "full"):
+        raise ValueError(f"contact: a full-contact scene settles with contact='full', got {contact!r}")
+    if warm_start is not None:
+        raise ValueError("warm_start: not supported with contact='full' (each settle closes from the built start)")
+    if not close:
+        raise ValueError("close: a full-contact settle always closes from the built start")
+    if tol is None:
+        tol = dynamics_tolerance(scene) if scene.has_workpiece else DYN_TOL
+    tol, max_steps = _check_settle_args(scene, tol, 20_000 if max_steps is None else max_steps)
+    t0 = time.perf_counter()
+    m, d = scene.model, scene.data
+    saved = save_options(m)
+    clear_warnings(d)
+    try:
+        state = settle_full(scene, tol, max_steps, allow_unconverged, t0)
+        state = _finish(scene, state, tol, allow_unconverged, "full-contact settle", f"{state.steps} steps")
     finally:
         restore_options(m, saved)
         d.qfrc_applied[:] = 0.0

@@ -115,6 +115,10 @@ class SettledState:
     #: with the contact-law round-off floor (Newton, :meth:`Newton.noise_floor`, capped at
     #: :data:`RESIDUAL_FLOOR_MAX`); the requested ``tol`` for dynamics and contact-free states.
     tolerance: float = math.nan
+    #: Every contact of a finger, one record each (:func:`simgrip.settle.full_contact.contact_set`): filled by the
+    #: full-contact settle (``contact="full"``); None otherwise (the point and surface settles' contacts are
+    #: ``contacts``, one per finger).
+    contact_set: list | None = None
 
     # convenience accessors for finger 0 --------------------------------------
     @property

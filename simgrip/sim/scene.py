@@ -146,6 +146,9 @@ class Scene(FingerScene):
         Radii over ``l``.
     mirror : ndarray (fingers,)
         ``+1`` for the finger along ``+x``, ``-1`` for its mirror.
+    contact : str
+        ``"pairs"`` (explicit contact pairs) or ``"full"`` (every link may touch:
+        :mod:`simgrip.sim.full_contact`; ``contact_geoms`` then holds every link and the tip).
     """
 
     spec: mujoco.MjSpec
@@ -172,6 +175,7 @@ class Scene(FingerScene):
     r_link: float
     r_corner: float
     mirror: np.ndarray
+    contact: str = "pairs"
 
     @property
     def link_body(self) -> np.ndarray:
@@ -272,6 +276,8 @@ def build_scene(
     r_corner: float = DEFAULT_R_CORNER,
     initial_angles=None,
     contact_window: float = 0.35,
+    contact: str | None = None,
+    box_gap: float | None = None,
 ) -> Scene:
     """Build and compile a scene, its fingers at the start shape.
 
@@ -301,12 +307,30 @@ def build_scene(
     contact_window : float
         Grip III: links within this arc length (over ``l``) of the start's
         contact get a contact pair with the corner.
+    contact : {None, "point", "surface", "full"}
+        ``"full"``: every link and the tip may touch the workpiece and every
+        non-adjacent link (:mod:`simgrip.sim.full_contact`; free rod, Grips I and
+        II); the others build the explicit pairs above (which settle then runs is
+        the settle's ``contact``).
+    box_gap : float, optional
+        With ``contact="full"`` (Grips I/II): the gap over ``l`` between the palm
+        plane and the box's near face (default
+        :data:`~simgrip.sim.full_contact.DEFAULT_BOX_GAP`).
 
     Returns
     -------
     Scene
     """
     grip = check_grip(grip)
+    from simgrip.sim.full_contact import DEFAULT_BOX_GAP, check_contact_mode, enable_full_contact, full_box_centre
+
+    mode = check_contact_mode(contact)
+    if mode == "full" and grip == "III":
+        raise ValueError("contact: 'full' is built for the free rod and Grips I/II (Grip III's box would need a "
+                         "top below the palm: not built yet)")
+    if box_gap is not None and mode != "full":
+        raise ValueError("box_gap: only a full-contact scene (contact='full') has a box with a near face")
+    gap = DEFAULT_BOX_GAP if box_gap is None else check_positive("box_gap", box_gap, 1.0)
     dimless, phys = check_params(params)
     prof = as_profile(profile)
     n = check_finger_links(n_links)
@@ -323,10 +347,12 @@ def build_scene(
     place = _placement(grip, q0, springs, dimless, phys, r_tip, r_link, r_corner, contact_window,
                        initial_angles is not None)
 
-    spec = _root(grip, n, phys)
+    spec = _root(grip, n, phys, full=mode == "full")
     L = phys.length
+    if mode == "full" and place is not None:  # a real box: its near face box_gap from the palm
+        place = _Placement(place.half, full_box_centre(grip, gap * L, float(place.half[2])), place.links)
     add_fingers(spec, spec.worldbody, springs, fingers=fingers, length=L, EI=phys.EI, rho=phys.rho,
-                r_link=r_link * L, r_tip=r_tip * L if (grip in ("I", "II") or render) else None)
+                r_link=r_link * L, r_tip=r_tip * L if (grip in ("I", "II") or render or mode == "full") else None)
     joints: tuple = ()
     if place is not None:
         joints = (("z",) if fingers == 1 else ("x", "z", "ry")) if free_workpiece else ()
@@ -337,13 +363,17 @@ def build_scene(
                              mass=inertial_mass(mass, fingers, phys.rho, L), joints=joints, weight_mass=mass)
         if grip == "III":
             _add_corners(spec, body, place.half, fingers, r_corner * L)
-        _add_pairs(spec, grip, fingers, place.links, phys.mu_s)
+        if mode == "pairs":
+            _add_pairs(spec, grip, fingers, place.links, phys.mu_s)
+    if mode == "full":
+        enable_full_contact(spec, [f"f{f}_{g}" for f in range(fingers) for g in [f"geom{i}" for i in range(n)] + ["tip"]],
+                            ["workpiece_box"] if place is not None else [], phys.mu_s)
     if render:
         _dress(spec, grip, L)
 
     model = spec.compile()
     scene = _scene(spec, model, grip, dimless, phys, prof, springs, fingers, free_workpiece, render,
-                   joints, place, r_tip, r_link, r_corner)
+                   joints, place, r_tip, r_link, r_corner, mode)
     set_joint_angles(scene, q0)
     return scene
 
@@ -356,10 +386,11 @@ def root_spec(name: str, g: float) -> mujoco.MjSpec:
     return spec
 
 
-def _root(grip: str, n: int, phys: PhysicalParams) -> mujoco.MjSpec:
-    """The scene's root spec: options and default classes of ``models/defaults.xml``, gravity, contact switch."""
+def _root(grip: str, n: int, phys: PhysicalParams, full: bool = False) -> mujoco.MjSpec:
+    """The scene's root spec: options and default classes of ``models/defaults.xml``, gravity, contact switch
+    (off for the free rod unless ``full``: its links touch each other)."""
     spec = root_spec(f"simgrip_{grip}_{n}", phys.g)
-    if grip == "free":
+    if grip == "free" and not full:
         spec.option.disableflags |= int(mujoco.mjtDisableBit.mjDSBL_CONTACT)
     return spec
 
@@ -419,7 +450,7 @@ def _dress(spec, grip: str, L: float) -> None:
 
 
 def _scene(spec, model, grip, params, phys, profile, springs, fingers, free_workpiece, render, joints, place,
-           r_tip, r_link, r_corner) -> Scene:
+           r_tip, r_link, r_corner, mode="pairs") -> Scene:
     """The :class:`Scene` of a compiled model: addresses looked up once."""
     n = springs.n
     index = index_fingers(model, fingers, n)
@@ -437,6 +468,8 @@ def _scene(spec, model, grip, params, phys, profile, springs, fingers, free_work
     else:
         contact_geoms = [np.zeros(0, int) for _ in range(fingers)]
         wgeoms = np.zeros(0, int)
+    if mode == "full":  # every link and the tip touch
+        contact_geoms = [np.append(index.link_geom[f], index.tip_geom[f]) for f in range(fingers)]
     return Scene(
         spec=spec, model=model, data=mujoco.MjData(model), grip=grip, params=params, physical=phys,
         profile=profile, n=n, fingers=fingers, free_workpiece=bool(free_workpiece), render=bool(render),
@@ -445,7 +478,7 @@ def _scene(spec, model, grip, params, phys, profile, springs, fingers, free_work
         workpiece_qpos=np.array(model.jnt_qposadr[wj], dtype=int), workpiece_dof=np.array(model.jnt_dofadr[wj], dtype=int),
         workpiece_joints=joints, workpiece_geoms=wgeoms,
         box_half=place.half if place else np.zeros(3), r_tip=r_tip, r_link=r_link, r_corner=r_corner,
-        mirror=np.array([1.0, -1.0][:fingers]),
+        mirror=np.array([1.0, -1.0][:fingers]), contact=mode,
     )
 
 

@@ -1,0 +1,333 @@
+"""The settle of a full-contact scene (``contact="full"``, :mod:`simgrip.sim.full_contact`): every link touches.
+
+Over-damped MuJoCo dynamics (:class:`~simgrip.settle.integrator.Dyn`: ``mjINT_DISCRETE`` at ``h =
+1/omega_min``, stiffness-proportional damping) with MuJoCo's own contact and friction on every contact the
+broad phase finds, in three phases:
+
+1. **Closing** (frictionless): from the built start (the straight finger; the box held where it was
+   built, Grips I/II), the rest angles are ramped at most ``r_link`` rad of total rotation per step
+   (:data:`FULL_CLOSE_RATE_PER_RADIUS`: no link moves through another between two steps) with every
+   contact on and ``condim = 1``, then run to rest: the finger
+   curls onto the workpiece and onto itself without a sticking history.
+2. **Release** (friction ``mu_s`` on, ``condim = 3``): the box's holding force fades out over
+   :data:`~simgrip.settle.dynamics.DYN_RELEASE_STEPS` steps and the scene runs to rest.  The box is
+   dropped when it falls :data:`~simgrip.settle.dynamics.DYN_DROP_FALL` (or
+   :data:`~simgrip.settle.dynamics.DYN_DROP_SLIP` out of contact); the finger then settles alone,
+   still touching itself.
+3. **Judge**: MuJoCo's static balance at rest (:class:`~simgrip.settle.statics.RestResidual`, as every
+   settle) below ``tol``, velocities below :data:`~simgrip.settle.dynamics.DYN_VTOL`.
+
+Contact softness: every colliding geom takes the dynamics' pair softness (time constant
+``DYN_TIMECONST h``, impedance :data:`~simgrip.settle.statics.CONTACT_IMPEDANCE`); a state deeper
+than :data:`FULL_PEN_LIMIT` (1e-4 l, ten times inside the issue's 1e-3 l) restarts with half the step,
+which stiffens the contact as ``h^2`` (at rest the depth is ``F d (1 - d) tau^2 A``,
+:func:`simgrip.settle.statics.configure_statics`).  A contact deeper than the capsule's radius has
+tunnelled: restart too.
+"""
+
+from __future__ import annotations
+
+import math
+import time
+
+import mujoco
+import numpy as np
+
+from simgrip.settle.dynamics import (DYN_CLOSE_RATE, DYN_DROP_FALL, DYN_DROP_SLIP, DYN_RELEASE_STEPS, DYN_TIMECONST,
+                                     DYN_VTOL, Dyn)
+from simgrip.settle.state import SettledState, SettleError, read_state
+from simgrip.settle.statics import CONTACT_IMPEDANCE
+from simgrip.sim.full_contact import colliding_geoms
+from simgrip.sim.scene import Scene, set_curvature
+
+__all__ = ["FULL_PEN_LIMIT", "contact_set", "settle_full"]
+
+#: Deepest contact (over l) a full-contact state may keep; deeper restarts at half the step.
+FULL_PEN_LIMIT = 1e-4
+#: Step halvings tried before the settle gives up on penetration.
+FULL_RESTARTS = 3
+#: Largest motion of a finger point in one step, over ``r_link`` (:class:`_Guarded`).
+FULL_STEP_RADII = 1.0
+#: Damping growth of a rejected step, and the largest damping factor tried.
+FULL_GUARD_GROWTH = 4.0
+FULL_GUARD_MAX = 4.0 ** 8
+#: Closing ramp: largest change of the total rest rotation per physics step, over the capsule radius
+#: ``r_link / l`` [rad].  A change ``delta`` of the rest angles moves no point of the over-damped finger by more
+#: than ``delta l`` in one step (each hinge's change turns the rest of the finger, arm <= l; the step follows its
+#: rest shape at most: :class:`Dyn` is over-damped at ``h = 1/omega_min``), so a link moves at most ``r_link``
+#: per step: half the capsules' contact distance ``2 r_link``, never through another link between two steps.
+FULL_CLOSE_RATE_PER_RADIUS = 1.0
+
+
+def settle_full(scene: Scene, tol: float, max_steps: int, allow_unconverged: bool, t0: float) -> SettledState:
+    """Settle a full-contact scene from its built start (see the module docstring); restarts at ``h/2`` while
+    the deepest contact exceeds :data:`FULL_PEN_LIMIT` or one tunnels.  ``max_steps`` bounds the physics steps
+    of all attempts together; raises :class:`SettleError` when the budget is spent (unless
+    ``allow_unconverged``)."""
+    m, d = scene.model, scene.data
+    if scene.contact != "full":
+        raise ValueError("contact: settle_full needs a scene built with contact='full'")
+    q0 = d.qpos.copy()
+    saved = _save_geoms(m)
+    steps = calls = 0
+    factor = 1.0
+    state = None
+    try:
+        for attempt in range(FULL_RESTARTS + 1):
+            d.qpos[:] = q0
+            d.qvel[:] = 0.0
+            d.qfrc_applied[:] = 0.0
+            _restore_geoms(m, saved)
+            mujoco.mj_forward(m, d)
+            state, deep = _once(scene, tol, max_steps - steps, factor, t0)
+            steps += state.steps
+            calls += state.forward_calls
+            if not deep or steps >= max_steps or attempt == FULL_RESTARTS:
+                break
+            factor *= 0.5
+        state.steps, state.forward_calls = steps, calls
+        if deep:
+            state.converged = False
+            state.warnings.append(f"full contact: a contact stayed deeper than {FULL_PEN_LIMIT:g} l down to the "
+                                  f"step h/{round(1 / factor)}")
+        if not state.converged and not allow_unconverged:
+            raise SettleError(f"full-contact settle did not converge (residual {state.residual:.3g}, "
+                              f"{steps} steps)")
+        state.contact_set = contact_set(scene)
+    finally:
+        _restore_geoms(m, saved)
+    return state
+
+
+def _once(scene: Scene, tol: float, budget: int, factor: float, t0: float) -> tuple[SettledState, bool]:
+    """One settle at ``factor`` h: ``(state, too_deep)``."""
+    m, d = scene.model, scene.data
+    dyn = Dyn(scene, factor)
+    gs = colliding_geoms(m)
+    m.geom_solref[gs] = [DYN_TIMECONST * dyn.h, 1.0]
+    m.geom_solimp[gs, 0] = CONTACT_IMPEDANCE
+    m.geom_solimp[gs, 1] = CONTACT_IMPEDANCE
+    limit = FULL_PEN_LIMIT * scene.length
+    tunnel = scene.r_link * scene.length
+    guard = _Guarded(scene, dyn)
+    held = scene.has_workpiece
+    if held:
+        dyn.hold(True)
+    # 1. closing, frictionless
+    target = scene.profile
+    rest = scene.springs.rest.copy()
+    m.geom_condim[gs] = 1
+    try:
+        rate = min(DYN_CLOSE_RATE, FULL_CLOSE_RATE_PER_RADIUS * scene.r_link)
+        stages = max(1, math.ceil(float(np.sum(np.abs(rest))) / rate))
+        for i in range(1, stages + 1):
+            if dyn.steps >= budget:
+                break
+            m.qpos_spring[scene.joint_qpos] = (rest * (i / stages))[None, :]
+            guard.step()
+            if _deepest(d) > tunnel:
+                return _read(scene, dyn, t0, held, False), True
+        converged, why = guard.run(max(tol, 1e-8), budget)
+    finally:
+        set_curvature(scene, target)
+        m.geom_condim[gs] = 3
+    if not converged:
+        return _read(scene, dyn, t0, held, False), _deepest(d) > limit
+    # 2. release with friction
+    if held and not _touching(scene):
+        held = False
+    if held:
+        wz = [dof for name, dof in zip(scene.workpiece_joints, scene.workpiece_dof) if name == "z"]
+        weight = scene.workpiece_mass * scene.physical.g
+        z0 = float(d.xpos[scene.workpiece_body][2])
+        dyn.held_q = None
+        for i in range(1, DYN_RELEASE_STEPS + 1):
+            if dyn.steps >= budget:
+                break
+            d.qfrc_applied[wz] = weight * (1.0 - i / DYN_RELEASE_STEPS)
+            guard.step()
+        dyn.hold(False)
+
+        def watch():
+            drop = (z0 - float(d.xpos[scene.workpiece_body][2])) / scene.length
+            if drop > DYN_DROP_FALL or (drop > DYN_DROP_SLIP and not _touching(scene)):
+                return "lost contact"
+            if _deepest(d) > tunnel:
+                return "tunnelled"
+            return None
+
+        converged, why = guard.run(tol, budget, watch)
+        if why == "tunnelled":
+            return _read(scene, dyn, t0, held, False), True
+        if why == "lost contact" or (converged and not _touching(scene)):
+            held, converged = False, True
+    if not held and scene.has_workpiece:
+        # park the workpiece (held, out of contact): the finger settles alone, touching itself
+        dyn.hold(True)
+        for g in scene.workpiece_geoms:
+            m.geom_contype[g] = m.geom_conaffinity[g] = 0
+        converged, why = guard.run(tol, budget)
+    elif not scene.has_workpiece:
+        converged, why = guard.run(tol, budget)
+    state = _read(scene, dyn, t0, held, converged)
+    return state, state.penetration > FULL_PEN_LIMIT or _deepest(d) > limit
+
+
+class _Guarded:
+    """Steps of :class:`Dyn` that move no point of a finger by more than ``r_link`` (:data:`FULL_STEP_RADII`).
+
+    A node of a finger moves at most ``l sum_j |dq_j|`` in a step (node ``k`` is ``sum_{i<k} ds (cos phi_i,
+    sin phi_i)``, ``|d phi_i| <= sum_{j<=i} |dq_j|``), the workpiece by its own translation.  A step above the
+    bound (a snap-through: the over-damped flow jumps most of the way to the next equilibrium in one step) is
+    undone and retried with the damping times :data:`FULL_GUARD_GROWTH` (Dyn's ``factor``), which slows the flow
+    as ``1 / factor``; the factor halves again after each accepted step.  Two capsules ``2 r_link`` apart at a
+    step's start therefore meet before their axes cross: no link passes through another.
+    """
+
+    def __init__(self, scene: Scene, dyn: Dyn):
+        self.scene, self.dyn = scene, dyn
+        self.limit = FULL_STEP_RADII * scene.r_link * scene.length
+        self.q = np.asarray(scene.joint_qpos)
+        self.wq = np.asarray(scene.workpiece_qpos, dtype=int)
+        self.wt = np.array([name != "ry" for name in scene.workpiece_joints], dtype=bool)
+        self.rejected = 0
+
+    def _moved(self, q0) -> float:
+        d, L = self.dyn.d, self.scene.length
+        dq = np.abs(d.qpos[self.q] - q0[self.q]).sum(axis=1).max() * L
+        if self.wq.size:
+            dq += float(np.abs(d.qpos[self.wq] - q0[self.wq])[self.wt].sum()) if self.wt.any() else 0.0
+        return float(dq)
+
+    def step(self) -> None:
+        """One accepted physics step (retried with more damping while it moves too far)."""
+        dyn, d = self.dyn, self.dyn.d
+        q0, v0, t0 = d.qpos.copy(), d.qvel.copy(), d.time
+        while True:
+            dyn.step()
+            if self._moved(q0) <= self.limit or dyn.factor >= FULL_GUARD_MAX:
+                break
+            d.qpos[:], d.qvel[:], d.time = q0, v0, t0
+            self.rejected += 1
+            dyn.factor *= FULL_GUARD_GROWTH
+        if dyn.factor > 1.0:
+            dyn.factor = max(1.0, 0.5 * dyn.factor)
+
+    def run(self, tol: float, budget: int, watch=None) -> tuple[bool, str]:
+        """Step until the velocity is below ``DYN_VTOL`` and MuJoCo's static residual below ``tol``
+        (:func:`~simgrip.settle.integrator.run_to_rest`'s test, one guarded step at a time)."""
+        dyn = self.dyn
+        while True:
+            if dyn.velocity() < DYN_VTOL:
+                r = dyn.residual()
+                if not math.isfinite(r):
+                    raise SettleError("full-contact settle diverged (non-finite residual)")
+                if r < tol:
+                    return True, "ok"
+            if watch is not None:
+                why = watch()
+                if why:
+                    return False, why
+            if dyn.steps >= budget:
+                return False, "max_steps"
+            self.step()
+
+
+def _read(scene: Scene, dyn: Dyn, t0: float, held: bool, converged: bool) -> SettledState:
+    """The settled state at rest, MuJoCo's own contact forces (as :func:`~simgrip.settle.dynamics.read_dynamics`)."""
+    m, d = scene.model, scene.data
+    residual = dyn.residual()
+    vmax = dyn.velocity()
+    d.qvel[:] = 0.0
+    mujoco.mj_forward(m, d)
+    state = read_state(scene, d, held=held, method="dynamics", residual=residual, converged=converged,
+                       steps=dyn.steps, newton_iterations=0, forward_calls=dyn.calls,
+                       wall_time_s=time.perf_counter() - t0, velocity=vmax, timestep=dyn.h)
+    state.penetration = max(state.penetration, _deepest(d) / scene.length)
+    return state
+
+
+def _touching(scene: Scene) -> bool:
+    """Whether any finger geom touches a workpiece geom."""
+    d = scene.data
+    wg = set(int(g) for g in scene.workpiece_geoms)
+    return any(int(d.contact.geom1[i]) in wg or int(d.contact.geom2[i]) in wg for i in range(d.ncon))
+
+
+def _deepest(d) -> float:
+    """Deepest penetration [m] among the active contacts (0 without)."""
+    return max((-float(d.contact.dist[i]) for i in range(d.ncon)), default=0.0)
+
+
+def _save_geoms(m):
+    return (m.geom_solref.copy(), m.geom_solimp.copy(), m.geom_condim.copy(), m.geom_contype.copy(),
+            m.geom_conaffinity.copy())
+
+
+def _restore_geoms(m, saved) -> None:
+    m.geom_solref[:], m.geom_solimp[:], m.geom_condim[:], m.geom_contype[:], m.geom_conaffinity[:] = saved
+
+
+def contact_set(scene) -> list[dict]:
+    """Every active contact of a finger in ``scene.data`` (dimensionless, each finger in its own frame).
+
+    One record per MuJoCo contact that involves a finger geom: ``finger``, ``link`` (0-based; ``n - 1`` for
+    the tip sphere, whose ``geom`` is ``"tip"``), ``arc_length`` (over ``l``: where the contact's point
+    projects onto that link's centreline), ``with`` (``"workpiece"``, ``"self"`` or ``"finger K"``; a
+    self contact also gives ``other_link`` and ``other_arc_length``), ``point`` (the contact point, ``[x,
+    z]`` over ``l``), ``normal`` (unit, the direction of the force on this finger), ``normal_force`` (>= 0)
+    and ``friction_force`` (signed along the tangent ``(-normal_z, normal_x)`` in the plane; over
+    ``rho g l``) and ``depth`` (penetration over ``l``).  A self contact is one record (the first link's).
+    """
+    m, d = scene.model, scene.data
+    L, W, n = scene.length, scene.force_scale, scene.n
+    idx = scene.index
+    link_of = {}
+    for f in range(scene.fingers):
+        for i, g in enumerate(idx.link_geom[f]):
+            link_of[int(g)] = (f, i, "link")
+        if idx.tip_geom[f] >= 0:
+            link_of[int(idx.tip_geom[f])] = (f, n - 1, "tip")
+    out = []
+    fc = np.zeros(6)
+    for c in range(d.ncon):
+        g1, g2 = int(d.contact.geom1[c]), int(d.contact.geom2[c])
+        a, b = link_of.get(g1), link_of.get(g2)
+        if a is None and b is None:
+            continue
+        mujoco.mj_contactForce(m, d, c, fc)
+        frame = np.asarray(d.contact.frame[c]).reshape(3, 3)
+        world = frame.T @ fc[:3]  # force on geom2 (the frame's normal points from geom1 to geom2)
+        mine, other, force = (a, b, -world) if a is not None else (b, a, world)
+        f, i, kind = mine
+        mir = scene.mirror[f]
+        p = np.asarray(d.contact.pos[c])
+        normal_w = frame[0] * (-1.0 if a is not None else 1.0)  # pushes this finger's geom away
+        nv = np.array([mir * normal_w[0], normal_w[2]])
+        nv /= max(float(np.linalg.norm(nv)), 1e-300)
+        F2 = np.array([mir * force[0], force[2]]) / W
+        tang = np.array([-nv[1], nv[0]])
+        rec = {
+            "finger": int(f), "link": int(i), "geom": kind,
+            "arc_length": _arc(d, idx, f, i, p, L, n),
+            "with": "workpiece" if other is None else ("self" if other[0] == f else f"finger {other[0]}"),
+            "point": [float(mir * p[0] / L), float(p[2] / L)],
+            "normal": [float(nv[0]), float(nv[1])],
+            "normal_force": float(fc[0] / W),
+            "friction_force": float(F2 @ tang),
+            "depth": float(max(0.0, -float(d.contact.dist[c])) / L),
+        }
+        if other is not None and other[0] == f:
+            rec["other_link"] = int(other[1])
+            rec["other_arc_length"] = _arc(d, idx, f, other[1], p, L, n)
+        out.append(rec)
+    return out
+
+
+def _arc(d, idx, f: int, i: int, p, L: float, n: int) -> float:
+    """Arc length over ``l`` of the point of link ``i`` of finger ``f`` nearest the world point ``p``."""
+    b = int(idx.link_body[f][i])
+    o = np.asarray(d.xpos[b])
+    t = np.asarray(d.xmat[b]).reshape(3, 3)[:, 0]
+    u = float(np.clip(np.dot(np.asarray(p) - o, t) / L, 0.0, 1.0 / n))
+    return float(i / n + u)
