@@ -61,7 +61,10 @@ class PickMultiEnv(gym.Env):
     ``simgrip/Pick-v1`` (:class:`simgrip.envs.pick.PickEnv`: same defaults,
     time step, frame skip, damping, armature, elliptic cones, condim-4 tip and
     link contacts, palm servo); a MuJoCo warning or a non-finite state raises
-    :class:`simgrip.sim.checks.PhysicsError`.
+    :class:`simgrip.sim.checks.PhysicsError`.  Dynamics: the finger's
+    first mode is ``Pick-v1``'s (7.66 Hz, zeta = 0.479; its higher modes
+    overdamped); with ``K = 3`` the fingers in phase, carrying the palm servo,
+    have 7.60 Hz and zeta = 0.474 (``tests/test_finger_damping.py``).
 
     ## Workpieces (randomised per episode, seeded by ``reset(seed=...)``)
 
