@@ -138,6 +138,11 @@ class ChainModel:
         self.first[::nl] = True
         self.last = np.zeros(n, bool)
         self.last[nl - 1::nl] = True
+        # the next hinge's stiffness (0 beyond a finger's last link) and the springs' diagonal, once per settle
+        self._k_next = np.zeros(n)
+        self._k_next[:-1] = self.k[1:]
+        self._k_next[self.last] = 0.0
+        self._k_diag = -(self.k + self._k_next)
         self.wnames = tuple(scene.workpiece_joints)
         self.nw = len(self.wnames)
         self.wq = np.asarray(scene.workpiece_qpos, int)
@@ -209,12 +214,17 @@ class ChainModel:
     # -- internal forces --------------------------------------------------------
     def internal(self, phi) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         """Spring and gravity force on the link angles, and its tridiagonal Jacobian (diag, off; 0 between fingers)."""
-        q = np.where(self.first, phi, phi - np.roll(phi, 1))
+        phi = np.asarray(phi, dtype=float)
+        q = phi.copy()  # joint angles: phi_i - phi_(i-1) within a finger, phi_i at its first link
+        q[1:] -= phi[:-1]
+        q[self.first] = phi[self.first]
         s = self.k * (q - self.m.qpos_spring[self.jq])  # read each time: the rest angles are edited
-        sn = np.where(self.last, 0.0, np.roll(s, -1))
-        kk = np.where(self.last, 0.0, np.roll(self.k, -1))
+        sn = np.zeros_like(s)  # the next hinge's moment, 0 beyond a finger's last link
+        sn[:-1] = s[1:]
+        sn[self.last] = 0.0
+        kk = self._k_next
         F = sn - s - self.c * np.cos(phi)
-        diag = -(self.k + kk) + self.c * np.sin(phi)
+        diag = self._k_diag + self.c * np.sin(phi)
         off = kk[:-1].copy()
         return F, diag, off
 
@@ -269,7 +279,11 @@ class ChainModel:
         """Global index of link ``i`` of finger ``f`` and its predecessors' normals and tangents."""
         g0 = f * self.nl
         ph = phi[g0:g0 + i]
-        return g0, np.stack([-np.sin(ph), np.cos(ph)], 1), np.stack([np.cos(ph), np.sin(ph)], 1)
+        cs, sn = np.cos(ph), np.sin(ph)  # (each once: a Newton iteration builds several terms)
+        nk, tk = np.empty((ph.size, 2)), np.empty((ph.size, 2))
+        nk[:, 0], nk[:, 1] = -sn, cs
+        tk[:, 0], tk[:, 1] = cs, sn
+        return g0, nk, tk
 
     def dot_term(self, phi, nodes, f, i, p, c_loc, y, v_loc, kind: str) -> Term:
         """``f = v . (p - c)``: ``p`` on link ``i`` of finger ``f``, ``c = O + R(alpha) c_loc`` on the workpiece.
@@ -305,7 +319,7 @@ class ChainModel:
             U[n:, 2] = da
             S = np.array([[0.0, 1.0, 0.0], [1.0, 0.0, 0.0], [0.0, 0.0, float(v @ Rc)]])
             return Term(value, grad, diag, U, S)
-        if not np.any(da):
+        if not da.any():
             return Term(value, grad, diag, np.zeros((n + nw, 0)), np.zeros((0, 0)))
         grad[n:] += da * float(pv @ (p - c))
         U = np.zeros((n + nw, 2))

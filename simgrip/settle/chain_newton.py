@@ -67,6 +67,7 @@ class ChainNewton(Newton):
             cons = pair_contacts(sd, *self.pairs[p])
             if cons:
                 self.dist_shift[p] = min(float(sd.contact.dist[c]) for c in cons) / self.scene.length - da[p]
+        self._kc_at = self._kc_key(q)  # (the distances' round-off too: Newton.solve skips a second read at q)
         return moved
 
     # -- MuJoCo's balance without the O(n^3) mass matrix when there is no contact ------------
@@ -135,6 +136,12 @@ class ChainNewton(Newton):
         R = np.concatenate([cm.to_q(F), Fw, gn, gs])
         if not with_jacobian:
             return R, None
+        # the Jacobian is assembled only when a step is taken (a converged state needs none)
+        return R, lambda: self._jacobian(n, nw, diag, off, coef, pterms, sterms, slide, stick_act, act, F, Fw, gn, gs)
+
+    def _jacobian(self, n, nw, diag, off, coef, pterms, sterms, slide, stick_act, act, F, Fw, gn, gs):
+        """The bordered Jacobian of :meth:`_system` from its terms (``solve_bordered``'s arguments)."""
+        yf = self.yf
         # border: [free workpiece dofs (nw), aux z (sum of ranks), N (len act), lambda (len stick_act)]
         for t, c in coef:
             diag = diag + c * t.diag
@@ -177,7 +184,7 @@ class ChainNewton(Newton):
         rhs_b[:nw] = -Fw
         rhs_b[nw + nz:nw + nz + nn] = -gn
         rhs_b[nw + nz + nn:] = -gs
-        return R, (diag, off, P, Q, E, rhs_phi, rhs_b, nz)
+        return diag, off, P, Q, E, rhs_phi, rhs_b, nz
 
     def _step(self, jac):
         diag, off, P, Q, E, r1, r2, nz = jac
@@ -230,17 +237,19 @@ class ChainNewton(Newton):
         while True:
             if self.sticks:
                 self._reanchor(state_q(phi, w))
-            R, jac = self._system(phi, w, N, lam, stick_act, True)
+            R, jacobian = self._system(phi, w, N, lam, stick_act, True)
             if not np.all(np.isfinite(R)):
                 raise SettleError("settle diverged (non-finite residual)")
             scale = np.concatenate([np.ones(nf), self._row_scale(len(N), len(stick_act))])  # rows in force units
             res = float(np.max(np.abs(R * scale))) if R.size else 0.0
             res_f = float(np.max(np.abs(R[:nf])))
             res_c = float(np.max(np.abs(R[nf:] * self._row_scale(len(N), len(stick_act))))) if R.size > nf else 0.0
-            if res_f < max(tol, angle_floor(sc, state_q(phi, w))) and res_c < max(tol, self.noise_floor()):
+            # (r < max(tol, floor), the floor evaluated only where tol alone does not decide)
+            if (res_f < tol or res_f < angle_floor(sc, state_q(phi, w))) and (
+                    res_c < tol or res_c < self.noise_floor()):
                 # the analytic contact rows resolve ~1 ulp of K_c l, far below MuJoCo's distance
                 # round-off (the floor): one more step when they are above a few ulps and improving
-                if polished or res_c < max(tol, CHAIN_FLOOR_ULPS / FLOOR_ULPS * self.noise_floor()):
+                if polished or res_c < tol or res_c < CHAIN_FLOOR_ULPS / FLOOR_ULPS * self.noise_floor():
                     break
                 polished = True
             if contacts and self.yf.size and not self.normal_active and np.any(cm.workpiece_force()[self.yf] != 0.0):
@@ -252,7 +261,7 @@ class ChainNewton(Newton):
                 return finish(False, "max_iter", state_q(phi, w), N, lam)
             self.iterations += 1
             try:
-                dphi, dw, dN, dl = self._step(jac)
+                dphi, dw, dN, dl = self._step(jacobian())
             except (np.linalg.LinAlgError, ValueError):
                 if polished:
                     break

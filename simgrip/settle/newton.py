@@ -185,7 +185,7 @@ class Newton:
                     changed = True
             if not changed and self.stiffen(self.N):
                 changed = True  # the contact pressed deeper than PEN_STIFFEN: solve again, stiffer
-            if not changed and self._update_kc(q):
+            if not changed and not self._kc_current(q) and self._update_kc(q):
                 changed = True
             if not changed:
                 self._commit(q)
@@ -295,9 +295,27 @@ class Newton:
         self.scene.model.pair_solref[:] = solref
         self.stiffening = float(np.max(self.kc_factor)) if self.kc_factor.size else 1.0
 
+    def _kc_key(self, q) -> tuple:
+        """Everything a read of ``K_c`` at ``q`` (:meth:`_update_kc`) depends on: the state, the contact
+        set, the stiffness it leaves and the model's contact and workpiece parameters."""
+        m = self.scene.model
+        return (np.array(q), list(self.normal_active), self.kc.copy(), m.pair_solref.copy(), m.pair_solimp.copy(),
+                m.pair_friction.copy(), m.body_pos.copy(), int(m.opt.disableflags))
+
+    def _kc_current(self, q) -> bool:
+        """``K_c`` was read at exactly this ``q`` and nothing it depends on changed since: a second read
+        (one ``mj_inverse``) would find the same stiffness and report no move."""
+        key = getattr(self, "_kc_at", None)
+        if key is None:
+            return False
+        now = self._kc_key(q)
+        return (key[1] == now[1] and key[7] == now[7]
+                and all(np.array_equal(a, b) for a, b in zip(key[:7], now[:7]) if not isinstance(a, list)))
+
     def _update_kc(self, q) -> bool:
         """Read MuJoCo's contact stiffness at ``q``; True if it moved enough to matter."""
         m, sd = self.scene.model, self.st.d
+        self._kc_at = None
         self.st.forces(q)
         moved = False
         for k, p in enumerate(self.normal_active):
@@ -311,6 +329,7 @@ class Newton:
                 if abs(kc - self.kc[p]) > KC_RTOL * kc:
                     moved = moved or abs(kc - self.kc[p]) * pen > 0.1 * self.noise_floor() * self.scene.force_scale
                     self.kc[p] = kc
+        self._kc_at = self._kc_key(q)
         return moved
 
     def _newton(self, q, idx, tol, max_iter, contacts):
@@ -422,7 +441,8 @@ class Newton:
 
 def read_newton(scene: Scene, run: Newton, t0: float, held: bool, converged: bool) -> SettledState:
     """The settled state of the static solve: MuJoCo's contacts plus the sticking friction forces."""
-    sync_scene(scene)
+    if run.st.d is not scene.data:
+        sync_scene(scene)  # (on the scene's own data the judge's call below brings it to the state)
     fric = run.friction_forces() if (run.sticks and held) else np.zeros(0)
     if not held:
         run.sticks, run.sliding = [], {}
