@@ -1,0 +1,517 @@
+"""Compile once, set in place: a bounded cache of compiled scenes, keyed on their structure.
+
+MuJoCo's compile of a serial chain is costly (``mj_setConst`` solves with the
+dense joint-space inertia of the chain: ~35 ms at 256 links, ten times the
+settle), and every design point of a sweep used to pay it.  Here a scene of a
+given *structure* is compiled once; the next point of the same structure
+gets the cached scene with its parameters written into the compiled model in
+place:
+
+* hinge stiffness ``(EI/l) * springs.stiffness`` (``D``) and rest angles
+  (``qpos_spring``, the profile ``kappa0(s)``), per finger;
+* the links' masses and inertias (``rho``); the workpiece's mass, inertia,
+  gravity compensation (``M``), size and position (``b``, ``gamma``, the start
+  shape);
+* the contact pairs' friction (``mu_s``) and the gravity (``g``);
+* then ``mujoco.mj_setConst`` where an input of it changed (masses, inertias,
+  sizes, the workpiece's placement: ``body_subtreemass``, ``*_invweight0``,
+  ``dof_M0``, ``geom_rbound``, ``geom_aabb``) and the compiler's statistics
+  (``stat``, ``dof_length``: ``mj_setConst`` leaves them, :func:`_set_stat`
+  sums them in the compiler's order); kept otherwise (a curvature or
+  stiffness sweep never pays it);
+* the data reset (``mj_resetData``) and the start angles set as the fresh
+  build sets them.
+
+The result is **bit-identical** to a fresh build (every array of the model
+and the settled state: ``tests/test_scene_reuse.py``).  Whatever a settle
+changed in the model (time step, damping, ``solref``: the settles write
+them) is restored from a pristine copy taken when the entry was last set.
+
+Structure (the key): the builder, the grip, links, fingers, every other
+keyword of the builder (bound to its signature with defaults, so a keyword
+added later, e.g. a contact mode, enters the key without a change here),
+the finger length ``l`` (it scales every geom), and what the parameters
+decide about the model's elements: the Grip III links paired with the
+corner (``contact_window`` around the start's contact) and, for the K-finger
+cradle, the box's placement (its corner capsules' frames are compiled from
+``fromto``).  ``initial_angles`` is a value, not structure.
+
+Ownership and safety.  The cache is bounded (:data:`CACHE_SIZE` scenes per
+thread, least recently used dropped).  A scene handed out is **owned by the
+cache**: it is valid until the next call for the same structure in the same
+thread, which resets and rewrites it; callers settle it and read the state
+(a :class:`~simgrip.settle.SettledState` holds copies, not the scene), or
+use :func:`simgrip.scenes.build_scene` for a scene of their own.  Each
+thread has its own cache (``threading.local``; no lock needed, no scene
+shared between threads); each process (a Dask worker, a ``multiprocessing``
+child) has its own too.  :func:`clear` empties the calling thread's cache.
+"""
+
+from __future__ import annotations
+
+import copy
+import inspect
+import math
+import threading
+from collections import OrderedDict
+
+import mujoco
+import numpy as np
+
+from simgrip.chain import chain_springs
+from simgrip.params import check_grip, check_grip_iii_reach
+from simgrip.profiles import as_profile
+
+__all__ = ["CACHE_SIZE", "build_gripper", "build_scene", "cache_info", "clear", "scene"]
+
+#: Compiled scenes kept per thread (least recently used dropped first).  A sweep, a figure or a stress run
+#: uses one or a few structures at a time; 8 keeps them all at a few MB (a 256-link scene is ~1 MB).
+CACHE_SIZE = 8
+
+_local = threading.local()
+
+
+class _Entry:
+    """A cached scene, the pristine model its parameters were last set into, and the inputs of ``mj_setConst``."""
+
+    __slots__ = ("scene", "template", "const_inputs", "fields")
+
+    def __init__(self, scene, const_inputs):
+        self.scene = scene
+        self.const_inputs = const_inputs
+        self.snapshot()
+
+    def snapshot(self) -> None:
+        """Take the model as it is now (freshly set, not yet settled) as the one to restore."""
+        m = self.scene.model
+        self.template = copy.copy(m)
+        self.fields = [(getattr(m, k), getattr(self.template, k)) for k in _array_fields(m)]
+
+    def restore(self) -> None:
+        """Undo whatever was written into the model since :meth:`snapshot` (the settles' options, damping...)."""
+        for dst, src in self.fields:
+            np.copyto(dst, src)
+        m, t = self.scene.model, self.template
+        for name in _OPTION_FIELDS:
+            setattr(m.opt, name, getattr(t.opt, name))
+        for name in ("center", "extent", "meaninertia", "meanmass", "meansize"):
+            setattr(m.stat, name, getattr(t.stat, name))
+
+
+_OPTION_FIELDS = tuple(k for k in dir(mujoco.MjOption) if not k.startswith("_"))
+
+
+def _array_fields(m: mujoco.MjModel) -> list:
+    """Names of the model's writable, non-empty array fields."""
+    out = []
+    for k in dir(m):
+        if k.startswith("_"):
+            continue
+        try:
+            v = getattr(m, k)
+        except Exception:  # pragma: no cover - a property MuJoCo refuses to read
+            continue
+        if isinstance(v, np.ndarray) and v.size and v.flags.writeable:
+            out.append(k)
+    return out
+
+
+def _cache() -> OrderedDict:
+    c = getattr(_local, "cache", None)
+    if c is None:
+        c = _local.cache = OrderedDict()
+        _local.hits = _local.misses = 0
+    return c
+
+
+def clear() -> None:
+    """Empty the calling thread's cache."""
+    _cache().clear()
+    _local.hits = _local.misses = 0
+
+
+def cache_info() -> dict:
+    """``{"size", "max_size", "hits", "misses"}`` of the calling thread's cache."""
+    c = _cache()
+    return {"size": len(c), "max_size": CACHE_SIZE, "hits": _local.hits, "misses": _local.misses}
+
+
+def _lookup(key):
+    c = _cache()
+    e = c.get(key)
+    if e is not None:
+        c.move_to_end(key)
+        _local.hits += 1
+    else:
+        _local.misses += 1
+    return e
+
+
+def _store(key, entry) -> None:
+    c = _cache()
+    c[key] = entry
+    c.move_to_end(key)
+    while len(c) > CACHE_SIZE:
+        c.popitem(last=False)
+
+
+def _freeze(v):
+    """A hashable, bit-exact stand-in for a keyword's value (``-0.0`` and ``0.0`` differ)."""
+    if isinstance(v, bool) or v is None or isinstance(v, (int, str)):
+        return v
+    if isinstance(v, float):
+        return ("f", v.hex())
+    if isinstance(v, np.ndarray) or isinstance(v, (list, tuple)):
+        a = np.asarray(v, dtype=float)
+        return ("a", a.shape, a.tobytes())
+    return ("r", type(v).__name__, repr(v))
+
+
+def _structure(builder, args: tuple, kw: dict, skip: tuple) -> tuple:
+    """The keywords of ``builder`` (defaults applied) but the parameter-valued ones, frozen."""
+    bound = inspect.signature(builder).bind(*args, **kw)
+    bound.apply_defaults()
+    return tuple((k, _freeze(v)) for k, v in bound.arguments.items() if k not in skip)
+
+
+def _set_links(m, index, springs_list, EI: float, rho: float, length: float, r_link: float) -> None:
+    """Hinge stiffness and rest angles of every finger; the links' masses and inertias (as ``add_fingers``)."""
+    n = index.n
+    ds = length / n
+    mass = rho * ds
+    inertia_perp = mass * (ds**2 / 12.0 + r_link**2 / 4.0)
+    inertia_axis = 0.5 * mass * r_link**2
+    jnt = m.dof_jntid[index.joint_dof]
+    for f, springs in enumerate(springs_list):
+        m.jnt_stiffness[jnt[f]] = (EI / length) * springs.stiffness
+        m.qpos_spring[index.joint_qpos[f]] = springs.rest
+    m.body_mass[index.link_body] = mass
+    m.body_inertia[index.link_body] = [inertia_axis, inertia_perp, inertia_perp]
+
+
+def _dist(a, b) -> np.ndarray:
+    """Row-wise distance of points ``a`` and ``b`` as ``mju_dist3`` sums it."""
+    dx = a - b
+    return np.sqrt(dx[..., 0] * dx[..., 0] + dx[..., 1] * dx[..., 1] + dx[..., 2] * dx[..., 2])
+
+
+def _set_stat(m: mujoco.MjModel, d: mujoco.MjData, keep_frame: bool) -> None:
+    """The compiler's statistics (``stat``, ``dof_length``) at ``qpos0``, summed in the compiler's order.
+
+    ``mj_setConst`` leaves them; the compiler computes them from the bounding box of the bodies, joint anchors,
+    sites and geoms, the bodies' sizes, the masses and the diagonal of the joint-space inertia.
+    ``keep_frame``: ``center`` and ``extent`` were given in the spec (the rendering dressing), keep them.
+    """
+    d.qpos[:] = m.qpos0
+    mujoco.mj_kinematics(m, d)
+    mujoco.mj_comPos(m, d)
+    mujoco.mj_crb(m, d)
+    nb = m.nbody
+    if np.any(m.geom_type == mujoco.mjtGeom.mjGEOM_HFIELD):  # pragma: no cover - no scene has one
+        raise ValueError("scene reuse: a height field's bound needs the compiler")
+    s0, s1 = m.geom_size[:, 0], m.geom_size[:, 1]
+    plane = np.where((s0 != 0) | (s1 != 0), np.maximum(s0, s1) * 0.1, 0.01)
+    r = np.where(m.geom_rbound > 0, m.geom_rbound, np.where(m.geom_type == mujoco.mjtGeom.mjGEOM_PLANE, plane, 0.0))
+    lo = [d.xpos[1:], d.xipos[1:], d.xanchor, d.site_xpos, d.geom_xpos - r[:, None]]
+    hi = [d.xpos[1:], d.xipos[1:], d.xanchor, d.site_xpos, d.geom_xpos + r[:, None]]
+    xmin = np.minimum(np.min(np.vstack(lo), axis=0), 1e10)
+    xmax = np.maximum(np.max(np.vstack(hi), axis=0), -1e10)
+    extent = float(m.stat.extent)
+    if not keep_frame:
+        m.stat.center = (xmin + xmax) * 0.5
+        if xmax[0] > xmin[0]:
+            extent = max(1e-5, max(xmax[0] - xmin[0], max(xmax[1] - xmin[1], xmax[2] - xmin[2])))
+    body = np.zeros(nb)
+    jb = m.jnt_bodyid
+    dj = _dist(d.xipos[jb], d.xanchor)
+    np.maximum.at(body, jb, dj)
+    pb = m.body_parentid[jb]
+    np.maximum.at(body, pb, _dist(d.xipos[pb], d.xanchor))
+    body[0] = 0.0
+    gb = m.geom_bodyid
+    has = (m.geom_rbound > 0) & (gb > 0)
+    np.maximum.at(body, gb[has], m.geom_rbound[has] + _dist(d.xipos[gb[has]], d.geom_xpos[has]))
+    if nb > 1:
+        body[1:] = np.maximum(body[1:], 1e-5)
+        m.stat.meansize = float(np.cumsum(body[1:] / (nb - 1))[-1])
+        m.stat.meanmass = float(np.cumsum(m.body_mass[1:])[-1]) / (nb - 1)
+    rot = np.isin(m.jnt_type[m.dof_jntid], (mujoco.mjtJoint.mjJNT_BALL, mujoco.mjtJoint.mjJNT_HINGE)) | (
+        (m.jnt_type[m.dof_jntid] == mujoco.mjtJoint.mjJNT_FREE) & (np.arange(m.nv) - m.jnt_dofadr[m.dof_jntid] >= 3))
+    m.dof_length[:] = np.where(rot, body[m.dof_bodyid], 1.0)
+    if not keep_frame:
+        m.stat.extent = max(extent, 2 * m.stat.meansize)
+    if m.nv:
+        m.stat.meaninertia = float(np.cumsum(d.M[m.M_rowadr + m.M_rownnz - 1])[-1]) / m.nv
+
+
+def _set_body_pos(m, body: int, pos) -> None:
+    """A body's position; a free joint's ``qpos0`` and ``qpos_spring`` start where the body is (the compiler's)."""
+    m.body_pos[body] = pos
+    for j in range(int(m.body_jntadr[body]), int(m.body_jntadr[body]) + int(m.body_jntnum[body])):
+        if m.jnt_type[j] == mujoco.mjtJoint.mjJNT_FREE:
+            a = int(m.jnt_qposadr[j])
+            for q in (m.qpos0, m.qpos_spring):
+                q[a:a + 3] = m.body_pos[body]
+                q[a + 3:a + 7] = m.body_quat[body]
+
+
+def _finish(entry, const_inputs, start) -> None:
+    """``mj_setConst`` if its inputs changed (then the new model is the one to restore), reset, start angles."""
+    sc = entry.scene
+    m, d = sc.model, sc.data
+    if const_inputs != entry.const_inputs:
+        mujoco.mj_setConst(m, d)
+        # the rendering dressing gives center and extent in the spec: the compiler keeps those
+        _set_stat(m, d, keep_frame=bool(getattr(sc, "render", False)))
+        entry.const_inputs = const_inputs
+        entry.snapshot()
+    mujoco.mj_resetData(m, d)
+    start(sc)
+
+
+# ---------------------------------------------------------------------------
+# planar scenes
+
+
+def scene(grip: str, params, profile, n_links: int, **kw):
+    """:func:`simgrip.sim.scene.build_scene` through the cache (same arguments, same checks, same result).
+
+    A scene of a structure seen before (see the module docstring) is the cached one with ``params``,
+    ``profile`` and ``initial_angles`` set in place: bit-identical to a fresh build, at a fraction of its
+    cost.  The scene returned is owned by the cache (valid until the next call for its structure in this
+    thread).
+    """
+    from simgrip.sim import scene as S
+    from simgrip.sim.fingers import check_finger_links
+    from simgrip.sim.workpiece import inertial_mass, workpiece_inertia
+
+    grip = check_grip(grip)
+    dimless, phys = S.check_params(params)
+    prof = as_profile(profile)
+    n = check_finger_links(n_links)
+    bound = inspect.signature(S.build_scene).bind(grip, params, profile, n_links, **kw)
+    bound.apply_defaults()
+    a = bound.arguments
+    fingers = a["fingers"]
+    if fingers not in (1, 2) or isinstance(fingers, bool):  # the builder's message
+        return S.build_scene(grip, params, profile, n_links, **kw)
+    r_tip = S.check_positive("r_tip", a["r_tip"], 0.05)
+    r_link = S.check_positive("r_link", a["r_link"], 0.05)
+    r_corner = S.check_positive("r_corner", a["r_corner"], 0.05)
+    window = S.check_positive("contact_window", a["contact_window"], 1.0)
+    if grip == "III":
+        check_grip_iii_reach(dimless.gamma, dimless.b)
+    springs = chain_springs(prof, n)
+    given = a["initial_angles"]
+    q0 = S._start_angles(grip, dimless, prof, n, given)
+    place = S._placement(grip, q0, springs, dimless, phys, r_tip, r_link, r_corner, window, given is not None)
+
+    key = ("scene", grip, n, phys.length.hex(), None if place is None else tuple(int(i) for i in place.links),
+           _structure(S.build_scene, (grip, params, profile, n_links), kw,
+                      ("grip", "params", "profile", "n_links", "initial_angles")))
+    L = phys.length
+    mass = phys.m * fingers
+    imass = inertial_mass(mass, fingers, phys.rho, L) if place is not None else 0.0
+    const_inputs = (phys.rho.hex(),) if place is None else (
+        phys.rho.hex(), imass.hex(), place.half.tobytes(), float(place.center_z).hex())
+
+    entry = _lookup(key)
+    if entry is None:
+        sc = S.build_scene(grip, params, profile, n_links, **kw)
+        _store(key, _Entry(sc, const_inputs))
+        return sc
+
+    entry.restore()
+    sc = entry.scene
+    m = sc.model
+    _set_links(m, sc.index, [springs] * fingers, phys.EI, phys.rho, L, r_link * L)
+    m.opt.gravity = [0.0, 0.0, -phys.g]
+    if place is not None:
+        wb = sc.workpiece_body
+        hx, hy, hz = (float(v) for v in place.half)
+        _set_body_pos(m, wb, [0.0, 0.0, float(place.center_z)])
+        m.body_mass[wb] = imass
+        m.body_inertia[wb] = workpiece_inertia("box", (hx, hy, hz), imass)
+        m.body_gravcomp[wb] = 1.0 - mass / imass if mass < imass else 0.0
+        m.geom_size[mujoco.mj_name2id(m, mujoco.mjtObj.mjOBJ_GEOM, "workpiece_box")] = [hx, hy, hz]
+        if grip == "III":
+            for f, g in enumerate(sc.workpiece_geoms):  # fromto (+-hx, -+hy, -hz): centre (+-hx, 0, -hz)
+                m.geom_pos[g] = [hx if f == 0 else -hx, 0.0, -hz]
+        m.pair_friction[:, :2] = phys.mu_s
+    sc.params, sc.physical, sc.profile, sc.springs = dimless, phys, prof, springs
+    sc.box_half = place.half if place is not None else np.zeros(3)
+    _finish(entry, const_inputs, lambda s: S.set_joint_angles(s, q0))
+    return sc
+
+
+def build_scene(grip: str, params, profile, n_links: int, **kw):
+    """:func:`simgrip.scenes.build_scene` (Grip III started from the hinge chain) through the cache."""
+    if kw.get("initial_angles") is None and check_grip(grip) == "III":
+        from simgrip.scenes import start_angles
+        from simgrip.sim.fingers import check_finger_links
+        from simgrip.params import DimensionlessParams, PhysicalParams
+
+        if not isinstance(params, (PhysicalParams, DimensionlessParams)):
+            raise ValueError(f"params must be PhysicalParams or DimensionlessParams, got {type(params).__name__}")
+        kw["initial_angles"] = start_angles(grip, params, as_profile(profile), check_finger_links(n_links))
+    return scene(grip, params, profile, n_links, **kw)
+
+
+# ---------------------------------------------------------------------------
+# K-finger grippers
+
+
+def build_gripper(grip: str, params, profile, n_links: int, **kw):
+    """:func:`simgrip.sim.gripper.build_gripper` through the cache (same arguments, same checks, same result).
+
+    ``yaw``, ``offset``, ``workpiece_yaw`` and ``contact_angle`` are structure (keyed); the parameters, the
+    profiles and ``initial_angles`` are set in place.  The scene returned is owned by the cache (valid until
+    the next call for its structure in this thread).
+    """
+    from simgrip.chain import link_positions
+    from simgrip.params import _finite
+    from simgrip.sim import gripper as G
+    from simgrip.sim.fingers import check_finger_links
+    from simgrip.sim.gripper_placement import check_offset, check_workpiece_yaw, place_fingers
+    from simgrip.sim.scene import check_params, check_positive, set_joint_angles
+    from simgrip.sim.workpiece import workpiece_inertia
+
+    args = (grip, params, profile, n_links)
+    bound = inspect.signature(G.build_gripper).bind(*args, **kw)
+    bound.apply_defaults()
+    a = bound.arguments
+    g, K, shape = G.check_gripper(grip, a["fingers"], a["workpiece"])
+    if g == "III":
+        return _cradle(args, kw, a, K)
+    dimless, phys = check_params(params)
+    profs = G._profiles(profile, K)
+    n = check_finger_links(n_links)
+    r_tip = check_positive("r_tip", a["r_tip"], 0.05)
+    r_link = check_positive("r_link", a["r_link"], 0.05)
+    yaw = _finite("yaw", a["yaw"], unit="radians")
+    beta = G._check_contact_angle(a["contact_angle"], shape)
+    b = dimless.b
+    off = check_offset(a["offset"])
+    psi = check_workpiece_yaw(a["workpiece_yaw"])
+    finger_springs = tuple(chain_springs(p, n) for p in profs)
+    springs = finger_springs[0]
+    q0 = G._start(a["initial_angles"], K, n)
+    if (2.0 * r_tip >= 2.0 * (0.5 * b) * math.sin(math.pi / K) or not 0.5 * b - r_tip > 0.0
+            or (shape == "sphere" and not 0.5 * b * math.cos(beta) - r_tip > 0.0)
+            or (shape == "sphere" and any(not np.array_equal(f.rest, springs.rest) for f in finger_springs[1:]))):
+        return G.build_gripper(*args, **kw)  # raises the builder's message
+    L = phys.length
+    azimuths = G.finger_azimuths(K, yaw)
+    size = G._workpiece_size(shape, K, 0.5 * b - r_tip, L)
+    place = place_fingers(shape, azimuths - yaw, size / L, r_tip, off, psi)
+    z0 = float(link_positions(np.cumsum(q0[0]), springs.ds)[-1, 1]) * L
+    cy, sy = math.cos(yaw), math.sin(yaw)
+    centre = [(cy * off[0] - sy * off[1]) * L, (sy * off[0] + cy * off[1]) * L, z0]
+    mass = G.workpiece_body_mass(phys, K)
+    key = ("gripper", g, K, shape, n, L.hex(),
+           _structure(G.build_gripper, args, kw, ("grip", "params", "profile", "n_links", "initial_angles")))
+    const_inputs = (phys.rho.hex(), mass.hex(), size.tobytes(), np.array(centre).tobytes())
+
+    entry = _lookup(key)
+    if entry is None:
+        sc = G.build_gripper(*args, **kw)
+        _store(key, _Entry(sc, const_inputs))
+        return sc
+    entry.restore()
+    sc = entry.scene
+    m = sc.model
+    _set_links(m, sc.index, finger_springs, phys.EI, phys.rho, L, r_link * L)
+    m.opt.gravity = [0.0, 0.0, -phys.g]
+    wb = sc.workpiece_body
+    _set_body_pos(m, wb, centre)
+    m.body_mass[wb] = mass
+    m.body_inertia[wb] = [max(v, 10.0 * mujoco.mjMINVAL) for v in workpiece_inertia(shape, size, mass)]
+    gsize = list(size) if shape == "box" else [size[0], size[1] if shape == "cylinder" else 0.0, 0.0]
+    m.geom_size[sc.workpiece_geom] = gsize
+    m.pair_friction[:, :2] = phys.mu_s
+    sc.params, sc.physical, sc.profile, sc.springs = dimless, phys, profs[0], springs
+    sc.size, sc.reach, sc.normals = size, place.reach, place.normal
+    sc.profiles, sc.finger_springs = profs, finger_springs
+    _finish(entry, const_inputs, lambda s: set_joint_angles(s, q0))
+    return sc
+
+
+def _cradle(args, kw, a, K):
+    """The K-finger Grip III (:func:`simgrip.sim.gripper_cradle.build_cradle`) through the cache."""
+    from simgrip.sim import gripper as G
+    from simgrip.sim.fingers import check_finger_links
+    from simgrip.sim.gripper_cradle import START_NUMERIC, build_cradle, corner_name
+    from simgrip.sim.scene import check_params, check_positive, root_spec, set_joint_angles
+    from simgrip.sim.workpiece import BOX_HEIGHT, contact_links, corner_placement, cradle_start, workpiece_inertia
+
+    _, params, profile, n_links = args
+    if (a["contact_angle"] != 0.0 or np.any(np.asarray(a["offset"], dtype=float) != 0.0)
+            or a["workpiece_yaw"] != 0.0 or isinstance(profile, (list, tuple, np.ndarray))):
+        return G.build_gripper(*args, **kw)  # raises the builder's message
+    dimless, phys = check_params(params)
+    prof = as_profile(profile)
+    n = check_finger_links(n_links)
+    r_link = check_positive("r_link", a["r_link"], 0.05)
+    ca = inspect.signature(build_cradle).parameters
+    r_corner = check_positive("r_corner", ca["r_corner"].default, 0.05)
+    window = check_positive("contact_window", ca["contact_window"].default, 1.0)
+    springs = chain_springs(prof, n)
+    given = a["initial_angles"]
+    if given is None:
+        q0 = cradle_start(dimless.b, dimless.gamma, prof, n)
+    else:
+        q = np.asarray(given, dtype=float)
+        if q.shape not in ((n,), (K, n)) or not np.all(np.isfinite(q)) or (q.ndim == 2 and np.any(q != q[:1])):
+            return G.build_gripper(*args, **kw)  # raises the builder's message
+        q0 = np.array(q if q.ndim == 1 else q[0])
+    L = phys.length
+    hx, zc, s = corner_placement(q0, springs, dimless.b, dimless.gamma, r_link, r_corner, L)
+    if not hx > 0.0:
+        return G.build_gripper(*args, **kw)  # raises the builder's message
+    links = contact_links(s, springs, window)
+    hz = 0.5 * BOX_HEIGHT * L
+    size = np.array([hx, hx, hz])
+    mass = G.workpiece_body_mass(phys, K)
+    key = ("cradle", K, n, L.hex(), tuple(int(i) for i in links),
+           _structure(G.build_gripper, args, kw, ("grip", "params", "profile", "n_links", "initial_angles")))
+    const_inputs = (phys.rho.hex(), mass.hex(), size.tobytes(), float(zc + hz).hex())
+
+    entry = _lookup(key)
+    if entry is None:
+        sc = G.build_gripper(*args, **kw)
+        _store(key, _Entry(sc, const_inputs))
+        return sc
+    entry.restore()
+    sc = entry.scene
+    m = sc.model
+    yaw = float(sc.yaw)
+    _set_links(m, sc.index, [springs] * K, phys.EI, phys.rho, L, r_link * L)
+    m.opt.gravity = [0.0, 0.0, -phys.g]
+    i = mujoco.mj_name2id(m, mujoco.mjtObj.mjOBJ_NUMERIC, START_NUMERIC)
+    m.numeric_data[int(m.numeric_adr[i]):int(m.numeric_adr[i]) + n] = q0
+    wb = sc.workpiece_body
+    _set_body_pos(m, wb, [0.0, 0.0, zc + hz])
+    m.body_mass[wb] = mass
+    m.body_inertia[wb] = [max(v, 10.0 * mujoco.mjMINVAL) for v in workpiece_inertia("box", size, mass)]
+    m.geom_size[sc.workpiece_geom] = list(size)
+    # the corner capsules' frames come from fromto: compile them alone, exactly as build_cradle adds them
+    spec = root_spec("simgrip_cradle_corners", phys.g)
+    body = spec.worldbody.add_body(name="b")
+    corner_cls = spec.find_default("corner")
+    for k in range(K):
+        az = float(sc.azimuths[k]) - yaw
+        e, t = np.array([math.cos(az), math.sin(az)]), np.array([-math.sin(az), math.cos(az)])
+        p0, p1 = hx * e - hx * t, hx * e + hx * t
+        body.add_geom(corner_cls, name=corner_name(k), fromto=[p0[0], p0[1], -hz, p1[0], p1[1], -hz],
+                      size=[r_corner * L, 0.0, 0.0])
+    small = spec.compile()
+    for k in range(K):
+        g = mujoco.mj_name2id(m, mujoco.mjtObj.mjOBJ_GEOM, corner_name(k))
+        for f in ("geom_pos", "geom_quat", "geom_size"):
+            getattr(m, f)[g] = getattr(small, f)[k]
+    m.pair_friction[:, :2] = phys.mu_s
+    sc.params, sc.physical, sc.profile, sc.springs = dimless, phys, prof, springs
+    sc.size, sc.reach = size, np.full(K, 0.5 * dimless.b)
+    sc.profiles, sc.finger_springs = (prof,) * K, (springs,) * K
+    _finish(entry, const_inputs, lambda s: set_joint_angles(s, np.tile(q0, (K, 1))))
+    return sc
