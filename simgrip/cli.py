@@ -122,6 +122,8 @@ def build_parser() -> argparse.ArgumentParser:
                        help="where sticking friction acts: point (the finger's centreline, the paper's point "
                        "contact; default for newton) or surface (MuJoCo's contact point on the tip sphere, whose "
                        "radius adds a couple; the reference then carries it; the only choice for dynamics); "
+                       "full: every link and the tip may touch the workpiece (a real box below the palm) and "
+                       "the finger itself, settled by the over-damped dynamics (free, I, II); "
                        "with --fingers: the symmetry skip's (point by default; surface for box and cylinder)")
         p.add_argument("--target-error", type=float, default=None,
                        help="settle to this error (tip over l, forces relative) by Richardson extrapolation over "
@@ -144,6 +146,16 @@ def build_parser() -> argparse.ArgumentParser:
             p.add_argument("--contact-angle", type=float, default=None, metavar="DEG",
                            help="with --workpiece sphere: elevation of the contact normal at the start, degrees in "
                            "(-90, 90) (0: the equator) [default 0]; the JSON's angles are in radians")
+
+    p = sub.add_parser("modes", help="natural frequencies and mode shapes of the settled finger beside the rod's")
+    _add_state_options(p)
+    p.add_argument("--links", type=int, default=32, help=f"links per finger, 2..{MAX_LINKS} [default 32]")
+    p.add_argument("--count", type=int, default=3,
+                   help="lowest modes to compute, 1..the degrees of freedom (links, or links - 1 with the "
+                   "workpiece held) [default 3]")
+    p.add_argument("--method", default=None, help="settle method: newton or dynamics [default newton]")
+    p.add_argument("--contact", default=None, help="where the settle's sticking friction acts: point or surface "
+                   "[default point]; the modes always stick the centreline point")
 
     p = sub.add_parser("bench", help="run time against error, naive vs settle vs minimiser vs BVP, what skipping buys")
     from simgrip.harness import bench as _bench  # light: matplotlib/mujoco are imported inside its functions
@@ -294,6 +306,21 @@ def _gripper_arguments(args, grip: str) -> dict | None:
     return None
 
 
+def _cmd_modes(args):
+    from simgrip.modes import modes
+    from simgrip.modes.report import format_modes
+
+    grip = check_grip(args.grip)
+    params, links = _params(args), _links(args.links)
+    profile = _profile(args, grip)
+    dofs = links - (0 if grip == "free" else 1)
+    if isinstance(args.count, bool) or args.count < 1 or args.count > dofs:
+        raise ValueError(f"count must be a positive integer at most {dofs} (the degrees of freedom of {links} "
+                         f"links{'' if grip == 'free' else ' holding the workpiece'}), got {args.count!r}")
+    result = modes(grip, params, profile, links, count=args.count, method=args.method, contact=args.contact)
+    return json.dumps(result.record(), allow_nan=False) if args.json else format_modes(result)
+
+
 def _cmd_compare(args) -> str:
     from simgrip.compare import compare
     from simgrip.io import to_jsonable
@@ -312,8 +339,9 @@ def _cmd_compare(args) -> str:
                          target_error=args.target_error, contact=args.contact, progress=_progress(args, links))
     if args.json:
         return json.dumps(to_jsonable(result), allow_nan=False)
-    if gripper is None:
-        return format_comparison(result)
+    if gripper is None:  # the centreline and the contact list are --json's
+        return format_comparison({**result, "simulation": {k: v for k, v in result["simulation"].items()
+                                                           if k not in ("nodes", "contacts")}})
     sim = {k: v for k, v in result["simulation"].items() if k != "fingers"}  # one line per finger below instead
     lines = [f"finger {f['finger']}: N {f['normal_force']:.5g}"
              + ("" if f["relative_difference"] is None else f" ({100 * f['relative_difference']:+.2g} % of the BVP's)")
@@ -393,16 +421,29 @@ def _print(result, as_json: bool) -> None:
         for line in result:
             print(line)
     elif as_json or any(isinstance(v, (dict, list)) and k != "params" for k, v in result.items()
-                        if k not in ("tip", "contact", "warnings")):
+                        if k not in ("tip", "contact", "warnings", "nodes", "contacts")):
         print(json.dumps(to_jsonable(result), allow_nan=False, indent=None if as_json else 2))
     else:
-        print(format_table(result))
+        print(format_table(_brief(result)))
+
+
+def _brief(record: dict) -> dict:
+    """A record for the table: the centreline (``nodes``) left to --json, the contacts counted by kind."""
+    out = {k: v for k, v in record.items() if k not in ("nodes", "contacts")}
+    if "contacts" in record:
+        kinds: dict = {}
+        for c in record["contacts"]:
+            kinds[c["with"]] = kinds.get(c["with"], 0) + 1
+        out["contacts"] = (f"{len(record['contacts'])} (" + ", ".join(f"{k} {v}" for k, v in kinds.items()) + ")"
+                           if kinds else "0") + "; --json lists them and the centreline"
+    return out
 
 
 COMMANDS = {
     "solve": _cmd_solve,
     "simulate": _cmd_simulate,
     "compare": _cmd_compare,
+    "modes": _cmd_modes,
     "figures": _cmd_figures,
     "render": _cmd_render,
     "bench": _cmd_bench,

@@ -39,8 +39,12 @@ import numpy as np
 
 from simgrip.modes.linear import Linearisation, Stick, eigen, linearise, sticks_of
 
-__all__ = ["ModeResult", "Stick", "Linearisation", "chain_modes", "eigen", "linearise", "mac", "modes",
+__all__ = ["ModeResult", "ModesError", "Stick", "Linearisation", "chain_modes", "eigen", "linearise", "mac", "modes",
            "node_displacements", "reference_modes", "sticks_of"]
+
+
+class ModesError(RuntimeError):
+    """No modes: the grip's equilibrium does not exist (the workpiece fell)."""
 
 
 @dataclass
@@ -208,8 +212,9 @@ def modes(grip, params, profile, links, *, count: int = 3, fingers: int = 1, met
     ------
     ValueError
         Bad arguments (named).
-    SettleError, ElasticaError
-        The settle or the BVP failed; RuntimeError when the rod's eigenproblem is not resolved.
+    SettleError, ElasticaError, ModesError
+        The settle or the BVP failed, the workpiece fell; RuntimeError when the rod's eigenproblem is not
+        resolved.
     """
     from simgrip.params import check_grip
     from simgrip.profiles import as_profile
@@ -235,6 +240,9 @@ def modes(grip, params, profile, links, *, count: int = 3, fingers: int = 1, met
     d = mujoco.MjData(scene.model)
     d.qpos[:] = state.qpos
     mujoco.mj_kinematics(scene.model, d)
+    if scene.has_workpiece and not state.held:
+        raise ModesError(f"grip {grip}: the settled finger does not hold the workpiece (it fell): there is no "
+                         f"equilibrium of the grip to vibrate about")
     sticks = sticks_of(scene, state, d)
     dofs = scene.model.nv - 2 * len(sticks)
     count = _check_count(count, dofs)

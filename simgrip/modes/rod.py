@@ -29,7 +29,7 @@ of the static force (gravity's and the workpiece's).  Boundary conditions:
   outside the reduction) and the workpiece, of inertial mass ``Mi`` per finger,
   moves vertically with the tip: ``Mi w_tt = -N2(1)`` with ``w = u2(1)``, i.e.
   ``N2(1) = lambda Mi u2(1)``; ``N1(1)`` (the change of the normal force) is free.
-  A fixed workpiece has ``u2(1) = 0`` instead.
+  A fixed workpiece has ``u2(1) = 0`` instead; a point mass on a free tip ``N(1) = lambda Mi u(1)``.
 
 The problem is solved by Chebyshev collocation (Gauss-Lobatto, ``nodes + 1``
 points per field, one collocation row of each field replaced by its boundary
@@ -57,6 +57,8 @@ __all__ = ["AGREE", "DEFAULT_NODES", "MAX_NODES", "RodModes", "RodProblem", "che
 #: Chebyshev intervals of the collocation (the smooth equilibria of uniform profiles converge to ~1e-10 well
 #: before this; the cost is a dense eigenproblem of size 6 (nodes + 1)).
 DEFAULT_NODES = 40
+#: Tip conditions (see the module docstring; ``mass``: a point mass ``tip_mass`` on an otherwise free tip).
+TIPS = ("free", "stick", "fixed", "mass")
 #: Most Chebyshev intervals: the collocation of this sixth-order system loses ~nodes^6 of round-off.
 MAX_NODES = 64
 #: The second collocation has this many intervals fewer (:func:`rod_modes`).
@@ -79,9 +81,10 @@ class RodProblem:
         Static force on the tip ``F`` (over ``rho g l``): ``n0(s) = F - gravity (1 - s) E2``.
     gravity : float
         Weight per length (1, or 0 for the weightless rod).
-    tip : {"free", "stick", "fixed"}
+    tip : {"free", "stick", "fixed", "mass"}
         Free tip, tip sticking to a workpiece free to move vertically (mass ``tip_mass`` per finger),
-        or tip pinned to a fixed workpiece.
+        tip pinned to a fixed workpiece, or a free tip carrying a point mass ``tip_mass``.  A straight
+        horizontal rod with ``stick`` or ``fixed`` is degenerate (``N1`` decouples: a singular pencil).
     tip_mass : float
         Inertial mass of the workpiece per finger over ``rho l`` (``tip="stick"``).
     """
@@ -137,8 +140,8 @@ def cheb(N: int) -> tuple[np.ndarray, np.ndarray]:
 def _check(P: RodProblem) -> None:
     if not (math.isfinite(P.D) and P.D > 0):
         raise ValueError(f"D must be positive and finite, got {P.D!r}")
-    if P.tip not in ("free", "stick", "fixed"):
-        raise ValueError(f"tip must be 'free', 'stick' or 'fixed', got {P.tip!r}")
+    if P.tip not in TIPS:
+        raise ValueError(f"tip must be one of {', '.join(TIPS)}, got {P.tip!r}")
     if not (math.isfinite(P.tip_mass) and P.tip_mass >= 0):
         raise ValueError(f"tip_mass must be non-negative and finite, got {P.tip_mass!r}")
 
@@ -231,6 +234,9 @@ def _collocation(P: RodProblem, nodes: int):
     elif P.tip == "stick":
         bc(N1, last, [(U1, last, 1.0)])
         bc(N2, last, [(N2, last, 1.0)], [(U2, last, float(P.tip_mass))])
+    elif P.tip == "mass":
+        bc(N1, last, [(N1, last, 1.0)], [(U1, last, float(P.tip_mass))])
+        bc(N2, last, [(N2, last, 1.0)], [(U2, last, float(P.tip_mass))])
     else:
         bc(N1, last, [(U1, last, 1.0)])
         bc(N2, last, [(U2, last, 1.0)])
@@ -311,6 +317,8 @@ def refine(P: RodProblem, modes: RodModes, k: int, tol: float = 1e-8) -> tuple[f
             rows += [yb[4], yb[5]]
         elif P.tip == "stick":
             rows += [yb[2], yb[5] - lam * P.tip_mass * yb[3]]
+        elif P.tip == "mass":
+            rows += [yb[4] - lam * P.tip_mass * yb[2], yb[5] - lam * P.tip_mass * yb[3]]
         else:
             rows += [yb[2], yb[3]]
         return np.array(rows)
