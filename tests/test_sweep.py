@@ -26,7 +26,7 @@ from simgrip.parallel.dask_cluster import descendants
 from simgrip.parallel.runner import RunnerOptions
 from simgrip.sweep.run import run_sweep
 from simgrip.sweep.grid import AXES, make_grid, parse_axis
-from simgrip.sweep.point import COLUMNS, evaluate_point
+from simgrip.sweep.point import COLUMNS, evaluate_point, evaluate_segment
 from simgrip.sweep.store import PARTIAL, read_csv, same_results
 
 LINKS = 8
@@ -216,18 +216,20 @@ def test_dask_cli_cluster_equals_the_loop(cli_cluster, reference):
     assert same_results(res.rows, reference.rows)
 
 
-def test_points_go_to_the_cluster_in_chunks_rows_unchanged(cli_cluster, reference, tmp_path, monkeypatch):
-    """A big sweep reaches Dask in chunks of CHUNK_DASK points (bounded client memory); 4 here: 2 chunks."""
+def test_points_stream_to_the_cluster_rows_unchanged(cli_cluster, reference, tmp_path, monkeypatch):
+    """A sweep reaches Dask as a generator of segments, in one runner call that keeps no results (bounded
+    client memory: tests/test_sweep_stream.py bounds what is in flight); rows unchanged."""
     import simgrip.sweep.run as sweep_run
 
     address, _, _ = cli_cluster
-    monkeypatch.setattr(sweep_run, "CHUNK_DASK", 4)
     calls = []
     real = sweep_run.run_tasks
-    monkeypatch.setattr(sweep_run, "run_tasks", lambda fn, items, **kw: calls.append(len(items)) or real(fn, items, **kw))
+    monkeypatch.setattr(sweep_run, "run_tasks", lambda fn, items, **kw: calls.append((hasattr(items, "__len__"),
+                                                                                     kw["collect"], kw["total"]))
+                        or real(fn, items, **kw))
     res = run_sweep(small_grid(), out=tmp_path / "c", options=RunnerOptions(scheduler=address, progress=False),
                     batch_size=1)
-    assert calls == [4, 2] and res.computed == 6
+    assert calls == [(False, False, 3)] and res.computed == 6  # 3 segments: the M line (2 values) at each kappa
     assert same_results(read_csv(tmp_path / "c" / "sweep.csv"), reference.rows)
 
 
@@ -264,7 +266,7 @@ def test_a_worker_killed_mid_sweep_loses_and_doubles_nothing(cli_cluster, tmp_pa
 
 def test_resume_after_ctrl_c_recomputes_nothing_saved(tmp_path):
     out = tmp_path / "r"
-    cmd = [sys.executable, "-m", "simgrip.cli", "sweep", "I", "--kappa", "-7", "-3", "30", "--links", str(LINKS),
+    cmd = [sys.executable, "-m", "simgrip.cli", "sweep", "I", "--kappa", "-7", "-3", "80", "--links", str(LINKS),
            "--out", str(out), "--jobs", "1", "--no-progress"]
     proc = subprocess.Popen(cmd, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
     try:
@@ -286,28 +288,29 @@ def test_resume_after_ctrl_c_recomputes_nothing_saved(tmp_path):
     for f in (out / PARTIAL).glob("batch-*.csv"):
         for r in read_csv(f):
             saved[r["index"]] = r
-    assert 0 < len(saved) < 30
+    assert 0 < len(saved) < 80  # 3 segments (32, 32, 16 points): stopped in the 2nd
 
-    grid = make_grid("I", kappa=(-7, -3, 30), links=LINKS)
+    grid = make_grid("I", kappa=(-7, -3, 80), links=LINKS)
     # without --resume the unfinished sweep is refused, naming --resume; a different grid is refused too
     with pytest.raises(ValueError, match="--resume"):
         run_sweep(grid, out=out, options=ONE)
     with pytest.raises(ValueError, match="different sweep"):
-        run_sweep(make_grid("I", kappa=(-7, -3, 31), links=LINKS), out=out, options=ONE, resume=True)
+        run_sweep(make_grid("I", kappa=(-7, -3, 81), links=LINKS), out=out, options=ONE, resume=True)
     computed = []
     res = run_sweep(grid, out=out, options=ONE, resume=True, on_record=lambda r: computed.append(r["index"]))
     assert not set(computed) & set(saved)  # nothing saved was recomputed ...
-    assert sorted(computed + list(saved)) == list(range(30))  # ... and nothing is missing
-    assert res.resumed == len(saved) and res.computed == 30 - len(saved)
+    assert sorted(computed + list(saved)) == list(range(80))  # ... and nothing is missing
+    assert res.resumed == len(saved) and res.computed == 80 - len(saved)
     for i, r in saved.items():
         assert res.rows[i] == {"index": i, **{c: r[c] for c in COLUMNS}}  # saved rows, times included
-    # the resumed rows are the points' own answers
+    # the resumed rows are the points' own answers (their segment's: the BVP warm-started along it)
     for i in (min(saved), max(saved), min(computed), max(computed)):
-        fresh = evaluate_point(grid.point(i))
+        a, b = next((a, b) for a, b in grid.segments() if a <= i < b)
+        fresh = evaluate_segment([grid.point(k) for k in range(a, b)])[i - a]
         assert same_results([res.rows[i]], [fresh])
     assert not (out / PARTIAL).exists()
     meta = json.loads((out / "sweep.json").read_text())
-    assert meta["counts"]["resumed"] == len(saved) and meta["counts"]["points"] == 30
+    assert meta["counts"]["resumed"] == len(saved) and meta["counts"]["points"] == 80
     assert all(math.isfinite(r["kappa"]) for r in read_csv(out / "sweep.csv"))
 
 

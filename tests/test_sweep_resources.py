@@ -124,14 +124,18 @@ def _fake_point(point):
     rec = {"index": point.index, **point.values(), "status": "settled", "held": True, "feasible": point.kappa < -5,
            "normal_force": 1.0, "required_mu": 0.5, "tip_x": 0.3, "tip_z": -0.5, "penetration": 1e-6,
            "bvp_normal_force": 1.0, "bvp_feasible": point.kappa < -5, "bvp_required_mu": 0.5, "agree": True,
-           "wall_time_s": 0.01, "message": "", "bvp_message": ""}
+           "wall_time_s": 0.01, "point_time_s": 0.02, "message": "", "bvp_message": "", "bvp_warning": ""}
     return {"index": rec["index"], **{c: rec[c] for c in COLUMNS}}
+
+
+def _fake_segment(points):
+    return [_fake_point(p) for p in points]
 
 
 def test_client_memory_does_not_grow_with_the_points(tmp_path, monkeypatch):
     """Peak traced memory of a 500- and a 5000-point sweep (jobs 1): the difference is ~1 byte a point, where
     keeping the rows would cost ~1.3 kB a point (~6 MB for the 4500 more); 1 MiB allows for allocator noise."""
-    monkeypatch.setattr(sweep_run, "evaluate_point", _fake_point)
+    monkeypatch.setattr(sweep_run, "evaluate_segment", _fake_segment)
     peaks = {}
     for n in (100, 500, 5000):  # the first warms up (imports, matplotlib's caches), not measured
         grid = make_grid("I", kappa=(-7, -3, n // 10), M=(1, 10, 10), links=LINKS)
@@ -189,7 +193,7 @@ def test_a_default_sweep_too_small_for_a_cluster_runs_in_process(monkeypatch):
         return out
 
     monkeypatch.setattr(sweep_run, "run_tasks", fake_run_tasks)
-    monkeypatch.setattr(sweep_run, "evaluate_point", _fake_point)
+    monkeypatch.setattr(sweep_run, "evaluate_segment", _fake_segment)
     monkeypatch.setattr(sweep_run, "machine", lambda out=None: Machine(memory=8 * 2**30, cores=2, disk=4000))
     grid = make_grid("I", kappa=(-7, -3, 3), links=LINKS)
     sweep_run.run_sweep(grid, options=RunnerOptions(jobs=None, progress=False))

@@ -7,12 +7,18 @@ points run through the one parallel runner (:func:`simgrip.parallel.runner.run_t
 in-process (``jobs=1``), on a local Dask cluster, or on an existing one
 (``--scheduler``), batched so that Dask's per-task overhead stays small.  Every
 point is settled from scratch, like ``simgrip simulate`` at the same values:
-warm starts along the kappa axis (:func:`simgrip.settle.settle_sweep`) are not
-used, because they change the answer (a warm-started release can stay on
-another equilibrium branch, or hold where the closing procedure drops), so a
-point's row would depend on its neighbours and on how the grid was cut into
-batches.  Hence the rows (all columns but ``wall_time_s``) are the same for
-any runner and batch size.
+warm starts of the settle along the kappa axis (:func:`simgrip.settle.settle_sweep`)
+are not used, because they change the answer (a warm-started release can stay
+on another equilibrium branch, or hold where the closing procedure drops).
+The BVP reference is warm-started: the grid is cut into continuation segments
+by the grid alone (:meth:`~simgrip.sweep.grid.SweepGrid.segments`: runs of at
+most :data:`~simgrip.sweep.grid.SEGMENT_POINTS` points along the fastest swept
+axis), each a unit of work (:func:`~simgrip.sweep.point.evaluate_segment`:
+cold at its first point, warm along it, re-solved cold where a warm start
+jumps branch), so a point's reference does not depend on the workers or the
+batch size either.  Hence the rows (all columns but the times,
+:data:`~simgrip.sweep.point.TIME_COLUMNS`) are the same for any runner and
+batch size.  ``reference="none"`` (``--reference none``) solves no BVP.
 
 With an output folder the sweep writes ``sweep.csv`` (one row per point, grid
 order, :data:`~simgrip.sweep.point.COLUMNS`), ``sweep.json``
@@ -25,19 +31,21 @@ worker that dies, so no point is lost or doubled.
 
 Bounded: the grid is estimated and checked before anything is allocated
 (:mod:`~simgrip.sweep.budget`: points, memory, disk, time at the stated
-points/s; ``--jobs`` capped); points go to the runner in chunks
-(:data:`~simgrip.sweep.budget.CHUNK_IN_PROCESS` in-process,
-:data:`~simgrip.sweep.budget.CHUNK_DASK` on Dask, where a local cluster starts
-once per chunk, ~1-3 s in ~100 s of work on 2 cores), rows are saved as they
-arrive and merged into ``sweep.csv`` by streaming, the counts and the map are
-made on the way: with an output folder this process keeps one byte per point.
+points/s; ``--jobs`` capped); segments go to the runner from a generator, a
+few batches per worker in flight (:func:`simgrip.parallel.runner.run_tasks`
+with ``collect=False``: one local cluster for the whole sweep, no result
+kept), rows are saved as they arrive and merged into ``sweep.csv`` by
+streaming, the counts, the medians of the times and the map are made on the
+way: with an output folder this process keeps one byte per point.
+``sweep.json`` reports the throughput (points/s and points/s per core of the
+computing phase, wall per point, the median settle and the median of each
+point's time over its settle).
 """
 
 from __future__ import annotations
 
 import argparse
 
-import itertools
 import json
 import math
 import platform
@@ -47,10 +55,10 @@ from dataclasses import dataclass, field, replace
 from pathlib import Path
 
 from simgrip.parallel.runner import RunnerOptions, add_runner_arguments, run_tasks, runner_options
-from simgrip.sweep.budget import CHUNK_DASK, CHUNK_IN_PROCESS, cap_jobs, check_sweep, machine, worth_a_cluster
-from simgrip.sweep.grid import SweepGrid, make_grid
+from simgrip.sweep.budget import cap_jobs, check_sweep, machine, worth_a_cluster
+from simgrip.sweep.grid import SEGMENT_POINTS, SweepGrid, make_grid
 from simgrip.sweep.map import check_map
-from simgrip.sweep.point import COLUMNS, evaluate_point
+from simgrip.sweep.point import COLUMNS, evaluate_segment
 from simgrip.sweep.store import PARTIAL, PartialStore, Tally, counts, iter_csv
 
 __all__ = ["SweepResult", "run_sweep", "add_arguments", "cli_sweep", "versions", "stderr_note"]
@@ -75,6 +83,8 @@ class SweepResult:
         The table in memory, for a sweep without an output folder; ``None``
         when it was streamed to ``sweep.csv`` (read it with :meth:`iter_rows`
         or :attr:`rows`).
+    throughput : dict
+        How fast the points ran (:func:`throughput`; also in ``sweep.json``).
     """
 
     grid: SweepGrid
@@ -84,6 +94,7 @@ class SweepResult:
     wall_time_s: float
     paths: dict = field(default_factory=dict)
     records: list | None = None
+    throughput: dict = field(default_factory=dict)
 
     def iter_rows(self):
         """Every record, in grid order, keys ``index`` and :data:`~simgrip.sweep.point.COLUMNS`, one at a time
@@ -226,28 +237,30 @@ def run_sweep(grid: SweepGrid, *, out=None, options: RunnerOptions = RunnerOptio
 
     bar = tqdm(total=grid.size - resumed, desc="sweep", unit="point", disable=not options.progress)
 
-    def arrived(_, rec):
+    def arrived(_, recs):
         nonlocal computed
-        computed += 1
-        bar.update(1)
-        if store is not None:
-            store.add(rec)
-        else:
-            records[rec["index"]] = rec
-        if on_record is not None:
-            on_record(rec)
+        for rec in recs:
+            if done[rec["index"]]:  # saved by the interrupted run (its segment is recomputed whole)
+                continue
+            computed += 1
+            bar.update(1)
+            if store is not None:
+                store.add(rec)
+            else:
+                records[rec["index"]] = rec
+            if on_record is not None:
+                on_record(rec)
 
     quiet = replace(options, progress=False)
-    chunk = CHUNK_IN_PROCESS if options.in_process else CHUNK_DASK
-    pending = (p for p in grid.points() if not done[p.index])
+    todo = [0]
+    for a, b in grid.segments():  # one pass over the segments, nothing kept but the count
+        todo[0] += not all(done[a:b])
+    t1 = time.perf_counter()
     try:
         try:
-            while True:
-                points = list(itertools.islice(pending, chunk))
-                if not points:
-                    break
-                run_tasks(evaluate_point, points, options=quiet, desc="sweep", batch_size=batch_size,
-                          on_result=arrived)
+            run_tasks(evaluate_segment, _pending_segments(grid, done), options=quiet, desc="sweep",
+                      batch_size=_segments_per_task(grid, batch_size), on_result=arrived, collect=False,
+                      total=todo[0])
         finally:
             bar.close()
             if store is not None:
@@ -256,14 +269,56 @@ def run_sweep(grid: SweepGrid, *, out=None, options: RunnerOptions = RunnerOptio
         if store is not None and resumed == 0 and not store.batch_files():
             store.remove()  # nothing saved (e.g. the scheduler unreachable): no unfinished sweep to resume
         raise
+    compute_s = time.perf_counter() - t1
     result = SweepResult(grid=grid, counts={}, computed=computed, resumed=resumed, wall_time_s=0.0, records=records)
+    cores = 1 if options.in_process else (None if options.remote else min(options.local_workers, max(1, todo[0])))
     if out is None:
-        result.counts = counts(records)
+        tally = Tally()
+        for r in records:
+            tally.add(r)
+        result.counts = tally.as_dict()
         result.wall_time_s = time.perf_counter() - t0
+        result.throughput = throughput(computed, compute_s, result.wall_time_s, cores, tally.timing())
         return result
-    result.paths = _write(out, result, store, options, batch_size, write_map, t0)
+    result.paths = _write(out, result, store, options, batch_size, write_map, t0, compute_s, cores)
     store.remove()
     return result
+
+
+def _pending_segments(grid: SweepGrid, done):
+    """The points of every segment not wholly saved, one segment (a list) at a time, in grid order."""
+    for a, b in grid.segments():
+        if not all(done[a:b]):
+            yield [grid.point(i) for i in range(a, b)]
+
+
+def _segments_per_task(grid: SweepGrid, batch_size):
+    """``batch_size`` (points per Dask task) in whole segments of this grid, at least one (None: the runner's)."""
+    if batch_size is None:
+        return None
+    a, b = next(grid.segments())  # the first is the longest: every line is cut the same way from its start
+    return max(1, batch_size // (b - a))
+
+
+def throughput(points: int, compute_s: float, wall_s: float, cores, timing: dict) -> dict:
+    """How fast a sweep ran: ``points_per_s`` and ``points_per_s_per_core`` over the computing phase
+    (``compute_s``: from the first point sent to the last result, a local cluster's start included),
+    ``wall_per_point_s`` (the whole call: imports, checks, cluster, merge and map included, over ``points``),
+    ``settle_median_s`` (median ``wall_time_s``), ``point_over_settle_median`` (median of each point's
+    ``point_time_s`` over its ``wall_time_s``, from :meth:`simgrip.sweep.store.Tally.timing`) and
+    ``wall_per_point_over_settle`` (``wall_per_point_s / settle_median_s``).  ``cores`` is the number of
+    worker processes (1 in-process; ``None`` on an existing cluster, whose size is its own: per core then
+    ``None``).  Values are ``None`` where nothing was computed."""
+    pps = points / compute_s if points and compute_s > 0 else None
+    per_point = wall_s / points if points else None
+    settle = timing.get("settle_median_s")
+    return {
+        "points": points, "compute_s": compute_s, "cores": cores, "points_per_s": pps,
+        "points_per_s_per_core": pps / cores if pps is not None and cores else None,
+        "wall_per_point_s": per_point, "settle_median_s": settle,
+        "point_over_settle_median": timing.get("point_over_settle_median"),
+        "wall_per_point_over_settle": per_point / settle if per_point is not None and settle else None,
+    }
 
 
 def _finished(out: Path, grid: SweepGrid, note, t0: float) -> SweepResult:
@@ -298,7 +353,7 @@ def _finished(out: Path, grid: SweepGrid, note, t0: float) -> SweepResult:
 
 
 def _write(out: Path, result: SweepResult, store: PartialStore, options: RunnerOptions, batch_size, draw: bool,
-           t0: float) -> dict:
+           t0: float, compute_s: float, cores) -> dict:
     paths = {"csv": out / "sweep.csv", "json": out / "sweep.json"}
     result.counts = store.merge(paths["csv"])  # streamed, in grid order, counted on the way
     if draw:
@@ -309,14 +364,16 @@ def _write(out: Path, result: SweepResult, store: PartialStore, options: RunnerO
     from simgrip.io import write_json
 
     result.wall_time_s = time.perf_counter() - t0
+    result.throughput = throughput(result.computed, compute_s, result.wall_time_s, cores, store.timing)
     write_json(paths["json"], {
         "command": "sweep",
-        "arguments": {**result.grid.spec(), "jobs": options.jobs, "scheduler": options.scheduler,
+        "arguments": {**result.grid.spec(), "reference": result.grid.reference, "jobs": options.jobs, "scheduler": options.scheduler,
                       "scheduler_file": options.scheduler_file, "batch_size": batch_size},
         "columns": list(COLUMNS),
         "versions": versions(),
         "counts": {**result.counts, "computed": result.computed, "resumed": result.resumed},
         "wall_time_s": result.wall_time_s,
+        "throughput": result.throughput,
         "files": {k: v.name for k, v in paths.items() if k != "json"},
     })
     return {k: str(v) for k, v in paths.items()}
@@ -337,10 +394,14 @@ def add_arguments(p) -> None:
     g.add_argument("--gamma", nargs="+", default=None, metavar="V", help="Grip III contact arc length gamma/l [default 0.8]")
     p.add_argument("--links", type=int, required=True, help="links per finger")
     p.add_argument("--method", default="newton", help="settle method: newton or dynamics [default newton]")
+    p.add_argument("--reference", default="bvp", metavar="{bvp,none}",
+                   help="bvp: the elastica BVP beside every point, warm-started along the grid (bvp_* and agree "
+                   "columns); none: the simulation only (those columns empty) [default bvp]")
     p.add_argument("--out", required=True, help="output folder (sweep.csv, sweep.json, map.png)")
     p.add_argument("--resume", action="store_true", help=f"complete an interrupted sweep saved in OUT/{PARTIAL} (damaged batch files are set aside "
                    "and recomputed; a finished sweep computes nothing)")
-    p.add_argument("--batch-size", type=int, default=None, help="points per Dask task [default: automatic]")
+    p.add_argument("--batch-size", type=int, default=None, help="points per Dask task, in whole continuation "
+                   f"segments (at most {SEGMENT_POINTS} points each; at least one) [default: automatic]")
     p.add_argument("--no-map", action="store_true", help="do not draw map.png")
     p.add_argument("--throughput", action="store_true",
                    help="measure points/s instead: plain loop, local cluster and dask-CLI cluster (no files but "
@@ -362,7 +423,7 @@ class _RenamedOption(argparse.Action):
 def grid_from_args(args) -> SweepGrid:
     """The :class:`SweepGrid` of parsed ``simgrip sweep`` arguments (``ValueError`` naming the option)."""
     return make_grid(args.grip, kappa=args.kappa, D=args.D, M=args.M, mu=args.mu, b=args.b, gamma=args.gamma,
-                     links=args.links, method=args.method)
+                     links=args.links, method=args.method, reference=args.reference)
 
 
 def cli_sweep(args):
@@ -390,8 +451,10 @@ def cli_sweep(args):
     c = res.counts
     print(f"{c['points']} points ({res.computed} computed, {res.resumed} resumed): {c['settled']} settled, "
           f"{c['unsettled']} unsettled, {c['rejected']} rejected, {c['error']} failed; "
-          f"{c['feasible']} held and feasible, {c['agree']} agree with the BVP, {c['disagree']} disagree; "
-          f"{res.wall_time_s:.1f} s", file=sys.stderr)
+          f"{c['feasible']} held and feasible, "
+          + (f"{c['agree']} agree with the BVP, {c['disagree']} disagree; " if grid.reference == "bvp" else
+             "no BVP reference (--reference none); ")
+          + f"{res.wall_time_s:.1f} s", file=sys.stderr)
     return None
 
 

@@ -41,9 +41,9 @@ import uuid
 from pathlib import Path
 
 from simgrip.io import atomic_write, write_json
-from simgrip.sweep.point import COLUMNS, STATUSES
+from simgrip.sweep.point import COLUMNS, STATUSES, TIME_COLUMNS
 
-__all__ = ["PARTIAL", "REJECTED", "BatchError", "PartialStore", "Tally", "counts", "format_csv", "iter_csv",
+__all__ = ["PARTIAL", "REJECTED", "BatchError", "LogHistogram", "PartialStore", "Tally", "counts", "format_csv", "iter_csv",
            "read_csv", "same_results", "verify_batch", "write_csv"]
 
 #: Folder (inside ``--out``) of an unfinished sweep's saved points.
@@ -51,7 +51,7 @@ PARTIAL = ".partial"
 #: Sub-folder of :data:`PARTIAL` where damaged batch files are set aside on ``--resume``.
 REJECTED = "rejected"
 _BOOL = ("held", "feasible", "bvp_feasible", "agree")
-_TEXT = ("status", "message", "bvp_message")
+_TEXT = ("status", "message", "bvp_message", "bvp_warning")
 #: Header of a batch file.
 BATCH_COLUMNS = ("index",) + COLUMNS
 #: ``batch-START-STOP-ID.csv``; files of earlier versions, ``batch-START-ID.csv``, declare no end.
@@ -137,12 +137,45 @@ def read_csv(path) -> list[dict]:
     return list(iter_csv(path))
 
 
+class LogHistogram:
+    """Positive numbers counted in :data:`BINS_PER_DECADE` logarithmic bins per decade (memory fixed whatever
+    the count): :meth:`median` is the geometric middle of the median's bin, within a factor
+    ``10 ** (0.5 / BINS_PER_DECADE)`` (0.6 %) of the exact median."""
+
+    BINS_PER_DECADE = 200
+
+    def __init__(self):
+        self.bins: dict[int, int] = {}  # at most ~200 bins a decade over the values' range (times: ~6 decades)
+        self.n = 0
+
+    def add(self, v) -> None:
+        if v is None or not (v > 0) or math.isinf(v):
+            return
+        k = math.floor(math.log10(v) * self.BINS_PER_DECADE)
+        self.bins[k] = self.bins.get(k, 0) + 1
+        self.n += 1
+
+    def median(self) -> float | None:
+        """The median (see the class docstring), ``None`` when nothing was counted."""
+        if self.n == 0:
+            return None
+        seen, half = 0, (self.n + 1) / 2
+        for k in sorted(self.bins):
+            seen += self.bins[k]
+            if seen >= half:
+                return 10.0 ** ((k + 0.5) / self.BINS_PER_DECADE)
+        return None  # pragma: no cover - the counts add up to n
+
+
 class Tally:
-    """Counts of a sweep table accumulated one row at a time (:meth:`add`); :meth:`as_dict` gives :func:`counts`."""
+    """Counts of a sweep table accumulated one row at a time (:meth:`add`); :meth:`as_dict` gives :func:`counts`,
+    :meth:`timing` the medians of the settle's time and of the point's over its settle (fixed memory)."""
 
     def __init__(self):
         self.c = {"points": 0, **{s: 0 for s in STATUSES}, "held": 0, "feasible": 0, "bvp_feasible": 0, "agree": 0,
-                  "disagree": 0, "bvp_failed": 0}
+                  "disagree": 0, "bvp_failed": 0, "bvp_jumped": 0}
+        self.settle = LogHistogram()
+        self.ratio = LogHistogram()
 
     def add(self, r: dict) -> None:
         c = self.c
@@ -154,10 +187,19 @@ class Tally:
         c["bvp_feasible"] += r["bvp_feasible"] is True
         c["agree"] += r["agree"] is True
         c["disagree"] += r["agree"] is False
-        c["bvp_failed"] += r["bvp_feasible"] is None
+        c["bvp_failed"] += r["bvp_feasible"] is None and bool(r["bvp_message"])  # none: no BVP, no message
+        c["bvp_jumped"] += bool(r.get("bvp_warning"))
+        settle, point = r.get("wall_time_s"), r.get("point_time_s")
+        self.settle.add(settle)
+        if settle and point:
+            self.ratio.add(point / settle)
 
     def as_dict(self) -> dict:
         return dict(self.c)
+
+    def timing(self) -> dict:
+        """``{"settle_median_s", "point_over_settle_median"}`` over the rows with both times (``None``: none)."""
+        return {"settle_median_s": self.settle.median(), "point_over_settle_median": self.ratio.median()}
 
 
 class BatchError(ValueError):
@@ -253,6 +295,7 @@ class PartialStore:
         self.saved = 0
         self.done = bytearray(grid.size)
         self.batches: list[tuple[int, int, Path]] = []  # (first, last, file) of every good batch
+        self.timing: dict = {}  # medians of the times, set by merge (Tally.timing)
 
     def exists(self) -> bool:
         return self.dir.is_dir()
@@ -372,6 +415,7 @@ class PartialStore:
                 raise RuntimeError(f"sweep: points {expect}..{self.grid.size - 1} are not among the saved batches")
 
         write_csv(csv_path, rows(), COLUMNS)
+        self.timing = tally.timing()
         return tally.as_dict()
 
     def batch_files(self) -> list[Path]:
@@ -391,7 +435,7 @@ def counts(rows) -> dict:
     return tally.as_dict()
 
 
-def same_results(a: list[dict], b: list[dict], ignore=("wall_time_s",)) -> bool:
+def same_results(a: list[dict], b: list[dict], ignore=TIME_COLUMNS) -> bool:
     """True when two tables are equal in every column but ``ignore`` (NaN-free by construction)."""
     if len(a) != len(b):
         return False
