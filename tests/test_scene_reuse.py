@@ -252,3 +252,16 @@ def test_bad_arguments_are_the_builders_errors():
         with pytest.raises(ValueError, match="fingers = 3"):
             build("I", narrow, Uniform(-2.0), 6, fingers=3, workpiece="cylinder")
     assert math.isfinite(reuse.build_scene("I", p, Uniform(-2.0), 6).model.stat.meaninertia)
+
+
+def test_a_keyword_no_test_compares_is_built_fresh():
+    """A builder keyword outside VERIFIED_KEYWORDS (one added later) never gets a cached scene off its default."""
+
+    def builder(grip, params, profile, n_links, *, fingers=1, contact=None, initial_angles=None):
+        raise AssertionError("not called")
+
+    skip = ("grip", "params", "profile", "n_links", "initial_angles")
+    args = ("I", DimensionlessParams(), Uniform(-1.0), 6)
+    assert reuse._structure(builder, args, {"fingers": 2}, skip) is not None
+    assert reuse._structure(builder, args, {"contact": None}, skip) is not None  # at its default: cached
+    assert reuse._structure(builder, args, {"contact": "full"}, skip) is None
