@@ -265,3 +265,22 @@ def test_a_keyword_no_test_compares_is_built_fresh():
     assert reuse._structure(builder, args, {"fingers": 2}, skip) is not None
     assert reuse._structure(builder, args, {"contact": None}, skip) is not None  # at its default: cached
     assert reuse._structure(builder, args, {"contact": "full"}, skip) is None
+
+
+def test_a_reused_scene_has_no_stale_spec_and_an_interrupted_one_is_dropped(monkeypatch):
+    reuse.clear()
+    p = DimensionlessParams()
+    a = reuse.build_scene("I", p, Uniform(-2.0), 6)
+    assert a.spec is not None  # freshly built: the spec is the model's
+    assert reuse.build_scene("I", p, Uniform(-3.0), 6).spec is None  # set in place: the spec would be stale
+
+    def interrupted(*args, **kw):
+        raise KeyboardInterrupt
+
+    with monkeypatch.context() as mp:
+        mp.setattr(reuse, "_set_links", interrupted)
+        with pytest.raises(KeyboardInterrupt):
+            reuse.build_scene("I", p, Uniform(-4.0), 6)
+    b = reuse.build_scene("I", p, Uniform(-4.0), 6)
+    assert b is not a  # the half-set scene was dropped, this one is fresh
+    assert_same_model(b.model, build_scene("I", p, Uniform(-4.0), 6).model)

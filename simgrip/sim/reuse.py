@@ -43,7 +43,10 @@ thread, least recently used dropped).  A scene handed out is **owned by the
 cache**: it is valid until the next call for the same structure in the same
 thread, which resets and rewrites it; callers settle it and read the state
 (a :class:`~simgrip.settle.SettledState` holds copies, not the scene), or
-use :func:`simgrip.scenes.build_scene` for a scene of their own.  Each
+use :func:`simgrip.scenes.build_scene` for a scene of their own.  Its
+``spec`` is None once it has been set in place (the spec would describe the
+first build's parameters); an interruption while it is being set (an error,
+Ctrl-C, a deadline) drops the entry.  Each
 thread has its own cache (``threading.local``; no lock needed, no scene
 shared between threads); each process (a Dask worker, a ``multiprocessing``
 child) has its own too.  :func:`clear` empties the calling thread's cache.
@@ -86,8 +89,9 @@ class _Entry:
     def snapshot(self) -> None:
         """Take the model as it is now (freshly set, not yet settled) as the one to restore."""
         m = self.scene.model
-        self.template = copy.copy(m)
-        self.fields = [(getattr(m, k), getattr(self.template, k)) for k in _array_fields(m)]
+        template = copy.copy(m)
+        fields = [(getattr(m, k), getattr(template, k)) for k in _array_fields(m)]
+        self.template, self.fields = template, fields
 
     def restore(self) -> None:
         """Undo whatever was written into the model since :meth:`snapshot` (the settles' options, damping...)."""
@@ -283,8 +287,9 @@ def _finish(entry, const_inputs, start) -> None:
         mujoco.mj_setConst(m, d)
         # the rendering dressing gives center and extent in the spec: the compiler keeps those
         _set_stat(m, d, keep_frame=bool(getattr(sc, "render", False)))
-        entry.const_inputs = const_inputs
         entry.snapshot()
+        entry.const_inputs = const_inputs
+    sc.spec = None  # the spec describes the parameters of the first build, no longer the model's
     mujoco.mj_resetData(m, d)
     start(sc)
 
@@ -343,27 +348,31 @@ def scene(grip: str, params, profile, n_links: int, **kw):
         _store(key, _Entry(sc, const_inputs))
         return sc
 
-    entry.restore()
-    sc = entry.scene
-    m = sc.model
-    _set_links(m, sc.index, [springs] * fingers, phys.EI, phys.rho, L, r_link * L)
-    m.opt.gravity = [0.0, 0.0, -phys.g]
-    if place is not None:
-        wb = sc.workpiece_body
-        hx, hy, hz = (float(v) for v in place.half)
-        _set_body_pos(m, wb, [0.0, 0.0, float(place.center_z)])
-        m.body_mass[wb] = imass
-        m.body_inertia[wb] = workpiece_inertia("box", (hx, hy, hz), imass)
-        m.body_gravcomp[wb] = 1.0 - mass / imass if mass < imass else 0.0
-        m.geom_size[mujoco.mj_name2id(m, mujoco.mjtObj.mjOBJ_GEOM, "workpiece_box")] = [hx, hy, hz]
-        if grip == "III":
-            for f, g in enumerate(sc.workpiece_geoms):  # fromto (+-hx, -+hy, -hz): centre (+-hx, 0, -hz)
-                m.geom_pos[g] = [hx if f == 0 else -hx, 0.0, -hz]
-        m.pair_friction[:, :2] = phys.mu_s
-    sc.params, sc.physical, sc.profile, sc.springs = dimless, phys, prof, springs
-    sc.box_half = place.half if place is not None else np.zeros(3)
-    _finish(entry, const_inputs, lambda s: S.set_joint_angles(s, q0))
-    return sc
+    try:  # interrupted (an error, Ctrl-C, a deadline): the half-set entry is dropped
+        entry.restore()
+        sc = entry.scene
+        m = sc.model
+        _set_links(m, sc.index, [springs] * fingers, phys.EI, phys.rho, L, r_link * L)
+        m.opt.gravity = [0.0, 0.0, -phys.g]
+        if place is not None:
+            wb = sc.workpiece_body
+            hx, hy, hz = (float(v) for v in place.half)
+            _set_body_pos(m, wb, [0.0, 0.0, float(place.center_z)])
+            m.body_mass[wb] = imass
+            m.body_inertia[wb] = workpiece_inertia("box", (hx, hy, hz), imass)
+            m.body_gravcomp[wb] = 1.0 - mass / imass if mass < imass else 0.0
+            m.geom_size[mujoco.mj_name2id(m, mujoco.mjtObj.mjOBJ_GEOM, "workpiece_box")] = [hx, hy, hz]
+            if grip == "III":
+                for f, g in enumerate(sc.workpiece_geoms):  # fromto (+-hx, -+hy, -hz): centre (+-hx, 0, -hz)
+                    m.geom_pos[g] = [hx if f == 0 else -hx, 0.0, -hz]
+            m.pair_friction[:, :2] = phys.mu_s
+        sc.params, sc.physical, sc.profile, sc.springs = dimless, phys, prof, springs
+        sc.box_half = place.half if place is not None else np.zeros(3)
+        _finish(entry, const_inputs, lambda s: S.set_joint_angles(s, q0))
+    except BaseException:
+        _cache().pop(key, None)
+        raise
+    return entry.scene
 
 
 def build_scene(grip: str, params, profile, n_links: int, **kw):
@@ -440,23 +449,27 @@ def build_gripper(grip: str, params, profile, n_links: int, **kw):
         if key[-1] is not None:
             _store(key, _Entry(sc, const_inputs))
         return sc
-    entry.restore()
-    sc = entry.scene
-    m = sc.model
-    _set_links(m, sc.index, finger_springs, phys.EI, phys.rho, L, r_link * L)
-    m.opt.gravity = [0.0, 0.0, -phys.g]
-    wb = sc.workpiece_body
-    _set_body_pos(m, wb, centre)
-    m.body_mass[wb] = mass
-    m.body_inertia[wb] = [max(v, 10.0 * mujoco.mjMINVAL) for v in workpiece_inertia(shape, size, mass)]
-    gsize = list(size) if shape == "box" else [size[0], size[1] if shape == "cylinder" else 0.0, 0.0]
-    m.geom_size[sc.workpiece_geom] = gsize
-    m.pair_friction[:, :2] = phys.mu_s
-    sc.params, sc.physical, sc.profile, sc.springs = dimless, phys, profs[0], springs
-    sc.size, sc.reach, sc.normals = size, place.reach, place.normal
-    sc.profiles, sc.finger_springs = profs, finger_springs
-    _finish(entry, const_inputs, lambda s: set_joint_angles(s, q0))
-    return sc
+    try:  # interrupted (an error, Ctrl-C, a deadline): the half-set entry is dropped
+        entry.restore()
+        sc = entry.scene
+        m = sc.model
+        _set_links(m, sc.index, finger_springs, phys.EI, phys.rho, L, r_link * L)
+        m.opt.gravity = [0.0, 0.0, -phys.g]
+        wb = sc.workpiece_body
+        _set_body_pos(m, wb, centre)
+        m.body_mass[wb] = mass
+        m.body_inertia[wb] = [max(v, 10.0 * mujoco.mjMINVAL) for v in workpiece_inertia(shape, size, mass)]
+        gsize = list(size) if shape == "box" else [size[0], size[1] if shape == "cylinder" else 0.0, 0.0]
+        m.geom_size[sc.workpiece_geom] = gsize
+        m.pair_friction[:, :2] = phys.mu_s
+        sc.params, sc.physical, sc.profile, sc.springs = dimless, phys, profs[0], springs
+        sc.size, sc.reach, sc.normals = size, place.reach, place.normal
+        sc.profiles, sc.finger_springs = profs, finger_springs
+        _finish(entry, const_inputs, lambda s: set_joint_angles(s, q0))
+    except BaseException:
+        _cache().pop(key, None)
+        raise
+    return entry.scene
 
 
 def _cradle(args, kw, a, K):
@@ -505,37 +518,41 @@ def _cradle(args, kw, a, K):
         if key[-1] is not None:
             _store(key, _Entry(sc, const_inputs))
         return sc
-    entry.restore()
-    sc = entry.scene
-    m = sc.model
-    yaw = float(sc.yaw)
-    _set_links(m, sc.index, [springs] * K, phys.EI, phys.rho, L, r_link * L)
-    m.opt.gravity = [0.0, 0.0, -phys.g]
-    i = mujoco.mj_name2id(m, mujoco.mjtObj.mjOBJ_NUMERIC, START_NUMERIC)
-    m.numeric_data[int(m.numeric_adr[i]):int(m.numeric_adr[i]) + n] = q0
-    wb = sc.workpiece_body
-    _set_body_pos(m, wb, [0.0, 0.0, zc + hz])
-    m.body_mass[wb] = mass
-    m.body_inertia[wb] = [max(v, 10.0 * mujoco.mjMINVAL) for v in workpiece_inertia("box", size, mass)]
-    m.geom_size[sc.workpiece_geom] = list(size)
-    # the corner capsules' frames come from fromto: compile them alone, exactly as build_cradle adds them
-    spec = root_spec("simgrip_cradle_corners", phys.g)
-    body = spec.worldbody.add_body(name="b")
-    corner_cls = spec.find_default("corner")
-    for k in range(K):
-        az = float(sc.azimuths[k]) - yaw
-        e, t = np.array([math.cos(az), math.sin(az)]), np.array([-math.sin(az), math.cos(az)])
-        p0, p1 = hx * e - hx * t, hx * e + hx * t
-        body.add_geom(corner_cls, name=corner_name(k), fromto=[p0[0], p0[1], -hz, p1[0], p1[1], -hz],
-                      size=[r_corner * L, 0.0, 0.0])
-    small = spec.compile()
-    for k in range(K):
-        g = mujoco.mj_name2id(m, mujoco.mjtObj.mjOBJ_GEOM, corner_name(k))
-        for f in ("geom_pos", "geom_quat", "geom_size"):
-            getattr(m, f)[g] = getattr(small, f)[k]
-    m.pair_friction[:, :2] = phys.mu_s
-    sc.params, sc.physical, sc.profile, sc.springs = dimless, phys, prof, springs
-    sc.size, sc.reach = size, np.full(K, 0.5 * dimless.b)
-    sc.profiles, sc.finger_springs = (prof,) * K, (springs,) * K
-    _finish(entry, const_inputs, lambda s: set_joint_angles(s, np.tile(q0, (K, 1))))
-    return sc
+    try:  # interrupted (an error, Ctrl-C, a deadline): the half-set entry is dropped
+        entry.restore()
+        sc = entry.scene
+        m = sc.model
+        yaw = float(sc.yaw)
+        _set_links(m, sc.index, [springs] * K, phys.EI, phys.rho, L, r_link * L)
+        m.opt.gravity = [0.0, 0.0, -phys.g]
+        i = mujoco.mj_name2id(m, mujoco.mjtObj.mjOBJ_NUMERIC, START_NUMERIC)
+        m.numeric_data[int(m.numeric_adr[i]):int(m.numeric_adr[i]) + n] = q0
+        wb = sc.workpiece_body
+        _set_body_pos(m, wb, [0.0, 0.0, zc + hz])
+        m.body_mass[wb] = mass
+        m.body_inertia[wb] = [max(v, 10.0 * mujoco.mjMINVAL) for v in workpiece_inertia("box", size, mass)]
+        m.geom_size[sc.workpiece_geom] = list(size)
+        # the corner capsules' frames come from fromto: compile them alone, exactly as build_cradle adds them
+        spec = root_spec("simgrip_cradle_corners", phys.g)
+        body = spec.worldbody.add_body(name="b")
+        corner_cls = spec.find_default("corner")
+        for k in range(K):
+            az = float(sc.azimuths[k]) - yaw
+            e, t = np.array([math.cos(az), math.sin(az)]), np.array([-math.sin(az), math.cos(az)])
+            p0, p1 = hx * e - hx * t, hx * e + hx * t
+            body.add_geom(corner_cls, name=corner_name(k), fromto=[p0[0], p0[1], -hz, p1[0], p1[1], -hz],
+                          size=[r_corner * L, 0.0, 0.0])
+        small = spec.compile()
+        for k in range(K):
+            g = mujoco.mj_name2id(m, mujoco.mjtObj.mjOBJ_GEOM, corner_name(k))
+            for f in ("geom_pos", "geom_quat", "geom_size"):
+                getattr(m, f)[g] = getattr(small, f)[k]
+        m.pair_friction[:, :2] = phys.mu_s
+        sc.params, sc.physical, sc.profile, sc.springs = dimless, phys, prof, springs
+        sc.size, sc.reach = size, np.full(K, 0.5 * dimless.b)
+        sc.profiles, sc.finger_springs = (prof,) * K, (springs,) * K
+        _finish(entry, const_inputs, lambda s: set_joint_angles(s, np.tile(q0, (K, 1))))
+    except BaseException:
+        _cache().pop(key, None)
+        raise
+    return entry.scene
