@@ -172,7 +172,10 @@ class ChainModel:
     def join(self, q, phi, y) -> np.ndarray:
         """``q`` with the link angles ``phi`` and the workpiece dofs ``y`` written in."""
         qq = np.array(q, dtype=float)
-        qq[self.jq] = np.diff(np.asarray(phi).reshape(self.fingers, self.nl), axis=1, prepend=0.0).reshape(-1)
+        ph = np.asarray(phi, dtype=float).reshape(self.fingers, self.nl)
+        dq = ph.copy()  # np.diff(ph, prepend=0) without its concatenation: phi_0 - 0 is phi_0
+        dq[:, 1:] -= ph[:, :-1]
+        qq[self.jq] = dq.reshape(-1)
         if self.nw:
             qq[self.wq] = np.atleast_1d(y) * self.wscale
         return qq
@@ -180,8 +183,10 @@ class ChainModel:
     def nodes(self, phi) -> np.ndarray:
         """Nodes (x, z) over l of every finger in its own frame (finger 1 mirrored in x): (fingers, nl + 1, 2)."""
         ph = np.asarray(phi).reshape(self.fingers, self.nl)
-        seg = self.ds * np.stack([np.cos(ph), np.sin(ph)], 2)
-        return np.concatenate([np.zeros((self.fingers, 1, 2)), np.cumsum(seg, 1)], 1)
+        out = np.zeros((self.fingers, self.nl + 1, 2))  # (the same sums as cumsum of stacked segments)
+        np.cumsum(self.ds * np.cos(ph), axis=1, out=out[:, 1:, 0])
+        np.cumsum(self.ds * np.sin(ph), axis=1, out=out[:, 1:, 1])
+        return out
 
     def pose(self, f, y):
         """Workpiece origin ``O`` and angle ``alpha`` in finger ``f``'s frame, and their derivatives in ``y``.
@@ -399,16 +404,21 @@ class ChainModel:
         A = np.empty(len(self.pairs))
         for f in range(self.fingers):
             Of, af, _, _ = self.pose(f, y)
-            O[self._pf == f], A[self._pf == f] = Of, af
+            mine = self._pf == f
+            O[mine], A[mine] = Of, af
         ca, sa = np.cos(A), np.sin(A)
-        rot = lambda u: np.stack([ca * u[:, 0] - sa * u[:, 1], sa * u[:, 0] + ca * u[:, 1]], 1)  # noqa: E731
-        c = O + rot(self._gl)
+        gl = self._gl
+        rgl = np.empty_like(gl)  # R(alpha) c_loc
+        rgl[:, 0] = ca * gl[:, 0] - sa * gl[:, 1]
+        rgl[:, 1] = sa * gl[:, 0] + ca * gl[:, 1]
+        c = O + rgl
         a, b = nodes[self._pf, self._pl], nodes[self._pf, self._pl + 1]
         seg = b - a
         u = np.clip(np.einsum("ij,ij->i", c - a, seg) / np.einsum("ij,ij->i", seg, seg), 0.0, 1.0)
         caps = np.hypot(*(c - a - u[:, None] * seg).T) - self._rad
-        nrm = np.stack([ca, sa], 1)  # the face normal, turned with the workpiece
-        face = np.einsum("ij,ij->i", nrm, b - O) - (np.einsum("ij,ij->i", nrm, rot(self._gl)) + self._hx) - self._rad
+        nrm = np.empty_like(gl)  # the face normal, turned with the workpiece
+        nrm[:, 0], nrm[:, 1] = ca, sa
+        face = np.einsum("ij,ij->i", nrm, b - O) - (np.einsum("ij,ij->i", nrm, rgl) + self._hx) - self._rad
         return np.where(self._sph, face, caps)
 
     def stick_term(self, s, phi, nodes, y) -> Term:

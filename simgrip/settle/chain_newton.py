@@ -233,6 +233,7 @@ class ChainNewton(Newton):
             return conv, why, qq
 
         polished = False
+        dist_at = None  # (phi, w, pair distances) of the last accepted state
         max_iter = min(max_iter, self.iterations + CHAIN_SOLVE_ITERS)
         while True:
             if self.sticks:
@@ -267,7 +268,10 @@ class ChainNewton(Newton):
                     break
                 return finish(False, "stalled", state_q(phi, w), N, lam)
             merit = float(np.linalg.norm(R))
-            d0 = cm.pair_distances(phi, cm.nodes(phi), w) if contacts else None
+            if contacts and dist_at is not None and dist_at[0] is phi and dist_at[1] is w:
+                d0 = dist_at[2]  # computed at this very state when it was accepted
+            else:
+                d0 = cm.pair_distances(phi, cm.nodes(phi), w) if contacts else None
             inact = [p for p in range(len(self.pairs)) if p not in self.normal_active] if contacts else []
             step, accepted = 1.0, False
             for _ in range(50):
@@ -294,6 +298,7 @@ class ChainNewton(Newton):
             stiffen(N)
             if contacts:  # a pair that starts touching joins the set at once
                 dn = cm.pair_distances(phi, cm.nodes(phi), w)
+                dist_at = (phi, w, dn)
                 newp = [p for p in range(len(self.pairs)) if p not in self.normal_active and dn[p] < 0.0]
                 if newp:
                     self.normal_active = self.normal_active + newp
