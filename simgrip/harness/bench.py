@@ -22,7 +22,8 @@ Files written (atomically) to ``out_dir``, which is checked before any work:
 ``summary.md``, ``skips.md`` (:mod:`simgrip.harness.tables`), ``sweep.json``, and the
 settle's targets ``settle_targets.json``/``.md`` (:mod:`simgrip.harness.bench_settle`), and the
 K-finger settles ``gripper.json``/``.md`` (:mod:`simgrip.harness.bench_gripper`; their rows also
-under ``"gripper"`` in ``bench.json``).
+under ``"gripper"`` in ``bench.json``), and the modes' run time and frequency error against ``n``
+``modes.json``/``.md``/``.png`` (:mod:`simgrip.harness.bench_modes`).
 
 Command line: ``simgrip bench [--quick] [--out DIR] [--repeats R]`` and the
 runner's options (``--jobs``, ``--scheduler``, ``--scheduler-file``,
@@ -102,6 +103,8 @@ class BenchResult:
     settle_targets: dict = field(default_factory=dict)
     #: K-finger settles against K single fingers and the symmetry skip (:mod:`simgrip.harness.bench_gripper`).
     gripper: dict = field(default_factory=dict)
+    #: The modes' run time and frequency error against n (:mod:`simgrip.harness.bench_modes`).
+    modes: dict = field(default_factory=dict)
     files: dict = field(default_factory=dict)
     jobs: int | None = 1
     quick: bool = False
@@ -214,14 +217,20 @@ def run_bench(
     from simgrip.harness.bench_gripper import write_gripper_bench  # issue 13's K-finger ratios, one run
 
     result.gripper = write_gripper_bench(out, quick=quick)
+    from simgrip.harness.bench_modes import write_modes_bench  # issue 20's modes: run time and error against n
+
+    result.modes = write_modes_bench(out, quick=quick, repeats=repeats)
     result.files = {**_write(out, result), **{name: out / name for name in ("settle_targets.json", "settle_targets.md",
-                                                                            "gripper.json", "gripper.md")}}
+                                                                            "gripper.json", "gripper.md", "modes.json",
+                                                                            "modes.md", "modes.png")}}
     return result
 
 
-#: The files run_bench writes into its folder (_write's, then write_settle_targets' and write_gripper_bench's).
+#: The files run_bench writes into its folder (_write's, then write_settle_targets', write_gripper_bench's and
+#: write_modes_bench's).
 OUTPUT_FILES = ("bench.csv", "bench.json", "sweep.json", "skips.md", "summary.md", "pareto.png",
-                "settle_targets.json", "settle_targets.md", "gripper.json", "gripper.md")
+                "settle_targets.json", "settle_targets.md", "gripper.json", "gripper.md", "modes.json", "modes.md",
+                "modes.png")
 
 
 def _loadavg():
