@@ -96,5 +96,22 @@ def test_bad_arguments_are_named():
         rod_modes(straight(1.0), 0)
     with pytest.raises(ValueError, match="nodes must"):
         rod_modes(straight(1.0), 3, 1000)
-    with pytest.raises(ValueError, match="grip"):
-        problem_of(elastica.solve("III", STANDARD, Uniform(-6.0)))
+    with pytest.raises(ValueError, match="solution"):
+        problem_of(elastica.solve("free", STANDARD, Uniform(-1.0), tip_load=(0.0, -1.0)))
+
+
+@pytest.mark.parametrize("tip", ["stick", "fixed"])
+def test_interior_contact_tends_to_the_tip_contact(tip):
+    """Grip III's two-segment problem (contact at gamma < 1, free tip beyond) tends to the tip contact as
+    gamma -> 1, at first order in 1 - gamma (the eigenvalues are smooth in gamma): the change shrinks tenfold
+    from 1 - gamma = 1e-4 to 1e-5."""
+    def lam(gamma):
+        P = RodProblem(theta0=lambda s: -3.0 * s, D=1.0, tip_force=(5.0, -5.0), tip=tip, tip_mass=5.0,
+                       contact=gamma)
+        return rod_modes(P, 3).lam
+
+    tip_lam = lam(1.0)
+    d4, d5 = lam(1 - 1e-4) / tip_lam - 1, lam(1 - 1e-5) / tip_lam - 1
+    assert np.all(np.abs(d4 / d5 - 10.0) < 0.5), (d4, d5)
+    with pytest.raises(ValueError, match="contact"):
+        rod_modes(RodProblem(theta0=np.zeros_like, D=1.0, contact=0.5))

@@ -22,6 +22,10 @@ does not vanish with ``ds``: ``~(beta_k r_link)^2 / 8 < 1e-5`` for the first thr
 With the springs' and gravity's second-order discretisation (:mod:`simgrip.chain`),
 the chain's frequencies converge to the rod's at second order in ``ds``.
 
+Grip III: the workpiece's corner sticks to the rod's centreline point at the simulation's own ``gamma``; the
+reference is the BVP at that ``gamma`` and ``X(gamma)`` (as :mod:`simgrip.compare`), and the contact falling
+inside a link makes the chain's error first order there, like the statics'.
+
 Which motions the modes cover: one finger (the symmetric reduction) with the
 workpiece sliding vertically, so its symmetric modes; the workpiece neither
 sways nor rocks in them.  ``fingers=2`` builds both mirrored fingers with the
@@ -64,7 +68,8 @@ class ModeResult:
     joint_shapes : ndarray (count, nv)
         The same modes in MuJoCo's generalised coordinates (mass-normalised).
     reference_frequencies : ndarray (count,) or None
-        The linearised elastica's (:mod:`.rod`), or None where it does not apply (Grip III, two fingers).
+        The linearised elastica's (:mod:`.rod`; Grip III at the simulation's own ``gamma`` and ``X(gamma)``), or
+        None where it does not apply (two fingers, a Grip III contact at the tip).
     relative_difference : ndarray (count,) or None
         ``frequencies / reference_frequencies - 1``.
     mac : ndarray (count,) or None
@@ -254,16 +259,24 @@ def modes(grip, params, profile, links, *, count: int = 3, fingers: int = 1, met
     ref_err = None
     times["settle"] = t_settle
     wp_mass = scene.workpiece_inertial_mass / fingers / (phys.rho * phys.length) if scene.has_workpiece else 0.0
-    if reference and fingers == 1 and grip != "III" and (grip == "free" or state.held):
+    c = state.contact
+    if reference and fingers == 1 and (grip == "free" or (c is not None and (grip != "III" or c.gamma < 1.0))):
         t1 = time.perf_counter()
-        rm = reference_modes(grip, dimless, prof, count, tip_mass=wp_mass)
+        if grip == "III":  # the BVP at the simulation's own gamma and X(gamma) (simgrip.compare)
+            from simgrip.compare import chain_reference
+            from simgrip.modes.rod import DEFAULT_NODES, problem_of, rod_modes
+
+            sol = chain_reference("III", dimless.replace(b=2.0 * float(c.point[0])), prof, state.link_angles[0],
+                                  float(c.N1), state.nodes[0], gamma=float(c.gamma))
+            rm = rod_modes(problem_of(sol, tip_mass=wp_mass), count, DEFAULT_NODES)
+        else:
+            rm = reference_modes(grip, dimless, prof, count, tip_mass=wp_mass)
         times["reference"] = time.perf_counter() - t1
         ref = rm.omega
         ref_err = rm.error_estimate
         rel = freq / ref - 1.0
         s_nodes = np.arange(scene.n + 1) / scene.n
         macs = np.array([mac(shapes[k, 0, 1:], rm.displacement(k, s_nodes)[1:]) for k in range(count)])
-    c = state.contact
     settled = {
         "tip": [float(x) for x in state.tip[0]], "held": bool(state.held), "residual": float(state.residual),
         "N1": float(c.N1) if c else 0.0, "N2": float(c.N2) if c else 0.0, "workpiece_mass": float(wp_mass),

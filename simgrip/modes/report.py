@@ -29,5 +29,5 @@ def format_modes(result) -> str:
     lines.append(f"settled: tip ({st['tip'][0]:.6g}, {st['tip'][1]:.6g}), N1 {st['N1']:.6g}, N2 {st['N2']:.6g}, "
                  f"residual {st['residual']:.3g}, held {st['held']}")
     if ref is None:
-        lines.append("no rod reference for this case (Grip III or two fingers)")
+        lines.append("no rod reference for this case (two fingers, or a Grip III contact at the tip)")
     return "\n".join(lines)

@@ -87,6 +87,10 @@ class RodProblem:
         horizontal rod with ``stick`` or ``fixed`` is degenerate (``N1`` decouples: a singular pencil).
     tip_mass : float
         Inertial mass of the workpiece per finger over ``rho l`` (``tip="stick"``).
+    contact : float
+        Arc length ``gamma`` of a sticking contact (``tip`` "stick" or "fixed"): 1 at the tip (Grips I/II);
+        below 1 (Grip III) ``tip_force`` acts at ``gamma`` (``n0 = F - (1 - s) E2`` on ``(0, gamma)``, ``-(1 - s)
+        E2`` beyond) and the tip is free.
     """
 
     theta0: Callable
@@ -95,6 +99,7 @@ class RodProblem:
     gravity: float = 1.0
     tip: str = "free"
     tip_mass: float = 0.0
+    contact: float = 1.0
 
 
 @dataclass
@@ -112,6 +117,7 @@ class RodModes:
     states: np.ndarray
     problem: RodProblem
     error_estimate: float = 0.0
+    sizes: tuple = ()
 
     @property
     def omega(self) -> np.ndarray:
@@ -120,9 +126,16 @@ class RodModes:
     def displacement(self, k: int, s) -> np.ndarray:
         """Displacement ``u(s)`` of mode ``k``, shape ``s.shape + (2,)`` (Chebyshev interpolation)."""
         s = np.asarray(s, dtype=float)
-        u1 = BarycentricInterpolator(self.s, self.states[k, 2])(s)
-        u2 = BarycentricInterpolator(self.s, self.states[k, 3])(s)
-        return np.stack([u1, u2], axis=-1)
+        sizes = self.sizes or (self.s.size,)
+        out = np.zeros(s.shape + (2,))
+        at = 0
+        for i, p in enumerate(sizes):
+            seg = self.s[at:at + p]
+            where = (s >= seg[0]) & ((s <= seg[-1]) if i == len(sizes) - 1 else (s < seg[-1]))
+            for c in (0, 1):
+                out[..., c][where] = BarycentricInterpolator(seg, self.states[k, 2 + c, at:at + p])(s[where])
+            at += p
+        return out
 
 
 def cheb(N: int) -> tuple[np.ndarray, np.ndarray]:
@@ -144,6 +157,8 @@ def _check(P: RodProblem) -> None:
         raise ValueError(f"tip must be one of {', '.join(TIPS)}, got {P.tip!r}")
     if not (math.isfinite(P.tip_mass) and P.tip_mass >= 0):
         raise ValueError(f"tip_mass must be non-negative and finite, got {P.tip_mass!r}")
+    if not (0.0 < P.contact <= 1.0) or (P.contact < 1.0 and P.tip not in ("stick", "fixed")):
+        raise ValueError(f"contact must lie in (0, 1] (below 1 only with tip 'stick' or 'fixed'), got {P.contact!r}")
 
 
 def _coefficients(P: RodProblem, s):
@@ -159,7 +174,8 @@ def rod_modes(P: RodProblem, count: int = 3, nodes: int = DEFAULT_NODES) -> RodM
     Collocation of a high-order system makes spurious eigenvalues (huge, of either sign, moving with
     ``nodes``); the problem is solved at ``nodes`` and at ``nodes - RESOLUTION_STEP`` and only eigenvalues
     found at both (to :data:`AGREE` relative) are kept; their largest difference is
-    :attr:`RodModes.error_estimate`.
+    :attr:`RodModes.error_estimate`.  An interior contact (``P.contact < 1``) splits the rod into two
+    Chebyshev segments, ``nodes`` intervals each.
 
     Raises ValueError for bad arguments, ``RuntimeError`` when fewer than ``count``
     eigenvalues are resolved.
@@ -169,7 +185,7 @@ def rod_modes(P: RodProblem, count: int = 3, nodes: int = DEFAULT_NODES) -> RodM
         raise ValueError(f"count must be a positive integer, got {count!r}")
     if isinstance(nodes, bool) or not isinstance(nodes, (int, np.integer)) or not 16 <= nodes <= MAX_NODES:
         raise ValueError(f"nodes must be an integer in [16, {MAX_NODES}], got {nodes!r}")
-    w, V, s = _collocation(P, int(nodes))
+    w, V, s, sizes = _collocation(P, int(nodes))
     w2 = _collocation(P, int(nodes) - RESOLUTION_STEP)[0]
     gap = np.array([np.min(np.abs(w2 - x)) if w2.size else np.inf for x in w]) / np.maximum(1.0, np.abs(w))
     keep = gap <= AGREE
@@ -178,75 +194,118 @@ def rod_modes(P: RodProblem, count: int = 3, nodes: int = DEFAULT_NODES) -> RodM
         raise RuntimeError(f"the rod's collocation resolved {w.size} eigenvalues, fewer than count = {count}; "
                            f"raise nodes ({nodes})")
     w, V, gap = w[:count], V[:, :count], gap[:count]
-    p = s.size
-    states = np.stack([_normalise(V[:, k].reshape(6, p), s) for k in range(count)])
-    return RodModes(lam=w, s=s, states=states, problem=P, error_estimate=float(np.max(gap)))
+    states = np.stack([_normalise(_fields(V[:, k], sizes), s, sizes) for k in range(count)])
+    return RodModes(lam=w, s=s, states=states, problem=P, error_estimate=float(np.max(gap)), sizes=tuple(sizes))
+
+
+def _fields(v, sizes) -> np.ndarray:
+    """A collocation vector (segment by segment, 6 fields each) as ``(6, points)``, segments side by side."""
+    out, at = [], 0
+    for p in sizes:
+        out.append(v[at:at + 6 * p].reshape(6, p))
+        at += 6 * p
+    return np.concatenate(out, axis=1)
 
 
 def _collocation(P: RodProblem, nodes: int):
-    """All finite real eigenvalues (ascending), their vectors and the points of one collocation."""
-    s, Ds = cheb(int(nodes))
-    p = s.size
-    sn, cs, n1, n2 = _coefficients(P, s)
+    """All finite real eigenvalues (ascending), their vectors, the points and the segments' point counts."""
+    gam = float(P.contact)
+    bounds = [(0.0, 1.0)] if gam >= 1.0 else [(0.0, gam), (gam, 1.0)]
+    x, Dx = cheb(int(nodes))
+    p = x.size
+    nseg = len(bounds)
+    size = 6 * p * nseg
+    A = np.zeros((size, size))
+    B = np.zeros((size, size))
     I = np.eye(p)
     dg = np.diag
     PHI, MU, U1, U2, N1, N2 = range(6)
-    A = np.zeros((6 * p, 6 * p))
-    B = np.zeros((6 * p, 6 * p))
 
-    def blk(M, r, c, val):
-        M[r * p:(r + 1) * p, c * p:(c + 1) * p] += val
+    def idx(seg, field, pt=None):
+        base = (seg * 6 + field) * p
+        return base if pt is None else base + pt
 
-    # rows: field' - (rhs without lambda) = lambda (lambda part)
-    blk(A, PHI, PHI, Ds)
-    blk(A, PHI, MU, -I / P.D)
-    blk(A, MU, MU, Ds)
-    blk(A, MU, N1, -dg(sn))
-    blk(A, MU, N2, dg(cs))
-    blk(A, MU, PHI, -dg(n1 * cs + n2 * sn))
-    blk(A, U1, U1, Ds)
-    blk(A, U1, PHI, dg(sn))
-    blk(A, U2, U2, Ds)
-    blk(A, U2, PHI, -dg(cs))
-    blk(A, N1, N1, Ds)
-    blk(B, N1, U1, -I)
-    blk(A, N2, N2, Ds)
-    blk(B, N2, U2, -I)
+    def blk(M, seg, r, c, val):
+        M[idx(seg, r):idx(seg, r) + p, idx(seg, c):idx(seg, c) + p] += val
 
-    def bc(field_row, at, coeffs_a, coeffs_b=()):
-        """Replace the collocation row of ``field_row`` at point ``at`` by sum(c y) = lambda sum(c' y)."""
-        r = field_row * p + at
-        A[r, :] = 0.0
-        B[r, :] = 0.0
-        for fld, pt, c in coeffs_a:
-            A[r, fld * p + pt] = c
-        for fld, pt, c in coeffs_b:
-            B[r, fld * p + pt] = c
+    points = []
+    for seg, (a, b) in enumerate(bounds):
+        s = a + (b - a) * x
+        points.append(s)
+        Ds = Dx / (b - a)
+        th = np.asarray(P.theta0(s), dtype=float)
+        sn, cs = np.sin(th), np.cos(th)
+        # the contact load acts on the clamp side of the contact (gamma included; all of it for a tip contact)
+        F = P.tip_force if seg == 0 else (0.0, 0.0)
+        n1 = np.full(p, float(F[0]))
+        n2 = float(F[1]) - P.gravity * (1.0 - s)
+        # rows: field' - (rhs without lambda) = lambda (lambda part)
+        blk(A, seg, PHI, PHI, Ds)
+        blk(A, seg, PHI, MU, -I / P.D)
+        blk(A, seg, MU, MU, Ds)
+        blk(A, seg, MU, N1, -dg(sn))
+        blk(A, seg, MU, N2, dg(cs))
+        blk(A, seg, MU, PHI, -dg(n1 * cs + n2 * sn))
+        blk(A, seg, U1, U1, Ds)
+        blk(A, seg, U1, PHI, dg(sn))
+        blk(A, seg, U2, U2, Ds)
+        blk(A, seg, U2, PHI, -dg(cs))
+        blk(A, seg, N1, N1, Ds)
+        blk(B, seg, N1, U1, -I)
+        blk(A, seg, N2, N2, Ds)
+        blk(B, seg, N2, U2, -I)
 
-    first, last = 0, p - 1
-    bc(PHI, first, [(PHI, first, 1.0)])
-    bc(U1, first, [(U1, first, 1.0)])
-    bc(U2, first, [(U2, first, 1.0)])
-    bc(MU, last, [(MU, last, 1.0)])
-    if P.tip == "free":
-        bc(N1, last, [(N1, last, 1.0)])
-        bc(N2, last, [(N2, last, 1.0)])
-    elif P.tip == "stick":
-        bc(N1, last, [(U1, last, 1.0)])
-        bc(N2, last, [(N2, last, 1.0)], [(U2, last, float(P.tip_mass))])
-    elif P.tip == "mass":
-        bc(N1, last, [(N1, last, 1.0)], [(U1, last, float(P.tip_mass))])
-        bc(N2, last, [(N2, last, 1.0)], [(U2, last, float(P.tip_mass))])
+    def bc(row, coeffs_a, coeffs_b=()):
+        """Replace collocation row ``row`` by sum(c y[i]) = lambda sum(c' y[i]) (``(index, c)`` pairs)."""
+        A[row, :] = 0.0
+        B[row, :] = 0.0
+        for i, c in coeffs_a:
+            A[row, i] = c
+        for i, c in coeffs_b:
+            B[row, i] = c
+
+    first, last, end = 0, p - 1, nseg - 1
+    for f in (PHI, U1, U2):  # the clamp
+        bc(idx(0, f, first), [(idx(0, f, first), 1.0)])
+    mi = float(P.tip_mass)
+    if nseg == 2:
+        # continuity of phi, u and mu at gamma; u1(gamma) = 0 (the workpiece does not move sideways); the
+        # workpiece's vertical motion: N2(gamma+) - N2(gamma-) = -F2 = -lambda Mi u2(gamma); N1 jumps freely
+        for f in (PHI, U1, U2):
+            bc(idx(1, f, first), [(idx(1, f, first), 1.0), (idx(0, f, last), -1.0)])
+        bc(idx(0, MU, last), [(idx(0, MU, last), 1.0), (idx(1, MU, first), -1.0)])
+        if P.tip == "stick":
+            bc(idx(0, N1, last), [(idx(0, U1, last), 1.0)])
+            bc(idx(0, N2, last), [(idx(1, N2, first), 1.0), (idx(0, N2, last), -1.0)],
+               [(idx(0, U2, last), -mi)])
+        else:  # fixed
+            bc(idx(0, N1, last), [(idx(0, U1, last), 1.0)])
+            bc(idx(0, N2, last), [(idx(0, U2, last), 1.0)])
+        for f in (MU, N1, N2):  # the free tip beyond the contact
+            bc(idx(1, f, last), [(idx(1, f, last), 1.0)])
     else:
-        bc(N1, last, [(U1, last, 1.0)])
-        bc(N2, last, [(U2, last, 1.0)])
+        bc(idx(end, MU, last), [(idx(end, MU, last), 1.0)])
+        rn1, rn2 = idx(end, N1, last), idx(end, N2, last)
+        u1, u2, n1i, n2i = (idx(end, f, last) for f in (U1, U2, N1, N2))
+        if P.tip == "free":
+            bc(rn1, [(n1i, 1.0)])
+            bc(rn2, [(n2i, 1.0)])
+        elif P.tip == "stick":
+            bc(rn1, [(u1, 1.0)])
+            bc(rn2, [(n2i, 1.0)], [(u2, mi)])
+        elif P.tip == "mass":
+            bc(rn1, [(n1i, 1.0)], [(u1, mi)])
+            bc(rn2, [(n2i, 1.0)], [(u2, mi)])
+        else:
+            bc(rn1, [(u1, 1.0)])
+            bc(rn2, [(u2, 1.0)])
     with warnings.catch_warnings():
         warnings.simplefilter("ignore", RuntimeWarning)
         w, V = sla.eig(A, B)
     ok = np.isfinite(w) & (np.abs(w.imag) <= 1e-8 * np.maximum(1.0, np.abs(w.real)))
     w, V = w[ok].real, V[:, ok].real
     order = np.argsort(w)
-    return w[order], V[:, order], s
+    return w[order], V[:, order], np.concatenate(points), [p] * nseg
 
 
 def _weights(s) -> np.ndarray:
@@ -268,10 +327,15 @@ def _weights(s) -> np.ndarray:
     return 0.5 * w
 
 
-def _normalise(y, s) -> np.ndarray:
+def _normalise(y, s, sizes) -> np.ndarray:
     """Scale a mode so that ``int |u|^2 ds = 1`` and its largest displacement component is positive."""
     u2 = y[2] ** 2 + y[3] ** 2
-    y = y / math.sqrt(float(_weights(s) @ u2))
+    total, at = 0.0, 0
+    for p in sizes:
+        seg = s[at:at + p]
+        total += (seg[-1] - seg[0]) * float(_weights(np.linspace(0, 1, p)) @ u2[at:at + p])
+        at += p
+    y = y / math.sqrt(total)
     big = np.unravel_index(np.argmax(np.abs(y[2:4])), y[2:4].shape)
     return -y if y[2:4][big] < 0 else y
 
@@ -281,10 +345,9 @@ def problem_of(solution, *, tip_mass: float | None = None, fixed: bool = False) 
 
     Free rod: free tip.  Grips I/II: the tip sticks to the workpiece (symmetric reduction), whose inertial
     mass per finger is ``tip_mass`` (default the solution's ``params.M``; ``fixed=True``: a fixed workpiece).
-    Grip III is not covered (ValueError).
+    Grip III: the rod's point at ``gamma`` sticks to the workpiece's corner the same way; the tip is free.
+    The point contact carries no couple: a solution with a ``contact_moment`` or a tip load is refused.
     """
-    if solution.grip == "III":
-        raise ValueError("grip: the rod's vibration problem covers the free rod and Grips I/II (not III)")
     if solution.contact_moment != 0.0 or tuple(solution.tip_load) != (0.0, 0.0):
         raise ValueError("solution: modes need the point-contact equilibrium without extra tip loads")
     g = 1.0 if solution.gravity else 0.0
@@ -292,15 +355,19 @@ def problem_of(solution, *, tip_mass: float | None = None, fixed: bool = False) 
         return RodProblem(theta0=solution.theta_at, D=solution.params.D, gravity=g)
     mi = solution.params.M if tip_mass is None else float(tip_mass)
     return RodProblem(theta0=solution.theta_at, D=solution.params.D, tip_force=(solution.N1, solution.N2),
-                      gravity=g, tip="fixed" if fixed else "stick", tip_mass=mi)
+                      gravity=g, tip="fixed" if fixed else "stick", tip_mass=mi,
+                      contact=float(solution.gamma) if solution.grip == "III" else 1.0)
 
 
-def refine(P: RodProblem, modes: RodModes, k: int, tol: float = 1e-8) -> tuple[float, object]:
+def refine(P: RodProblem, modes: RodModes, k: int, tol: float = 1e-6) -> tuple[float, object]:
     """Polish eigenpair ``k`` of ``modes`` with ``solve_bvp`` (``lambda`` a parameter; ``int |u|^2 = 1``).
 
-    Returns ``(lambda, solve_bvp result)``; raises RuntimeError when ``solve_bvp`` does not converge.
+    Tip contacts only (``P.contact == 1``).  Returns ``(lambda, solve_bvp result)``; raises RuntimeError when
+    ``solve_bvp`` does not converge.
     """
     _check(P)
+    if P.contact < 1.0:
+        raise ValueError("contact: refine covers tip contacts only (contact = 1)")
     D = P.D
 
     def fun(s, y, p):
