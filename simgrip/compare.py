@@ -18,6 +18,7 @@ import time
 
 import numpy as np
 
+from simgrip.contact_report import contact_records, node_records
 from simgrip.params import DimensionlessParams, check_grip
 from simgrip.profiles import as_profile
 from simgrip.report import difference, elastica_record
@@ -59,9 +60,11 @@ def simulate(grip: str, params: DimensionlessParams, profile, links: int, *, pro
     profile = as_profile(profile)
     auto = method in (None, "auto")
 
+    full = {"contact": "full"} if settle_kw.get("contact") == "full" else {}  # every link touches (issue 17)
+
     def build():
         with phase(progress, f"building the model ({links} links per finger)"):
-            return build_scene(grip, params, profile, links)
+            return build_scene(grip, params, profile, links, **full)
 
     t0 = time.perf_counter()
     scene = build()
@@ -113,7 +116,8 @@ def settled_record(state, params: DimensionlessParams, profile=None) -> dict:
     Adds ``wall_time_s`` (the settle alone), ``build_time_s`` (the model's build and compile),
     ``steps``, ``held``, ``penetration`` (over ``l``),
     ``residual``, ``links`` (the finest used), ``method``, ``warnings``, ``extrapolated`` and
-    ``error_estimate`` (``settle(..., target_error=E)``: tip over ``l``, forces relative; else None).  ``feasible`` is the
+    ``error_estimate`` (``settle(..., target_error=E)``: tip over ``l``, forces relative; else None),
+    ``nodes`` and ``contacts`` (every contact on the finger: :mod:`simgrip.contact_report`).  ``feasible`` is the
     simulation's verdict: the workpiece is held, its contacts are surface contacts
     (``contact_ok``: none deeper than half the finger's radius, no Grip I/II tip past
     the face; the record then carries ``contact_ok: False``) and, Grip III, condition
@@ -141,6 +145,8 @@ def settled_record(state, params: DimensionlessParams, profile=None) -> dict:
         "extrapolated": bool(state.extrapolated),
         "error_estimate": state.error_estimate,
         "params": {"D": params.D, "M": params.M, "b": params.b, "mu_s": params.mu_s, "gamma": params.gamma},
+        "nodes": node_records(state),
+        "contacts": contact_records(state),
     }
     if grip == "III" and c is not None:
         rec.update(

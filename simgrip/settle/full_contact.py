@@ -46,11 +46,16 @@ __all__ = ["FULL_PEN_LIMIT", "contact_set", "settle_full"]
 FULL_PEN_LIMIT = 1e-4
 #: Step halvings tried before the settle gives up on penetration.
 FULL_RESTARTS = 3
-#: Largest motion of a finger point in one step, over ``r_link`` (:class:`_Guarded`).
-FULL_STEP_RADII = 1.0
+#: Largest motion of a finger point in one step, over ``r_link`` (:class:`_Guarded`): two points closing on each
+#: other approach by at most ``r_link`` per step, so two capsules that were apart (``2 r_link`` between their
+#: axes) at a step's start overlap by at most half their contact distance after it (MuJoCo sees a contact only
+#: once it exists, at the next step) and never cross axes.
+FULL_STEP_RADII = 0.5
 #: Damping growth of a rejected step, and the largest damping factor tried.
 FULL_GUARD_GROWTH = 4.0
 FULL_GUARD_MAX = 4.0 ** 8
+#: Fraction of a contact's penetration closed per step (the contact's damping, :func:`_once`).
+FULL_CONTACT_RELAX = 0.5
 #: Closing ramp: largest change of the total rest rotation per physics step, over the capsule radius
 #: ``r_link / l`` [rad].  A change ``delta`` of the rest angles moves no point of the over-damped finger by more
 #: than ``delta l`` in one step (each hinge's change turns the rest of the finger, arm <= l; the step follows its
@@ -104,7 +109,13 @@ def _once(scene: Scene, tol: float, budget: int, factor: float, t0: float) -> tu
     m, d = scene.model, scene.data
     dyn = Dyn(scene, factor)
     gs = colliding_geoms(m)
-    m.geom_solref[gs] = [DYN_TIMECONST * dyn.h, 1.0]
+    # MuJoCo's direct form (-stiffness, -damping) [1/s^2, 1/s]: the dynamics' stiffness 1/(DYN_TIMECONST h)^2 (the
+    # depth at rest, F d (1 - d) A / k, as the pairs'), with the damping b = k h / FULL_CONTACT_RELAX so that a
+    # penetration r closes at the speed (k / b) r: FULL_CONTACT_RELAX of it per step, never the whole of it and past
+    # (the critically damped 2 / tau would close it ~50 times over in one step: a contact that opens in one step and
+    # closes in the next, forever)
+    k = 1.0 / (DYN_TIMECONST * dyn.h) ** 2
+    m.geom_solref[gs] = [-k, -k * dyn.h / FULL_CONTACT_RELAX]
     m.geom_solimp[gs, 0] = CONTACT_IMPEDANCE
     m.geom_solimp[gs, 1] = CONTACT_IMPEDANCE
     limit = FULL_PEN_LIMIT * scene.length
@@ -118,15 +129,23 @@ def _once(scene: Scene, tol: float, budget: int, factor: float, t0: float) -> tu
     rest = scene.springs.rest.copy()
     m.geom_condim[gs] = 1
     try:
+        # adaptive ramp: the rest rotation per step grows while a step moves less than half the guard's bound
+        # and shrinks when it moves more (the guard itself still rejects any step above it)
+        total = float(np.sum(np.abs(rest)))
         rate = min(DYN_CLOSE_RATE, FULL_CLOSE_RATE_PER_RADIUS * scene.r_link)
-        stages = max(1, math.ceil(float(np.sum(np.abs(rest))) / rate))
-        for i in range(1, stages + 1):
+        frac = 0.0
+        while frac < 1.0:
             if dyn.steps >= budget:
                 break
-            m.qpos_spring[scene.joint_qpos] = (rest * (i / stages))[None, :]
+            frac = min(1.0, frac + rate / max(total, 1e-300))
+            m.qpos_spring[scene.joint_qpos] = (rest * frac)[None, :]
             guard.step()
             if _deepest(d) > tunnel:
                 return _read(scene, dyn, t0, held, False), True
+            if guard.last < 0.5 * guard.limit:
+                rate = min(DYN_CLOSE_RATE, 1.5 * rate)
+            elif guard.last > 0.9 * guard.limit:
+                rate *= 0.5
         converged, why = guard.run(max(tol, 1e-8), budget)
     finally:
         set_curvature(scene, target)
@@ -176,12 +195,12 @@ def _once(scene: Scene, tol: float, budget: int, factor: float, t0: float) -> tu
 class _Guarded:
     """Steps of :class:`Dyn` that move no point of a finger by more than ``r_link`` (:data:`FULL_STEP_RADII`).
 
-    A node of a finger moves at most ``l sum_j |dq_j|`` in a step (node ``k`` is ``sum_{i<k} ds (cos phi_i,
-    sin phi_i)``, ``|d phi_i| <= sum_{j<=i} |dq_j|``), the workpiece by its own translation.  A step above the
+    The motion is measured exactly: every node's displacement in the finger's plane (the hinge chain's
+    ``sum_{i<k} ds (cos phi_i, sin phi_i)``) plus the workpiece's translation.  A step above the
     bound (a snap-through: the over-damped flow jumps most of the way to the next equilibrium in one step) is
     undone and retried with the damping times :data:`FULL_GUARD_GROWTH` (Dyn's ``factor``), which slows the flow
-    as ``1 / factor``; the factor halves again after each accepted step.  Two capsules ``2 r_link`` apart at a
-    step's start therefore meet before their axes cross: no link passes through another.
+    as ``1 / factor``; the factor halves again after each accepted step.  Two capsules apart at a step's
+    start overlap by at most ``r_link`` after it: no link passes through another.
     """
 
     def __init__(self, scene: Scene, dyn: Dyn):
@@ -191,21 +210,72 @@ class _Guarded:
         self.wq = np.asarray(scene.workpiece_qpos, dtype=int)
         self.wt = np.array([name != "ry" for name in scene.workpiece_joints], dtype=bool)
         self.rejected = 0
+        # node pairs that the clearance leaves out: one finger's nodes fewer than 2 apart (links 1 and 2 apart)
+        F, n1 = scene.fingers, scene.n + 1
+        f_of = np.repeat(np.arange(F), n1)
+        k_of = np.tile(np.arange(n1), F)
+        self.near = (f_of[:, None] == f_of[None, :]) & (np.abs(k_of[:, None] - k_of[None, :]) < 2)
+        self.last = 0.0  # the last accepted step's motion [m]
 
-    def _moved(self, q0) -> float:
-        d, L = self.dyn.d, self.scene.length
-        dq = np.abs(d.qpos[self.q] - q0[self.q]).sum(axis=1).max() * L
-        if self.wq.size:
-            dq += float(np.abs(d.qpos[self.wq] - q0[self.wq])[self.wt].sum()) if self.wt.any() else 0.0
-        return float(dq)
+    def _nodes(self, qpos) -> np.ndarray:
+        """Every finger's nodes ``(fingers, n + 1, 2)`` [m] in its own plane from the hinge angles ``qpos``."""
+        phi = np.cumsum(qpos[self.q], axis=1)
+        ds = self.scene.length / self.scene.n
+        steps = ds * np.stack([np.cos(phi), np.sin(phi)], axis=-1)
+        return np.concatenate([np.zeros((phi.shape[0], 1, 2)), np.cumsum(steps, axis=1)], axis=1)
+
+    def _moved(self, q0, nodes0) -> float:
+        """Largest displacement [m] of a finger node (or the workpiece) since ``q0`` (nodes ``nodes0``)."""
+        d = self.dyn.d
+        moved = float(np.max(np.linalg.norm(self._nodes(d.qpos) - nodes0, axis=-1)))
+        if self.wq.size and self.wt.any():
+            moved += float(np.linalg.norm((d.qpos[self.wq] - q0[self.wq])[self.wt]))
+        return moved
+
+    def clearance(self, nodes) -> float:
+        """A lower bound [m] on the gap between a finger's capsules and anything they may touch that is not
+        guarded by geometry: links at least three apart on one finger, the other fingers' links, the box.
+
+        Every point of a link lies within ``ds / 2`` of one of its end nodes, so two links whose nodes are at
+        least ``D`` apart have capsules at least ``D - ds - 2 r_link`` apart; a link whose nodes are ``D`` from
+        the box is ``D - ds/2 - r_link`` from it.  Links one and two apart are left out: the first are MuJoCo's
+        filtered parent and child, the second cannot touch while their hinges turn by less than ``pi/2``
+        (:func:`~simgrip.sim.full_contact.next_but_one_separated`); where a hinge turns more, the bound is 0.
+        """
+        sc = self.scene
+        L, n = sc.length, sc.n
+        ds, r = L / n, sc.r_link * L
+        if np.any(np.abs(self.dyn.d.qpos[self.q][:, 1:]) >= 0.5 * math.pi):
+            return 0.0
+        pts = nodes.reshape(-1, 2)
+        gap = math.inf
+        if pts.shape[0] > 3:
+            dist = np.linalg.norm(pts[:, None, :] - pts[None, :, :], axis=-1)
+            dist[self.near] = math.inf
+            gap = float(dist.min()) - ds - 2.0 * r
+        if sc.has_workpiece and sc.box_half[0] > 0.0 and self.wq.size <= 1:
+            # the box in each finger's plane: |x| <= hx, |z - zc| <= hz (the symmetric reduction's box)
+            hx, hz = float(sc.box_half[0]), float(sc.box_half[2])
+            zc = float(self.dyn.d.xpos[sc.workpiece_body][2])
+            dx = np.abs(pts[:, 0]) - hx
+            dz = np.abs(pts[:, 1] - zc) - hz
+            out = np.hypot(np.maximum(dx, 0.0), np.maximum(dz, 0.0)) + np.minimum(np.maximum(dx, dz), 0.0)
+            gap = min(gap, float(out.min()) - 0.5 * ds - r)
+        elif sc.has_workpiece:
+            gap = 0.0
+        return max(0.0, gap)
 
     def step(self) -> None:
         """One accepted physics step (retried with more damping while it moves too far)."""
         dyn, d = self.dyn, self.dyn.d
         q0, v0, t0 = d.qpos.copy(), d.qvel.copy(), d.time
+        nodes0 = self._nodes(q0)
+        # two points closing on each other approach by at most twice this: the gap plus r_link
+        self.limit = FULL_STEP_RADII * self.scene.r_link * self.scene.length + 0.5 * self.clearance(nodes0)
         while True:
             dyn.step()
-            if self._moved(q0) <= self.limit or dyn.factor >= FULL_GUARD_MAX:
+            self.last = self._moved(q0, nodes0)
+            if self.last <= self.limit or dyn.factor >= FULL_GUARD_MAX:
                 break
             d.qpos[:], d.qvel[:], d.time = q0, v0, t0
             self.rejected += 1
@@ -277,7 +347,7 @@ def contact_set(scene) -> list[dict]:
     self contact also gives ``other_link`` and ``other_arc_length``), ``point`` (the contact point, ``[x,
     z]`` over ``l``), ``normal`` (unit, the direction of the force on this finger), ``normal_force`` (>= 0)
     and ``friction_force`` (signed along the tangent ``(-normal_z, normal_x)`` in the plane; over
-    ``rho g l``) and ``depth`` (penetration over ``l``).  A self contact is one record (the first link's).
+    ``rho g l``), ``force`` (the whole force on this finger, ``[x, z]``) and ``depth`` (penetration over ``l``).  A self contact is one record (the first link's).
     """
     m, d = scene.model, scene.data
     L, W, n = scene.length, scene.force_scale, scene.n
@@ -315,6 +385,7 @@ def contact_set(scene) -> list[dict]:
             "normal": [float(nv[0]), float(nv[1])],
             "normal_force": float(fc[0] / W),
             "friction_force": float(F2 @ tang),
+            "force": [float(F2[0]), float(F2[1])],
             "depth": float(max(0.0, -float(d.contact.dist[c])) / L),
         }
         if other is not None and other[0] == f:
