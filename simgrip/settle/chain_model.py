@@ -155,6 +155,8 @@ class ChainModel:
         if scene.has_workpiece:
             p = m.body_pos[scene.workpiece_body] / L
             self.w0 = np.array([p[0], p[2]])
+        #: one-entry memos of :meth:`pose` and :meth:`_link` (keyed on their arguments' values; read-only results)
+        self._pose_memo = self._link_memo = None
         self.pairs = [(int(m.pair_geom1[i]), int(m.pair_geom2[i])) for i in range(m.npair)]
         #: for each pair: (finger, link index of geom1, is the tip sphere) and the radii to subtract
         self.pair_link, self.radius = [], []
@@ -196,6 +198,9 @@ class ChainModel:
         """
         mf = self.mir[f]
         y = np.atleast_1d(np.asarray(y, float))
+        key = (f, y.tobytes())
+        if self._pose_memo is not None and self._pose_memo[0] == key:
+            return self._pose_memo[1]  # (one Newton iteration asks for the same pose several times)
         O = np.array([mf * self.w0[0], self.w0[1]])
         alpha = 0.0
         dO = np.zeros((self.nw, 2))
@@ -210,6 +215,9 @@ class ChainModel:
             else:  # hinge about -y: turns (x, z) counter-clockwise by y in the world, mirrored in the finger's frame
                 alpha = mf * y[j]
                 da[j] = mf
+        for a in (O, dO, da):
+            a.setflags(write=False)  # shared by the memo: callers build new arrays from them
+        self._pose_memo = (key, (O, alpha, dO, da))
         return O, alpha, dO, da
 
     def local(self, f, v3) -> np.ndarray:
@@ -283,11 +291,17 @@ class ChainModel:
     def _link(self, phi, f, i):
         """Global index of link ``i`` of finger ``f`` and its predecessors' normals and tangents."""
         g0 = f * self.nl
-        ph = phi[g0:g0 + i]
-        cs, sn = np.cos(ph), np.sin(ph)  # (each once: a Newton iteration builds several terms)
+        ph = np.asarray(phi, dtype=float)[g0:g0 + i]
+        key = (f, i, ph.tobytes())
+        if self._link_memo is not None and self._link_memo[0] == key:
+            return self._link_memo[1]  # (a contact and its stick sit on the same link)
+        cs, sn = np.cos(ph), np.sin(ph)
         nk, tk = np.empty((ph.size, 2)), np.empty((ph.size, 2))
         nk[:, 0], nk[:, 1] = -sn, cs
         tk[:, 0], tk[:, 1] = cs, sn
+        nk.setflags(write=False)
+        tk.setflags(write=False)
+        self._link_memo = (key, (g0, nk, tk))
         return g0, nk, tk
 
     def dot_term(self, phi, nodes, f, i, p, c_loc, y, v_loc, kind: str) -> Term:

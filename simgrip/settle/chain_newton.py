@@ -115,7 +115,8 @@ class ChainNewton(Newton):
         act = self.normal_active
         pterms = [cm.pair_term(p, phi, nodes, w) for p in act]
         sterms = [cm.stick_term(s, phi, nodes, w) for s in self.sticks] if self.sticks else []
-        mu = {i: float(self.scene.model.pair_friction[self._pair_of(s)][0]) for i, s in enumerate(self.sticks)}
+        mu = {i: float(self.scene.model.pair_friction[self._pair_of(s)][0]) for i, s in enumerate(self.sticks)
+              if i in self.sliding}  # (only the sliding sticks' friction enters)
         coef = []  # (term, multiplier) pairs of the force
         for k, t in enumerate(pterms):
             coef.append((t, N[k]))
