@@ -71,3 +71,22 @@ def test_solve_chain_stability_modes(grip, kappa):
 def test_solve_chain_bad_stability():
     with pytest.raises(ValueError, match="stability"):
         solve_chain("I", STANDARD, Uniform(-6.0), 8, stability="fast")
+
+
+def test_solve_tridiagonal_is_solve_banded():
+    """The direct LAPACK ``gtsv`` call gives scipy's ``solve_banded((1, 1))`` answer bit for bit (the same
+    routine on the same numbers), one or several right-hand sides, down to the 1 x 1 case; a singular
+    matrix raises as there."""
+    from scipy.linalg import solve_banded
+
+    from simgrip.settle.banded import solve_tridiagonal
+
+    rng = np.random.default_rng(7)
+    for n in (1, 2, 5, 40):
+        for shape in ((n,), (n, 3)):
+            diag, off, rhs = rng.normal(size=n) * 3.0, rng.normal(size=n - 1), rng.normal(size=shape)
+            ab = np.zeros((3, n))
+            ab[0, 1:], ab[1], ab[2, :-1] = off, diag, off
+            assert np.array_equal(solve_tridiagonal(diag, off, rhs), solve_banded((1, 1), ab, rhs))
+    with pytest.raises(np.linalg.LinAlgError):
+        solve_tridiagonal(np.zeros(3), np.zeros(2), np.ones(3))

@@ -57,8 +57,8 @@ from dataclasses import dataclass
 
 import mujoco
 import numpy as np
-from scipy.linalg import solve_banded
 
+from simgrip.settle.banded import solve_tridiagonal
 from simgrip.sim.scene import Scene
 
 __all__ = ["ChainModel", "Term", "eligible", "gravity_factor", "model_gravity"]
@@ -255,10 +255,8 @@ class ChainModel:
         for _ in range(max_iter):
             if res < tol:
                 return phi
-            ab = np.zeros((3, self.n))
-            ab[0, 1:], ab[1], ab[2, :-1] = off, diag, off
             try:
-                d = solve_banded((1, 1), ab, -F, check_finite=False)
+                d = solve_tridiagonal(diag, off, -F)
             except (np.linalg.LinAlgError, ValueError):
                 return None
             step = 1.0
