@@ -284,3 +284,14 @@ def test_a_reused_scene_has_no_stale_spec_and_an_interrupted_one_is_dropped(monk
     b = reuse.build_scene("I", p, Uniform(-4.0), 6)
     assert b is not a  # the half-set scene was dropped, this one is fresh
     assert_same_model(b.model, build_scene("I", p, Uniform(-4.0), 6).model)
+
+
+def test_call_settle_ratio_reports_the_repeated_call():
+    from simgrip.harness.bench_reuse import call_settle_ratio
+
+    r = call_settle_ratio("I", 6, calls=2)
+    assert r["calls"] == 2 and r["links"] == 6
+    assert 0.0 < r["settle_s"] <= r["call_s"] and r["ratio"] == r["call_s"] / r["settle_s"]
+    assert reuse.cache_info()["hits"] == 2  # one compile, then set in place
+    with pytest.raises(ValueError, match="calls"):
+        call_settle_ratio("I", 6, calls=0)

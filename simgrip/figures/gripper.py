@@ -287,7 +287,7 @@ def gripper_force_data(*, fingers=FORCE_FINGERS, kappas=SIM_KAPPAS, links: int =
     from simgrip.profiles import Uniform
     from simgrip.reference import elastica
     from simgrip.settle.gripper import settle_gripper
-    from simgrip.sim.gripper import build_gripper
+    from simgrip.sim import reuse  # one compile per K, set in place for each kappa
 
     p = STANDARD if params is None else params
     fingers = tuple(int(k) for k in fingers)
@@ -308,7 +308,7 @@ def gripper_force_data(*, fingers=FORCE_FINGERS, kappas=SIM_KAPPAS, links: int =
         forces = np.full((len(sim_kappas), K), np.nan)
         ref, rel, couple = (np.full(len(sim_kappas), np.nan) for _ in range(3))
         for i, k in enumerate(sim_kappas):
-            st = settle_gripper(build_gripper("I", p, Uniform(float(k)), links, fingers=K, workpiece="cylinder"))
+            st = settle_gripper(reuse.build_gripper("I", p, Uniform(float(k)), links, fingers=K, workpiece="cylinder"))
             if not (st.held and len(st.records) == K):
                 continue
             held[i] = True

@@ -59,7 +59,7 @@ _SIM_LABEL = "MuJoCo chain, n = {links}"
 
 
 def _sim_scene(grip, params, kappa, links, gravity):
-    from simgrip.scenes import build_scene
+    from simgrip.sim.reuse import build_scene  # one compile per grip and links, set in place
 
     scene = build_scene(grip, params, Uniform(float(kappa)), links)
     if not gravity:  # the model's own gravity vector: what MuJoCo and the settle's statics both read

@@ -197,7 +197,7 @@ def run_case(case: dict, *, timeout_s: float = CASE_TIMEOUT_S, max_steps: int | 
     """Build and settle one case; return the case with ``outcome``, ``error``, ``steps``, flags..."""
     from simgrip.params import DimensionlessParams
     from simgrip.settle import DEFAULT_TOL, SettleError, settle
-    from simgrip.scenes import build_scene
+    from simgrip.sim.reuse import build_scene  # one compile per structure (grip, n), set in place
 
     rec = dict(case)
     rec.update(outcome=None, error=None, error_type=None, steps=None, newton=None, time_s=None,
