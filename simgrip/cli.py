@@ -156,6 +156,11 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--method", default=None, help="settle method: newton or dynamics [default newton]")
     p.add_argument("--contact", default=None, help="where the settle's sticking friction acts: point or surface "
                    "[default point]; the modes always stick the centreline point")
+    p.add_argument("--fingers", type=int, default=None,
+                   help="K >= 2 fingers around the palm axis holding a workpiece free in 3-D (Grips I, II): the "
+                   "gripper's modes, its symmetric modes and the rod's beside them")
+    p.add_argument("--workpiece", default=None, help="with --fingers: box (K = 2 or 4), cylinder or sphere "
+                   "[default cylinder]")
 
     p = sub.add_parser("bench", help="run time against error, naive vs settle vs minimiser vs BVP, what skipping buys")
     from simgrip.harness import bench as _bench  # light: matplotlib/mujoco are imported inside its functions
@@ -317,6 +322,15 @@ def _cmd_modes(args):
     if isinstance(args.count, bool) or args.count < 1 or args.count > dofs:
         raise ValueError(f"count must be a positive integer at most {dofs} (the degrees of freedom of {links} "
                          f"links{'' if grip == 'free' else ' holding the workpiece'}), got {args.count!r}")
+    if args.fingers is not None or args.workpiece is not None:
+        from simgrip.modes.gripper import gripper_modes
+        from simgrip.modes.report import format_gripper_modes
+
+        if args.fingers is None:
+            raise ValueError("fingers: --workpiece needs --fingers K")
+        rec = gripper_modes(grip, params, profile, links, fingers=args.fingers, workpiece=args.workpiece or "cylinder",
+                            count=args.count, method=args.method, contact=args.contact)
+        return json.dumps(rec, allow_nan=False) if args.json else format_gripper_modes(rec)
     result = modes(grip, params, profile, links, count=args.count, method=args.method, contact=args.contact)
     return json.dumps(result.record(), allow_nan=False) if args.json else format_modes(result)
 

@@ -126,3 +126,21 @@ def test_grip_iii_against_the_rod_at_its_own_gamma():
         r = modes("III", STANDARD, Uniform(-4.0), n)
         assert np.all(np.abs(r.relative_difference) < tol), (n, r.relative_difference)
         assert np.all(r.mac >= 1.0 - 1e-3), r.mac  # 1 - MAC = O(eps^2), eps <= 0.03 at n = 32
+
+
+def test_k_finger_gripper_contains_the_symmetric_reduction(capsys):
+    """K = 3 fingers around a centred cylinder: the symmetric subspace is invariant, and on it the gripper is
+    the planar symmetric reduction (the same chain, the workpiece's mass shared by K): the same frequencies to
+    the linearisations' errors (finite differences ~1e-10, the settles' residual ~1e-9), and they are modes of
+    the whole gripper too.  The sway modes come below them."""
+    from simgrip.modes.gripper import gripper_modes
+
+    rec = gripper_modes("I", STANDARD, Uniform(-6.0), 16, fingers=3, workpiece="cylinder", count=4)
+    planar = modes("I", STANDARD, Uniform(-6.0), 16, count=3, reference=False).frequencies
+    assert np.allclose(rec["symmetric_frequencies"][:3], planar, rtol=1e-7, atol=0)
+    full = np.array(rec["frequencies"])
+    assert np.min(np.abs(full - planar[0])) < 1e-7 * planar[0] and full[0] < planar[0]
+    assert main(["modes", "I", "--kappa", "-6", "--links", "16", "--fingers", "3", "--json"]) == 0
+    assert json.loads(capsys.readouterr().out)["fingers"] == 3
+    assert main(["modes", "I", "--kappa", "-6", "--links", "16", "--workpiece", "box"]) == 2
+    assert "fingers" in capsys.readouterr().err

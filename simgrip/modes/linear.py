@@ -58,6 +58,8 @@ class Stick:
     point_a: np.ndarray
     body_b: int
     point_b: np.ndarray
+    #: World components constrained: ``"xz"`` (the planar scenes) or ``"xyz"`` (a K-finger gripper in 3-D).
+    rows: str = "xz"
 
 
 @dataclass
@@ -69,11 +71,11 @@ class Linearisation:
     M, K : ndarray (nv, nv)
         Mass matrix (``mj_fullM``) and stiffness (symmetrised, see the module docstring).
     jacobian : ndarray (c, nv)
-        Constraint Jacobian ``J`` (world ``x`` and ``z`` rows of each stick).
+        Constraint Jacobian ``J`` (world ``x`` and ``z`` rows of each stick, or ``x, y, z``: :attr:`Stick.rows`).
     basis : ndarray (nv, nv - rank J)
         Orthonormal basis ``N`` of ``ker J`` (the identity without constraints).
     multipliers : ndarray (c,)
-        Contact forces on the finger at the equilibrium, world ``x``/``z`` [N].
+        Contact forces on the finger at the equilibrium, the world components of :attr:`Stick.rows` [N].
     misfit : float
         ``max |Q(q*) + J^T lambda|`` over the force scale of each dof: how far ``q*`` is from the equilibrium
         the linearisation assumes (the settle's residual).
@@ -136,10 +138,11 @@ def sticks_of(scene, state, data=None) -> tuple:
 class _Forces:
     """``Q(q) + J(q)^T lambda`` on scratch data, O(nv) per call (no mass matrix, no contact)."""
 
-    def __init__(self, model, sticks):
+    def __init__(self, model, sticks, applied=None):
         self.m = model
         self.d = mujoco.MjData(model)
         self.sticks = sticks
+        self.applied = np.zeros(model.nv) if applied is None else np.asarray(applied, dtype=float)
 
     def positions(self, q):
         m, d = self.m, self.d
@@ -159,11 +162,15 @@ class _Forces:
         mujoco.mj_passive(m, d)
         bias = np.zeros(m.nv)
         mujoco.mj_rne(m, d, 0, bias)
-        out = np.array(d.qfrc_passive) - bias
+        out = np.array(d.qfrc_passive) - bias + self.applied
         if lam is not None:
             zero = np.zeros(3)
-            for k, st in enumerate(self.sticks):
-                F = np.array([lam[2 * k], 0.0, lam[2 * k + 1]])
+            at = 0
+            for st in self.sticks:
+                F = np.zeros(3)
+                for axis in st.rows:
+                    F["xyz".index(axis)] = lam[at]
+                    at += 1
                 mujoco.mj_applyFT(m, d, F, zero, self.world(st.body_a, st.point_a), st.body_a, out)
                 if st.body_b > 0:
                     mujoco.mj_applyFT(m, d, -F, zero, self.world(st.body_b, st.point_b), st.body_b, out)
@@ -180,20 +187,22 @@ class _Forces:
                 jb = np.zeros((3, m.nv))
                 mujoco.mj_jac(m, d, jb, None, self.world(st.body_b, st.point_b), st.body_b)
                 jp -= jb
-            rows += [jp[0], jp[2]]
+            rows += [jp["xyz".index(axis)] for axis in st.rows]
         return np.array(rows).reshape(len(rows), m.nv)
 
 
 def _force_scales(model, length: float, force_scale: float) -> np.ndarray:
-    """Per-dof force scale: ``rho g l^2`` for hinges, ``rho g l`` for slides."""
+    """Per-dof force scale: ``rho g l^2`` for hinges and rotations, ``rho g l`` for slides and translations."""
     out = np.full(model.nv, force_scale * length)
     for j in range(model.njnt):
         if model.jnt_type[j] == mujoco.mjtJoint.mjJNT_SLIDE:
             out[model.jnt_dofadr[j]] = force_scale
+        elif model.jnt_type[j] == mujoco.mjtJoint.mjJNT_FREE:
+            out[model.jnt_dofadr[j]:model.jnt_dofadr[j] + 3] = force_scale
     return out
 
 
-def linearise(scene, data=None, *, sticks=(), step: float = FD_STEP) -> Linearisation:
+def linearise(scene, data=None, *, sticks=(), step: float = FD_STEP, applied=None) -> Linearisation:
     """Linearise ``scene`` (a built :class:`~simgrip.sim.scene.Scene`) about the configuration in ``data``.
 
     Parameters
@@ -205,7 +214,11 @@ def linearise(scene, data=None, *, sticks=(), step: float = FD_STEP) -> Linearis
     sticks : sequence of Stick
         Sticking contacts (:func:`sticks_of`); empty for the free rod.
     step : float
-        Central-difference step (rad for hinges, times ``l`` for slides).
+        Central-difference step (rad for hinges and rotations, times ``l`` for slides and translations;
+        ball and free joints are stepped along their tangent space, ``mj_integratePos``).
+    applied : array (nv,), optional
+        A constant generalised force [model units] acting at the equilibrium (e.g. a K-finger gripper's
+        workpiece weight relief, ``qfrc_applied`` of its settle); it enters the multipliers only.
 
     Returns
     -------
@@ -214,14 +227,12 @@ def linearise(scene, data=None, *, sticks=(), step: float = FD_STEP) -> Linearis
     """
     m = scene.model
     d0 = scene.data if data is None else data
-    if m.nq != m.nv:
-        raise ValueError("scene: modes need hinge and slide joints only (nq == nv)")
     step = float(step)
     if not (math.isfinite(step) and step > 0):
         raise ValueError(f"step must be positive and finite, got {step!r}")
     sticks = tuple(sticks)
     q0 = np.array(d0.qpos, dtype=float)
-    F = _Forces(m, sticks)
+    F = _Forces(m, sticks, applied)
     Q0 = F(q0)
     J = F.jacobian(q0) if sticks else np.zeros((0, m.nv))
     if sticks:
@@ -234,11 +245,15 @@ def linearise(scene, data=None, *, sticks=(), step: float = FD_STEP) -> Linearis
     for j in range(m.njnt):
         if m.jnt_type[j] == mujoco.mjtJoint.mjJNT_SLIDE:
             h[m.jnt_dofadr[j]] = step * scene.length
+        elif m.jnt_type[j] == mujoco.mjtJoint.mjJNT_FREE:
+            h[m.jnt_dofadr[j]:m.jnt_dofadr[j] + 3] = step * scene.length
     K = np.zeros((m.nv, m.nv))
     for i in range(m.nv):
         qp, qm = q0.copy(), q0.copy()
-        qp[i] += h[i]
-        qm[i] -= h[i]
+        e = np.zeros(m.nv)
+        e[i] = h[i]
+        mujoco.mj_integratePos(m, qp, e, 1.0)
+        mujoco.mj_integratePos(m, qm, -e, 1.0)
         K[:, i] = -(F(qp, lam) - F(qm, lam)) / (2.0 * h[i])
     kmax = float(np.max(np.abs(K))) or 1.0
     asym = float(np.max(np.abs(K - K.T))) / kmax
