@@ -90,3 +90,18 @@ def test_solve_tridiagonal_is_solve_banded():
             assert np.array_equal(solve_tridiagonal(diag, off, rhs), solve_banded((1, 1), ab, rhs))
     with pytest.raises(np.linalg.LinAlgError):
         solve_tridiagonal(np.zeros(3), np.zeros(2), np.ones(3))
+
+
+@pytest.mark.parametrize("grip,kappa", [("free", -3.0), ("free", 4.0), ("I", -6.0), ("III", -4.0)])
+def test_chain_angles_are_solve_chains(grip, kappa):
+    """``chain_angles`` (the free start's solve) returns ``solve_chain``'s link angles bit for bit, cold and
+    from a guess, and rejects what it rejects."""
+    from simgrip.reference.hinge_chain import chain_angles
+
+    full = solve_chain(grip, STANDARD, Uniform(kappa), 20, gravity=0.5)
+    assert np.array_equal(chain_angles(grip, STANDARD, Uniform(kappa), 20, gravity=0.5), full.link_angles)
+    guess = full.link_angles * 0.9
+    assert np.array_equal(chain_angles(grip, STANDARD, Uniform(kappa), 20, gravity=0.5, guess=guess),
+                          solve_chain(grip, STANDARD, Uniform(kappa), 20, gravity=0.5, guess=guess).link_angles)
+    with pytest.raises(ValueError, match="n"):
+        chain_angles(grip, STANDARD, Uniform(kappa), 1)

@@ -64,7 +64,7 @@ from simgrip.reference.minimiser import (
     minimise,
 )
 
-__all__ = ["ChainEquilibrium", "chain_energy", "check_load", "cradle_start_angles", "solve_chain"]
+__all__ = ["ChainEquilibrium", "chain_angles", "chain_energy", "check_load", "cradle_start_angles", "solve_chain"]
 
 
 @dataclass(frozen=True)
@@ -264,16 +264,8 @@ def solve_chain(
     DiscreteError
         Newton failed to converge.
     """
-    grip, params, prof, n, gam, prob_gravity = check_discrete(grip, params, profile, "n", n, gamma, gravity)
-    if stability not in ("value", "sign", "none"):
-        raise ValueError(f"stability must be 'value', 'sign' or 'none', got {stability!r}")
-    sp = _springs_for(prof, n, springs)
-    cm = _finite("contact_moment", contact_moment)
-    M = check_load(load, grip, params)
-    prob, unit_rest, m = _chain_problem(grip, params, sp, gam, cm, prob_gravity, M)
-    smid = (np.arange(n) + 0.5) / n
-    g0 = angles_from_guess(guess, smid, n, "n link angles")
-    res = minimise(prob, unit_rest, grip_sign(grip, prof), g0)
+    grip, params, n, sp, gam, m, cm, prob_gravity, M, prob, res = _minimised(
+        grip, params, profile, n, gamma, contact_moment, guess, gravity, springs, load, stability)
     phi = res.x
     nodes = link_positions(phi, sp.ds)
     tip = nodes[-1].copy()
@@ -289,6 +281,31 @@ def solve_chain(
         tip=tip, contact=contact, gamma=gam_out, contact_moment=cm, gravity=prob_gravity,
         **equilibrium_fields(prob, res, M, stability),
     )
+
+
+def _minimised(grip, params, profile, n, gamma, contact_moment, guess, gravity, springs, load, stability="value"):
+    """:func:`solve_chain`'s argument checks, discrete problem and minimisation (shared with :func:`chain_angles`):
+    ``(grip, params, n, springs, gamma, contact link, contact_moment, gravity, load, problem, Newton result)``."""
+    grip, params, prof, n, gam, prob_gravity = check_discrete(grip, params, profile, "n", n, gamma, gravity)
+    if stability not in ("value", "sign", "none"):
+        raise ValueError(f"stability must be 'value', 'sign' or 'none', got {stability!r}")
+    sp = _springs_for(prof, n, springs)
+    cm = _finite("contact_moment", contact_moment)
+    M = check_load(load, grip, params)
+    prob, unit_rest, m = _chain_problem(grip, params, sp, gam, cm, prob_gravity, M)
+    smid = (np.arange(n) + 0.5) / n
+    g0 = angles_from_guess(guess, smid, n, "n link angles")
+    res = minimise(prob, unit_rest, grip_sign(grip, prof), g0)
+    return grip, params, n, sp, gam, m, cm, prob_gravity, M, prob, res
+
+
+def chain_angles(grip, params, profile, n, *, gamma=None, guess=None, gravity=1.0, load=None) -> np.ndarray:
+    """The link angles ``phi`` of :func:`solve_chain` alone, bit for bit (the same checks, problem and Newton),
+    without its nodes, forces, energy and stability: a start shape (the free settle's) at ~3/4 of the cost.
+
+    Arguments and errors as :func:`solve_chain`'s (``contact_moment = 0``, the chain's own springs).
+    """
+    return _minimised(grip, params, profile, n, gamma, 0.0, guess, gravity, None, load)[-1].x
 
 
 def cradle_start_angles(params: DimensionlessParams, profile, n: int) -> np.ndarray:
