@@ -144,3 +144,14 @@ def test_k_finger_gripper_contains_the_symmetric_reduction(capsys):
     assert json.loads(capsys.readouterr().out)["fingers"] == 3
     assert main(["modes", "I", "--kappa", "-6", "--links", "16", "--workpiece", "box"]) == 2
     assert "fingers" in capsys.readouterr().err
+
+
+def test_physical_units_give_the_same_dimensionless_frequencies():
+    """PhysicalParams() is the standard case in SI (D = EI/(rho g l^3) = 1, M = 5, b = 0.6): omega sqrt(l/g)
+    must not depend on the units (the settles' residual, ~1e-9, bounds the difference)."""
+    from simgrip import PhysicalParams
+
+    a = modes("I", PhysicalParams(), Uniform(-6.0), 16, count=3)
+    b = modes("I", STANDARD, Uniform(-6.0), 16, count=3)
+    assert np.allclose(a.frequencies, b.frequencies, rtol=1e-8, atol=0)
+    assert np.allclose(a.reference_frequencies, b.reference_frequencies, rtol=1e-8, atol=0)
