@@ -30,6 +30,19 @@ of the static force (gravity's and the workpiece's).  Boundary conditions:
   moves vertically with the tip: ``Mi w_tt = -N2(1)`` with ``w = u2(1)``, i.e.
   ``N2(1) = lambda Mi u2(1)``; ``N1(1)`` (the change of the normal force) is free.
   A fixed workpiece has ``u2(1) = 0`` instead; a point mass on a free tip ``N(1) = lambda Mi u(1)``.
+* Grip III, the workpiece's corner sticking to the rod's point at ``gamma`` (the
+  static contact force ``F = (N1, -M)`` acts there: ``n0 = F - (1 - s) E2`` on
+  ``(0, gamma)``, ``-(1 - s) E2`` beyond): ``phi, u, mu`` continuous at ``gamma`` (a
+  point contact, no couple), ``u1(gamma) = 0`` and ``N2(gamma+) - N2(gamma-) =
+  -lambda Mi u2(gamma)`` (the workpiece moving vertically with that point),
+  ``N1`` jumps freely; the tip beyond is free (``mu = N = 0``).  Two Chebyshev
+  segments.
+
+Which box motions the reduction allows: only the vertical translation; the
+sway, rocking and (K fingers) turning modes need both or all fingers
+(:mod:`simgrip.modes.gripper`).  A straight rod whose tip is pinned or sticks
+is degenerate (its axial force perturbation decouples, the pencil is singular):
+the grips' curled equilibria are not.
 
 The problem is solved by Chebyshev collocation (Gauss-Lobatto, ``nodes + 1``
 points per field, one collocation row of each field replaced by its boundary
