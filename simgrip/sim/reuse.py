@@ -107,17 +107,28 @@ class _Entry:
 _OPTION_FIELDS = tuple(k for k in dir(mujoco.MjOption) if not k.startswith("_"))
 
 
+_MODEL_ARRAYS: tuple | None = None  # the names of MjModel's array fields (the same for every model)
+
+
 def _array_fields(m: mujoco.MjModel) -> list:
     """Names of the model's writable, non-empty array fields."""
+    global _MODEL_ARRAYS
+    if _MODEL_ARRAYS is None:
+        names = []
+        for k in dir(m):
+            if k.startswith("_"):
+                continue
+            try:
+                v = getattr(m, k)
+            except Exception:  # pragma: no cover - a property MuJoCo refuses to read
+                continue
+            if isinstance(v, np.ndarray):
+                names.append(k)
+        _MODEL_ARRAYS = tuple(names)
     out = []
-    for k in dir(m):
-        if k.startswith("_"):
-            continue
-        try:
-            v = getattr(m, k)
-        except Exception:  # pragma: no cover - a property MuJoCo refuses to read
-            continue
-        if isinstance(v, np.ndarray) and v.size and v.flags.writeable:
+    for k in _MODEL_ARRAYS:
+        v = getattr(m, k)
+        if v.size and v.flags.writeable:
             out.append(k)
     return out
 
