@@ -109,7 +109,7 @@ class ChainNewton(Newton):
         cm = self.model
         n, yf = cm.n, self.yf
         nw = yf.size
-        nodes = cm.nodes(phi)
+        nodes = cm.nodes(phi) if (self.normal_active or self.sticks) else None  # (only the terms need them)
         F, diag, off = cm.internal(phi)
         Fw = cm.workpiece_force()[yf]
         act = self.normal_active
@@ -200,8 +200,9 @@ class ChainNewton(Newton):
     def _newton(self, q, idx, tol, max_iter, contacts):
         sc = self.scene
         cm = self.model
-        free = set(int(i) for i in idx)
-        self.yf = np.array([j for j in range(cm.nw) if int(cm.wd[j]) in free], dtype=int)  # free workpiece dofs
+        free = np.zeros(sc.model.nv, bool)
+        free[np.asarray(idx, dtype=int)] = True
+        self.yf = np.array([j for j in range(cm.nw) if free[int(cm.wd[j])]], dtype=int)  # free workpiece dofs
         L, W = sc.length, sc.force_scale
         self.kc_dl = self.kc * L / W
         N = self.N.copy() / W
@@ -242,8 +243,6 @@ class ChainNewton(Newton):
             R, jacobian = self._system(phi, w, N, lam, stick_act, True)
             if not np.all(np.isfinite(R)):
                 raise SettleError("settle diverged (non-finite residual)")
-            scale = np.concatenate([np.ones(nf), self._row_scale(len(N), len(stick_act))])  # rows in force units
-            res = float(np.max(np.abs(R * scale))) if R.size else 0.0
             res_f = float(np.max(np.abs(R[:nf])))
             res_c = float(np.max(np.abs(R[nf:] * self._row_scale(len(N), len(stick_act))))) if R.size > nf else 0.0
             # (r < max(tol, floor), the floor evaluated only where tol alone does not decide)
@@ -261,6 +260,9 @@ class ChainNewton(Newton):
                 if self.budget is not None and self.iterations >= self.budget:
                     return finish(False, f"Newton iteration budget max_steps={self.budget} spent", state_q(phi, w), N, lam)
                 return finish(False, "max_iter", state_q(phi, w), N, lam)
+            # (the acceptance's scaled residual: only a step needs it)
+            scale = np.concatenate([np.ones(nf), self._row_scale(len(N), len(stick_act))])  # rows in force units
+            res = float(np.max(np.abs(R * scale))) if R.size else 0.0
             self.iterations += 1
             try:
                 dphi, dw, dN, dl = self._step(jacobian())

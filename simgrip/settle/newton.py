@@ -61,6 +61,8 @@ SOLVE_ITERS = 200
 PEN_STIFFEN = 1e-5
 #: Contact stiffness factors are powers of this (path-independent settled states, :meth:`Newton.stiffen`).
 STIFFEN_STEP = 10.0
+#: Machine epsilon (``np.finfo(float).eps``, looked up once: the floors are evaluated every iteration).
+_EPS = float(np.finfo(float).eps)
 #: Largest stiffness factor (a weightless workpiece needs ~1e14: MuJoCo weighs its contact by the workpiece's
 #: inverse mass; a contact needing more is flagged by :func:`simgrip.validity.check_contact_depth`).
 STIFFEN_MAX = 1e16
@@ -198,7 +200,7 @@ class Newton:
         if not self.normal_active:
             return 0.0
         kc = float(np.max(self.kc[self.normal_active]))
-        return self.floor_ulps() * np.finfo(float).eps * kc * self.scene.length / self.scene.force_scale
+        return self.floor_ulps() * _EPS * kc * self.scene.length / self.scene.force_scale
 
     def floor_ulps(self) -> float:
         """Round-off of a contact distance in ulps of ``l``: :data:`FLOOR_ULPS`, or the chain's bound if larger.

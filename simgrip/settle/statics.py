@@ -35,6 +35,7 @@ CONTACT_IMPEDANCE = 0.9999
 CONTACT_STIFFNESS = 1e6
 #: Round-off of a joint angle in ulps of the largest link angle (:func:`angle_floor`).
 ANGLE_FLOOR_ULPS = 2.5
+_EPS = float(np.finfo(float).eps)  # (looked up once: the floor is evaluated every Newton iteration)
 
 
 # ---------------------------------------------------------------------------
@@ -73,9 +74,10 @@ def angle_floor(scene: Scene, qpos=None) -> float:
     if jq.size == 0:
         return 0.0
     phi = np.abs(np.cumsum(q[jq].reshape(-1, jq.shape[-1]), axis=-1))
-    big = np.maximum(phi, np.concatenate([np.zeros((phi.shape[0], 1)), phi[:, :-1]], axis=1))  # max |phi| at each hinge
+    big = phi.copy()  # max |phi| at each hinge (the first's: |phi_0|, as max(|phi_0|, 0))
+    np.maximum(phi[:, 1:], phi[:, :-1], out=big[:, 1:])
     k = m.jnt_stiffness[m.dof_jntid[np.asarray(scene.joint_dof, dtype=int).reshape(big.shape)]]
-    return float(ANGLE_FLOOR_ULPS * np.finfo(float).eps * np.max(k * big) / scene.moment_scale)
+    return float(ANGLE_FLOOR_ULPS * _EPS * np.max(k * big) / scene.moment_scale)
 
 
 @dataclass
