@@ -298,15 +298,18 @@ def _check_series(t, y):
     return t, y
 
 
-def fit_damped_cosine(t, y, guess: complex) -> DampedFit:
-    """Least-squares fit of ``A exp(-sigma t) cos(omega_d t + phase)`` to ``(t, y)`` started at the pole
-    ``guess = -sigma + i omega_d``; the amplitude and phase enter linearly and are eliminated."""
+def fit_damped_cosine(t, y, guess: complex, *, offset: bool = False) -> DampedFit:
+    """Least-squares fit of ``A exp(-sigma t) cos(omega_d t + phase)`` (plus a constant with ``offset``: an
+    equilibrium not known beforehand) to ``(t, y)`` started at the pole ``guess = -sigma + i omega_d``; the
+    amplitude, phase and offset enter linearly and are eliminated.  ``residual`` is over the rms of ``y``
+    about the fitted offset."""
     t, y = _check_series(t, y)
     t0 = t[0]
 
     def basis(p):
         env = np.exp(-p[0] * (t - t0))
-        return np.stack([env * np.cos(p[1] * (t - t0)), env * np.sin(p[1] * (t - t0))], axis=1)
+        cols = [env * np.cos(p[1] * (t - t0)), env * np.sin(p[1] * (t - t0))]
+        return np.stack(cols + [np.ones_like(t)] if offset else cols, axis=1)
 
     def resid(p):
         B = basis(p)
@@ -314,7 +317,9 @@ def fit_damped_cosine(t, y, guess: complex) -> DampedFit:
 
     sol = least_squares(resid, [-guess.real, guess.imag], x_scale=abs(guess), xtol=1e-14, ftol=1e-14, gtol=1e-14)
     c = np.linalg.lstsq(basis(sol.x), y, rcond=None)[0]
-    amp, phase = math.hypot(*c), math.atan2(-c[1], c[0])
+    if offset:
+        y = y - c[2]
+    amp, phase = math.hypot(c[0], c[1]), math.atan2(-c[1], c[0])
     # referred back to t = 0
     amp *= math.exp(sol.x[0] * t0)
     phase -= sol.x[1] * t0
