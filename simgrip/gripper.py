@@ -44,13 +44,44 @@ def simulate_gripper(grip: str, params: DimensionlessParams, profile, links: int
         start["initial_angles"] = start_angles("III", params, profile, links)
     t0 = time.perf_counter()
     with phase(progress, f"building the model ({fingers} fingers x {links} links)"):
+        if settle_kw.get("contact") == "full":  # every link touches (issue 17)
+            start["contact"] = "full"
         scene = build_gripper(grip, params, profile, links, fingers=fingers, workpiece=workpiece, yaw=yaw,
                               contact_angle=contact_angle, offset=offset, workpiece_yaw=workpiece_yaw, **start)
     build_time_s = time.perf_counter() - t0
     with phase(progress, "settling"):
         state = settle_gripper(scene, **settle_kw)
     state.build_time_s = build_time_s
+    state.nodes = gripper_nodes(scene, state.link_angles)
     return state
+
+
+def gripper_nodes(scene, link_angles) -> np.ndarray:
+    """Each finger's centreline ``(K, n + 1, 3)`` over ``l`` in the scene's frame: finger ``k``'s plane is
+    vertical at its azimuth (:attr:`~simgrip.sim.gripper.GripperScene.azimuths`, the whole scene's ``yaw`` in it)."""
+    import numpy as np
+
+    from simgrip.chain import link_positions
+
+    out = []
+    for k, phi in enumerate(np.asarray(link_angles, dtype=float)):
+        xz = link_positions(phi, 1.0 / scene.n)
+        a = float(scene.azimuths[k])
+        out.append(np.stack([xz[:, 0] * math.cos(a), xz[:, 0] * math.sin(a), xz[:, 1]], axis=1))
+    return np.array(out)
+
+
+def _contacts(state) -> list:
+    """Every contact on a finger: the full-contact settle's list, else one per finger that touches (its tip, in the
+    scene's frame; ``normal_force`` and ``friction_force`` in the finger's plane, as ``fingers``)."""
+    full = getattr(state, "contact_set", None)
+    if full is not None:
+        return list(full)
+    nodes = getattr(state, "nodes", None)
+    return [{"finger": int(r.finger), "link": int(state.links) - 1, "arc_length": 1.0, "with": "workpiece",
+             "point": None if nodes is None else [float(v) for v in nodes[r.finger][-1]],
+             "normal_force": float(r.normal), "friction_force": float(r.friction)}
+            for r in (state.records if state.held else [])]
 
 
 def _finger(state, k: int) -> dict:
@@ -139,4 +170,7 @@ def gripper_record(state, params: DimensionlessParams, profile=None) -> dict:
         "workpiece_yaw": float(getattr(state, "workpiece_yaw", 0.0)),
         "force_balance": [float(v) for v in state.force_balance],
         "moment_balance": [float(v) for v in state.moment_balance],
+        "nodes": None if getattr(state, "nodes", None) is None else [[[float(v) for v in p] for p in f]
+                                                                      for f in state.nodes],
+        "contacts": _contacts(state),
     }

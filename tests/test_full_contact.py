@@ -88,9 +88,9 @@ def test_candidate_pairs_from_the_topology(n):
 def test_two_fingers_touch_each_other():
     sc = build_scene("I", STD, -4.0, 8, contact="full", fingers=2)
     pairs = candidate_pairs(sc.model, sc.index.finger_of_geom)
-    # every geom of one finger (8 links and the tip) with every geom of the other: the two root links hang
-    # from the world body, siblings, not parent and child
-    assert pairs["finger_finger"] == 9 * 9
+    # every geom of one finger (8 links and the tip) with every geom of the other, but the two first links:
+    # clamped at one point, they overlap by construction and are excluded
+    assert pairs["finger_finger"] == 9 * 9 - 1
 
 
 def test_the_box_is_real_and_below_the_palm():
@@ -193,3 +193,61 @@ def test_simulate_table_counts_contacts(capsys):
     out = capsys.readouterr().out
     line = next(x for x in out.splitlines() if x.startswith("contacts"))
     assert "self" in line and "nodes" not in out
+
+
+# -- K fingers -----------------------------------------------------------------------------------------------
+
+
+def _capsule_gap(p0, p1, q0, q1, samples=64) -> float:
+    """Distance between the 3-D segments ``p0 p1`` and ``q0 q1`` from a sampled first one (each sample's exact
+    distance to the second; the distance is 1-Lipschitz along the first, so half a spacing is subtracted)."""
+    t = np.linspace(0.0, 1.0, samples)[:, None]
+    p = p0 + t * (p1 - p0)
+    ab = q1 - q0
+    u = np.clip(((p - q0) @ ab) / max(float(ab @ ab), 1e-300), 0.0, 1.0)[:, None]
+    d = np.linalg.norm(p - (q0 + u * ab), axis=1)
+    return float(d.min()) - 0.5 * float(np.linalg.norm(p1 - p0)) / (samples - 1)
+
+
+def test_three_fingers_wrap_a_cylinder():
+    """K = 3 around a cylinder below the palm: held, the fingers touch the cylinder along more than their tips,
+    no finger crosses itself or another, none enters the cylinder; the three fingers carry equal shares."""
+    from simgrip.gripper import gripper_record, simulate_gripper
+
+    n, r = 16, 2e-3
+    st = simulate_gripper("I", STD, -8.0, n, fingers=3, workpiece="cylinder", contact="full")
+    rec = gripper_record(st, STD)
+    assert st.converged and st.held and getattr(st, "valid", True)
+    nodes = np.asarray(rec["nodes"])
+    assert nodes.shape == (3, n + 1, 3)
+    # no capsule through another: every pair of links of different fingers (but the clamped first links) and
+    # of one finger at least two apart stays 2 r apart, less the issue's bound
+    for a in range(3):
+        for b in range(a, 3):
+            for i in range(n):
+                for j in range(i + 2 if a == b else 0, n):
+                    if a != b and i + j == 0:
+                        continue  # both first links start at the common clamp (excluded from contact)
+                    gap = _capsule_gap(nodes[a, i], nodes[a, i + 1], nodes[b, j], nodes[b, j + 1])
+                    assert gap >= 2 * r - PEN_BOUND, (a, i, b, j, gap)
+    # none inside the cylinder (radius b/2 - r_tip, vertical axis through its centre)
+    c = np.asarray(st.workpiece_position)
+    radial = np.hypot(nodes[..., 0] - c[0], nodes[..., 1] - c[1])
+    below_top = nodes[..., 2] < c[2] + 1.0  # the cylinder is BOX_HEIGHT = 2 l tall
+    assert np.all(radial[below_top] >= 0.3 - 2e-3 + r - PEN_BOUND)
+    on = [x for x in rec["contacts"] if x["with"] == "workpiece"]
+    assert {x["finger"] for x in on} == {0, 1, 2}
+    assert any(x["arc_length"] < 1.0 - 1.0 / n for x in on)  # wrapping: more than the tips
+    per = [sum(x["normal_force"] for x in on if x["finger"] == k) for k in range(3)]
+    assert per == pytest.approx([per[0]] * 3, rel=1e-2)  # the scene is symmetric under a turn by 120 degrees
+
+
+def test_gripper_json_has_nodes_and_contacts(capsys):
+    from simgrip.cli import main
+
+    n = 8
+    assert main(["simulate", "I", "--kappa", "-6", "--links", str(n), "--fingers", "3", "--json"]) == 0
+    rec = json.loads(capsys.readouterr().out)
+    nodes = np.asarray(rec["nodes"])
+    assert nodes.shape == (3, n + 1, 3) and np.allclose(nodes[:, 0], 0.0)
+    assert len(rec["contacts"]) == 3 and all(c["link"] == n - 1 for c in rec["contacts"])

@@ -30,7 +30,13 @@ Which motions the modes cover: one finger (the symmetric reduction) with the
 workpiece sliding vertically, so its symmetric modes; the workpiece neither
 sways nor rocks in them.  ``fingers=2`` builds both mirrored fingers with the
 workpiece free in the plane (``x, z, ry``): its modes include the antisymmetric
-ones, which the rod reference (symmetric) does not cover.
+ones, which the rod reference (symmetric) does not cover.  The K-finger gripper
+(workpiece free in 3-D) is :func:`simgrip.modes.gripper.gripper_modes`.
+
+For other code (e.g. the damping of a built scene): :func:`linearise` gives
+``M``, ``K`` and the constraints' null space of any built scene at a given
+``qpos``, :func:`eigen` the eigenpairs, :func:`chain_modes` both for a settled
+state (model units: ``omega^2`` in 1/s^2).
 """
 
 from __future__ import annotations

@@ -33,6 +33,7 @@ import time
 import mujoco
 import numpy as np
 
+from simgrip.settle.full_guard import GuardedSteps
 from simgrip.settle.dynamics import (DYN_CLOSE_RATE, DYN_DROP_FALL, DYN_DROP_SLIP, DYN_RELEASE_STEPS, DYN_TIMECONST,
                                      DYN_VTOL, Dyn)
 from simgrip.settle.state import SettledState, SettleError, read_state
@@ -40,20 +41,12 @@ from simgrip.settle.statics import CONTACT_IMPEDANCE
 from simgrip.sim.full_contact import colliding_geoms
 from simgrip.sim.scene import Scene, set_curvature
 
-__all__ = ["FULL_PEN_LIMIT", "contact_set", "settle_full"]
+__all__ = ["FULL_PEN_LIMIT", "contact_set", "ramp_rate", "settle_full"]
 
 #: Deepest contact (over l) a full-contact state may keep; deeper restarts at half the step.
 FULL_PEN_LIMIT = 1e-4
 #: Step halvings tried before the settle gives up on penetration.
 FULL_RESTARTS = 3
-#: Largest motion of a finger point in one step, over ``r_link`` (:class:`_Guarded`): two points closing on each
-#: other approach by at most ``r_link`` per step, so two capsules that were apart (``2 r_link`` between their
-#: axes) at a step's start overlap by at most half their contact distance after it (MuJoCo sees a contact only
-#: once it exists, at the next step) and never cross axes.
-FULL_STEP_RADII = 0.5
-#: Damping growth of a rejected step, and the largest damping factor tried.
-FULL_GUARD_GROWTH = 4.0
-FULL_GUARD_MAX = 4.0 ** 8
 #: Fraction of a contact's penetration closed per step (the contact's damping, :func:`_once`).
 FULL_CONTACT_RELAX = 0.5
 #: Closing ramp: largest change of the total rest rotation per physics step, over the capsule radius
@@ -120,7 +113,7 @@ def _once(scene: Scene, tol: float, budget: int, factor: float, t0: float) -> tu
     m.geom_solimp[gs, 1] = CONTACT_IMPEDANCE
     limit = FULL_PEN_LIMIT * scene.length
     tunnel = scene.r_link * scene.length
-    guard = _Guarded(scene, dyn)
+    guard = GuardedSteps(scene, dyn)
     held = scene.has_workpiece
     if held:
         dyn.hold(True)
@@ -142,10 +135,7 @@ def _once(scene: Scene, tol: float, budget: int, factor: float, t0: float) -> tu
             guard.step()
             if _deepest(d) > tunnel:
                 return _read(scene, dyn, t0, held, False), True
-            if guard.last < 0.5 * guard.limit:
-                rate = min(DYN_CLOSE_RATE, 1.5 * rate)
-            elif guard.last > 0.9 * guard.limit:
-                rate *= 0.5
+            rate = ramp_rate(rate, guard, _deepest(d), tunnel)
         converged, why = guard.run(max(tol, 1e-8), budget)
     finally:
         set_curvature(scene, target)
@@ -192,115 +182,17 @@ def _once(scene: Scene, tol: float, budget: int, factor: float, t0: float) -> tu
     return state, state.penetration > FULL_PEN_LIMIT or _deepest(d) > limit
 
 
-class _Guarded:
-    """Steps of :class:`Dyn` that move no point of a finger by more than ``r_link`` (:data:`FULL_STEP_RADII`).
-
-    The motion is measured exactly: every node's displacement in the finger's plane (the hinge chain's
-    ``sum_{i<k} ds (cos phi_i, sin phi_i)``) plus the workpiece's translation.  A step above the
-    bound (a snap-through: the over-damped flow jumps most of the way to the next equilibrium in one step) is
-    undone and retried with the damping times :data:`FULL_GUARD_GROWTH` (Dyn's ``factor``), which slows the flow
-    as ``1 / factor``; the factor halves again after each accepted step.  Two capsules apart at a step's
-    start overlap by at most ``r_link`` after it: no link passes through another.
-    """
-
-    def __init__(self, scene: Scene, dyn: Dyn):
-        self.scene, self.dyn = scene, dyn
-        self.limit = FULL_STEP_RADII * scene.r_link * scene.length
-        self.q = np.asarray(scene.joint_qpos)
-        self.wq = np.asarray(scene.workpiece_qpos, dtype=int)
-        self.wt = np.array([name != "ry" for name in scene.workpiece_joints], dtype=bool)
-        self.rejected = 0
-        # node pairs that the clearance leaves out: one finger's nodes fewer than 2 apart (links 1 and 2 apart)
-        F, n1 = scene.fingers, scene.n + 1
-        f_of = np.repeat(np.arange(F), n1)
-        k_of = np.tile(np.arange(n1), F)
-        self.near = (f_of[:, None] == f_of[None, :]) & (np.abs(k_of[:, None] - k_of[None, :]) < 2)
-        self.last = 0.0  # the last accepted step's motion [m]
-
-    def _nodes(self, qpos) -> np.ndarray:
-        """Every finger's nodes ``(fingers, n + 1, 2)`` [m] in its own plane from the hinge angles ``qpos``."""
-        phi = np.cumsum(qpos[self.q], axis=1)
-        ds = self.scene.length / self.scene.n
-        steps = ds * np.stack([np.cos(phi), np.sin(phi)], axis=-1)
-        return np.concatenate([np.zeros((phi.shape[0], 1, 2)), np.cumsum(steps, axis=1)], axis=1)
-
-    def _moved(self, q0, nodes0) -> float:
-        """Largest displacement [m] of a finger node (or the workpiece) since ``q0`` (nodes ``nodes0``)."""
-        d = self.dyn.d
-        moved = float(np.max(np.linalg.norm(self._nodes(d.qpos) - nodes0, axis=-1)))
-        if self.wq.size and self.wt.any():
-            moved += float(np.linalg.norm((d.qpos[self.wq] - q0[self.wq])[self.wt]))
-        return moved
-
-    def clearance(self, nodes) -> float:
-        """A lower bound [m] on the gap between a finger's capsules and anything they may touch that is not
-        guarded by geometry: links at least three apart on one finger, the other fingers' links, the box.
-
-        Every point of a link lies within ``ds / 2`` of one of its end nodes, so two links whose nodes are at
-        least ``D`` apart have capsules at least ``D - ds - 2 r_link`` apart; a link whose nodes are ``D`` from
-        the box is ``D - ds/2 - r_link`` from it.  Links one and two apart are left out: the first are MuJoCo's
-        filtered parent and child, the second cannot touch while their hinges turn by less than ``pi/2``
-        (:func:`~simgrip.sim.full_contact.next_but_one_separated`); where a hinge turns more, the bound is 0.
-        """
-        sc = self.scene
-        L, n = sc.length, sc.n
-        ds, r = L / n, sc.r_link * L
-        if np.any(np.abs(self.dyn.d.qpos[self.q][:, 1:]) >= 0.5 * math.pi):
-            return 0.0
-        pts = nodes.reshape(-1, 2)
-        gap = math.inf
-        if pts.shape[0] > 3:
-            dist = np.linalg.norm(pts[:, None, :] - pts[None, :, :], axis=-1)
-            dist[self.near] = math.inf
-            gap = float(dist.min()) - ds - 2.0 * r
-        if sc.has_workpiece and sc.box_half[0] > 0.0 and self.wq.size <= 1:
-            # the box in each finger's plane: |x| <= hx, |z - zc| <= hz (the symmetric reduction's box)
-            hx, hz = float(sc.box_half[0]), float(sc.box_half[2])
-            zc = float(self.dyn.d.xpos[sc.workpiece_body][2])
-            dx = np.abs(pts[:, 0]) - hx
-            dz = np.abs(pts[:, 1] - zc) - hz
-            out = np.hypot(np.maximum(dx, 0.0), np.maximum(dz, 0.0)) + np.minimum(np.maximum(dx, dz), 0.0)
-            gap = min(gap, float(out.min()) - 0.5 * ds - r)
-        elif sc.has_workpiece:
-            gap = 0.0
-        return max(0.0, gap)
-
-    def step(self) -> None:
-        """One accepted physics step (retried with more damping while it moves too far)."""
-        dyn, d = self.dyn, self.dyn.d
-        q0, v0, t0 = d.qpos.copy(), d.qvel.copy(), d.time
-        nodes0 = self._nodes(q0)
-        # two points closing on each other approach by at most twice this: the gap plus r_link
-        self.limit = FULL_STEP_RADII * self.scene.r_link * self.scene.length + 0.5 * self.clearance(nodes0)
-        while True:
-            dyn.step()
-            self.last = self._moved(q0, nodes0)
-            if self.last <= self.limit or dyn.factor >= FULL_GUARD_MAX:
-                break
-            d.qpos[:], d.qvel[:], d.time = q0, v0, t0
-            self.rejected += 1
-            dyn.factor *= FULL_GUARD_GROWTH
-        if dyn.factor > 1.0:
-            dyn.factor = max(1.0, 0.5 * dyn.factor)
-
-    def run(self, tol: float, budget: int, watch=None) -> tuple[bool, str]:
-        """Step until the velocity is below ``DYN_VTOL`` and MuJoCo's static residual below ``tol``
-        (:func:`~simgrip.settle.integrator.run_to_rest`'s test, one guarded step at a time)."""
-        dyn = self.dyn
-        while True:
-            if dyn.velocity() < DYN_VTOL:
-                r = dyn.residual()
-                if not math.isfinite(r):
-                    raise SettleError("full-contact settle diverged (non-finite residual)")
-                if r < tol:
-                    return True, "ok"
-            if watch is not None:
-                why = watch()
-                if why:
-                    return False, why
-            if dyn.steps >= budget:
-                return False, "max_steps"
-            self.step()
+def ramp_rate(rate: float, guard, deepest: float, radius: float) -> float:
+    """The closing ramp's next rate [rad of total rest rotation per step]: half when the last step moved near
+    the guard's bound or a contact is deeper than a quarter of the capsule's ``radius`` [m] (the contact closes
+    only :data:`FULL_CONTACT_RELAX` of a depth per step, so a ramp that keeps pressing a blocked link in deepens
+    it by up to the guard's bound per step), 1.5 times (at most :data:`DYN_CLOSE_RATE`) when it moved less than
+    half the bound, else unchanged."""
+    if guard.last > 0.9 * guard.limit or deepest > 0.25 * radius:
+        return 0.5 * rate
+    if guard.last < 0.5 * guard.limit:
+        return min(DYN_CLOSE_RATE, 1.5 * rate)
+    return rate
 
 
 def _read(scene: Scene, dyn: Dyn, t0: float, held: bool, converged: bool) -> SettledState:

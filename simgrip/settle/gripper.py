@@ -149,6 +149,16 @@ def settle_gripper(scene: GripperScene, *, tol: float | None = None, max_steps: 
     """
     if not isinstance(scene, GripperScene):
         raise ValueError(f"scene must be a simgrip.sim.gripper.GripperScene, got {type(scene).__name__}")
+    if scene.contact == "full" or contact == "full":  # every link touches (issue 17): the guarded dynamics
+        from simgrip.settle.gripper_full import settle_gripper_full
+
+        if scene.contact != "full" or contact not in (None, "full"):
+            raise ValueError("contact: 'full' needs a gripper built with contact='full' and settles with it only")
+        if method not in (None, "auto", "dynamics"):
+            raise ValueError(f"method: a full-contact gripper settles by the dynamics, got {method!r}")
+        tol, _ = check_tol_steps(gripper_tolerance(scene) if tol is None else tol,
+                                 1 if max_steps is None else max_steps)
+        return settle_gripper_full(scene, tol=tol, max_steps=max_steps, allow_unconverged=allow_unconverged)
     from simgrip.settle.gripper_symmetry import symmetric_or_none
 
     t0 = time.perf_counter()

@@ -118,6 +118,12 @@ class GripperState:
     #: Where the sticking friction acts: ``"surface"`` (MuJoCo's contact point on the tip sphere; the
     #: dynamics) or ``"point"`` (the finger's centreline, the paper's point contact; the skip's default).
     contact: str = "surface"
+    #: Each finger's centreline in the scene's frame, (K, n + 1, 3) over ``l`` (:func:`simgrip.gripper.simulate_gripper`
+    #: fills it from the scene; None when the state was settled from a scene elsewhere).
+    nodes: np.ndarray | None = field(default=None, repr=False)
+    #: Every contact on a finger (:func:`simgrip.settle.gripper_full.gripper_contact_set`): filled by the
+    #: full-contact settle (``contact="full"``); None otherwise (the tips' contacts are ``records``).
+    contact_set: list | None = None
 
 
 def read_gripper_state(scene: GripperScene, dyn, held: bool, converged: bool, steps: int, t0: float,

@@ -87,11 +87,19 @@ def check_contact_mode(contact) -> str:
     raise ValueError(f"contact must be 'point', 'surface' or 'full', got {contact!r}")
 
 
-def enable_full_contact(spec: mujoco.MjSpec, finger_geoms, workpiece_geoms, mu: float) -> None:
+def enable_full_contact(spec: mujoco.MjSpec, finger_geoms, workpiece_geoms, mu: float, root_bodies=()) -> None:
     """Make the named geoms of ``spec`` collide through the broad phase (see the module docstring).
 
-    ``finger_geoms``, ``workpiece_geoms``: geom names; ``mu``: sliding friction ``mu_s`` (both tangents).
+    ``finger_geoms``, ``workpiece_geoms``: geom names; ``mu``: sliding friction ``mu_s`` (both tangents);
+    ``root_bodies``: the first link's body of every finger.  Every finger is clamped at the same point (the palm
+    centre), so the first links of two fingers overlap by construction there: each pair of them is excluded
+    (MuJoCo's ``<exclude>``); a first link and another finger's second link are ``ds sin(angle between the
+    fingers)`` apart at the clamp and stay candidates.
     """
+    roots = list(root_bodies)
+    for i, a in enumerate(roots):
+        for b in roots[i + 1:]:
+            spec.add_exclude(bodyname1=a, bodyname2=b)
     for names, ctype, caff in ((finger_geoms, FINGER_BIT, FINGER_BIT | WORKPIECE_BIT),
                                (workpiece_geoms, WORKPIECE_BIT, FINGER_BIT)):
         for name in names:
@@ -117,7 +125,7 @@ def candidate_pairs(model: mujoco.MjModel, finger_of_geom) -> dict:
     """The geom pairs MuJoCo's broad phase may test in a full-contact model, counted by kind.
 
     A pair is a candidate when the bits match (``contype1 & conaffinity2 || contype2 & conaffinity1``), the
-    geoms are on different bodies and the bodies are not parent and child (MuJoCo's filters).
+    geoms are on different bodies, the bodies are not parent and child and not excluded (MuJoCo's filters).
     ``finger_of_geom``: the finger of each geom, -1 for others (:class:`~simgrip.sim.fingers.FingerIndex`).
     Returns ``{"total", "finger_workpiece", "self", "finger_finger", "all_pairs"}`` (``all_pairs``: ``g (g-1) / 2``
     of the ``g`` colliding geoms).  ``O(g^2)`` in Python: a report, not part of any settle.
@@ -125,6 +133,7 @@ def candidate_pairs(model: mujoco.MjModel, finger_of_geom) -> dict:
     ids = colliding_geoms(model)
     body, parent = model.geom_bodyid, model.body_parentid
     owner = np.asarray(finger_of_geom)
+    excluded = {int(x) for x in model.exclude_signature}
     out = {"finger_workpiece": 0, "self": 0, "finger_finger": 0}
     for k, a in enumerate(ids):
         for b in ids[k + 1:]:
@@ -133,6 +142,8 @@ def candidate_pairs(model: mujoco.MjModel, finger_of_geom) -> dict:
                 continue
             ba, bb = body[a], body[b]
             if ba == bb or parent[ba] == bb or parent[bb] == ba:
+                continue
+            if ((int(ba) << 16) + int(bb)) in excluded or ((int(bb) << 16) + int(ba)) in excluded:
                 continue
             fa = owner[a] if a < owner.size else -1
             fb = owner[b] if b < owner.size else -1

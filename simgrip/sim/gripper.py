@@ -165,6 +165,8 @@ class GripperScene(FingerScene):
     finger_springs: tuple = ()
     reach: np.ndarray | None = None
     normals: np.ndarray | None = None
+    #: ``"pairs"`` (one explicit pair per tip) or ``"full"`` (every link may touch: :mod:`simgrip.sim.full_contact`).
+    contact: str = "pairs"
 
     @property
     def tip_geom(self) -> np.ndarray:
@@ -247,6 +249,8 @@ def build_gripper(
     initial_angles=None,
     offset=(0.0, 0.0),
     workpiece_yaw: float = 0.0,
+    contact: str | None = None,
+    box_gap: float | None = None,
 ) -> GripperScene:
     """Build and compile a K-finger gripper holding a workpiece (see the module docstring).
 
@@ -289,12 +293,29 @@ def build_gripper(
         The workpiece's turn about its vertical axis relative to the fingers
         [rad]; a box's fingers must still meet flat faces (ValueError naming
         ``workpiece_yaw``).
+    contact : {None, "point", "surface", "full"}
+        ``"full"`` (Grips I/II): every link and tip may touch the workpiece, the
+        other fingers and its own links (:mod:`simgrip.sim.full_contact`); the
+        workpiece then lies ``box_gap`` below the palm (above it, Grip II)
+        instead of level with the tips.  Otherwise one pair per tip.
+    box_gap : float, optional
+        With ``contact="full"``: gap over ``l`` between the palm plane and the
+        workpiece's nearest point (default
+        :data:`~simgrip.sim.full_contact.DEFAULT_BOX_GAP`).
 
     Returns
     -------
     GripperScene
     """
     grip, K, shape = check_gripper(grip, fingers, workpiece)
+    from simgrip.sim.full_contact import DEFAULT_BOX_GAP, check_contact_mode, enable_full_contact, full_box_centre
+
+    mode = check_contact_mode(contact)
+    if mode == "full" and grip == "III":
+        raise ValueError("contact: 'full' is built for Grips I/II (the cradle's box would need a top below the palm)")
+    if box_gap is not None and mode != "full":
+        raise ValueError("box_gap: only a full-contact gripper (contact='full') places its workpiece by a gap")
+    gap = DEFAULT_BOX_GAP if box_gap is None else check_positive("box_gap", box_gap, 1.0)
     if grip == "III":
         from simgrip.sim.gripper_cradle import build_cradle
 
@@ -344,16 +365,22 @@ def build_gripper(
     place = place_fingers(shape, azimuths - yaw, size / L, r_tip, off, psi)
     z0 = float(link_positions(np.cumsum(q0[0]), springs.ds)[-1, 1]) * L
     cy, sy = math.cos(yaw), math.sin(yaw)
+    if mode == "full":  # below the palm (Grip II: above it), its nearest point box_gap away
+        z0 = full_box_centre(grip, gap * L, float(size[2] if shape == "box" else size[1] if shape == "cylinder"
+                                                  else size[0]))
     centre = [(cy * off[0] - sy * off[1]) * L, (sy * off[0] + cy * off[1]) * L, z0]
     _add_workpiece(spec, shape, size, workpiece_body_mass(phys, K), centre, yaw + psi)
-    for k in range(K):
+    if mode == "full":
+        enable_full_contact(spec, [f"f{k}_{g}" for k in range(K) for g in [f"geom{i}" for i in range(n)] + ["tip"]],
+                            [_WORKPIECE_GEOM], phys.mu_s, root_bodies=[f"f{k}_link0" for k in range(K)])
+    for k in range(K if mode == "pairs" else 0):
         add_pair(spec, f"pair_f{k}_tip", f"f{k}_tip", _WORKPIECE_GEOM, phys.mu_s)
 
     scene = compile_gripper(
         spec, fingers=K, n=n, grip=grip, workpiece=shape, params=dimless, physical=phys, profile=prof,
         springs=springs, azimuths=azimuths, yaw=yaw, size=size, r_tip=r_tip, r_link=r_link, contact_angle=beta,
         offset=off, workpiece_yaw=psi, profiles=profs, finger_springs=finger_springs, reach=place.reach,
-        normals=place.normal)
+        normals=place.normal, contact=mode)
     set_finger_angles(scene, q0)
     return scene
 

@@ -367,7 +367,8 @@ def build_scene(
             _add_pairs(spec, grip, fingers, place.links, phys.mu_s)
     if mode == "full":
         enable_full_contact(spec, [f"f{f}_{g}" for f in range(fingers) for g in [f"geom{i}" for i in range(n)] + ["tip"]],
-                            ["workpiece_box"] if place is not None else [], phys.mu_s)
+                            ["workpiece_box"] if place is not None else [], phys.mu_s,
+                            root_bodies=[f"f{f}_link0" for f in range(fingers)])
     if render:
         _dress(spec, grip, L)
 
