@@ -52,6 +52,7 @@ sticking constraints of :class:`~simgrip.settle.statics.Stick`.
 
 from __future__ import annotations
 
+import functools
 import math
 from dataclasses import dataclass
 
@@ -123,7 +124,7 @@ class ChainModel:
         self.jd = np.asarray(scene.joint_dof, int).reshape(-1)
         self.k = m.jnt_stiffness[m.dof_jntid[self.jd]] / (W * L)
         bodies = np.asarray(scene.link_body, int).reshape(nf, nl)
-        self.link_index = {int(b): (f, i) for f in range(nf) for i, b in enumerate(bodies[f])}
+        self._bodies = bodies
         self.mir = np.asarray(scene.mirror, float)
         self.ds = float(m.body_pos[bodies[0, 1]][0]) / L
         g = model_gravity(m)
@@ -164,6 +165,11 @@ class ChainModel:
             sphere = int(m.geom_type[g1]) == int(mujoco.mjtGeom.mjGEOM_SPHERE)
             self.pair_link.append((*self.link_index[int(m.geom_bodyid[g1])], sphere))
             self.radius.append((m.geom_size[g1][0] + (0.0 if sphere else m.geom_size[g2][0])) / L)
+
+    @functools.cached_property
+    def link_index(self) -> dict:
+        """``{link body id: (finger, link)}``; built on first use (contact and stick terms: a free chain needs none)."""
+        return {int(b): (f, i) for f in range(self.fingers) for i, b in enumerate(self._bodies[f])}
 
     # -- kinematics -------------------------------------------------------------
     def split(self, q) -> tuple[np.ndarray, np.ndarray]:
