@@ -321,3 +321,21 @@ def test_call_settle_ratio_reports_the_repeated_call():
     assert reuse.cache_info()["hits"] == 2  # one compile, then set in place
     with pytest.raises(ValueError, match="calls"):
         call_settle_ratio("I", 6, calls=0)
+
+
+@pytest.mark.parametrize("grip,kw", [("I", {"free_workpiece": False}), ("III", {"free_workpiece": False}),
+                                     ("III", {"render": True, "fingers": 2}), ("II", {"render": True})])
+def test_planar_reuse_fixed_workpiece_and_dressing(grip, kw):
+    """A fixed workpiece (its body placed, no joints) and the rendering dressing (palm, floor plane, camera;
+    the spec's stat.center/extent kept) reused as built fresh."""
+    reuse.clear()
+    rng = np.random.default_rng(1999)
+    for _ in range(3):
+        p = DimensionlessParams(D=float(rng.uniform(0.5, 2.0)), M=float(rng.uniform(0.0, 3.0)), b=0.6, gamma=0.8,
+                                mu_s=float(rng.uniform(0.5, 2.0)))
+        prof = Uniform(float(rng.uniform(-3.0, -1.0)))
+        used, fresh = reuse.build_scene(grip, p, prof, 12, **kw), build_scene(grip, p, prof, 12, **kw)
+        assert_same_model(used.model, fresh.model)
+        assert_same_data(used.data, fresh.data, fresh.model)
+        scribble(used)
+    assert reuse.cache_info()["hits"] == 2
