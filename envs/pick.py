@@ -35,6 +35,7 @@ from simgrip.envs.pick_contacts import BoxContactForces
 from simgrip.envs.pick_model import build_pick_model, resize_workpiece
 from simgrip.envs.pick_observation import OBS_LAYOUT, PickObservation, obs_layout
 from simgrip.envs.pick_reward import PickReward, progress
+from simgrip.envs.pick_validity import FingerValidity
 from simgrip.params import DimensionlessParams, PhysicalParams
 from simgrip.sim.checks import PhysicsError, StateCheck, check_invalid_state
 from simgrip.sim.gl import make_renderer
@@ -360,6 +361,7 @@ class PickEnv(gym.Env):
         self.spec, self.model = pm.spec, pm.model
         self.data = mujoco.MjData(self.model)
         self.fingers = pm.fingers
+        self._validity = FingerValidity(self.model, pm.fingers)  # info["valid"] (issue 17)
         self.palm_qpos, self.palm_dof = pm.palm_qpos, pm.palm_dof
         self.box_qpos, self.box_dof, self.box_body, self.box_geom = pm.box_qpos, pm.box_dof, pm.box_body, pm.box_geom
         self._finger_pair_ids = pm.finger_pairs
@@ -578,6 +580,10 @@ class PickEnv(gym.Env):
             "normal_force": np.array((n0, n1)), "friction_force": np.array((f0, f1)),
             "side_force": np.array((s0, s1)), "hold_time": hold,
         }
+        invalid = self._validity(q, data)  # a finger through itself or the other (envs.pick_validity)
+        info["valid"] = not invalid
+        if invalid:
+            info["invalid"] = invalid
         return obs, reward, terminated, False, info
 
     def render(self):

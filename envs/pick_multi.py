@@ -29,6 +29,7 @@ from simgrip.envs.pick_multi_model import build_pick_multi_model, half_height, s
 from simgrip.envs.pick_multi_observation import MultiObservation, WorkpieceContactForces, multi_reward
 from simgrip.envs.pick_multi_workpiece import WORKPIECE_OPTIONS, WorkpieceParams, draw_workpiece
 from simgrip.envs.pick_reward import progress
+from simgrip.envs.pick_validity import FingerValidity
 from simgrip.params import DimensionlessParams, PhysicalParams
 from simgrip.sim.checks import PhysicsError, StateCheck, check_invalid_state
 from simgrip.sim.gl import make_renderer
@@ -279,6 +280,7 @@ class PickMultiEnv(gym.Env):
                     and np.array_equal(other.fingers.finger_of_geom, pm.fingers.finger_of_geom)):
                 raise RuntimeError(f"the {other.shape!r} model's addresses differ from the {pm.shape!r} model's")
         self.fingers = pm.fingers
+        self._validity = FingerValidity(pm.model, pm.fingers)  # info["valid"] (issue 17; same addresses every shape)
         self.azimuths = pm.azimuths
         self.palm_qpos, self.palm_dof = pm.palm_qpos, pm.palm_dof
         self.work_qpos, self.work_dof = pm.work_qpos, pm.work_dof
@@ -448,6 +450,10 @@ class PickMultiEnv(gym.Env):
             "workpiece_lift": gain, "normal_force": np.array(normal), "friction_force": np.array(friction),
             "side_force": np.array(side), "hold_time": self._hold, "fingers_touching": touching,
         })
+        invalid = self._validity(d.qpos.tolist(), d)  # a finger through itself or another (envs.pick_validity)
+        info["valid"] = not invalid
+        if invalid:
+            info["invalid"] = invalid
         return self._get_obs(forces), reward, terminated, False, info
 
     def render(self):

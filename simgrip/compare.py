@@ -24,7 +24,7 @@ from simgrip.profiles import as_profile
 from simgrip.report import difference, elastica_record
 
 __all__ = ["BRANCH_LINKS", "simulate", "settled_record", "reference_for", "reference_of", "chain_reference",
-           "branch_warnings", "cone_warnings", "compare", "verdict_warnings"]
+           "branch_warnings", "cone_warnings", "compare", "reference_validity", "verdict_warnings"]
 
 #: A reference whose tip lies farther than this many link lengths (``BRANCH_LINKS / n`` over ``l``) from the
 #: simulated tip describes another equilibrium.  The settled ``n``-link chain is the midpoint discretisation of
@@ -135,7 +135,9 @@ def settled_record(state, params: DimensionlessParams, profile=None) -> dict:
         "normal_force": float(state.normal_force),
         "friction_force": float(state.friction_force),
         "required_mu": float(state.required_mu) if c is not None else 0.0,
-        "feasible": bool(state.held and state.tip_clear and getattr(state, "contact_ok", True)) if grip != "free" else True,
+        "feasible": (bool(state.held and state.tip_clear and getattr(state, "contact_ok", True)) if grip != "free"
+                     else True) and bool(getattr(state, "valid", True)),
+        "valid": bool(getattr(state, "valid", True)),
         "min_eigenvalue": None if profile is None else _stability(state, grip, params, as_profile(profile)),
         "N1": float(state.N1),
         "N2": float(state.N2),
@@ -198,7 +200,9 @@ def reference_of(state, params: DimensionlessParams, profile):
     grip = state.grip
     c = state.contact
     profile = as_profile(profile)
-    if grip == "free" or c is None or not state.held:
+    # an impossible state (``valid`` False, :func:`simgrip.validity.check_valid`) is reported not held, but the
+    # solve held it (it has a contact): its reference is the BVP on the branch it lies on, as for a held one
+    if grip == "free" or c is None or not (state.held or not getattr(state, "valid", True)):
         sol = elastica.solve(grip, params, profile)
         return sol, cone_warnings(sol, state.links)
     kw = {"contact_moment": float(c.moment)}
@@ -349,8 +353,26 @@ def compare(grip: str, params: DimensionlessParams, profile, links: int, **settl
         ref = {"source": "elastica", "grip": state.grip, "available": False, "why": ref_warnings[0]}
         return {"simulation": sim, "reference": ref, "difference": {}, "warnings": ref_warnings}
     ref = elastica_record(sol)
+    ref_warnings = ref_warnings + reference_validity(ref, sol)
     return {"simulation": sim, "reference": ref, "difference": difference(sim, ref),
             "warnings": ref_warnings + verdict_warnings(sim, ref)}
+
+
+def reference_validity(ref: dict, sol) -> list[str]:
+    """Mark the reference record ``valid`` (:func:`simgrip.validity.reference_violations`); the messages.
+
+    The BVP allows the rod to pass through itself and the workpiece: an impossible reference gets
+    ``valid: False`` and ``feasible: False`` (it holds nothing) and a warning saying why.
+    """
+    from simgrip.validity import reference_violations
+
+    found = reference_violations(sol)
+    ref["valid"] = not found
+    if not found:
+        return []
+    ref["feasible"] = False
+    return [f"the reference itself crosses itself / enters the workpiece (the BVP allows it): {m}; the reference "
+            f"is reported not feasible" for m in found]
 
 
 def verdict_warnings(sim: dict, ref: dict) -> list[str]:
@@ -379,6 +401,10 @@ def verdict_warnings(sim: dict, ref: dict) -> list[str]:
         why = []
         if not sim.get("held", True):
             why.append("the simulation dropped the workpiece")
+        if sim.get("valid") is False:
+            why.append("the simulation's state is not physical (see its warnings: invalid state)")
+        if ref.get("valid") is False:
+            why.append("the reference is not physical (it crosses itself or enters the workpiece)")
         if sim.get("contact_ok") is False:
             why.append("the simulation's contact is not a surface contact (see its warnings)")
         mu = (sim.get("params") or ref.get("params") or {}).get("mu_s")

@@ -58,7 +58,7 @@ def compare_gripper(grip: str, params: DimensionlessParams, profile, links: int,
     reference starts from that shape, :func:`simgrip.compare.chain_reference`)
     and the verdicts that disagree (:func:`simgrip.compare.verdict_warnings`).
     """
-    from simgrip.compare import branch_warnings, chain_reference, verdict_warnings
+    from simgrip.compare import branch_warnings, chain_reference, reference_validity, verdict_warnings
     from simgrip.gripper import gripper_record, simulate_gripper
     from simgrip.reference import elastica
     from simgrip.report import difference, elastica_record
@@ -70,7 +70,9 @@ def compare_gripper(grip: str, params: DimensionlessParams, profile, links: int,
     state = simulate_gripper(grip, params, profile, links, fingers=fingers, workpiece=workpiece,
                              contact_angle=contact_angle, offset=offset, workpiece_yaw=workpiece_yaw, **settle_kw)
     sim = gripper_record(state, params, profile)
-    first = state.records[0] if (state.held and state.records) else None
+    # an impossible state (valid False: not held) was held by the settle: its reference is on its branch too
+    solved = state.held or not getattr(state, "valid", True)
+    first = state.records[0] if (solved and state.records) else None
     moment = float(first.moment) if first is not None else 0.0
     if first is not None:
         sol = chain_reference(grip, params, profile, state.link_angles[0], float(first.N1), contact_moment=moment)
@@ -78,6 +80,7 @@ def compare_gripper(grip: str, params: DimensionlessParams, profile, links: int,
     else:
         sol, ref_warnings = elastica.solve(grip, params, profile), []
     ref = elastica_record(sol)
+    ref_warnings = ref_warnings + reference_validity(ref, sol)
     per_finger = []
     for rec in sim["fingers"]:
         n_ref = ref.get("normal_force")

@@ -129,7 +129,8 @@ def gripper_record(state, params: DimensionlessParams, profile=None) -> dict:
     Top level: the planar ``simulate`` record's fields for finger 0
     (``tip``, ``normal_force``, ``friction_force``, ``required_mu``, ``N1``,
     ``N2``; zeros when dropped), ``held`` and ``feasible`` for the workpiece
-    (``feasible``: held and, Grip III, condition (23) met: ``state.tip_clear``),
+    (``feasible``: held and, Grip III, condition (23) met: ``state.tip_clear``), ``valid`` (no finger
+    through itself, another or the workpiece: :func:`simgrip.validity.check_gripper_valid`),
     the settle's ``steps``, ``residual``, ``penetration``, ``wall_time_s``, ``build_time_s`` (the model's),
     ``method`` (which settle ran: ``"symmetric"``, the symmetry skip, or
     ``"dynamics"``) and ``contact`` (where the friction acts: ``"point"`` or
@@ -151,7 +152,8 @@ def gripper_record(state, params: DimensionlessParams, profile=None) -> dict:
         "normal_force": float(first.normal) if first else 0.0,
         "friction_force": float(first.friction) if first else 0.0,
         "required_mu": float(first.required_mu) if first else 0.0,
-        "feasible": bool(state.held and getattr(state, "tip_clear", True)),
+        "feasible": bool(state.held and getattr(state, "tip_clear", True) and getattr(state, "valid", True)),
+        "valid": bool(getattr(state, "valid", True)),
         "min_eigenvalue": None if profile is None else _stability(state, params, as_profile(
             profile[0] if isinstance(profile, (list, tuple)) else profile)),
         "N1": float(first.N1) if first else 0.0,

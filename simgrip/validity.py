@@ -46,10 +46,18 @@ and so the simulation's verdict agrees with it.
 
 from __future__ import annotations
 
+import math
+from dataclasses import dataclass
+
 import numpy as np
 
-__all__ = ["DEPTH_FRACTION", "check_condition_23", "check_contact_depth", "check_friction_cone", "check_grip_shape",
-           "check_reach", "check_tip_contact"]
+from simgrip import intersection as isect
+
+__all__ = ["DEPTH_FRACTION", "SELF_LIMIT_FACTOR", "SOLID_LIMIT_FACTOR", "Solid", "chain_violations", "check_condition_23",
+           "check_contact_depth", "check_friction_cone", "check_grip_shape", "check_reach", "check_tip_contact",
+           "check_gripper_valid", "check_valid", "gripper_solid", "gripper_violations", "planar_solid",
+           "reference_violations", "self_gap_links", "state_violations",
+           "VIOLATION_KINDS"]
 
 #: A contact pressed deeper than this fraction of the finger geom's radius (``r_tip`` for Grips I/II,
 #: ``r_link`` for III) is not a surface contact of the rod: half its cross-section is inside the
@@ -249,3 +257,430 @@ def check_friction_cone(scene, state) -> None:
             + (" at the corner; MuJoCo's contact frame: "
                f"{max(float(c.required_mu_contact) for c in state.contacts):.4g}" if scene.grip == "III" else "")
             + "); there the settles' friction models and the BVP's |f| <= mu_s n may give different verdicts")
+
+
+# ---------------------------------------------------------------------------
+# what a valid state is: no link through another, a finger or the workpiece (issue 17)
+
+#: Two links' capsules (radius ``r_link`` each) may overlap by as much as one contact may sink
+#: (:data:`DEPTH_FRACTION` of the geom's radius, the bound :func:`check_contact_depth` puts on every contact):
+#: their centrelines closer than ``(2 - DEPTH_FRACTION) r_link`` are a link through another.
+SELF_LIMIT_FACTOR = 2.0 - DEPTH_FRACTION
+#: A link capsule (or the tip sphere) whose least signed distance to the workpiece's solid is below
+#: ``(1 - DEPTH_FRACTION) r`` overlaps it by more than a contact may sink: the rod is inside the workpiece.
+SOLID_LIMIT_FACTOR = 1.0 - DEPTH_FRACTION
+#: What :func:`chain_violations` names: the centreline crossing itself, two links of one finger closer than
+#: their capsules allow, two fingers through each other, a link or the tip inside the workpiece.  (Grip III's
+#: condition (23), the paper's verdict on the shape, is :func:`check_condition_23`'s: ``tip_clear`` False,
+#: not feasible, on every path; a rod that enters the box beyond the contact is also a ``workpiece`` one.)
+VIOLATION_KINDS = ("self_crossing", "self_overlap", "fingers", "workpiece")
+
+
+def self_gap_links(n: int, r_link: float) -> int:
+    """Least index gap ``j - i`` of two links of one ``n``-link finger whose capsules are compared.
+
+    A rod of radius ``r`` bends no tighter than a radius ``r`` (its inner fibre would vanish); on such a
+    circle two cross-sections an arc ``g >= pi r`` apart are ``2 r sin(g / 2r) = 2 r`` apart at ``g = pi r``
+    and stay farther than ``(2 - DEPTH_FRACTION) r`` until the rod has turned through most of a full turn
+    (a real self-contact).  Closer links (arc gap between their near ends below ``pi r``) are within the
+    limit whatever the shape, through the links between them, and are not compared (their crossing still
+    is, :func:`simgrip.intersection.crossing_pairs`).  At least 2 (adjacent links share a node).
+    """
+    return max(2, 1 + int(math.ceil(math.pi * float(r_link) * int(n) - 1e-12)))
+
+
+def _ranges(idx) -> str:
+    idx = sorted(set(int(i) for i in idx))
+    out, start = [], None
+    for k, i in enumerate(idx):
+        if start is None:
+            start = i
+        if k + 1 == len(idx) or idx[k + 1] != i + 1:
+            out.append(f"{start}" if start == i else f"{start}-{i}")
+            start = None
+    return ", ".join(out)
+
+
+@dataclass(frozen=True)
+class Solid:
+    """The workpiece's solid in a common frame: ``local = rot @ (p - centre)`` (lengths over ``l``).
+
+    ``kind`` ``"box"`` (``half``: half sizes, 2 or 3), ``"cylinder"`` (3-D, about local ``z``:
+    ``half = (radius, half height)``) or ``"sphere"`` (``half = (radius,)``); ``corners``: points in the
+    local frame with radius ``corner_radius`` (the Grip III edge capsules, planar).
+    """
+
+    kind: str
+    centre: np.ndarray
+    rot: np.ndarray
+    half: np.ndarray
+    corners: np.ndarray | None = None
+    corner_radius: float = 0.0
+
+    def local(self, p) -> np.ndarray:
+        return (np.asarray(p, dtype=float) - self.centre) @ self.rot.T
+
+    def sdf(self, local_points) -> np.ndarray:
+        """Signed distance of points given in the local frame (negative inside)."""
+        if self.kind == "box":
+            v = isect.box_sdf(local_points, self.half)
+        elif self.kind == "cylinder":
+            v = isect.cylinder_sdf(local_points, float(self.half[0]), float(self.half[1]))
+        else:
+            v = isect.sphere_sdf(local_points, float(self.half[0]))
+        if self.corners is not None:
+            for c in self.corners:
+                v = np.minimum(v, np.linalg.norm(local_points - c, axis=-1) - self.corner_radius)
+        return v
+
+    def segment_sdf(self, a, b, below: float | None = None) -> np.ndarray:
+        """Least signed distance along segments ``a b`` (common frame), exact for planar boxes and balls.
+
+        ``below``: only values under it are wanted; segments whose bounding box stays farther than that
+        from the solid's (axis by axis, a lower bound of the distance) get the bound, not the exact value.
+        """
+        la, lb = self.local(a), self.local(b)
+        v = np.full(len(la), np.inf)
+        todo = np.arange(len(la))
+        if below is not None and self.kind != "sphere":
+            ext = np.array(self.half, dtype=float)
+            if self.kind == "cylinder":
+                ext = np.array([ext[0], ext[0], ext[1]])
+            if self.corners is not None:
+                ext = ext + self.corner_radius
+            lo, hi = np.minimum(la, lb), np.maximum(la, lb)
+            gap = np.max(np.maximum(np.maximum(lo - ext, -ext - hi), 0.0), axis=1)  # <= the true distance
+            v = gap.copy()
+            todo = np.nonzero(gap < below)[0]
+            if todo.size == 0:
+                return v
+        la, lb = la[todo], lb[todo]
+        if self.kind == "box" and la.shape[1] == 2:
+            w = isect.segment_box_sdf_2d(la, lb, self.half)[0]
+        elif self.kind == "sphere":
+            z = np.zeros_like(la)
+            w = isect.segment_distances(la, lb, z, z) - float(self.half[0])
+        else:
+            w = isect.segment_min_sdf(lambda q: isect.box_sdf(q, self.half) if self.kind == "box" else
+                                      isect.cylinder_sdf(q, *map(float, self.half)), la, lb)[0]
+        if self.corners is not None:
+            for c in self.corners:
+                cc = np.broadcast_to(c, la.shape)
+                w = np.minimum(w, isect.segment_distances(la, lb, cc, cc) - self.corner_radius)
+        v[todo] = w
+        return v
+
+    def clipped(self, lo: float | None = None, hi: float | None = None) -> "Solid | None":
+        """The solid with its local vertical extent (last axis; cylinder: its axis) cut to ``[lo, hi]``; None if empty."""
+        if self.kind == "sphere":
+            return self
+        k = len(self.half) - 1
+        bottom, top = -float(self.half[k]), float(self.half[k])
+        bottom = bottom if lo is None else max(bottom, float(lo))
+        top = top if hi is None else min(top, float(hi))
+        if not top > bottom:
+            return None
+        half = np.array(self.half, dtype=float)
+        half[k] = 0.5 * (top - bottom)
+        shift = np.zeros(self.rot.shape[0])
+        shift[-1] = 0.5 * (top + bottom)
+        corners = None if self.corners is None else self.corners - shift
+        return Solid(self.kind, self.centre + shift @ self.rot, self.rot, half, corners, self.corner_radius)
+
+
+def chain_violations(planar, world, *, r_link: float, r_tip: float | None, solid: Solid | None,
+                     base_sines=None, contact_links=None, who: str = "finger") -> list[tuple[str, str]]:
+    """Every way a set of fingers passes through itself, another or the workpiece: ``(kind, message)`` pairs.
+
+    ``kind`` is one of :data:`VIOLATION_KINDS`; empty: a valid state.
+
+    ``planar``: each finger's centreline in its own plane ``(n+1, 2)`` over ``l`` (the self checks);
+    ``world``: the same nodes in one common frame ``(n+1, d)`` (the finger-finger and workpiece checks;
+    the fingers share their base, the palm's centre); ``r_link``, ``r_tip`` (None: no tip sphere) over
+    ``l``; ``solid`` the workpiece (None: none); ``base_sines[f][g]`` the sine of half the angle between
+    fingers ``f`` and ``g`` at the base (1 for mirrored planar fingers).  Tolerances:
+    :data:`SELF_LIMIT_FACTOR`, :data:`SOLID_LIMIT_FACTOR`, :func:`self_gap_links`.
+
+    The geoms that carry the workpiece's contact (the tip sphere; ``contact_links[f]``, the indices of
+    finger ``f``'s links with a contact pair, Grip III) are pressed into it by the contact law: how deep is
+    :func:`check_contact_depth`'s verdict (``contact_ok``, deeper than :data:`DEPTH_FRACTION` of the
+    radius); they are an impossible state here only once their centre (line) is inside the solid.  The
+    last link's piece inside the tip sphere is the tip's (it ends at the sphere's centre).
+    """
+    out: list[tuple[str, str]] = []
+
+    def add(kind: str, message: str) -> None:
+        out.append((kind, message))
+
+    K = len(planar)
+    limit = SELF_LIMIT_FACTOR * float(r_link)
+    for f in range(K):
+        P = np.asarray(planar[f], dtype=float)
+        n = len(P) - 1
+        gap = self_gap_links(n, r_link)
+        cand = isect.candidate_pairs(P, limit=limit, min_gap=2)  # one pass for both tests
+        ci, cj = isect.crossing_pairs(P, pairs=cand)
+        if ci.size:
+            pairs = ", ".join(f"{int(i)}/{int(j)}" for i, j in list(zip(ci, cj))[:4]) + (" ..." if ci.size > 4 else "")
+            add("self_crossing", f"{who} {f}: the centreline crosses itself ({ci.size} crossing(s), links {pairs}): a self-crossing "
+                       f"the chain has no contact to prevent; not a physical state")
+        far = cand[1] - cand[0] >= gap
+        i, j = cand[0][far], cand[1][far]
+        dist = isect.segment_distances(P[i], P[i + 1], P[j], P[j + 1]) if i.size else np.zeros(0)
+        i, j, dist = i[dist < limit], j[dist < limit], dist[dist < limit]
+        if i.size and not ci.size:
+            k = int(np.argmin(dist))
+            add("self_overlap", f"{who} {f}: {i.size} pair(s) of links closer than their capsules allow (links {int(i[k])} and "
+                       f"{int(j[k])}: centrelines {float(dist[k]):.3g} l apart, less than (2 - {DEPTH_FRACTION:g}) r_link = "
+                       f"{limit:.3g} l): the finger passes through itself")
+    for f in range(K):
+        for g in range(f + 1, K):
+            A, B = np.asarray(world[f], dtype=float), np.asarray(world[g], dtype=float)
+            n = len(A) - 1
+            i, j, dist = isect.close_link_pairs(A, limit, other=B)
+            sine = 1.0 if base_sines is None else float(base_sines[f][g])
+            # two straight fingers from the common base: near ends at arcs s_i, s_j are >= (s_i + s_j) sin(da/2)
+            # apart; pairs that close to the base are within the limit by construction (the palm's joint)
+            far = (i + j) / n * sine >= limit
+            i, j, dist = i[far], j[far], dist[far]
+            if i.size:
+                k = int(np.argmin(dist))
+                add("fingers", f"{who}s {f} and {g} pass through each other ({i.size} pair(s) of links closer than "
+                           f"{limit:.3g} l; links {int(i[k])} and {int(j[k])}: {float(dist[k]):.3g} l apart)")
+    if solid is None:
+        return out
+    for f in range(K):
+        W = np.asarray(world[f], dtype=float)
+        a, b = W[:-1].copy(), W[1:].copy()
+        if r_tip is not None:  # the last link up to the tip sphere's surface
+            step = b[-1] - a[-1]
+            h = float(np.linalg.norm(step))
+            b[-1] = a[-1] + step * max(0.0, 1.0 - float(r_tip) / h) if h > 0 else a[-1]
+        v = solid.segment_sdf(a, b, below=SOLID_LIMIT_FACTOR * float(r_link))
+        lim = np.full(len(a), SOLID_LIMIT_FACTOR * float(r_link))
+        if contact_links is not None and len(contact_links[f]):
+            lim[np.asarray(contact_links[f], dtype=int)] = 0.0
+        bad = np.nonzero(v < lim)[0]
+        if bad.size:
+            k = int(bad[np.argmin(v[bad])])
+            add("workpiece", f"{who} {f}: link(s) {_ranges(bad)} inside the workpiece (deepest: link {k}, its centreline "
+                       f"{max(0.0, -float(v[k])):.3g} l inside, its capsule {float(r_link) - float(v[k]):.3g} l deep; a "
+                       f"link without contact may sink {DEPTH_FRACTION:g} r_link = {DEPTH_FRACTION * float(r_link):.3g} l, "
+                       f"one carrying the contact its radius): the rod enters the workpiece")
+        if r_tip is not None:
+            t = float(solid.sdf(solid.local(W[-1:]))[0])
+            if t < 0.0:
+                add("workpiece", f"{who} {f}: the tip sphere's centre is {-t:.3g} l inside the workpiece (the sphere "
+                           f"{float(r_tip) - t:.3g} l deep, more than its radius r_tip = {float(r_tip):.3g} l): the tip "
+                           f"enters the workpiece")
+    return out
+
+
+def _rot2(angle: float) -> np.ndarray:
+    c, s = math.cos(angle), math.sin(angle)
+    return np.array([[c, s], [-s, c]])  # world -> local for a body turned by +angle
+
+
+def planar_solid(scene, state, finger: int = 0) -> Solid | None:
+    """The workpiece's solid in finger ``finger``'s frame (``X`` away from the palm centre, ``Y`` up; over ``l``).
+
+    The simulation's box is :data:`~simgrip.sim.workpiece.BOX_HEIGHT` tall only so that a tip can slide
+    along it while closing; its part on the palm's side of the contact is not the workpiece's (the finger
+    reaches out from the palm above it, Grip I).  The solid kept is the least one the grip implies: the box's
+    column from its far end to the contact level plus the contact geom's radius (Grips I/II: the face carries
+    the tip sphere at its equator, ``Y(l) +- r_tip``; Grip III: a band ``2 r_link`` high above the bottom edge
+    that the corner capsules round, plus those capsules).
+    """
+    if not scene.has_workpiece or state.workpiece_pose is None:
+        return None
+    L = scene.length
+    mir = float(scene.mirror[finger])
+    pose = np.asarray(state.workpiece_pose, dtype=float)
+    centre = np.array([pose[0] * mir, pose[1]])
+    angle = float(pose[2]) if pose.size > 2 else 0.0
+    # MuJoCo's ry turns x toward -z; in the finger's frame (x mirrored) the turn's sign flips with the mirror
+    rot = _rot2(-angle * mir)
+    half = np.array([float(scene.box_half[0]), float(scene.box_half[2])]) / L
+    if scene.grip in ("I", "II"):
+        full = Solid("box", centre, rot, half)
+        tips = full.local(np.asarray(state.tip, dtype=float).reshape(-1, 2))[:, 1]
+        r = float(scene.r_tip)
+        return full.clipped(hi=float(np.max(tips)) + r) if scene.grip == "I" else full.clipped(lo=float(np.min(tips)) - r)
+    corners = np.array([[half[0], -half[1]], [-half[0], -half[1]]])
+    band = 2.0 * float(scene.r_link)
+    return Solid("box", centre, rot, half, corners, float(scene.r_corner)).clipped(hi=-half[1] + band)
+
+
+def state_violations(scene, state) -> list[tuple[str, str]]:
+    """``(kind, message)`` of every violation of a planar settled state (:func:`check_valid`'s, recomputed).
+
+    Pure: reads the state's nodes, pose and the solve's own verdict (``held`` as the solve left it, or an
+    earlier :func:`check_valid`'s: a state it marked invalid has a contact but ``held`` False) and changes nothing.
+    """
+    planar = [np.asarray(state.nodes[f], dtype=float) for f in range(state.fingers)]
+    world = [p * np.array([float(scene.mirror[f]), 1.0]) for f, p in enumerate(planar)]
+    held = bool(state.held) or (not getattr(state, "valid", True) and bool(state.contacts))
+    # a dropped workpiece is not there: only a held one is a solid the fingers may not enter
+    solid = planar_solid(scene, state) if held else None  # finger 0's frame (mirror +1), ``world``'s
+    r_tip = float(scene.r_tip) if scene.grip in ("I", "II") else None
+    found = chain_violations(planar, world, r_link=float(scene.r_link), r_tip=r_tip, solid=solid,
+                             contact_links=_contact_links(scene))
+    return found
+
+
+def check_valid(scene, state) -> None:
+    """The settled state is a physical one: no self-crossing, no link through another, a finger or the workpiece.
+
+    Runs on every planar settle's answer (:func:`simgrip.settle._finish`, last, after
+    :func:`check_condition_23`): each finger's centreline against itself, the two mirrored fingers (a
+    two-finger scene) against each other and, when the workpiece is held (a dropped one is gone), every
+    link capsule and the tip against its solid (:func:`planar_solid`).  A violation sets ``valid`` False, ``held`` False (an impossible state holds
+    nothing) and puts ``invalid state: ...`` messages naming the links and the depth in ``warnings``;
+    ``valid`` stays True otherwise.  See docs/validation.md ("What a valid state is").
+    """
+    _mark_invalid(state, [m for _, m in state_violations(scene, state)])
+
+
+def _contact_links(scene) -> list:
+    """Per finger: the indices of the links whose geoms have a contact pair with the workpiece (Grip III)."""
+    out = []
+    for f in range(scene.fingers):
+        geoms = np.asarray(scene.index.link_geom[f])
+        out.append(np.nonzero(np.isin(geoms, np.asarray(scene.contact_geoms[f])))[0])
+    return out
+
+
+def _mark_invalid(state, found: list[str]) -> None:
+    state.valid = not found
+    if found:
+        state.held = False
+        for m in found:  # a replicated planar state (the K-finger symmetry skip) may carry the same message
+            msg = f"invalid state: {m}; reported not held, not feasible"
+            if msg not in state.warnings:
+                state.warnings.append(msg)
+
+
+#: Points at which a reference (BVP) centreline is sampled for :func:`reference_violations`: the polyline's
+#: chords miss the curve by ``|kappa| h^2 / 8``, ``2.7e-5 l`` at ``|kappa| = 14``, far below the
+#: ``DEPTH_FRACTION r_link = 1e-3 l`` the checks resolve.
+REFERENCE_SAMPLES = 256
+
+
+def reference_violations(sol, *, r_link: float | None = None, r_tip: float | None = None,
+                         r_corner: float | None = None) -> list[str]:
+    """What makes an elastica solution (:class:`~simgrip.reference.elastica.ElasticaSolution`) impossible.
+
+    The BVP solves the idealised problem, which lets the rod pass through itself and the workpiece; its
+    centreline (sampled at :data:`REFERENCE_SAMPLES` + 1 points) gets the simulation's checks
+    (:func:`chain_violations`) with the simulation's default radii (a rod of radius ``r_link``; Grips I/II
+    a tip sphere ``r_tip`` on the face ``X = b/2``; Grip III the corner, radius ``r_corner``, touching the
+    rod at ``gamma`` from above), the workpiece's solid built as :func:`planar_solid` builds the
+    simulation's; a reference that is not feasible by its own verdict holds no workpiece, and only its
+    self-crossing is checked (as a dropped simulated state).  Empty for a valid solution.
+    """
+    from simgrip.sim.scene import BOX_HEIGHT, DEFAULT_R_CORNER, DEFAULT_R_LINK, DEFAULT_R_TIP
+
+    r_link = DEFAULT_R_LINK if r_link is None else float(r_link)
+    r_tip = DEFAULT_R_TIP if r_tip is None else float(r_tip)
+    r_corner = DEFAULT_R_CORNER if r_corner is None else float(r_corner)
+    s = np.linspace(0.0, 1.0, REFERENCE_SAMPLES + 1)
+    P = np.asarray(sol.position_at(s), dtype=float)
+    if not np.all(np.isfinite(P)):
+        return []
+    b = float(sol.params.b)
+    solid, tip = None, None
+    if not bool(getattr(sol, "feasible", True)):  # it holds nothing (its own verdict): only its self-crossing
+        return [m for _, m in chain_violations([P], [P], r_link=r_link, r_tip=None, solid=None,
+                                               who="the reference's rod, finger")]
+    hz = 0.5 * BOX_HEIGHT
+    if sol.grip in ("I", "II"):
+        tip = r_tip
+        full = Solid("box", np.array([0.0, float(P[-1, 1])]), np.eye(2), np.array([0.5 * b - r_tip, hz]))
+        solid = full.clipped(hi=r_tip) if sol.grip == "I" else full.clipped(lo=-r_tip)
+    elif sol.grip == "III":
+        g = float(sol.gamma)
+        th = float(sol.theta_at(np.array([g]))[0])
+        c = np.asarray(sol.position_at(np.array([g])), dtype=float).reshape(2)
+        nu = np.array([-math.sin(th), math.cos(th)])
+        c = c + (r_link + r_corner) * (nu if nu[1] >= 0.0 else -nu)  # the corner on the rod's upper side
+        hx = abs(float(c[0]))
+        full = Solid("box", np.array([0.0, float(c[1]) + hz]), np.eye(2), np.array([hx, hz]),
+                     np.array([[hx, -hz], [-hx, -hz]]), r_corner)
+        solid = full.clipped(hi=-hz + 2.0 * r_link)
+    found = chain_violations([P], [P], r_link=r_link, r_tip=tip, solid=solid, who="the reference's rod, finger")
+    return [m for _, m in found]
+
+
+def _quat_matrix(q) -> np.ndarray:
+    """Rotation matrix (local -> world) of a unit quaternion ``(w, x, y, z)``."""
+    w, x, y, z = (float(v) for v in np.asarray(q, dtype=float) / max(float(np.linalg.norm(q)), 1e-300))
+    return np.array([[1 - 2 * (y * y + z * z), 2 * (x * y - w * z), 2 * (x * z + w * y)],
+                     [2 * (x * y + w * z), 1 - 2 * (x * x + z * z), 2 * (y * z - w * x)],
+                     [2 * (x * z - w * y), 2 * (y * z + w * x), 1 - 2 * (x * x + y * y)]])
+
+
+def gripper_solid(scene, state) -> Solid | None:
+    """The K-finger workpiece's solid in the world frame over ``l`` (:func:`planar_solid`'s least solid, in 3-D).
+
+    Box and cylinder are :data:`~simgrip.sim.workpiece.BOX_HEIGHT` tall (their part on the palm's side of the
+    tips is not the workpiece's: cut at the highest tip plus ``r_tip``, Grip I, the lowest less ``r_tip``,
+    Grip II); the sphere is the workpiece itself.  The cradle (Grip III): the box's bottom band ``2 r_link``
+    high (its edge capsules left out: a lenient, never a false, verdict).
+    """
+    L = float(scene.length)
+    R = _quat_matrix(state.workpiece_quat)
+    centre = np.asarray(state.workpiece_position, dtype=float)
+    size = np.asarray(scene.size, dtype=float) / L
+    shape = getattr(scene, "workpiece", "box")
+    if shape == "sphere":
+        return Solid("sphere", centre, R.T, np.array([size[0]]))
+    full = (Solid("box", centre, R.T, size[:3]) if shape == "box"
+            else Solid("cylinder", centre, R.T, np.array([size[0], size[1]])))
+    if scene.grip == "III":
+        return full.clipped(hi=-float(full.half[-1]) + 2.0 * float(scene.r_link))
+    tips = full.local(np.stack([_world_nodes(scene, state, k)[-1] for k in range(state.fingers)]))[:, 2]
+    r = float(scene.r_tip)
+    return full.clipped(hi=float(np.max(tips)) + r) if scene.grip == "I" else full.clipped(lo=float(np.min(tips)) - r)
+
+
+def _world_nodes(scene, state, k: int) -> np.ndarray:
+    from simgrip.chain import link_positions
+
+    P = link_positions(np.asarray(state.link_angles[k], dtype=float), 1.0 / int(state.links))
+    a = float(scene.azimuths[k])
+    return P[:, :1] * np.array([math.cos(a), math.sin(a), 0.0]) + P[:, 1:2] * np.array([0.0, 0.0, 1.0])
+
+
+def gripper_violations(scene, state) -> list[tuple[str, str]]:
+    """``(kind, message)`` of every violation of a K-finger settled state (pure; see :func:`check_gripper_valid`)."""
+    from simgrip.chain import link_positions
+
+    K, n = int(state.fingers), int(state.links)
+    planar = [link_positions(np.asarray(state.link_angles[k], dtype=float), 1.0 / n) for k in range(K)]
+    world = [_world_nodes(scene, state, k) for k in range(K)]
+    az = np.asarray(scene.azimuths, dtype=float)
+    sines = np.abs(np.sin(0.5 * (az[:, None] - az[None, :])))
+    solid = gripper_solid(scene, state) if state.held else None
+    r_tip = float(scene.r_tip) if scene.grip in ("I", "II") else None
+    found = chain_violations(planar, world, r_link=float(scene.r_link), r_tip=r_tip, solid=solid,
+                             base_sines=sines, contact_links=_contact_links_of_pairs(scene))
+    return found
+
+
+def check_gripper_valid(scene, state):
+    """:func:`check_valid` for a K-finger :class:`~simgrip.settle.gripper_state.GripperState`; returns ``state``.
+
+    Each finger against itself, every pair of fingers (from the common base on the palm axis: pairs whose
+    near ends are so close to it that straight fingers would touch are the palm's joint, not compared),
+    and every link and tip against the held workpiece's solid (:func:`gripper_solid`).
+    """
+    _mark_invalid(state, [m for _, m in gripper_violations(scene, state)])
+    return state
+
+
+def _contact_links_of_pairs(scene) -> list:
+    """Per finger: the links whose geoms are in a contact pair of the model (the cradle's corner links)."""
+    m = scene.model
+    paired = set(int(g) for g in np.asarray(m.pair_geom1)) | set(int(g) for g in np.asarray(m.pair_geom2))
+    geoms = np.asarray(scene.index.link_geom)
+    return [np.nonzero([int(g) in paired for g in geoms[f]])[0] for f in range(geoms.shape[0])]

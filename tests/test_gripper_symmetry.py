@@ -382,8 +382,9 @@ def test_cradle_fingers_reaching_the_palm_axis_are_not_held():
     # axis, where the four fingers' planes meet: they would pass through each other
     p = STANDARD.replace(b=0.3, gamma=0.5, M=1.0, mu_s=2.0)
     pl = settle(build_scene("III", p, Uniform(-5.0), N))
-    # (the planar reduction itself flags condition (23): its tip ends above the contact, past the palm axis)
-    assert pl.held and not pl.tip_clear and np.min(pl.nodes[0][:, 0]) < 0
+    # (the planar reduction itself flags condition (23): its tip ends above the contact, past the palm axis, and
+    # through the box: an impossible state, reported not held and not valid, issue 17)
+    assert not pl.held and not pl.valid and not pl.tip_clear and np.min(pl.nodes[0][:, 0]) < 0
     st = settle_symmetric(_cradle(-5.0, params=p))
     assert not st.held and not st.grip_matched and "palm axis" in st.warnings[-1]
 

@@ -14,6 +14,7 @@ from simgrip.harness.stress import (
     names_an_input,
     run_stress,
     self_intersects,
+    PHYSICAL_FLAGS,
 )
 
 
@@ -154,3 +155,13 @@ def test_runs_on_an_existing_dask_cluster(tmp_path):
     assert [{k: v for k, v in c.items() if k not in strip} for c in remote.cases] == \
            [{k: v for k, v in c.items() if k not in strip} for c in local.cases]
     assert remote.jobs is None and local.jobs == 1
+
+
+def test_no_invalid_state_is_returned_as_valid(stress):
+    """Issue 17: every settled state the geometric checks find impossible (recomputed from its geometry by
+    simgrip.validity.state_violations) was returned with valid False."""
+    res, _ = stress
+    assert res.counts["invalid_returned_as_valid"] == 0
+    for c in res.cases:
+        if c["outcome"] == "settled" and any(c["flags"][k] for k in PHYSICAL_FLAGS):
+            assert c["valid"] is False and c["held"] is False

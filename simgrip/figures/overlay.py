@@ -28,6 +28,10 @@ key                        meaning
                            held but infeasible -- compare with the shading
 ``"feasible"``             fig07-09: bool (n,), the simulation's verdict in the
                            caption's terms (default ``"held"``)
+``"valid"``                fig07-09: bool (n,), the settled state is physical
+                           (:func:`simgrip.validity.check_valid`: no link
+                           through itself or the workpiece); an invalid one is
+                           reported not held and marked apart in the verdict row
 ``"failed"``               bool (n,): points whose settle failed (NaN values);
                            listed in the legend, never dropped silently
 =========================  ===================================================
@@ -150,9 +154,10 @@ def _overlay_grip(grip, params, links, kappas):
     nan = np.full(n, np.nan)
     failed = np.array([s is None for s in states])
     held = np.array([s is not None and bool(s.held) and s.contact is not None for s in states])
+    valid = np.array([s is None or bool(getattr(s, "valid", True)) for s in states])
     tip = np.array([s.tip[0] if s is not None else (np.nan, np.nan) for s in states], dtype=float)
     out = {"kappa": kappas, "grip": grip, "links": int(links), "label": _SIM_LABEL.format(links=links),
-           "held": held, "failed": failed, "errors": errors, "tip_x": tip[:, 0], "tip_z": tip[:, 1],
+           "held": held, "valid": valid, "failed": failed, "errors": errors, "tip_x": tip[:, 0], "tip_z": tip[:, 1],
            "residual": np.array([s.residual if s is not None else np.nan for s in states])}
     c = [s.contact if h else None for s, h in zip(states, held)]
     pick = lambda f: np.array([f(ci) if ci is not None else np.nan for ci in c], dtype=float)  # noqa: E731

@@ -110,8 +110,10 @@ def _overlay_verdict(ax, overlay, xfun, grip):
 
     Filled triangle: the workpiece is held (Grip III: and the tip stays below the
     contact); hollow circle: dropped; cross (Grip III): held, but the tip is above
-    the contact (condition (23) fails on the simulated shape); red X: the settle
-    failed (also listed in the legend).  Compare with the shaded feasible region.
+    the contact (condition (23) fails on the simulated shape); red diamond: an
+    invalid state (it crosses itself or enters the workpiece, reported not held;
+    ``overlay["valid"]``); red X: the settle failed (also listed in the legend).
+    Compare with the shaded feasible region.
     """
     if overlay is None or "held" not in overlay:
         return
@@ -121,11 +123,14 @@ def _overlay_verdict(ax, overlay, xfun, grip):
     held = np.asarray(overlay["held"], dtype=bool)
     failed = np.asarray(overlay.get("failed", np.zeros(len(k), dtype=bool)), dtype=bool)
     feas = np.asarray(overlay.get("feasible", held), dtype=bool) & held
+    invalid = ~np.asarray(overlay.get("valid", np.ones(len(k), dtype=bool)), dtype=bool) & ~failed
     y = 0.045
     rows = (
         (feas, dict(marker="^", color="k", mfc="k", ms=6), "MuJoCo holds the box"),
         (held & ~feas, dict(marker="x", color="k", ms=6, mew=1.2), "MuJoCo holds, tip above contact"),
-        (~held & ~failed, dict(marker="o", color="k", mfc="white", ms=6, mew=1.0), "MuJoCo drops the box"),
+        (~held & ~failed & ~invalid, dict(marker="o", color="k", mfc="white", ms=6, mew=1.0), "MuJoCo drops the box"),
+        (invalid, dict(marker="D", color="tab:red", mfc="white", ms=6, mew=1.2),
+         "invalid state (crosses itself / enters the box)"),
         (failed, dict(marker="X", color="tab:red", ms=7), None),
     )
     for mask, style, lab in rows:

@@ -28,8 +28,14 @@ A settled state is also checked for physically invalid configurations, which
 are reported as flags rather than returned quietly:
 
 ``self_intersection``
-    the centreline crosses itself (a rod curled beyond a full turn passes
-    through itself: the chain has no self-collision), :func:`self_intersects`;
+    the centreline crosses itself or two of its links are closer than their
+    capsules allow (a rod curled beyond a full turn passes through itself: the
+    point-contact chain has no self-collision);
+``workpiece_entry``
+    a link or the tip inside the held workpiece; ``fingers_cross``: two
+    fingers through each other (all three: :func:`simgrip.validity.state_violations`,
+    the one implementation every path runs, recomputed here from the returned
+    geometry);
 ``tip_touches_workpiece``
     Grip III: the rod beyond the contact reaches the box's bottom face (the
     settle's own check, :func:`simgrip.validity.check_condition_23`: MuJoCo has
@@ -38,10 +44,15 @@ are reported as flags rather than returned quietly:
 ``wrong_grip``
     Grips I/II: the finger settled in the other grip's shape
     (:func:`simgrip.validity.check_grip_shape`);
-``beyond_full_turn``
-    some link has turned through a full turn or more (``|phi| >= 2 pi``);
 ``penetration``
     contact penetration above :data:`PENETRATION_TOL` (over ``l``).
+
+A state the checks find impossible must come back reported so (``valid``
+False, :func:`simgrip.validity.check_valid`); ``counts["invalid_returned_as_valid"]``
+counts those that did not (any of the physical flags :data:`PHYSICAL_FLAGS`
+set on a state whose ``valid`` is True): it must be 0.  (A rod beyond a full
+turn is not in itself impossible: a spiral whose turns do not touch is a
+state; the capsule distances decide.)
 
 K-finger cases (off-centre, turned workpieces, unequal fingers;
 :mod:`simgrip.harness.stress_gripper`) run alongside and are checked for
@@ -79,6 +90,7 @@ __all__ = [
     "run_case",
     "self_intersects",
     "invalid_state_flags",
+    "PHYSICAL_FLAGS",
     "PENETRATION_TOL",
     "CASE_TIMEOUT_S",
     "MAX_STEPS",
@@ -115,40 +127,37 @@ def names_an_input(message: str) -> bool:
 # invalid-state checks
 
 
+#: The flags that make a state impossible (issue 17): a state with any of them must be reported ``valid`` False.
+PHYSICAL_FLAGS = ("self_intersection", "workpiece_entry", "fingers_cross", "tip_touches_workpiece", "tip_above_contact")
+
+
 def self_intersects(nodes) -> bool:
-    """Whether the centreline polyline ``nodes`` ``(n+1, 2)`` crosses itself (non-adjacent links).
+    """Whether the planar centreline ``nodes`` ``(n+1, 2)`` crosses itself (a proper crossing of two non-adjacent
+    links; :func:`simgrip.intersection.crossing_pairs`, the one implementation)."""
+    from simgrip.intersection import crossing_pairs
 
-    Vectorised over all pairs of links ``i < j - 1``; touching end points do
-    not count (a proper crossing is required).
-    """
-    P = np.asarray(nodes, dtype=float)
-    a, b = P[:-1], P[1:]
-    nseg = len(a)
-    if nseg < 3:
-        return False
-    i, j = np.triu_indices(nseg, k=2)
-
-    def orient(u, v, w):
-        return (v[:, 0] - u[:, 0]) * (w[:, 1] - u[:, 1]) - (v[:, 1] - u[:, 1]) * (w[:, 0] - u[:, 0])
-
-    d1 = orient(a[j], b[j], a[i])
-    d2 = orient(a[j], b[j], b[i])
-    d3 = orient(a[i], b[i], a[j])
-    d4 = orient(a[i], b[i], b[j])
-    return bool(np.any((d1 * d2 < 0) & (d3 * d4 < 0)))
+    return bool(crossing_pairs(np.asarray(nodes, dtype=float))[0].size)
 
 
 def invalid_state_flags(scene, state, *, penetration_tol: float = PENETRATION_TOL) -> dict:
-    """Physically invalid features of a settled state: name -> bool (see the module docstring)."""
+    """Physically invalid features of a settled state: name -> bool (see the module docstring).
+
+    The geometric ones are :func:`simgrip.validity.state_violations` recomputed from the returned state
+    (not read from its ``valid``), so that a state the settle failed to mark is counted.
+    """
+    from simgrip.validity import state_violations
+
+    kinds = {k for k, _ in state_violations(scene, state)}
     flags = {
-        "self_intersection": any(self_intersects(state.nodes[f]) for f in range(state.fingers)),
+        "self_intersection": bool(kinds & {"self_crossing", "self_overlap"}),
+        "workpiece_entry": "workpiece" in kinds,
+        "fingers_cross": "fingers" in kinds,
         "penetration": bool(state.penetration > penetration_tol),
         "tip_touches_workpiece": not state.tip_clear,  # the settle's own check (simgrip.validity)
         "tip_above_contact": False,
-        "beyond_full_turn": bool(np.max(np.abs(state.link_angles)) >= 2 * math.pi),
         "wrong_grip": not state.grip_matched,
     }
-    if scene.grip == "III" and state.held and state.contact is not None:
+    if scene.grip == "III" and state.contact is not None:
         flags["tip_above_contact"] = bool(state.tip[0][1] >= state.contact.point[1])
     return flags
 
@@ -225,6 +234,7 @@ def run_case(case: dict, *, timeout_s: float = CASE_TIMEOUT_S, max_steps: int | 
         else:
             rec["outcome"] = "settled"
             rec["flags"] = invalid_state_flags(scene, st)
+            rec["valid"] = bool(getattr(st, "valid", True))
             rec["residual_above_tol"] = bool(st.residual > DEFAULT_TOL)
     except _Timeout:
         rec.update(outcome="failed", error=f"no answer within {timeout_s:g} s (hang)", error_type="Timeout")
@@ -310,6 +320,9 @@ def _counts(cases) -> dict:
     counts["dropped"] = dropped
     counts["flags"] = flag_counts
     counts["residual_above_tol"] = sum(1 for c in cases if c.get("residual_above_tol"))
+    counts["invalid_returned_as_valid"] = sum(
+        1 for c in cases if c["outcome"] == "settled" and c.get("valid", True)
+        and any(c["flags"].get(k) for k in PHYSICAL_FLAGS))
     return counts
 
 

@@ -51,7 +51,7 @@ from simgrip.settle.statics import (RestResidual, angle_floor, configure_statics
 from simgrip.sim.checks import clear_warnings
 from simgrip.sim.scene import Scene, set_curvature
 from simgrip.threads import blas_threads
-from simgrip.validity import (check_condition_23, check_contact_depth, check_friction_cone, check_grip_shape,
+from simgrip.validity import (check_valid, check_condition_23, check_contact_depth, check_friction_cone, check_grip_shape,
                               check_reach, check_tip_contact)
 
 __all__ = [
@@ -134,6 +134,7 @@ def _finish(scene: Scene, state: SettledState, tolerance: float, allow_unconverg
     check_reach(scene, state)
     check_tip_contact(scene, state)
     check_friction_cone(scene, state)
+    check_valid(scene, state)  # last: the others read the solve's own verdict (simgrip.validity, issue 17)
     state.rest = scene.springs.rest.copy()
     return state
 

@@ -74,7 +74,7 @@ from simgrip.settle.state import SettleError
 from simgrip.settle.statics import restore_options, save_options
 from simgrip.sim.checks import clear_warnings
 from simgrip.sim.gripper import GripperScene
-from simgrip.validity import check_grip_shape
+from simgrip.validity import check_grip_shape, check_gripper_valid
 
 __all__ = ["FingerRecord", "GripperState", "contact_rest_depth", "gripper_tolerance", "settle_gripper",
            "straight_frequency"]
@@ -171,9 +171,9 @@ def settle_gripper(scene: GripperScene, *, tol: float | None = None, max_steps: 
         skip, why = None, str(exc)
     else:
         if skip is None:
-            return _settle_dynamics(scene, tol, max_steps, allow_unconverged)
+            return check_gripper_valid(scene, _settle_dynamics(scene, tol, max_steps, allow_unconverged))
         if skip.converged or not _may_fall_back(scene, method, contact):
-            return skip
+            return check_gripper_valid(scene, skip)
         why = f"symmetric settle did not converge (residual {skip.residual:.3g}, tolerance {skip.tolerance:.3g})"
     # method "auto": the default must not fail where another method answers; the dynamics settles the same
     # scene (MuJoCo's surface contact), and the state says why it, not the skip, answered
@@ -187,12 +187,12 @@ def settle_gripper(scene: GripperScene, *, tol: float | None = None, max_steps: 
     except SettleError as exc:
         raise SettleError(f"{why}; the fallback to the dynamics failed too: {exc}") from exc
     if skip is not None and not state.converged:
-        return skip  # allow_unconverged: neither converged; the skip's state (the default's) is returned
+        return check_gripper_valid(scene, skip)  # allow_unconverged: neither converged; the skip's (the default's)
     which = "one finger's planar dynamics, replicated" if scene.grip == "III" else "the over-damped dynamics"
     state.warnings.insert(0, f"the symmetry skip failed ({why}): settled by {which} instead "
                              f"(method 'dynamics', MuJoCo's surface contact)")
     state.wall_time_s = time.perf_counter() - t0
-    return state
+    return check_gripper_valid(scene, state)
 
 
 def _may_fall_back(scene: GripperScene, method: str | None, contact: str | None) -> bool:

@@ -108,6 +108,9 @@ class GripperState:
     #: :func:`simgrip.validity.check_condition_23`, read from the planar state the cradle replicates); a held
     #: state with ``tip_clear`` False is not feasible (:func:`simgrip.gripper.gripper_record`), as the planar one.
     tip_clear: bool = True
+    #: A physical state: no finger through itself, another finger or the workpiece
+    #: (:func:`simgrip.validity.check_gripper_valid`); False: ``held`` is False and ``warnings`` says why.
+    valid: bool = True
     #: Conditions the state violates that the settle does not enforce (e.g. the other grip's shape).
     warnings: list = field(default_factory=list)
     #: The scene's workpiece offset (over l, scene frame) and turn about its axis [rad] (:func:`build_gripper`).

@@ -231,14 +231,17 @@ def _settle_exact(scene: GripperScene, t0: float, *, tol=None, max_steps=None, c
     # replicated held, and the K-finger grip-shape check reports it not held with its own warning, as the
     # K-finger dynamics does.
     wrong_grip = not pst.grip_matched and pst.contact is not None
-    held = bool(pst.held) or wrong_grip
+    # likewise an impossible planar state (issue 17: simgrip.validity.check_valid, not held): replicated as the
+    # mechanical state it is, then the K-finger check (check_gripper_valid) reports it not held, not valid
+    impossible = not getattr(pst, "valid", True) and pst.contact is not None
+    held = bool(pst.held) or wrong_grip or impossible
     if wrong_grip:
         pst = replace(pst, warnings=[w for w in pst.warnings if not w.startswith("wrong grip:")])
     converged = bool(pst.converged)
     steps = int(pst.steps)
     if held and scene.workpiece == "sphere":
         held = _sphere_holds(scene, pst)
-    if not held and scene.workpiece == "sphere" and (pst.held or wrong_grip):
+    if not held and scene.workpiece == "sphere" and (pst.held or wrong_grip or impossible):
         # the sphere's cone fails: it drops, and the fingers settle alone
         alone = settle(planar_scene(scene, "free"), allow_unconverged=allow_unconverged, **kw)
         converged, steps = converged and bool(alone.converged), steps + int(alone.steps)

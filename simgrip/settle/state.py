@@ -107,6 +107,9 @@ class SettledState:
     contact_ok: bool = True
     #: Grips I/II: the state has the shape of the grip asked for (:func:`simgrip.validity.check_grip_shape`).
     grip_matched: bool = True
+    #: A physical state: no self-crossing, no link through another, a finger or the workpiece
+    #: (:func:`simgrip.validity.check_valid`); False: ``held`` is False and ``warnings`` names the violation.
+    valid: bool = True
     #: Conditions the state violates that the solve itself does not enforce (e.g. condition (23)).
     warnings: list = field(default_factory=list)
     #: Hinge rest angles (``springs.rest``) the state was settled with (a dynamic warm start ramps from them).

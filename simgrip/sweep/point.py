@@ -33,7 +33,8 @@ Columns (:data:`COLUMNS`, dimensionless: lengths over ``l``, forces over
 * the parameters, :data:`simgrip.sweep.grid.AXES`;
 * ``status`` (settled / unsettled / rejected / error), ``held`` (the
   simulation holds the workpiece), ``feasible`` (held and, Grip III, condition
-  (23): the simulation's hold/drop verdict), ``normal_force``, ``required_mu``
+  (23): the simulation's hold/drop verdict), ``valid`` (no link through itself or the
+  workpiece, :func:`simgrip.validity.check_valid`), ``normal_force``, ``required_mu``
   (``|friction| / normal`` at the contact, 0 when dropped), ``tip_x``,
   ``tip_z`` (finger 0's tip in its base frame, z up), ``penetration``;
 * ``bvp_normal_force``, ``bvp_feasible``, ``bvp_required_mu`` (``inf`` when the
@@ -60,7 +61,7 @@ from simgrip.sweep.grid import AXES, SweepPoint
 __all__ = ["COLUMNS", "TIME_COLUMNS", "STATUSES", "SAME_BRANCH_RAD", "evaluate_point", "evaluate_segment",
            "warm_bvp"]
 
-SIM_COLUMNS = ("status", "held", "feasible", "normal_force", "required_mu", "tip_x", "tip_z", "penetration")
+SIM_COLUMNS = ("status", "held", "feasible", "valid", "normal_force", "required_mu", "tip_x", "tip_z", "penetration")
 BVP_COLUMNS = ("bvp_normal_force", "bvp_feasible", "bvp_required_mu")
 #: Every column of ``sweep.csv``, in order.
 COLUMNS = AXES + SIM_COLUMNS + BVP_COLUMNS + ("agree", "wall_time_s", "point_time_s", "message", "bvp_message",
@@ -105,6 +106,7 @@ def _simulation(point: SweepPoint) -> dict:
         status="settled" if rec["converged"] else "unsettled",
         held=bool(rec["held"]),
         feasible=bool(rec["feasible"]),
+        valid=bool(rec.get("valid", True)),
         normal_force=float(rec["normal_force"]),
         required_mu=float(rec["required_mu"]),
         tip_x=float(rec["tip"][0]),

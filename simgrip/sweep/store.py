@@ -50,7 +50,7 @@ __all__ = ["PARTIAL", "REJECTED", "BatchError", "LogHistogram", "PartialStore", 
 PARTIAL = ".partial"
 #: Sub-folder of :data:`PARTIAL` where damaged batch files are set aside on ``--resume``.
 REJECTED = "rejected"
-_BOOL = ("held", "feasible", "bvp_feasible", "agree")
+_BOOL = ("held", "feasible", "valid", "bvp_feasible", "agree")
 _TEXT = ("status", "message", "bvp_message", "bvp_warning")
 #: Header of a batch file.
 BATCH_COLUMNS = ("index",) + COLUMNS

@@ -1,0 +1,143 @@
+"""Whether a pick environment's fingers pass through themselves or each other: ``info["valid"]`` (issue 17).
+
+In the pick scenes every link and tip has a contact pair with the box, so MuJoCo keeps them out of it; what it
+cannot prevent is a finger crossing itself (a strongly curled finger has no self-contact) and two fingers
+passing through each other (no finger-finger pairs).  :class:`FingerValidity` checks exactly those two with
+:func:`simgrip.validity.chain_violations` (the one implementation every path runs), behind a screen that
+keeps the usual step cheap:
+
+* pure Python on the hinge angles: every link of every finger within ``pi/2 - delta`` of its start
+  direction: each finger advances along it at least ``sin(delta)`` per unit arc, so it cannot cross
+  itself, its compared links (an arc ``g >= pi r_link`` apart, :func:`simgrip.validity.self_gap_links`)
+  are at least ``pi r_link sin(delta)`` apart, and two fingers from a common base at an angle ``da`` at
+  least ``(s_i + s_j) sin(delta) sin(da/2)`` (the compared pairs' arc sums are whole links); ``delta`` is
+  the least that puts all of these above the ``(2 - DEPTH_FRACTION) r_link`` limit (at build);
+* a finger that turned at most ``pi/2`` in all cannot reach itself (tangents within ``pi/4`` of one
+  direction: compared links at least ``pi r_link cos(pi/4) = 2.2 r_link`` apart);
+* links whose midpoints are farther apart than the limit plus their half lengths cannot be within it
+  (one broadcast over every pair of links of every finger; for two fingers from a common base, the pairs
+  that close to it are the palm's joint and not compared, :func:`simgrip.validity.chain_violations`).
+
+Only what the screen lets through is measured exactly.  World nodes are MuJoCo's (the link bodies' origins and
+the tip geoms), so the palm's pose and each finger's plane need no bookkeeping.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+from simgrip.validity import SELF_LIMIT_FACTOR, chain_violations
+
+__all__ = ["FingerValidity"]
+
+
+
+class FingerValidity:
+    """Callable ``probe(q, data) -> list of messages`` (empty: valid) for a pick model's fingers.
+
+    ``model``: the env's MuJoCo model (read once: the link radius); ``index``: its
+    :class:`~simgrip.sim.fingers.FingerIndex`; ``q``: ``data.qpos.tolist()`` (the step already has it),
+    ``data`` the env's ``MjData``.  Lengths are the model's (m).  Holds no MuJoCo object (picklable).
+    """
+
+    def __init__(self, model, index):
+        import mujoco
+
+        self._bodies = np.asarray(index.link_body, dtype=int)
+        self._tips = np.asarray(index.tip_geom, dtype=int)
+        self._jq = [[int(v) for v in row] for row in np.asarray(index.joint_qpos)]
+        self._r = float(model.geom_size[int(np.asarray(index.link_geom)[0, 0])][0])
+        self._limit = SELF_LIMIT_FACTOR * self._r
+        self._flat = self._bodies.ravel()
+        # each finger's plane: the horizontal direction of its first link at the model's rest pose (the palm
+        # only slides vertically, the hinges turn about horizontal axes: it never changes)
+        d0 = mujoco.MjData(model)
+        mujoco.mj_forward(model, d0)
+        w0 = self.nodes(d0)
+        K, n = self._bodies.shape
+        dirs = []
+        for w in w0:
+            e1 = w[1] - w[0]
+            e1[2] = 0.0
+            dirs.append(e1 / max(float(np.linalg.norm(e1)), 1e-300))
+        self._dirs = dirs
+        self._length = float(np.sum(np.linalg.norm(np.diff(w0[0], axis=0), axis=1)))
+        common = np.array([[np.linalg.norm(w0[f][0] - w0[g][0]) < self._limit for g in range(K)] for f in range(K)])
+        cos = np.clip(np.array([[float(dirs[f] @ dirs[g]) for g in range(K)] for f in range(K)]), -1.0, 1.0)
+        # two straight fingers from a common base: near ends at arcs s_i, s_j are >= (s_i + s_j) sin(da/2) apart
+        self._sines = np.where(common, np.abs(np.sin(0.5 * np.arccos(cos))), 1.0)
+        i = np.arange(n)
+        pair_gap = (i[:, None] + i[None, :]) / n * self._length  # arc lengths of the near ends, summed [m]
+        mask = np.zeros((K, K, n, n), dtype=bool)
+        for f in range(K):
+            mask[f, f] = i[None, :] >= i[:, None] + 2
+            for g in range(f + 1, K):
+                mask[f, g] = pair_gap * self._sines[f, g] >= self._limit
+        self._mask = mask
+        # the pure-Python screen (:meth:`_mild`): every link within pi/2 - delta of its finger's start direction,
+        # delta the least margin that keeps every compared pair apart (module docstring)
+        ds = self._length / n
+        need = SELF_LIMIT_FACTOR / math.pi  # one finger: pi r_link sin(delta) >= (2 - DEPTH_FRACTION) r_link
+        for f in range(K):
+            for g in range(f + 1, K):
+                sine = float(self._sines[f, g])
+                k_min = max(1, math.ceil(self._limit / (ds * sine) - 1e-12)) if sine > 0 else 1
+                need = max(need, self._limit / (k_min * ds * sine) if sine > 0 else 2.0)
+        self._cap = 0.5 * math.pi - math.asin(need) if need < 1.0 else -1.0
+
+    def nodes(self, d) -> list:
+        """Each finger's world nodes ``(n+1, 3)`` [m] in ``d``: its link bodies' origins, then its tip."""
+        K, n = self._bodies.shape
+        xs = np.asarray(d.xpos)[self._flat].reshape(K, n, 3)
+        tips = np.asarray(d.geom_xpos)[self._tips]
+        return [np.vstack([xs[f], tips[f:f + 1]]) for f in range(K)]
+
+    def _mild(self, q: list) -> bool:
+        """Every finger's link angles within the screen's cap of its start: no violation possible (module docstring)."""
+        cap = self._cap
+        for row in self._jq:
+            phi = 0.0
+            for a in row:
+                phi += q[a]
+                if phi > cap or phi < -cap:
+                    return False
+        return True
+
+    def __call__(self, q: list, data) -> list:
+        if self._cap > 0.0 and self._mild(q):
+            return []
+        world = self.nodes(data)
+        W = np.stack(world)  # (K, n+1, 3)
+        M = 0.5 * (W[:, 1:] + W[:, :-1])
+        h = 0.5 * np.linalg.norm(W[:, 1:] - W[:, :-1], axis=2)
+        # every point of a link lies within half its length of its midpoint: a lower bound of each pair's distance
+        low = (np.linalg.norm(M[:, None, :, None] - M[None, :, None, :], axis=-1)
+               - h[:, None, :, None] - h[None, :, None, :])
+        near = (low < self._limit) & self._mask
+        K = len(world)
+        for f in range(K):  # a finger that turned at most pi/2 cannot reach itself (module docstring)
+            if not self._turned_one(q, f):
+                near[f, f] = False
+        if not near.any():
+            return []
+        planar = []
+        for f, w in enumerate(world):
+            rel = w - w[0]
+            planar.append(np.stack([rel @ self._dirs[f], rel[:, 2]], axis=1))
+        L = self._length
+        # chain_violations works over l: scale the nodes to the finger's length
+        found = chain_violations([p / L for p in planar], [w / L for w in world], r_link=self._r / L,
+                                 r_tip=None, solid=None, base_sines=self._sines)
+        return [m for _, m in found]
+
+    def _turned_one(self, q: list, f: int) -> bool:
+        phi = lo = hi = 0.0
+        for a in self._jq[f]:
+            phi += q[a]
+            if phi < lo:
+                lo = phi
+            elif phi > hi:
+                hi = phi
+        return hi - lo > 0.5 * math.pi
