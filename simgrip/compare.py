@@ -359,12 +359,12 @@ def compare(grip: str, params: DimensionlessParams, profile, links: int, **settl
 
 
 def reference_validity(ref: dict, sol) -> list[str]:
-    """Mark the reference record ``valid`` (:func:`simgrip.validity.reference_violations`); the messages.
+    """Mark the reference record ``valid`` (:func:`simgrip.validity_shapes.reference_violations`); the messages.
 
     The BVP allows the rod to pass through itself and the workpiece: an impossible reference gets
     ``valid: False`` and ``feasible: False`` (it holds nothing) and a warning saying why.
     """
-    from simgrip.validity import reference_violations
+    from simgrip.validity_shapes import reference_violations
 
     found = reference_violations(sol)
     ref["valid"] = not found

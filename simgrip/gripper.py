@@ -130,7 +130,7 @@ def gripper_record(state, params: DimensionlessParams, profile=None) -> dict:
     (``tip``, ``normal_force``, ``friction_force``, ``required_mu``, ``N1``,
     ``N2``; zeros when dropped), ``held`` and ``feasible`` for the workpiece
     (``feasible``: held and, Grip III, condition (23) met: ``state.tip_clear``), ``valid`` (no finger
-    through itself, another or the workpiece: :func:`simgrip.validity.check_gripper_valid`),
+    through itself, another or the workpiece: :func:`simgrip.validity_shapes.check_gripper_valid`),
     the settle's ``steps``, ``residual``, ``penetration``, ``wall_time_s``, ``build_time_s`` (the model's),
     ``method`` (which settle ran: ``"symmetric"``, the symmetry skip, or
     ``"dynamics"``) and ``contact`` (where the friction acts: ``"point"`` or

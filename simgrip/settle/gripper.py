@@ -74,7 +74,8 @@ from simgrip.settle.state import SettleError
 from simgrip.settle.statics import restore_options, save_options
 from simgrip.sim.checks import clear_warnings
 from simgrip.sim.gripper import GripperScene
-from simgrip.validity import check_grip_shape, check_gripper_valid
+from simgrip.validity import check_grip_shape
+from simgrip.validity_shapes import check_gripper_valid
 
 __all__ = ["FingerRecord", "GripperState", "contact_rest_depth", "gripper_tolerance", "settle_gripper",
            "straight_frequency"]

@@ -109,7 +109,7 @@ class GripperState:
     #: state with ``tip_clear`` False is not feasible (:func:`simgrip.gripper.gripper_record`), as the planar one.
     tip_clear: bool = True
     #: A physical state: no finger through itself, another finger or the workpiece
-    #: (:func:`simgrip.validity.check_gripper_valid`); False: ``held`` is False and ``warnings`` says why.
+    #: (:func:`simgrip.validity_shapes.check_gripper_valid`); False: ``held`` is False and ``warnings`` says why.
     valid: bool = True
     #: Conditions the state violates that the settle does not enforce (e.g. the other grip's shape).
     warnings: list = field(default_factory=list)
