@@ -139,15 +139,22 @@ def linearise(model: mujoco.MjModel, data: mujoco.MjData, dofs) -> LinearModel:
     return LinearModel(dofs=dofs, M=full[np.ix_(dofs, dofs)], C=C, K=K, qpos=q0, dt=float(model.opt.timestep))
 
 
+def _order(s: np.ndarray) -> np.ndarray:
+    """The order of poles ``s``: slowest decay first, then lowest ``|s|`` (equal decay rates, e.g. undamped
+    poles, compared up to round-off)."""
+    decay = np.round(-s.real / (1e-9 * np.abs(s).max()))
+    return np.lexsort((np.abs(s), decay))
+
+
 def _sorted(s: np.ndarray) -> np.ndarray:
-    """Poles with ``Im s >= 0`` (one of each complex pair), slowest decay first."""
+    """Poles with ``Im s >= 0`` (one of each complex pair), in :func:`_order`."""
     s = s[s.imag >= -1e-9 * np.abs(s)]
-    return s[np.lexsort((-s.imag, -s.real))]
+    return s[_order(s)]
 
 
 def continuous_poles(M, C, K) -> np.ndarray:
     """Poles ``s`` of ``M x'' + C x' + K x = 0`` [1/s]: one of each complex pair (``Im s > 0``) and the real ones,
-    slowest decay (largest ``Re s``) first.  A pair gives ``omega_n = |s|``, ``zeta = -Re s / |s|``."""
+    slowest decay (largest ``Re s``) first, then lowest ``|s|``.  A pair gives ``omega_n = |s|``, ``zeta = -Re s / |s|``."""
     n = len(M)
     A = np.block([[np.zeros((n, n)), np.eye(n)], [-np.linalg.solve(M, K), -np.linalg.solve(M, C)]])
     return _sorted(np.linalg.eigvals(A))
@@ -170,7 +177,7 @@ def discrete_poles(M, C, K, dt: float, *, vectors: bool = False):
     s = np.log(mu.astype(complex)) / dt
     keep = s.imag >= -1e-9 * np.abs(s)
     s, V = s[keep], V[:, keep]
-    order = np.lexsort((-s.imag, -s.real))
+    order = _order(s)
     return (s[order], V[:, order]) if vectors else s[order]
 
 

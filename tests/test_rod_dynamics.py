@@ -170,3 +170,79 @@ def test_bad_input():
         simulate(rod, [0.0, 0.002], np.zeros(3))
     with pytest.raises(ValueError, match="dt must"):
         simulate(rod, [0.0], dt=0.0)
+
+
+def pyelastica_tip(n_elem: int, radius: float = 0.02) -> np.ndarray:
+    """PyElastica's Cosserat rod (``n_elem`` elements, undamped) released from the weightless arc under gravity:
+    the tip ``(X, Y)`` at TIMES.  ``rho A = EI = 1``: ``E = 4/(pi r^4)``, ``G = E/3``; extension ``EA =
+    4/r^2``, shear ``G A = EA/3``, rotary inertia ``rho I = r^2/4`` (all absent from the peer and the chain:
+    relative effects ``~ (k r)^2`` with the mode's wavenumber ``k ~ 2``).  The clamp holds the first element's
+    director (PositionVerlet, step a fifth of the axial wave's ``ds / c``, ``c = 2/r``)."""
+    import elastica as ea
+
+    class Sim(ea.BaseSystemCollection, ea.Constraints, ea.Forcing, ea.CallBacks):
+        pass
+
+    area, inertia = math.pi * radius**2, math.pi * radius**4 / 4
+    rod = ea.CosseratRod.straight_rod(n_elem, np.zeros(3), np.array([1.0, 0, 0]), np.array([0, 0, 1.0]), 1.0,
+                                      radius, 1.0 / area, youngs_modulus=1.0 / inertia,
+                                      shear_modulus=1.0 / (3 * inertia))
+    ds = 1.0 / n_elem
+    nodes = np.arange(n_elem + 1) * ds
+    rod.position_collection[0] = np.sin(KAPPA * nodes) / KAPPA
+    rod.position_collection[2] = (1 - np.cos(KAPPA * nodes)) / KAPPA
+    th = KAPPA * (np.arange(n_elem) + 0.5) * ds
+    zero = np.zeros(n_elem)
+    rod.director_collection[0] = [-np.sin(th), zero, np.cos(th)]  # d1: the normal in the x-z plane
+    rod.director_collection[1] = [zero, -np.ones(n_elem), zero]   # d2 = d3 x d1 = -y: bending about it is theta
+    rod.director_collection[2] = [np.cos(th), zero, np.sin(th)]   # d3: the tangent
+    rod.rest_kappa[1, :] = KAPPA
+    sim = Sim()
+    sim.append(rod)
+    sim.constrain(rod).using(ea.OneEndFixedBC, constrained_position_idx=(0,), constrained_director_idx=(0,))
+    sim.add_forcing_to(rod).using(ea.GravityForces, acc_gravity=np.array([0.0, 0.0, -1.0]))
+    out = []
+
+    class Tip(ea.CallBackBaseClass):
+        def __init__(self, step_skip):
+            super().__init__()
+            self.every = step_skip
+
+        def make_callback(self, system, time, current_step):
+            if current_step % self.every == 0:
+                out.append([system.position_collection[0, -1], system.position_collection[2, -1]])
+
+    every = int(math.ceil(0.02 / (0.2 * ds * radius / 2)))
+    sim.collect_diagnostics(rod).using(Tip, step_skip=every)
+    sim.finalize()
+    ea.integrate(ea.PositionVerlet(), sim, float(TIMES[-1]), int(round(TIMES[-1] / (0.02 / every))),
+                 progress_bar=False)
+    return np.array(out)[:TIMES.size]
+
+
+def test_pyelastica_peer():
+    """PyElastica (optional: ``pip install simgrip[peer]``) against the spectral peer, both undamped.  The
+    Cosserat rod's clamp holds its first element (the clamp sits half an element off ``s = 0``), a first-order
+    error: it halves from 32 to 64 elements (0.6 allows the next order); the extension, shear and rotary
+    inertia add ``~ (k r)^2 ~ 2e-3`` of the motion at r = 0.02."""
+    pytest.importorskip("elastica")
+    rod = rod_dynamics(D, KAPPA)
+    a0 = np.zeros(12)
+    a0[0] = KAPPA / 2
+    ref = simulate(rod, TIMES, a0, dt=PEER_DT)
+    errs = {n: float(np.abs(pyelastica_tip(n) - ref).max()) for n in (32, 64)}
+    amplitude = float(np.abs(ref - ref[0]).max())
+    assert errs[64] <= 0.6 * errs[32], errs
+    assert errs[64] < 0.3 * amplitude, (errs, amplitude)
+
+
+def test_peer_vibrations_match_the_modes_reference():
+    """Undamped, the peer's small vibrations about its equilibrium are :mod:`simgrip.modes`' linearised elastica
+    (Chebyshev collocation of the BVP's variational equations: a different method of the same rod)."""
+    from simgrip.modes import reference_modes
+
+    ref = reference_modes("free", DimensionlessParams(D=D), KAPPA, 3).omega
+    rod = rod_dynamics(D, KAPPA)
+    poles = linear_poles(rod, equilibrium(rod))[:3]
+    np.testing.assert_allclose(np.abs(poles.real), 0.0, atol=1e-9)
+    np.testing.assert_allclose(poles.imag, ref, rtol=1e-7)  # both spectral: agree to ~1e-10

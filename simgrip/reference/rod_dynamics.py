@@ -176,13 +176,14 @@ def equilibrium(rod: RodDynamics, a0=None, *, tol: float = 1e-13, max_iter: int 
 def linear_poles(rod: RodDynamics, a) -> np.ndarray:
     """Poles ``s`` [over ``sqrt(g/l)``] of the small vibrations about the equilibrium ``a``: ``det(s^2 M + s C +
     K) = 0`` with ``M = rod.mass(a)``, ``K`` the Hessian of ``V``, ``C = tau K_b``; one of each complex pair
-    (``Im s > 0``) and the real ones, slowest decay first (the Galerkin's spurious high poles last)."""
+    (``Im s > 0``) and the real ones, slowest decay first, then lowest ``|s|`` (undamped: by frequency)."""
     n = rod.Phi.shape[1]
     M, K, C = rod.mass(a), _stiffness(rod, a), rod.tau * rod.Kb
     A = np.block([[np.zeros((n, n)), np.eye(n)], [-np.linalg.solve(M, K), -np.linalg.solve(M, C)]])
     s = np.linalg.eigvals(A)
     s = s[s.imag >= -1e-9 * np.abs(s)]
-    return s[np.lexsort((-s.imag, -s.real))]
+    decay = np.round(-s.real / (1e-9 * np.abs(s).max()))  # equal decay rates (undamped: 0) up to round-off
+    return s[np.lexsort((np.abs(s), decay))]
 
 
 def simulate(rod: RodDynamics, times, a0=None, *, dt: float = 2e-3, tol: float = 1e-12,
