@@ -251,3 +251,32 @@ def test_gripper_json_has_nodes_and_contacts(capsys):
     nodes = np.asarray(rec["nodes"])
     assert nodes.shape == (3, n + 1, 3) and np.allclose(nodes[:, 0], 0.0)
     assert len(rec["contacts"]) == 3 and all(c["link"] == n - 1 for c in rec["contacts"])
+
+
+# -- the independent reference: the chain's energy minimised under non-penetration (SLSQP) -------------------
+
+
+def test_free_spiral_is_the_constrained_energy_minimum():
+    """The settled spiral (kappa = -9, n = 32) is a KKT point of the chain's own energy with every pair of
+    non-adjacent links kept 2 r_link apart (:func:`simgrip.reference.constrained.solve_constrained`, SciPy's
+    SLSQP and an active-set KKT polish, no MuJoCo): started from the settled angles it stays there, with the
+    same contacts and forces.
+
+    Tolerance (derived): the settle stops at MuJoCo's static residual ``tol = DYN_TOL`` (1e-5 per hinge, over
+    rho g l^2), which moves the angles by at most ``sqrt(n) tol / lambda_min`` (``lambda_min`` ~ 2.4, the
+    chain's smallest stability eigenvalue here: 7e-5 rad); its soft contacts sit ``p <= 2e-6 l`` deep, which
+    turns a link by at most ``2 p / ds`` (1.3e-4 rad at n = 32).  Forces: MuJoCo splits a node's contact in two
+    (the tip sphere and the last capsule, or the two capsules meeting at a node), so they are summed per pair of
+    places; the same residual bounds their difference relative to their size (1e-5 / 0.5, 1e-3 with margin).
+    """
+    constrained = pytest.importorskip("simgrip.reference.constrained")
+    n = 32
+    sc = build_scene("free", STD, -9.0, n, contact="full")
+    st = settle(sc)
+    ref = constrained.solve_constrained("free", STD, -9.0, n, guess=st.link_angles[0])
+    assert ref.kkt_residual < 1e-10
+    bound = math.sqrt(n) * 1e-5 / 2.4 + 2.0 * max(st.penetration, 2e-6) * n
+    assert np.max(np.abs(st.link_angles[0] - ref.link_angles)) <= bound
+    sim_total = sum(c["normal_force"] for c in st.contact_set)
+    ref_total = sum(float(np.linalg.norm(c.force)) for c in ref.contacts)
+    assert sim_total == pytest.approx(ref_total, rel=1e-3)
