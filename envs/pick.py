@@ -114,7 +114,9 @@ class PickEnv(gym.Env):
     taking part, 7.62 Hz, zeta = 0.476 (7.46 Hz, zeta = 0.465, damped 6.60 Hz
     at 2 ms).  The damping is stiffness-proportional (``zeta_i = omega_i
     finger_damping_time / 2`` without gravity), so every higher mode is
-    overdamped (curled to ``kappa_bar <= -6`` the first one too).  Released
+    overdamped; curled, the first mode stiffens and damps more (palm still,
+    continuous model: kappa_bar = -3: 9.30 Hz, zeta = 0.555; -6: 14.17 Hz,
+    zeta = 0.891; -10: overdamped).  Released
     straight, the fingers reach their sag within 2 % after 0.18 s (after
     ``settle_time`` 11 % of it is left); a step of the curvature command
     moves the tip 63 % of the way after 0.10 s and within 2 % after 0.40 s

@@ -58,6 +58,11 @@ DOC = {
 DOC_MULTI = {"f_phase": ("7.60 Hz", 7.60, 0.005), "zeta_phase": ("zeta = 0.474", 0.474, 0.0005)}
 
 
+def _doc(cls) -> str:
+    """``cls``'s docstring with its line breaks and indentation as single spaces."""
+    return " ".join(cls.__doc__.split())
+
+
 def _probe(env):
     """The tip's height above the palm [m] from ``qpos`` (``geom_xpos`` after ``mj_step`` is a step stale)."""
     tip, palm = int(env.fingers.tip_geom[0]), env.palm_qpos
@@ -193,8 +198,30 @@ def test_release_decay_matches_discrete_poles(pick, pole):
     assert abs(fit.pole - sd[pole]) <= tol * abs(sd[pole])
 
 
+def _continuous_eig(lin):
+    """Continuous poles (Im >= 0) and eigenvectors (displacement part) of ``lin``."""
+    n = lin.dofs.size
+    A = np.block([[np.zeros((n, n)), np.eye(n)],
+                  [-np.linalg.solve(lin.M, lin.K), -np.linalg.solve(lin.M, lin.C)]])
+    s, V = np.linalg.eig(A)
+    keep = s.imag >= -1e-9 * np.abs(s)
+    return s[keep], V[:n, keep]
+
+
+def _first_pair(s, V, still: bool):
+    """The slowest-decaying complex pair whose palm share (the palm's displacement over the largest) is ~0
+    (``still``: the fingers in antiphase) or not (in phase); None if there is none."""
+    x = np.abs(V)
+    share = x[0] / x.max(axis=0)
+    ok = (s.imag > 0) & ((share < 1e-6) if still else (share > 1e-3))
+    if not ok.any():
+        return None
+    cand = s[ok]
+    return cand[np.argmax(cand.real)]
+
+
 def _palm_share(lin, pole):
-    """The palm's share of pole ``pole``'s displacement (0: the palm still)."""
+    """The palm's share of discrete pole ``pole``'s displacement (0: the palm still)."""
     _, V = fd.discrete_poles(lin.M, lin.C, lin.K, lin.dt, vectors=True)
     x = np.abs(V[:lin.dofs.size, pole])
     return x[0] / x.max()
@@ -202,12 +229,9 @@ def _palm_share(lin, pole):
 
 def _first_pairs(lin):
     """``(still, phase)``: the continuous and discrete poles of the first pair with the palm still and in phase."""
-    sc = fd.continuous_poles(lin.M, lin.C, lin.K)
-    sd = fd.discrete_poles(lin.M, lin.C, lin.K, lin.dt)
-    pairs = [k for k in range(len(sd)) if sd[k].imag > 0]
-    still = [k for k in pairs if _palm_share(lin, k) < 1e-6]
-    phase = [k for k in pairs if _palm_share(lin, k) > 1e-3]
-    return (sc[still[0]], sd[still[0]]), (sc[phase[0]], sd[phase[0]])
+    sc, Vc = _continuous_eig(lin)
+    sd, Vd = fd.discrete_poles(lin.M, lin.C, lin.K, lin.dt, vectors=True)
+    return tuple((_first_pair(sc, Vc, still), _first_pair(sd, Vd[:lin.dofs.size], still)) for still in (True, False))
 
 
 def _figures(sc, sd, prefix):
@@ -228,6 +252,23 @@ def test_documented_first_mode(pick):
     sd = fd.discrete_poles(lin.M, lin.C, lin.K, lin.dt)
     assert sd[1].imag > 0 and sd[2].imag == 0
     assert fd.continuous_poles(lin.M, lin.C, lin.K)[2].imag == 0
+
+
+@pytest.mark.parametrize("kappa, label, freq, zeta", [(-3.0, "kappa_bar = -3: 9.30 Hz, zeta = 0.555", 9.30, 0.555),
+                                                      (-6.0, "-6: 14.17 Hz, zeta = 0.891", 14.17, 0.891),
+                                                      (-10.0, "-10: overdamped", None, None)])
+def test_curled_finger(kappa, label, freq, zeta):
+    """Curled, the finger's first mode (palm still, continuous model) stiffens and damps more, as the docstring
+    says (to half a unit of its last digit); fully curled it is overdamped."""
+    env = _settled(PickEnv(), kappa)
+    lin = fd.linearise(env.model, env.data, _dofs(env))
+    (still, _), _ = _first_pairs(lin)
+    assert label in _doc(PickEnv)
+    if freq is None:
+        assert still is None
+    else:
+        assert abs(still) / (2 * math.pi) == pytest.approx(freq, abs=0.005)
+        assert -still.real / abs(still) == pytest.approx(zeta, abs=0.0005)
 
 
 def test_pick_multi_finger_is_the_same():
@@ -311,11 +352,11 @@ def test_docstrings_state_the_figures():
     from simgrip.envs.pick_multi import PickMultiEnv
 
     for label, _, _ in DOC.values():
-        assert label in PickEnv.__doc__, label
+        assert label in _doc(PickEnv), label
     for key in ("f_still", "zeta_still"):
-        assert DOC[key][0] in PickMultiEnv.__doc__, key
+        assert DOC[key][0] in _doc(PickMultiEnv), key
     for label, _, _ in DOC_MULTI.values():
-        assert label in PickMultiEnv.__doc__, label
+        assert label in _doc(PickMultiEnv), label
 
 
 def test_bad_input():
