@@ -154,7 +154,8 @@ def _sorted(s: np.ndarray) -> np.ndarray:
 
 def continuous_poles(M, C, K) -> np.ndarray:
     """Poles ``s`` of ``M x'' + C x' + K x = 0`` [1/s]: one of each complex pair (``Im s > 0``) and the real ones,
-    slowest decay (largest ``Re s``) first, then lowest ``|s|``.  A pair gives ``omega_n = |s|``, ``zeta = -Re s / |s|``."""
+    slowest decay (largest ``Re s``) first, then lowest ``|s|``.  A pair gives ``omega_n = |s|``,
+    ``zeta = -Re s / |s|``."""
     n = len(M)
     A = np.block([[np.zeros((n, n)), np.eye(n)], [-np.linalg.solve(M, K), -np.linalg.solve(M, C)]])
     return _sorted(np.linalg.eigvals(A))
