@@ -17,12 +17,11 @@ broad phase finds, in three phases:
 3. **Judge**: MuJoCo's static balance at rest (:class:`~simgrip.settle.statics.RestResidual`, as every
    settle) below ``tol``, velocities below :data:`~simgrip.settle.dynamics.DYN_VTOL`.
 
-Contact softness: every colliding geom takes the dynamics' pair softness (time constant
-``DYN_TIMECONST h``, impedance :data:`~simgrip.settle.statics.CONTACT_IMPEDANCE`); a state deeper
-than :data:`FULL_PEN_LIMIT` (1e-4 l, ten times inside the issue's 1e-3 l) restarts with half the step,
-which stiffens the contact as ``h^2`` (at rest the depth is ``F d (1 - d) tau^2 A``,
-:func:`simgrip.settle.statics.configure_statics`).  A contact deeper than the capsule's radius has
-tunnelled: restart too.
+Contact softness: every colliding geom takes :func:`contact_solref` (MuJoCo's direct stiffness sized for
+the static settle's contact stiffness, ``F / 1e6 l`` deep under a force ``F``; damping that closes half a
+penetration per step).  A state deeper than :data:`FULL_PEN_LIMIT` (1e-4 l, ten times inside the issue's
+1e-3 l) restarts with half the step; a contact deeper than the capsule's radius has tunnelled: restart too.
+Every step is guarded (:class:`~simgrip.settle.full_guard.GuardedSteps`): no point moves through a capsule.
 """
 
 from __future__ import annotations
@@ -34,14 +33,14 @@ import mujoco
 import numpy as np
 
 from simgrip.settle.full_guard import GuardedSteps
-from simgrip.settle.dynamics import (DYN_CLOSE_RATE, DYN_DROP_FALL, DYN_DROP_SLIP, DYN_RELEASE_STEPS, DYN_TIMECONST,
+from simgrip.settle.dynamics import (DYN_CLOSE_RATE, DYN_DROP_FALL, DYN_DROP_SLIP, DYN_RELEASE_STEPS,
                                      DYN_VTOL, Dyn)
 from simgrip.settle.state import SettledState, SettleError, read_state
-from simgrip.settle.statics import CONTACT_IMPEDANCE
+from simgrip.settle.statics import CONTACT_IMPEDANCE, CONTACT_STIFFNESS
 from simgrip.sim.full_contact import colliding_geoms
 from simgrip.sim.scene import Scene, set_curvature
 
-__all__ = ["FULL_PEN_LIMIT", "contact_set", "ramp_rate", "settle_full"]
+__all__ = ["FULL_PEN_LIMIT", "contact_set", "contact_solref", "ramp_rate", "settle_full"]
 
 #: Deepest contact (over l) a full-contact state may keep; deeper restarts at half the step.
 FULL_PEN_LIMIT = 1e-4
@@ -102,13 +101,7 @@ def _once(scene: Scene, tol: float, budget: int, factor: float, t0: float) -> tu
     m, d = scene.model, scene.data
     dyn = Dyn(scene, factor)
     gs = colliding_geoms(m)
-    # MuJoCo's direct form (-stiffness, -damping) [1/s^2, 1/s]: the dynamics' stiffness 1/(DYN_TIMECONST h)^2 (the
-    # depth at rest, F d (1 - d) A / k, as the pairs'), with the damping b = k h / FULL_CONTACT_RELAX so that a
-    # penetration r closes at the speed (k / b) r: FULL_CONTACT_RELAX of it per step, never the whole of it and past
-    # (the critically damped 2 / tau would close it ~50 times over in one step: a contact that opens in one step and
-    # closes in the next, forever)
-    k = 1.0 / (DYN_TIMECONST * dyn.h) ** 2
-    m.geom_solref[gs] = [-k, -k * dyn.h / FULL_CONTACT_RELAX]
+    m.geom_solref[gs] = contact_solref(scene, dyn.h)
     m.geom_solimp[gs, 0] = CONTACT_IMPEDANCE
     m.geom_solimp[gs, 1] = CONTACT_IMPEDANCE
     limit = FULL_PEN_LIMIT * scene.length
@@ -180,6 +173,24 @@ def _once(scene: Scene, tol: float, budget: int, factor: float, t0: float) -> tu
         converged, why = guard.run(tol, budget)
     state = _read(scene, dyn, t0, held, converged)
     return state, state.penetration > FULL_PEN_LIMIT or _deepest(d) > limit
+
+
+def contact_solref(scene, h: float) -> list[float]:
+    """The colliding geoms' ``solref`` in MuJoCo's direct form ``[-k, -b]`` [1/s^2, 1/s] for the step ``h`` [s].
+
+    Stiffness: at rest a contact of MuJoCo's soft law sits ``F / K_c`` deep with ``K_c = k d^2 / A`` (force per
+    length; ``d`` the impedance, ``A`` the contact's inverse effective mass, at most ``~3 / m_link`` at a light
+    end link: :func:`~simgrip.settle.statics.configure_statics`' estimate).  ``k = K_c A / d^2`` with ``K_c =
+    CONTACT_STIFFNESS rho g`` (the static settle's) puts a contact carrying ``F`` (over ``rho g l``) ``F / 1e6 l``
+    deep at most: ten times under :data:`FULL_PEN_LIMIT` for ``F <= 100``.  Damping: ``b = k h /``
+    :data:`FULL_CONTACT_RELAX`, so that a penetration ``r`` closes at the speed ``(k / b) r``: that fraction of
+    it per step, never the whole of it and past (a critically damped ``2 / tau`` with ``tau << h`` closes it
+    many times over in one step: a contact that opens in one step and closes in the next, forever).
+    """
+    phys = scene.physical
+    a = 3.0 * scene.n / (phys.rho * phys.length)  # 3 / m_link
+    k = CONTACT_STIFFNESS * phys.rho * phys.g * a / CONTACT_IMPEDANCE ** 2
+    return [-k, -k * h / FULL_CONTACT_RELAX]
 
 
 def ramp_rate(rate: float, guard, deepest: float, radius: float) -> float:

@@ -18,8 +18,8 @@ import time
 import mujoco
 import numpy as np
 
-from simgrip.settle.dynamics import DYN_CLOSE_RATE, DYN_DROP_FALL, DYN_DROP_SLIP, DYN_RELEASE_STEPS, DYN_TIMECONST
-from simgrip.settle.full_contact import FULL_CLOSE_RATE_PER_RADIUS, FULL_CONTACT_RELAX, FULL_PEN_LIMIT, ramp_rate
+from simgrip.settle.dynamics import DYN_CLOSE_RATE, DYN_DROP_FALL, DYN_DROP_SLIP, DYN_RELEASE_STEPS
+from simgrip.settle.full_contact import FULL_CLOSE_RATE_PER_RADIUS, FULL_PEN_LIMIT, contact_solref, ramp_rate
 from simgrip.settle.full_guard import GuardedSteps
 from simgrip.settle.gripper_dynamics import GripperDynamics
 from simgrip.settle.gripper_state import GripperState, read_gripper_state
@@ -71,8 +71,7 @@ def settle_gripper_full(scene, *, tol: float, max_steps: int | None = None,
         d.qfrc_applied[:] = 0.0
         mujoco.mj_forward(m, d)
         dyn = FullGripperDynamics(scene)
-        k = 1.0 / (DYN_TIMECONST * dyn.h) ** 2
-        m.geom_solref[gs] = [-k, -k * dyn.h / FULL_CONTACT_RELAX]
+        m.geom_solref[gs] = contact_solref(scene, dyn.h)
         m.geom_solimp[gs, 0] = CONTACT_IMPEDANCE
         m.geom_solimp[gs, 1] = CONTACT_IMPEDANCE
         guard = GuardedSteps(scene, dyn)
