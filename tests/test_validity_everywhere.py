@@ -96,7 +96,7 @@ def test_overlay_marks_invalid_states():
     from simgrip.figures.overlay import simulation_overlay
 
     ov = simulation_overlay("fig07", links=8, kappas=(-6.0, -10.0))
-    assert list(ov["valid"]) == [True, False] and list(ov["held"]) == [True, False]
+    assert list(ov["valid"]) == [True, False] and list(ov["feasible"]) == [True, False]
 
 
 @pytest.mark.parametrize("env_id", ["simgrip/Pick-v1", "simgrip/PickMulti-v0"])

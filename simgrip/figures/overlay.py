@@ -30,8 +30,10 @@ key                        meaning
                            caption's terms (default ``"held"``)
 ``"valid"``                fig07-09: bool (n,), the settled state is physical
                            (:func:`simgrip.validity.check_valid`: no link
-                           through itself or the workpiece); an invalid one is
-                           reported not held and marked apart in the verdict row
+                           through itself or the workpiece); ``"held"`` is the
+                           solve's hold (an invalid state is reported not held
+                           by the settle), ``"feasible"`` False where invalid;
+                           the verdict row marks invalid states apart
 ``"failed"``               bool (n,): points whose settle failed (NaN values);
                            listed in the legend, never dropped silently
 =========================  ===================================================
@@ -153,8 +155,11 @@ def _overlay_grip(grip, params, links, kappas):
     n = len(kappas)
     nan = np.full(n, np.nan)
     failed = np.array([s is None for s in states])
-    held = np.array([s is not None and bool(s.held) and s.contact is not None for s in states])
     valid = np.array([s is None or bool(getattr(s, "valid", True)) for s in states])
+    # the solve's own hold (an invalid state is reported not held, but its contact and forces are the chain's):
+    # the values and the friction verdict are drawn as settled, the invalid ones marked apart ("valid")
+    held = np.array([s is not None and (bool(s.held) or not v) and s.contact is not None
+                     for s, v in zip(states, valid)])
     tip = np.array([s.tip[0] if s is not None else (np.nan, np.nan) for s in states], dtype=float)
     out = {"kappa": kappas, "grip": grip, "links": int(links), "label": _SIM_LABEL.format(links=links),
            "held": held, "valid": valid, "failed": failed, "errors": errors, "tip_x": tip[:, 0], "tip_z": tip[:, 1],
@@ -169,7 +174,7 @@ def _overlay_grip(grip, params, links, kappas):
     mu = params.mu_s
     if grip in ("I", "II"):
         out["muN"] = mu * out["N1"]
-        out["feasible"] = held  # the simulation's verdict: the workpiece is held
+        out["feasible"] = held & valid  # the simulation's verdict: the workpiece is held, by a physical state
     else:
         out["f"] = np.abs(out["f_signed"])
         out["mu_n"] = mu * out["n"]
@@ -178,7 +183,7 @@ def _overlay_grip(grip, params, links, kappas):
         with np.errstate(invalid="ignore"):
             out["tip_below_contact"] = held & (out["h"] < out["h_gamma"])
         # the sim's box is not a collider for the tip: condition (23) is checked on its geometry
-        out["feasible"] = out["tip_below_contact"]
+        out["feasible"] = out["tip_below_contact"] & valid
     # shapes: held states at the kappas the reference panel draws (integers; even for Grip III)
     step = 2.0 if grip == "III" else 1.0
     out["shape_kappa"] = np.array([k for k, h in zip(kappas, held) if h and float(k / step).is_integer()])

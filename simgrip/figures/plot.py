@@ -110,9 +110,9 @@ def _overlay_verdict(ax, overlay, xfun, grip):
 
     Filled triangle: the workpiece is held (Grip III: and the tip stays below the
     contact); hollow circle: dropped; cross (Grip III): held, but the tip is above
-    the contact (condition (23) fails on the simulated shape); red diamond: an
-    invalid state (it crosses itself or enters the workpiece, reported not held;
-    ``overlay["valid"]``); red X: the settle failed (also listed in the legend).
+    the contact (condition (23) fails on the simulated shape); red diamond (a row
+    above): an invalid state (it crosses itself or enters the workpiece, reported
+    not held by the settle; ``overlay["valid"]``); red X: the settle failed (also listed in the legend).
     Compare with the shaded feasible region.
     """
     if overlay is None or "held" not in overlay:
@@ -129,14 +129,16 @@ def _overlay_verdict(ax, overlay, xfun, grip):
         (feas, dict(marker="^", color="k", mfc="k", ms=6), "MuJoCo holds the box"),
         (held & ~feas, dict(marker="x", color="k", ms=6, mew=1.2), "MuJoCo holds, tip above contact"),
         (~held & ~failed & ~invalid, dict(marker="o", color="k", mfc="white", ms=6, mew=1.0), "MuJoCo drops the box"),
-        (invalid, dict(marker="D", color="tab:red", mfc="white", ms=6, mew=1.2),
-         "invalid state (crosses itself / enters the box)"),
         (failed, dict(marker="X", color="tab:red", ms=7), None),
     )
     for mask, style, lab in rows:
         if mask.any():
             ax.plot(x[mask], np.full(mask.sum(), y), linestyle="none", transform=tr, clip_on=False,
                     zorder=6, label=lab, **style)
+    if invalid.any():  # a row above: the state itself is impossible, whatever the friction says
+        ax.plot(x[invalid], np.full(invalid.sum(), 2.2 * y), linestyle="none", transform=tr, clip_on=False, zorder=6,
+                marker="D", color="tab:red", mfc="white", ms=6, mew=1.2,
+                label="invalid state (crosses itself / enters the box)")
     if failed.any():
         ks = ", ".join(f"{v:g}" for v in k[failed])
         ax.plot([], [], "X", color="tab:red", ms=7, label=rf"settle failed at ${_KBAR} = {ks}$")

@@ -128,7 +128,9 @@ def names_an_input(message: str) -> bool:
 
 
 #: The flags that make a state impossible (issue 17): a state with any of them must be reported ``valid`` False.
-PHYSICAL_FLAGS = ("self_intersection", "workpiece_entry", "fingers_cross", "tip_touches_workpiece", "tip_above_contact")
+#: (Condition (23)'s, ``tip_touches_workpiece`` and ``tip_above_contact``, are the paper's verdict on the shape,
+#: reported by ``tip_clear``: not feasible; a rod through the box beyond the contact is ``workpiece_entry`` too.)
+PHYSICAL_FLAGS = ("self_intersection", "workpiece_entry", "fingers_cross")
 
 
 def self_intersects(nodes) -> bool:
