@@ -280,3 +280,21 @@ def test_free_spiral_is_the_constrained_energy_minimum():
     sim_total = sum(c["normal_force"] for c in st.contact_set)
     ref_total = sum(float(np.linalg.norm(c.force)) for c in ref.contacts)
     assert sim_total == pytest.approx(ref_total, rel=1e-3)
+
+
+def test_below_the_onset_full_contact_is_the_tip_contact():
+    """kappa = -6 (inside the paper's point-contact range): every link may touch, but only the tip does, and the
+    state is the static settle's with the same surface contact (``contact="surface"``, Newton).
+
+    Tolerance (derived): the dynamics stops at MuJoCo's residual ``DYN_TOL = 1e-5`` (over rho g l) and its tip
+    sits ``p <= 1e-4 l`` (:data:`~simgrip.settle.full_contact.FULL_PEN_LIMIT`) deeper in the face than Newton's
+    ``~1e-6 l``; the finger's tip stiffness ``dN/dX`` is of order ``10 EI / l^3`` (D = 1), so ``|dN| <= 10 p + 1e-5``
+    = 1e-3 rho g l: 1.3e-4 of N = 7.8; the tip moves by ``p``.
+    """
+    n = 32
+    ref = settle(build_scene("I", STD, -6.0, n), contact="surface")
+    st = settle(build_scene("I", STD, -6.0, n, contact="full"))
+    assert st.held and ref.held
+    assert {(c["link"], c["arc_length"]) for c in st.contact_set} == {(n - 1, 1.0)}
+    assert st.normal_force == pytest.approx(ref.normal_force, rel=1.3e-4)
+    assert np.max(np.abs(st.tip[0] - ref.tip[0])) <= 1e-4
