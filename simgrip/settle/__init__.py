@@ -109,6 +109,9 @@ def settle(scene: Scene, *, target_error=None, **kw) -> SettledState:  # docstri
         if kw.get("method") == "dynamics":
             raise ValueError("method: target_error extrapolates the static settle (method='newton'); the dynamic "
                              "settle's error is floored by MuJoCo's friction creep, not by ds")
+        if kw.get("contact") == "full" or getattr(scene, "contact", "pairs") == "full":
+            raise ValueError("contact: target_error extrapolates the point-contact settle over resolutions; the "
+                             "full-contact settle (contact='full') has no derived error expansion in ds")
         if kw.get("contact") == "surface":
             raise ValueError("contact: target_error extrapolates the point-contact settle (method='newton', "
                              "contact='point'), whose error expansion in ds is derived; the finite-radius "
