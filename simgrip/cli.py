@@ -102,6 +102,10 @@ def build_parser() -> argparse.ArgumentParser:
     p = sub.add_parser("solve", help="solve the elastica boundary-value problem of one grip")
     _add_state_options(p)
     p.add_argument("--K", type=int, default=128, help=f"nodes of the discrete stability check, 2..{MAX_K} [default 128]")
+    p.add_argument("--contact", default="point",
+                   help="point (the paper's BVP, default) or full: every contact unilateral (free, I, II): the "
+                   "contact set found by the constrained chain, then the free-boundary BVP (tip + box corner) or "
+                   "the chain itself where no smooth BVP applies")
 
     for name, text in (
         ("simulate", "settle the MuJoCo finger (symmetric reduction) and print its state"),
@@ -248,6 +252,12 @@ def _cmd_solve(args) -> dict:
 
 
     grip = check_grip(args.grip)
+    if args.contact == "full":
+        from simgrip.reference.full_contact import full_contact_record
+
+        return full_contact_record(grip, _params(args), _profile(args, grip))
+    if args.contact != "point":
+        raise ValueError(f"contact must be point or full for solve, got {args.contact!r}")
     if args.K > MAX_K:
         raise ValueError(f"K must be at most {MAX_K}, got {args.K!r} (the stability check's error is ~1e-8 there)")
     return solve_record(grip, _params(args), _profile(args, grip), K=args.K)

@@ -120,7 +120,7 @@ ONSETS = [
 ]
 
 
-@pytest.mark.parametrize("grip, change, value", ONSETS[:3] + ONSETS[4:5])
+@pytest.mark.parametrize("grip, change, value", ONSETS[:3] + ONSETS[5:])
 def test_onset_brackets_the_loss_of_validity(grip, change, value):
     """The onset is a transition of the point-contact BVP: valid at ``kappa``, invalid at ``first_invalid``
     within ``tol``; started near it (fast), it agrees with the full default run (the table, to the coarse
@@ -154,3 +154,24 @@ def test_onset_arguments():
         onset("I", STANDARD, kappa_start=-9.0)
     with pytest.raises(ValueError, match="tol"):
         onset("I", STANDARD, step=0.1, tol=0.2)
+
+
+# -- the command line -----------------------------------------------------------------------------------------
+
+
+def test_cli_solve_contact_full(capsys):
+    """``simgrip solve I --kappa -10 --contact full``: the contact set found, the free-boundary BVP's N;
+    Grip III refused with one line (exit 2)."""
+    import json
+
+    from simgrip.cli import main
+
+    assert main(["solve", "I", "--kappa", "-10", "--contact", "full", "--json"]) == 0
+    rec = json.loads(capsys.readouterr().out)
+    assert rec["contact_set"] == "tip + corner@link10"
+    assert rec["N"] == pytest.approx(GRIP_I_KAPPA_M10["bvp"]["N"], abs=1e-5)
+    assert rec["valid"] is True
+    assert main(["solve", "III", "--kappa", "-4", "--contact", "full"]) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and "grip" in err[0]
+    assert main(["solve", "I", "--kappa", "-4", "--contact", "wide"]) == 2
