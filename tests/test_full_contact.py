@@ -209,6 +209,44 @@ def _capsule_gap(p0, p1, q0, q1, samples=64) -> float:
     return float(d.min()) - 0.5 * float(np.linalg.norm(p1 - p0)) / (samples - 1)
 
 
+def _check_gripper_physical(st, rec, n, r):
+    nodes = np.asarray(rec["nodes"])
+    assert nodes.shape == (st.fingers, n + 1, 3)
+    # no capsule through another: every pair of links of different fingers (but the clamped first links) and
+    # of one finger at least two apart stays 2 r apart, less the issue's bound
+    for a in range(st.fingers):
+        for b in range(a, st.fingers):
+            for i in range(n):
+                for j in range(i + 2 if a == b else 0, n):
+                    if a != b and i + j == 0:
+                        continue  # both first links start at the common clamp (excluded from contact)
+                    gap = _capsule_gap(nodes[a, i], nodes[a, i + 1], nodes[b, j], nodes[b, j + 1])
+                    assert gap >= 2 * r - PEN_BOUND, (a, i, b, j, gap)
+    return nodes
+
+
+def test_three_fingers_hold_a_sphere_below_the_palm():
+    """K = 3 around a sphere (diameter b) below the palm, kappa = -6: held, no finger through another or the
+    sphere (every capsule point at least R + r_link - 1e-3 l from its centre), equal shares."""
+    from simgrip.gripper import gripper_record, simulate_gripper
+
+    n, r = 16, 2e-3
+    st = simulate_gripper("I", STD, -6.0, n, fingers=3, workpiece="sphere", contact="full")
+    rec = gripper_record(st, STD)
+    assert st.converged and st.held and getattr(st, "valid", True)
+    nodes = _check_gripper_physical(st, rec, n, r)
+    c = np.asarray(st.workpiece_position)
+    for f in range(3):
+        for i in range(n):
+            t = np.linspace(0.0, 1.0, 64)[:, None]
+            p = nodes[f, i] + t * (nodes[f, i + 1] - nodes[f, i])
+            slack = 0.5 * float(np.linalg.norm(nodes[f, i + 1] - nodes[f, i])) / 63
+            assert float(np.linalg.norm(p - c, axis=1).min()) - slack >= 0.3 - 2e-3 + r - PEN_BOUND
+    on = [x for x in rec["contacts"] if x["with"] == "workpiece"]
+    per = [sum(x["normal_force"] for x in on if x["finger"] == k) for k in range(3)]
+    assert min(per) > 0.0 and per == pytest.approx([per[0]] * 3, rel=1e-2)
+
+
 def test_three_fingers_wrap_a_cylinder():
     """K = 3 around a cylinder below the palm: held, the fingers touch the cylinder along more than their tips,
     no finger crosses itself or another, none enters the cylinder; the three fingers carry equal shares."""
@@ -218,18 +256,7 @@ def test_three_fingers_wrap_a_cylinder():
     st = simulate_gripper("I", STD, -8.0, n, fingers=3, workpiece="cylinder", contact="full")
     rec = gripper_record(st, STD)
     assert st.converged and st.held and getattr(st, "valid", True)
-    nodes = np.asarray(rec["nodes"])
-    assert nodes.shape == (3, n + 1, 3)
-    # no capsule through another: every pair of links of different fingers (but the clamped first links) and
-    # of one finger at least two apart stays 2 r apart, less the issue's bound
-    for a in range(3):
-        for b in range(a, 3):
-            for i in range(n):
-                for j in range(i + 2 if a == b else 0, n):
-                    if a != b and i + j == 0:
-                        continue  # both first links start at the common clamp (excluded from contact)
-                    gap = _capsule_gap(nodes[a, i], nodes[a, i + 1], nodes[b, j], nodes[b, j + 1])
-                    assert gap >= 2 * r - PEN_BOUND, (a, i, b, j, gap)
+    nodes = _check_gripper_physical(st, rec, n, r)
     # none inside the cylinder (radius b/2 - r_tip, vertical axis through its centre)
     c = np.asarray(st.workpiece_position)
     radial = np.hypot(nodes[..., 0] - c[0], nodes[..., 1] - c[1])

@@ -31,6 +31,8 @@ __all__ = ["FullGripperDynamics", "settle_gripper_full"]
 
 #: Static residual at which the frictionless closing hands over to the release (over rho g l^2 / rho g l).
 FULL_CLOSE_TOL = 1e-2
+#: Damping factor on a held workpiece's dofs (:meth:`FullGripperDynamics.update_damping`).
+FULL_HELD_DAMPING = 1e8
 #: Physics steps allowed to a full-contact gripper settle by default.
 FULL_GRIPPER_STEPS = 40_000
 
@@ -43,12 +45,19 @@ class FullGripperDynamics(GripperDynamics):
         super().__init__(scene, step_factor)
         self.wt = np.asarray(scene.workpiece_dof[:3])
         self.wt_damping = self.m.dof_damping[self.wt].copy()
+        self.wr = np.asarray(scene.workpiece_dof[3:])
+        self.wr_damping = self.m.dof_damping[self.wr].copy()
 
     def update_damping(self) -> None:
         super().update_damping()
         if getattr(self, "wt", None) is not None:
             self.m.dof_damping[self.hinge] *= self.factor
-            self.m.dof_damping[self.wt] = self.wt_damping * self.factor
+            # held: the pose is put back after each step, so a contact that pushed the workpiece instead of the
+            # finger would undo nothing (a fingertip under a held sphere sank on); damping far above the fingers'
+            # (their hinges' h D ~ h^2 K factor) makes MuJoCo's contact solve move the finger
+            held = FULL_HELD_DAMPING if self.held_q is not None else 1.0
+            self.m.dof_damping[self.wt] = self.wt_damping * self.factor * held
+            self.m.dof_damping[self.wr] = self.wr_damping * held
 
 
 def settle_gripper_full(scene, *, tol: float, max_steps: int | None = None,
