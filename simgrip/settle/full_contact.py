@@ -46,6 +46,8 @@ __all__ = ["FULL_PEN_LIMIT", "contact_set", "contact_solref", "ramp_rate", "sett
 FULL_PEN_LIMIT = 1e-4
 #: Step halvings tried before the settle gives up on penetration.
 FULL_RESTARTS = 3
+#: Damping factor on a held workpiece's dofs (:class:`FullDyn`).
+FULL_HELD_DAMPING = 1e8
 #: Fraction of a contact's penetration closed per step (the contact's damping, :func:`_once`).
 FULL_CONTACT_RELAX = 0.5
 #: Closing ramp: largest change of the total rest rotation per physics step, over the capsule radius
@@ -96,10 +98,20 @@ def settle_full(scene: Scene, tol: float, max_steps: int, allow_unconverged: boo
     return state
 
 
+class FullDyn(Dyn):
+    """:class:`Dyn` whose held workpiece is damped :data:`FULL_HELD_DAMPING` times: its pose is put back after each
+    step, so a contact that MuJoCo's solve resolved by moving it instead of the finger would undo nothing."""
+
+    def update_damping(self) -> None:
+        super().update_damping()
+        if self.held_q is not None:
+            self.m.dof_damping[np.asarray(self.scene.workpiece_dof, dtype=int)] *= FULL_HELD_DAMPING
+
+
 def _once(scene: Scene, tol: float, budget: int, factor: float, t0: float) -> tuple[SettledState, bool]:
     """One settle at ``factor`` h: ``(state, too_deep)``."""
     m, d = scene.model, scene.data
-    dyn = Dyn(scene, factor)
+    dyn = FullDyn(scene, factor)
     gs = colliding_geoms(m)
     m.geom_solref[gs] = contact_solref(scene, dyn.h)
     m.geom_solimp[gs, 0] = CONTACT_IMPEDANCE
