@@ -109,3 +109,15 @@ def test_a_drop_is_explained_from_its_start(monkeypatch):
     assert run_gripper_case(case)["drop_reason"] == "wrong grip"
     counts = gripper_counts([rec, dict(rec, outcome="unsettled", drop_reason="friction")])
     assert counts["dropped_by"] == {"unexplained": 1} and counts["unsettled_by"] == {"friction": 1}
+
+
+def test_an_impossible_k_finger_state_is_counted_unless_reported(monkeypatch):
+    """Issue 17: the K-finger stress recomputes the geometric check; a crossing state reported valid is counted."""
+    case = dict(make_gripper_cases(1)[0])
+    good = sg._settle(case)
+    crossed = replace(good, link_angles=np.cumsum(np.full_like(good.link_angles, -3.0 * np.pi / good.links), axis=1))
+    monkeypatch.setattr(sg, "_settle", lambda _c: crossed)  # a curl through 1.5 turns, still claimed valid
+    rec = run_gripper_case(case)
+    assert rec["invalid_kinds"] and rec["valid"] is True
+    assert gripper_counts([rec])["invalid_returned_as_valid"] == 1
+    assert gripper_counts([dict(rec, valid=False)])["invalid_returned_as_valid"] == 0  # reported: not counted

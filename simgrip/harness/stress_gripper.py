@@ -180,6 +180,12 @@ def run_gripper_case(case: dict, *, timeout_s: float = 60.0) -> dict:
             again = _settle(case)
         rec.update(steps=int(st.steps), residual=float(st.residual), held=bool(st.held),
                    penetration=float(st.penetration), grip_matched=bool(st.grip_matched))
+        # issue 17: the geometric check recomputed from the returned state (simgrip.validity_shapes), beside
+        # what the state says (valid): an impossible state returned as valid is counted
+        from simgrip.validity_shapes import gripper_violations
+
+        rec.update(valid=bool(getattr(st, "valid", True)),
+                   invalid_kinds=sorted({k for k, _ in gripper_violations(_scene(case), st)}))
         why = _check(st)
         if why is None and not (np.array_equal(st.qpos, again.qpos) and st.steps == again.steps):
             why = "not deterministic: the same case settled twice differs"
@@ -210,7 +216,9 @@ def run_gripper_case(case: dict, *, timeout_s: float = 60.0) -> dict:
 
 
 def gripper_counts(recs) -> dict:
-    """Outcome -> number of K-finger cases, plus ``held`` and ``dropped`` among the settled, and
+    """Outcome -> number of K-finger cases, plus ``held``, ``dropped``, ``invalid`` (the geometric check,
+    :func:`simgrip.validity_shapes.gripper_violations`) and ``invalid_returned_as_valid`` (must be 0) among the
+    settled, and
     ``dropped_by`` / ``unsettled_by``: ``drop_reason`` -> number."""
     counts = {k: 0 for k in ("settled", "rejected", "unsettled", "failed")}
     for c in recs:
@@ -218,6 +226,9 @@ def gripper_counts(recs) -> dict:
     counts["total"] = len(recs)
     counts["held"] = sum(1 for c in recs if c["outcome"] == "settled" and c["held"])
     counts["dropped"] = sum(1 for c in recs if c["outcome"] == "settled" and not c["held"])
+    counts["invalid"] = sum(1 for c in recs if c["outcome"] == "settled" and c.get("invalid_kinds"))
+    counts["invalid_returned_as_valid"] = sum(1 for c in recs if c["outcome"] == "settled" and c.get("invalid_kinds")
+                                              and c.get("valid", True))
     for name, sel in (("dropped_by", lambda c: c["outcome"] == "settled" and not c["held"]),
                       ("unsettled_by", lambda c: c["outcome"] == "unsettled")):
         by: dict = {}
