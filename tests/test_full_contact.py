@@ -245,6 +245,17 @@ def test_three_fingers_hold_a_sphere_below_the_palm():
     on = [x for x in rec["contacts"] if x["with"] == "workpiece"]
     per = [sum(x["normal_force"] for x in on if x["finger"] == k) for k in range(3)]
     assert min(per) > 0.0 and per == pytest.approx([per[0]] * 3, rel=1e-2)
+    _check_balance(st, rec)
+
+
+def _check_balance(st, rec):
+    """The workpiece's balance from every contact (its rows of MuJoCo's residual: within the settle's tolerance):
+    the fingers' vertical resultants add up to the weight K M, and share it equally (the scene is symmetric under a
+    turn by 2 pi / K; the same 1e-2 as the normal forces')."""
+    assert np.max(np.abs(rec["force_balance"])) <= st.tolerance
+    shares = [f["friction_force"] for f in rec["fingers"]]
+    assert sum(shares) == pytest.approx(-st.fingers * STD.M, abs=st.tolerance)
+    assert shares == pytest.approx([shares[0]] * st.fingers, rel=1e-2)
 
 
 def test_three_fingers_wrap_a_cylinder():
@@ -267,6 +278,7 @@ def test_three_fingers_wrap_a_cylinder():
     assert any(x["arc_length"] < 1.0 - 1.0 / n for x in on)  # wrapping: more than the tips
     per = [sum(x["normal_force"] for x in on if x["finger"] == k) for k in range(3)]
     assert per == pytest.approx([per[0]] * 3, rel=1e-2)  # the scene is symmetric under a turn by 120 degrees
+    _check_balance(st, rec)
 
 
 def test_gripper_json_has_nodes_and_contacts(capsys):

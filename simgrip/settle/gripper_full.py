@@ -65,7 +65,7 @@ def settle_gripper_full(scene, *, tol: float, max_steps: int | None = None,
     """Settle a full-contact gripper (see the module docstring); ``tol`` over ``rho g l^2`` / ``rho g l``;
     ``max_steps`` physics steps (default :data:`FULL_GRIPPER_STEPS`).  Raises :class:`SettleError` when it does
     not converge unless ``allow_unconverged``.  The state's ``contact_set`` lists every contact
-    (:func:`gripper_contact_set`)."""
+    (:func:`gripper_contact_set`) and its ``records`` are each finger's resultant (:func:`whole_finger_records`)."""
     if getattr(scene, "contact", "pairs") != "full":
         raise ValueError("contact: settle_gripper_full needs a gripper built with contact='full'")
     budget = FULL_GRIPPER_STEPS if max_steps is None else int(max_steps)
@@ -140,6 +140,15 @@ def settle_gripper_full(scene, *, tol: float, max_steps: int | None = None,
         state.method = "dynamics"
         state.contact = "full"
         state.contact_set = gripper_contact_set(scene)
+        if held:  # every contact, not the tips' alone: each finger's resultant and the workpiece's balance
+            state.records = whole_finger_records(scene, state)
+            on_wp = [c for c in state.contact_set if c["with"] == "workpiece"]
+            centre = np.asarray(state.workpiece_position, dtype=float)
+            f = -np.sum([c["force"] for c in on_wp], axis=0) if on_wp else np.zeros(3)
+            mom = sum((np.cross(np.asarray(c["point"]) - centre, -np.asarray(c["force"])) for c in on_wp),
+                      np.zeros(3))
+            state.force_balance = f - np.array([0.0, 0.0, scene.workpiece_mass * scene.physical.g / scene.force_scale])
+            state.moment_balance = mom
         if state.penetration > FULL_PEN_LIMIT:
             state.warnings.append(f"full contact: a contact {state.penetration:.3g} l deep (above {FULL_PEN_LIMIT:g} l)")
         if not state.converged and not allow_unconverged:
@@ -152,6 +161,33 @@ def settle_gripper_full(scene, *, tol: float, max_steps: int | None = None,
         d.qvel[:] = 0.0
         mujoco.mj_forward(m, d)
     return state
+
+
+def whole_finger_records(scene, state) -> list:
+    """Each touching finger's :class:`~simgrip.settle.gripper_state.FingerRecord` as the resultant of all its
+    contacts with the workpiece (``state.contact_set``), not the tip's alone: ``N1, N2, N3`` the summed force in
+    the finger's frame, ``normal = N1`` and ``friction = N2`` (the Grip I/II reading: ``E1`` is the normal of a
+    side face), ``contact_angle`` 0, ``point`` the force-weighted mean contact point ``(X, Y, out of plane)``,
+    ``moment`` 0 (several contact points have no one couple about the tip), ``required_mu`` ``sqrt(N2^2 +
+    N3^2) / N1``."""
+    from simgrip.settle.gripper_state import FingerRecord
+
+    out = []
+    for k in range(scene.fingers):
+        mine = [c for c in state.contact_set if c["finger"] == k and c["with"] == "workpiece"]
+        if not mine:
+            continue
+        R = scene.frame(k)
+        F = R @ np.sum([c["force"] for c in mine], axis=0)
+        w = np.array([max(float(np.linalg.norm(c["force"])), 1e-300) for c in mine])
+        pt = R @ (np.asarray([c["point"] for c in mine]).T @ w / w.sum())
+        N1, N3, N2 = (float(v) for v in F)
+        out.append(FingerRecord(
+            finger=k, N1=N1, N2=N2, N3=N3, normal=N1, friction=N2, contact_angle=0.0,
+            tip=np.asarray(state.tip[k]).copy(), point=np.array([pt[0], pt[2], pt[1]]), moment=0.0,
+            penetration=max(c["depth"] for c in mine),
+            required_mu=math.hypot(N2, N3) / N1 if N1 > 0 else math.inf))
+    return out
 
 
 def gripper_contact_set(scene) -> list[dict]:
