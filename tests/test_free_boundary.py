@@ -175,3 +175,67 @@ def test_cli_solve_contact_full(capsys):
     err = capsys.readouterr().err.strip().splitlines()
     assert len(err) == 1 and "grip" in err[0]
     assert main(["solve", "I", "--kappa", "-4", "--contact", "wide"]) == 2
+
+
+# -- a cylinder wrapped ---------------------------------------------------------------------------------------
+
+CYL = dict(x=0.2, y=-0.2, radius=0.15)
+
+
+@functools.lru_cache(maxsize=None)
+def wrapped(n: int):
+    from simgrip.reference.constrained import Cylinder
+
+    return solve_constrained("free", STANDARD, Uniform(-10.0), n, cylinder=Cylinder(**CYL))
+
+
+def test_wrap_bvp_balances_and_matches_the_chain():
+    """The free rod (kappa = -10) on a cylinder of radius 0.15: the wrap BVP (arc [s1, s2] with theta' = -1/R,
+    curvature continuous at its ends, point forces there, the tip on the cylinder) started from the n = 16
+    constrained chain.  Checks: a valid state (pushing forces, positive pressure, nothing inside the
+    cylinder); the rod's moment balance about the clamp from the loads alone -- tip force, the arc's end
+    forces, the pressure p = T/R + cos(theta) over the arc, the weight -- equals the BVP's m(0); and the
+    chain at n = 16, 32 approaches it (tip force, tip, arc ends within a link)."""
+    from simgrip.reference.constrained import Cylinder
+    from simgrip.reference.wrap import solve_wrap
+
+    cyl = Cylinder(**CYL)
+    w = solve_wrap(STANDARD, Uniform(-10.0), cyl, wrapped(16))
+    assert w.valid, w.violations
+    assert 0.3 < w.s1 < w.s2 < 0.75 and w.p_min > 0
+    c = np.array([CYL["x"], CYL["y"]])
+    R = CYL["radius"]
+
+    def cross(r, f):
+        return r[0] * f[1] - r[1] * f[0]
+
+    def out(s):
+        i = int(np.argmin(np.abs(w.s - s)))
+        r = np.array([w.x[i], w.y[i]])
+        return r, (r - c) / R
+
+    r1, o1 = out(w.s1)
+    r2, o2 = out(w.s2)
+    total = cross(w.tip, w.Q * (w.tip - c) / R) + cross(r1, w.f1 * o1) + cross(r2, w.f2 * o2)
+    arc = (w.s > w.s1) & (w.s < w.s2)
+    sa = np.concatenate([[w.s1], w.s[arc], [w.s2]])
+    tha = -10.0 * 0 + np.interp(sa, w.s, w.theta)
+    psi = tha + 0.5 * np.pi
+    ra = c[:, None] + R * np.stack([np.cos(psi), np.sin(psi)])
+    # tension on the arc from its end: T(s2-) = n(s2+) . t(s2), T' = sin(theta)
+    n2p = w.Q * (w.tip - c) / R - (1.0 - w.s2) * np.array([0.0, 1.0])
+    T2 = float(n2p @ np.array([np.cos(tha[-1]), np.sin(tha[-1])]))
+    T = T2 - R * (np.cos(tha[-1]) - np.cos(tha))
+    p = T / R + np.cos(tha)
+    total += np.trapezoid(p * (ra[0] * np.sin(psi) - ra[1] * np.cos(psi)), sa)
+    total += np.trapezoid(-w.x, w.s)
+    # trapezoid on grids of spacing <= 1/400 and the arc's 200 points: error ~1e-4 of the terms (size ~10)
+    assert w.moment[0] == pytest.approx(total, abs=2e-3)
+    errs = []
+    for n in (16, 32):
+        ch = wrapped(n)
+        q = float(np.linalg.norm([f.force for f in ch.contacts if f.index == n - 1][0]))
+        errs.append((abs(q - w.Q), float(np.linalg.norm(ch.tip - w.tip))))
+        links = ch.contact_links("cylinder")
+        assert abs(links[0] / n - w.s1) <= 2.0 / n and abs((links[-2] + 1) / n - w.s2) <= 2.0 / n
+    assert errs[1][0] < errs[0][0] and errs[1][1] < errs[0][1]
