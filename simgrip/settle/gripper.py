@@ -159,7 +159,8 @@ def settle_gripper(scene: GripperScene, *, tol: float | None = None, max_steps: 
             raise ValueError(f"method: a full-contact gripper settles by the dynamics, got {method!r}")
         tol, _ = check_tol_steps(gripper_tolerance(scene) if tol is None else tol,
                                  1 if max_steps is None else max_steps)
-        return settle_gripper_full(scene, tol=tol, max_steps=max_steps, allow_unconverged=allow_unconverged)
+        return check_gripper_valid(scene, settle_gripper_full(scene, tol=tol, max_steps=max_steps,
+                                                              allow_unconverged=allow_unconverged))
     from simgrip.settle.gripper_symmetry import symmetric_or_none
 
     t0 = time.perf_counter()
