@@ -3,13 +3,15 @@
 Importing this package registers the environments (lazy string entry points,
 time limits set here, ``step`` never truncates):
 
-==========================  =======================================  =========
-id                          what                                     max steps
-==========================  =======================================  =========
-``simgrip/Pick-v1``         Grip I: palm-down tip pinch (50 Hz)      200 (4 s)
-``simgrip/PickCradle-v1``   Grip III: cradle from a pedestal (50 Hz) 250 (5 s)
-``simgrip/PickMulti-v0``    K fingers around a box, cylinder, sphere 200 (4 s)
-==========================  =======================================  =========
+===============================  ========================================  =========
+id                               what                                      max steps
+===============================  ========================================  =========
+``simgrip/Pick-v1``              Grip I: palm-down tip pinch (50 Hz)       200 (4 s)
+``simgrip/PickCradle-v1``        Grip III: cradle from a pedestal (50 Hz)  250 (5 s)
+``simgrip/PickMulti-v0``         K fingers around a box, cylinder, sphere  200 (4 s)
+``simgrip/PickFragile-v0``       Grip I pinch of a fragile workpiece       300 (6 s)
+``simgrip/PickMultiFragile-v0``  K fingers around a fragile workpiece      300 (6 s)
+===============================  ========================================  =========
 
 >>> import gymnasium as gym, simgrip.envs
 >>> env = gym.make("simgrip/Pick-v1")          # doctest: +SKIP
@@ -26,16 +28,20 @@ from __future__ import annotations
 
 from gymnasium.envs.registration import register, registry
 
-__all__ = ["ENV_IDS", "MULTI_ENV_IDS", "register_envs"]
+__all__ = ["ENV_IDS", "FRAGILE_ENV_IDS", "MULTI_ENV_IDS", "register_envs"]
 
 #: id -> (entry point, kwargs, max_episode_steps)
 _ENVS = {
     "simgrip/Pick-v1": ("simgrip.envs.pick:PickEnv", {"grip": "I"}, 200),
     "simgrip/PickCradle-v1": ("simgrip.envs.pick:PickEnv", {"grip": "III"}, 250),
     "simgrip/PickMulti-v0": ("simgrip.envs.pick_multi:PickMultiEnv", {}, 200),
+    # issue 18: fragile workpieces (a crush limit per episode), see simgrip.envs.pick_fragile
+    "simgrip/PickFragile-v0": ("simgrip.envs.pick_fragile:FragilePickEnv", {}, 300),
+    "simgrip/PickMultiFragile-v0": ("simgrip.envs.pick_fragile:FragilePickMultiEnv", {}, 300),
 }
 ENV_IDS = tuple(k for k, v in _ENVS.items() if v[0] == "simgrip.envs.pick:PickEnv")
-MULTI_ENV_IDS = tuple(k for k in _ENVS if k not in ENV_IDS)
+MULTI_ENV_IDS = tuple(k for k, v in _ENVS.items() if v[0] == "simgrip.envs.pick_multi:PickMultiEnv")
+FRAGILE_ENV_IDS = tuple(k for k, v in _ENVS.items() if v[0].startswith("simgrip.envs.pick_fragile:"))
 
 
 def register_envs() -> None:

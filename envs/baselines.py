@@ -1,0 +1,167 @@
+"""Non-learned baselines of the fragile pick tasks, one command each, written as JSON (issue 18).
+
+``python -m simgrip.envs.baselines --env simgrip/PickFragile-v0 --policy constant --seeds 5000-5049 --out F.json``
+
+Policies (actions ``(curvature command, palm speed)`` in ``[-1, 1]``):
+
+==============  ==============================================================================================
+``random``      uniform actions, the action space seeded with the episode seed
+``constant``    every action of a grid (``--grid``): curvature ``a_k`` in ``KAPPA_GRID``, palm ``a_p`` in
+                ``PALM_GRID``, held for the whole episode; ``success_rate`` is the best of the grid *on the
+                evaluated seeds themselves* (an optimistic bound for the family)
+``openloop``    every schedule of the family "ramp the curvature command linearly from straight (+1) to ``a_k``
+                over ``R`` steps, hold it; palm still until ``R + 10`` steps, then up at ``a_p``", over the
+                grid ``a_k`` x ``RAMP_GRID`` x ``PALM_GRID`` (best of the grid on the evaluated seeds)
+``oracle``      :class:`~simgrip.envs.scripted_fragile.OracleFragilePolicy` (knows the hidden window)
+``observation`` :class:`~simgrip.envs.scripted_fragile.ObservationFragilePolicy` (the observation only)
+==============  ==============================================================================================
+
+``--grid coarse`` uses every other curvature and one ramp/palm value (for tests).  Output: ``env``,
+``policy``, ``seeds``, ``success_rate`` (the best member's for the grids), ``outcomes`` (counts of
+success / crushed / dropped / knocked_over / timeout) and, for the grids, every member's success rate.
+Exit 2 (one line) on a bad argument.
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import sys
+from collections import Counter
+
+import gymnasium as gym
+import numpy as np
+
+__all__ = ["KAPPA_GRID", "PALM_GRID", "RAMP_GRID", "run_policy", "evaluate", "main"]
+
+KAPPA_GRID = tuple(round(float(a), 2) for a in np.linspace(-1.0, 0.6, 17))  # 0.1 apart: force steps of ~0.3 N
+PALM_GRID = (0.25, 0.5, 1.0)
+RAMP_GRID = (1, 25, 75)  # steps: 0.02 s, 0.5 s, 1.5 s
+_WAIT = 10  # steps between the end of the ramp and the lift
+
+
+def _outcome(info: dict, truncated: bool) -> str:
+    for key in ("is_success", "crushed", "dropped", "knocked_over"):
+        if info.get(key):
+            return "success" if key == "is_success" else key
+    return "timeout"
+
+
+def run_policy(env, make_act, seeds) -> Counter:
+    """Outcomes of one policy over ``seeds``: ``make_act(env, info, seed)`` returns ``act(obs, t)``."""
+    counts = Counter()
+    for seed in seeds:
+        obs, info = env.reset(seed=int(seed))
+        act = make_act(env, info, int(seed))
+        t = 0
+        while True:
+            obs, _, terminated, truncated, info = env.step(act(obs, t))
+            t += 1
+            if terminated or truncated:
+                break
+        counts[_outcome(info, truncated)] += 1
+    return counts
+
+
+def _constant(a_k, a_p):
+    a = np.array([a_k, a_p], dtype=np.float32)
+    return lambda env, info, seed: (lambda obs, t: a)
+
+
+def _openloop(a_k, ramp, a_p):
+    def make(env, info, seed):
+        def act(obs, t):
+            k = 1.0 + (a_k - 1.0) * min(1.0, (t + 1) / ramp)
+            return np.array([k, a_p if t >= ramp + _WAIT else 0.0], dtype=np.float32)
+        return act
+    return make
+
+
+def _scripted(cls):
+    def make(env, info, seed):
+        pol = cls()
+        pol.reset(env, info)
+        return lambda obs, t: pol(obs)
+    return make
+
+
+def _random(env, info, seed):
+    space = env.action_space
+    space.seed(seed)
+    return lambda obs, t: space.sample()
+
+
+def _members(policy: str, grid: str):
+    kappas = KAPPA_GRID if grid == "full" else KAPPA_GRID[::2]
+    palms = PALM_GRID if grid == "full" else (0.5,)
+    ramps = RAMP_GRID if grid == "full" else (25,)
+    if policy == "constant":
+        return [({"kappa": k, "palm": p}, _constant(k, p)) for k in kappas for p in palms]
+    if policy == "openloop":
+        return [({"kappa": k, "ramp_steps": r, "palm": p}, _openloop(k, r, p))
+                for k in kappas for r in ramps for p in palms]
+    from simgrip.envs.scripted_fragile import ObservationFragilePolicy, OracleFragilePolicy
+    make = {"random": _random, "oracle": _scripted(OracleFragilePolicy),
+            "observation": _scripted(ObservationFragilePolicy)}[policy]
+    return [({}, make)]
+
+
+def evaluate(env_id: str, policy: str, seeds, grid: str = "full") -> dict:
+    """Run ``policy`` on ``env_id`` (``gym.make``, its registered time limit) over ``seeds``; the JSON record."""
+    env = gym.make(env_id)
+    try:
+        rows = []
+        for params, make in _members(policy, grid):
+            counts = run_policy(env, make, seeds)
+            rows.append({**params, "success_rate": counts["success"] / len(seeds), "outcomes": dict(counts)})
+    finally:
+        env.close()
+    best = max(rows, key=lambda r: r["success_rate"])
+    out = {"env": env_id, "policy": policy, "seeds": [int(seeds[0]), int(seeds[-1])], "episodes": len(seeds),
+           "success_rate": best["success_rate"], "outcomes": best["outcomes"]}
+    if len(rows) > 1:
+        out.update({"grid": grid, "best": {k: v for k, v in best.items() if k != "outcomes"}, "members": rows})
+    return out
+
+
+def _seeds(text: str) -> list[int]:
+    try:
+        lo, _, hi = text.partition("-")
+        lo, hi = int(lo), int(hi or lo)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"--seeds must be A-B (integers), got {text!r}") from None
+    if lo < 0 or hi < lo:
+        raise argparse.ArgumentTypeError(f"--seeds must be A-B with 0 <= A <= B, got {text!r}")
+    return list(range(lo, hi + 1))
+
+
+def main(argv=None) -> int:
+    """The command line; returns the exit status (2 on a bad argument)."""
+    import simgrip.envs  # noqa: F401  (registers the ids)
+    from simgrip.envs import FRAGILE_ENV_IDS
+    from simgrip.io import atomic_write, check_output_file
+
+    p = argparse.ArgumentParser(prog="python -m simgrip.envs.baselines", description=__doc__.splitlines()[0])
+    p.add_argument("--env", required=True, choices=FRAGILE_ENV_IDS)
+    p.add_argument("--policy", required=True, choices=("random", "constant", "openloop", "oracle", "observation"))
+    p.add_argument("--seeds", type=_seeds, default=_seeds("5000-5049"), help="A-B, inclusive (default 5000-5049)")
+    p.add_argument("--grid", choices=("full", "coarse"), default="full")
+    p.add_argument("--out", help="JSON file (default: stdout)")
+    args = p.parse_args(argv)
+    if args.out:
+        try:
+            check_output_file(args.out, "--out")
+        except (ValueError, OSError) as e:
+            p.error(str(e))
+    record = evaluate(args.env, args.policy, args.seeds, args.grid)
+    text = json.dumps(record, indent=1) + "\n"
+    if args.out:
+        with atomic_write(args.out, "w", option="--out") as f:
+            f.write(text)
+    else:
+        sys.stdout.write(text)
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())

@@ -1,0 +1,191 @@
+r"""Fragile workpieces: pick tasks where the grip force must be found by feedback (issue 18).
+
+``simgrip/PickFragile-v0`` (Grip I, two-finger pinch) and
+``simgrip/PickMultiFragile-v0`` (``K`` fingers around a box, cylinder or
+sphere) are :class:`~simgrip.envs.pick.PickEnv` and
+:class:`~simgrip.envs.pick_multi.PickMultiEnv` with two changes:
+
+1. **A crush limit.**  Each episode's workpiece survives a normal force of at
+   most ``crush_limit`` [N] on any one finger (the finger's summed contact
+   normal force on it, read at the end of every control step, 50 Hz, as a
+   tactile sensor reads it).  A larger force crushes it: the episode
+   terminates as a failure (``info["crushed"]``, reward ``-w_drop`` and the lift
+   progress taken back, as for a drop).
+2. **A wide draw.**  Mass is log-uniform over a 20-fold range, friction wide,
+   and the crush limit is drawn as a ratio ``r`` to the least normal force
+   that holds the workpiece, ``N_hold = m g / (K mu)`` (``K`` fingers sharing
+   the weight through friction on near-vertical faces): ``crush_limit = r
+   N_hold`` with ``r`` log-uniform in ``crush_ratio_range = (1.3, 2.0)``.
+   The grip force of a soft finger is set by its curvature (the paper's
+   Grip I: ``N`` rises with ``|kappa_bar|`` past the onset of contact, from 0
+   to ~11 N over the command range for these fingers), so every curvature
+   holds only the workpieces whose window ``[N_hold, r N_hold]`` contains
+   its force: the curvature that holds a heavy, slippery workpiece crushes a
+   light, fragile one, and the one that spares a fragile one drops a heavy
+   one.  The windows of two draws overlap only when their ``N_hold`` are
+   within a factor ``r`` (at most 2) of each other, while ``N_hold`` spans a
+   factor ~80 (``20 x 4``).
+
+Physical picture (SI, the ``PickEnv`` finger): workpieces of 10-200 g
+(a strawberry, an egg, a plastic cup with some water), friction 0.3-1.2,
+crush limits of 0.05-6.4 N per finger; a thin cup or a ripe berry is damaged
+well below what the fully curled finger presses (~11 N).
+
+What the agent senses is the parent env's observation, unchanged:
+finger shapes (tangent angles along each finger), fingertip positions, the
+curvature command and its lagged actual value, the palm height, the
+workpiece's position and velocity relative to the palm (slip: a workpiece
+that does not follow the palm up slides in the grip) and the contact forces
+on each finger as ``log(1 + F/W)`` (normal and friction magnitude: a tactile
+sensor).  Hidden (never in the observation): the workpiece's mass, friction
+and crush limit; ``reset``'s ``info`` and the attributes ``crush_limit``,
+``hold_force`` hold them for oracles and analysis.
+
+Info keys (the same in both envs, every ``step``):
+
+=====================  ==========================================================================
+key                    meaning
+=====================  ==========================================================================
+``is_success``         lifted ``target_height`` and held ``hold_time``, never crushed (terminates)
+``workpiece_lift``     workpiece centre's height gain since the start of the episode [m]
+``crushed``            a finger's normal force exceeded ``crush_limit`` this step (terminates)
+``dropped``            lifted, then sank ``drop_distance`` relative to the palm (terminates)
+``knocked_over``       tilted > 30 degrees or pushed > 3 cm sideways (terminates)
+``normal_force``       per finger: summed contact normal force on the workpiece [N]
+``crush_limit``        this episode's crush limit [N] (hidden from the observation)
+``reward_crush``       the crush term of this step's reward (``-w_drop`` or 0, plus the taken-back lift)
+=====================  ==========================================================================
+
+plus the parent env's reward terms and force arrays (``friction_force``,
+``side_force``, ``hold_time``, ``valid``).  ``PickFragile`` has no ``box_lift``
+(it is ``workpiece_lift``).
+
+Reset options: the parent's (``box_width``/``box_mass``/``friction`` or
+``width``/``mass``/``friction``/``shape``/...) and ``crush_limit`` [N].
+"""
+
+from __future__ import annotations
+
+import math
+
+import gymnasium as gym
+
+from simgrip.envs.arguments import check_positive as _pos
+from simgrip.envs.arguments import check_range as _range
+from simgrip.envs.arguments import check_reset
+from simgrip.envs.pick import PickEnv
+from simgrip.envs.pick_multi import PickMultiEnv
+
+__all__ = ["FragilePickEnv", "FragilePickMultiEnv", "FRAGILE_DEFAULTS"]
+
+#: the draw shared by both envs: mass [kg] (log-uniform), friction (uniform), crush ratio (log-uniform)
+FRAGILE_DEFAULTS = {"mass_range": (0.01, 0.2), "friction_range": (0.3, 1.2), "crush_ratio_range": (1.3, 2.0),
+                    "size_range": (0.03, 0.075)}
+
+
+def _log_uniform(rng, lo: float, hi: float) -> float:
+    return float(math.exp(rng.uniform(math.log(lo), math.log(hi))))
+
+
+class _Fragile:
+    """The crush limit and the log-uniform mass draw, shared by both fragile envs (a mixin before the env)."""
+
+    _MASS_KEY = "mass"  # the parent's reset option of the mass
+    _PARENT_OPTIONS: tuple = ()
+
+    def _fragile_args(self, crush_ratio_range):
+        self.crush_ratio_range = _range("crush_ratio_range", crush_ratio_range)
+        if self.crush_ratio_range[0] <= 1.0:
+            raise ValueError(f"crush_ratio_range must lie above 1 (a limit below the holding force cannot be "
+                             f"picked), got {crush_ratio_range!r}")
+        self.crush_limit = math.inf
+        self.hold_force = 0.0
+
+    def _episode(self) -> tuple[float, float, int]:  # pragma: no cover - defined by each env
+        raise NotImplementedError
+
+    def reset(self, *, seed=None, options=None):
+        seed, options = check_reset(seed, options, (*self._PARENT_OPTIONS, "crush_limit"))
+        crush = options.pop("crush_limit", None)
+        gym.Env.reset(self, seed=seed)  # seeds np_random; the parent's reset (seed None) keeps drawing from it
+        rng = self.np_random
+        lo, hi = self._mass_range
+        options.setdefault(self._MASS_KEY, _log_uniform(rng, lo, hi))
+        ratio = _log_uniform(rng, *self.crush_ratio_range)
+        obs, info = super().reset(seed=None, options=options)
+        mass, mu, k = self._episode()
+        self.hold_force = mass * self.g / (k * mu)
+        self.crush_limit = self.hold_force * ratio if crush is None else _pos("crush_limit", crush)
+        info.update({"crush_limit": self.crush_limit, "hold_force": self.hold_force})
+        return obs, info
+
+    def step(self, action):
+        obs, reward, terminated, truncated, info = super().step(action)
+        crushed = max(info["normal_force"].tolist()) > self.crush_limit
+        r_crush = 0.0
+        if crushed:
+            if info["is_success"]:
+                reward -= self.w_success
+                info["reward_success"] = 0.0
+                info["is_success"] = False
+            if not (info["dropped"] or info["knocked_over"]):  # not already charged as lost
+                r_crush = -self.w_drop - self.w_lift * self._phi
+                self._phi = 0.0
+            terminated = True
+            self._needs_reset = True
+        info["crushed"] = crushed
+        info["reward_crush"] = r_crush
+        info["crush_limit"] = self.crush_limit
+        if "box_lift" in info:
+            info["workpiece_lift"] = info.pop("box_lift")
+        return obs, reward + r_crush, terminated, truncated, info
+
+
+class FragilePickEnv(_Fragile, PickEnv):
+    """``simgrip/PickFragile-v0``: :class:`~simgrip.envs.pick.PickEnv` (Grip I by default) with a crush limit.
+
+    See :mod:`simgrip.envs.pick_fragile` for the draw, the sensing and the info table (``info["is_success"]``,
+    ``info["workpiece_lift"]``, ``info["crushed"]``, ``info["dropped"]``).  Arguments: those of ``PickEnv``
+    with the defaults ``box_mass_range = (0.01, 0.2)`` kg (drawn log-uniform), ``friction_range = (0.3, 1.2)``,
+    ``box_width_range = (0.03, 0.075)`` m, plus ``crush_ratio_range = (1.3, 2.0)``.
+    """
+
+    _MASS_KEY = "box_mass"
+    _PARENT_OPTIONS = ("box_width", "box_mass", "friction", "palm_height")
+
+    def __init__(self, *, crush_ratio_range=FRAGILE_DEFAULTS["crush_ratio_range"],
+                 box_mass_range=FRAGILE_DEFAULTS["mass_range"], friction_range=FRAGILE_DEFAULTS["friction_range"],
+                 box_width_range=FRAGILE_DEFAULTS["size_range"], palm_start=(0.095, 0.1), **kwargs):
+        super().__init__(box_mass_range=box_mass_range, friction_range=friction_range,
+                         box_width_range=box_width_range, palm_start=palm_start, **kwargs)
+        self._mass_range = self.box_mass_range
+        self._fragile_args(crush_ratio_range)
+
+    def _episode(self):
+        return self.box.mass, self.box.friction, 2
+
+
+class FragilePickMultiEnv(_Fragile, PickMultiEnv):
+    """``simgrip/PickMultiFragile-v0``: :class:`~simgrip.envs.pick_multi.PickMultiEnv` with a crush limit.
+
+    See :mod:`simgrip.envs.pick_fragile` for the draw, the sensing and the info table.  Arguments: those of
+    ``PickMultiEnv`` (``K = fingers = 3`` by default: cylinder and sphere) with the defaults ``mass_range =
+    (0.01, 0.2)`` kg (log-uniform), ``friction_range = (0.3, 1.2)``, ``size_range = (0.03, 0.075)`` m, plus
+    ``crush_ratio_range = (1.3, 2.0)``.  ``N_hold = m g / (K mu)`` counts every finger as carrying its share
+    through friction on a vertical face; on a sphere the contact normals tilt, so the window is approximate there.
+    """
+
+    _MASS_KEY = "mass"
+    _PARENT_OPTIONS = ("shape", "width", "mass", "friction", "offset", "yaw", "palm_height")
+
+    def __init__(self, *, crush_ratio_range=FRAGILE_DEFAULTS["crush_ratio_range"],
+                 mass_range=FRAGILE_DEFAULTS["mass_range"], friction_range=FRAGILE_DEFAULTS["friction_range"],
+                 size_range=FRAGILE_DEFAULTS["size_range"], **kwargs):
+        super().__init__(mass_range=mass_range, friction_range=friction_range, size_range=size_range, **kwargs)
+        self._mass_range = self.mass_range
+        self._fragile_args(crush_ratio_range)
+
+    def _episode(self):
+        w = self.workpiece
+        return w.mass, w.friction, self.K
+

@@ -1,0 +1,119 @@
+"""Scripted controllers for the fragile pick tasks (:mod:`simgrip.envs.pick_fragile`).
+
+Both close the fingers slowly while raising the palm slowly, so that the tips
+slide up the workpiece's faces until the friction they carry exceeds its
+weight and it follows the palm: at that moment the grip force is the least
+that holds (``N_hold``).  They differ in how they stop the curvature:
+
+* :class:`ObservationFragilePolicy` (observation only): it watches the
+  workpiece's lift (``box_lift`` / ``workpiece_lift``, the workpiece's height
+  gain, i.e. it no longer slips in the grip) and freezes the curvature
+  command at the *actual* curvature then (the pneumatic lag would otherwise
+  carry the force on), plus a margin ``margin`` times the curvature travelled
+  since first contact (the force grows about linearly with curvature past the
+  onset, so this adds about ``margin`` of the force).  Then it lifts.
+* :class:`OracleFragilePolicy` (knows the hidden ``hold_force`` and
+  ``crush_limit``): it reads the tactile normal force and freezes the
+  curvature once the force reaches the window's geometric middle
+  ``sqrt(N_hold N_crush)``, then lifts.
+
+Observation indices are taken from the env's ``obs_slices`` (both envs), the
+actions are ``(curvature command, palm speed)`` (one shared curvature).
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+__all__ = ["ObservationFragilePolicy", "OracleFragilePolicy"]
+
+
+class _Closing:
+    """The shared recipe: close slowly while probing upwards, freeze the curvature on a trigger, lift, hold."""
+
+    def __init__(self, *, start: float = 0.6, rate: float = 0.008, rel_rate: float = 0.04, min_rate: float = 0.002,
+                 probe_speed: float = 0.1, lift_speed: float = 1.0, lift_ramp: int = 10):
+        self.start, self.rate, self.rel_rate, self.min_rate = start, rate, rel_rate, min_rate
+        self.probe_speed = probe_speed
+        self.lift_speed, self.lift_ramp = lift_speed, lift_ramp
+
+    def reset(self, env, info=None):
+        u = env.unwrapped
+        sl = u.obs_slices
+        self._i_kact = sl["kappa_actual"].start
+        self._i_lift = sl["box_lift" if "box_lift" in sl else "workpiece_lift"]
+        self._i_force = sl["contact_force"]
+        self._force_unit = float(u._force_unit)
+        self._cmd = self.start
+        self._frozen = None
+        self._contact_at = None
+        self._lift_steps = 0
+
+    def _forces(self, obs) -> np.ndarray:
+        """Per-finger normal forces [N] read from the observation's ``log(1 + F/W)`` (normal, friction pairs)."""
+        f = np.asarray(obs[self._i_force])[0::2]
+        return np.expm1(f) * self._force_unit
+
+    def _trigger(self, obs) -> bool:  # pragma: no cover - defined by each policy
+        raise NotImplementedError
+
+    def _frozen_command(self, obs) -> float:
+        return float(obs[self._i_kact])
+
+    def __call__(self, obs):
+        kact = float(obs[self._i_kact])
+        touching = self._forces(obs).max() > 0.0
+        if self._frozen is None:
+            if touching and self._contact_at is None:
+                self._contact_at = kact
+                self._cmd = kact  # stop the lag from carrying the closing on
+            if self._contact_at is not None and self._trigger(obs):
+                self._frozen = self._frozen_command(obs)
+            else:
+                if self._contact_at is None:
+                    step = self.rate
+                else:  # the force grows about linearly past contact: close by a fraction of what is closed
+                    step = max(self.min_rate, self.rel_rate * (self._contact_at - kact))
+                self._cmd = max(self._cmd - step, -1.0)
+                return np.array([self._cmd, self.probe_speed if self._contact_at is not None else 0.0],
+                                dtype=np.float32)
+        self._lift_steps += 1
+        speed = max(self.probe_speed, self.lift_speed * min(1.0, self._lift_steps / self.lift_ramp))
+        return np.array([self._frozen, speed], dtype=np.float32)
+
+
+class ObservationFragilePolicy(_Closing):
+    """Observation-only: freeze the curvature when the workpiece follows the palm (lift > ``lift_trigger``
+    of the target height), at the actual curvature plus ``margin`` times the curvature closed since contact."""
+
+    def __init__(self, *, margin: float = 0.1, lift_trigger: float = 0.008, **kwargs):
+        super().__init__(**kwargs)
+        self.margin, self.lift_trigger = margin, lift_trigger
+
+    def _trigger(self, obs) -> bool:
+        return float(np.asarray(obs[self._i_lift]).ravel()[0]) > self.lift_trigger
+
+    def _frozen_command(self, obs) -> float:
+        kact = float(obs[self._i_kact])
+        return max(kact - self.margin * max(self._contact_at - kact, 0.0), -1.0)
+
+
+class OracleFragilePolicy(_Closing):
+    """Knows the hidden window: freeze the curvature once the largest finger force reaches
+    ``sqrt(hold_force * crush_limit)`` (read from the env at ``reset``)."""
+
+    def __init__(self, *, probe_speed: float = 0.0, **kwargs):
+        super().__init__(probe_speed=probe_speed, **kwargs)
+
+    def reset(self, env, info=None):
+        super().reset(env, info)
+        u = env.unwrapped
+        self._target = math.sqrt(u.hold_force * u.crush_limit)
+
+    def _trigger(self, obs) -> bool:
+        return self._forces(obs).max() >= self._target
+
+    def _frozen_command(self, obs) -> float:
+        return float(obs[self._i_kact])
