@@ -28,7 +28,7 @@ sphere) are :class:`~simgrip.envs.pick.PickEnv` and
 
 Physical picture (SI, the ``PickEnv`` finger): workpieces of 10-200 g
 (a strawberry, an egg, a plastic cup with some water), friction 0.3-1.2,
-crush limits of 0.05-6.4 N per finger; a thin cup or a ripe berry is damaged
+crush limits of 0.05-6.5 N per finger (two fingers); a thin cup or a ripe berry is damaged
 well below what the fully curled finger presses (~11 N).
 
 What the agent senses is the parent env's observation, unchanged:
