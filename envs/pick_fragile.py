@@ -1,8 +1,8 @@
 r"""Fragile workpieces: pick tasks where the grip force must be found by feedback (issue 18).
 
 ``simgrip/PickFragile-v0`` (Grip I, two-finger pinch) and
-``simgrip/PickMultiFragile-v0`` (``K`` fingers around a box, cylinder or
-sphere) are :class:`~simgrip.envs.pick.PickEnv` and
+``simgrip/PickMultiFragile-v0`` (``K = 3`` fingers around a centred
+cylinder by default; other shapes and offsets by argument) are :class:`~simgrip.envs.pick.PickEnv` and
 :class:`~simgrip.envs.pick_multi.PickMultiEnv` with two changes:
 
 1. **A crush limit.**  Each episode's workpiece survives a normal force of at
@@ -169,10 +169,14 @@ class FragilePickMultiEnv(_Fragile, PickMultiEnv):
     """``simgrip/PickMultiFragile-v0``: :class:`~simgrip.envs.pick_multi.PickMultiEnv` with a crush limit.
 
     See :mod:`simgrip.envs.pick_fragile` for the draw, the sensing and the info table.  Arguments: those of
-    ``PickMultiEnv`` (``K = fingers = 3`` by default: cylinder and sphere) with the defaults ``mass_range =
-    (0.01, 0.2)`` kg (log-uniform), ``friction_range = (0.3, 1.2)``, ``size_range = (0.03, 0.075)`` m, plus
-    ``crush_ratio_range = (1.3, 2.0)``.  ``N_hold = m g / (K mu)`` counts every finger as carrying its share
-    through friction on a vertical face; on a sphere the contact normals tilt, so the window is approximate there.
+    ``PickMultiEnv`` (``K = fingers = 3``) with the defaults ``shapes = ("cylinder",)``, ``offset_max = 0``
+    (centred), ``mass_range = (0.01, 0.2)`` kg (log-uniform), ``friction_range = (0.3, 1.2)``, ``size_range =
+    (0.03, 0.075)`` m, plus ``crush_ratio_range = (1.3, 2.0)``.  ``N_hold = m g / (K mu)`` counts every finger
+    as carrying its share through friction on a vertical face (a cylinder's).  Other settings are harder and
+    not yet solved by the scripted controllers (issue 18, measured on seeds 5000-5029): an off-centre
+    cylinder (``offset_max = 0.005``: the first finger to touch pushes it, and the largest finger force
+    exceeds the mean) 8 of 30 observation-only; spheres (``shapes=("sphere",)``: tilted contact normals,
+    so ``N_hold`` above is approximate, and a squeezed sphere is pressed out sideways) 0 of 16 centred.
     """
 
     _MASS_KEY = "mass"
@@ -180,8 +184,9 @@ class FragilePickMultiEnv(_Fragile, PickMultiEnv):
 
     def __init__(self, *, crush_ratio_range=FRAGILE_DEFAULTS["crush_ratio_range"],
                  mass_range=FRAGILE_DEFAULTS["mass_range"], friction_range=FRAGILE_DEFAULTS["friction_range"],
-                 size_range=FRAGILE_DEFAULTS["size_range"], **kwargs):
-        super().__init__(mass_range=mass_range, friction_range=friction_range, size_range=size_range, **kwargs)
+                 size_range=FRAGILE_DEFAULTS["size_range"], shapes=("cylinder",), offset_max=0.0, **kwargs):
+        super().__init__(mass_range=mass_range, friction_range=friction_range, size_range=size_range, shapes=shapes,
+                         offset_max=offset_max, **kwargs)
         self._mass_range = self.mass_range
         self._fragile_args(crush_ratio_range)
 
