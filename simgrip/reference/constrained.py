@@ -388,6 +388,31 @@ def _solve_one(prob, spec, x, self_on, keys, mu, maxiter):
     return x, keys
 
 
+#: The homotopy's largest and least steps in the curvature's scale ``t`` (halved on a failed step).  A rod
+#: curling onto itself (the free rod with no workpiece) takes the small one throughout: a larger step lets
+#: SLSQP jump a turn of the spiral past another and land on a different self-contact state.
+HOMOTOPY_STEP, SPIRAL_STEP, HOMOTOPY_MIN_STEP = 0.1, 0.02, 1e-3
+
+
+def _homotopy(prob, spec, x, t0, self_on, maxiter):
+    """From the feasible shape ``x`` at ``t0`` to ``t = 1`` (rest angles ``t * rest``), a step halved where a
+    solve fails (SLSQP can jump through a contact from a far start; the step that fails is retried)."""
+    big = SPIRAL_STEP if (spec.sd == 0 and spec.cylinder is None) else HOMOTOPY_STEP
+    keys, t, dt = None, t0, big
+    while t < 1.0:
+        tn = min(1.0, t + dt)
+        try:
+            xn, kn = _solve_one(prob.with_(rest=tn * prob.rest), spec, x, self_on, keys, None, maxiter)
+        except ConstrainedError:
+            dt *= 0.5
+            if dt < HOMOTOPY_MIN_STEP:
+                raise
+            continue
+        x, keys, t = xn, kn, tn
+        dt = min(big, 1.5 * dt)
+    return x, keys
+
+
 def solve_constrained(grip, params, profile, n, *, box=None, cylinder=None, self_contact=True, mirror=None,
                       clearance=DEFAULT_CLEARANCE, guess=None, maxiter=2000) -> ConstrainedEquilibrium:
     """The ``n``-link chain's energy minimised with every contact unilateral (see the module docstring).
@@ -431,10 +456,7 @@ def solve_constrained(grip, params, profile, n, *, box=None, cylinder=None, self
     if x is None:
         x, t0 = _feasible_start(grip, params, prof, prob, spec, unit_rest)
         if t0 is not None:
-            full_rest = prob.rest
-            for t in np.linspace(t0, 1.0, max(2, int(math.ceil((1.0 - t0) / 0.02)) + 1))[1:]:
-                sub = prob.with_(rest=t * full_rest)
-                x, keys = _solve_one(sub, spec, x, self_on, keys, None, maxiter)
+            x, keys = _homotopy(prob, spec, x, t0, self_on, maxiter)
     x, keys = _solve_one(prob, spec, x, self_on, keys, mu, maxiter)
     return _equilibrium(grip, params, prob, spec, x, keys)
 
