@@ -239,3 +239,15 @@ def test_wrap_bvp_balances_and_matches_the_chain():
         links = ch.contact_links("cylinder")
         assert abs(links[0] / n - w.s1) <= 2.0 / n and abs((links[-2] + 1) / n - w.s2) <= 2.0 / n
     assert errs[1][0] < errs[0][0] and errs[1][1] < errs[0][1]
+
+
+def test_wrap_arguments():
+    from simgrip.reference.constrained import Cylinder
+    from simgrip.reference.wrap import solve_wrap
+
+    with pytest.raises(ValueError, match="cylinder"):
+        solve_wrap(STANDARD, Uniform(-10.0), (0.2, -0.2, 0.15), wrapped(16))
+    with pytest.raises(ValueError, match="profile"):
+        solve_wrap(STANDARD, Uniform(10.0), Cylinder(**CYL), wrapped(16))
+    with pytest.raises(ValueError, match="guess"):
+        solve_wrap(STANDARD, Uniform(-10.0), Cylinder(**CYL), chain(16))

@@ -42,6 +42,20 @@ where only the tip is active: then both agree to the solver's tolerance.
 The free rod with a cylinder and/or self-contact has no tip constraint.
 Grip III is not covered (its full-contact problem is the cradle's corner plus
 the rest of the rod; out of scope here).
+
+What it finds (standard case D = 1, M = 5, b = 0.6, uniform kappa, ``depth = 0.4``; tests in
+``tests/test_constrained.py`` and ``tests/test_free_boundary.py``):
+
+* Grip I, kappa = -10: the tip on the side face and the box's top corner on one link (the point-contact
+  chain loops through the box); n = 32: N = 19.87244, tip (0.3, -0.47795); n = 64: N = 19.87183; the
+  free-boundary BVP (:mod:`simgrip.reference.free_boundary`): N = 19.88035, tip (0.3, -0.478353).
+* Grip II, kappa = 10: the box's bottom corner rests on the rod.
+* The free rod at kappa = -9: a spiral whose tip and root press on other turns (no smooth BVP is built:
+  this chain is the reference).
+* A cylinder (0.2, -0.2), R = 0.15, kappa = -10: a wrapped arc plus the tip (:mod:`simgrip.reference.wrap`).
+
+The minimiser is local and the path matters (a closing finger): the default start continues from the
+point-contact chain (or rest shape) in the curvature's scale.
 """
 
 from __future__ import annotations

@@ -94,7 +94,7 @@ def solve_wrap(params, profile, cylinder, guess, *, tol=1e-10) -> WrapSolution:
     """Solve the wrap BVP (free rod, uniform ``kappa0 < 0``; see the module docstring).
 
     ``guess``: the constrained chain (:func:`~simgrip.reference.constrained.solve_constrained` with this
-    ``cylinder``) with a run of wrapped links and the tip on the cylinder, or a :class:`WrapSolution`.
+    ``cylinder``) with two or more wrapped links and the tip on the cylinder.
 
     Raises
     ------
@@ -105,13 +105,14 @@ def solve_wrap(params, profile, cylinder, guess, *, tol=1e-10) -> WrapSolution:
     """
     params = check_params(params)
     prof = as_profile(profile)
+    if not all(hasattr(cylinder, a) for a in ("x", "y", "radius")):
+        raise ValueError(f"cylinder must be a Cylinder, got {type(cylinder).__name__}")
+    if not hasattr(guess, "contact_links"):
+        raise ValueError("guess must be a ConstrainedEquilibrium with this cylinder")
     if not isinstance(prof, Uniform) or not prof.kappa < 0:
         raise ValueError("profile: the wrap BVP takes a uniform kappa < 0 (curling clockwise onto the cylinder)")
     k, D, R = float(prof.kappa), params.D, cylinder.radius
     c = np.array([cylinder.x, cylinder.y])
-    if isinstance(guess, WrapSolution):
-        p0 = None
-        raise ValueError("guess: continuation from a WrapSolution is not supported; pass the constrained chain")
     links = np.array(guess.contact_links("cylinder"))
     n = guess.n
     ds = 1.0 / n
