@@ -26,7 +26,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from simgrip.params import DimensionlessParams, _finite
+from simgrip.params import _finite
 from simgrip.profiles import Uniform
 from simgrip.reference.arguments import check_params
 from simgrip.reference.contact_geometry import self_crossing
