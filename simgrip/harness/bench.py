@@ -105,6 +105,8 @@ class BenchResult:
     gripper: dict = field(default_factory=dict)
     #: The modes' run time and frequency error against n (:mod:`simgrip.harness.bench_modes`).
     modes: dict = field(default_factory=dict)
+    #: simgrip's free-rod settle against MuJoCo's cable at matched error (:mod:`simgrip.harness.bench_cable`).
+    cable: dict = field(default_factory=dict)
     files: dict = field(default_factory=dict)
     jobs: int | None = 1
     quick: bool = False
@@ -220,9 +222,13 @@ def run_bench(
     from simgrip.harness.bench_modes import write_modes_bench  # issue 20's modes: run time and error against n
 
     result.modes = write_modes_bench(out, quick=quick, repeats=repeats)
+    from simgrip.harness.bench_cable import write_cable_bench  # issue 19: MuJoCo's cable as the settle's peer
+
+    result.cable = write_cable_bench(out, quick=quick, repeats=repeats)
     result.files = {**_write(out, result), **{name: out / name for name in ("settle_targets.json", "settle_targets.md",
                                                                             "gripper.json", "gripper.md", "modes.json",
-                                                                            "modes.md", "modes.png")}}
+                                                                            "modes.md", "modes.png", "cable.json",
+                                                                            "cable.md")}}
     return result
 
 
@@ -230,7 +236,7 @@ def run_bench(
 #: write_modes_bench's).
 OUTPUT_FILES = ("bench.csv", "bench.json", "sweep.json", "skips.md", "summary.md", "pareto.png",
                 "settle_targets.json", "settle_targets.md", "gripper.json", "gripper.md", "modes.json", "modes.md",
-                "modes.png")
+                "modes.png", "cable.json", "cable.md")
 
 
 def _loadavg():
