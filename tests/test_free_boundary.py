@@ -195,7 +195,7 @@ def test_wrap_bvp_balances_and_matches_the_chain():
     constrained chain.  Checks: a valid state (pushing forces, positive pressure, nothing inside the
     cylinder); the rod's moment balance about the clamp from the loads alone -- tip force, the arc's end
     forces, the pressure p = T/R + cos(theta) over the arc, the weight -- equals the BVP's m(0); and the
-    chain at n = 16, 32 approaches it (tip force, tip, arc ends within a link)."""
+    chain at n = 16, 32 approaches it (tip force, tip at second order, arc ends within two links)."""
     from simgrip.reference.constrained import Cylinder
     from simgrip.reference.wrap import solve_wrap
 
@@ -238,7 +238,11 @@ def test_wrap_bvp_balances_and_matches_the_chain():
         errs.append((abs(q - w.Q), float(np.linalg.norm(ch.tip - w.tip))))
         links = ch.contact_links("cylinder")
         assert abs(links[0] / n - w.s1) <= 2.0 / n and abs((links[-2] + 1) / n - w.s2) <= 2.0 / n
-    assert errs[1][0] < errs[0][0] and errs[1][1] < errs[0][1]
+    assert errs[1][0] < errs[0][0]
+    # the tip: second order (the rod is smooth across the arc's ends -- curvature continuous there -- and
+    # the chain is second order on smooth pieces); measured 8.7e-3, 1.8e-3, 4.0e-4 at n = 16, 32, 64
+    # (ratios 4.9, 4.4); 3 leaves room for the ends falling at different places in their links
+    assert errs[0][1] / errs[1][1] > 3.0
 
 
 def test_wrap_arguments():
