@@ -11,6 +11,7 @@ id                               what                                      max s
 ``simgrip/PickMulti-v0``         K fingers around a box, cylinder, sphere  200 (4 s)
 ``simgrip/PickFragile-v0``       Grip I pinch of a fragile workpiece       300 (6 s)
 ``simgrip/PickMultiFragile-v0``  K fingers around a fragile workpiece      300 (6 s)
+``simgrip/PlaceFragile-v0``      pinch, carry to a target, set down        400 (8 s)
 ===============================  ========================================  =========
 
 >>> import gymnasium as gym, simgrip.envs
@@ -38,10 +39,12 @@ _ENVS = {
     # issue 18: fragile workpieces (a crush limit per episode), see simgrip.envs.pick_fragile
     "simgrip/PickFragile-v0": ("simgrip.envs.pick_fragile:FragilePickEnv", {}, 300),
     "simgrip/PickMultiFragile-v0": ("simgrip.envs.pick_fragile:FragilePickMultiEnv", {}, 300),
+    "simgrip/PlaceFragile-v0": ("simgrip.envs.pick_place:FragilePlaceEnv", {}, 400),
 }
 ENV_IDS = tuple(k for k, v in _ENVS.items() if v[0] == "simgrip.envs.pick:PickEnv")
 MULTI_ENV_IDS = tuple(k for k, v in _ENVS.items() if v[0] == "simgrip.envs.pick_multi:PickMultiEnv")
-FRAGILE_ENV_IDS = tuple(k for k, v in _ENVS.items() if v[0].startswith("simgrip.envs.pick_fragile:"))
+FRAGILE_ENV_IDS = tuple(k for k, v in _ENVS.items() if v[0].split(":")[0] in ("simgrip.envs.pick_fragile",
+                                                                             "simgrip.envs.pick_place"))
 
 
 def register_envs() -> None:

@@ -2,7 +2,7 @@
 
 ``python -m simgrip.envs.baselines --env simgrip/PickFragile-v0 --policy constant --seeds 5000-5049 --out F.json``
 
-Policies (actions ``(curvature command, palm speed)`` in ``[-1, 1]``):
+Policies (actions ``(curvature command, palm speed)`` in ``[-1, 1]``; ``PlaceFragile-v0``: ``(curvature, palm x, palm z)``):
 
 ==============  ==============================================================================================
 ``random``      uniform actions, the action space seeded with the episode seed
@@ -12,8 +12,13 @@ Policies (actions ``(curvature command, palm speed)`` in ``[-1, 1]``):
 ``openloop``    every schedule of the family "ramp the curvature command linearly from straight (+1) to ``a_k``
                 over ``R`` steps, hold it; palm still until ``R + 10`` steps, then up at ``a_p``", over the
                 grid ``a_k`` x ``RAMP_GRID`` x ``PALM_GRID`` (best of the grid on the evaluated seeds)
-``oracle``      :class:`~simgrip.envs.scripted_fragile.OracleFragilePolicy` (knows the hidden window)
-``observation`` :class:`~simgrip.envs.scripted_fragile.ObservationFragilePolicy` (the observation only)
+``constant``    (``PlaceFragile-v0``: the grid adds the palm's ``x`` command ``a_x`` in ``(-0.5, 0, 0.5)``)
+``openloop``    (``PlaceFragile-v0``: ramp to ``a_k`` over 25 steps, lift 20 steps, carry at full speed to
+                ``-x`` or ``+x`` over ``PLACE_DISTANCES``, lower 20 steps; grid ``a_k`` x side x distance)
+``oracle``      :class:`~simgrip.envs.scripted_fragile.OracleFragilePolicy` (knows the hidden window; for
+                ``PlaceFragile-v0`` inside :class:`~simgrip.envs.scripted_fragile.PlacePolicy`)
+``observation`` :class:`~simgrip.envs.scripted_fragile.ObservationFragilePolicy` (the observation only;
+                ``PlaceFragile-v0``: :class:`~simgrip.envs.scripted_fragile.PlacePolicy`)
 ==============  ==============================================================================================
 
 ``--grid coarse`` uses every other curvature and one ramp/palm value (for tests).  Output: ``env``,
@@ -32,11 +37,12 @@ from collections import Counter
 import gymnasium as gym
 import numpy as np
 
-__all__ = ["KAPPA_GRID", "PALM_GRID", "RAMP_GRID", "run_policy", "evaluate", "main"]
+__all__ = ["KAPPA_GRID", "PALM_GRID", "PLACE_DISTANCES", "RAMP_GRID", "run_policy", "evaluate", "main"]
 
 KAPPA_GRID = tuple(round(float(a), 2) for a in np.linspace(-1.0, 0.6, 17))  # 0.1 apart: force steps of ~0.3 N
 PALM_GRID = (0.25, 0.5, 1.0)
 RAMP_GRID = (1, 25, 75)  # steps: 0.02 s, 0.5 s, 1.5 s
+PLACE_DISTANCES = (0.05, 0.07, 0.09)  # [m] carried by the pick-and-place open-loop family
 _WAIT = 10  # steps between the end of the ramp and the lift
 
 
@@ -63,8 +69,8 @@ def run_policy(env, make_act, seeds) -> Counter:
     return counts
 
 
-def _constant(a_k, a_p):
-    a = np.array([a_k, a_p], dtype=np.float32)
+def _constant(*a):
+    a = np.array(a, dtype=np.float32)
     return lambda env, info, seed: (lambda obs, t: a)
 
 
@@ -73,6 +79,23 @@ def _openloop(a_k, ramp, a_p):
         def act(obs, t):
             k = 1.0 + (a_k - 1.0) * min(1.0, (t + 1) / ramp)
             return np.array([k, a_p if t >= ramp + _WAIT else 0.0], dtype=np.float32)
+        return act
+    return make
+
+
+def _place_openloop(a_k, side, distance):
+    """Ramp the curvature to ``a_k`` over 25 steps, wait 10, lift at full speed for 20 steps (4 cm), move the
+    palm ``side`` (+-1) at full speed for ``distance`` [m], lower at full speed for 20 steps, rest."""
+    ramp, up = 25, 20
+    t_move = ramp + _WAIT + up
+    n_move = int(round(distance / 0.1 / 0.02))  # palm_speed 0.1 m/s, control step 0.02 s
+
+    def make(env, info, seed):
+        def act(obs, t):
+            k = 1.0 + (a_k - 1.0) * min(1.0, (t + 1) / ramp)
+            x = side if t_move <= t < t_move + n_move else 0.0
+            z = 1.0 if ramp + _WAIT <= t < t_move else -1.0 if t_move + n_move <= t < t_move + n_move + up else 0.0
+            return np.array([k, x, z], dtype=np.float32)
         return act
     return make
 
@@ -91,18 +114,28 @@ def _random(env, info, seed):
     return lambda obs, t: space.sample()
 
 
-def _members(policy: str, grid: str):
+def _members(policy: str, grid: str, place: bool):
     kappas = KAPPA_GRID if grid == "full" else KAPPA_GRID[::2]
     palms = PALM_GRID if grid == "full" else (0.5,)
     ramps = RAMP_GRID if grid == "full" else (25,)
+    if place and policy == "constant":  # (curvature, palm x, palm z)
+        xs = (-0.5, 0.0, 0.5) if grid == "full" else (0.0,)
+        return [({"kappa": k, "palm_x": x, "palm": p}, _constant(k, x, p)) for k in kappas for x in xs for p in palms]
+    if place and policy == "openloop":
+        dists = PLACE_DISTANCES if grid == "full" else (0.07,)
+        return [({"kappa": k, "side": sd, "distance": dd}, _place_openloop(k, sd, dd))
+                for k in kappas for sd in (-1.0, 1.0) for dd in dists]
     if policy == "constant":
         return [({"kappa": k, "palm": p}, _constant(k, p)) for k in kappas for p in palms]
     if policy == "openloop":
         return [({"kappa": k, "ramp_steps": r, "palm": p}, _openloop(k, r, p))
                 for k in kappas for r in ramps for p in palms]
-    from simgrip.envs.scripted_fragile import ObservationFragilePolicy, OracleFragilePolicy
-    make = {"random": _random, "oracle": _scripted(OracleFragilePolicy),
-            "observation": _scripted(ObservationFragilePolicy)}[policy]
+    from simgrip.envs.scripted_fragile import ObservationFragilePolicy, OracleFragilePolicy, PlacePolicy
+    if place:
+        oracle, observation = (lambda: PlacePolicy(OracleFragilePolicy())), PlacePolicy
+    else:
+        oracle, observation = OracleFragilePolicy, ObservationFragilePolicy
+    make = {"random": _random, "oracle": _scripted(oracle), "observation": _scripted(observation)}[policy]
     return [({}, make)]
 
 
@@ -111,7 +144,8 @@ def evaluate(env_id: str, policy: str, seeds, grid: str = "full") -> dict:
     env = gym.make(env_id)
     try:
         rows = []
-        for params, make in _members(policy, grid):
+        place = env.action_space.shape[0] == 3
+        for params, make in _members(policy, grid, place):
             counts = run_policy(env, make, seeds)
             rows.append({**params, "success_rate": counts["success"] / len(seeds), "outcomes": dict(counts)})
     finally:

@@ -27,7 +27,7 @@ import math
 
 import numpy as np
 
-__all__ = ["ObservationFragilePolicy", "OracleFragilePolicy"]
+__all__ = ["ObservationFragilePolicy", "OracleFragilePolicy", "PlacePolicy"]
 
 
 class _Closing:
@@ -46,6 +46,7 @@ class _Closing:
         self._i_lift = sl["box_lift" if "box_lift" in sl else "workpiece_lift"]
         self._i_force = sl["contact_force"]
         self._force_unit = float(u._force_unit)
+        self._lift_unit = float(u.target_height)  # the observed lift is in units of the target height [m]
         self._cmd = self.start
         self._frozen = None
         self._contact_at = None
@@ -85,15 +86,15 @@ class _Closing:
 
 
 class ObservationFragilePolicy(_Closing):
-    """Observation-only: freeze the curvature when the workpiece follows the palm (lift > ``lift_trigger``
-    of the target height), at the actual curvature plus ``margin`` times the curvature closed since contact."""
+    """Observation-only: freeze the curvature when the workpiece follows the palm (lift > ``lift_trigger`` [m]),
+    at the actual curvature plus ``margin`` times the curvature closed since contact."""
 
-    def __init__(self, *, margin: float = 0.1, lift_trigger: float = 0.008, **kwargs):
+    def __init__(self, *, margin: float = 0.1, lift_trigger: float = 0.0005, **kwargs):
         super().__init__(**kwargs)
         self.margin, self.lift_trigger = margin, lift_trigger
 
     def _trigger(self, obs) -> bool:
-        return float(np.asarray(obs[self._i_lift]).ravel()[0]) > self.lift_trigger
+        return float(np.asarray(obs[self._i_lift]).ravel()[0]) * self._lift_unit > self.lift_trigger
 
     def _frozen_command(self, obs) -> float:
         kact = float(obs[self._i_kact])
@@ -117,3 +118,48 @@ class OracleFragilePolicy(_Closing):
 
     def _frozen_command(self, obs) -> float:
         return float(obs[self._i_kact])
+
+
+class PlacePolicy:
+    """Pick-and-place (``PlaceFragile-v0``): grip and lift with ``grip`` (an :class:`ObservationFragilePolicy`
+    by default, or an :class:`OracleFragilePolicy`) up to the carry height, carry the workpiece over the target
+    (palm ``x`` speed proportional to the observed ``target_x - workpiece_x``, saturating ``ramp`` [m] away,
+    changing that speed by at most ``x_step`` per step), lower it until it stops sinking on the table (the
+    observed lift below ``down`` of the carry height), and wait there.  Actions ``(curvature, palm x, palm z)``."""
+
+    def __init__(self, grip=None, *, ramp: float = 0.02, align: float = 0.003, lower_speed: float = 0.4,
+                 down: float = 0.05, x_step: float = 0.05):
+        self.grip = ObservationFragilePolicy() if grip is None else grip
+        self.ramp, self.align, self.lower_speed, self.down = ramp, align, lower_speed, down
+        self.x_step = x_step  # the largest change of the palm's x command per step (its acceleration: inertial
+        # loads m a press one finger harder, and a fragile workpiece's window is narrow)
+
+    def reset(self, env, info=None):
+        self.grip.reset(env, info)
+        u = env.unwrapped
+        sl = u.obs_slices
+        self._i_lift = sl["box_lift"].start
+        self._i_wx, self._i_tx = sl["workpiece_x"].start, sl["target_x"].start
+        self._length = float(u.length)
+        self._phase = "grip"
+        self._ax = 0.0
+
+    def __call__(self, obs):
+        a_k, a_z = (float(v) for v in self.grip(obs))
+        if self.grip._frozen is None:
+            return np.array([a_k, 0.0, a_z], dtype=np.float32)
+        lift = float(obs[self._i_lift])  # in units of the carry height
+        err = (float(obs[self._i_tx]) - float(obs[self._i_wx])) * self._length  # [m]
+        want = float(np.clip(err / self.ramp, -1.0, 1.0))
+        a_x = self._ax = self._ax + float(np.clip(want - self._ax, -self.x_step, self.x_step))
+        if self._phase == "grip" and lift >= 1.0:
+            self._phase = "carry"
+        if self._phase == "grip":
+            return np.array([a_k, 0.0, a_z], dtype=np.float32)
+        if self._phase == "carry" and abs(err) < self.align:
+            self._phase = "lower"
+        if self._phase == "carry":
+            return np.array([a_k, a_x, 0.0], dtype=np.float32)
+        if lift <= self.down:
+            self._phase = "rest"
+        return np.array([a_k, a_x, -self.lower_speed if self._phase == "lower" else 0.0], dtype=np.float32)
