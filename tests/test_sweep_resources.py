@@ -122,7 +122,7 @@ def test_cli_jobs_above_the_bound_exit_2_before_work(tmp_path, capsys):
 def _fake_point(point):
     """A stand-in for the point's physics: a record of the right shape, at once."""
     rec = {"index": point.index, **point.values(), "status": "settled", "held": True, "feasible": point.kappa < -5,
-           "normal_force": 1.0, "required_mu": 0.5, "tip_x": 0.3, "tip_z": -0.5, "penetration": 1e-6,
+           "valid": True, "normal_force": 1.0, "required_mu": 0.5, "tip_x": 0.3, "tip_z": -0.5, "penetration": 1e-6,
            "bvp_normal_force": 1.0, "bvp_feasible": point.kappa < -5, "bvp_required_mu": 0.5, "agree": True,
            "wall_time_s": 0.01, "point_time_s": 0.02, "message": "", "bvp_message": "", "bvp_warning": ""}
     return {"index": rec["index"], **{c: rec[c] for c in COLUMNS}}

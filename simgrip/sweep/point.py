@@ -1,7 +1,8 @@
 """One point of a design sweep: the settled simulation beside the elastica BVP at the same parameters.
 
-:func:`evaluate_point` is the function the sweep's workers run.  It never
-raises for a point's sake: a point the grip cannot build (``ValueError``) is
+:func:`evaluate_segment` is the function the sweep's workers run
+(:func:`evaluate_point`: one point alone).  It never raises for a point's
+sake: a point the grip cannot build (``ValueError``) is
 ``rejected``, a settle that fails (``SettleError`` or any solver's
 ``RuntimeError``) is ``unsettled``, anything else is ``error``, each with its
 message; the BVP is solved independently of the simulation
@@ -13,17 +14,12 @@ uniform curvature) and its failure leaves the ``bvp_*`` columns empty with
 
 The reference at the cost of a continuation (:func:`evaluate_segment`): along
 a segment of the grid (:meth:`simgrip.sweep.grid.SweepGrid.segments`, fixed by
-the grid alone) the first point's BVP is solved cold, exactly as
-:func:`evaluate_point` does, and each next one by one ``solve_bvp`` run at the
-final tolerance started from its predecessor's solution and mesh
-(:func:`warm_bvp`, ~4x cheaper than the cold start at n = 32).  A warm start
-that does not converge is replaced by the cold solve.  A warm start whose
-``theta`` moves by more than the solver's own branch-jump bound
-(:data:`simgrip.reference.continuation.MAX_JUMP`) is checked against the cold
-solve: when they are different equilibria the cold one is kept (the point's
-reference is then exactly the per-point one) and ``bvp_warning`` says so.
-The verdicts are those of cold solves at every point (tested on grids that
-cross the hold/drop boundary); the references agree to the solver's tolerance.
+the grid alone) the references are warm-started from their neighbours and
+checked against cold solves at the ends, where the walk is kept only when it
+ends on the cold solve's branch (:mod:`simgrip.sweep.reference`): each equals
+the point's cold solve (:func:`evaluate_point`) to the solver's tolerance, so
+the verdicts are those of cold solves.  A point whose warm start reached
+another branch is solved cold and ``bvp_warning`` says so.
 With ``reference="none"`` no BVP is solved: ``bvp_*`` and ``agree`` are empty,
 ``bvp_message`` and ``bvp_warning`` too (a failed BVP always has a message).
 
@@ -45,8 +41,8 @@ Columns (:data:`COLUMNS`, dimensionless: lengths over ``l``, forces over
   change from run to run (:data:`TIME_COLUMNS`);
 * ``message``, ``bvp_message``: why a point has no result, or the settled
   state's warnings;
-* ``bvp_warning``: the warm-started reference jumped branch and was solved
-  cold (empty otherwise).
+* ``bvp_warning``: the warm-started reference reached another branch than
+  the cold solve and was solved cold (empty otherwise).
 """
 
 from __future__ import annotations
@@ -54,12 +50,9 @@ from __future__ import annotations
 import math
 import time
 
-import numpy as np
-
 from simgrip.sweep.grid import AXES, SweepPoint
 
-__all__ = ["COLUMNS", "TIME_COLUMNS", "STATUSES", "SAME_BRANCH_RAD", "evaluate_point", "evaluate_segment",
-           "warm_bvp"]
+__all__ = ["COLUMNS", "TIME_COLUMNS", "STATUSES", "evaluate_point", "evaluate_segment"]
 
 SIM_COLUMNS = ("status", "held", "feasible", "valid", "normal_force", "required_mu", "tip_x", "tip_z", "penetration")
 BVP_COLUMNS = ("bvp_normal_force", "bvp_feasible", "bvp_required_mu")
@@ -68,13 +61,6 @@ COLUMNS = AXES + SIM_COLUMNS + BVP_COLUMNS + ("agree", "wall_time_s", "point_tim
                                               "bvp_warning")
 #: Columns that are timings (they differ between runs; everything else is reproducible).
 TIME_COLUMNS = ("wall_time_s", "point_time_s")
-#: Two converged references (tolerance 1e-8) whose ``theta`` differ by less than this [rad] are one equilibrium:
-#: the same branch solved twice agrees to ~1e-7 rad (the collocation tolerance carried through the mesh), while
-#: distinct equilibria of a grip differ by O(0.1-1) rad; 1e-3 sits far from both.
-SAME_BRANCH_RAD = 1e-3
-#: A warm start may reuse its predecessor's mesh up to this many nodes (solve_bvp only adds nodes; above it the
-#: mesh is thinned as the solver's own continuation does, so meshes do not grow along a segment).
-_WARM_NODES = 1200
 #: Values of ``status``.
 STATUSES = ("settled", "unsettled", "rejected", "error")
 
@@ -118,81 +104,20 @@ def _simulation(point: SweepPoint) -> dict:
     return out
 
 
-def _cold(point: SweepPoint):
-    from simgrip.profiles import Uniform
-    from simgrip.reference import elastica
-
-    return elastica.solve(point.grip, point.params(), Uniform(point.kappa))
-
-
-def warm_bvp(point: SweepPoint, guess):
-    """The BVP of ``point`` by one ``solve_bvp`` run at the final tolerance (1e-8, :func:`elastica.solve`'s)
-    from the converged ``guess`` (an :class:`~simgrip.reference.elastica.ElasticaSolution` of a neighbouring
-    point: its mesh, states and unknown parameters); ``None`` when that run does not converge."""
-    from simgrip.profiles import Uniform
-    from simgrip.reference import elastica
-    from simgrip.reference.bvp import run_bvp
-    from simgrip.reference.continuation import _mesh_guess
-
-    grip, params, P = elastica.checked_problem(point.grip, point.params(), Uniform(point.kappa))
-    raw = guess._raw
-    if raw.prob.two_seg == P.two_seg and raw.prob.constrained == P.constrained and raw.x.size <= _WARM_NODES \
-            and (not P.two_seg or raw.prob.gamma == P.gamma):
-        x, y, p = raw.x, raw.y, (raw.p if P.constrained else None)
-    else:
-        x, y, p = _mesh_guess(raw, P)
-    r = run_bvp(P, x, y, p, 1e-8)
-    return None if r is None else elastica.ElasticaSolution.from_bvp(grip, params, r)
-
-
-def _theta_gap(a, b) -> float:
-    """Largest difference of ``theta`` between two references on the solver's branch-jump grid [rad]."""
-    from simgrip.reference.continuation import _JUMP_GRID
-
-    return float(np.max(np.abs(a._raw.states(_JUMP_GRID)[0] - b._raw.states(_JUMP_GRID)[0])))
-
-
-def _reference(point: SweepPoint, guess):
-    """``(solution, warning)`` of ``point``'s BVP: cold without ``guess``, else warm (see the module docstring)."""
-    from simgrip.reference.continuation import MAX_JUMP
-
-    if guess is None:
-        return _cold(point), ""
-    sol = warm_bvp(point, guess)
-    if sol is None:
-        return _cold(point), ""
-    jump = _theta_gap(guess, sol)
-    if jump <= MAX_JUMP:
-        return sol, ""
-    cold = _cold(point)  # a large step: the branch is checked against the per-point solve
-    gap = _theta_gap(cold, sol)
-    if gap <= SAME_BRANCH_RAD:
-        return cold, ""
-    return cold, (f"the warm-started BVP jumped branch (theta moved {jump:.3g} rad from the previous point, "
-                  f"{gap:.3g} rad from the cold solve): solved cold")
-
-
-def _bvp(point: SweepPoint, guess=None) -> tuple[dict, object]:
+def _bvp_columns(sol, error: str, warning: str) -> dict:
     out = {c: None for c in BVP_COLUMNS}
-    out.update(bvp_message="", bvp_warning="")
-    if point.reference == "none":
-        return out, None
-    try:
-        sol, warning = _reference(point, guess)
-    except Exception as exc:  # noqa: BLE001 - ElasticaError, ValueError, ...: recorded with the point
-        out["bvp_message"] = _message(exc)
-        return out, None
-    out.update(bvp_normal_force=float(sol.normal_force), bvp_feasible=bool(sol.feasible),
-               bvp_required_mu=float(sol.required_mu), bvp_warning=warning)
-    return out, sol
+    out.update(bvp_message=error, bvp_warning=warning)
+    if sol is not None:
+        out.update(bvp_normal_force=float(sol.normal_force), bvp_feasible=bool(sol.feasible),
+                   bvp_required_mu=float(sol.required_mu))
+    return out
 
 
-def _evaluate(point: SweepPoint, guess) -> tuple[dict, object]:
+def _record(point: SweepPoint, bvp: dict, bvp_seconds: float) -> dict:
     t0 = time.perf_counter()
     rec = {"index": int(point.index)}
     rec.update(point.values())
     sim = _simulation(point)
-    bvp, sol = _bvp(point, guess)
     rec.update(sim)
     rec.update(bvp)
     if sim["feasible"] is None or bvp["bvp_feasible"] is None:
@@ -203,8 +128,17 @@ def _evaluate(point: SweepPoint, guess) -> tuple[dict, object]:
         v = rec[k]
         if v is not None and math.isnan(v):
             rec[k] = None
-    rec["point_time_s"] = time.perf_counter() - t0
-    return {"index": rec["index"], **{c: rec[c] for c in COLUMNS}}, sol
+    rec["point_time_s"] = time.perf_counter() - t0 + bvp_seconds
+    return {"index": rec["index"], **{c: rec[c] for c in COLUMNS}}
+
+
+def _references(points: list) -> list[tuple]:
+    """``(bvp columns, seconds)`` of each point: none, or the segment's references (:mod:`simgrip.sweep.reference`)."""
+    from simgrip.sweep.reference import segment_references
+
+    if not points or points[0].reference == "none":
+        return [(_bvp_columns(None, "", ""), 0.0) for _ in points]
+    return [(_bvp_columns(sol, err, warn), sec) for sol, err, warn, sec in segment_references(points)]
 
 
 def evaluate_point(point: SweepPoint) -> dict:
@@ -213,17 +147,13 @@ def evaluate_point(point: SweepPoint) -> dict:
     Never raises for the point's sake (see the module docstring); floats are
     plain Python floats, flags plain bools, a missing value ``None``.
     """
-    return _evaluate(point, None)[0]
+    return evaluate_segment([point])[0]
 
 
 def evaluate_segment(points) -> list[dict]:
     """Records of consecutive ``points`` of one segment (:meth:`~simgrip.sweep.grid.SweepGrid.segments`), in
-    order: the first point's BVP solved cold, each next warm-started from the last converged one (see the
-    module docstring).  Every point is settled from scratch, as by :func:`evaluate_point`."""
-    out, guess = [], None
-    for p in points:
-        rec, sol = _evaluate(p, guess)
-        out.append(rec)
-        if sol is not None:
-            guess = sol
-    return out
+    order: every point settled from scratch, as by :func:`evaluate_point`; the BVP references of the segment
+    at the cost of a continuation, each equal to the point's cold solve to the solver's tolerance
+    (:func:`simgrip.sweep.reference.segment_references`)."""
+    points = list(points)
+    return [_record(p, bvp, sec) for p, (bvp, sec) in zip(points, _references(points))]

@@ -326,13 +326,14 @@ def _finished(out: Path, grid: SweepGrid, note, t0: float) -> SweepResult:
     try:
         meta = json.loads((out / "sweep.json").read_text(encoding="utf-8"))
         args = meta["arguments"]
-        same = {k: args[k] for k in grid.spec()} == json.loads(json.dumps(grid.spec()))
+        same = ({k: args[k] for k in grid.spec()} == json.loads(json.dumps(grid.spec()))
+                and args.get("reference", "bvp") == grid.reference)
     except (OSError, ValueError, KeyError, TypeError):
         raise ValueError(f"--resume: {str(out)!r} holds a sweep.csv but no unfinished sweep ({PARTIAL}/) and no "
                          "readable sweep.json saying which sweep it is: drop --resume to compute it again") from None
     if not same:
-        raise ValueError(f"--resume: {str(out)!r} holds a finished sweep of a different grid (grip, axes, links or "
-                         "method differ): drop --resume to replace it, or choose another --out")
+        raise ValueError(f"--resume: {str(out)!r} holds a finished sweep of a different grid (grip, axes, links, "
+                         "method or reference differ): drop --resume to replace it, or choose another --out")
     tally = Tally()
     try:
         for r in iter_csv(out / "sweep.csv"):

@@ -43,7 +43,8 @@ from pathlib import Path
 from simgrip.io import atomic_write, write_json
 from simgrip.sweep.point import COLUMNS, STATUSES, TIME_COLUMNS
 
-__all__ = ["PARTIAL", "REJECTED", "BatchError", "LogHistogram", "PartialStore", "Tally", "counts", "format_csv", "iter_csv",
+__all__ = ["PARTIAL", "REJECTED", "BatchError", "LogHistogram", "PartialStore", "Tally", "counts", "format_csv",
+           "iter_csv",
            "read_csv", "same_results", "verify_batch", "write_csv"]
 
 #: Folder (inside ``--out``) of an unfinished sweep's saved points.
@@ -325,8 +326,8 @@ class PartialStore:
                 saved_spec = None
             if saved_spec != json.loads(json.dumps(self.spec)):
                 raise ValueError(f"--resume: {str(self.dir)!r} was written for a different sweep "
-                                 "(grip, axes, links or method differ, or its spec.json is damaged); delete it to "
-                                 "start afresh")
+                                 "(grip, axes, links, method or reference differ, or its spec.json is damaged); "
+                                 "delete it to start afresh")
             return self._take_over(note)
         self.dir.mkdir(parents=True, exist_ok=True)
         write_json(self.dir / "spec.json", self.spec)

@@ -1,0 +1,133 @@
+"""What surrounds the settle (issue 19), measured in one run: each ratio against the settle it wraps.
+
+=================================================  ============================================  ======
+ratio                                              how                                           target
+=================================================  ============================================  ======
+free rod, n = 16..256: settle / the chain's        fastest CPU time of interleaved runs          <= 2.5
+tridiagonal Newton                                 (:func:`simgrip.reference.solve_chain`)
+``simulate("free", ..., links=256)``, 12 calls     median over the calls of each call's wall     <= 3
+with different kappa_bar: call / its settle        time over its own ``wall_time_s``
+a sweep point / its settle (Grip I,                median over the points of ``point_time_s /    <= 2
+kappa -7..-3, n = 32, in-process)                  wall_time_s`` (:mod:`simgrip.sweep.run`),
+                                                   with the BVP reference and with ``none``;
+                                                   and the whole sweep's wall per point over
+                                                   the median settle
+=================================================  ============================================  ======
+
+Ratios of two times taken in the same process, the same seconds apart, hold
+on a busy machine where absolute times do not: the settle / chain ratio takes
+the fastest CPU time of each (:func:`simgrip.harness.timing.fastest_cpu_times`),
+the others divide each call's wall time by the settle's own wall time inside
+it.  Only the targets of the table are checked here; the sweep's ratio with the
+BVP reference counts the reference's solve in the point (the target is the
+simulation's: ``--reference none``).
+"""
+
+from __future__ import annotations
+
+import statistics
+import time
+
+from simgrip.harness.tables import checks_md, write_record
+from simgrip.params import STANDARD
+from simgrip.profiles import Uniform
+
+__all__ = ["overhead_ratios", "overhead_md", "write_overhead_bench", "TARGETS"]
+
+#: Targets of issue 19 (upper bounds of the ratios).
+TARGETS = {"settle/chain": 2.5, "call/settle n=256": 3.0, "sweep point/settle": 2.0}
+#: kappa_bar of the free rod (bench_settle's standard case).
+FREE_KAPPA = -3.0
+
+
+def _settle_over_chain(ns, reps) -> list[dict]:
+    from simgrip.harness.timing import fastest_cpu_times, settle_from_start
+    from simgrip.reference import solve_chain
+
+    rows = []
+    for n in ns:
+        t = fastest_cpu_times({"settle": settle_from_start("free", FREE_KAPPA, n),
+                               "chain": lambda n=n: solve_chain("free", STANDARD, Uniform(FREE_KAPPA), n)}, reps)
+        rows.append({"case": f"free n={n}: settle/chain", "settle_s": t["settle"], "chain_s": t["chain"],
+                     "ratio": t["settle"] / t["chain"]})
+    return rows
+
+
+def _call_over_settle(calls: int, links: int = 256) -> dict:
+    from simgrip.compare import simulate
+
+    kappas = [FREE_KAPPA - 0.1 * i for i in range(calls)]
+    simulate("free", STANDARD, Uniform(FREE_KAPPA + 0.05), links)  # first call: imports and caches, not counted
+    ratios, walls, settles = [], [], []
+    for k in kappas:
+        t0 = time.perf_counter()
+        st = simulate("free", STANDARD, Uniform(k), links)
+        wall = time.perf_counter() - t0
+        walls.append(wall)
+        settles.append(st.wall_time_s)
+        ratios.append(wall / st.wall_time_s)
+    return {"case": f"simulate free n={links} x{calls}: call/settle", "call_s": statistics.median(walls),
+            "settle_s": statistics.median(settles), "ratio": statistics.median(ratios)}
+
+
+def _sweep_over_settle(points: int, reference: str) -> dict:
+    from simgrip.parallel.runner import RunnerOptions
+    from simgrip.sweep.grid import make_grid
+    from simgrip.sweep.run import run_sweep
+
+    grid = make_grid("I", kappa=(-7, -3, points), links=32, reference=reference)
+    res = run_sweep(grid, options=RunnerOptions(jobs=1, progress=False), note=None)
+    t = res.throughput
+    return {"case": f"sweep I kappa -7..-3 x{points} n=32 --reference {reference}: point/settle",
+            "settle_s": t["settle_median_s"], "points_per_s_per_core": t["points_per_s_per_core"],
+            "wall_per_point_s": t["wall_per_point_s"], "wall_per_point/settle": t["wall_per_point_over_settle"],
+            "ratio": t["point_over_settle_median"]}
+
+
+def overhead_ratios(*, quick: bool = False, repeats: int | None = None) -> dict:
+    """Measure the ratios of the module docstring; returns ``{"rows": [...], "checks": {...}, "repeats": r}``
+    (every row has ``case`` and ``ratio``).  One BLAS thread throughout."""
+    from simgrip.threads import blas_threads
+
+    reps = int(repeats or (3 if quick else 5))
+    with blas_threads(1):
+        rows = _settle_over_chain((16, 32, 64, 128, 256), reps)
+        rows.append(_call_over_settle(6 if quick else 12))
+        pts = 16 if quick else 32
+        rows.append(_sweep_over_settle(pts, "none"))
+        rows.append(_sweep_over_settle(pts, "bvp"))
+    checks = {}
+    for r in rows:
+        if r["case"].startswith("free n="):
+            checks[f"{r['case']} <= {TARGETS['settle/chain']}"] = r["ratio"] <= TARGETS["settle/chain"]
+        elif r["case"].startswith("simulate"):
+            checks[f"{r['case']} <= {TARGETS['call/settle n=256']}"] = r["ratio"] <= TARGETS["call/settle n=256"]
+        elif "--reference none" in r["case"]:
+            checks[f"{r['case']} <= {TARGETS['sweep point/settle']}"] = r["ratio"] <= TARGETS["sweep point/settle"]
+    return {"rows": rows, "checks": checks, "repeats": reps}
+
+
+def _fmt(v) -> str:
+    return f"{v:.3g}" if isinstance(v, float) else str(v)
+
+
+def overhead_md(rec: dict) -> str:
+    """Markdown of :func:`overhead_ratios`: one line per ratio, then the checks."""
+    out = ["# What surrounds the settle (issue 19)", "",
+           f"settle/chain: fastest CPU time of {rec['repeats']} interleaved runs; the others: medians of each "
+           "call's wall time over its own settle.", ""]
+    for r in rec["rows"]:
+        out.append("- " + r["case"] + ": " + "; ".join(f"{k} {_fmt(v)}" for k, v in r.items() if k != "case"))
+    out += checks_md(rec["checks"])
+    return "\n".join(out) + "\n"
+
+
+def write_overhead_bench(out_dir, *, quick: bool = False, repeats: int | None = None) -> dict:
+    """Measure and write ``overhead.json`` and ``overhead.md`` into ``out_dir``; returns the record."""
+    rec = overhead_ratios(quick=quick, repeats=repeats)
+    write_record(out_dir, "overhead", rec, overhead_md(rec))
+    return rec
+
+
+if __name__ == "__main__":  # pragma: no cover - manual run: python -m simgrip.harness.bench_overhead
+    print(overhead_md(overhead_ratios()))
