@@ -107,6 +107,8 @@ class BenchResult:
     modes: dict = field(default_factory=dict)
     #: simgrip's free-rod settle against MuJoCo's cable at matched error (:mod:`simgrip.harness.bench_cable`).
     cable: dict = field(default_factory=dict)
+    #: What surrounds the settle: sweep point, simulate call, settle/chain (:mod:`simgrip.harness.bench_overhead`).
+    overhead: dict = field(default_factory=dict)
     files: dict = field(default_factory=dict)
     jobs: int | None = 1
     quick: bool = False
@@ -225,10 +227,14 @@ def run_bench(
     from simgrip.harness.bench_cable import write_cable_bench  # issue 19: MuJoCo's cable as the settle's peer
 
     result.cable = write_cable_bench(out, quick=quick, repeats=repeats)
+    from simgrip.harness.bench_overhead import write_overhead_bench  # issue 19: the ratios around the settle
+
+    result.overhead = write_overhead_bench(out, quick=quick, repeats=repeats)
     result.files = {**_write(out, result), **{name: out / name for name in ("settle_targets.json", "settle_targets.md",
                                                                             "gripper.json", "gripper.md", "modes.json",
                                                                             "modes.md", "modes.png", "cable.json",
-                                                                            "cable.md")}}
+                                                                            "cable.md", "overhead.json",
+                                                                            "overhead.md")}}
     return result
 
 
@@ -236,7 +242,7 @@ def run_bench(
 #: write_modes_bench's).
 OUTPUT_FILES = ("bench.csv", "bench.json", "sweep.json", "skips.md", "summary.md", "pareto.png",
                 "settle_targets.json", "settle_targets.md", "gripper.json", "gripper.md", "modes.json", "modes.md",
-                "modes.png", "cable.json", "cable.md")
+                "modes.png", "cable.json", "cable.md", "overhead.json", "overhead.md")
 
 
 def _loadavg():
@@ -259,7 +265,7 @@ def _write(out: Path, res: BenchResult) -> dict:
     meta = {"quick": res.quick, "jobs": res.jobs, "elapsed_s": res.elapsed_s, "params": vars(STANDARD),
             "standard_cases": STANDARD_CASES, "cpu_count": os.cpu_count(), "load_avg": _loadavg()}
     write_json(out / "bench.json", {"meta": meta, "rows": res.rows, "ratios": res.ratios, "env": res.env,
-                                    "gripper": res.gripper.get("rows", [])})
+                                    "gripper": res.gripper.get("rows", []), "overhead": res.overhead.get("rows", [])})
     write_json(out / "sweep.json", res.sweep)
     with atomic_write(out / "skips.md") as fh:
         fh.write(skips_md(res.skips))
