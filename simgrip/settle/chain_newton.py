@@ -56,6 +56,7 @@ class ChainNewton(Newton):
         self.model = ChainModel(scene)
         #: MuJoCo's contact distance minus the analytic one (round-off, over l), per pair
         self.dist_shift = np.zeros(len(self.pairs))
+        self._memo = {}  # the state's geometry within one inner solve (_at)
 
     def _update_kc(self, q) -> bool:
         """Read MuJoCo's contact stiffness and its contact distances' round-off at ``q``."""
@@ -109,11 +110,11 @@ class ChainNewton(Newton):
         cm = self.model
         n, yf = cm.n, self.yf
         nw = yf.size
-        nodes = cm.nodes(phi) if (self.normal_active or self.sticks) else None  # (only the terms need them)
-        F, diag, off = cm.internal(phi)
+        nodes = self._at("nodes", phi, w, cm.nodes, phi) if (self.normal_active or self.sticks) else None
+        F, diag, off = self._at("internal", phi, w, cm.internal, phi)
         Fw = cm.workpiece_force()[yf]
         act = self.normal_active
-        pterms = [cm.pair_term(p, phi, nodes, w) for p in act]
+        pterms = [self._at(("pair", p), phi, w, cm.pair_term, p, phi, nodes, w) for p in act]
         sterms = [cm.stick_term(s, phi, nodes, w) for s in self.sticks] if self.sticks else []
         mu = {i: float(self.scene.model.pair_friction[self._pair_of(s)][0]) for i, s in enumerate(self.sticks)
               if i in self.sliding}  # (only the sliding sticks' friction enters)
@@ -196,10 +197,34 @@ class ChainNewton(Newton):
         nn = len(self.normal_active)
         return dphi, dw, y[nw + nz:nw + nz + nn], y[nw + nz + nn:]
 
+    # -- the state's geometry, once per state ------------------------------------------------
+    def _at(self, key, phi, w, fn, *args):
+        """``fn(*args)`` computed once per state ``(phi, w)`` of an inner solve.
+
+        A state's arrays are never written in place (every trial step builds new ones), so a
+        result found at the very same objects (``is``) is the result ``fn`` would compute again,
+        bit for bit; the one entry per ``key`` is the last state's.  Only what depends on the state
+        and on what stays fixed through a solve is kept (nodes, spring and gravity forces, contact
+        pair terms: not the stick terms, whose anchors move at every iteration); :meth:`_newton`
+        starts each solve empty (the rest angles and contact set change between solves).
+        """
+        hit = self._memo.get(key)
+        if hit is not None and hit[0] is phi and hit[1] is w:
+            return hit[2]
+        out = fn(*args)
+        self._memo[key] = (phi, w, out)
+        return out
+
+    def _distances(self, phi, w) -> np.ndarray:
+        """Every pair's analytic signed distance at the state ``(phi, w)`` (:meth:`_at`)."""
+        cm = self.model
+        return self._at("dist", phi, w, cm.pair_distances, phi, self._at("nodes", phi, w, cm.nodes, phi), w)
+
     # -- Newton -------------------------------------------------------------------------
     def _newton(self, q, idx, tol, max_iter, contacts):
         sc = self.scene
         cm = self.model
+        self._memo = {}
         free = np.zeros(sc.model.nv, bool)
         free[np.asarray(idx, dtype=int)] = True
         self.yf = np.array([j for j in range(cm.nw) if free[int(cm.wd[j])]], dtype=int)  # free workpiece dofs
@@ -230,6 +255,7 @@ class ChainNewton(Newton):
             return cm.join(q, ph, ww)
 
         def finish(conv, why, qq, NN, ll):
+            self._memo = {}
             self.N = NN * W
             self.lam[stick_act] = ll * W
             return conv, why, qq
@@ -242,6 +268,7 @@ class ChainNewton(Newton):
                 self._reanchor(state_q(phi, w))
             R, jacobian = self._system(phi, w, N, lam, stick_act, True)
             if not np.all(np.isfinite(R)):
+                self._memo = {}
                 raise SettleError("settle diverged (non-finite residual)")
             res_f = float(np.max(np.abs(R[:nf])))
             res_c = float(np.max(np.abs(R[nf:] * self._row_scale(len(N), len(stick_act))))) if R.size > nf else 0.0
@@ -274,7 +301,7 @@ class ChainNewton(Newton):
             if contacts and dist_at is not None and dist_at[0] is phi and dist_at[1] is w:
                 d0 = dist_at[2]  # computed at this very state when it was accepted
             else:
-                d0 = cm.pair_distances(phi, cm.nodes(phi), w) if contacts else None
+                d0 = self._distances(phi, w) if contacts else None
             inact = [p for p in range(len(self.pairs)) if p not in self.normal_active] if contacts else []
             step, accepted = 1.0, False
             for _ in range(50):
@@ -283,7 +310,7 @@ class ChainNewton(Newton):
                 Rn, _ = self._system(ph, ww, Nn, ln, stick_act, False)
                 ok = bool(np.all(np.isfinite(Rn)))
                 if ok and inact:  # pairs not yet touching: no tunnelling (move at most half their gap)
-                    dn = cm.pair_distances(ph, cm.nodes(ph), ww)
+                    dn = self._distances(ph, ww)
                     ok = all(dn[p] > -PEN_MAX or d0[p] <= 0 for p in inact) and all(
                         d0[p] - dn[p] <= max(0.5 * d0[p], 0.0) + PEN_MAX for p in inact if d0[p] > 0)
                 mn = float(np.linalg.norm(Rn)) if ok else math.inf
@@ -300,7 +327,7 @@ class ChainNewton(Newton):
             read_kc(phi, w)
             stiffen(N)
             if contacts:  # a pair that starts touching joins the set at once
-                dn = cm.pair_distances(phi, cm.nodes(phi), w)
+                dn = self._distances(phi, w)
                 dist_at = (phi, w, dn)
                 newp = [p for p in range(len(self.pairs)) if p not in self.normal_active and dn[p] < 0.0]
                 if newp:
@@ -316,10 +343,10 @@ class ChainNewton(Newton):
         """
         cm = self.model
         n, yf = cm.n, self.yf
-        nodes = cm.nodes(phi)
-        F, _, _ = cm.internal(phi)
+        nodes = self._at("nodes", phi, w, cm.nodes, phi)
+        F, _, _ = self._at("internal", phi, w, cm.internal, phi)
         b = np.concatenate([cm.to_q(F), cm.workpiece_force()[yf]])
-        cols = [cm.pair_term(p, phi, nodes, w).grad for p in self.normal_active]
+        cols = [self._at(("pair", p), phi, w, cm.pair_term, p, phi, nodes, w).grad for p in self.normal_active]
         cols += [cm.stick_term(self.sticks[i], phi, nodes, w).grad for i in stick_act]
         if not cols:
             return N, lam
