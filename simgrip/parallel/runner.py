@@ -346,9 +346,10 @@ def _run_dask_quietly(fn, items, n, options, batch_size, on_result, bar, collect
         else:  # its nannies restart a worker that dies within ~1 s; none for this long: they died and stayed dead
             watch = WorkerWatch(client, "the local Dask cluster", DEFAULT_WORKER_WAIT_S, hint="its worker processes "
                                 "died and were not restarted (out of memory? killed?); run again, or with --jobs 1")
-        # batches are cut from the items and submitted as earlier ones finish: at most `limit` in flight, so the
-        # items, the futures and the results held here are bounded whatever the number of items
-        limit = IN_FLIGHT_PER_WORKER * max(1, workers)
+        # collect=False: batches are cut from the items and submitted as earlier ones finish, at most `limit` in
+        # flight, so the items, futures and results held here are bounded whatever the number of items; collect:
+        # the items and results are all held anyway, and every batch is submitted at once (as always)
+        limit = IN_FLIGHT_PER_WORKER * max(1, workers) if not collect else tasks
         batches = _batches(items, batch_size)
         env.futures = []
         start_of = {}
