@@ -15,7 +15,7 @@ The cost model (stated; the estimates are rough, the bounds generous):
   0.16, 0.28 and 0.60 s.  Wall time = points x that / workers;
 * **client memory** (the process that runs the sweep): with an output folder
   rows go to disk as they arrive, and the client keeps one byte per point
-  (which points are done), the axis values and one chunk of points in flight
+  (which points are done), the axis values and the points in flight
   (:data:`CHUNK_BYTES`); without one it keeps every record
   (:data:`RECORD_BYTES` each);
 * **disk**: :data:`CSV_ROW_BYTES` per row, twice (the saved batches and
@@ -64,10 +64,13 @@ POINT_BYTES = 500
 CSV_ROW_BYTES = 400
 #: An axis value in memory and in the JSON files (a float in a tuple, a list, a JSON number).
 AXIS_VALUE_BYTES = 100
-#: Points sent to the runner at once: in-process, and to a Dask cluster (which starts once per chunk).
+#: Points in flight (sent, results not yet saved): in-process one segment (:data:`simgrip.sweep.grid.SEGMENT_POINTS`);
+#: on Dask at most IN_FLIGHT_PER_WORKER (4) batches of at most 32 segments of 32 points per worker
+#: (:func:`simgrip.parallel.runner.run_tasks` with ``collect=False``): 8192 for the default 2 workers.  Each local
+#: worker also costs :data:`WORKER_BYTES`, 30x what its points in flight cost this process.
 CHUNK_IN_PROCESS = 256
 CHUNK_DASK = 8192
-#: Client memory of one chunk in flight (points and records of the larger chunk).
+#: Client memory of the points in flight of 2 workers (points and records).
 CHUNK_BYTES = CHUNK_DASK * (POINT_BYTES + RECORD_BYTES)
 #: Settles are CPU-bound single-threaded tasks: beyond one worker per core nothing is gained; up to this many per
 #: core are started (the runner's own cap, :data:`simgrip.parallel.dask_cluster.MAX_WORKERS_PER_CORE`), more are
