@@ -103,7 +103,9 @@ class DiscreteEnergy:
 
     # -- energy and derivatives -------------------------------------------------
     def moments(self, x):
-        q = np.diff(x, prepend=0.0)
+        xa = np.asarray(x, dtype=float)
+        q = xa.copy()  # np.diff(x, prepend=0.0) without its concatenation: the same differences, x_0 - 0 is x_0
+        q[1:] -= xa[:-1]
         return q, self.D * self.k * (q - self.rest)
 
     def energy(self, x) -> float:
