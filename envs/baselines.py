@@ -12,7 +12,7 @@ Policies (actions ``(curvature command, palm speed)`` in ``[-1, 1]``; ``PlaceFra
 ``openloop``    every schedule of the family "ramp the curvature command linearly from straight (+1) to ``a_k``
                 over ``R`` steps, hold it; palm still until ``R + 10`` steps, then up at ``a_p``", over the
                 grid ``a_k`` x ``RAMP_GRID`` x ``PALM_GRID`` (best of the grid on the evaluated seeds)
-``constant``    (``PlaceFragile-v0``: the grid adds the palm's ``x`` command ``a_x`` in ``(-0.5, 0, 0.5)``)
+``constant``    (``PlaceFragile-v0``: ``a_k`` x palm ``x`` command ``a_x`` in ``(-0.5, 0.5)``, palm ``z`` 0.5)
 ``openloop``    (``PlaceFragile-v0``: ramp to ``a_k`` over 25 steps, lift 20 steps, carry at full speed to
                 ``-x`` or ``+x`` over ``PLACE_DISTANCES``, lower 20 steps; grid ``a_k`` x side x distance)
 ``oracle``      :class:`~simgrip.envs.scripted_fragile.OracleFragilePolicy` (knows the hidden window; for
@@ -41,8 +41,8 @@ __all__ = ["KAPPA_GRID", "PALM_GRID", "PLACE_DISTANCES", "RAMP_GRID", "run_polic
 
 KAPPA_GRID = tuple(round(float(a), 2) for a in np.linspace(-1.0, 0.6, 17))  # 0.1 apart: force steps of ~0.3 N
 PALM_GRID = (0.25, 0.5, 1.0)
-RAMP_GRID = (1, 25, 75)  # steps: 0.02 s, 0.5 s, 1.5 s
-PLACE_DISTANCES = (0.05, 0.07, 0.09)  # [m] carried by the pick-and-place open-loop family
+RAMP_GRID = (1, 50)  # steps: 0.02 s, 1 s
+PLACE_DISTANCES = (0.05, 0.08)  # [m] carried by the pick-and-place open-loop family
 _WAIT = 10  # steps between the end of the ramp and the lift
 
 
@@ -119,8 +119,8 @@ def _members(policy: str, grid: str, place: bool):
     palms = PALM_GRID if grid == "full" else (0.5,)
     ramps = RAMP_GRID if grid == "full" else (25,)
     if place and policy == "constant":  # (curvature, palm x, palm z)
-        xs = (-0.5, 0.0, 0.5) if grid == "full" else (0.0,)
-        return [({"kappa": k, "palm_x": x, "palm": p}, _constant(k, x, p)) for k in kappas for x in xs for p in palms]
+        xs = (-0.5, 0.5) if grid == "full" else (0.5,)  # a constant palm z never sets the workpiece down
+        return [({"kappa": k, "palm_x": x, "palm": 0.5}, _constant(k, x, 0.5)) for k in kappas for x in xs]
     if place and policy == "openloop":
         dists = PLACE_DISTANCES if grid == "full" else (0.07,)
         return [({"kappa": k, "side": sd, "distance": dd}, _place_openloop(k, sd, dd))

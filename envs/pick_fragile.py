@@ -147,7 +147,8 @@ class FragilePickEnv(_Fragile, PickEnv):
     See :mod:`simgrip.envs.pick_fragile` for the draw, the sensing and the info table (``info["is_success"]``,
     ``info["workpiece_lift"]``, ``info["crushed"]``, ``info["dropped"]``).  Arguments: those of ``PickEnv``
     with the defaults ``box_mass_range = (0.01, 0.2)`` kg (drawn log-uniform), ``friction_range = (0.3, 1.2)``,
-    ``box_width_range = (0.03, 0.075)`` m, plus ``crush_ratio_range = (1.3, 2.0)``.
+    ``box_width_range = (0.03, 0.075)`` m, ``palm_start = (0.085, 0.09)`` m, plus ``crush_ratio_range =
+    (1.3, 2.0)``.
     """
 
     _MASS_KEY = "box_mass"
@@ -155,7 +156,9 @@ class FragilePickEnv(_Fragile, PickEnv):
 
     def __init__(self, *, crush_ratio_range=FRAGILE_DEFAULTS["crush_ratio_range"],
                  box_mass_range=FRAGILE_DEFAULTS["mass_range"], friction_range=FRAGILE_DEFAULTS["friction_range"],
-                 box_width_range=FRAGILE_DEFAULTS["size_range"], palm_start=(0.095, 0.1), **kwargs):
+                 box_width_range=FRAGILE_DEFAULTS["size_range"], palm_start=(0.085, 0.09), **kwargs):
+        # palm_start lower than Pick-v1's (0.105, 0.115): the tips meet the box lower, leaving room to slide up
+        # its faces while the grip force is found
         super().__init__(box_mass_range=box_mass_range, friction_range=friction_range,
                          box_width_range=box_width_range, palm_start=palm_start, **kwargs)
         self._mass_range = self.box_mass_range
@@ -170,10 +173,12 @@ class FragilePickMultiEnv(_Fragile, PickMultiEnv):
 
     See :mod:`simgrip.envs.pick_fragile` for the draw, the sensing and the info table.  Arguments: those of
     ``PickMultiEnv`` (``K = fingers = 3``) with the defaults ``shapes = ("cylinder",)``, ``offset_max = 0``
-    (centred), ``mass_range = (0.01, 0.2)`` kg (log-uniform), ``friction_range = (0.3, 1.2)``, ``size_range =
+    (centred), ``palm_start = (0.085, 0.09)`` m (lower than ``PickMulti-v0``'s: the tips meet the cylinder
+    lower, leaving room to slide up it while the grip force is found), ``mass_range = (0.01, 0.2)`` kg (log-uniform), ``friction_range = (0.3, 1.2)``, ``size_range =
     (0.03, 0.075)`` m, plus ``crush_ratio_range = (1.3, 2.0)``.  ``N_hold = m g / (K mu)`` counts every finger
     as carrying its share through friction on a vertical face (a cylinder's).  Other settings are harder and
-    not yet solved by the scripted controllers (issue 18, measured on seeds 5000-5029): an off-centre
+    not yet solved by the scripted controllers (issue 18, measured on seeds 5000-5029 with the palm
+    started at 0.105-0.115 m): an off-centre
     cylinder (``offset_max = 0.005``: the first finger to touch pushes it, and the largest finger force
     exceeds the mean) 8 of 30 observation-only; spheres (``shapes=("sphere",)``: tilted contact normals,
     so ``N_hold`` above is approximate, and a squeezed sphere is pressed out sideways) 0 of 16 centred.
@@ -184,9 +189,10 @@ class FragilePickMultiEnv(_Fragile, PickMultiEnv):
 
     def __init__(self, *, crush_ratio_range=FRAGILE_DEFAULTS["crush_ratio_range"],
                  mass_range=FRAGILE_DEFAULTS["mass_range"], friction_range=FRAGILE_DEFAULTS["friction_range"],
-                 size_range=FRAGILE_DEFAULTS["size_range"], shapes=("cylinder",), offset_max=0.0, **kwargs):
+                 size_range=FRAGILE_DEFAULTS["size_range"], shapes=("cylinder",), offset_max=0.0,
+                 palm_start=(0.085, 0.09), **kwargs):
         super().__init__(mass_range=mass_range, friction_range=friction_range, size_range=size_range, shapes=shapes,
-                         offset_max=offset_max, **kwargs)
+                         offset_max=offset_max, palm_start=palm_start, **kwargs)
         self._mass_range = self.mass_range
         self._fragile_args(crush_ratio_range)
 
