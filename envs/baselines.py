@@ -2,7 +2,8 @@
 
 ``python -m simgrip.envs.baselines --env simgrip/PickFragile-v0 --policy constant --seeds 5000-5049 --out F.json``
 
-Policies (actions ``(curvature command, palm speed)`` in ``[-1, 1]``; ``PlaceFragile-v0``: ``(curvature, palm x, palm z)``):
+Policies (actions ``(curvature command, palm speed)`` in ``[-1, 1]``; ``PlaceFragile-v0``:
+``(curvature, palm x, palm z)``):
 
 ==============  ==============================================================================================
 ``random``      uniform actions, the action space seeded with the episode seed

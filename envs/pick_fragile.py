@@ -174,7 +174,8 @@ class FragilePickMultiEnv(_Fragile, PickMultiEnv):
     See :mod:`simgrip.envs.pick_fragile` for the draw, the sensing and the info table.  Arguments: those of
     ``PickMultiEnv`` (``K = fingers = 3``) with the defaults ``shapes = ("cylinder",)``, ``offset_max = 0``
     (centred), ``palm_start = (0.085, 0.09)`` m (lower than ``PickMulti-v0``'s: the tips meet the cylinder
-    lower, leaving room to slide up it while the grip force is found), ``mass_range = (0.01, 0.2)`` kg (log-uniform), ``friction_range = (0.3, 1.2)``, ``size_range =
+    lower, leaving room to slide up it while the grip force is found), ``mass_range = (0.01, 0.2)`` kg
+    (log-uniform), ``friction_range = (0.3, 1.2)``, ``size_range =
     (0.03, 0.075)`` m, plus ``crush_ratio_range = (1.3, 2.0)``.  ``N_hold = m g / (K mu)`` counts every finger
     as carrying its share through friction on a vertical face (a cylinder's).  Other settings are harder and
     not yet solved by the scripted controllers (issue 18, measured on seeds 5000-5029 with the palm

@@ -106,9 +106,11 @@ class FragilePlaceEnv(FragilePickEnv):
 
         self.fingers = fingers = index_fingers(model, 2, self.n, "hand_")
         self._validity = FingerValidity(model, fingers)
-        self.palm_qpos, self.palm_dof = int(model.jnt_qposadr[joint("palm_z")]), int(model.jnt_dofadr[joint("palm_z")])
+        palm_z = joint("palm_z")
+        self.palm_qpos, self.palm_dof = int(model.jnt_qposadr[palm_z]), int(model.jnt_dofadr[palm_z])
         self._palm_x_qpos = int(model.jnt_qposadr[joint("palm_x")])
-        self.box_qpos, self.box_dof = int(model.jnt_qposadr[joint("box_free")]), int(model.jnt_dofadr[joint("box_free")])
+        box = joint("box_free")
+        self.box_qpos, self.box_dof = int(model.jnt_qposadr[box]), int(model.jnt_dofadr[box])
         self._spring_idx = fingers.joint_qpos.ravel()
         self._fq = (fingers.hinge_qpos,) if fingers.hinge_qpos is not None else (fingers.joint_qpos,)
         self._contact_forces = BoxContactForces(model, self.box_geom, fingers.finger_of_geom)
