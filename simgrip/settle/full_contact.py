@@ -9,7 +9,21 @@ broad phase finds, in three phases:
    (:data:`FULL_CLOSE_RATE_PER_RADIUS`: no link moves through another between two steps) with every
    contact on and ``condim = 1``, then run to rest: the finger
    curls onto the workpiece and onto itself without a sticking history.
-2. **Release** (friction ``mu_s`` on, ``condim = 3``): the box's holding force fades out over
+1b. **Grasp at a depth** (``scene.box_depth``, :func:`~simgrip.sim.full_contact.check_grasp`), during the
+   closing: once the tip has passed ``depth`` below the box's built top, the held box follows it (moved at most
+   :data:`FULL_GRASP_RATE` ``r_link`` per step toward ``top - Y_tip = depth``; Grip II ``Y_tip - bottom``:
+   :func:`grasp_depth`), and each tip is pulled down by the force its friction will carry once the box hangs
+   on it, ``-W/F - (the vertical forces of the finger's other contacts with the box)`` (the box's vertical
+   balance; low-passed, :data:`FULL_LOAD_BLEND`).  Without that stand-in a frictionless tip slides up the face
+   and off its top edge (past the onset there is no frictionless rest on the face); the held box cannot be
+   brought to rest at the depth by this explicit force alone (it feeds back through the corner's contact: a
+   limit cycle of ~1e-3 l, measured at n = 16), so the release starts as soon as the ramp ends, the stand-in
+   fading as the box's support does, and the box then hangs on the sticking tip: the over-damped flow of the
+   rod and the free box with the tip bonded by friction, which converges.  The depth the state ends at (the
+   tip sticks; MuJoCo's soft friction slips ~5e-4 l while the load comes on) is checked against the asked one
+   within :data:`FULL_DEPTH_TOL` (a warning otherwise); :func:`grasp_depth` reads it.
+2. **Release** (friction ``mu_s`` on, ``condim = 3``; without ``scene.extra_friction`` only the tip's contacts
+   carry friction, every other contact stays ``condim = 1``: :func:`_friction`): the box's holding force fades out over
    :data:`~simgrip.settle.dynamics.DYN_RELEASE_STEPS` steps and the scene runs to rest.  The box is
    dropped when it falls :data:`~simgrip.settle.dynamics.DYN_DROP_FALL` (or
    :data:`~simgrip.settle.dynamics.DYN_DROP_SLIP` out of contact); the finger then settles alone,
@@ -40,7 +54,8 @@ from simgrip.settle.statics import CONTACT_IMPEDANCE, CONTACT_STIFFNESS
 from simgrip.sim.full_contact import colliding_geoms
 from simgrip.sim.scene import Scene, set_curvature
 
-__all__ = ["FULL_PEN_LIMIT", "contact_set", "contact_solref", "ramp_rate", "settle_full"]
+__all__ = ["FULL_DEPTH_TOL", "FULL_GRASP_RATE", "FULL_LOAD_BLEND", "FULL_PEN_LIMIT", "contact_set", "contact_solref", "grasp_depth",
+           "ramp_rate", "settle_full"]
 
 #: Deepest contact (over l) a full-contact state may keep; deeper restarts at half the step.
 FULL_PEN_LIMIT = 1e-4
@@ -56,6 +71,19 @@ FULL_CONTACT_RELAX = 0.5
 #: rest shape at most: :class:`Dyn` is over-damped at ``h = 1/omega_min``), so a link moves at most ``r_link``
 #: per step: half the capsules' contact distance ``2 r_link``, never through another link between two steps.
 FULL_CLOSE_RATE_PER_RADIUS = 1.0
+#: Closing ramp: its rate never halves below this (over ``r_link``, rad per step): a contact held deep by a
+#: load would otherwise halve it to zero and stall the closing.
+FULL_CLOSE_RATE_FLOOR = 0.01
+#: Grasp at a depth: largest move of the held box per step, over ``r_link`` (half the guard's bound
+#: :data:`~simgrip.settle.full_guard.FULL_STEP_RADII`: the finger keeps the other half).
+FULL_GRASP_RATE = 0.25
+#: Grasp at a depth: weight of the new value in the tip's stand-in force per closing step (a low-pass: the
+#: contact forces it is summed from answer the force itself one step late).
+FULL_LOAD_BLEND = 0.5
+#: Grasp at a depth: the settled depth must be within this of the asked one (over l): the contact radius
+#: ``r_link`` (2e-3); measured 5e-4 of slip at Grip I kappa -10, n = 16 ... 64.  It moves N by
+#: ``|dN/d depth|`` times it at most.
+FULL_DEPTH_TOL = 2e-3
 
 
 def settle_full(scene: Scene, tol: float, max_steps: int, allow_unconverged: bool, t0: float) -> SettledState:
@@ -125,7 +153,8 @@ def _once(scene: Scene, tol: float, budget: int, factor: float, t0: float) -> tu
     # 1. closing, frictionless
     target = scene.profile
     rest = scene.springs.rest.copy()
-    m.geom_condim[gs] = 1
+    grasp = _Follow(scene, dyn) if held and scene.box_depth is not None else None
+    _friction(scene, gs, "none")
     try:
         # adaptive ramp: the rest rotation per step grows while a step moves less than half the guard's bound
         # and shrinks when it moves more (the guard itself still rejects any step above it)
@@ -137,14 +166,26 @@ def _once(scene: Scene, tol: float, budget: int, factor: float, t0: float) -> tu
                 break
             frac = min(1.0, frac + rate / max(total, 1e-300))
             m.qpos_spring[scene.joint_qpos] = (rest * frac)[None, :]
+            if grasp is not None:
+                grasp.move(force=False)
+                grasp.load(FULL_LOAD_BLEND)
             guard.step()
             if _deepest(d) > tunnel:
                 return _read(scene, dyn, t0, held, False), True
-            rate = ramp_rate(rate, guard, _deepest(d), tunnel)
-        converged, why = guard.run(max(tol, 1e-8), budget)
+            rate = max(ramp_rate(rate, guard, _deepest(d), tunnel), FULL_CLOSE_RATE_FLOOR * scene.r_link)
+        if grasp is not None:  # 1b. the box at the asked depth (followed on if the tip never got there)
+            converged = True
+            while abs(grasp.move(force=True)) > FULL_GRASP_RATE * scene.r_link * scene.length:
+                if dyn.steps >= budget:
+                    converged = False
+                    break
+                grasp.load(FULL_LOAD_BLEND)
+                guard.step()
+        else:
+            converged, why = guard.run(max(tol, 1e-8), budget)
     finally:
         set_curvature(scene, target)
-        m.geom_condim[gs] = 3
+        _friction(scene, gs, "all" if scene.extra_friction else "tip")
     if not converged:
         return _read(scene, dyn, t0, held, False), _deepest(d) > limit
     # 2. release with friction
@@ -159,8 +200,12 @@ def _once(scene: Scene, tol: float, budget: int, factor: float, t0: float) -> tu
             if dyn.steps >= budget:
                 break
             d.qfrc_applied[wz] = weight * (1.0 - i / DYN_RELEASE_STEPS)
+            if grasp is not None:  # the tip's stand-in for friction fades as the box's support does
+                grasp.fade(1.0 - i / DYN_RELEASE_STEPS)
             guard.step()
         dyn.hold(False)
+        if grasp is not None:
+            grasp.fade(0.0)
 
         def watch():
             drop = (z0 - float(d.xpos[scene.workpiece_body][2])) / scene.length
@@ -184,7 +229,101 @@ def _once(scene: Scene, tol: float, budget: int, factor: float, t0: float) -> tu
     elif not scene.has_workpiece:
         converged, why = guard.run(tol, budget)
     state = _read(scene, dyn, t0, held, converged)
+    if grasp is not None and held:
+        got = grasp_depth(scene)
+        if abs(got - scene.box_depth) > FULL_DEPTH_TOL:
+            state.warnings.append(f"grasp depth: the tip slipped to {got:.4g} l below the box's edge (asked "
+                                  f"{scene.box_depth:.4g} l)")
     return state, state.penetration > FULL_PEN_LIMIT or _deepest(d) > limit
+
+
+def grasp_depth(scene, qpos=None) -> float:
+    """The grasp depth over ``l`` at ``qpos`` (default: the scene's): Grip I ``top - Y_tip``, Grip II
+    ``Y_tip - bottom``, where ``top``/``bottom`` is the box's face offset by ``r_link`` outward (the centreline
+    convention of :func:`~simgrip.sim.full_contact.check_grasp`) and ``Y_tip`` the first finger's tip node."""
+    m, d = scene.model, scene.data
+    q = d.qpos if qpos is None else qpos
+    if scene.grip not in ("I", "II") or scene.workpiece_body < 0:
+        raise ValueError(f"grip: a grasp depth needs Grip I or II's box, got {scene.grip!r}")
+    L = scene.length
+    phi = np.cumsum(q[scene.index.joint_qpos[0]])
+    y_tip = float(np.sum(np.sin(phi))) * L / scene.n
+    zc = float(m.body_pos[scene.workpiece_body][2])
+    for name, qa in zip(scene.workpiece_joints, scene.workpiece_qpos):
+        if name == "z":
+            zc += float(q[qa])
+    face = float(scene.box_half[2]) + scene.r_link * L
+    return ((zc + face - y_tip) if scene.grip == "I" else (y_tip - (zc - face))) / L
+
+
+class _Follow:
+    """Phase 1b (module docstring): the held box's ``z`` toward ``top - Y_tip = depth`` and the tips' stand-in
+    for the friction that will carry the box.  While closing it follows once the tip has passed the asked depth
+    below the box's built top (before, the box waits where it was built, clear of the finger's root)."""
+
+    def __init__(self, scene: Scene, dyn: Dyn):
+        if "z" not in scene.workpiece_joints:
+            raise ValueError("box_depth: the box must be free to move vertically (free_workpiece=True)")
+        self.scene, self.dyn = scene, dyn
+        self.iz = list(scene.workpiece_joints).index("z")
+        self.up = 1.0 if scene.grip == "I" else -1.0  # raising the box deepens Grip I's grasp, lowers Grip II's
+        self.on = False
+        self.tip_qfrc = np.zeros(dyn.m.nv)
+        self.fz = None
+
+    def move(self, force: bool) -> float:
+        """Move the held box toward the depth by at most :data:`FULL_GRASP_RATE` ``r_link``; returns the box's
+        remaining move [m] (before this one)."""
+        sc = self.scene
+        err = (sc.box_depth - grasp_depth(sc)) * sc.length
+        self.on = self.on or force or err <= 0.0
+        if self.on:
+            rate = FULL_GRASP_RATE * sc.r_link * sc.length
+            self.dyn.held_q[self.iz] += self.up * float(np.clip(err, -rate, rate))
+        return err
+
+    def load(self, blend: float) -> float:
+        """While following: each finger's tip pulled vertically by ``fz = -W/F - sum`` (``W`` the workpiece's
+        weight over the ``F`` fingers; ``sum`` the vertical forces of the finger's other contacts with the
+        workpiece, MuJoCo's, frictionless): what the tip's friction carries once the box hangs on it (the box's
+        vertical balance), applied as ``J^T fz`` at the tip sphere's centre; ``blend`` of the new value mixed
+        into the old.  Returns the largest change of ``fz`` over ``W/F``."""
+        sc, d, m = self.scene, self.dyn.d, self.dyn.m
+        if not self.on:
+            return math.inf
+        wg = set(int(g) for g in sc.workpiece_geoms)
+        idx = sc.index
+        weight = sc.workpiece_mass * sc.physical.g / sc.fingers
+        fz = np.full(sc.fingers, -weight)
+        owner = {int(g): f for f in range(sc.fingers) for g in idx.link_geom[f]}
+        fc = np.zeros(6)
+        for c in range(d.ncon):
+            g1, g2 = int(d.contact.geom1[c]), int(d.contact.geom2[c])
+            if g1 in wg and g2 in owner:
+                f, sign = owner[g2], 1.0  # the frame's force acts on geom2
+            elif g2 in wg and g1 in owner:
+                f, sign = owner[g1], -1.0
+            else:
+                continue
+            mujoco.mj_contactForce(m, d, c, fc)
+            world = np.asarray(d.contact.frame[c]).reshape(3, 3).T @ fc[:3]
+            fz[f] -= sign * float(world[2])
+        old = self.fz
+        self.fz = fz if old is None else blend * fz + (1.0 - blend) * old
+        self.tip_qfrc[:] = 0.0
+        jacp = np.zeros((3, m.nv))
+        for f in range(sc.fingers):
+            g = int(idx.tip_geom[f])
+            mujoco.mj_jac(m, d, jacp, None, d.geom_xpos[g], int(m.geom_bodyid[g]))
+            self.tip_qfrc += jacp[2] * self.fz[f]
+        self.tip_qfrc[np.asarray(sc.workpiece_dof, dtype=int)] = 0.0
+        self.fade(1.0)
+        return math.inf if old is None else float(np.max(np.abs(self.fz - old))) / weight
+
+    def fade(self, share: float) -> None:
+        """Apply ``share`` of the tips' stand-in force (the finger dofs of ``qfrc_applied``)."""
+        dofs = np.asarray(self.scene.joint_dof, dtype=int).ravel()
+        self.dyn.d.qfrc_applied[dofs] = share * self.tip_qfrc[dofs]
 
 
 def contact_solref(scene, h: float) -> list[float]:
@@ -244,13 +383,33 @@ def _deepest(d) -> float:
     return max((-float(d.contact.dist[i]) for i in range(d.ncon)), default=0.0)
 
 
+def _friction(scene: Scene, gs, where: str) -> None:
+    """Which contacts carry friction: ``"none"`` (every colliding geom ``condim = 1``), ``"all"`` (``condim =
+    3``) or ``"tip"``: the tip spheres and the last links ``condim = 3``, every other colliding geom ``condim = 1``, the links with
+    priority 1 (MuJoCo takes the higher-priority geom's condim, the larger one between equals: a link's
+    contact with anything is frictionless, the tip's with the workpiece has friction)."""
+    m = scene.model
+    m.geom_priority[gs] = 0
+    m.geom_condim[gs] = 3 if where == "all" else 1
+    if where == "tip":
+        # the last link's capsule ends in the tip sphere (same radius by default): its contact with the face is
+        # the tip's, and frictionless it would take a share of N without friction
+        tips = np.asarray([int(g) for g in scene.index.tip_geom if g >= 0] +
+                          [int(g[-1]) for g in scene.index.link_geom], dtype=int)
+        links = np.asarray(scene.index.link_geom, dtype=int).ravel()
+        m.geom_priority[links] = 1
+        m.geom_priority[tips] = 0
+        m.geom_condim[tips] = 3
+
+
 def _save_geoms(m):
     return (m.geom_solref.copy(), m.geom_solimp.copy(), m.geom_condim.copy(), m.geom_contype.copy(),
-            m.geom_conaffinity.copy())
+            m.geom_conaffinity.copy(), m.geom_priority.copy())
 
 
 def _restore_geoms(m, saved) -> None:
-    m.geom_solref[:], m.geom_solimp[:], m.geom_condim[:], m.geom_contype[:], m.geom_conaffinity[:] = saved
+    (m.geom_solref[:], m.geom_solimp[:], m.geom_condim[:], m.geom_contype[:], m.geom_conaffinity[:],
+     m.geom_priority[:]) = saved
 
 
 def contact_set(scene) -> list[dict]:

@@ -56,6 +56,7 @@ __all__ = [
     "WORKPIECE_BIT",
     "candidate_pairs",
     "check_contact_mode",
+    "check_grasp",
     "colliding_geoms",
     "enable_full_contact",
     "full_box_centre",
@@ -85,6 +86,46 @@ def check_contact_mode(contact) -> str:
     if contact == "full":
         return "full"
     raise ValueError(f"contact must be 'point', 'surface' or 'full', got {contact!r}")
+
+
+def check_grasp(grip: str, mode: str, box_depth, extra_friction) -> tuple[float | None, bool]:
+    """The full-contact grasp protocol of Grips I/II, validated: ``(box_depth, extra_friction)``.
+
+    ``box_depth`` (over ``l``, in ``(0, 1]``) or None.  Given, the box is *grasped at that depth*: the tip's
+    centre ``box_depth`` below the box's top edge (Grip II: above its bottom edge), measured in the centreline
+    convention of :mod:`simgrip.reference.constrained` (the edge where a link's centreline touches the face:
+    the top face plus ``r_link``, as the side face plus ``r_tip`` is the tip's ``X = b/2``).  The settle
+    (:mod:`simgrip.settle.full_contact`) closes the finger frictionless over the box, then moves the held box
+    until ``top - Y_tip = box_depth`` (a hand pushing the object into its grip), then releases it with friction:
+    a sticking tip keeps the depth while the box hangs on it.  None: the box stays where ``box_gap`` put it.
+
+    ``extra_friction``: whether contacts other than the tip's on the workpiece (and self contacts) carry the
+    friction ``mu_s``.  With friction at several contacts the static problem is indeterminate: the box's
+    weight may be shared by the friction of any of them in any proportion the sticking history left (the
+    contact forces are not fixed by the balance), so N depends on the path and on the step (measured, Grip I
+    kappa -10 with the box ``box_gap`` below the palm: N = 39.8, 43.0, 45.2, 43.9 at n = 16 ... 128).
+    Frictionless extra contacts make it determinate: the theory's model (the free-boundary elastica of
+    :mod:`simgrip.reference.free_boundary`), where the tip's friction alone carries the box.  Default
+    (None): False when ``box_depth`` is given (the comparison with the theory), True otherwise (every contact
+    real).  ValueError naming the parameter otherwise (both need ``contact="full"`` and Grip I or II).
+    """
+    if box_depth is not None:
+        if mode != "full" or grip not in ("I", "II"):
+            raise ValueError("box_depth: only a full-contact Grip I/II scene (contact='full') is grasped at a depth")
+        try:
+            v = float(box_depth)
+        except (TypeError, ValueError):
+            raise ValueError(f"box_depth must be a real number, got {box_depth!r}") from None
+        if isinstance(box_depth, bool) or not (math.isfinite(v) and 0.0 < v <= 1.0):
+            raise ValueError(f"box_depth must lie in (0, 1] (over l), got {box_depth!r}")
+        box_depth = v
+    if extra_friction is None:
+        return box_depth, box_depth is None
+    if not isinstance(extra_friction, (bool, np.bool_)):
+        raise ValueError(f"extra_friction must be True or False, got {extra_friction!r}")
+    if mode != "full" and not extra_friction:
+        raise ValueError("extra_friction: only a full-contact scene (contact='full') has contacts besides the tip's")
+    return box_depth, bool(extra_friction)
 
 
 def enable_full_contact(spec: mujoco.MjSpec, finger_geoms, workpiece_geoms, mu: float, root_bodies=()) -> None:

@@ -176,6 +176,11 @@ class Scene(FingerScene):
     r_corner: float
     mirror: np.ndarray
     contact: str = "pairs"
+    #: ``contact="full"``, Grips I/II: the grasp depth over ``l`` (the tip's centre below the box's top edge, Grip
+    #: II above its bottom edge, in the centreline convention; :mod:`simgrip.settle.full_contact`) or None (the
+    #: box stays where ``box_gap`` put it); whether contacts other than the tip's carry friction.
+    box_depth: float | None = None
+    extra_friction: bool = True
 
     @property
     def link_body(self) -> np.ndarray:
@@ -278,6 +283,8 @@ def build_scene(
     contact_window: float = 0.35,
     contact: str | None = None,
     box_gap: float | None = None,
+    box_depth: float | None = None,
+    extra_friction: bool | None = None,
 ) -> Scene:
     """Build and compile a scene, its fingers at the start shape.
 
@@ -316,6 +323,10 @@ def build_scene(
         With ``contact="full"`` (Grips I/II): the gap over ``l`` between the palm
         plane and the box's near face (default
         :data:`~simgrip.sim.full_contact.DEFAULT_BOX_GAP`).
+    box_depth, extra_friction : optional
+        With ``contact="full"`` (Grips I/II): the grasp protocol of
+        :func:`~simgrip.sim.full_contact.check_grasp` (the box grasped with the
+        tip ``box_depth`` below its top edge; friction on the non-tip contacts).
 
     Returns
     -------
@@ -331,6 +342,9 @@ def build_scene(
     if box_gap is not None and mode != "full":
         raise ValueError("box_gap: only a full-contact scene (contact='full') has a box with a near face")
     gap = DEFAULT_BOX_GAP if box_gap is None else check_positive("box_gap", box_gap, 1.0)
+    from simgrip.sim.full_contact import check_grasp
+
+    box_depth, extra_friction = check_grasp(grip, mode, box_depth, extra_friction)
     dimless, phys = check_params(params)
     prof = as_profile(profile)
     n = check_finger_links(n_links)
@@ -375,6 +389,7 @@ def build_scene(
     model = spec.compile()
     scene = _scene(spec, model, grip, dimless, phys, prof, springs, fingers, free_workpiece, render,
                    joints, place, r_tip, r_link, r_corner, mode)
+    scene.box_depth, scene.extra_friction = box_depth, extra_friction
     set_joint_angles(scene, q0)
     return scene
 
