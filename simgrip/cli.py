@@ -132,6 +132,15 @@ def build_parser() -> argparse.ArgumentParser:
         p.add_argument("--target-error", type=float, default=None,
                        help="settle to this error (tip over l, forces relative) by Richardson extrapolation over "
                        "resolutions it chooses (free, I, II; --links is then ignored)")
+        p.add_argument("--box-depth", type=float, default=None, metavar="D",
+                       help="with --contact full, Grips I/II: grasp the box with the tip D (over l, in (0, 1]) below "
+                       "its top edge (II: above its bottom edge); the box then hangs on the tip's friction, as in "
+                       "the free-boundary reference (simgrip solve GRIP --contact full, depth 0.4) [default: the "
+                       "box stays 0.15 l below the palm]")
+        p.add_argument("--extra-friction", default=None, choices=("on", "off"),
+                       help="with --contact full: friction on the contacts other than the tip's (off: frictionless, "
+                       "the theory's determinate problem; on: every contact, statically indeterminate) "
+                       "[default: off with --box-depth, else on]")
         if name in ("simulate", "compare"):  # compare: symmetric scenes only (simgrip.compare_gripper)
             p.add_argument("--fingers", type=int, default=None,
                            help="K >= 2 fingers around the palm axis holding a workpiece free in 3-D (Grips I, II: "
@@ -279,8 +288,25 @@ def _cmd_simulate(args) -> dict:
     profile = _profile(args, grip)
     return settled_record(simulate(grip, params, profile, links, method=args.method,
                                    target_error=args.target_error, contact=args.contact,
-                                   progress=_progress(args, links)),
+                                   progress=_progress(args, links), **_grasp_options(args, grip)),
                           params, profile)
+
+
+def _grasp_options(args, grip: str) -> dict:
+    """``--box-depth`` and ``--extra-friction`` as ``box_depth``/``extra_friction`` keywords of the full-contact
+    scene (none given: {}); ValueError naming the option."""
+    depth, extra = getattr(args, "box_depth", None), getattr(args, "extra_friction", None)
+    if depth is None and extra is None:
+        return {}
+    if args.contact != "full":
+        raise ValueError(f"{'--box-depth' if depth is not None else '--extra-friction'}: needs --contact full")
+    from simgrip.sim.full_contact import check_grasp
+
+    try:
+        depth, extra = check_grasp(grip, "full", depth, None if extra is None else extra == "on")
+    except ValueError as exc:
+        raise ValueError(f"--{str(exc).replace('_', '-', 1)}") from None
+    return {"box_depth": depth, "extra_friction": extra}
 
 
 def _gripper_arguments(args, grip: str) -> dict | None:

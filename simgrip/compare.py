@@ -61,6 +61,9 @@ def simulate(grip: str, params: DimensionlessParams, profile, links: int, *, pro
     auto = method in (None, "auto")
 
     full = {"contact": "full"} if settle_kw.get("contact") == "full" else {}  # every link touches (issue 17)
+    for k in ("box_depth", "extra_friction"):  # the full-contact grasp (simgrip.sim.full_contact.check_grasp)
+        if k in settle_kw:
+            full[k] = settle_kw.pop(k)
 
     def build():
         with phase(progress, f"building the model ({links} links per finger)"):

@@ -119,3 +119,15 @@ def test_grasp_defaults():
     assert (a.box_depth, a.extra_friction) == (0.4, False)
     assert (b.box_depth, b.extra_friction) == (None, True)
     assert (c.box_depth, c.extra_friction) == (0.3, True)
+
+
+@pytest.mark.parametrize("argv,option", [
+    (["--box-depth", "0.4"], "--box-depth"), (["--contact", "full", "--box-depth", "2"], "--box-depth"),
+    (["--contact", "full", "--box-depth", "nan"], "--box-depth"), (["--extra-friction", "off"], "--extra-friction"),
+])
+def test_cli_grasp_options_named(argv, option, capsys):
+    from simgrip.cli import main
+
+    assert main(["simulate", "I", "--kappa", "-10", "--links", "8", *argv]) == 2
+    err = capsys.readouterr().err
+    assert option in err and len(err.strip().splitlines()) == 1
