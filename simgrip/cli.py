@@ -386,7 +386,8 @@ def _cmd_compare(args) -> str:
                                  **gripper)
     else:
         result = compare(grip, params, _profile(args, grip), links, method=args.method,
-                         target_error=args.target_error, contact=args.contact, progress=_progress(args, links))
+                         target_error=args.target_error, contact=args.contact, progress=_progress(args, links),
+                         **_grasp_options(args, grip))
     if args.json:
         return json.dumps(to_jsonable(result), allow_nan=False)
     if gripper is None:  # the centreline and the contact list are --json's

@@ -349,13 +349,18 @@ def compare(grip: str, params: DimensionlessParams, profile, links: int, **settl
     Extra keywords (e.g. ``method="dynamics"``) go to :func:`simulate`.
     """
     profile = as_profile(profile)
+    if settle_kw.get("contact") == "full" and settle_kw.get("box_depth") is not None:
+        from simgrip.compare_full import compare_full  # grasped at a depth: the free-boundary reference
+
+        return compare_full(grip, params, profile, links, **settle_kw)
     state = simulate(grip, params, profile, links, **settle_kw)
     sim = settled_record(state, params, profile)
     sol, ref_warnings = reference_of(state, params, profile)
     if settle_kw.get("contact") == "full":  # every link touches; the reference below is the point-contact BVP
         ref_warnings = ["contact 'full': the reference is the point-contact BVP (tip on the face, the rod free to "
                         "pass through itself and the workpiece), not the full-contact problem; the difference "
-                        "measures the full-contact state against that idealisation"] + ref_warnings
+                        "measures the full-contact state against that idealisation (--box-depth D compares a grasp "
+                        "at a depth with the free-boundary reference)"] + ref_warnings
     if sol is None:
         ref = {"source": "elastica", "grip": state.grip, "available": False, "why": ref_warnings[0]}
         return {"simulation": sim, "reference": ref, "difference": {}, "warnings": ref_warnings}

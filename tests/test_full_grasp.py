@@ -131,3 +131,22 @@ def test_cli_grasp_options_named(argv, option, capsys):
     assert main(["simulate", "I", "--kappa", "-10", "--links", "8", *argv]) == 2
     err = capsys.readouterr().err
     assert option in err and len(err.strip().splitlines()) == 1
+
+
+def test_compare_full_uses_the_free_boundary_reference(capsys):
+    """compare --contact full --box-depth: the tip's N and friction against the free-boundary BVP (at n = 16 its
+    error budget above), the resultant kept beside them."""
+    import json
+
+    from simgrip.cli import main
+
+    assert main(["compare", "I", "--kappa", "-10", "--links", "16", "--contact", "full", "--box-depth", "0.4",
+                 "--json"]) == 0
+    out = json.loads(capsys.readouterr().out)
+    sim, ref = out["simulation"], out["reference"]
+    assert "free-boundary" in ref["source"] and ref["contact_set"].startswith("tip + corner")
+    assert ref["normal_force"] == pytest.approx(_bvp_n(), rel=1e-6)
+    bound = 1.73 / 16 + DN_DDEPTH * FULL_DEPTH_TOL + DN_DDEPTH * 2e-3 * (math.sqrt(2) - 1) / 0.8
+    assert abs(sim["normal_force"] - ref["normal_force"]) <= bound
+    assert sim["resultant_friction_force"] == pytest.approx(-STD.M, rel=1e-3)  # the whole box on the finger
+    assert sim["feasible"] and ref["feasible"] and not out["warnings"]

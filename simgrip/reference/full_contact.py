@@ -26,9 +26,10 @@ def _label(c) -> str:
     return f"{c.kind}@{'link' if c.kind in ('corner', 'cylinder') else 'node'}{c.index}"
 
 
-def full_contact_record(grip: str, params, profile, n: int = 32) -> dict:
+def full_contact_record(grip: str, params, profile, n: int = 32, depth: float = DEFAULT_DEPTH) -> dict:
     """A flat record: the contact set, the normal force ``N`` (the tip's), the tip, the contact points'
     arc lengths and forces, which reference produced them, and the chain's own values at ``n`` links.
+    ``depth``: the tip below the box's top edge (I) / above its bottom edge (II), over ``l``.
 
     Raises
     ------
@@ -43,9 +44,11 @@ def full_contact_record(grip: str, params, profile, n: int = 32) -> dict:
     from simgrip.reference.elastica import solve
     from simgrip.reference.free_boundary import solve_corner
 
-    ch = solve_constrained(grip, params, profile, n)
+    from simgrip.reference.constrained import Box
+
+    ch = solve_constrained(grip, params, profile, n, box=Box(depth=depth) if grip != "free" else None)
     kinds = ch.kinds()
-    rec = {"grip": grip, "contact": "full", "links": n, "depth": DEFAULT_DEPTH if grip != "free" else None}
+    rec = {"grip": grip, "contact": "full", "links": n, "depth": float(depth) if grip != "free" else None}
     contact_set = (["tip"] if grip != "free" and ch.N > 0 else []) + [_label(c) for c in ch.contacts]
     rec["contact_set"] = " + ".join(contact_set) if contact_set else "none"
     if grip != "free" and not kinds:
@@ -53,7 +56,7 @@ def full_contact_record(grip: str, params, profile, n: int = 32) -> dict:
         rec.update(reference="point-contact BVP (only the tip touches)", N=sol.normal_force,
                    friction=sol.friction_force, tip_x=float(sol.tip[0]), tip_y=float(sol.tip[1]))
     elif grip != "free" and kinds == {"corner": 1}:
-        b = solve_corner(grip, params, profile, ch)
+        b = solve_corner(grip, params, profile, ch, depth=float(depth))
         rec.update(reference="free-boundary BVP (tip + box corner)", N=b.N, friction=b.friction,
                    tip_x=float(b.tip[0]), tip_y=float(b.tip[1]), corner_gamma=b.gamma,
                    corner_fx=float(b.corner_force[0]), corner_fy=float(b.corner_force[1]), valid=b.valid)
