@@ -68,7 +68,8 @@ class ChainNewton(Newton):
             cons = pair_contacts(sd, *self.pairs[p])
             if cons:
                 self.dist_shift[p] = min(float(sd.contact.dist[c]) for c in cons) / self.scene.length - da[p]
-        self._kc_at = self._kc_key(q)  # (the distances' round-off too: Newton.solve skips a second read at q)
+        # (the read's key, set by Newton._update_kc at this q, covers the distances' round-off too: nothing in
+        # it changed since, so Newton.solve skips a second read at q)
         return moved
 
     # -- MuJoCo's balance without the O(n^3) mass matrix when there is no contact ------------

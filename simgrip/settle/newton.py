@@ -118,6 +118,7 @@ class Newton:
         self.kc_factor = np.ones(m.npair)
         self._tc0 = None  # the configured solref time constants (read at the first stiffen)
         self._kc_raised: list = [None] * m.npair  # per pair: K_c read before its last raise (saturation test)
+        self._floor_memo = None  # floor_ulps' last (qpos bytes, value)
 
     def spent(self) -> bool:
         """The settle's Newton iteration budget is used up."""
@@ -211,9 +212,15 @@ class Newton:
         adds up to ``n eps l`` (``Phi = max |phi_k|``, read at the scene's current state).
         """
         sc = self.scene
-        phi = np.cumsum(np.asarray(sc.data.qpos)[np.asarray(sc.joint_qpos)], axis=-1)
+        q = np.asarray(sc.data.qpos)
+        memo = self._floor_memo  # the last state's (qpos bytes, value): a solve asks ~8 times, mostly at one state
+        if memo is not None and memo[0] == q.tobytes():
+            return memo[1]
+        phi = np.cumsum(q[np.asarray(sc.joint_qpos)], axis=-1)
         big = float(np.max(np.abs(phi))) if phi.size else 0.0
-        return max(FLOOR_ULPS, sc.n * (1.0 + 0.5 * big))
+        out = max(FLOOR_ULPS, sc.n * (1.0 + 0.5 * big))
+        self._floor_memo = (q.tobytes(), out)
+        return out
 
     def stiffen(self, N, *, grow_only: bool = False) -> bool:
         """Size every active pair's contact stiffness for its normal force ``N`` [N]; True if any changed.
