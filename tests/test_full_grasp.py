@@ -54,14 +54,14 @@ def _tip_forces(sc, st):
 @pytest.fixture(scope="module")
 def grasps():
     out = {}
-    for n in (16, 32, 64):
+    for n in (16, 32, 64, 128):
         sc = build_scene("I", STD, -10.0, n, contact="full", box_depth=DEPTH)
         st = settle(sc)
         out[n] = (sc, st)
     return out
 
 
-@pytest.mark.parametrize("n", [16, 32, 64])
+@pytest.mark.parametrize("n", [16, 32, 64, 128])
 def test_grip_i_grasped_at_depth_is_the_free_boundary_solution(grasps, n):
     sc, st = grasps[n]
     assert st.converged and st.held and not st.warnings
@@ -84,9 +84,10 @@ def test_grip_i_grasped_at_depth_is_the_free_boundary_solution(grasps, n):
 
 
 def test_the_error_falls_with_ds(grasps):
-    """First order plus the resolution-independent rounding term: each halving of ds lowers the error."""
-    errs = [abs(_tip_forces(*grasps[n])[0][0] - _bvp_n()) for n in (16, 32, 64)]
-    assert errs[0] > errs[1] > errs[2]
+    """First order plus the resolution-independent rounding term: each halving of ds lowers the error (measured
+    0.18, 0.091, 0.060, 0.013 at n = 16 ... 128; the depth's slip, up to 8e-4 l, moves each by up to 0.045)."""
+    errs = [abs(_tip_forces(*grasps[n])[0][0] - _bvp_n()) for n in (16, 32, 64, 128)]
+    assert errs[0] > errs[1] > errs[2] > errs[3]
 
 
 @pytest.mark.parametrize("kw,name", [

@@ -84,6 +84,12 @@ FULL_LOAD_BLEND = 0.5
 #: ``r_link`` (2e-3); measured 5e-4 of slip at Grip I kappa -10, n = 16 ... 64.  It moves N by
 #: ``|dN/d depth|`` times it at most.
 FULL_DEPTH_TOL = 2e-3
+#: Grasp at a depth: a release that slipped farther grasps again from its rested state (the box back to the
+#: depth, the stand-in for the tip's friction, :data:`FULL_REGRASP_STEPS` steps) and releases again, at most this
+#: often.  A release far from rest slips (n = 128 at kappa -10: the ramp ends in 3000 steps, the tip slipped
+#: 5.8e-3 l); from a rested state the load it takes on is the one it carried.
+FULL_REGRASPS = 2
+FULL_REGRASP_STEPS = 200
 
 
 def settle_full(scene: Scene, tol: float, max_steps: int, allow_unconverged: bool, t0: float) -> SettledState:
@@ -174,13 +180,7 @@ def _once(scene: Scene, tol: float, budget: int, factor: float, t0: float) -> tu
                 return _read(scene, dyn, t0, held, False), True
             rate = max(ramp_rate(rate, guard, _deepest(d), tunnel), FULL_CLOSE_RATE_FLOOR * scene.r_link)
         if grasp is not None:  # 1b. the box at the asked depth (followed on if the tip never got there)
-            converged = True
-            while abs(grasp.move(force=True)) > FULL_GRASP_RATE * scene.r_link * scene.length:
-                if dyn.steps >= budget:
-                    converged = False
-                    break
-                grasp.load(FULL_LOAD_BLEND)
-                guard.step()
+            converged = _follow(grasp, guard, budget, 0)
         else:
             converged, why = guard.run(max(tol, 1e-8), budget)
     finally:
@@ -191,7 +191,16 @@ def _once(scene: Scene, tol: float, budget: int, factor: float, t0: float) -> tu
     # 2. release with friction
     if held and not _touching(scene):
         held = False
-    if held:
+    for attempt in range(FULL_REGRASPS + 1 if grasp is not None else 1):
+        if not held:
+            break
+        if attempt:  # 1b again from the rested state: the box to the depth, the stand-in for the tip's friction
+            dyn.hold(True)
+            _friction(scene, gs, "none")
+            converged = _follow(grasp, guard, budget, FULL_REGRASP_STEPS)
+            _friction(scene, gs, "all" if scene.extra_friction else "tip")
+            if not converged:
+                return _read(scene, dyn, t0, held, False), _deepest(d) > limit
         wz = [dof for name, dof in zip(scene.workpiece_joints, scene.workpiece_dof) if name == "z"]
         weight = scene.workpiece_mass * scene.physical.g
         z0 = float(d.xpos[scene.workpiece_body][2])
@@ -220,6 +229,9 @@ def _once(scene: Scene, tol: float, budget: int, factor: float, t0: float) -> tu
             return _read(scene, dyn, t0, held, False), True
         if why == "lost contact" or (converged and not _touching(scene)):
             held, converged = False, True
+        if not (held and converged and grasp is not None) or abs(grasp_depth(scene) - scene.box_depth) <= \
+                FULL_DEPTH_TOL:
+            break
     if not held and scene.has_workpiece:
         # park the workpiece (held, out of contact): the finger settles alone, touching itself
         dyn.hold(True)
@@ -324,6 +336,20 @@ class _Follow:
         """Apply ``share`` of the tips' stand-in force (the finger dofs of ``qfrc_applied``)."""
         dofs = np.asarray(self.scene.joint_dof, dtype=int).ravel()
         self.dyn.d.qfrc_applied[dofs] = share * self.tip_qfrc[dofs]
+
+
+def _follow(grasp: _Follow, guard: GuardedSteps, budget: int, steps: int) -> bool:
+    """Phase 1b's steps (the box following, the stand-in load) for at least ``steps`` and until the box is within
+    one move of the depth; False when the step budget ran out."""
+    dyn, sc = grasp.dyn, grasp.scene
+    k = 0
+    while abs(grasp.move(force=True)) > FULL_GRASP_RATE * sc.r_link * sc.length or k < steps:
+        if dyn.steps >= budget:
+            return False
+        grasp.load(FULL_LOAD_BLEND)
+        guard.step()
+        k += 1
+    return True
 
 
 def contact_solref(scene, h: float) -> list[float]:
