@@ -21,7 +21,10 @@ broad phase finds, in three phases:
    fading as the box's support does, and the box then hangs on the sticking tip: the over-damped flow of the
    rod and the free box with the tip bonded by friction, which converges.  The depth the state ends at (the
    tip sticks; MuJoCo's soft friction slips ~5e-4 l while the load comes on) is checked against the asked one
-   within :data:`FULL_DEPTH_TOL` (a warning otherwise); :func:`grasp_depth` reads it.
+   within :data:`FULL_DEPTH_TOL`: past it the box is grasped again from the rested state and released again
+   (:data:`FULL_REGRASPS`), then a warning says so; :func:`grasp_depth` reads it.  Grip I at kappa -10
+   (:mod:`tests.test_full_grasp`): N 0.92, 0.46, 0.30, 0.07 % above the free-boundary BVP at n = 16 ... 128.
+   Grip II at kappa 10 does not settle (the tip leaves the face: SettleError), not solved yet.
 2. **Release** (friction ``mu_s`` on, ``condim = 3``; without ``scene.extra_friction`` only the tip's contacts
    carry friction, every other contact stays ``condim = 1``: :func:`_friction`): the box's holding force fades out over
    :data:`~simgrip.settle.dynamics.DYN_RELEASE_STEPS` steps and the scene runs to rest.  The box is
