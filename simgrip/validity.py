@@ -52,10 +52,12 @@ from dataclasses import dataclass
 import numpy as np
 
 from simgrip import intersection as isect
+from simgrip.intersection import self_clear, self_clear_below  # noqa: F401  (re-exported: the proof's home)
 
 __all__ = ["DEPTH_FRACTION", "SELF_LIMIT_FACTOR", "SOLID_LIMIT_FACTOR", "Solid", "chain_violations", "check_condition_23",
            "check_contact_depth", "check_friction_cone", "check_grip_shape", "check_reach", "check_tip_contact",
-           "check_valid", "mark_invalid", "planar_solid", "self_clear", "self_clear_below", "self_gap_links", "state_violations", "VIOLATION_KINDS"]
+           "check_valid", "mark_invalid", "planar_solid", "self_clear", "self_clear_below", "self_gap_links",
+           "state_violations", "VIOLATION_KINDS"]
 
 #: A contact pressed deeper than this fraction of the finger geom's radius (``r_tip`` for Grips I/II,
 #: ``r_link`` for III) is not a surface contact of the rod: half its cross-section is inside the
@@ -285,81 +287,6 @@ def self_gap_links(n: int, r_link: float) -> int:
     is, :func:`simgrip.intersection.crossing_pairs`).  At least 2 (adjacent links share a node).
     """
     return max(2, 1 + int(math.ceil(math.pi * float(r_link) * int(n) - 1e-12)))
-
-
-#: Relative margin by which :func:`self_clear`'s lower bound must clear the limit: the bound and the exact
-#: distances it stands for are both computed in floating point (round-off ~1e-16 of the chain's size), so
-#: a bound this far above the limit proves the exact test's answer too, not only the exact arithmetic's.
-CLEAR_MARGIN = 1e-9
-
-
-def self_clear(nodes, limit: float, gap: int) -> bool:
-    """True when no two links of the planar polyline can cross or come within ``limit`` of each other (proved in O(n log n)).
-
-    ``self_clear_below(nodes, limit, gap) >= len(nodes) - 1``: see there.
-    """
-    return self_clear_below(nodes, limit, gap) >= len(nodes) - 1
-
-
-def self_clear_below(nodes, limit: float, gap: int) -> int:
-    """The least index gap ``d`` of the pairs of links this proof leaves open (``>= n``: none left; 2: none proved).
-
-    Every pair of links ``(i, j)`` of the planar polyline with ``2 <= j - i < d`` is proved neither to cross
-    nor (``j - i >= gap``) to be closer than ``limit``: the exact pair tests of :func:`chain_violations` give
-    the same verdict on them, so they need to see only the pairs ``j - i >= d``.  The proof: let links ``i..j`` all have their directions within
-    ``R/2`` of one unit vector ``u`` (``R``, the range of their angles, below ``pi``).  Along the rod from a
-    point ``p`` of link ``i`` to a point ``q`` of link ``j``, the tangent's projection on ``u`` is at least
-    ``cos(R/2) > 0``, so ``|q - p| >= (q - p).u >= cos(R/2)`` times the arc between them, which covers the
-    ``j - i - 1`` whole links between: ``|q - p| >= (j - i - 1) h_min cos(R/2)``; and the projections of
-    links ``i`` and ``j >= i + 2`` are disjoint intervals of ``u``, so they do not cross.  The pairs are taken
-    in bands of ``d = j - i``: ``[2, gap)`` (crossings only), then ``[d_k, 2 d_k)`` from ``d_1 = gap``, each
-    with ``R`` the largest range over windows of ``2 d_k`` consecutive links (every pair of the band lies in
-    one; doubled windows from the halves' extremes, so O(n) a band) and the bound ``(d_k - 1) h_min
-    cos(R/2)``, which must exceed ``limit`` by :data:`CLEAR_MARGIN` (bounds and exact distances are both
-    computed in floating point).  A smooth rod, whose tangent turns little over a short arc, passes at
-    every ``n``; a rod curled through more than ``pi`` over a band's window does not (the exact tests run).
-    """
-    P = np.asarray(nodes, dtype=float)
-    if P.ndim != 2 or P.shape[1] != 2 or len(P) < 2:
-        return 2
-    m = len(P) - 1
-    gap = max(int(gap), 2)
-    d = P[1:] - P[:-1]
-    h_min = float(np.sqrt(np.min(d[:, 0] * d[:, 0] + d[:, 1] * d[:, 1])))
-    need = float(limit) * (1.0 + CLEAR_MARGIN)
-    if not h_min > 0.0:
-        return 2
-    # the links' angles, each turn from the last taken in (-pi, pi] (any 2 pi shifts leave the directions, the
-    # proof's input, alone): the first link's 0, then the running sum of the turns
-    turn = np.arctan2(d[:-1, 0] * d[1:, 1] - d[:-1, 1] * d[1:, 0], d[:-1, 0] * d[1:, 0] + d[:-1, 1] * d[1:, 1])
-    angle = np.zeros(m)
-    np.cumsum(turn, out=angle[1:])
-    R = float(angle.max() - angle.min())
-    if R < math.pi and (gap - 1) * h_min * math.cos(0.5 * R) > need:
-        return m  # one band for every pair: the whole rod's range
-    # the bands; hi/lo[i]: the extremes of the window of w links starting at link i
-    hi, lo, w = angle, angle, 1
-
-    def grow(w_new):
-        nonlocal hi, lo, w
-        while w < w_new:
-            step = min(w, w_new - w)
-            hi = np.maximum(hi[:len(hi) - step], hi[step:])
-            lo = np.minimum(lo[:len(lo) - step], lo[step:])
-            w += step
-        return float((hi - lo).max())
-
-    if gap > 2:  # d in [2, gap): crossings only; separation >= h_min cos(R/2), kept well above round-off
-        R = grow(min(gap, m))
-        if not (R < math.pi and math.cos(0.5 * R) > 1e-6):
-            return 2
-    d_k = gap
-    while d_k <= m - 1:
-        R = grow(min(2 * d_k, m))
-        if not (R < math.pi and (d_k - 1) * h_min * math.cos(0.5 * R) > need):
-            return d_k
-        d_k *= 2
-    return m
 
 
 def _ranges(idx) -> str:
