@@ -120,7 +120,9 @@ def settled_record(state, params: DimensionlessParams, profile=None) -> dict:
     ``steps``, ``held``, ``penetration`` (over ``l``),
     ``residual``, ``links`` (the finest used), ``method``, ``warnings``, ``extrapolated`` and
     ``error_estimate`` (``settle(..., target_error=E)``: tip over ``l``, forces relative; else None),
-    ``nodes`` and ``contacts`` (every contact on the finger: :mod:`simgrip.contact_report`).  ``feasible`` is the
+    ``nodes`` and ``contacts`` (every contact on the finger: :mod:`simgrip.contact_report`); a held full-contact
+    Grip I/II state also ``tip_normal_force`` and ``tip_friction_force`` (the contacts at the tip,
+    :func:`simgrip.compare_full.tip_forces`; ``normal_force`` is the resultant of all).  ``feasible`` is the
     simulation's verdict: the workpiece is held, its contacts are surface contacts
     (``contact_ok``: none deeper than half the finger's radius, no Grip I/II tip past
     the face; the record then carries ``contact_ok: False``) and, Grip III, condition
@@ -167,6 +169,11 @@ def settled_record(state, params: DimensionlessParams, profile=None) -> dict:
         rec["contact_ok"] = False  # a contact too deep or a tip past the face (simgrip.validity.check_contact_depth)
     if grip != "III" and c is not None:
         rec["contact_moment"] = float(c.moment)
+    if grip in ("I", "II") and state.held and getattr(state, "contact_set", None) is not None:
+        from simgrip.compare_full import tip_forces  # full contact: the tip's share, the theory's N (issue 17)
+        from simgrip.sim.scene import DEFAULT_R_TIP
+
+        rec["tip_normal_force"], rec["tip_friction_force"] = tip_forces(state, DEFAULT_R_TIP)
     return rec
 
 
