@@ -491,8 +491,8 @@ def planar_solid(scene, state, finger: int = 0) -> Solid | None:
     The simulation's box is :data:`~simgrip.sim.workpiece.BOX_HEIGHT` tall only so that a tip can slide
     along it while closing; its part on the palm's side of the contact is not the workpiece's (the finger
     reaches out from the palm above it, Grip I).  The solid kept is the least one the grip implies: the box's
-    column from its far end to the contact level plus the contact geom's radius (Grips I/II: the face carries
-    the tip sphere at its equator, ``Y(l) +- r_tip``; Grip III: a band ``2 r_link`` high above the bottom edge
+    column from its far end to the contact level (Grips I/II: the face carries the tip sphere at its equator,
+    ``Y(l)``, the contact point's height; Grip III: a band ``2 r_link`` high above the bottom edge
     that the corner capsules round, plus those capsules).
     """
     if not scene.has_workpiece or state.workpiece_pose is None:
@@ -508,8 +508,9 @@ def planar_solid(scene, state, finger: int = 0) -> Solid | None:
     if scene.grip in ("I", "II"):
         full = Solid("box", centre, rot, half)
         tips = full.local(np.asarray(state.tip, dtype=float).reshape(-1, 2))[:, 1]
-        r = float(scene.r_tip)
-        return full.clipped(hi=float(np.max(tips)) + r) if scene.grip == "I" else full.clipped(lo=float(np.min(tips)) - r)
+        # the face carries the tip sphere at its equator: the contact point is at the tip centre's height,
+        # so the face need reach no further (a rod that comes down over the box onto its top edge is legal)
+        return full.clipped(hi=float(np.max(tips))) if scene.grip == "I" else full.clipped(lo=float(np.min(tips)))
     corners = np.array([[half[0], -half[1]], [-half[0], -half[1]]])
     band = 2.0 * float(scene.r_link)
     return Solid("box", centre, rot, half, corners, float(scene.r_corner)).clipped(hi=-half[1] + band)
