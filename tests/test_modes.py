@@ -155,3 +155,11 @@ def test_physical_units_give_the_same_dimensionless_frequencies():
     b = modes("I", STANDARD, Uniform(-6.0), 16, count=3)
     assert np.allclose(a.frequencies, b.frequencies, rtol=1e-8, atol=0)
     assert np.allclose(a.reference_frequencies, b.reference_frequencies, rtol=1e-8, atol=0)
+
+
+@pytest.mark.parametrize("contact", ["full", "bogus"])
+def test_modes_refuse_a_contact_mode_they_do_not_linearise(contact):
+    from simgrip.modes import modes as modes_of
+
+    with pytest.raises(ValueError, match="contact must be 'point' or 'surface'"):
+        modes_of("I", STANDARD, -6.0, 8, contact=contact)

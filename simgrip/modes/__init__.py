@@ -237,6 +237,11 @@ def modes(grip, params, profile, links, *, count: int = 3, fingers: int = 1, met
     prof = as_profile(profile)
     if isinstance(count, bool) or not isinstance(count, (int, np.integer)) or count < 1:
         raise ValueError(f"count must be a positive integer, got {count!r}")
+    if contact not in (None, "point", "surface"):
+        # the linearisation sticks the tip (Grips I/II) or the corner (III) and nothing else: a full-contact
+        # state's contact set (links on faces, self-contact) is not a constraint it knows
+        raise ValueError(f"contact must be 'point' or 'surface' for the modes (the sticking tip or corner is their "
+                         f"only constraint; contact='full' is not linearised), got {contact!r}")
     scene = build_scene(grip, params, prof, links, fingers=fingers)
     t0 = time.perf_counter()
     kw = dict(settle_kw)
