@@ -44,3 +44,19 @@ def test_wheel_ships_models_and_envs(installed, tmp_path):
     out = subprocess.run([sys.executable, "-c", code], cwd=tmp_path, env=env, capture_output=True, text=True)
     assert out.returncode == 0, out.stderr
     assert int(out.stdout.strip()) >= 1
+
+
+def test_wheel_ships_every_module_of_the_source_tree(installed):
+    """Every .py file of simgrip/, envs/ and models/ is in the wheel (a subpackage missing from pyproject's
+    ``packages`` list installs without error and fails only at import, on the user's machine)."""
+    site = Path(installed)
+    trees = {"simgrip": ROOT / "simgrip", "simgrip/envs": ROOT / "envs", "simgrip/models": ROOT / "models"}
+    missing = []
+    for dest, src in trees.items():
+        for f in src.rglob("*.py"):
+            rel = f.relative_to(src)
+            if "__pycache__" in rel.parts or (dest == "simgrip" and rel.parts[0] in ("envs", "models")):
+                continue
+            if not (site / dest / rel).is_file():
+                missing.append(f"{dest}/{rel}")
+    assert not missing, f"not in the wheel (add the package to pyproject's [tool.setuptools] packages): {missing}"
