@@ -1,6 +1,7 @@
 """The installed package finds its MJCF parts and environments without the source tree."""
 
 import os
+import shutil
 import subprocess
 import sys
 import textwrap
@@ -15,9 +16,13 @@ ROOT = Path(__file__).resolve().parents[1]
 def installed(tmp_path_factory):
     """Build a wheel from the source tree and unpack it into an isolated target dir."""
     tmp = tmp_path_factory.mktemp("wheel")
-    wheel_dir, site = tmp / "dist", tmp / "site"
+    wheel_dir, site, src = tmp / "dist", tmp / "site", tmp / "src"
+    # from a copy without build outputs: setuptools reuses a checkout's build/lib, whose stale files would ship
+    # (and hide a package missing from pyproject's list, as a clean clone would not)
+    shutil.copytree(ROOT, src, ignore=shutil.ignore_patterns("build", "dist", "*.egg-info", "__pycache__", ".git",
+                                                             ".hypothesis", ".pytest_cache"))
     pip = [sys.executable, "-m", "pip", "-q", "--disable-pip-version-check"]
-    subprocess.run(pip + ["wheel", "--no-deps", "--no-build-isolation", "-w", str(wheel_dir), str(ROOT)], check=True)
+    subprocess.run(pip + ["wheel", "--no-deps", "--no-build-isolation", "-w", str(wheel_dir), str(src)], check=True)
     (wheel,) = wheel_dir.glob("simgrip-*.whl")
     subprocess.run(pip + ["install", "--no-deps", "--target", str(site), str(wheel)], check=True)
     return site
