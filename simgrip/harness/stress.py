@@ -54,6 +54,13 @@ set on a state whose ``valid`` is True): it must be 0.  (A rod beyond a full
 turn is not in itself impossible: a spiral whose turns do not touch is a
 state; the capsule distances decide.)
 
+Full-contact cases (``contact="full"``, :func:`~simgrip.harness.stress_cases.make_full_cases`: Grips I, II
+and the free rod past the point-contact onset, ``n <= 16``) run alongside too: the same outcomes and flags,
+except that a settled state's residual is capped by the settle's own tolerance (the over-damped dynamics' creep
+floor, :func:`simgrip.settle.dynamics.dynamics_tolerance`, not :data:`RESIDUAL_CAP`, which is the Newton
+settle's); ``stress.json`` lists them under ``full`` with their own ``counts`` (``invalid_returned_as_valid``
+included: must be 0) and ``max_penetration`` (over ``l``; flagged above :data:`PENETRATION_TOL`).
+
 K-finger cases (off-centre, turned workpieces, unequal fingers;
 :mod:`simgrip.harness.stress_gripper`) run alongside and are checked for
 balance, finiteness and determinism; ``stress.json`` lists them under
@@ -80,7 +87,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from simgrip.harness.stress_cases import BOX, GRIPS, make_cases, stress_profile
+from simgrip.harness.stress_cases import BOX, FULL_BOX, GRIPS, make_cases, make_full_cases, stress_profile
 from simgrip.io import check_output_dir, check_output_files_in, write_json
 
 __all__ = [
@@ -98,6 +105,8 @@ __all__ = [
     "names_an_input",
     "add_arguments",
     "cli_stress",
+    "default_full_cases",
+    "full_summary",
 ]
 
 #: The files run_stress writes into its folder (checked before any case runs).
@@ -220,8 +229,10 @@ def run_case(case: dict, *, timeout_s: float = CASE_TIMEOUT_S, max_steps: int | 
             warnings.simplefilter("error", RuntimeWarning)
             params = DimensionlessParams(D=case["D"], M=case["M"], b=case["b"], mu_s=case["mu_s"])
             prof = stress_profile(case["profile"], case["kappa"], case.get("alpha", 0.0))
-            scene = build_scene(case["grip"], params, prof, case["n"])
+            full = case.get("contact") == "full"
+            scene = build_scene(case["grip"], params, prof, case["n"], **({"contact": "full"} if full else {}))
             st = settle(scene) if max_steps is None else settle(scene, max_steps=max_steps)
+            cap = _full_residual_cap(scene) if full else RESIDUAL_CAP
         rec.update(steps=int(st.steps), newton=int(st.newton_iterations), residual=float(st.residual),
                    held=bool(st.held), penetration=float(st.penetration))
         finite = (np.all(np.isfinite(st.qpos)) and np.all(np.isfinite(st.tip)) and math.isfinite(st.residual)
@@ -230,14 +241,15 @@ def run_case(case: dict, *, timeout_s: float = CASE_TIMEOUT_S, max_steps: int | 
             rec.update(outcome="failed", error="non-finite settled state returned", error_type="NaN")
         elif not st.converged:
             rec.update(outcome="failed", error="state returned with converged=False", error_type="silent")
-        elif not st.residual <= RESIDUAL_CAP:
-            rec.update(outcome="failed", error=f"converged=True with static residual {st.residual:.3g} > {RESIDUAL_CAP:g}",
+        elif not st.residual <= cap:
+            rec.update(outcome="failed", error=f"converged=True with static residual {st.residual:.3g} > {cap:g}",
                        error_type="silent")
         else:
             rec["outcome"] = "settled"
             rec["flags"] = invalid_state_flags(scene, st)
             rec["valid"] = bool(getattr(st, "valid", True))
-            rec["residual_above_tol"] = bool(st.residual > DEFAULT_TOL)
+            # above the settle's own tolerance (Newton's DEFAULT_TOL; a full-contact state is already within its cap)
+            rec["residual_above_tol"] = bool(st.residual > (cap if full else DEFAULT_TOL))
     except _Timeout:
         rec.update(outcome="failed", error=f"no answer within {timeout_s:g} s (hang)", error_type="Timeout")
     except ValueError as exc:
@@ -252,6 +264,29 @@ def run_case(case: dict, *, timeout_s: float = CASE_TIMEOUT_S, max_steps: int | 
         rec.update(outcome="failed", error=f"{exc}\n{traceback.format_exc(limit=4)}", error_type=type(exc).__name__)
     rec["time_s"] = time.perf_counter() - t0
     return rec
+
+
+def _full_residual_cap(scene) -> float:
+    """The full-contact settle's own tolerance (its default ``tol``: the dynamics' creep floor,
+    ``max(DYN_TOL, 2e-6 M)`` with a workpiece, ``DYN_TOL`` without): a converged state above it is silent."""
+    from simgrip.settle.dynamics import DYN_TOL, dynamics_tolerance
+
+    return float(dynamics_tolerance(scene) if scene.has_workpiece else DYN_TOL)
+
+
+def default_full_cases(cases: int) -> int:
+    """Full-contact cases in a stress run of ``cases`` planar cases: one per 100, at least 1, at most 5 (each is
+    ~10-20 point-contact cases' time: the default 500-case run grows by about a tenth)."""
+    return min(5, max(1, int(cases) // 100))
+
+
+def full_summary(recs: list) -> dict:
+    """The full-contact cases' ``counts`` (as :func:`_counts`), ``max_penetration`` over the settled ones (over
+    ``l``; ``None`` if none settled), ``failures`` and ``cases``."""
+    pens = [c["penetration"] for c in recs if c["outcome"] == "settled"]
+    return {"counts": _counts(recs), "max_penetration": max(pens) if pens else None,
+            "penetration_tol": PENETRATION_TOL, "box": FULL_BOX,
+            "failures": [c for c in recs if c["outcome"] == "failed"], "cases": recs}
 
 
 def _case_task(task: tuple) -> dict:
@@ -293,6 +328,8 @@ class StressResult:
     #: The K-finger cases: ``counts``, ``cases``, ``failures`` (:mod:`simgrip.harness.stress_gripper`).
     gripper: dict = field(default_factory=dict)
     jobs: int = 1
+    #: The full-contact cases: ``counts``, ``max_penetration``, ``failures``, ``cases`` (:func:`full_summary`).
+    full: dict = field(default_factory=dict)
 
     @property
     def unsettled(self) -> list:
@@ -341,6 +378,7 @@ def run_stress(
     max_links: int = 256,
     options=None,
     gripper_cases: int | None = None,
+    full_cases: int | None = None,
 ) -> StressResult:
     """Run the stress cases of :func:`make_cases` and write ``stress.json`` and ``stability_map.png``.
 
@@ -371,6 +409,9 @@ def run_stress(
         How to run (e.g. on an existing Dask cluster); replaces ``jobs`` and ``progress``.
     gripper_cases : int, optional
         K-finger cases run alongside (default :func:`~simgrip.harness.stress_gripper.default_gripper_cases`).
+    full_cases : int, optional
+        Full-contact cases run alongside (default :func:`default_full_cases`;
+        :func:`~simgrip.harness.stress_cases.make_full_cases`, ``n <= min(16, max_links)``).
     """
     from simgrip.harness.plots import stability_map
     from simgrip.parallel.runner import RunnerOptions, run_tasks
@@ -385,25 +426,33 @@ def run_stress(
     n_gripper = sg.default_gripper_cases(cases) if gripper_cases is None else gripper_cases
     if isinstance(n_gripper, bool) or not isinstance(n_gripper, (int, np.integer)) or n_gripper < 0:
         raise ValueError(f"gripper_cases must be an integer >= 0, got {gripper_cases!r}")
+    n_full = default_full_cases(cases) if full_cases is None else full_cases
+    if isinstance(n_full, bool) or not isinstance(n_full, (int, np.integer)) or n_full < 0:
+        raise ValueError(f"full_cases must be an integer >= 0, got {full_cases!r}")
     if not options.remote:  # jobs: at most the tasks, 2 per core, what memory holds; refused above MAX_JOBS
-        capped, why = cap_jobs(options.jobs, int(cases) + int(n_gripper))
+        capped, why = cap_jobs(options.jobs, int(cases) + int(n_gripper) + int(n_full))
         if why:
             print(f"simgrip stress: {why}", file=sys.stderr, flush=True)
         if capped != options.jobs:
             options = dataclasses.replace(options, jobs=capped)
     workers = None if options.remote else (1 if options.in_process else options.local_workers)
-    check_stress(int(cases), int(n_gripper), workers=workers)  # before any case is made: memory and time bounded
+    # a full-contact case costs ~20 point-contact cases (0.5-4 s against 0.15 s): counted so in the budget
+    check_stress(int(cases), int(n_gripper) + 20 * int(n_full), workers=workers)  # before any case is made: memory and time bounded
     todo = make_cases(cases, seed, grid_cases, max_links)
     g_todo = sg.make_gripper_cases(n_gripper, seed, max_links=min(32, max_links))
+    f_todo = make_full_cases(int(n_full), seed, max_links=min(16, max_links))
     out = check_output_dir(out_dir, option="out_dir")
     check_output_files_in(out, OUTPUT_FILES, "out_dir")  # refused before the cases run
     t0 = time.perf_counter()
     heavy_first = sorted(todo, key=lambda c: -c["n"])  # large n first: the last batches finish together
-    tasks = [(c, timeout_s, max_steps) for c in g_todo + heavy_first]  # one run: the K-finger cases first
-    done, g_done = {}, {}
+    # one run: the K-finger and full-contact cases (the slow ones) first
+    tasks = [(c, timeout_s, max_steps) for c in g_todo + f_todo + heavy_first]
+    done, g_done, f_done = {}, {}, {}
     for rec in run_tasks(_case_task, tasks, options=options, desc="stress"):
-        (g_done if rec.get("kind") == "gripper" else done)[rec["id"]] = rec
+        kind = "gripper" if rec.get("kind") == "gripper" else rec.get("contact")
+        {"gripper": g_done, "full": f_done}.get(kind, done)[rec["id"]] = rec
     recs = [done[c["id"]] for c in todo]
+    full = full_summary([f_done[c["id"]] for c in f_todo])
     g_recs = [g_done[c["id"]] for c in g_todo]
     gripper = {"counts": sg.gripper_counts(g_recs), "failures": [c for c in g_recs if c["outcome"] == "failed"],
                "cases": g_recs}
@@ -411,7 +460,7 @@ def run_stress(
     failures = [c for c in recs if c["outcome"] == "failed"]
     workers = 1 if options.in_process else (options.local_workers if not options.remote else None)
     res = StressResult(cases=recs, counts=counts, failures=failures, elapsed_s=time.perf_counter() - t0, jobs=workers,
-                       gripper=gripper)
+                       gripper=gripper, full=full)
     write_json(out / "stress.json", {
         "meta": {"cases": len(recs), "seed": seed, "jobs": workers, "elapsed_s": res.elapsed_s,
                  "timeout_s": timeout_s, "max_steps": max_steps, "penetration_tol": PENETRATION_TOL,
@@ -423,6 +472,7 @@ def run_stress(
         "flagged": [c for c in recs if c["outcome"] == "settled" and any(c["flags"].values())],
         "cases": recs,
         "gripper": gripper,
+        "full": full,
     })
     stability_map([{**c, "category": _category(c)} for c in recs], GRIPS, SLOW_STEPS, out / "stability_map.png")
     res.files = {"stress.json": out / "stress.json", "stability_map.png": out / "stability_map.png"}
@@ -448,6 +498,9 @@ def add_arguments(p) -> None:
     p.add_argument("--out", default="stress_out", help="output folder [default stress_out]")
     p.add_argument("--gripper-cases", type=int, default=None,
                    help="K-finger cases (off-centre, turned, unequal fingers) [default: one per 50 cases, 1..8]")
+    p.add_argument("--full-cases", type=int, default=None,
+                   help="full-contact cases (contact='full': Grips I, II and the free rod past the point-contact "
+                   "onset, n <= 16, ~0.5-4 s each) [default: one per 100 cases, 1..5]")
     add_runner_arguments(p)
 
 
@@ -455,10 +508,16 @@ def cli_stress(args) -> dict:
     """Run the stress test from parsed arguments; returns the counts and the failures (the CLI checked ``--out`` first)."""
     from simgrip.parallel.runner import runner_options
 
+    full_cases = getattr(args, "full_cases", None)
+    if full_cases is not None and full_cases < 0:
+        raise ValueError(f"--full-cases must be an integer >= 0, got {full_cases!r}")
     res = run_stress(args.out, cases=args.cases, seed=args.seed, options=runner_options(args),
-                     gripper_cases=args.gripper_cases)
+                     gripper_cases=args.gripper_cases, full_cases=full_cases)
     return {"out": str(args.out), "counts": res.counts, "gripper_counts": res.gripper["counts"],
             "gripper_failures": [{k: c[k] for k in ("id", "grip", "workpiece", "fingers", "error")}
                                  for c in res.gripper["failures"]],
+            "full_counts": res.full["counts"], "full_max_penetration": res.full["max_penetration"],
+            "full_failures": [{k: c[k] for k in ("id", "grip", "D", "kappa", "M", "mu_s", "b", "n", "error")}
+                              for c in res.full["failures"]],
             "failures": [{k: c[k] for k in ("id", "grip", "D", "kappa", "M", "mu_s", "b", "n", "profile", "error")}
                          for c in res.failures]}

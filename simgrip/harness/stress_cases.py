@@ -36,6 +36,12 @@ cases (the whole grid from 216 cases on) and fills up with draws.
 Each case is a plain ``dict`` (``grip, D, kappa, M, mu_s, b, n, profile,
 alpha, id, source``), self-contained, so its outcome does not depend on how
 the run is spread over processes.
+
+**Full-contact cases** (:func:`make_full_cases`, ``contact="full"``: every link touches the workpiece and
+itself) are drawn apart, from their own box :data:`FULL_BOX`: grips I, II and the free rod, uniform profile,
+``|kappa|`` past the point-contact onset (standard case: I -8.27, II 5.50, :mod:`tests.test_free_boundary`;
+I at ``D = 0.5``: -9.38; the free rod touches itself past ``2 pi``), ``n <= 16`` (each settle is the
+over-damped dynamics, ~0.5-4 s at these ``n``).
 """
 
 from __future__ import annotations
@@ -44,7 +50,7 @@ import math
 
 import numpy as np
 
-__all__ = ["BOX", "GRIPS", "PROFILES", "make_cases", "stress_profile"]
+__all__ = ["BOX", "FULL_BOX", "FULL_GRIPS", "GRIPS", "PROFILES", "make_cases", "make_full_cases", "stress_profile"]
 
 #: Parameter box (``n``: links).
 BOX = {"D": (1e-2, 1e2), "kappa": (-12.0, 12.0), "M": (0.0, 50.0), "mu_s": (0.05, 5.0), "b": (0.0, 1.0), "n": (4, 256)}
@@ -52,6 +58,13 @@ GRIPS = ("free", "I", "II", "III")
 PROFILES = ("uniform", "concentrated", "step", "spike", "wiggle")
 #: How often each profile is drawn (the uniform profile is the common case).
 PROFILE_WEIGHTS = (0.5, 0.2, 0.1, 0.1, 0.1)
+#: Grips of the full-contact cases (Grip III's full contact is not settled by contact="full").
+FULL_GRIPS = ("I", "II", "free")
+#: Box of the full-contact cases.  ``abs_kappa`` per grip: from past the onset over ``D`` and ``b`` here (Grip I's
+#: onset is -8.27 at the standard case, -9.38 at D = 0.5, -7.51 at b = 0.4; Grip II's 5.50; the free uniform rod
+#: closes on itself at 2 pi) to the stress box's 12, curled onto the workpiece (I: kappa < 0, II: > 0; free: either).
+FULL_BOX = {"D": (0.5, 2.0), "abs_kappa": {"I": (9.5, 12.0), "II": (6.5, 12.0), "free": (6.5, 12.0)},
+            "M": (0.0, 10.0), "mu_s": (0.3, 2.0), "b": (0.4, 0.8), "n": (8, 16)}
 
 
 def stress_profile(kind: str, kappa: float, alpha: float):
@@ -175,3 +188,40 @@ def make_cases(cases: int = 500, seed: int = 0, grid_cases: int | None = None, m
         c["n"] = min(int(c["n"]), max_links)
         c["id"] = i
     return allc
+
+
+def make_full_cases(count: int, seed: int = 0, max_links: int = 16) -> list[dict]:
+    """``count`` full-contact cases (``contact="full"``) from a scrambled Sobol sequence over :data:`FULL_BOX`.
+
+    Grip, ``D`` (log), ``|kappa|``, ``M``, ``mu_s`` (log), ``b``, ``n`` (integer, capped at ``max_links``) and,
+    for the free rod, the sign of ``kappa``.  Each case is a dict like :func:`make_cases`' with ``contact =
+    "full"``, ``profile = "uniform"``, ``source = "full"`` and ``id`` counted from 0.  Raises ``ValueError``
+    naming ``full_cases`` (``count``), ``seed`` or ``max_links``.
+    """
+    count = _check_count("full_cases", count, 0)
+    seed = _check_count("seed", seed, 0)
+    max_links = _check_count("max_links", max_links, 4)
+    if count == 0:
+        return []
+    from scipy.stats import qmc
+
+    U = qmc.Sobol(d=8, scramble=True, seed=seed + 1).random_base2(max(0, math.ceil(math.log2(count))))[:count]
+    b = FULL_BOX
+    out = []
+    for i, u in enumerate(U):
+        grip = FULL_GRIPS[min(int(u[0] * len(FULL_GRIPS)), len(FULL_GRIPS) - 1)]
+        lo, hi = b["abs_kappa"][grip]
+        sign = {"I": -1.0, "II": 1.0}.get(grip, -1.0 if u[7] < 0.5 else 1.0)
+        lg = (math.log10(b["D"][0]), math.log10(b["D"][1]))
+        lm = (math.log10(b["mu_s"][0]), math.log10(b["mu_s"][1]))
+        n = int(round(b["n"][0] + (b["n"][1] - b["n"][0]) * u[6]))
+        out.append(dict(
+            grip=grip, contact="full", profile="uniform", alpha=0.0, source="full", id=i,
+            D=float(10 ** (lg[0] + (lg[1] - lg[0]) * u[1])),
+            kappa=float(sign * (lo + (hi - lo) * u[2])),
+            M=float(b["M"][0] + (b["M"][1] - b["M"][0]) * u[3]),
+            mu_s=float(10 ** (lm[0] + (lm[1] - lm[0]) * u[4])),
+            b=float(b["b"][0] + (b["b"][1] - b["b"][0]) * u[5]),
+            n=min(n, max_links),
+        ))
+    return out
