@@ -10,7 +10,8 @@ from __future__ import annotations
 import sys
 from pathlib import Path
 
-from simgrip.figures.catalog import COST, FIGURES, GRIPPER_FIGURES, OVERLAY_FIGURES, RENDERED_FIGURES, figure_key
+from simgrip.figures.catalog import (COST, FIGURES, FULL_CONTACT_FIGURES, GRIPPER_FIGURES, OVERLAY_FIGURES,
+                                     RENDERED_FIGURES, figure_key)
 
 __all__ = ["make_figures", "add_arguments", "cli_figures"]
 
@@ -26,6 +27,10 @@ def _render(task: tuple) -> str:
         from simgrip.figures.gripper import make_gripper_figure
 
         return str(make_gripper_figure(name, out_dir, simulate=simulate))
+    if name in FULL_CONTACT_FIGURES:  # its own links (32): --links is Figs. 6-9's
+        from simgrip.figures.full_contact import make_full_contact_figure
+
+        return str(make_full_contact_figure(name, out_dir, simulate=simulate))
     from simgrip.figures.data import figure_data
     from simgrip.figures.overlay import simulation_overlay
     from simgrip.figures.plot import plot_figure, save_figure
@@ -105,7 +110,7 @@ def add_arguments(p) -> None:
 
     p.add_argument("--out", default="figures", help="output folder [default ./figures]")
     p.add_argument("--which", nargs="+", default=None,
-                   help="figures to make, e.g. 7 9 16 grasp3 grasp4 grip_forces [default: all]")
+                   help="figures to make, e.g. 7 9 16 grasp3 grasp4 grip_forces fig07_full [default: all]")
     p.add_argument("--links", type=int, default=16,
                    help="links per finger of the simulated chain overlaid on Figs. 6-9 [default 16; "
                         "the K-finger figures use 32]")
