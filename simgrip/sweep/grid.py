@@ -8,6 +8,13 @@ when the grid is made: each must be a valid value of its parameter
 (:class:`simgrip.params.DimensionlessParams`, :class:`simgrip.profiles.Uniform`);
 combinations that a grip cannot build (e.g. a Grip III corner that misses the
 rod) are the points' business (status ``rejected``).
+
+``contact`` (:data:`CONTACTS`) is the settle's contact model: ``"point"`` (the paper's point contact, Newton's
+default), ``"surface"`` (MuJoCo's contact point on the tip sphere; the dynamics' only one) or ``"full"`` (every
+link and the tip touch the workpiece and the finger itself, :mod:`simgrip.settle.full_contact`; Grips I/II,
+optionally grasped at ``box_depth``).  A full-contact sweep has no BVP beside its points (``reference``
+``"none"``): the point-contact BVP is another problem past the onset, and the free-boundary reference
+(:mod:`simgrip.reference.full_contact`) is not run per point.
 """
 
 from __future__ import annotations
@@ -22,7 +29,7 @@ from simgrip.chain import check_links
 from simgrip.params import DimensionlessParams, _finite, check_grip
 from simgrip.profiles import Uniform
 
-__all__ = ["AXES", "DEFAULTS", "SweepGrid", "SweepPoint", "axis_count", "parse_axis", "make_grid"]
+__all__ = ["AXES", "CONTACTS", "DEFAULTS", "check_contact", "default_contact", "SweepGrid", "SweepPoint", "axis_count", "parse_axis", "make_grid"]
 
 #: Swept parameters in grid order (the CLI option of each is ``--<name>``; ``mu`` is ``mu_s``).
 AXES = ("kappa", "D", "M", "mu", "b", "gamma")
@@ -34,6 +41,42 @@ METHODS = ("newton", "dynamics")
 SWEEP_GRIPS = ("I", "II", "III")
 #: References a sweep can compare with: the elastica BVP (default), or none (the simulation only).
 REFERENCES = ("bvp", "none")
+#: Contact models of a sweep (:func:`simgrip.settle.settle`'s ``contact``; ``"full"``: :mod:`simgrip.sim.full_contact`).
+CONTACTS = ("point", "surface", "full")
+
+
+def default_contact(method: str) -> str:
+    """The settle's own contact for ``method``: ``"point"`` (Newton) or ``"surface"`` (dynamics)."""
+    return "point" if method == "newton" else "surface"
+
+
+def check_contact(grip: str, method: str, contact, box_depth, reference) -> tuple[str, float | None, str]:
+    """``(contact, box_depth, reference)`` of a sweep, validated; ``contact`` None: the method's default,
+    ``reference`` None: ``"bvp"``, or ``"none"`` with ``contact="full"``.  ValueError naming ``contact``,
+    ``box_depth`` or ``reference``."""
+    if contact is None:
+        contact = default_contact(method)
+    c = str(contact).strip().lower() if isinstance(contact, str) else contact
+    if c not in CONTACTS:
+        raise ValueError(f"contact must be one of {CONTACTS}, got {contact!r}")
+    if method == "dynamics" and c == "point":
+        raise ValueError("contact: 'point' needs method newton (the dynamics' friction acts at MuJoCo's surface "
+                         "contact: 'surface')")
+    if c == "full" and grip not in ("I", "II"):
+        raise ValueError(f"contact: 'full' sweeps Grips I and II (the full-contact settle has no Grip III), got {grip!r}")
+    if box_depth is not None:
+        if c != "full":
+            raise ValueError("box_depth: needs contact 'full'")
+        from simgrip.sim.full_contact import check_grasp
+
+        box_depth, _ = check_grasp(grip, "full", box_depth, None)
+    if reference is None:
+        reference = "none" if c == "full" else "bvp"
+    if c == "full" and str(reference).strip().lower() == "bvp":
+        raise ValueError("reference: 'bvp' (the point-contact BVP) is not the full-contact problem's reference; a "
+                         "full-contact sweep runs with reference 'none' (the free-boundary reference: simgrip solve "
+                         "GRIP --contact full, or compare --contact full --box-depth D, per point)")
+    return c, box_depth, reference
 #: Most points of one continuation segment (:meth:`SweepGrid.segments`): the first is solved cold, the others
 #: warm from their neighbour.  32 puts a cold start (~4x a warm one at n = 32) at ~10 % of the BVP's time and
 #: still cuts a 300-point line into 10 tasks for the workers.
@@ -129,6 +172,18 @@ class SweepPoint:
     links: int
     method: str
     reference: str = "bvp"
+    contact: str | None = None
+    box_depth: float | None = None
+
+    def settle_options(self) -> dict:
+        """Keywords of :func:`simgrip.compare.simulate` for the point's contact: none for the method's default
+        contact (a sweep without ``contact`` settles as before), else ``contact`` (and ``box_depth``)."""
+        if self.contact in (None, default_contact(self.method)):
+            return {}
+        out = {"contact": self.contact}
+        if self.box_depth is not None:
+            out["box_depth"] = self.box_depth
+        return out
 
     def params(self) -> DimensionlessParams:
         """The point's :class:`DimensionlessParams` (validated)."""
@@ -141,14 +196,18 @@ class SweepPoint:
 
 @dataclass(frozen=True)
 class SweepGrid:
-    """A sweep's definition: grip, axis values (each a non-empty tuple), links per finger, settle method and
-    reference (``"bvp"``: the elastica BVP beside every point; ``"none"``: the simulation only)."""
+    """A sweep's definition: grip, axis values (each a non-empty tuple), links per finger, settle method,
+    reference (``"bvp"``: the elastica BVP beside every point; ``"none"``: the simulation only; None: ``"bvp"``,
+    ``"none"`` for full contact), contact (:data:`CONTACTS`; None: the method's own, :func:`default_contact`) and
+    the full-contact grasp depth ``box_depth`` (over ``l``, in ``(0, 1]``; None: the box stays below the palm)."""
 
     grip: str
     axes: dict
     links: int
     method: str = "newton"
-    reference: str = "bvp"
+    reference: str | None = "bvp"
+    contact: str | None = None
+    box_depth: float | None = None
 
     def __post_init__(self):
         grip = check_grip(self.grip)
@@ -166,7 +225,10 @@ class SweepGrid:
         if method not in METHODS:
             raise ValueError(f"method must be one of {METHODS}, got {self.method!r}")
         object.__setattr__(self, "method", method)
-        reference = str(self.reference).strip().lower()
+        contact, depth, reference = check_contact(grip, method, self.contact, self.box_depth, self.reference)
+        object.__setattr__(self, "contact", contact)
+        object.__setattr__(self, "box_depth", depth)
+        reference = str(reference).strip().lower()
         if reference not in REFERENCES:
             raise ValueError(f"reference must be one of {REFERENCES}, got {self.reference!r}")
         object.__setattr__(self, "reference", reference)
@@ -191,12 +253,13 @@ class SweepGrid:
         idx = np.unravel_index(int(index), self.shape)
         vals = {a: self.axes[a][i] for a, i in zip(AXES, idx)}
         return SweepPoint(index=int(index), grip=self.grip, links=self.links, method=self.method,
-                          reference=self.reference, **vals)
+                          reference=self.reference, contact=self.contact, box_depth=self.box_depth, **vals)
 
     def points(self):
         """Every point, in grid order."""
         for i, combo in enumerate(itertools.product(*(self.axes[a] for a in AXES))):
-            yield SweepPoint(i, self.grip, *combo, links=self.links, method=self.method, reference=self.reference)
+            yield SweepPoint(i, self.grip, *combo, links=self.links, method=self.method, reference=self.reference,
+                             contact=self.contact, box_depth=self.box_depth)
 
     def segments(self, max_points: int = SEGMENT_POINTS):
         """The grid cut into continuation segments: ``(start, stop)`` index ranges (``stop`` exclusive), in order.
@@ -216,16 +279,22 @@ class SweepGrid:
 
     def spec(self) -> dict:
         """JSON-able definition (the identity of a sweep: ``--resume`` checks it).  ``reference`` appears
-        only when it is not the default ``"bvp"`` (so that sweeps saved before the option resume)."""
+        only when it is not the default ``"bvp"``, ``contact`` when it is not the method's own and ``box_depth``
+        when given (so that sweeps saved before those options resume)."""
         out = {"grip": self.grip, "links": self.links, "method": self.method,
                "axes": {a: list(self.axes[a]) for a in AXES}}
         if self.reference != "bvp":
             out["reference"] = self.reference
+        if self.contact != default_contact(self.method):
+            out["contact"] = self.contact
+        if self.box_depth is not None:
+            out["box_depth"] = self.box_depth
         return out
 
 
 def make_grid(grip: str, *, kappa, D=None, M=None, mu=None, b=None, gamma=None, links: int,
-              method: str = "newton", reference: str = "bvp") -> SweepGrid:
+              method: str = "newton", reference: str | None = "bvp", contact: str | None = None,
+              box_depth: float | None = None) -> SweepGrid:
     """A :class:`SweepGrid` from axis specifications (see :func:`parse_axis`); ``None`` takes :data:`DEFAULTS`.
 
     The grid's size is computed from the ``NUM`` values alone and checked
@@ -244,4 +313,5 @@ def make_grid(grip: str, *, kappa, D=None, M=None, mu=None, b=None, gamma=None, 
     links = check_links(links)
     check_sweep(counts, links, str(method).strip().lower(), workers=None)
     axes = {a: parse_axis(a, v) for a, v in specs.items()}
-    return SweepGrid(grip=grip, axes=axes, links=links, method=method, reference=reference)
+    return SweepGrid(grip=grip, axes=axes, links=links, method=method, reference=reference, contact=contact,
+                     box_depth=box_depth)

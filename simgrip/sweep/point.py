@@ -7,7 +7,8 @@ sake: a point the grip cannot build (``ValueError``) is
 ``RuntimeError``) is ``unsettled``, anything else is ``error``, each with its
 message; the BVP is solved independently of the simulation
 (:func:`simgrip.reference.elastica.solve` at the point's own parameters,
-uniform curvature) and its failure leaves the ``bvp_*`` columns empty with
+uniform curvature; none for a full-contact sweep,
+:mod:`simgrip.sweep.grid`) and its failure leaves the ``bvp_*`` columns empty with
 ``bvp_message``.  All the physics comes from the library's public functions
 (:func:`simgrip.compare.simulate`, :func:`simgrip.compare.settled_record`,
 :func:`simgrip.reference.elastica.solve`).
@@ -77,7 +78,8 @@ def _simulation(point: SweepPoint) -> dict:
     out.update(wall_time_s=None, message="")
     try:
         params = point.params()
-        state = simulate(point.grip, params, Uniform(point.kappa), point.links, method=point.method)
+        state = simulate(point.grip, params, Uniform(point.kappa), point.links, method=point.method,
+                         **point.settle_options())
         rec = settled_record(state, params)
     except ValueError as exc:
         out.update(status="rejected", message=_message(exc))

@@ -326,14 +326,18 @@ def _finished(out: Path, grid: SweepGrid, note, t0: float) -> SweepResult:
     try:
         meta = json.loads((out / "sweep.json").read_text(encoding="utf-8"))
         args = meta["arguments"]
-        same = ({k: args[k] for k in grid.spec()} == json.loads(json.dumps(grid.spec()))
-                and args.get("reference", "bvp") == grid.reference)
+        from simgrip.sweep.grid import default_contact
+
+        same = ({k: args.get(k) for k in grid.spec()} == json.loads(json.dumps(grid.spec()))
+                and args.get("reference", "bvp") == grid.reference
+                and args.get("contact", default_contact(args["method"])) == grid.contact
+                and args.get("box_depth") == grid.box_depth)
     except (OSError, ValueError, KeyError, TypeError):
         raise ValueError(f"--resume: {str(out)!r} holds a sweep.csv but no unfinished sweep ({PARTIAL}/) and no "
                          "readable sweep.json saying which sweep it is: drop --resume to compute it again") from None
     if not same:
         raise ValueError(f"--resume: {str(out)!r} holds a finished sweep of a different grid (grip, axes, links, "
-                         "method or reference differ): drop --resume to replace it, or choose another --out")
+                         "method, reference, contact or box depth differ): drop --resume to replace it, or choose another --out")
     tally = Tally()
     try:
         for r in iter_csv(out / "sweep.csv"):
@@ -368,7 +372,8 @@ def _write(out: Path, result: SweepResult, store: PartialStore, options: RunnerO
     result.throughput = throughput(result.computed, compute_s, result.wall_time_s, cores, store.timing)
     write_json(paths["json"], {
         "command": "sweep",
-        "arguments": {**result.grid.spec(), "reference": result.grid.reference, "jobs": options.jobs, "scheduler": options.scheduler,
+        "arguments": {**result.grid.spec(), "reference": result.grid.reference, "contact": result.grid.contact,
+                      "box_depth": result.grid.box_depth, "jobs": options.jobs, "scheduler": options.scheduler,
                       "scheduler_file": options.scheduler_file, "batch_size": batch_size},
         "columns": list(COLUMNS),
         "versions": versions(),
@@ -395,9 +400,18 @@ def add_arguments(p) -> None:
     g.add_argument("--gamma", nargs="+", default=None, metavar="V", help="Grip III contact arc length gamma/l [default 0.8]")
     p.add_argument("--links", type=int, required=True, help="links per finger")
     p.add_argument("--method", default="newton", help="settle method: newton or dynamics [default newton]")
-    p.add_argument("--reference", default="bvp", metavar="{bvp,none}",
+    p.add_argument("--reference", default=None, metavar="{bvp,none}",
                    help="bvp: the elastica BVP beside every point, warm-started along the grid (bvp_* and agree "
-                   "columns); none: the simulation only (those columns empty) [default bvp]")
+                   "columns); none: the simulation only (those columns empty) [default bvp; none with --contact "
+                   "full, which has no per-point reference]")
+    p.add_argument("--contact", default=None, metavar="{point,surface,full}",
+                   help="the settle's contact: point (the paper's, newton's default), surface (MuJoCo's contact "
+                   "point on the tip; the dynamics' only one) or full (every link and the tip touch the box and "
+                   "the finger itself: Grips I/II, over-damped dynamics, ~1-4 s a point at n = 16) [default: the "
+                   "method's own]; recorded in sweep.json, --resume refuses another")
+    p.add_argument("--box-depth", type=float, default=None, metavar="D",
+                   help="with --contact full: grasp the box with the tip D (over l, in (0, 1]) below its top edge "
+                   "(II: above its bottom edge), as simulate --box-depth [default: the box stays below the palm]")
     p.add_argument("--out", required=True, help="output folder (sweep.csv, sweep.json, map.png)")
     p.add_argument("--resume", action="store_true", help=f"complete an interrupted sweep saved in OUT/{PARTIAL} (damaged batch files are set aside "
                    "and recomputed; a finished sweep computes nothing)")
@@ -423,8 +437,16 @@ class _RenamedOption(argparse.Action):
 
 def grid_from_args(args) -> SweepGrid:
     """The :class:`SweepGrid` of parsed ``simgrip sweep`` arguments (``ValueError`` naming the option)."""
-    return make_grid(args.grip, kappa=args.kappa, D=args.D, M=args.M, mu=args.mu, b=args.b, gamma=args.gamma,
-                     links=args.links, method=args.method, reference=args.reference)
+    try:
+        return make_grid(args.grip, kappa=args.kappa, D=args.D, M=args.M, mu=args.mu, b=args.b, gamma=args.gamma,
+                         links=args.links, method=args.method, reference=args.reference,
+                         contact=getattr(args, "contact", None), box_depth=getattr(args, "box_depth", None))
+    except ValueError as exc:  # the grid's names as the options': --contact, --box-depth, --reference
+        msg = str(exc)
+        for name in ("contact", "box_depth", "reference"):
+            if msg.startswith(name):
+                raise ValueError("--" + name.replace("_", "-") + msg[len(name):]) from None
+        raise
 
 
 def cli_sweep(args):

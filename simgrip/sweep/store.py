@@ -326,7 +326,8 @@ class PartialStore:
                 saved_spec = None
             if saved_spec != json.loads(json.dumps(self.spec)):
                 raise ValueError(f"--resume: {str(self.dir)!r} was written for a different sweep "
-                                 "(grip, axes, links, method or reference differ, or its spec.json is damaged); "
+                                 "(grip, axes, links, method, reference, contact or box depth differ, or its "
+                                 "spec.json is damaged); "
                                  "delete it to start afresh")
             return self._take_over(note)
         self.dir.mkdir(parents=True, exist_ok=True)
