@@ -29,7 +29,8 @@ from simgrip.chain import check_links
 from simgrip.params import DimensionlessParams, _finite, check_grip
 from simgrip.profiles import Uniform
 
-__all__ = ["AXES", "CONTACTS", "DEFAULTS", "check_contact", "default_contact", "SweepGrid", "SweepPoint", "axis_count", "parse_axis", "make_grid"]
+__all__ = ["AXES", "CONTACTS", "DEFAULTS", "check_contact", "default_contact", "SweepGrid", "SweepPoint", "axis_count",
+           "parse_axis", "make_grid"]
 
 #: Swept parameters in grid order (the CLI option of each is ``--<name>``; ``mu`` is ``mu_s``).
 AXES = ("kappa", "D", "M", "mu", "b", "gamma")
@@ -63,7 +64,8 @@ def check_contact(grip: str, method: str, contact, box_depth, reference) -> tupl
         raise ValueError("contact: 'point' needs method newton (the dynamics' friction acts at MuJoCo's surface "
                          "contact: 'surface')")
     if c == "full" and grip not in ("I", "II"):
-        raise ValueError(f"contact: 'full' sweeps Grips I and II (the full-contact settle has no Grip III), got {grip!r}")
+        raise ValueError(f"contact: 'full' sweeps Grips I and II (the full-contact settle has no Grip III), "
+                         f"got {grip!r}")
     if box_depth is not None:
         if c != "full":
             raise ValueError("box_depth: needs contact 'full'")

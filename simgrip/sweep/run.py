@@ -337,7 +337,8 @@ def _finished(out: Path, grid: SweepGrid, note, t0: float) -> SweepResult:
                          "readable sweep.json saying which sweep it is: drop --resume to compute it again") from None
     if not same:
         raise ValueError(f"--resume: {str(out)!r} holds a finished sweep of a different grid (grip, axes, links, "
-                         "method, reference, contact or box depth differ): drop --resume to replace it, or choose another --out")
+                         "method, reference, contact or box depth differ): drop --resume to replace it, or choose "
+                         "another --out")
     tally = Tally()
     try:
         for r in iter_csv(out / "sweep.csv"):
