@@ -23,6 +23,8 @@ FIGURES = {
     # past the onset of full contact (simgrip.figures.full_contact)
     "fig07_full": "Grip I N and tip vs kappa_bar0 in [0, -12]: point contact (invalid past the onset), "
                   "free-boundary reference, MuJoCo contact='full' at n = 32",
+    "fig07_wrap": "free rod wrapping a fixed cylinder vs kappa_bar0 in [-7, -12]: the free rod (invalid through it), "
+                  "the wrap BVP, the constrained chain at n = 32",
 }
 
 #: Figures made by :mod:`simgrip.figures.gripper`, and those of them that need OpenGL (rendered pictures).
@@ -30,12 +32,12 @@ GRIPPER_FIGURES = ("grasp3", "grasp4", "grip_forces")
 RENDERED_FIGURES = ("grasp3", "grasp4")
 
 #: Figures made by :mod:`simgrip.figures.full_contact`.
-FULL_CONTACT_FIGURES = ("fig07_full",)
+FULL_CONTACT_FIGURES = ("fig07_full", "fig07_wrap")
 
 #: Rough relative cost of computing each figure (the slow ones are started first).
 COST = {"fig16": 10, "fig11": 8, "fig15": 6, "fig13": 4, "fig14": 4, "fig09": 3,
         "fig07": 2, "fig08": 2, "fig06": 2, "fig12": 1, "grip_forces": 2, "grasp3": 1, "grasp4": 1,
-        "fig07_full": 4}
+        "fig07_full": 4, "fig07_wrap": 3}
 
 #: Figures that can carry the MuJoCo overlay, and the grip of each grip sweep.
 OVERLAY_FIGURES = ("fig06", "fig07", "fig08", "fig09")

@@ -21,7 +21,8 @@ straight link, so it is first order in ``ds``; the budget at ``kappa = -10`` is 
 :mod:`simgrip.reference.free_boundary` and ``tests/test_full_grasp.py``.
 
 :func:`full_contact_data` computes (no matplotlib); :func:`plot_full_contact` draws; :func:`make_full_contact_figure`
-writes ``out_dir/fig07_full.png`` (``simgrip figures --which fig07_full``).
+writes ``out_dir/fig07_full.png`` (``simgrip figures --which fig07_full``); the round workpiece's
+``fig07_wrap`` is :mod:`simgrip.figures.wrap_contact`'s.
 """
 
 from __future__ import annotations
@@ -324,6 +325,10 @@ def make_full_contact_figure(name, out_dir, *, simulate: bool = True, links: int
     ``simulate`` no MuJoCo points.  Used by :func:`simgrip.figures.make_figures`."""
     from simgrip.figures.plot import save_figure
 
+    if name == "fig07_wrap":  # the round workpiece: reference and constrained chain only (no planar MuJoCo scene)
+        from simgrip.figures.wrap_contact import make_wrap_contact_figure
+
+        return make_wrap_contact_figure(name, out_dir)
     if name not in FULL_CONTACT_FIGURES:
         raise ValueError(f"name: unknown full-contact figure {name!r}; known: {', '.join(FULL_CONTACT_FIGURES)}")
     data = full_contact_data(sim_kappas=SIM_KAPPA if simulate else (), links=links)
