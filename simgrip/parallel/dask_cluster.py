@@ -237,6 +237,28 @@ class LocalDask:
             out.add(pid)
         return out
 
+    def trim(self) -> None:
+        """Drop what the in-process scheduler keeps of every submitted batch and would keep for ever.
+
+        The local cluster's scheduler runs in this process (on the client's
+        event loop).  Two of its records grow with every ``client.submit``
+        and are never emptied while it lives: each span's metadata appends
+        one ``{"type": "Future"}`` per submit (``Span.add_metadata``; the
+        dashboard's list of computed collections), and
+        ``dask.utils.key_split``'s cache (100 000 entries) keeps every
+        batch's unique key.  Measured with a trivial task, one batch per item
+        (``tests/test_runner_memory.py``), the client grew 450-650 traced
+        bytes per batch, ~150 with the trim.  Both are
+        diagnostics or pure caches: emptying them changes no result.  Runs on
+        the event loop (the scheduler's thread); a no-op once closed.
+        """
+        scheduler = getattr(self.cluster, "scheduler", None)
+        loop = getattr(self.client, "loop", None)
+        if scheduler is None or loop is None:
+            return
+        with contextlib.suppress(Exception):
+            loop.add_callback(_trim_scheduler, scheduler)
+
     def stop(self, interrupted: bool) -> None:
         """Close the cluster: after an interrupt or failure within ~2 s, its worker processes killed first."""
         if interrupted:
@@ -254,6 +276,18 @@ class LocalDask:
             self.client.close(timeout=timeout)
         with contextlib.suppress(Exception):
             self.cluster.close(timeout=timeout)
+
+
+def _trim_scheduler(scheduler) -> None:
+    """On the scheduler's event loop: empty its spans' lists of computed collections and ``key_split``'s cache."""
+    from dask.utils import key_split
+
+    spans = getattr(scheduler, "extensions", {}).get("spans")
+    for span in list(getattr(spans, "spans", {}).values()):
+        meta = getattr(span, "_metadata", None)
+        if isinstance(meta, dict) and isinstance(meta.get("collections"), list):
+            del meta["collections"][:]
+    key_split.cache_clear()
 
 
 @contextlib.contextmanager

@@ -356,6 +356,7 @@ def _run_dask_quietly(fn, items, n, options, batch_size, on_result, bar, collect
         out = [None] * n if collect else None
         losses = {}
         pending = as_completed([], loop=client.loop)
+        done = 0
 
         def submit_more():
             while len(start_of) < limit:
@@ -401,6 +402,9 @@ def _run_dask_quietly(fn, items, n, options, batch_size, on_result, bar, collect
             bar.update(len(chunk))
             fut.release()
             del chunk
+            done += 1
+            if not collect and not options.remote and done % _TRIM_EVERY == 0:
+                env.trim()  # the in-process scheduler's per-submit records (LocalDask.trim)
             submit_more()
         return out
     except BaseException:  # Ctrl-C, fn failed or the cluster did: stop the rest now
@@ -449,6 +453,9 @@ def _next_done(pending, watch):
         time.sleep(_POLL_S)
     return next(pending)
 
+
+#: Finished batches between two trims of the local scheduler's per-submit records (collect=False).
+_TRIM_EVERY = 64
 
 _MAX_LOSSES = 5  # times one batch's result may be lost with its worker before the run gives up
 
