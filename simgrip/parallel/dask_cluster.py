@@ -47,6 +47,9 @@ START_ABORT_S = 1.0
 #: processes than cores only share the cores (and cost ~150 MB each); two per core still lets a task that waits
 #: (I/O, a figure's file) overlap with one that computes.  ``--jobs`` above this is capped, not refused.
 MAX_WORKERS_PER_CORE = 2
+#: Entries of the local cluster's low-level logs (transition log, each connection's recent messages, events) in
+#: place of distributed's 1000: they hold whole messages, i.e. batches of items and results (see _start_local).
+LOW_LEVEL_LOG_LENGTH = 32
 
 
 def available_cores() -> int:
@@ -94,7 +97,12 @@ def _start_local(cls, workers: int):
     # distributed's nannies set MALLOC_TRIM_THRESHOLD_=65536 in their workers: glibc then trims (and stops
     # adapting its mmap threshold) so often that a settle costs ~10 % more CPU (measured: 30 vs 27 ms per
     # point at n = 32); the workers keep glibc's adaptive default, and the single-threaded BLAS variables
-    with dask.config.set({"distributed.nanny.pre-spawn-environ.MALLOC_TRIM_THRESHOLD_": None}):
+    # distributed.admin.low-level-log-length (1000) bounds the debugging logs the in-process scheduler and the
+    # client keep: each BatchedSend's recent_message_log holds its last 1000 messages WHOLE (a batch's pickled
+    # items going to a worker, its results coming back), so a sweep's client grew by a batch's messages per batch
+    # until ~1000 were held (tens of MB); LOW_LEVEL_LOG_LENGTH keeps the last few for a post-mortem
+    with dask.config.set({"distributed.nanny.pre-spawn-environ.MALLOC_TRIM_THRESHOLD_": None,
+                          "distributed.admin.low-level-log-length": LOW_LEVEL_LOG_LENGTH}):
         cluster = cls(
             n_workers=workers, threads_per_worker=1, processes=True, host="127.0.0.1",
             # the scheduler always serves HTTP (/health, /metrics): on 127.0.0.1 and a free port, so
@@ -103,7 +111,8 @@ def _start_local(cls, workers: int):
             worker_dashboard_address=None, silence_logs=50,
         )
     try:
-        return cluster, Client(cluster, set_as_default=False)
+        with dask.config.set({"distributed.admin.low-level-log-length": LOW_LEVEL_LOG_LENGTH}):
+            return cluster, Client(cluster, set_as_default=False)
     except BaseException:
         with contextlib.suppress(Exception):
             cluster.close(timeout=CLOSE_TIMEOUT_S)
