@@ -216,6 +216,20 @@ class PickEnv(gym.Env):
     :class:`gymnasium.error.ResetNeeded`: as Gymnasium's ``Env.step`` says,
     the user needs to call ``reset`` then.
 
+    ## Info
+
+    Every ``step``'s ``info``:
+
+    | key | meaning |
+    |-----|---------|
+    | ``is_success`` | the episode ended in success (the box held ``target_height`` up for ``hold_time``) |
+    | ``dropped``, ``knocked_over`` | the episode ended in that failure |
+    | ``box_lift`` | box height gained since the start, over ``target_height`` (``workpiece_lift`` in the other envs) |
+    | ``normal_force``, ``friction_force``, ``side_force`` | per finger, on the box [N] |
+    | ``hold_time`` | time held at the target [s] |
+    | ``reward_lift``, ``reward_success``, ``reward_squeeze``, ``reward_drop`` | the reward's terms |
+    | ``valid`` (``invalid``) | no finger passes through itself or the other (else the messages) |
+
     ## Arguments
 
     Every argument is checked: a bad value raises ``ValueError`` naming it.  They are read once, at

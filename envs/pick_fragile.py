@@ -56,8 +56,9 @@ key                    meaning
 ``reward_crush``       the crush term of this step's reward (``-w_drop`` or 0, plus the taken-back lift)
 =====================  ==========================================================================
 
-plus the parent env's reward terms and force arrays (``friction_force``,
-``side_force``, ``hold_time``, ``valid``).  ``PickFragile`` has no ``box_lift``
+plus the parent env's reward terms (``reward_lift``, ``reward_success``, ``reward_squeeze``,
+``reward_drop``) and force arrays (``friction_force``, ``side_force``, ``hold_time``, ``valid``;
+``fingers_touching`` with K fingers).  ``PickFragile`` has no ``box_lift``
 (it is ``workpiece_lift``).
 
 Baselines (``python -m simgrip.envs.baselines --env ID --policy P --seeds 6000-6049``, 50 seeds no

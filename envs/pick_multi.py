@@ -145,6 +145,15 @@ class PickMultiEnv(gym.Env):
     registration 200 steps (4 s); ``step`` never truncates, and after the end
     raises :class:`gymnasium.error.ResetNeeded` until ``reset``.
 
+    ## Info
+
+    Every ``step``'s ``info``: ``is_success`` (the episode ended in success, as above), ``dropped``,
+    ``knocked_over`` (it ended in that failure), ``workpiece_lift`` (height gained since the start over
+    ``target_height``), ``normal_force``, ``friction_force``, ``side_force`` (per finger, on the workpiece
+    [N]), ``hold_time`` [s], ``fingers_touching``, the reward's terms (``reward_lift``, ``reward_success``,
+    ``reward_squeeze``, ``reward_drop``), and ``valid`` (no finger through
+    itself or another; else ``invalid`` lists the messages).
+
     ## Arguments
 
     Every argument is checked: a bad value raises ``ValueError`` naming it.

@@ -27,7 +27,9 @@ down), plus ``w_place (psi_t - psi_{t-1})`` with ``psi = 1 - min(1, |x - x_t| / 
 
 Info keys: ``is_success``, ``workpiece_lift`` [m], ``crushed``, ``dropped`` (the table of
 :mod:`simgrip.envs.pick_fragile`) plus ``place_error`` (``|x - x_t|`` [m]), ``carried``, ``reward_place``,
-``target_x`` [m].  Reset options: ``PickFragile-v0``'s and ``target_x`` [m].
+``target_x`` [m], and the rest of that table and of its parent's: ``knocked_over``, ``normal_force``,
+``friction_force``, ``side_force``, ``hold_time``, ``crush_limit``, ``reward_crush``, ``reward_lift``,
+``reward_success``, ``reward_squeeze``, ``reward_drop``, ``valid``.  Reset options: ``PickFragile-v0``'s and ``target_x`` [m].
 """
 
 from __future__ import annotations

@@ -1,0 +1,24 @@
+"""Every key a pick environment's ``step`` puts in ``info`` is named in its class docstring (issue 18)."""
+
+import gymnasium as gym
+import pytest
+
+import simgrip  # noqa: F401  registers the environments
+
+IDS = ["simgrip/Pick-v1", "simgrip/PickMulti-v0", "simgrip/PickFragile-v0", "simgrip/PickMultiFragile-v0",
+       "simgrip/PlaceFragile-v0"]
+
+
+@pytest.mark.parametrize("env_id", IDS)
+def test_every_info_key_is_documented(env_id):
+    env = gym.make(env_id)
+    try:
+        env.reset(seed=0)
+        _, _, _, _, info = env.step(env.action_space.sample())
+        doc = type(env.unwrapped).__doc__ or ""
+        module_doc = __import__(type(env.unwrapped).__module__, fromlist=["_"]).__doc__ or ""
+        missing = [k for k in info if f"``{k}``" not in doc + module_doc]
+        assert "is_success" in info
+        assert not missing, f"{env_id}: info keys not in the docstring: {missing}"
+    finally:
+        env.close()
