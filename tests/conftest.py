@@ -82,3 +82,18 @@ def pytest_terminal_summary(terminalreporter, exitstatus, config):
     backend = config.stash.get(_BACKEND_KEY, None)
     if backend is not None:
         terminalreporter.write_line(f"simgrip render tests ran on: {backend}")
+
+
+def pytest_configure(config):
+    """Ctrl-C reaches the processes the suite starts, as from a terminal.
+
+    A shell that runs a job in the background without job control (``cmd &`` in a script, some CI runners)
+    starts it with SIGINT ignored, and an ignored signal stays ignored across ``exec``: every process the
+    tests start would then ignore the SIGINT they send it (Python installs its ``KeyboardInterrupt`` handler
+    only where SIGINT is at its default).  Restore the default handler here, once, so the interrupt tests test
+    simgrip and not how the suite was launched.
+    """
+    import signal
+
+    if signal.getsignal(signal.SIGINT) == signal.SIG_IGN:
+        signal.signal(signal.SIGINT, signal.default_int_handler)
