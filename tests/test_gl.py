@@ -33,10 +33,11 @@ def test_the_users_backend_is_kept_without_probing(headless, monkeypatch):
 
 
 def test_the_users_backend_without_its_library_is_named(headless, monkeypatch):
-    """MUJOCO_GL=osmesa without libOSMesa: MuJoCo's own import dies in PyOpenGL (AttributeError); ours names it."""
-    headless["MUJOCO_GL"] = "osmesa"
+    """A user's MUJOCO_GL whose library is missing (osmesa without libOSMesa makes MuJoCo's own import die in
+    PyOpenGL; egl without libEGL likewise): ours names it.  Only this dict is set, never a process's backend."""
+    headless["MUJOCO_GL"] = "egl"
     monkeypatch.setattr(gl.ctypes.util, "find_library", lambda name: None)
-    with pytest.raises(gl.RenderingUnavailable, match=r"MUJOCO_GL=osmesa: libOSMesa not found"):
+    with pytest.raises(gl.RenderingUnavailable, match=r"MUJOCO_GL=egl: libEGL not found"):
         gl.choose_backend(headless)
 
 
