@@ -80,51 +80,37 @@ class PickEnv(gym.Env):
 
     ## Physical defaults (SI) and the paper's groups
 
-    A PneuNet-like silicone finger: length ``length = 0.10 m``; mass per length
-    ``rho = 0.15 kg/m`` (15 g of elastomer and strain-limiting layer);
-    bending stiffness ``EI = 3.0e-3 N m^2`` (a 15 mm x 15 mm elastomer section
-    with ``E ~ 1 MPa`` gives ``E b h^3/12 ~ 4e-3``, less for the air chambers);
-    tip sphere and link capsules of radius 4 mm (contact geometry; the mechanics
-    is the centreline).  Box: 6 cm tall, 4 cm deep, width 4-6.5 cm, mass
-    20-60 g, finger-box friction 0.5-1.2 (silicone on card or plastic).  Then
-    ``D = EI/(rho g l^3) = 2.04`` and, per finger (half the box),
-    ``M = m/(rho l) = 0.67 - 2.0``, ``b/l = 0.4 - 0.65``.
+    A PneuNet-like silicone finger: length ``length = 0.10 m``; mass per length ``rho = 0.15 kg/m`` (15 g of
+    elastomer and strain-limiting layer); bending stiffness ``EI = 3.0e-3 N m^2`` (a 15 mm x 15 mm elastomer
+    section with ``E ~ 1 MPa`` gives ``E b h^3/12 ~ 4e-3``, less for the air chambers); tip sphere and link
+    capsules of radius 4 mm (contact geometry; the mechanics is the centreline).  Box: 6 cm tall, 4 cm deep,
+    width 4-6.5 cm, mass 20-60 g, finger-box friction 0.5-1.2 (silicone on card or plastic).  Then ``D = EI/(rho
+    g l^3) = 2.04`` and, per finger (half the box), ``M = m/(rho l) = 0.67 - 2.0``, ``b/l = 0.4 - 0.65``.
     :meth:`dimensionless` returns the current episode's groups.
 
-    Simulation: ``timestep = 2 ms``, ``frame_skip = 10`` (control at 50 Hz),
-    implicitfast integrator, elliptic friction cones, Newton solver (50
-    iterations), ``impratio = 1``.  The hinges carry stiffness-proportional
-    damping (``finger_damping_time = 20 ms``, lossy silicone) and an armature
-    of ``1e-5 kg m^2`` (numerical: it slows the hinge modes so that 2 ms steps
-    and the friction solve stay well conditioned; equilibria are unchanged).
-    Tip and link contacts are condim 4 (torsional friction ``spin_friction *
-    mu``) so the box cannot swing about the line through the tips.  The palm
-    slides vertically on a joint driven by a stiff, critically damped position
-    servo.  Contacts are explicit pairs only (tip and links of each finger, and
-    the palm slab, with the box; box with table/pedestal).  A MuJoCo warning
-    or a non-finite state during ``reset`` or ``step`` raises
-    :class:`simgrip.sim.checks.PhysicsError`.
+    Simulation: ``timestep = 2 ms``, ``frame_skip = 10`` (control at 50 Hz), implicitfast integrator, elliptic
+    friction cones, Newton solver (50 iterations), ``impratio = 1``.  The hinges carry stiffness-proportional
+    damping (``finger_damping_time = 20 ms``, lossy silicone) and an armature of ``1e-5 kg m^2`` (numerical: it
+    slows the hinge modes so that 2 ms steps and the friction solve stay well conditioned; equilibria are
+    unchanged). Tip and link contacts are condim 4 (torsional friction ``spin_friction * mu``) so the box cannot
+    swing about the line through the tips.  The palm slides vertically on a joint driven by a stiff, critically
+    damped position servo.  Contacts are explicit pairs only (tip and links of each finger, and the palm slab,
+    with the box; box with table/pedestal).  A MuJoCo warning or a non-finite state during ``reset`` or ``step``
+    raises :class:`simgrip.sim.checks.PhysicsError`.
 
-    Dynamics of the default finger (straight and sagging, palm held; measured
-    by ``tests/test_finger_damping.py`` with
-    :mod:`simgrip.envs.finger_dynamics`): its first bending mode (fingers in
-    antiphase, the palm still) has 7.66 Hz and zeta = 0.479 in the
-    continuous model, 7.50 Hz and zeta = 0.469 in MuJoCo at the 2 ms step
-    (the integrator's first-order error); in phase, with the palm servo
-    taking part, 7.62 Hz, zeta = 0.476 (7.46 Hz, zeta = 0.465, damped 6.60 Hz
-    at 2 ms).  The damping is stiffness-proportional (``zeta_i = omega_i
-    finger_damping_time / 2`` without gravity), so every higher mode is
-    overdamped; curled, the first mode stiffens and damps more (palm still,
-    continuous model: kappa_bar = -3: 9.30 Hz, zeta = 0.555; -6: 14.17 Hz,
-    zeta = 0.891; -10: overdamped).  Released
-    straight, the fingers reach their sag within 2 % after 0.18 s (after
-    ``settle_time`` 11 % of it is left); a step of the curvature command
-    moves the tip 63 % of the way after 0.10 s and within 2 % after 0.40 s
-    (``kappa_tau`` dominates).  The highest mode has omega_max dt = 0.48
-    (undamped limit 2; with the damping implicit the step is stable for any
-    ``timestep < 2 finger_damping_time``).  The armature lowers the first
-    mode by 3 % (7.90 Hz without it) and the second from 48.7 Hz to 26.0 Hz;
-    without it omega_max dt = 21 and only the implicit damping keeps the
+    Dynamics of the default finger (straight and sagging, palm held; measured by
+    ``tests/test_finger_damping.py`` with :mod:`simgrip.envs.finger_dynamics`): its first bending mode (fingers
+    in antiphase, the palm still) has 7.66 Hz and zeta = 0.479 in the continuous model, 7.50 Hz and zeta = 0.469
+    in MuJoCo at the 2 ms step (the integrator's first-order error); in phase, with the palm servo taking part,
+    7.62 Hz, zeta = 0.476 (7.46 Hz, zeta = 0.465, damped 6.60 Hz at 2 ms).  The damping is
+    stiffness-proportional (``zeta_i = omega_i finger_damping_time / 2`` without gravity), so every higher mode
+    is overdamped; curled, the first mode stiffens and damps more (palm still, continuous model: kappa_bar = -3:
+    9.30 Hz, zeta = 0.555; -6: 14.17 Hz, zeta = 0.891; -10: overdamped).  Released straight, the fingers reach
+    their sag within 2 % after 0.18 s (after ``settle_time`` 11 % of it is left); a step of the curvature
+    command moves the tip 63 % of the way after 0.10 s and within 2 % after 0.40 s (``kappa_tau`` dominates).
+    The highest mode has omega_max dt = 0.48 (undamped limit 2; with the damping implicit the step is stable for
+    any ``timestep < 2 finger_damping_time``).  The armature lowers the first mode by 3 % (7.90 Hz without it)
+    and the second from 48.7 Hz to 26.0 Hz; without it omega_max dt = 21 and only the implicit damping keeps the
     2 ms step stable.
 
     ## Action space
@@ -218,17 +204,12 @@ class PickEnv(gym.Env):
 
     ## Info
 
-    Every ``step``'s ``info``:
-
-    | key | meaning |
-    |-----|---------|
-    | ``is_success`` | the episode ended in success (the box held ``target_height`` up for ``hold_time``) |
-    | ``dropped``, ``knocked_over`` | the episode ended in that failure |
-    | ``box_lift`` | box height gained since the start, over ``target_height`` (``workpiece_lift`` in the other envs) |
-    | ``normal_force``, ``friction_force``, ``side_force`` | per finger, on the box [N] |
-    | ``hold_time`` | time held at the target [s] |
-    | ``reward_lift``, ``reward_success``, ``reward_squeeze``, ``reward_drop`` | the reward's terms |
-    | ``valid`` (``invalid``) | no finger passes through itself or the other (else the messages) |
+    Every ``step``'s ``info``: ``is_success`` (the episode ended in success: the box held ``target_height`` up
+    for ``hold_time``), ``dropped``, ``knocked_over`` (it ended in that failure), ``box_lift`` (height gained
+    since the start over ``target_height``; ``workpiece_lift`` in the other envs), ``normal_force``,
+    ``friction_force``, ``side_force`` (per finger, on the box [N]), ``hold_time`` [s], the reward's terms
+    (``reward_lift``, ``reward_success``, ``reward_squeeze``, ``reward_drop``) and ``valid`` (no finger through
+    itself or the other; else ``invalid`` lists the messages).
 
     ## Arguments
 

@@ -54,10 +54,8 @@ MAX_K = 16384
 #: seconds: MuJoCo's compile solves the mass matrix once per body, work ~ fingers * links^3, about 3 s for
 #: one finger of SLOW_LINKS links (the threshold: fingers * links^3 > SLOW_LINKS^3).
 SLOW_LINKS = 512
-#: Output options and whether each names a folder (True) or a file (False), checked before any work.
-OUTPUT_OPTIONS = {"out": ("--out", True), "png": ("--png", False), "gif": ("--gif", False)}
-#: render's files when neither --png nor --gif is given (with either, only the ones given are written).
-RENDER_DEFAULTS = {"--png": "grip.png", "--gif": "pick.gif"}
+from simgrip.cli_outputs import OUTPUT_OPTIONS, RENDER_DEFAULTS, check_outputs as _check_outputs  # noqa: F401
+from simgrip.cli_outputs import clean_after_interrupt as _clean_after_interrupt, render_outputs as _render_outputs
 
 
 #: What argparse should read as a negative number, not an option: ``-5``, ``-0.5``, ``-.5``, ``-1e6``,
@@ -415,13 +413,6 @@ def _cmd_render(args):
     return [str(path) for path in outputs.values()]
 
 
-def _render_outputs(args) -> dict[str, str]:
-    """render's files as ``{option: path}``: those given, or :data:`RENDER_DEFAULTS` when neither is."""
-    given = {option: getattr(args, option[2:]) for option in RENDER_DEFAULTS}
-    given = {option: path for option, path in given.items() if path is not None}
-    return given or dict(RENDER_DEFAULTS)
-
-
 def _cmd_bench(args) -> dict:
     from simgrip.harness.bench import cli_bench
 
@@ -475,19 +466,8 @@ def _print(result, as_json: bool) -> None:
                         if k not in ("tip", "contact", "warnings", "nodes", "contacts")):
         print(json.dumps(to_jsonable(result), allow_nan=False, indent=None if as_json else 2))
     else:
-        print(format_table(_brief(result)))
-
-
-def _brief(record: dict) -> dict:
-    """A record for the table: the centreline (``nodes``) left to --json, the contacts counted by kind."""
-    out = {k: v for k, v in record.items() if k not in ("nodes", "contacts")}
-    if "contacts" in record:
-        kinds: dict = {}
-        for c in record["contacts"]:
-            kinds[c["with"]] = kinds.get(c["with"], 0) + 1
-        out["contacts"] = (f"{len(record['contacts'])} (" + ", ".join(f"{k} {v}" for k, v in kinds.items()) + ")"
-                           if kinds else "0") + "; --json lists them and the centreline"
-    return out
+        from simgrip.contact_report import brief_record
+        print(format_table(brief_record(result)))
 
 
 COMMANDS = {
@@ -505,69 +485,6 @@ COMMANDS = {
 
 #: Commands that do not import MuJoCo up front: solve needs none; render chooses its GL backend first (named error).
 _NO_MUJOCO_IMPORT = ("solve", "render")
-
-
-def _check_outputs(args) -> list[Path]:
-    """Check every output path of the command before any work (nothing is created); returns the folders.
-
-    The one check of ``--out`` (bench, stress, figures, sweep, ...) and of
-    render's ``--png``/``--gif`` (the files it will write, defaults included),
-    under :mod:`simgrip.io`'s output-path policy: ``ValueError`` naming the
-    option when a path is of the wrong kind (a file where a folder belongs; a
-    folder, FIFO, device or socket where a file belongs), cannot be written, or
-    when two outputs are one file.
-    """
-    from simgrip.io import check_distinct_outputs, check_output_dir, check_output_file, check_output_files_in
-
-    folders = []
-    files = _render_outputs(args) if args.command == "render" else {}
-    for attr, (option, is_dir) in OUTPUT_OPTIONS.items():
-        value = getattr(args, attr, None)
-        if value is None or option in files:
-            continue
-        if is_dir:
-            folders.append(check_output_dir(value, option, create=False))
-            check_output_files_in(value, _files_in_out(args), option)  # e.g. a folder or FIFO at OUT/bench.csv
-        else:
-            files[option] = value
-    for option, value in files.items():
-        folders.append(check_output_file(value, option, create=False).parent)
-    check_distinct_outputs(files)
-    return folders
-
-
-def _files_in_out(args) -> list[str]:
-    """The files bench, stress and figures will write into ``--out``, as far as known before any work.
-
-    (The sweep checks its own, naming ``--out``; the libraries check theirs too, naming ``out_dir``.)
-    """
-    if args.command == "bench":
-        from simgrip.harness.bench import OUTPUT_FILES
-
-        return list(OUTPUT_FILES)
-    if args.command == "stress":
-        from simgrip.harness.stress import OUTPUT_FILES
-
-        return list(OUTPUT_FILES)
-    if args.command == "figures":
-        from simgrip.figures.catalog import FIGURES, figure_key
-
-        try:
-            return [f"{figure_key(w)}.png" for w in args.which] if args.which else [f"{k}.png" for k in FIGURES]
-        except ValueError:  # an unknown figure: the command names it
-            return []
-    return []
-
-
-def _clean_after_interrupt(folders: list[Path], created: list[Path]) -> None:
-    """Remove partial files (of workers killed mid-write) and output folders this run created and left empty."""
-    from simgrip.io import remove_partial_files
-
-    for folder in folders:
-        remove_partial_files(folder, recursive=folder not in (Path("."), Path.cwd()))
-    for folder in created:
-        with contextlib.suppress(OSError):
-            folder.rmdir()  # only if empty
 
 
 def _signals_as_interrupt(on_stuck=None):

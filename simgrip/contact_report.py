@@ -21,7 +21,7 @@ import math
 
 import numpy as np
 
-__all__ = ["contact_records", "node_records"]
+__all__ = ["brief_record", "contact_records", "node_records"]
 
 
 def node_records(state) -> list:
@@ -59,4 +59,16 @@ def contact_records(state) -> list:
             "force": [float(force[0]), float(force[1])],
             "depth": float(c.penetration),
         })
+    return out
+
+
+def brief_record(record: dict) -> dict:
+    """A record for the table: the centreline (``nodes``) left to --json, the contacts counted by kind."""
+    out = {k: v for k, v in record.items() if k not in ("nodes", "contacts")}
+    if "contacts" in record:
+        kinds: dict = {}
+        for c in record["contacts"]:
+            kinds[c["with"]] = kinds.get(c["with"], 0) + 1
+        out["contacts"] = (f"{len(record['contacts'])} (" + ", ".join(f"{k} {v}" for k, v in kinds.items()) + ")"
+                           if kinds else "0") + "; --json lists them and the centreline"
     return out
