@@ -57,8 +57,11 @@ key                    meaning
 =====================  ==========================================================================
 
 plus the parent env's reward terms (``reward_lift``, ``reward_success``, ``reward_squeeze``,
-``reward_drop``) and force arrays (``friction_force``, ``side_force``, ``hold_time``, ``valid``;
-``fingers_touching`` with K fingers).  ``PickFragile`` has no ``box_lift``
+``reward_drop``) and force arrays (``friction_force``, ``side_force``, ``hold_time``;
+``fingers_touching`` with K fingers).  ``valid`` (no finger through itself or another; else ``invalid``
+lists the messages) is checked on the first step, every ``FRAGILE_VALIDITY_EVERY = 25`` steps (0.5 s) and on
+every terminating step (:mod:`simgrip.envs.pick_validity`); between checks it repeats the last check's result.
+A success declared in an invalid state is taken back (``is_success`` False, the success reward withdrawn).  ``PickFragile`` has no ``box_lift``
 (it is ``workpiece_lift``).
 
 Baselines (``python -m simgrip.envs.baselines --env ID --policy P --seeds 6000-6049``, 50 seeds no
@@ -87,6 +90,7 @@ from simgrip.envs.arguments import check_range as _range
 from simgrip.envs.arguments import check_reset
 from simgrip.envs.pick import PickEnv
 from simgrip.envs.pick_multi import PickMultiEnv
+from simgrip.envs.pick_validity import FRAGILE_VALIDITY_EVERY
 
 __all__ = ["FragilePickEnv", "FragilePickMultiEnv", "FRAGILE_DEFAULTS"]
 
@@ -104,6 +108,7 @@ class _Fragile:
 
     _MASS_KEY = "mass"  # the parent's reset option of the mass
     _PARENT_OPTIONS: tuple = ()
+    _final_check = True  # check validity on terminating steps here (False: the subclass does, after its success)
 
     def _fragile_args(self, crush_ratio_range):
         self.crush_ratio_range = _range("crush_ratio_range", crush_ratio_range)
@@ -112,6 +117,25 @@ class _Fragile:
                              f"picked), got {crush_ratio_range!r}")
         self.crush_limit = math.inf
         self.hold_force = 0.0
+        self._validity.every = FRAGILE_VALIDITY_EVERY  # checked every k-th step and at every episode end
+
+    def _final_validity(self, info, terminated: bool) -> float:
+        """Check ``info["valid"]`` afresh on a terminating step (the probe otherwise runs every
+        ``FRAGILE_VALIDITY_EVERY`` steps); a success in an impossible state is taken back.  Returns the reward
+        change (``-w_success`` where a success was taken back, else 0)."""
+        if not terminated or self._validity.checked:
+            return 0.0
+        invalid = self._validity(self.data.qpos.tolist(), self.data, force=True)
+        info["valid"] = not invalid
+        info.pop("invalid", None)
+        if not invalid:
+            return 0.0
+        info["invalid"] = invalid
+        if info["is_success"]:
+            info["is_success"] = False
+            info["reward_success"] = 0.0
+            return -self.w_success
+        return 0.0
 
     def _episode(self) -> tuple[float, float, int]:  # pragma: no cover - defined by each env
         raise NotImplementedError
@@ -124,6 +148,7 @@ class _Fragile:
         lo, hi = self._mass_range
         options.setdefault(self._MASS_KEY, _log_uniform(rng, lo, hi))
         ratio = _log_uniform(rng, *self.crush_ratio_range)
+        self._validity.restart()
         obs, info = super().reset(seed=None, options=options)
         mass, mu, k = self._episode()
         self.hold_force = mass * self.g / (k * mu)
@@ -150,6 +175,8 @@ class _Fragile:
         info["crush_limit"] = self.crush_limit
         if "box_lift" in info:
             info["workpiece_lift"] = info.pop("box_lift")
+        if self._final_check:  # PlaceFragile declares its own success after this and checks there
+            reward += self._final_validity(info, terminated)
         return obs, reward + r_crush, terminated, truncated, info
 
 

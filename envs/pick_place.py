@@ -29,7 +29,7 @@ Info keys: ``is_success``, ``workpiece_lift`` [m], ``crushed``, ``dropped`` (the
 :mod:`simgrip.envs.pick_fragile`) plus ``place_error`` (``|x - x_t|`` [m]), ``carried``, ``reward_place``,
 ``target_x`` [m], and the rest of that table and of its parent's: ``knocked_over``, ``normal_force``,
 ``friction_force``, ``side_force``, ``hold_time``, ``crush_limit``, ``reward_crush``, ``reward_lift``,
-``reward_success``, ``reward_squeeze``, ``reward_drop``, ``valid``.  Reset options: ``PickFragile-v0``'s and ``target_x`` [m].
+``reward_success``, ``reward_squeeze``, ``reward_drop``, ``valid`` (checked as in :mod:`simgrip.envs.pick_fragile`: every 25 steps and at every episode end).  Reset options: ``PickFragile-v0``'s and ``target_x`` [m].
 """
 
 from __future__ import annotations
@@ -60,6 +60,8 @@ _EXTRA = (("workpiece_x", 1), ("target_x", 1))
 class FragilePlaceEnv(FragilePickEnv):
     """Pick-and-place of a fragile workpiece (``simgrip/PlaceFragile-v0``); see :mod:`simgrip.envs.pick_place`
     (``info["is_success"]``, ``info["workpiece_lift"]``, ``info["crushed"]``, ``info["dropped"]``)."""
+
+    _final_check = False  # the place success is declared in step below, and checked there
 
     _PARENT_OPTIONS = FragilePickEnv._PARENT_OPTIONS
 
@@ -182,4 +184,5 @@ class FragilePlaceEnv(FragilePickEnv):
         info.update({"is_success": success, "reward_place": r_place,
                      "reward_success": self.w_success if success else 0.0, "place_error": err,
                      "carried": self._carried, "target_x": self.target_x})
+        reward += self._final_validity(info, terminated)  # a success in an impossible state is taken back
         return self._extend(obs), reward, terminated, truncated, info

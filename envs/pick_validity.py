@@ -20,6 +20,14 @@ keeps the usual step cheap:
 
 Only what the screen lets through is measured exactly.  World nodes are MuJoCo's (the link bodies' origins and
 the tip geoms), so the palm's pose and each finger's plane need no bookkeeping.
+
+**Checking every k-th step** (issue 18: with curled fingers the screen lets most pairs through and the exact
+check costs ~2x a control step's physics).  ``FingerValidity(..., every=k)`` runs the check on the first step
+after :meth:`FingerValidity.restart` and then every ``k``-th call, and returns the last result on the calls
+between (``every = 1``, the default, checks every call).  A caller that declares success or ends the
+episode passes ``force=True`` (:meth:`FingerValidity.__call__`), so a success is always checked at the step it
+is declared: an impossible state never counts as a success.  The fragile envs use ``every =
+FRAGILE_VALIDITY_EVERY``.
 """
 
 from __future__ import annotations
@@ -30,8 +38,11 @@ import numpy as np
 
 from simgrip.validity import SELF_LIMIT_FACTOR, chain_violations
 
-__all__ = ["FingerValidity"]
+__all__ = ["FingerValidity", "FRAGILE_VALIDITY_EVERY"]
 
+#: the fragile envs' check period [control steps]: 25 steps = 0.5 s at 50 Hz (a violation is a configuration the
+#: fingers hold for a while; every terminating step, a success included, is checked regardless)
+FRAGILE_VALIDITY_EVERY = 25
 
 
 class FingerValidity:
@@ -40,10 +51,19 @@ class FingerValidity:
     ``model``: the env's MuJoCo model (read once: the link radius); ``index``: its
     :class:`~simgrip.sim.fingers.FingerIndex`; ``q``: ``data.qpos.tolist()`` (the step already has it),
     ``data`` the env's ``MjData``.  Lengths are the model's (m).  Holds no MuJoCo object (picklable).
+    ``every``: check on every ``every``-th call only (module docstring), a positive int; ``checked`` says
+    whether the last call ran the check.
     """
 
-    def __init__(self, model, index):
+    def __init__(self, model, index, every: int = 1):
         import mujoco
+
+        if isinstance(every, bool) or not isinstance(every, (int, np.integer)) or every < 1:
+            raise ValueError(f"every must be a positive integer, got {every!r}")
+        self.every = int(every)
+        self._calls = 0
+        self._last: list = []
+        self.checked = False
 
         self._bodies = np.asarray(index.link_body, dtype=int)
         self._tips = np.asarray(index.tip_geom, dtype=int)
@@ -105,7 +125,22 @@ class FingerValidity:
                     return False
         return True
 
-    def __call__(self, q: list, data) -> list:
+    def restart(self) -> None:
+        """A new episode: the next call checks."""
+        self._calls = 0
+        self._last = []
+
+    def __call__(self, q: list, data, force: bool = False) -> list:
+        """The violation messages in this state (empty: valid); between every-k checks, the last check's."""
+        due = force or self.every == 1 or self._calls % self.every == 0
+        self._calls += 1
+        self.checked = due
+        if not due:
+            return list(self._last)
+        self._last = self._check(q, data)
+        return list(self._last)
+
+    def _check(self, q: list, data) -> list:
         if self._cap > 0.0 and self._mild(q):
             return []
         world = self.nodes(data)

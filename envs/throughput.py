@@ -29,7 +29,7 @@ __all__ = ["measure_throughput"]
 
 
 def measure_throughput(steps: int = 2000, *, grip: str = "I", seed: int = 0, repeats: int = 3,
-                       chunk: int = 50, env_kwargs=None, clock: str = "wall") -> dict:
+                       chunk: int = 50, env_kwargs=None, clock: str = "wall", env_id: str | None = None) -> dict:
     """Env steps per second, raw physics steps per second and the env's overhead.
 
     Parameters
@@ -38,6 +38,9 @@ def measure_throughput(steps: int = 2000, *, grip: str = "I", seed: int = 0, rep
         Control steps per repeat (each ``frame_skip`` physics steps).
     grip, env_kwargs
         The environment (:class:`~simgrip.envs.pick.PickEnv` arguments).
+    env_id : str, optional
+        A registered two-finger id whose env is a ``PickEnv`` (``"simgrip/PickFragile-v0"``) measured instead,
+        made with ``env_kwargs`` (``grip`` is then not used).
     seed : int
         Seeds the random actions and the episodes.
     repeats : int
@@ -71,7 +74,19 @@ def measure_throughput(steps: int = 2000, *, grip: str = "I", seed: int = 0, rep
     timers = {"wall": time.perf_counter, "cpu": time.thread_time}
     if clock not in timers:
         raise ValueError(f"clock must be 'wall' or 'cpu', got {clock!r}")
-    env = PickEnv(grip=grip, **dict(env_kwargs or {}))
+    if env_id is None:
+        env = PickEnv(grip=grip, **dict(env_kwargs or {}))
+    else:
+        import gymnasium as gym
+
+        import simgrip.envs  # noqa: F401  (registers the ids)
+
+        if not isinstance(env_id, str) or env_id not in gym.registry:
+            raise ValueError(f"env_id must be a registered id, got {env_id!r}")
+        env = gym.make(env_id, **dict(env_kwargs or {})).unwrapped
+        if not isinstance(env, PickEnv):
+            env.close()
+            raise ValueError(f"env_id must name a PickEnv (two fingers, one palm servo), got {env_id!r}")
     try:
         best, ratios = _measure(env, steps, seed, int(repeats), chunk, timers[clock])
     finally:

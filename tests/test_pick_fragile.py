@@ -125,3 +125,49 @@ def test_place_observes_the_target_and_the_scripted_pick_places():
     assert info["workpiece_lift"] < 0.003
     with pytest.raises(ValueError, match="target_x"):
         env.reset(seed=0, options={"target_x": 1.0})
+
+
+def _cross_finger_0(u):
+    """Curl finger 0 through 1.5 turns in place: its links cross (the pick scenes have no self-contact pair)."""
+    import math
+
+    import mujoco
+
+    d = u.data
+    jq = np.asarray(u.fingers.joint_qpos)[0]
+    d.qpos[jq] = -3.0 * math.pi / len(jq)
+    mujoco.mj_kinematics(u.model, d)
+    return d
+
+
+def test_validity_probe_every_k_steps_and_forced_at_success():
+    """The probe runs on the first call after restart and every k-th call (cached between), and a forced
+    check at a declared success takes an impossible success back."""
+    from simgrip.envs.pick_validity import FRAGILE_VALIDITY_EVERY, FingerValidity
+
+    env = FragilePickEnv()
+    env.reset(seed=1)
+    probe = env._validity
+    assert probe.every == FRAGILE_VALIDITY_EVERY > 1
+    saved = env.data.qpos.copy()
+    d = _cross_finger_0(env)
+    probe.restart()
+    assert probe(d.qpos.tolist(), d) and probe.checked  # first call: checked, the crossing found
+    d.qpos[:] = saved
+    import mujoco
+
+    mujoco.mj_kinematics(env.model, d)
+    assert probe(d.qpos.tolist(), d) and not probe.checked  # within the period: the last result repeated
+    assert probe(d.qpos.tolist(), d, force=True) == [] and probe.checked  # forced: the state is valid again
+    for _ in range(FRAGILE_VALIDITY_EVERY - 3):
+        probe(d.qpos.tolist(), d)
+    _cross_finger_0(env)
+    assert probe(d.qpos.tolist(), d) and probe.checked  # the k-th call after restart checks
+    # a success declared in the crossed state on an unchecked step is taken back
+    probe.checked = False
+    info = {"is_success": True, "reward_success": env.w_success, "valid": True}
+    assert env._final_validity(info, True) == -env.w_success
+    assert info["is_success"] is False and info["valid"] is False and info["invalid"]
+    with pytest.raises(ValueError, match="every"):
+        FingerValidity(env.model, env.fingers, every=0)
+    env.close()
