@@ -1,0 +1,282 @@
+"""Learned baselines over several training seeds: one Stable-Baselines3 run per (algorithm, seed), aggregated.
+
+Needs the optional extra: ``pip install "simgrip[rl]"`` (Stable-Baselines3 and a CPU build of PyTorch).
+
+    python examples/rl_baselines.py --env simgrip/PickFragile-v0 --algo ppo sac --seeds 0 1 2 \\
+        --minutes 15 --checkpoint-minutes 5 --eval-seeds 8000-8049 --jobs 2 --out runs/pick_fragile
+
+Each (algorithm, seed) is trained by ``examples/train_sb3.py`` (library defaults, one environment, one torch
+thread, ``--minutes`` of the process's CPU time, a checkpoint every ``--checkpoint-minutes``) in a *separate
+process*, at most ``--jobs`` at once (default 1, at most the machine's cores: each run uses one core, so its
+CPU budget buys the same training whatever else runs).  Every checkpoint and the final policy are evaluated
+deterministically on the held-out seeds ``--eval-seeds A-B`` (contiguous; training draws its episodes from
+the training seed's stream, not from these).
+
+Writes into ``--out``:
+
+* ``<algo>_seed<S>/``: that run's folder (``train_sb3.py``'s files: ``<algo>_eval.json`` with the held-out
+  success of every checkpoint, ``<algo>_curve.csv``, the models, and ``log.txt``, the run's output);
+* ``<algo>_seed<S>.json``: the run's result (a copy of its ``<algo>_eval.json``, plus ``returncode``);
+* ``aggregate.json``: per algorithm and checkpoint (CPU minutes): ``n`` runs, ``mean``, ``min``, ``max`` and
+  every run's held-out ``success_rates`` (fractions in [0, 1]), and the same for the final policies; the
+  command line, the seeds and the budget;
+* ``learning_curves.png``: held-out success against CPU minutes, each algorithm's mean with the min-max band
+  over the seeds and each seed's curve.
+
+Ctrl-C stops every running child (SIGTERM, then SIGKILL after 5 s) and exits 130 with one line.  Exit 2 (one
+line) on a bad argument, 1 when a run failed (its log names why; the others are still aggregated).
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import os
+import signal
+import subprocess
+import sys
+import time
+from pathlib import Path
+
+ALGOS = ("ppo", "sac")
+TRAIN_SCRIPT = Path(__file__).resolve().with_name("train_sb3.py")
+
+
+def _positive(kind):
+    def parse(text):
+        try:
+            v = kind(text)
+        except ValueError:
+            raise argparse.ArgumentTypeError(f"expected a positive {kind.__name__}, got {text!r}") from None
+        if not v > 0 or v != v or v == float("inf"):
+            raise argparse.ArgumentTypeError(f"expected a positive {kind.__name__}, got {text!r}")
+        return v
+    return parse
+
+
+def _seed(text: str) -> int:
+    try:
+        v = int(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"expected a non-negative integer, got {text!r}") from None
+    if v < 0:
+        raise argparse.ArgumentTypeError(f"expected a non-negative integer, got {text!r}")
+    return v
+
+
+def _seed_range(text: str) -> tuple[int, int]:
+    """``A-B`` (inclusive, A <= B, non-negative) or one seed ``A``."""
+    parts = text.split("-")
+    try:
+        lo, hi = (int(parts[0]), int(parts[-1])) if len(parts) in (1, 2) else (None, None)
+    except ValueError:
+        lo = hi = None
+    if lo is None or lo < 0 or hi < lo:
+        raise argparse.ArgumentTypeError(f"expected a seed range A-B with 0 <= A <= B, got {text!r}")
+    return lo, hi
+
+
+def run_command(algo: str, seed: int, args, folder: Path) -> list[str]:
+    """The ``train_sb3.py`` command line of one run (one algorithm, one training seed, one torch thread)."""
+    lo, hi = args.eval_seeds
+    cmd = [sys.executable, str(TRAIN_SCRIPT), "--algo", algo, "--env", args.env, "--seed", str(seed),
+           "--minutes", repr(args.minutes), "--clock", "cpu", "--steps", str(args.steps), "--threads", "1",
+           "--eval-seed", str(lo), "--eval-episodes", str(hi - lo + 1), "--out", str(folder)]
+    if args.checkpoint_minutes:
+        cmd += ["--checkpoint-minutes", repr(args.checkpoint_minutes)]
+    return cmd
+
+
+def _child_env() -> dict:
+    """The children's environment: one thread per math library, and the simgrip this driver imported."""
+    import simgrip
+
+    env = dict(os.environ)
+    for key in ("OMP_NUM_THREADS", "MKL_NUM_THREADS", "OPENBLAS_NUM_THREADS"):
+        env[key] = "1"
+    root = str(Path(simgrip.__file__).resolve().parent.parent)
+    env["PYTHONPATH"] = os.pathsep.join([root] + ([env["PYTHONPATH"]] if env.get("PYTHONPATH") else []))
+    return env
+
+
+def run_all(jobs: list[tuple[str, int, list[str], Path]], max_jobs: int, poll: float = 0.2) -> dict:
+    """Run ``(algo, seed, command, folder)`` jobs, at most ``max_jobs`` at once; returns ``{(algo, seed):
+    returncode}``.  On KeyboardInterrupt every running child is terminated (then killed after 5 s) and the
+    interrupt is re-raised."""
+    env = _child_env()
+    pending, running, codes = list(jobs), {}, {}
+    try:
+        while pending or running:
+            while pending and len(running) < max_jobs:
+                algo, seed, cmd, folder = pending.pop(0)
+                folder.mkdir(parents=True, exist_ok=True)
+                log = open(folder / "log.txt", "w")
+                # own session: a terminal's Ctrl-C reaches the driver only, which stops the children itself
+                proc = subprocess.Popen(cmd, stdout=log, stderr=subprocess.STDOUT, env=env, start_new_session=True)
+                running[(algo, seed)] = (proc, log)
+            for key, (proc, log) in list(running.items()):
+                if proc.poll() is not None:
+                    log.close()
+                    codes[key] = proc.returncode
+                    del running[key]
+            time.sleep(poll)
+    except KeyboardInterrupt:
+        _stop(running)
+        raise
+    return codes
+
+
+def _stop(running: dict) -> None:
+    for proc, _ in running.values():
+        if proc.poll() is None:
+            proc.send_signal(signal.SIGTERM)
+    deadline = time.monotonic() + 5.0
+    for proc, log in running.values():
+        try:
+            proc.wait(timeout=max(0.0, deadline - time.monotonic()))
+        except subprocess.TimeoutExpired:
+            proc.kill()
+            proc.wait()
+        log.close()
+
+
+def _stats(values: list[float]) -> dict:
+    return {"n": len(values), "mean": sum(values) / len(values), "min": min(values), "max": max(values),
+            "success_rates": values}
+
+
+def aggregate(results: list[dict]) -> dict:
+    """Per algorithm: held-out success at each checkpoint (``minutes``) and of the final policy over the runs
+    that finished (``mean``, ``min``, ``max``, ``success_rates``; fractions in [0, 1])."""
+    out = {}
+    for algo in sorted({r["algo"].lower() for r in results}):
+        done = [r for r in results if r["algo"].lower() == algo and r.get("returncode") == 0]
+        entry = {"runs": len(done), "failed": sum(1 for r in results if r["algo"].lower() == algo) - len(done)}
+        by_minute = {}
+        for r in done:
+            for cp in r.get("checkpoints", ()):
+                by_minute.setdefault(float(cp["minutes"]), []).append(float(cp["success_rate"]))
+        entry["checkpoints"] = [{"minutes": m, **_stats(v)} for m, v in sorted(by_minute.items())]
+        if done:
+            entry["final"] = {"timesteps": [int(r["timesteps"]) for r in done],
+                              **_stats([float(r["success_rate"]) for r in done])}
+        out[algo] = entry
+    return out
+
+
+def plot(summary: dict, results: list[dict], path: Path) -> None:
+    """Held-out success against CPU minutes: each algorithm's mean, min-max band and every seed's curve."""
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    from simgrip.io import atomic_write
+
+    fig, ax = plt.subplots(figsize=(6.4, 4.0), constrained_layout=True)
+    for i, (algo, entry) in enumerate(summary.items()):
+        color = f"C{i}"
+        cps = entry["checkpoints"]
+        if cps:
+            m = [c["minutes"] for c in cps]
+            ax.plot(m, [c["mean"] for c in cps], "o-", color=color,
+                    label=f"{algo.upper()} mean of {max(c['n'] for c in cps)} seeds")
+            ax.fill_between(m, [c["min"] for c in cps], [c["max"] for c in cps], color=color, alpha=0.2,
+                            label=f"{algo.upper()} min-max")
+        for r in results:
+            if r["algo"].lower() == algo and r.get("returncode") == 0 and r.get("checkpoints"):
+                ax.plot([c["minutes"] for c in r["checkpoints"]], [c["success_rate"] for c in r["checkpoints"]],
+                        color=color, lw=0.7, alpha=0.5)
+    ax.set_xlabel("training budget (CPU minutes, one core)")
+    ax.set_ylabel("held-out success (deterministic policy)")
+    ax.set_ylim(-0.02, 1.02)
+    ax.grid(alpha=0.3)
+    if summary:
+        ax.legend(fontsize=8)
+    with atomic_write(path, "wb") as fh:
+        fig.savefig(fh, format="png", dpi=110)
+    plt.close(fig)
+
+
+def main(argv=None) -> int:
+    p = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
+    p.add_argument("--env", required=True, help="registered env id, e.g. simgrip/PickFragile-v0")
+    p.add_argument("--algo", nargs="+", choices=ALGOS, default=list(ALGOS), help="algorithms (default ppo sac)")
+    p.add_argument("--seeds", nargs="+", type=_seed, default=[0, 1, 2], help="training seeds (default 0 1 2)")
+    p.add_argument("--minutes", type=_positive(float), default=15.0, help="CPU-minute budget per run (default 15)")
+    p.add_argument("--checkpoint-minutes", type=_positive(float), default=None,
+                   help="evaluate a checkpoint every so many CPU minutes (default: the final policy only)")
+    p.add_argument("--steps", type=_positive(int), default=10_000_000, help="environment-step cap per run")
+    p.add_argument("--eval-seeds", type=_seed_range, default=(8000, 8049),
+                   help="held-out evaluation seeds A-B, inclusive (default 8000-8049)")
+    p.add_argument("--jobs", type=_positive(int), default=1, help="runs at once (default 1, at most the cores)")
+    p.add_argument("--out", required=True, help="output folder")
+    args = p.parse_args(argv)
+    cores = os.cpu_count() or 1
+    if args.jobs > cores:
+        p.error(f"--jobs: at most the {cores} cores of this machine, got {args.jobs}")
+    if len(set(args.seeds)) != len(args.seeds):
+        p.error(f"--seeds: repeated seed in {args.seeds}")
+    if args.checkpoint_minutes and args.checkpoint_minutes > args.minutes:
+        p.error("--checkpoint-minutes: larger than --minutes (no checkpoint would be taken)")
+    import importlib.util
+
+    if any(importlib.util.find_spec(m) is None for m in ("stable_baselines3", "torch")):  # found, not imported:
+        p.error('needs Stable-Baselines3 and PyTorch: pip install "simgrip[rl]"')  # the children import them
+    import gymnasium as gym
+
+    import simgrip.envs  # noqa: F401  (registers the ids)
+    from simgrip.io import check_output_dir, check_output_files_in, write_json
+
+    if args.env not in gym.registry:
+        p.error(f"--env: unknown id {args.env!r}")
+    algos = list(dict.fromkeys(args.algo))
+    try:
+        out = check_output_dir(args.out, "--out")
+        names = [f"{a}_seed{s}.json" for a in algos for s in args.seeds] + ["aggregate.json", "learning_curves.png"]
+        check_output_files_in(out, names, "--out")
+    except ValueError as e:
+        p.error(str(e))
+    jobs = [(a, s, run_command(a, s, args, out / f"{a}_seed{s}"), out / f"{a}_seed{s}") for a in algos
+            for s in args.seeds]
+    try:
+        codes = run_all(jobs, args.jobs)
+    except KeyboardInterrupt:
+        print(f"rl_baselines: interrupted; stopped the running trainings (finished results stay in {out})",
+              file=sys.stderr, flush=True)
+        return 130
+    results = []
+    for algo, seed, _, folder in jobs:
+        result = {"algo": algo.upper(), "seed": seed}
+        try:
+            result.update(json.loads((folder / f"{algo}_eval.json").read_text()))
+        except (OSError, ValueError):
+            pass
+        result["returncode"] = codes[(algo, seed)]
+        if result["returncode"] == 0 and "success_rate" not in result:
+            result["returncode"] = -1  # finished without its result file: counted as failed
+        write_json(out / f"{algo}_seed{seed}.json", result)
+        results.append(result)
+    summary = aggregate(results)
+    lo, hi = args.eval_seeds
+    write_json(out / "aggregate.json", {
+        "env": args.env, "algos": algos, "seeds": args.seeds, "minutes": args.minutes,
+        "checkpoint_minutes": args.checkpoint_minutes, "clock": "cpu", "eval_seeds": [lo, hi],
+        "hyperparameters": "Stable-Baselines3 defaults, one env, one torch thread", "summary": summary,
+        "command": [Path(sys.argv[0]).name] + list(sys.argv[1:] if argv is None else argv)})
+    plot(summary, results, out / "learning_curves.png")
+    for algo, entry in summary.items():
+        final = entry.get("final")
+        text = (f"held-out success mean {final['mean']:.2f} (min {final['min']:.2f}, max {final['max']:.2f})"
+                if final else "no run finished")
+        print(f"{algo.upper()}: {entry['runs']} runs, {text}", flush=True)
+    failed = [f"{a}_seed{s}" for (a, s), c in codes.items() if c != 0]
+    if failed or any(r["returncode"] != 0 for r in results):
+        bad = failed or [f"{r['algo'].lower()}_seed{r['seed']}" for r in results if r["returncode"] != 0]
+        print(f"rl_baselines: {len(bad)} run(s) failed, see their log.txt: {' '.join(bad)}", file=sys.stderr)
+        return 1
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())

@@ -1,0 +1,129 @@
+"""examples/rl_baselines.py: one process per (algorithm, seed), the aggregate over seeds, bad input, Ctrl-C.
+
+The training tests use a budget of seconds (they check the plumbing, not learning) and are skipped without
+Stable-Baselines3 (the ``rl`` extra).
+"""
+
+from __future__ import annotations
+
+import importlib.util
+import json
+import os
+import signal
+import subprocess
+import sys
+import time
+from pathlib import Path
+
+import pytest
+
+SCRIPT = Path(__file__).resolve().parent.parent / "examples" / "rl_baselines.py"
+ROOT = SCRIPT.parent.parent
+
+
+def _module():
+    spec = importlib.util.spec_from_file_location("rl_baselines", SCRIPT)
+    mod = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(mod)
+    return mod
+
+
+def _env():
+    import simgrip
+
+    env = dict(os.environ)
+    env["PYTHONPATH"] = os.pathsep.join([str(Path(simgrip.__file__).resolve().parent.parent),
+                                         env.get("PYTHONPATH", "")])
+    return env
+
+
+def test_aggregate_mean_min_max_per_checkpoint_and_failed_runs():
+    agg = _module().aggregate
+    runs = [
+        {"algo": "PPO", "seed": 0, "returncode": 0, "success_rate": 0.5, "timesteps": 10,
+         "checkpoints": [{"minutes": 5.0, "success_rate": 0.1}, {"minutes": 10.0, "success_rate": 0.4}]},
+        {"algo": "PPO", "seed": 1, "returncode": 0, "success_rate": 0.9, "timesteps": 12,
+         "checkpoints": [{"minutes": 5.0, "success_rate": 0.3}, {"minutes": 10.0, "success_rate": 0.8}]},
+        {"algo": "PPO", "seed": 2, "returncode": 1},
+    ]
+    s = agg(runs)["ppo"]
+    assert s["runs"] == 2 and s["failed"] == 1
+    c5, c10 = s["checkpoints"]
+    assert c5["minutes"] == 5.0 and c5["n"] == 2 and c5["min"] == 0.1 and c5["max"] == 0.3
+    assert c5["mean"] == pytest.approx(0.2, abs=1e-12) and c10["mean"] == pytest.approx(0.6, abs=1e-12)
+    assert s["final"]["success_rates"] == [0.5, 0.9] and s["final"]["mean"] == pytest.approx(0.7, abs=1e-12)
+
+
+@pytest.mark.parametrize("extra, word", [
+    (["--jobs", str((os.cpu_count() or 1) + 1)], "--jobs"),
+    (["--eval-seeds", "9-3"], "--eval-seeds"),
+    (["--minutes", "0"], "--minutes"),
+    (["--seeds", "1", "1"], "--seeds"),
+])
+def test_bad_arguments_exit_2_with_one_line(extra, word, tmp_path, capsys):
+    argv = ["--env", "simgrip/PickFragile-v0", "--out", str(tmp_path / "o"), *extra]
+    with pytest.raises(SystemExit) as e:
+        _module().main(argv)
+    assert e.value.code == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert word in err[-1] and "Traceback" not in "\n".join(err)
+
+
+def test_smoke_two_seeds_aggregate_and_plot(tmp_path):
+    _needs_sb3()
+    out = tmp_path / "runs"
+    cmd = [sys.executable, str(SCRIPT), "--env", "simgrip/PickFragile-v0", "--algo", "sac", "--seeds", "0", "1",
+           "--minutes", "0.02", "--checkpoint-minutes", "0.01", "--eval-seeds", "8000-8001",
+           "--jobs", str(min(2, os.cpu_count() or 1)), "--out", str(out)]
+    r = subprocess.run(cmd, capture_output=True, text=True, timeout=300, env=_env(), cwd=ROOT)
+    assert r.returncode == 0, r.stderr[-2000:]
+    runs = [json.loads((out / f"sac_seed{s}.json").read_text()) for s in (0, 1)]
+    assert [x["seed"] for x in runs] == [0, 1] and all(x["returncode"] == 0 for x in runs)
+    assert all(x["eval_seeds"] == [8000, 8001] and x["episodes"] == 2 for x in runs)
+    agg = json.loads((out / "aggregate.json").read_text())
+    final = agg["summary"]["sac"]["final"]
+    rates = [x["success_rate"] for x in runs]
+    assert final["success_rates"] == rates and final["min"] == min(rates) and final["max"] == max(rates)
+    assert agg["summary"]["sac"]["checkpoints"][0]["minutes"] == 0.01
+    assert (out / "learning_curves.png").stat().st_size > 0
+    assert (out / "sac_seed0" / "log.txt").exists()
+
+
+def _needs_sb3():
+    if importlib.util.find_spec("stable_baselines3") is None:  # found without importing torch here
+        pytest.skip("needs Stable-Baselines3 (the rl extra)")
+
+
+def _children(pid: int) -> list[int]:
+    try:
+        text = Path(f"/proc/{pid}/task/{pid}/children").read_text()
+    except OSError:
+        return []
+    return [int(c) for c in text.split()]
+
+
+@pytest.mark.skipif(not Path("/proc/self/task").exists(), reason="reads the child list from /proc")
+def test_ctrl_c_stops_every_child_with_one_line(tmp_path):
+    _needs_sb3()
+    cmd = [sys.executable, str(SCRIPT), "--env", "simgrip/PickFragile-v0", "--algo", "ppo", "--seeds", "0",
+           "--minutes", "10", "--eval-seeds", "8000-8001", "--out", str(tmp_path / "runs")]
+    p = subprocess.Popen(cmd, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True, env=_env(), cwd=ROOT)
+    try:
+        deadline = time.monotonic() + 60
+        kids = []
+        while not kids and time.monotonic() < deadline and p.poll() is None:
+            time.sleep(0.2)
+            kids = _children(p.pid)
+        assert kids, "the driver started no training process"
+        p.send_signal(signal.SIGINT)
+        _, err = p.communicate(timeout=30)
+    finally:
+        if p.poll() is None:
+            p.kill()
+            p.wait()
+    assert p.returncode == 130
+    lines = err.strip().splitlines()
+    assert len(lines) == 1 and "interrupted" in lines[0]
+    for k in kids:  # gone (or a zombie nobody waits for: not running)
+        state = Path(f"/proc/{k}/stat").read_text().split()[2] if Path(f"/proc/{k}/stat").exists() else "gone"
+        assert state in ("gone", "Z", "X")
