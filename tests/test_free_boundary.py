@@ -171,6 +171,9 @@ def test_cli_solve_contact_full(capsys):
     assert rec["contact_set"] == "tip + corner@link10"
     assert rec["N"] == pytest.approx(GRIP_I_KAPPA_M10["bvp"]["N"], abs=1e-5)
     assert rec["valid"] is True
+    # the least mu_s holding the box (tests/test_hold_full.py): the tip's friction over N, held at mu_s = 1
+    assert rec["least_mu"] == pytest.approx(-GRIP_I_KAPPA_M10["bvp"]["friction"] / rec["N"], rel=1e-6)
+    assert rec["held"] is True
     assert main(["solve", "III", "--kappa", "-4", "--contact", "full"]) == 2
     err = capsys.readouterr().err.strip().splitlines()
     assert len(err) == 1 and "grip" in err[0]

@@ -122,7 +122,7 @@ def _e_out(sd, th, tilt=0.0):
     return sd * np.array([-np.sin(th + tilt), np.cos(th + tilt)])
 
 
-def _system(D, M, prof, K, xb, sd, depth, tilt=0.0):
+def _system(D, M, prof, K, xb, sd, depth, tilt=0.0, tip_moment=0.0):
     def fun(t, y, p):
         N, P, gam, thg = p
         e = _e_out(sd, thg, tilt)
@@ -145,7 +145,7 @@ def _system(D, M, prof, K, xb, sd, depth, tilt=0.0):
         return np.array([
             ya[0], ya[2], ya[3],
             ya[4] - yb[0], ya[5] - yb[1], ya[6] - yb[2], ya[7] - yb[3],
-            yb[5], yb[6] - xb,
+            yb[5] - tip_moment, yb[6] - xb,
             yb[2] - xb, yb[3] - yb[7] - sd * depth,
             yb[0] - thg,
         ])
@@ -172,7 +172,8 @@ def _validity(grip, xb, sd, depth, s, x, y, gamma, N, P):
     return tuple(bad)
 
 
-def solve_corner(grip, params, profile, guess, *, depth=0.4, tol=1e-10, tilt=0.0) -> CornerSolution:
+def solve_corner(grip, params, profile, guess, *, depth=0.4, tol=1e-10, tilt=0.0,
+                 tip_moment=0.0) -> CornerSolution:
     """Solve the tip + corner free-boundary BVP of Grip I/II (see the module docstring).
 
     Parameters
@@ -190,6 +191,9 @@ def solve_corner(grip, params, profile, guess, *, depth=0.4, tol=1e-10, tilt=0.0
     tilt : float
         Turn the corner's force by this angle [rad] off the rod's normal (0: the frictionless corner; a
         sensitivity for the discretisation-error bound, see the module docstring).
+    tip_moment : float
+        A couple at the tip, ``m(1)``, over ``rho g l^2`` (0: the paper's moment-free tip; a sensitivity for a
+        model whose tip force acts off the centreline, :mod:`simgrip.reference.hold_full`).
 
     Raises
     ------
@@ -239,7 +243,10 @@ def solve_corner(grip, params, profile, guess, *, depth=0.4, tol=1e-10, tilt=0.0
     else:
         raise ValueError("guess must be a ConstrainedEquilibrium (one corner contact) or a CornerSolution")
     y0 = np.vstack(state(sA) + state(sB))
-    fun, bc = _system(params.D, params.M, prof, antiderivative(prof), xb, sd, depth, float(tilt))
+    tip_moment = float(tip_moment)
+    if not math.isfinite(tip_moment):
+        raise ValueError(f"tip_moment must be finite, got {tip_moment!r}")
+    fun, bc = _system(params.D, params.M, prof, antiderivative(prof), xb, sd, depth, float(tilt), tip_moment)
     r = solve_bvp(fun, bc, t, y0, p=np.array([N, P, gam, thg]), tol=tol, max_nodes=20000, bc_tol=tol)
     if r.status != 0 or not np.all(np.isfinite(r.p)):
         raise FreeBoundaryError(f"solve_bvp: {r.message}")

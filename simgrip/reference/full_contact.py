@@ -26,6 +26,14 @@ def _label(c) -> str:
     return f"{c.kind}@{'link' if c.kind in ('corner', 'cylinder') else 'node'}{c.index}"
 
 
+def _hold(rec: dict, params, N: float, friction: float, valid: bool) -> None:
+    """``least_mu``: the least mu_s that holds the box at this grasp, ``|F_f| / N`` (the tip's friction carries the
+    weight and the frictionless corner's push on the box: :mod:`simgrip.reference.hold_full`; inf where no friction
+    holds it), and ``held`` at the given mu_s."""
+    least = abs(float(friction)) / float(N) if (valid and N > 0) else float("inf")
+    rec.update(least_mu=least, held=bool(params.mu_s >= least))
+
+
 def full_contact_record(grip: str, params, profile, n: int = 32, depth: float = DEFAULT_DEPTH) -> dict:
     """A flat record: the contact set, the normal force ``N`` (the tip's), the tip, the contact points'
     arc lengths and forces, which reference produced them, and the chain's own values at ``n`` links.
@@ -55,11 +63,13 @@ def full_contact_record(grip: str, params, profile, n: int = 32, depth: float = 
         sol = solve(grip, params, profile)
         rec.update(reference="point-contact BVP (only the tip touches)", N=sol.normal_force,
                    friction=sol.friction_force, tip_x=float(sol.tip[0]), tip_y=float(sol.tip[1]))
+        _hold(rec, params, sol.normal_force, sol.friction_force, bool(sol.feasibility.get("grip_shape", True)))
     elif grip != "free" and kinds == {"corner": 1}:
         b = solve_corner(grip, params, profile, ch, depth=float(depth))
         rec.update(reference="free-boundary BVP (tip + box corner)", N=b.N, friction=b.friction,
                    tip_x=float(b.tip[0]), tip_y=float(b.tip[1]), corner_gamma=b.gamma,
                    corner_fx=float(b.corner_force[0]), corner_fy=float(b.corner_force[1]), valid=b.valid)
+        _hold(rec, params, b.N, b.friction, b.valid)
     else:
         rec.update(reference=f"constrained chain, n = {n} (no smooth BVP for this contact set)",
                    N=ch.N if grip != "free" else None, friction=ch.tip_friction if grip != "free" else None,
