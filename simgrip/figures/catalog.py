@@ -25,11 +25,13 @@ FIGURES = {
                   "free-boundary reference, MuJoCo contact='full' at n = 32",
     "fig07_wrap": "free rod wrapping a fixed cylinder vs kappa_bar0 in [-7, -12]: the free rod (invalid through it), "
                   "the wrap BVP, the constrained chain at n = 32",
+    # a wrap grasp (simgrip.figures.wrap_grasp)
+    "wrap_grasp": "three fingers wrapping a sphere, contact='full', settled at n = 32 (MuJoCo rendering)",
 }
 
 #: Figures made by :mod:`simgrip.figures.gripper`, and those of them that need OpenGL (rendered pictures).
 GRIPPER_FIGURES = ("grasp3", "grasp4", "grip_forces")
-RENDERED_FIGURES = ("grasp3", "grasp4")
+RENDERED_FIGURES = ("grasp3", "grasp4", "wrap_grasp")
 
 #: Figures made by :mod:`simgrip.figures.full_contact`.
 FULL_CONTACT_FIGURES = ("fig07_full", "fig07_wrap")
@@ -37,7 +39,7 @@ FULL_CONTACT_FIGURES = ("fig07_full", "fig07_wrap")
 #: Rough relative cost of computing each figure (the slow ones are started first).
 COST = {"fig16": 10, "fig11": 8, "fig15": 6, "fig13": 4, "fig14": 4, "fig09": 3,
         "fig07": 2, "fig08": 2, "fig06": 2, "fig12": 1, "grip_forces": 2, "grasp3": 1, "grasp4": 1,
-        "fig07_full": 4, "fig07_wrap": 3}
+        "fig07_full": 4, "fig07_wrap": 3, "wrap_grasp": 1}
 
 #: Figures that can carry the MuJoCo overlay, and the grip of each grip sweep.
 OVERLAY_FIGURES = ("fig06", "fig07", "fig08", "fig09")

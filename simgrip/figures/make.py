@@ -27,6 +27,10 @@ def _render(task: tuple) -> str:
         from simgrip.figures.gripper import make_gripper_figure
 
         return str(make_gripper_figure(name, out_dir, simulate=simulate))
+    if name == "wrap_grasp":  # its own links (32)
+        from simgrip.figures.wrap_grasp import make_wrap_grasp_figure
+
+        return str(make_wrap_grasp_figure(out_dir))
     if name in FULL_CONTACT_FIGURES:  # its own links (32): --links is Figs. 6-9's
         from simgrip.figures.full_contact import make_full_contact_figure
 
@@ -110,7 +114,7 @@ def add_arguments(p) -> None:
 
     p.add_argument("--out", default="figures", help="output folder [default ./figures]")
     p.add_argument("--which", nargs="+", default=None,
-                   help="figures to make, e.g. 7 9 16 grasp3 grasp4 grip_forces fig07_full [default: all]")
+                   help="figures to make, e.g. 7 9 16 grasp3 grasp4 grip_forces fig07_full wrap_grasp [default: all]")
     p.add_argument("--links", type=int, default=16,
                    help="links per finger of the simulated chain overlaid on Figs. 6-9 [default 16; "
                         "the K-finger figures use 32]")
