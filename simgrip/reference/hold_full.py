@@ -22,8 +22,8 @@ The shape does not depend on ``mu_s`` while the tip sticks (the corner is fricti
 fixed by the depth), so ``mu*`` is one free-boundary solve.  Below ``mu*`` the tip slides along the face and
 the box moves down relative to it (the grasp gets shallower); ``mu*`` falls with the depth (Grip I at
 kappa = -10: 0.735 at 0.4, 0.686 at 0.38, 0.654 at 0.35), so a quasi-static slide stops at the depth where
-``mu*(depth) = mu_s`` when there is one on the valid branch (:func:`slip_depth`), and the box is not held at
-the asked grasp.
+``mu*(depth) = mu_s`` when there is one on the valid branch (:func:`slip_depth`: 0.390 at mu_s = 0.709, 0.376
+at 0.68, none at 0.62, where the branch turns invalid first), and the box is not held at the asked grasp.
 
 Standard case (D = 1, M = 5, b = 0.6), uniform kappa, depth 0.4, Grip I (``simgrip solve I --kappa K
 --contact full``): ``mu*`` = 0.4900 (kappa -9), 0.7347 (-10), 0.9671 (-11).
@@ -164,45 +164,49 @@ def threshold_sensitivities(th: HoldThreshold, h: float = 1e-3, tol: float = 1e-
     return {k: float(v) for k, v in out.items()}
 
 
-def slip_depth(th: HoldThreshold, mu_s: float, *, step: float = 0.01, floor: float = 0.05) -> float | None:
-    """Where a tip that cannot stick at ``th.depth`` stops sliding: the first depth below ``th.depth`` (the box
-    moves down relative to the tip) at which ``mu*(depth) = mu_s``, by continuation in steps of ``step`` and a
-    secant refinement; ``th.depth`` itself if ``mu_s >= mu*``; ``None`` if the valid corner branch ends (or
-    reaches ``floor``) first: the theory then has no rest at this contact set (the box is dropped or the
-    contact set changes).
+def slip_depth(th: HoldThreshold, mu_s: float, *, step: float = 0.01, tol: float = 1e-10) -> float | None:
+    """Where a tip that cannot stick at ``th.depth`` stops sliding, over ``l``.
+
+    The box slides down relative to the tip: Grip I's depth (the tip below the top edge) shrinks, Grip II's
+    (the tip above the bottom edge) grows.  Continued in steps of ``step`` from ``th.depth`` until ``mu*`` has
+    fallen to ``mu_s``, then the root of ``mu*(depth) = mu_s`` (``brentq``, to 1e-7 l): the first depth at which
+    the tip sticks.  ``th.depth`` itself if ``mu_s >= mu*``; ``None`` if the valid corner branch ends first (a
+    solve fails, a force turns negative, the rod enters the box, or the depth leaves (0.05, 1.95)): the theory
+    then has no rest with this contact set (the box falls, or another contact set takes over).  ``tol``: the
+    ``solve_bvp`` tolerance of each solve.
     """
+    from scipy.optimize import brentq
+
     from simgrip.reference.free_boundary import FreeBoundaryError, solve_corner
 
     mu_s = float(mu_s)
     if not (math.isfinite(mu_s) and mu_s >= 0.0):
         raise ValueError(f"mu_s must be finite and >= 0, got {mu_s!r}")
+    if not (isinstance(step, (int, float)) and 0.0 < step <= 0.1):
+        raise ValueError(f"step must lie in (0, 0.1], got {step!r}")
     if th.held(mu_s):
         return th.depth
     if th.contact_set != "tip + corner":
         return None
-    prof = th.profile
-    prev, d_prev, m_prev = th.solution, th.depth, th.least_mu
-    d = th.depth
-    while d - step > floor:
-        d -= step
-        try:
-            s = solve_corner(th.grip, th.params, prof, prev, depth=d)
-        except FreeBoundaryError:
-            return None
-        if not s.valid or s.N <= 0:
-            return None
-        m = abs(s.friction) / s.N
-        if m <= mu_s:
-            for _ in range(30):  # secant on mu*(depth) - mu_s between (d, m) and (d_prev, m_prev)
-                dn = d + (mu_s - m) * (d_prev - d) / (m_prev - m)
-                sn = solve_corner(th.grip, th.params, prof, s, depth=dn)
-                mn = abs(sn.friction) / sn.N
-                if abs(mn - mu_s) < 1e-10:
-                    return float(dn)
-                if mn <= mu_s:
-                    d, m, s = dn, mn, sn
-                else:
-                    d_prev, m_prev = dn, mn
-            return float(dn)
-        prev, d_prev, m_prev = s, d, m
-    return None
+    sign = -1.0 if th.grip == "I" else 1.0
+    cache = {th.depth: th.solution}
+
+    def mu_at(d, start):
+        sol = solve_corner(th.grip, th.params, th.profile, start, depth=d, tol=tol)
+        if not sol.valid or sol.N <= 0:
+            raise FreeBoundaryError(f"the corner branch is invalid at depth {d:.4g}: {sol.violations}")
+        cache[d] = sol
+        return abs(sol.friction) / sol.N
+
+    d_prev, start = th.depth, th.solution
+    try:
+        while True:
+            d = d_prev + sign * step
+            if not 0.05 < d < 1.95:
+                return None
+            if mu_at(d, start) <= mu_s:
+                near = cache[d_prev]
+                return float(brentq(lambda x: mu_at(x, near) - mu_s, min(d, d_prev), max(d, d_prev), xtol=1e-7))
+            d_prev, start = d, cache[d]
+    except FreeBoundaryError:
+        return None
