@@ -109,6 +109,9 @@ class BenchResult:
     cable: dict = field(default_factory=dict)
     #: What surrounds the settle: sweep point, simulate call, settle/chain (:mod:`simgrip.harness.bench_overhead`).
     overhead: dict = field(default_factory=dict)
+    #: The full-contact settle against the point-contact settle and the free-boundary BVP
+    #: (:mod:`simgrip.harness.bench_full`).
+    full: dict = field(default_factory=dict)
     files: dict = field(default_factory=dict)
     jobs: int | None = 1
     quick: bool = False
@@ -230,11 +233,14 @@ def run_bench(
     from simgrip.harness.bench_overhead import write_overhead_bench  # issue 19: the ratios around the settle
 
     result.overhead = write_overhead_bench(out, quick=quick, repeats=repeats)
+    from simgrip.harness.bench_full import write_full_bench  # issue 17: the full-contact settle's speed
+
+    result.full = write_full_bench(out, quick=quick, repeats=repeats)
     result.files = {**_write(out, result), **{name: out / name for name in ("settle_targets.json", "settle_targets.md",
                                                                             "gripper.json", "gripper.md", "modes.json",
                                                                             "modes.md", "modes.png", "cable.json",
                                                                             "cable.md", "overhead.json",
-                                                                            "overhead.md")}}
+                                                                            "overhead.md", "full.json", "full.md")}}
     return result
 
 
@@ -242,7 +248,7 @@ def run_bench(
 #: write_modes_bench's).
 OUTPUT_FILES = ("bench.csv", "bench.json", "sweep.json", "skips.md", "summary.md", "pareto.png",
                 "settle_targets.json", "settle_targets.md", "gripper.json", "gripper.md", "modes.json", "modes.md",
-                "modes.png", "cable.json", "cable.md", "overhead.json", "overhead.md")
+                "modes.png", "cable.json", "cable.md", "overhead.json", "overhead.md", "full.json", "full.md")
 
 
 def _loadavg():

@@ -62,6 +62,11 @@ __all__ = ["FULL_DEPTH_TOL", "FULL_GRASP_RATE", "FULL_LOAD_BLEND", "FULL_PEN_LIM
 
 #: Deepest contact (over l) a full-contact state may keep; deeper restarts at half the step.
 FULL_PEN_LIMIT = 1e-4
+#: Deepest contact (over l) of a static (Newton) state: the issue's bound.  The depth at rest is MuJoCo's contact
+#: law's, not the step's (:func:`contact_solref`'s stiffness is independent of h), so :data:`FULL_PEN_LIMIT`'s
+#: restart at half the step would end at the same depth: measured 1.08e-4 l at the tip of Grip I kappa -10, n =
+#: 32 (N = 2 x 9.97), where the dynamics stops 8.99e-5 deep short of rest.
+FULL_NEWTON_PEN = 1e-3
 #: Step halvings tried before the settle gives up on penetration.
 FULL_RESTARTS = 3
 #: Damping factor on a held workpiece's dofs (:class:`FullDyn`).
@@ -95,11 +100,15 @@ FULL_REGRASPS = 2
 FULL_REGRASP_STEPS = 200
 
 
-def settle_full(scene: Scene, tol: float, max_steps: int, allow_unconverged: bool, t0: float) -> SettledState:
-    """Settle a full-contact scene from its built start (see the module docstring); restarts at ``h/2`` while
-    the deepest contact exceeds :data:`FULL_PEN_LIMIT` or one tunnels.  ``max_steps`` bounds the physics steps
-    of all attempts together; raises :class:`SettleError` when the budget is spent (unless
-    ``allow_unconverged``)."""
+def settle_full(scene: Scene, tol: float, max_steps: int, allow_unconverged: bool, t0: float,
+                static: bool = True) -> SettledState:
+    """Settle a full-contact scene from its built start.  First the static route (``static``,
+    :mod:`~simgrip.settle.full_routes`: Newton on MuJoCo's rest balance, judged as the dynamics is: method
+    ``"newton"``, or ``"newton+dynamics"`` where the box dropped past the onset and the finger alone flowed to
+    rest); where it does not apply or fails (a warning says so), the guarded dynamics (the module docstring),
+    which restarts at ``h/2`` while the deepest contact exceeds :data:`FULL_PEN_LIMIT` or one tunnels.
+    ``max_steps`` bounds the Newton iterations and the physics steps of all attempts together; raises
+    :class:`SettleError` when the budget is spent (unless ``allow_unconverged``)."""
     m, d = scene.model, scene.data
     if scene.contact != "full":
         raise ValueError("contact: settle_full needs a scene built with contact='full'")
@@ -109,6 +118,14 @@ def settle_full(scene: Scene, tol: float, max_steps: int, allow_unconverged: boo
     factor = 1.0
     state = None
     try:
+        state, why = _by_newton(scene, tol, max_steps, t0) if static else (None, None)
+        if state is not None:
+            state.contact_set = contact_set(scene)
+            return state
+        d.qpos[:] = q0
+        d.qvel[:] = 0.0
+        d.qfrc_applied[:] = 0.0
+        _restore_geoms(m, saved)
         for attempt in range(FULL_RESTARTS + 1):
             d.qpos[:] = q0
             d.qvel[:] = 0.0
@@ -129,10 +146,57 @@ def settle_full(scene: Scene, tol: float, max_steps: int, allow_unconverged: boo
         if not state.converged and not allow_unconverged:
             raise SettleError(f"full-contact settle did not converge (residual {state.residual:.3g}, "
                               f"{steps} steps)")
+        if why:
+            state.warnings.append(f"full contact: the static Newton failed ({why}); settled by the dynamics")
         state.contact_set = contact_set(scene)
     finally:
         _restore_geoms(m, saved)
     return state
+
+
+def _by_newton(scene: Scene, tol: float, max_steps: int, t0: float) -> tuple[SettledState | None, str | None]:
+    """The static route (:mod:`~simgrip.settle.full_newton`), judged as the dynamics' answer is: MuJoCo's rest
+    balance (:meth:`~simgrip.settle.integrator.Dyn.residual`, the friction of :func:`_friction` on) below ``tol``
+    and no contact deeper than :data:`FULL_PEN_LIMIT`.  ``(state, None)``; ``(None, why)`` where it failed;
+    ``(None, None)`` where it does not apply.  The caller restores the geoms."""
+    from simgrip.settle.full_routes import newton_full
+
+    m, d = scene.model, scene.data
+    dyn = FullDyn(scene, 1.0)
+    gs = colliding_geoms(m)
+    m.geom_solref[gs] = contact_solref(scene, dyn.h)
+    m.geom_solimp[gs, 0] = CONTACT_IMPEDANCE
+    m.geom_solimp[gs, 1] = CONTACT_IMPEDANCE
+    _friction(scene, gs, "none")
+    res, why = newton_full(scene, tol, max_steps)
+    if res is None:
+        return None, why
+    _friction(scene, gs, "all" if scene.extra_friction else "tip")
+    d.qpos[:] = res.qpos
+    d.qvel[:] = 0.0
+    d.qfrc_applied[:] = 0.0
+    if scene.has_workpiece and not res.held:
+        dyn.hold(True)  # parked: its geoms stay out of contact (newton_full), its weight held
+    mujoco.mj_forward(m, d)
+    method = "newton"
+    if not res.settled:  # dropped past the onset: the finger alone flows to rest from the held shape
+        for g in scene.workpiece_geoms:
+            m.geom_contype[g] = m.geom_conaffinity[g] = 0
+        converged, why = GuardedSteps(scene, dyn).run(tol, max_steps)
+        if not converged:
+            return None, f"the finger alone did not settle after the drop ({why})"
+        method = "newton+dynamics"
+    residual = dyn.residual()
+    if not residual < tol:
+        return None, f"MuJoCo's rest residual {residual:.3g} above {tol:.3g} at its state"
+    state = _read(scene, dyn, t0, res.held, True)
+    if state.penetration > FULL_NEWTON_PEN:
+        return None, f"a contact {state.penetration:.3g} l deep"
+    state.method = method
+    state.steps = dyn.steps
+    state.newton_iterations = res.iterations
+    state.forward_calls = dyn.calls + res.evaluations
+    return state, None
 
 
 class FullDyn(Dyn):
