@@ -23,7 +23,7 @@ SMALL_N = 16
 def wrap():
     from simgrip.settle.gripper import settle_gripper
 
-    scene = wg._scene(SMALL_N)
+    scene = wg.wrap_scene(SMALL_N)
     return scene, settle_gripper(scene, contact="full")
 
 

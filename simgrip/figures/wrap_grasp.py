@@ -25,7 +25,8 @@ from pathlib import Path
 
 import numpy as np
 
-__all__ = ["WRAP", "MAX_PENETRATION", "wrap_grasp_picture", "wrap_violations", "make_wrap_grasp_figure"]
+__all__ = ["WRAP", "MAX_PENETRATION", "wrap_scene", "wrap_grasp_picture", "wrap_violations",
+           "make_wrap_grasp_figure"]
 
 #: The wrap grasp: three fingers, a sphere of diameter ``b`` (through the tip centres) whose top lies
 #: ``box_gap`` under the palm, uniform ``kappa``, the standard case's D, M, mu_s (module docstring).
@@ -36,7 +37,8 @@ MAX_PENETRATION = 1e-3
 LINKS = 32
 
 
-def _scene(links: int):
+def wrap_scene(links: int):
+    """The unsettled :class:`~simgrip.sim.gripper.GripperScene` of :data:`WRAP` at ``links`` links per finger."""
     from simgrip.params import DimensionlessParams
     from simgrip.profiles import Uniform
     from simgrip.sim.gripper import build_gripper
@@ -106,7 +108,7 @@ def wrap_grasp_picture(links: int = LINKS, **render):
     from simgrip.figures.gripper import render_gripper
     from simgrip.settle.gripper import settle_gripper
 
-    scene = _scene(links)
+    scene = wrap_scene(links)
     state = settle_gripper(scene, contact="full")
     bad = wrap_violations(scene, state)
     if bad:
