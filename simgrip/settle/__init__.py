@@ -231,6 +231,7 @@ def _settle(
     per = min(SOLVE_ITERS, max_steps)  # one solve's share
     held = scene.has_workpiece
     converged, why = True, "ok"
+    run = None
     try:
         if warm_start is not None:
             if warm_start.qpos.shape != d.qpos.shape:
@@ -288,7 +289,8 @@ def _settle(
         restore_options(m, saved)
         d.qfrc_applied[:] = 0.0
         d.qvel[:] = 0.0
-        sync_scene(scene)
+        if run is None or not run.positions_current():  # (a contact-free state's positions are already there)
+            sync_scene(scene)
     return state
 
 

@@ -33,7 +33,6 @@ from simgrip.settle.chain_model import ChainModel, eligible
 from simgrip.settle.newton import FLOOR_ULPS, PEN_MAX, Newton
 from simgrip.settle.state import SettleError
 from simgrip.settle.statics import angle_floor, sync_scene
-from simgrip.sim.contacts import pair_contacts
 from simgrip.sim.scene import Scene
 
 __all__ = ["ChainNewton"]
@@ -43,6 +42,11 @@ __all__ = ["ChainNewton"]
 CHAIN_SOLVE_ITERS = 60
 #: The analytic contact rows are polished to this many ulps of ``K_c l`` when one step gets there.
 CHAIN_FLOOR_ULPS = 2.0
+
+
+def _positions_only(m) -> bool:
+    """:func:`~simgrip.settle.statics.sync_scene` computes positions only (no contact pairs, or contacts off)."""
+    return m.npair == 0 or bool(int(m.opt.disableflags) & int(mujoco.mjtDisableBit.mjDSBL_CONTACT))
 
 
 class ChainNewton(Newton):
@@ -64,10 +68,11 @@ class ChainNewton(Newton):
         sd, cm = self.st.d, self.model
         phi, w = cm.split(q)
         da = cm.pair_distances(phi, cm.nodes(phi), w)
+        found, dist = self._kc_cons, sd.contact.dist  # (the contacts Newton._update_kc found in the data at q)
         for p in self.normal_active:
-            cons = pair_contacts(sd, *self.pairs[p])
+            cons = found[p]
             if cons:
-                self.dist_shift[p] = min(float(sd.contact.dist[c]) for c in cons) / self.scene.length - da[p]
+                self.dist_shift[p] = min(float(dist[c]) for c in cons) / self.scene.length - da[p]
         # (the read's key, set by Newton._update_kc at this q, covers the distances' round-off too: nothing in
         # it changed since, so Newton.solve skips a second read at q)
         return moved
@@ -86,11 +91,14 @@ class ChainNewton(Newton):
         d.qpos[:] = q
         d.qvel[:] = 0.0
         d.qfrc_applied[:] = self.scene.data.qfrc_applied
-        mujoco.mj_kinematics(m, d)
-        mujoco.mj_comPos(m, d)
+        current = self.positions_current()  # (the settle's last _commit computed them at this very state)
+        if not current:
+            mujoco.mj_kinematics(m, d)
+            mujoco.mj_comPos(m, d)
         mujoco.mj_passive(m, d)
         mujoco.mj_rne(m, d, 0, d.qfrc_bias)
         self.st.calls += 1
+        self._positions_at = self._positions_key() if d is self.scene.data else None
         return d.qfrc_applied + d.qfrc_passive - d.qfrc_bias
 
     def full_residual(self, q) -> np.ndarray:
@@ -104,6 +112,24 @@ class ChainNewton(Newton):
         d.qpos[:] = q
         d.qvel[:] = 0.0
         sync_scene(self.scene)
+        # a contact-free scene's sync is positions only (mj_kinematics, mj_comPos): remember where, so that
+        # the judge's balance and the settle's last sync at the same state do not compute them again
+        self._positions_at = self._positions_key() if self.st.d is d and _positions_only(self.scene.model) else None
+
+    def _positions_key(self) -> tuple:
+        """What the positions (``mj_kinematics``, ``mj_comPos``) of the scene's data depend on: its ``qpos``, the
+        model's body frames and whether contacts are off (a contact-free scene's sync computes only them)."""
+        m, d = self.scene.model, self.scene.data
+        # (the counts of the solve's own MuJoCo evaluations: any evaluation since, at whatever state, invalidates)
+        return (d.qpos.tobytes(), m.body_pos.tobytes(), m.body_quat.tobytes(), self.st.calls, self.kinematics_calls,
+                _positions_only(m))
+
+    def positions_current(self) -> bool:
+        """The scene's data holds ``mj_kinematics`` and ``mj_comPos`` of its current ``qpos`` (computed by this
+        solve on a contact-free scene, nothing they depend on changed since), and a sync would compute only
+        them: :func:`~simgrip.settle.statics.sync_scene` would recompute the same numbers."""
+        at = getattr(self, "_positions_at", None)
+        return at is not None and self.st.d is self.scene.data and at == self._positions_key() and at[-1]
 
     # -- the analytic residual ------------------------------------------------------------
     def _system(self, phi, w, N, lam, stick_act, with_jacobian: bool):

@@ -66,7 +66,9 @@ def start_free(scene: Scene) -> bool:
         phi = hinge_chain.chain_angles("free", scene.params, scene.profile, scene.n, gravity=gravity_factor(scene))
     except (DiscreteError, ValueError):
         return False
-    scene.data.qpos[scene.joint_qpos] = np.diff(phi, prepend=0.0)[None, :]  # solve_chain's joint_angles
+    q = phi.copy()  # solve_chain's joint_angles, np.diff(phi, prepend=0) without its concatenation: phi_0 - 0 is phi_0
+    q[1:] -= phi[:-1]
+    scene.data.qpos[scene.joint_qpos] = q[None, :]
     scene.data.qvel[:] = 0.0
     return True
 

@@ -119,6 +119,9 @@ class Newton:
         self._tc0 = None  # the configured solref time constants (read at the first stiffen)
         self._kc_raised: list = [None] * m.npair  # per pair: K_c read before its last raise (saturation test)
         self._floor_memo = None  # floor_ulps' last (qpos bytes, value)
+        #: ``mj_kinematics`` calls of the solve on its data (contact distances, sticks' anchors): a count, so that
+        #: positions known to be current can be told stale
+        self.kinematics_calls = 0
 
     def spent(self) -> bool:
         """The settle's Newton iteration budget is used up."""
@@ -133,6 +136,7 @@ class Newton:
         m, sd = self.scene.model, self.st.d
         sd.qpos[:] = q
         mujoco.mj_kinematics(m, sd)
+        self.kinematics_calls += 1
         L = self.scene.length
         return np.array([mujoco.mj_geomDistance(m, sd, g1, g2, L, None) for g1, g2 in self.pairs])
 
@@ -327,11 +331,13 @@ class Newton:
         self._kc_at = None
         self.st.forces(q)
         moved = False
+        self._kc_cons = found = {}  # each pair's contacts in the data at q (ChainNewton reads their distances)
+        dist = sd.contact.dist
         for k, p in enumerate(self.normal_active):
-            cons = pair_contacts(sd, *self.pairs[p])
+            found[p] = cons = pair_contacts(sd, *self.pairs[p])
             if not cons:
                 continue
-            pen = -min(float(sd.contact.dist[c]) for c in cons)
+            pen = -min(float(dist[c]) for c in cons)
             fn = sum(normal_force(m, sd, c) for c in cons)
             if pen > 0 and fn > 0:
                 kc = fn / pen
@@ -350,6 +356,7 @@ class Newton:
         m, sd = self.scene.model, self.st.d
         sd.qpos[:] = q
         mujoco.mj_kinematics(m, sd)
+        self.kinematics_calls += 1
         ft = np.zeros(6)
         for s in self.sticks:
             mujoco.mj_geomDistance(m, sd, s.geoms[0], s.geoms[1], self.scene.length, ft)
@@ -374,11 +381,13 @@ class Newton:
         self.st.forces(sc.data.qpos)
         self.sticks, self.sliding = [], {}
         wg = set(int(g) for g in sc.workpiece_geoms)
+        con = sd.contact  # (one view of the contact arrays)
+        geom1, geom2 = con.geom1[:sd.ncon].tolist(), con.geom2[:sd.ncon].tolist()
         for f in range(sc.fingers):
             mine = set(int(g) for g in sc.contact_geoms[f])
             best = None
             for i in range(sd.ncon):
-                g1, g2 = int(sd.contact.geom1[i]), int(sd.contact.geom2[i])
+                g1, g2 = geom1[i], geom2[i]
                 if g1 in mine and g2 in wg:
                     fn = normal_force(m, sd, i)
                     if best is None or fn > best[0]:
@@ -386,10 +395,11 @@ class Newton:
             if best is None:
                 continue
             _, i, g1, g2 = best
-            p = self._anchor(sd, g1, np.array(sd.contact.pos[i]))
+            p = self._anchor(sd, g1, np.array(con.pos[i]))
             bf, bw = int(m.geom_bodyid[g1]), int(m.geom_bodyid[g2])
-            normal = np.array(sd.contact.frame[i][:3])
-            t = np.cross(np.array([0.0, 1.0, 0.0]), normal)  # in-plane tangent
+            n0, n1, n2 = (float(v) for v in con.frame[i][:3])
+            # in-plane tangent: np.cross((0, 1, 0), normal) term by term (the same products and differences)
+            t = np.array([1.0 * n2 - 0.0 * n1, 0.0 * n0 - 0.0 * n2, 0.0 * n1 - 1.0 * n0])
             if np.linalg.norm(t) < 1e-6:  # out-of-plane normal (tip deep in the box): no planar stick
                 continue
             t /= np.linalg.norm(t)

@@ -248,9 +248,11 @@ def read_state(scene: Scene, d, *, held: bool, method: str, residual: float, con
         np.cumsum((1.0 / n) * np.sin(p), out=nodes[f, 1:, 1])
     contacts, pen_max = [], 0.0
     wg = set(int(g) for g in scene.workpiece_geoms)
+    con = d.contact  # (one view of MuJoCo's contact arrays: each ``d.contact`` builds a new one)
+    geom1, geom2 = con.geom1[:d.ncon].tolist(), con.geom2[:d.ncon].tolist()
     for f in range(scene.fingers if held else 0):
         mine = set(int(g) for g in scene.contact_geoms[f])
-        cons = [i for i in range(d.ncon) if int(d.contact.geom1[i]) in mine and int(d.contact.geom2[i]) in wg]
+        cons = [i for i in range(d.ncon) if geom1[i] in mine and geom2[i] in wg]
         if not cons:
             continue
         Fw, point, wsum, pen, fn, ft = np.zeros(3), np.zeros(3), 0.0, 0.0, 0.0, np.zeros(2)
@@ -258,13 +260,13 @@ def read_state(scene: Scene, d, *, held: bool, method: str, residual: float, con
         for i in cons:
             fc = np.zeros(6)
             mujoco.mj_contactForce(m, d, i, fc)
-            fw = -(np.asarray(d.contact.frame[i]).reshape(3, 3).T @ fc[:3])  # on the finger (geom1)
+            fw = -(np.asarray(con.frame[i]).reshape(3, 3).T @ fc[:3])  # on the finger (geom1)
             Fw += fw
-            applied.append((fw, np.asarray(d.contact.pos[i])))
+            applied.append((fw, np.asarray(con.pos[i])))
             w = max(float(np.linalg.norm(fw)), 1e-300)
-            point += w * np.asarray(d.contact.pos[i])
+            point += w * np.asarray(con.pos[i])
             wsum += w
-            pen = max(pen, -float(d.contact.dist[i]) / L)
+            pen = max(pen, -float(con.dist[i]) / L)
             fn += fc[0]
             ft += fc[1:3]
         point /= wsum

@@ -220,30 +220,36 @@ class SavedOptions:
 
 def save_options(m) -> SavedOptions:
     """The options a settle changes on model ``m``, to put back with :func:`restore_options`."""
-    dyn = (int(m.opt.integrator), float(m.opt.timestep), int(m.opt.cone), float(m.opt.impratio),
+    opt = m.opt  # (one view: each ``m.opt`` builds a new one)
+    dyn = (int(opt.integrator), float(opt.timestep), int(opt.cone), float(opt.impratio),
            m.dof_damping.copy(), m.pair_dim.copy(), m.pair_friction.copy())
-    return SavedOptions(m.pair_solref.copy(), m.pair_solimp.copy(), int(m.opt.noslip_iterations), int(m.opt.disableflags),
-                  (float(m.opt.ccd_tolerance), int(m.opt.ccd_iterations)), dyn)
+    return SavedOptions(m.pair_solref.copy(), m.pair_solimp.copy(), int(opt.noslip_iterations), int(opt.disableflags),
+                  (float(opt.ccd_tolerance), int(opt.ccd_iterations)), dyn)
 
 
 def restore_options(m, s: SavedOptions) -> None:
     """Put model ``m``'s options back as :func:`save_options` saved them in ``s``."""
-    m.pair_solref[:] = s.solref
-    m.pair_solimp[:] = s.solimp
-    m.opt.noslip_iterations = s.noslip
-    m.opt.disableflags = s.disableflags
-    m.opt.ccd_tolerance, m.opt.ccd_iterations = s.ccd
+    opt = m.opt
+    if s.solref.size:  # (a scene without contact pairs has none to put back)
+        m.pair_solref[:] = s.solref
+        m.pair_solimp[:] = s.solimp
+    opt.noslip_iterations = s.noslip
+    opt.disableflags = s.disableflags
+    opt.ccd_tolerance, opt.ccd_iterations = s.ccd
     if s.dynamics:
-        m.opt.integrator, m.opt.timestep, m.opt.cone, m.opt.impratio = s.dynamics[:4]
-        m.dof_damping[:], m.pair_dim[:], m.pair_friction[:] = s.dynamics[4:]
+        opt.integrator, opt.timestep, opt.cone, opt.impratio = s.dynamics[:4]
+        m.dof_damping[:] = s.dynamics[4]
+        if s.solref.size:
+            m.pair_dim[:], m.pair_friction[:] = s.dynamics[5:]
 
 
 def configure_statics(scene: Scene) -> None:
     """Contact settings of the static solve (see the module docstring)."""
     m = scene.model
-    m.opt.noslip_iterations = 0  # a dynamics post-process, not part of the force balance at rest
-    m.opt.ccd_tolerance = 1e-14  # distances exact to round-off (Newton differentiates them)
-    m.opt.ccd_iterations = 200
+    opt = m.opt
+    opt.noslip_iterations = 0  # a dynamics post-process, not part of the force balance at rest
+    opt.ccd_tolerance = 1e-14  # distances exact to round-off (Newton differentiates them)
+    opt.ccd_iterations = 200
     if m.npair == 0:
         return
     # at rest K_c = 1 / (d (1 - d) timeconst^2 A), A ~ 3 / (link mass): pick timeconst for K_c

@@ -40,8 +40,13 @@ def add_pair(spec: mujoco.MjSpec, name: str, geom1: str, geom2: str, mu: float, 
 
 def pair_contacts(data: mujoco.MjData, geom1: int, geom2: int) -> list[int]:
     """Indices of the active contacts between geoms ``geom1`` and ``geom2`` (either order)."""
-    want = {int(geom1), int(geom2)}
-    return [i for i in range(data.ncon) if {int(data.contact.geom1[i]), int(data.contact.geom2[i])} == want]
+    n = data.ncon
+    if n == 0:
+        return []
+    con = data.contact  # (one view of MuJoCo's contact arrays: each ``data.contact`` builds a new one)
+    g1, g2 = con.geom1[:n].tolist(), con.geom2[:n].tolist()
+    a, b = int(geom1), int(geom2)
+    return [i for i in range(n) if (g1[i] == a and g2[i] == b) or (g1[i] == b and g2[i] == a)]
 
 
 def normal_force(model: mujoco.MjModel, data: mujoco.MjData, i: int) -> float:
