@@ -90,15 +90,14 @@ class FullNewton:
         self.sc, self.m = scene, m
         self.d = mujoco.MjData(m)
         self.fscale = dof_scales(scene)[0]
-        self.geo = GuardedSteps(scene, None)  # nodes, clearance, the workpiece's signed distance
+        self._geo = None  # the step guard's geometry (GuardedSteps: nodes, the workpiece's signed distance)
         self.hinges = np.asarray(scene.joint_dof, dtype=int).ravel()
         self.wz = [int(a) for name, a in zip(scene.workpiece_joints, scene.workpiece_qpos) if name == "z"]
         self.tip = int(scene.index.tip_geom[0]) if scene.grip in ("I", "II") else -1
         self.wgeoms = set(int(g) for g in scene.workpiece_geoms)
         self.evaluations = 0
         self.iterations = 0
-        link = np.repeat(np.arange(scene.n), FN_SAMPLES)
-        self.far = np.abs(link[:, None] - link[None, :]) >= 2  # samples on links that may touch
+        self._far = None  # sample pairs on links that may touch (two apart or more), built on first use
         self._jf = np.zeros((3, m.nv))
         self._jw = np.zeros((3, m.nv))
         self._normal = {}
@@ -193,10 +192,11 @@ class FullNewton:
         sc, geo = self.sc, self.geo
         S = FN_SAMPLES
         ds, r = sc.length / sc.n, sc.r_link * sc.length
-        a, b = geo.nodes(q0)[0], geo.nodes(q1)[0]
-        box = float(np.linalg.norm(geo.pose(q1)[0] - geo.pose(q0)[0])) if self.wz else 0.0
-        if float(np.max(np.linalg.norm(b - a, axis=-1))) + box <= 0.25 * r:
+        # a node moves by at most ds sum |d phi| (each link turns by d phi_k about its start); the box translates
+        box = float(np.sum(np.abs(q1[self.wz] - q0[self.wz]))) if self.wz else 0.0
+        if ds * float(np.sum(np.abs(np.cumsum(q1[self.hinges] - q0[self.hinges])))) + box <= 0.25 * r:
             return 1.0  # every point moves a quarter radius at most: no pair approaches by more than half of one
+        a, b = geo.nodes(q0)[0], geo.nodes(q1)[0]
         t = (np.arange(S) + 0.5) / S
         pa = (a[:-1, None, :] + t[None, :, None] * (a[1:] - a[:-1])[:, None, :]).reshape(-1, 3)
         pb = (b[:-1, None, :] + t[None, :, None] * (b[1:] - b[:-1])[:, None, :]).reshape(-1, 3)
@@ -216,6 +216,19 @@ class FullNewton:
             with np.errstate(divide="ignore", invalid="ignore"):
                 out = min(out, float(np.min(np.where(relw > 0, alloww / relw, np.inf))))
         return min(1.0, out)
+
+    @property
+    def geo(self) -> GuardedSteps:
+        if self._geo is None:
+            self._geo = GuardedSteps(self.sc, None)
+        return self._geo
+
+    @property
+    def far(self) -> np.ndarray:
+        if self._far is None:
+            link = np.repeat(np.arange(self.sc.n), FN_SAMPLES)
+            self._far = np.abs(link[:, None] - link[None, :]) >= 2
+        return self._far
 
     def guarded(self, q, dq) -> float:
         """The step fraction the guard allows from ``q`` along ``dq``: :meth:`step_bound` measured again at each

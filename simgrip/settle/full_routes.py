@@ -32,10 +32,10 @@ from simgrip.settle.full_newton import FN_ITERS, FullNewton, NewtonResult
 __all__ = ["FN_CONE_MARGIN", "FN_CONE_PRECHECK", "FN_STAGE", "FN_START", "FN_TOL_SHARE", "newton_full"]
 
 #: Continuation: total rest rotation added per stage [rad].
-FN_STAGE = 0.5
+FN_STAGE = 1.0
 #: Continuation: the total rest rotation [rad] of its first stage (inside the point-contact range of each
 #: problem: Grip I [-8.2, 0], Grip II [0, 5.5]).
-FN_START = {"I": 6.0, "II": 4.0, "free": 4.0}
+FN_START = {"I": 7.0, "II": 4.0, "free": 4.0}
 #: A tip force within this fraction of the friction cone's edge is left to the dynamics (its creep decides).
 FN_CONE_MARGIN = 1e-3
 #: The point-contact chain's tip force outside its friction cone by more than this fraction drops the box at
