@@ -1,5 +1,11 @@
 """The settle of a full-contact scene (``contact="full"``, :mod:`simgrip.sim.full_contact`): every link touches.
 
+First the static route (:mod:`~simgrip.settle.full_routes` on :mod:`~simgrip.settle.full_newton`: Newton on
+MuJoCo's own rest balance, from the point-contact chain where only the tip touches, by continuation past the
+onset for Grips I/II at ``box_depth``), judged as the dynamics' answer is (:func:`_by_newton`: MuJoCo's rest
+residual with the friction on below ``tol``, no contact deeper than :data:`FULL_NEWTON_PEN`).  Where it does not
+apply, or fails (a warning then says so), the guarded dynamics below settles.
+
 Over-damped MuJoCo dynamics (:class:`~simgrip.settle.integrator.Dyn`: ``mjINT_DISCRETE`` at ``h =
 1/omega_min``, stiffness-proportional damping) with MuJoCo's own contact and friction on every contact the
 broad phase finds, in three phases:
@@ -24,7 +30,8 @@ broad phase finds, in three phases:
    within :data:`FULL_DEPTH_TOL`: past it the box is grasped again from the rested state and released again
    (:data:`FULL_REGRASPS`), then a warning says so; :func:`grasp_depth` reads it.  Grip I at kappa -10
    (:mod:`tests.test_full_grasp`): N 0.92, 0.46, 0.30, 0.07 % above the free-boundary BVP at n = 16 ... 128.
-   Grip II at kappa 10 does not settle (the tip leaves the face: SettleError), not solved yet.
+   Grip II at kappa 10 does not settle this way (the tip leaves the face: SettleError); the static route does
+   (:mod:`tests.test_full_newton`).
 2. **Release** (friction ``mu_s`` on, ``condim = 3``; without ``scene.extra_friction`` only the tip's contacts
    carry friction, every other contact stays ``condim = 1``: :func:`_friction`): the box's holding force fades out over
    :data:`~simgrip.settle.dynamics.DYN_RELEASE_STEPS` steps and the scene runs to rest.  The box is

@@ -101,6 +101,7 @@ class FullNewton:
         self._jf = np.zeros((3, m.nv))
         self._jw = np.zeros((3, m.nv))
         self._normal = {}
+        self._active = {}  # the bordered solve's last set: {pair: (N over rho g l, K [N/m])}
         self._depth0 = None
 
     # -- evaluation -------------------------------------------------------------------------------------
@@ -370,9 +371,12 @@ class FullNewton:
         q = np.array(q, dtype=float)
         self.forces(q)
         touch = self.touching()
-        pairs = list(touch)
-        N = np.array([touch[p][1] / W for p in pairs])
-        K = np.array([touch[p][1] / touch[p][0] if touch[p][0] > 0 and touch[p][1] > 0 else k0 for p in pairs])
+        # the set: the last solve's pairs (a continuation's predictor may have lifted one a hair off) and those
+        # touching now; forces and stiffness carried over, else read from MuJoCo
+        pairs = list(dict.fromkeys(list(self._active) + list(touch)))
+        N = np.array([self._active[p][0] if p in self._active else touch[p][1] / W for p in pairs])
+        K = np.array([self._active[p][1] if p in self._active else
+                      (touch[p][1] / touch[p][0] if touch[p][0] > 0 and touch[p][1] > 0 else k0) for p in pairs])
         start = self.iterations
         final_tol = tol
         if polish:
@@ -446,6 +450,7 @@ class FullNewton:
                     changed = True
             if not changed:
                 break
+        self._active = {p: (float(N[i]), float(K[i])) for i, p in enumerate(pairs) if N[i] > 0.0}
         if not polish:
             return True, q, lam
         return self.solve(q, free, final_tol, lam=lam, target=target,
