@@ -18,7 +18,12 @@ keeps the usual step cheap:
   (one broadcast over every pair of links of every finger; for two fingers from a common base, the pairs
   that close to it are the palm's joint and not compared, :func:`simgrip.validity.chain_violations`).
 
-Only what the screen lets through is measured exactly.  World nodes are MuJoCo's (the link bodies' origins and
+Only what the screen lets through is measured exactly: first the pairs the bound left open, by their exact
+segment distance (:func:`simgrip.intersection.segment_distances`, what the exact check measures): all of them
+farther than the limit (by the relative ``CLEAR_MARGIN``) and every hinge within ``pi/2`` (adjacent links cannot
+fold onto each other) prove the state valid; only otherwise (a violation, or too close to call) does
+:func:`simgrip.validity.chain_violations` run and word the messages.  The verdict and messages are those of
+``chain_violations`` alone (``tests/test_pick_validity.py``).  World nodes are MuJoCo's (the link bodies' origins and
 the tip geoms), so the palm's pose and each finger's plane need no bookkeeping.
 
 **Checking every k-th step** (issue 18: with curled fingers the screen lets most pairs through and the exact
@@ -36,6 +41,7 @@ import math
 
 import numpy as np
 
+from simgrip.intersection import CLEAR_MARGIN, segment_distances
 from simgrip.validity import SELF_LIMIT_FACTOR, chain_violations
 
 __all__ = ["FingerValidity", "FRAGILE_VALIDITY_EVERY"]
@@ -96,6 +102,7 @@ class FingerValidity:
             for g in range(f + 1, K):
                 mask[f, g] = pair_gap * self._sines[f, g] >= self._limit
         self._mask = mask
+        self._pair_cache: dict = {}
         # the pure-Python screen (:meth:`_mild`): every link within pi/2 - delta of its finger's start direction,
         # delta the least margin that keeps every compared pair apart (module docstring)
         ds = self._length / n
@@ -143,20 +150,22 @@ class FingerValidity:
     def _check(self, q: list, data) -> list:
         if self._cap > 0.0 and self._mild(q):
             return []
-        world = self.nodes(data)
-        W = np.stack(world)  # (K, n+1, 3)
-        M = 0.5 * (W[:, 1:] + W[:, :-1])
-        h = 0.5 * np.linalg.norm(W[:, 1:] - W[:, :-1], axis=2)
+        W = self._world(data)  # (K, n+1, 3)
+        K = W.shape[0]
         # every point of a link lies within half its length of its midpoint: a lower bound of each pair's distance
-        low = (np.linalg.norm(M[:, None, :, None] - M[None, :, None, :], axis=-1)
-               - h[:, None, :, None] - h[None, :, None, :])
-        near = (low < self._limit) & self._mask
-        K = len(world)
-        for f in range(K):  # a finger that turned at most pi/2 cannot reach itself (module docstring)
-            if not self._turned_one(q, f):
-                near[f, f] = False
+        # (the compared pairs only, as flat index arrays: the same arithmetic as over every pair, masked after)
+        M = (0.5 * (W[:, 1:] + W[:, :-1])).reshape(-1, 3)
+        h = (0.5 * np.linalg.norm(W[:, 1:] - W[:, :-1], axis=2)).ravel()
+        turned = tuple(self._turned_one(q, f) for f in range(K))  # a finger that turned at most pi/2 cannot reach
+        i, j = self._pairs(turned)                                 # itself (module docstring)
+        if not i.size:
+            return []
+        near = np.linalg.norm(M[i] - M[j], axis=-1) - h[i] - h[j] < self._limit
         if not near.any():
             return []
+        if self._near_clear(q, W, i[near], j[near]):
+            return []
+        world = [W[f] for f in range(K)]
         planar = []
         for f, w in enumerate(world):
             rel = w - w[0]
@@ -166,6 +175,44 @@ class FingerValidity:
         found = chain_violations([p / L for p in planar], [w / L for w in world], r_link=self._r / L,
                                  r_tip=None, solid=None, base_sines=self._sines)
         return [m for _, m in found]
+
+    def _world(self, d) -> np.ndarray:
+        """The fingers' world nodes as one array ``(K, n+1, 3)`` [m] (:meth:`nodes`)."""
+        K, n = self._bodies.shape
+        W = np.empty((K, n + 1, 3))
+        W[:, :n] = d.xpos[self._flat].reshape(K, n, 3)
+        W[:, n] = d.geom_xpos[self._tips]
+        return W
+
+    def _pairs(self, turned: tuple) -> tuple:
+        """Flat link indices ``(i, j)`` (link ``k`` of finger ``f`` is ``f n + k``) of the pairs the screen compares:
+        those of the mask, less the self pairs of the fingers that did not turn more than ``pi/2``.  Cached per
+        ``turned`` pattern (at most ``2^K`` entries, made on first use)."""
+        pairs = self._pair_cache.get(turned)
+        if pairs is None:
+            mask = self._mask.copy()
+            for f, t in enumerate(turned):
+                if not t:
+                    mask[f, f] = False
+            n = self._bodies.shape[1]
+            f, g, a, b = np.nonzero(mask)
+            pairs = ((f * n + a).astype(np.intp), (g * n + b).astype(np.intp))
+            self._pair_cache[turned] = pairs
+        return pairs
+
+    def _near_clear(self, q: list, W: np.ndarray, i: np.ndarray, j: np.ndarray) -> bool:
+        """True when the pairs ``(i, j)`` the screen left open are proved clear by their exact distance
+        (:func:`simgrip.intersection.segment_distances`, the exact test's own measure) at least ``(1 +
+        CLEAR_MARGIN)`` times the limit: every pair the screen cleared is farther than its bound, so
+        :func:`~simgrip.validity.chain_violations` would find nothing (a crossing is at distance 0; its crossing
+        test skips adjacent links, which cannot cross while every hinge turns less than ``pi/2``, checked here)."""
+        for row in self._jq:
+            for a in row:
+                if not -0.5 * math.pi < q[a] < 0.5 * math.pi:
+                    return False
+        s0, s1 = W[:, :-1].reshape(-1, 3), W[:, 1:].reshape(-1, 3)
+        dist = segment_distances(s0[i], s1[i], s0[j], s1[j])
+        return bool((dist >= self._limit * (1.0 + CLEAR_MARGIN)).all())
 
     def _turned_one(self, q: list, f: int) -> bool:
         phi = lo = hi = 0.0
