@@ -32,7 +32,7 @@ from simgrip.settle.banded import solve_bordered
 from simgrip.settle.chain_model import ChainModel, eligible
 from simgrip.settle.newton import FLOOR_ULPS, PEN_MAX, Newton
 from simgrip.settle.state import SettleError
-from simgrip.settle.statics import angle_floor, sync_scene
+from simgrip.settle.statics import angle_floor
 from simgrip.sim.scene import Scene
 
 __all__ = ["ChainNewton"]
@@ -108,13 +108,23 @@ class ChainNewton(Newton):
         return self.rest_forces(q) / self.st.fscale
 
     def _commit(self, q) -> None:
+        """Leave the scene's data at ``q`` at rest, its positions computed (``mj_kinematics``, ``mj_comPos``).
+
+        Not ``mj_forward`` (``O(n^3)`` in the serial chain's dense mass matrix: ~2 ms at ``n = 256``): its
+        contacts and constraint forces would be read by nothing.  Every reader of forces evaluates MuJoCo at
+        the state itself (:meth:`Statics.forces`: ``stick_now``, the judge's :meth:`full_residual`) and the
+        settle ends with :func:`~simgrip.settle.statics.sync_scene`; ``mj_forward`` leaves ``qacc_warmstart``
+        as it finds it, so that last sync gives the data it gave after an ``mj_forward`` here.
+        """
         d = self.scene.data
         d.qpos[:] = q
         d.qvel[:] = 0.0
-        sync_scene(self.scene)
-        # a contact-free scene's sync is positions only (mj_kinematics, mj_comPos): remember where, so that
-        # the judge's balance and the settle's last sync at the same state do not compute them again
-        self._positions_at = self._positions_key() if self.st.d is d and _positions_only(self.scene.model) else None
+        m = self.scene.model
+        mujoco.mj_kinematics(m, d)
+        mujoco.mj_comPos(m, d)
+        # a contact-free scene's sync is these two: remember where, so that the judge's balance and the settle's
+        # last sync at the same state do not compute them again
+        self._positions_at = self._positions_key() if self.st.d is d and _positions_only(m) else None
 
     def _positions_key(self) -> tuple:
         """What the positions (``mj_kinematics``, ``mj_comPos``) of the scene's data depend on: its ``qpos``, the

@@ -147,7 +147,10 @@ def touch(scene: Scene, run: Newton) -> None:
         if gap <= 0.0:
             break
         d.qpos[wz[0]] -= gap + 1e-9 * scene.length
-    mujoco.mj_forward(scene.model, d)
+    # positions only: the release's next step (Newton.stick_now) evaluates MuJoCo's balance at this state itself,
+    # and mj_forward's contact forces would be read by nothing (it leaves the solver's warm start as it was)
+    mujoco.mj_kinematics(scene.model, d)
+    mujoco.mj_comPos(scene.model, d)
 
 
 def start_on_chain(scene: Scene, run: Newton | None) -> bool | None:
