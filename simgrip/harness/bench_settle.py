@@ -17,6 +17,8 @@ free rod, n = 32..256                     growth exponent of the settle time <= 
 Grips I, II, III standard cases, n = 32   settle / BVP (default tolerance) <= 1,
                                           settle / hinge-chain minimiser <= 5,
                                           dynamics / settle <= 2
+Grip I, n = 32                            settle / the free rod's settle at n = 32 <= 3
+                                          (issue 19)
 Grips I, II at n = 64                     normal force within 1e-3 (relative), tip height
                                           within 5e-4 l of the point-contact BVP;
                                           order 2 +- 0.2 over n = 16..128
@@ -96,6 +98,11 @@ def _settle_targets(quick: bool, repeats: int | None) -> dict:
         checks[f"{grip} n=32: settle <= BVP"] = t["settle"] <= t["bvp"]
         checks[f"{grip} n=32: settle <= 5x chain"] = t["settle"] <= 5.0 * t["chain"]
         checks[f"{grip} n=32: dynamics <= 2x settle"] = t["dynamics"] <= 2.0 * t["settle"]
+        if grip == "I":  # issue 19: a grip's settle against the free rod's at the same n, interleaved run by run
+            tf = fastest_cpu_times({"I": _settler("I", 32), "free": _settler("free", 32)}, reps)
+            rows.append({"case": "I n=32 / free n=32", "I_settle_s": tf["I"], "free_settle_s": tf["free"],
+                         "ratio": tf["I"] / tf["free"]})
+            checks["I n=32: settle <= 3x free rod's settle"] = tf["I"] <= 3.0 * tf["free"]
     # -- accuracy and order against the point-contact BVP -------------------------------
     for grip in ("I", "II"):
         ref = elastica.solve(grip, STANDARD, Uniform(CASES[grip]), tol=REF_TOL)
