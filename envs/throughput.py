@@ -5,10 +5,12 @@
 rewinds the simulation to the chunk's start (``mj_getState`` /
 ``mj_setState``) and integrates exactly the same physics again with bare
 :func:`mujoco.mj_step` calls, writing the rest angles and the palm servo target
-that ``step`` wrote: once with one ``mj_step`` call per physics step and once
+(all of ``data.ctrl``) that ``step`` wrote: once with one ``mj_step`` call per physics step and once
 with ``mj_step(..., nstep=frame_skip)`` (what the environment uses).  Both
 timings therefore cover the same states, contacts included, for the same
-number of physics steps.
+number of physics steps; ``replay_max_abs_diff`` checks it (the largest
+difference between the replay's end state and the environment's, over every
+chunk and both replays: 0 when the replay is faithful).
 
 The overhead is the environment's extra time (action checks, curvature lag,
 contact forces, observation, reward) over the raw stepping.  On a shared
@@ -39,8 +41,9 @@ def measure_throughput(steps: int = 2000, *, grip: str = "I", seed: int = 0, rep
     grip, env_kwargs
         The environment (:class:`~simgrip.envs.pick.PickEnv` arguments).
     env_id : str, optional
-        A registered two-finger id whose env is a ``PickEnv`` (``"simgrip/PickFragile-v0"``) measured instead,
-        made with ``env_kwargs`` (``grip`` is then not used).
+        A registered id (``"simgrip/PickFragile-v0"``, ``"simgrip/PickMulti-v0"``: any
+        :class:`~simgrip.envs.pick.PickEnv` or :class:`~simgrip.envs.pick_multi.PickMultiEnv`) measured
+        instead, made with ``env_kwargs`` (``grip`` is then not used).
     seed : int
         Seeds the random actions and the episodes.
     repeats : int
@@ -60,9 +63,11 @@ def measure_throughput(steps: int = 2000, *, grip: str = "I", seed: int = 0, rep
         ``raw_nstep_physics_steps_per_s`` (``nstep=frame_skip``),
         ``overhead_percent`` (env against the one-call-per-step loop, median of
         the chunks' ratios), ``overhead_vs_nstep_percent``, ``frame_skip``,
-        ``timestep``, ``steps``, ``chunks``, ``clock``.
+        ``timestep``, ``steps``, ``chunks``, ``clock``, ``replay_max_abs_diff``
+        (module docstring).
     """
     from simgrip.envs.pick import PickEnv
+    from simgrip.envs.pick_multi import PickMultiEnv
 
     steps, chunk = int(steps), int(chunk)
     if steps < 1:
@@ -84,11 +89,11 @@ def measure_throughput(steps: int = 2000, *, grip: str = "I", seed: int = 0, rep
         if not isinstance(env_id, str) or env_id not in gym.registry:
             raise ValueError(f"env_id must be a registered id, got {env_id!r}")
         env = gym.make(env_id, **dict(env_kwargs or {})).unwrapped
-        if not isinstance(env, PickEnv):
+        if not isinstance(env, (PickEnv, PickMultiEnv)):
             env.close()
-            raise ValueError(f"env_id must name a PickEnv (two fingers, one palm servo), got {env_id!r}")
+            raise ValueError(f"env_id must name a pick env (PickEnv or PickMultiEnv), got {env_id!r}")
     try:
-        best, ratios = _measure(env, steps, seed, int(repeats), chunk, timers[clock])
+        best, ratios, diff = _measure(env, steps, seed, int(repeats), chunk, timers[clock])
     finally:
         env.close()
     fs = env.frame_skip
@@ -105,28 +110,26 @@ def measure_throughput(steps: int = 2000, *, grip: str = "I", seed: int = 0, rep
         "raw_nstep_physics_steps_per_s": n_phys / best["nstep"],
         "overhead_percent": 100.0 * (float(np.median(ratios["single"])) - 1.0),
         "overhead_vs_nstep_percent": 100.0 * (float(np.median(ratios["nstep"])) - 1.0),
+        "replay_max_abs_diff": diff,
     }
 
 
-def _measure(env, steps: int, seed: int, repeats: int, chunk: int, timer) -> tuple[dict, dict]:
-    """Best total seconds per mode over the repeats, and every chunk's env / raw time ratio per raw mode."""
-    m, d = env.model, env.data
+def _measure(env, steps: int, seed: int, repeats: int, chunk: int, timer) -> tuple[dict, dict, float]:
+    """Best total seconds per mode over the repeats, every chunk's env / raw time ratio per raw mode, and the
+    replays' largest deviation from the environment's end state."""
     fs = env.frame_skip
     idx = env.joint_qpos.ravel()  # the finger hinges' rest angles live at these qpos_spring entries
     kind = mujoco.mjtState.mjSTATE_INTEGRATION
-    size = mujoco.mj_stateSize(m, kind)
-    start, end = np.empty(size), np.empty(size)
     log_spring = np.empty((chunk, idx.size))
-    log_ctrl = np.empty(chunk)
-    spring = m.qpos_spring  # one view, bound once: the logging below stays a few hundred ns per step
     if np.array_equal(idx, np.arange(idx[0], idx[0] + idx.size)):
         idx = slice(int(idx[0]), int(idx[0]) + idx.size)  # the builder makes them contiguous: a slice copies less
     best = {"env": np.inf, "single": np.inf, "nstep": np.inf}
     ratios = {"single": [], "nstep": []}
+    diff = 0.0
     for r in range(repeats):
         rng = np.random.default_rng(seed + r)
         actions = rng.uniform(-1, 1, size=(steps, env.action_space.shape[0])).astype(np.float32)
-        env.reset(seed=seed + 1000 * r)
+        m, d, spring, start, end, log_ctrl, ctrl = _bind(env, kind, chunk, seed + 1000 * r)
         total = {"env": 0.0, "single": 0.0, "nstep": 0.0}
         i = 0
         while i < steps:
@@ -137,7 +140,7 @@ def _measure(env, steps: int, seed: int, repeats: int, chunk: int, timer) -> tup
             while n < chunk and i + n < steps and not done:
                 _, _, term, trunc, _ = env.step(actions[i + n])
                 log_spring[n] = spring[idx]
-                log_ctrl[n] = d.ctrl[0]
+                log_ctrl[n] = ctrl
                 n += 1
                 done = term or trunc
             t_env = timer() - t0
@@ -150,7 +153,7 @@ def _measure(env, steps: int, seed: int, repeats: int, chunk: int, timer) -> tup
                 elapsed = 0.0
                 for k in range(n):
                     spring[idx] = log_spring[k]
-                    d.ctrl[0] = log_ctrl[k]
+                    ctrl[:] = log_ctrl[k]
                     t0 = timer()
                     if mode == "single":
                         for _ in range(fs):
@@ -160,11 +163,23 @@ def _measure(env, steps: int, seed: int, repeats: int, chunk: int, timer) -> tup
                     elapsed += timer() - t0
                 total[mode] += elapsed
                 ratios[mode].append(t_env / elapsed)
+                replayed = np.empty_like(end)
+                mujoco.mj_getState(m, d, replayed, kind)
+                diff = max(diff, float(np.max(np.abs(replayed - end))))
             mujoco.mj_setState(m, d, end, kind)
             spring[idx] = log_spring[n - 1]
             i += n
-            if done:
-                env.reset(seed=seed + 1000 * r + i)
+            if done:  # PickMulti: another shape is another model
+                m, d, spring, start, end, log_ctrl, ctrl = _bind(env, kind, chunk, seed + 1000 * r + i)
         for key in best:
             best[key] = min(best[key], total[key])
-    return best, ratios
+    return best, ratios, diff
+
+
+def _bind(env, kind, chunk: int, seed: int) -> tuple:
+    """Reset ``env`` with ``seed`` and bind what the loop reads: the (new) model and data, the rest angles'
+    view, state buffers and the control log (``PickMultiEnv`` holds one model per workpiece shape)."""
+    env.reset(seed=seed)
+    m, d = env.model, env.data
+    size = mujoco.mj_stateSize(m, kind)
+    return m, d, m.qpos_spring, np.empty(size), np.empty(size), np.empty((chunk, m.nu)), d.ctrl
