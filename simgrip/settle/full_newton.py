@@ -248,16 +248,17 @@ class FullNewton:
         return any(int(self.m.geom_contype[g]) or int(self.m.geom_conaffinity[g]) for g in self.wgeoms)
 
     # -- Newton -----------------------------------------------------------------------------------------
-    def solve(self, q, free, tol, *, lam=0.0, target=None, max_iter=FN_ITERS):
+    def solve(self, q, free, tol, *, lam=0.0, target=None, max_iter=FN_ITERS, stop=None, max_jacobians=None):
         """Newton from ``q`` in the ``free`` dofs (and ``lam`` with a depth ``target``): ``(ok, q, lam)``.
 
         Stops when the scaled balance rows are below ``tol`` and the depth row below ``1e-12``; fails (False)
-        on a singular system, a line search without descent or ``max_iter`` iterations."""
+        on a singular system, a line search without descent, ``max_iter`` iterations, more than
+        ``max_jacobians`` fresh Jacobians or ``stop(pairs)`` true of the contact pairs after a step."""
         free = np.asarray(free, dtype=int)
         q = np.array(q, dtype=float)
         F = self.system(q, free, lam, target)
         nf = free.size
-        J, ratio = None, 1.0
+        J, ratio, jacobians = None, 1.0, 0
         for _ in range(max_iter):
             if not np.all(np.isfinite(F)):
                 return False, q, lam
@@ -265,7 +266,10 @@ class FullNewton:
                 return True, q, lam
             self.iterations += 1
             if J is None or ratio > FN_CHORD:  # the last Jacobian again while it contracts fast (chord steps)
+                if max_jacobians is not None and jacobians >= max_jacobians:
+                    return False, q, lam
                 J = self.jacobian(q, free, lam, target, F)
+                jacobians += 1
             try:
                 step = np.linalg.solve(J, -F)
             except np.linalg.LinAlgError:
@@ -292,7 +296,14 @@ class FullNewton:
                 return False, q, lam
             ratio = float(np.linalg.norm(Ft)) / max(merit, 1e-300) if alpha == 1.0 else 1.0
             q, lam, F = qt, lt, Ft
+            if stop is not None and stop(self.contact_pairs()):
+                return False, q, lam
         return False, q, lam
+
+    def contact_pairs(self) -> list[tuple[int, int]]:
+        """The geom pairs in contact in the scratch data (its last evaluation's)."""
+        d = self.d
+        return [(int(d.contact.geom1[i]), int(d.contact.geom2[i])) for i in range(d.ncon)]
 
     # -- the bordered form: contacts as compliant constraints ---------------------------------------------
     def touching(self) -> dict:

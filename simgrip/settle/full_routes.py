@@ -49,6 +49,9 @@ FN_STAGE_TOL = 1e-6
 #: Iterations of the point route's polish before the bordered form takes over (chord steps, one evaluation each:
 #: ~10 from the chain's start, contracting ~0.13 a step at Grip I kappa -6, n = 32).
 FN_POLISH_ITERS = 30
+#: Fresh Jacobians the point route's polish may take (1-2 from the chain's start; more means contacts the chain
+#: does not have: the bordered form's, or another route's).
+FN_POLISH_JACOBIANS = 3
 
 
 def newton_full(scene, tol: float, budget: int) -> tuple[NewtonResult | None, str | None]:
@@ -138,7 +141,8 @@ def _held(run: FullNewton, q0, rest, tol: float, budget: int):
         if not _only(run.contacts(q), tips, run.wgeoms):
             continue  # the point-contact start already touches elsewhere (past the onset)
         free = np.concatenate([run.hinges, run.wz])
-        q, lam, why = _stages(run, q, free, rest, t, tol, budget, -p.M, depth, route == "point")
+        q, lam, why = _stages(run, q, free, rest, t, tol, budget, -p.M, depth, route == "point", not tip_only,
+                              (lambda pairs: _only(pairs, tips, run.wgeoms)) if tip_only else None)
         if q is None:
             continue
         if tip_only and not _only(run.contacts(q), tips, run.wgeoms):
@@ -172,7 +176,7 @@ def _alone(run: FullNewton, q0, rest, tol: float, budget: int):
         q[run.hinges] = np.diff(phi, prepend=0.0)
         if run.contacts(q):
             continue  # the free chain touches itself: past the onset
-        q, _, why = _stages(run, q, run.hinges, rest, t, tol, budget, 0.0, None, True)
+        q, _, why = _stages(run, q, run.hinges, rest, t, tol, budget, 0.0, None, True, False, lambda pairs: not pairs)
         if q is None:
             continue
         if route == "point" and run.contacts(q):
@@ -186,9 +190,13 @@ def _only(pairs, tips, wgeoms) -> bool:
     return all({g1, g2} & tips and {g1, g2} & wgeoms for g1, g2 in pairs)
 
 
-def _stages(run: FullNewton, q, free, rest, t: float, tol: float, budget: int, lam: float, depth, polish_first):
+def _stages(run: FullNewton, q, free, rest, t: float, tol: float, budget: int, lam: float, depth, polish_first,
+            bordered=True, allowed=None):
     """Newton at the curvature factors ``t, t + FN_STAGE / |total|, ..., 1``: ``(q, lam, None)`` or ``(None,
-    None, why)``; ``polish_first``: try MuJoCo's own balance (:data:`FN_POLISH_ITERS`) before the bordered form."""
+    None, why)``; ``polish_first``: try MuJoCo's own balance (:data:`FN_POLISH_ITERS`) before the bordered form;
+    ``bordered`` False: the polish alone (a point route whose answer must keep the tip's contact alone: where the
+    polish from the chain's start fails, more contacts are active, and the route does not apply: ``(None, None,
+    None)``); ``allowed(pairs)``: the polish stops (fails) once a step leaves a contact it does not allow."""
     sc, m = run.sc, run.m
     total = max(abs(float(np.sum(rest))), 1e-300)
     s = t
@@ -201,9 +209,13 @@ def _stages(run: FullNewton, q, free, rest, t: float, tol: float, budget: int, l
         last = s >= 1.0
         ok = False
         if polish_first:  # the point route's start is the chain's equilibrium: the polish alone, first
-            ok, qp, lp = run.solve(q, free, tol, lam=lam, target=depth, max_iter=min(FN_POLISH_ITERS, left))
+            stop = None if allowed is None else (lambda pairs: not allowed(pairs))
+            ok, qp, lp = run.solve(q, free, tol, lam=lam, target=depth, max_iter=min(FN_POLISH_ITERS, left),
+                                   stop=stop, max_jacobians=FN_POLISH_JACOBIANS)
             if ok:
                 q, lam = qp, lp
+        if not ok and not bordered:
+            return None, None, None
         if not ok:  # intermediate stages only lead to the last: solved to FN_STAGE_TOL, not polished
             ok, q, lam = run.solve_kkt(q, free, tol if last else max(tol, FN_STAGE_TOL), lam=lam, target=depth,
                                        max_iter=min(FN_ITERS, left), polish=last)
