@@ -50,6 +50,9 @@ __all__ = ["FingerValidity", "FRAGILE_VALIDITY_EVERY"]
 #: fingers hold for a while; every terminating step, a success included, is checked regardless)
 FRAGILE_VALIDITY_EVERY = 25
 
+#: at most this many pair lists are kept (one per pattern of finger pairs compared; K = 2 has 8 patterns, K = 3 64)
+_PAIR_CACHE = 256
+
 
 class FingerValidity:
     """Callable ``probe(q, data) -> list of messages`` (empty: valid) for a pick model's fingers.
@@ -103,6 +106,10 @@ class FingerValidity:
                 mask[f, g] = pair_gap * self._sines[f, g] >= self._limit
         self._mask = mask
         self._pair_cache: dict = {}
+        # links one link apart are proved clear by the link between them when every link is longer than the limit
+        # (rigid links: their lengths change by round-off only, far inside this margin)
+        self._skip_one = float(np.min([np.linalg.norm(np.diff(w, axis=0), axis=1).min() for w in w0])) \
+            >= self._limit * (1.0 + 1e-6)
         # the pure-Python screen (:meth:`_mild`): every link within pi/2 - delta of its finger's start direction,
         # delta the least margin that keeps every compared pair apart (module docstring)
         ds = self._length / n
@@ -152,15 +159,31 @@ class FingerValidity:
             return []
         W = self._world(data)  # (K, n+1, 3)
         K = W.shape[0]
-        # every point of a link lies within half its length of its midpoint: a lower bound of each pair's distance
-        # (the compared pairs only, as flat index arrays: the same arithmetic as over every pair, masked after)
-        M = (0.5 * (W[:, 1:] + W[:, :-1])).reshape(-1, 3)
-        h = (0.5 * np.linalg.norm(W[:, 1:] - W[:, :-1], axis=2)).ravel()
-        turned = tuple(self._turned_one(q, f) for f in range(K))  # a finger that turned at most pi/2 cannot reach
-        i, j = self._pairs(turned)                                 # itself (module docstring)
+        # the pairs compared: the self pairs of each finger that turned more than pi/2 (one that turned less cannot
+        # reach itself, module docstring) and the pairs of two fingers whose nodes' bounding boxes come within the
+        # limit (each link lies in its nodes' box: boxes farther apart keep every pair farther apart)
+        lo, hi = W.min(axis=1).tolist(), W.max(axis=1).tolist()
+        lim = self._limit * (1.0 + CLEAR_MARGIN)
+        keys = []
+        for f in range(K):
+            if self._turned_one(q, f):
+                keys.append((f, f))
+            lf, hf = lo[f], hi[f]
+            for g in range(f + 1, K):
+                lg, hg = lo[g], hi[g]
+                if (lg[0] - hf[0] < lim and lf[0] - hg[0] < lim and lg[1] - hf[1] < lim and lf[1] - hg[1] < lim
+                        and lg[2] - hf[2] < lim and lf[2] - hg[2] < lim):
+                    keys.append((f, g))
+        i, j = self._pairs(tuple(keys))
         if not i.size:
             return []
-        near = np.linalg.norm(M[i] - M[j], axis=-1) - h[i] - h[j] < self._limit
+        # every point of a link lies within half its length of its midpoint: a lower bound of each pair's distance
+        # (np.linalg.norm's arithmetic, over the compared pairs only)
+        M = (0.5 * (W[:, 1:] + W[:, :-1])).reshape(-1, 3)
+        E = W[:, 1:] - W[:, :-1]
+        h = (0.5 * np.sqrt(np.add.reduce(E * E, axis=2))).ravel()
+        D = M[i] - M[j]
+        near = np.sqrt(np.add.reduce(D * D, axis=1)) - h[i] - h[j] < self._limit
         if not near.any():
             return []
         if self._near_clear(q, W, i[near], j[near]):
@@ -184,32 +207,40 @@ class FingerValidity:
         W[:, n] = d.geom_xpos[self._tips]
         return W
 
-    def _pairs(self, turned: tuple) -> tuple:
-        """Flat link indices ``(i, j)`` (link ``k`` of finger ``f`` is ``f n + k``) of the pairs the screen compares:
-        those of the mask, less the self pairs of the fingers that did not turn more than ``pi/2``.  Cached per
-        ``turned`` pattern (at most ``2^K`` entries, made on first use)."""
-        pairs = self._pair_cache.get(turned)
+    def _pairs(self, keys: tuple) -> tuple:
+        """Flat link indices ``(i, j)`` (link ``k`` of finger ``f`` is ``f n + k``) of the mask's pairs in the finger
+        pairs ``keys`` (``(f, g)``, ``f <= g``).  Cached per ``keys`` (at most ``_PAIR_CACHE`` entries)."""
+        pairs = self._pair_cache.get(keys)
         if pairs is None:
-            mask = self._mask.copy()
-            for f, t in enumerate(turned):
-                if not t:
-                    mask[f, f] = False
             n = self._bodies.shape[1]
-            f, g, a, b = np.nonzero(mask)
-            pairs = ((f * n + a).astype(np.intp), (g * n + b).astype(np.intp))
-            self._pair_cache[turned] = pairs
+            i, j = [np.zeros(0, np.intp)], [np.zeros(0, np.intp)]
+            for f, g in keys:
+                a, b = np.nonzero(self._mask[f, g])
+                i.append((f * n + a).astype(np.intp))
+                j.append((g * n + b).astype(np.intp))
+            pairs = (np.concatenate(i), np.concatenate(j))
+            if len(self._pair_cache) < _PAIR_CACHE:
+                self._pair_cache[keys] = pairs
         return pairs
 
     def _near_clear(self, q: list, W: np.ndarray, i: np.ndarray, j: np.ndarray) -> bool:
         """True when the pairs ``(i, j)`` the screen left open are proved clear by their exact distance
         (:func:`simgrip.intersection.segment_distances`, the exact test's own measure) at least ``(1 +
-        CLEAR_MARGIN)`` times the limit: every pair the screen cleared is farther than its bound, so
+        CLEAR_MARGIN)`` times the limit, links ``i`` and ``i + 2`` of one finger by the link between them: every pair the screen cleared is farther than its bound, so
         :func:`~simgrip.validity.chain_violations` would find nothing (a crossing is at distance 0; its crossing
         test skips adjacent links, which cannot cross while every hinge turns less than ``pi/2``, checked here)."""
         for row in self._jq:
             for a in row:
                 if not -0.5 * math.pi < q[a] < 0.5 * math.pi:
                     return False
+        if self._skip_one:
+            # links i and i+2 of one finger: with both hinges of link i+1 within pi/2, link i lies behind link i+1's
+            # start and link i+2 beyond its end along link i+1's direction: they are at least its length apart
+            n = self._bodies.shape[1]
+            rest = (j - i != 2) | (i // n != j // n)
+            if not rest.any():
+                return True
+            i, j = i[rest], j[rest]
         s0, s1 = W[:, :-1].reshape(-1, 3), W[:, 1:].reshape(-1, 3)
         dist = segment_distances(s0[i], s1[i], s0[j], s1[j])
         return bool((dist >= self._limit * (1.0 + CLEAR_MARGIN)).all())
