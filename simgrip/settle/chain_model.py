@@ -107,12 +107,26 @@ def _structure(scene: Scene) -> dict:
     memo = scene.__dict__.get("_chain_structure")
     if memo is not None and memo[0] is m and memo[1] is scene.index:
         return memo[2]
-    bodies = np.asarray(scene.link_body, int).reshape(scene.fingers, scene.n)
-    link_index = {int(b): (f, i) for f in range(scene.fingers) for i, b in enumerate(bodies[f])}
+    nf, nl = scene.fingers, scene.n
+    n = nf * nl
+    bodies = np.asarray(scene.link_body, int).reshape(nf, nl)
+    link_index = {int(b): (f, i) for f in range(nf) for i, b in enumerate(bodies[f])}
     pairs = [(int(m.pair_geom1[i]), int(m.pair_geom2[i])) for i in range(m.npair)]
     sphere = int(mujoco.mjtGeom.mjGEOM_SPHERE)
     pair_link = [(*link_index[int(m.geom_bodyid[g1])], int(m.geom_type[g1]) == sphere) for g1, _ in pairs]
-    out = {"link_index": link_index, "pairs": pairs, "pair_link": pair_link}
+    jd = np.asarray(scene.joint_dof, int).reshape(-1)
+    first = np.zeros(n, bool)  # a finger's first link, and its last
+    first[::nl] = True
+    last = np.zeros(n, bool)
+    last[nl - 1::nl] = True
+    out = {"link_index": link_index, "pairs": pairs, "pair_link": pair_link, "bodies": bodies,
+           "jq": np.asarray(scene.joint_qpos, int).reshape(-1), "jd": jd, "jnt": m.dof_jntid[jd],
+           "mir": np.asarray(scene.mirror, float), "first": first, "last": last,
+           "wnames": tuple(scene.workpiece_joints), "wq": np.asarray(scene.workpiece_qpos, int),
+           "wd": np.asarray(scene.workpiece_dof, int)}
+    for v in out.values():
+        if isinstance(v, np.ndarray):
+            v.setflags(write=False)  # shared by every settle of the model: read only
     scene.__dict__["_chain_structure"] = (m, scene.index, out)
     return out
 
@@ -142,12 +156,11 @@ class ChainModel:
         self.fingers = nf = scene.fingers
         self.nl = nl = scene.n
         self.n = n = nf * nl  #: all link angles, finger after finger
-        self.jq = np.asarray(scene.joint_qpos, int).reshape(-1)
-        self.jd = np.asarray(scene.joint_dof, int).reshape(-1)
-        self.k = m.jnt_stiffness[m.dof_jntid[self.jd]] / (W * L)
-        bodies = np.asarray(scene.link_body, int).reshape(nf, nl)
-        self._bodies = bodies
-        self.mir = np.asarray(scene.mirror, float)
+        st = self._struct = _structure(scene)  # (the index arrays: read once per compiled model)
+        self.jq, self.jd = st["jq"], st["jd"]
+        self.k = m.jnt_stiffness[st["jnt"]] / (W * L)
+        bodies = self._bodies = st["bodies"]
+        self.mir = st["mir"]
         self.ds = float(m.body_pos[bodies[0, 1]][0]) / L
         g = model_gravity(m)
         # every finger at once (rows: the per-finger sums of the same terms in the same order)
@@ -156,19 +169,15 @@ class ChainModel:
         beyond = np.zeros((nf, nl))  # the mass beyond each link: suffix sums, the last link's 0
         beyond[:, :-1] = np.cumsum(mass[:, ::-1], axis=1)[:, ::-1][:, 1:]
         self.c = (g * (mass * arm + self.ds * beyond) / W).reshape(-1)
-        self.first = np.zeros(n, bool)
-        self.first[::nl] = True
-        self.last = np.zeros(n, bool)
-        self.last[nl - 1::nl] = True
+        self.first, self.last = st["first"], st["last"]
         # the next hinge's stiffness (0 beyond a finger's last link) and the springs' diagonal, once per settle
         self._k_next = np.zeros(n)
         self._k_next[:-1] = self.k[1:]
         self._k_next[nl - 1::nl] = 0.0
         self._k_diag = -(self.k + self._k_next)
-        self.wnames = tuple(scene.workpiece_joints)
+        self.wnames = st["wnames"]
         self.nw = len(self.wnames)
-        self.wq = np.asarray(scene.workpiece_qpos, int)
-        self.wd = np.asarray(scene.workpiece_dof, int)
+        self.wq, self.wd = st["wq"], st["wd"]
         # the true weight (the model's body_mass may be a floored inertia whose extra weight gravity
         # compensation relieves: simgrip.sim.workpiece.inertial_mass)
         self.weight = float(scene.workpiece_mass) * g / W if scene.has_workpiece else 0.0
@@ -179,7 +188,6 @@ class ChainModel:
             self.w0 = np.array([p[0], p[2]])
         #: one-entry memos of :meth:`pose` and :meth:`_link` (keyed on their arguments' values; read-only results)
         self._pose_memo = self._link_memo = None
-        self._struct = _structure(scene)
         #: the contact pairs (geom1, geom2) and, for each, (finger, link index of geom1, is the tip sphere)
         self.pairs, self.pair_link = self._struct["pairs"], self._struct["pair_link"]
         #: the radii each pair's distance subtracts (geom sizes: parameters, read every settle)
