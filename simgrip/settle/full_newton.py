@@ -202,12 +202,14 @@ class FullNewton:
         pa = (a[:-1, None, :] + t[None, :, None] * (a[1:] - a[:-1])[:, None, :]).reshape(-1, 3)
         pb = (b[:-1, None, :] + t[None, :, None] * (b[1:] - b[:-1])[:, None, :]).reshape(-1, 3)
         move = pb - pa
-        D = np.linalg.norm(pa[:, None, :] - pa[None, :, :], axis=-1)
-        rel = np.linalg.norm(move[:, None, :] - move[None, :, :], axis=-1)
-        allow = 0.5 * r + np.maximum(D - ds / S - 2.0 * r, 0.0)
+        # the finger's plane (x, z): pairwise distances from two outer differences each (O((S n)^2), no 3-D cube)
+        D = np.hypot(np.subtract.outer(pa[:, 0], pa[:, 0]), np.subtract.outer(pa[:, 2], pa[:, 2]))
+        rel = np.hypot(np.subtract.outer(move[:, 0], move[:, 0]), np.subtract.outer(move[:, 2], move[:, 2]))
+        allow = np.maximum(D - (ds / S + 2.0 * r), 0.0)
+        allow += 0.5 * r
+        rel[~self.far] = 0.0
         with np.errstate(divide="ignore", invalid="ignore"):
-            frac = np.where(self.far & (rel > 0), allow / rel, np.inf)
-        out = float(np.min(frac))
+            out = float(np.min(np.where(rel > 0, allow / rel, np.inf)))
         if sc.has_workpiece and self._box_on(q0):
             c0, _ = geo.pose(q0)
             c1, _ = geo.pose(q1)
@@ -294,7 +296,7 @@ class FullNewton:
                     ratio = 1.0
                     continue
                 return False, q, lam
-            ratio = float(np.linalg.norm(Ft)) / max(merit, 1e-300) if alpha == 1.0 else 1.0
+            ratio = _chord_ratio(float(np.linalg.norm(Ft)), merit, alpha)
             q, lam, F = qt, lt, Ft
             if stop is not None and stop(self.contact_pairs()):
                 return False, q, lam
@@ -434,7 +436,7 @@ class FullNewton:
                     if float(np.max(np.abs(F[:nf]))) < FN_STALL * tol:
                         break  # at the difference Jacobian's round-off: MuJoCo's own balance polishes (below)
                     return False, q, lam
-                ratio = float(np.linalg.norm(Ft)) / max(merit, 1e-300) if alpha == 1.0 else 1.0
+                ratio = _chord_ratio(float(np.linalg.norm(Ft)), merit, alpha)
                 q, lam, N, F, G = q + alpha * dq, lam + alpha * dl, N + alpha * dN, Ft, Gt
                 new = [p for p in self._touching_now(q, eps) if p not in pairs]
                 if new:  # a pair that starts touching joins at once
@@ -517,3 +519,12 @@ class FullNewton:
                 mujoco.mj_contactForce(m, d, i, fc)
                 out += float(fc[0])
         return out / sc.force_scale
+
+
+def _chord_ratio(after: float, before: float, alpha: float) -> float:
+    """How far a step of ``alpha`` of the Newton step fell short of its linear model, as the chord test reads it:
+    the merit left over the merit the model leaves, ``after / ((1 - alpha) before + alpha FN_CHORD before)`` times
+    :data:`FN_CHORD`.  A full step (``alpha = 1``) gives ``after / before``; a step the guard shortened keeps the
+    Jacobian when it did what the model says (the approach to a contact, a few radii per step, needs no new one)."""
+    return FN_CHORD * after / max((1.0 - alpha * (1.0 - FN_CHORD)) * before, 1e-300)
+
