@@ -3,16 +3,18 @@
 Importing this package registers the environments (lazy string entry points,
 time limits set here, ``step`` never truncates):
 
-===============================  ========================================  =========
-id                               what                                      max steps
-===============================  ========================================  =========
-``simgrip/Pick-v1``              Grip I: palm-down tip pinch (50 Hz)       200 (4 s)
-``simgrip/PickCradle-v1``        Grip III: cradle from a pedestal (50 Hz)  250 (5 s)
-``simgrip/PickMulti-v0``         K fingers around a box, cylinder, sphere  200 (4 s)
-``simgrip/PickFragile-v0``       Grip I pinch of a fragile workpiece       300 (6 s)
-``simgrip/PickMultiFragile-v0``  K fingers around a fragile workpiece      300 (6 s)
-``simgrip/PlaceFragile-v0``      pinch, carry to a target, set down        400 (8 s)
-===============================  ========================================  =========
+================================  ========================================  =========
+id                                what                                      max steps
+================================  ========================================  =========
+``simgrip/Pick-v1``               Grip I: palm-down tip pinch (50 Hz)       200 (4 s)
+``simgrip/PickCradle-v1``         Grip III: cradle from a pedestal (50 Hz)  250 (5 s)
+``simgrip/PickMulti-v0``          K fingers around a box, cylinder, sphere  200 (4 s)
+``simgrip/PickFragile-v0``        Grip I pinch of a fragile workpiece       300 (6 s)
+``simgrip/PickMultiFragile-v0``   K fingers around a fragile workpiece      300 (6 s)
+``simgrip/PlaceFragile-v0``       pinch, carry to a target, set down        400 (8 s)
+``simgrip/PickCradleFragile-v0``  Grip III cradle of a fragile box          300 (6 s)
+``simgrip/PickSphereFragile-v0``  K fingers around a fragile sphere         300 (6 s)
+================================  ========================================  =========
 
 >>> import gymnasium as gym, simgrip.envs
 >>> env = gym.make("simgrip/Pick-v1")          # doctest: +SKIP
@@ -40,11 +42,14 @@ _ENVS = {
     "simgrip/PickFragile-v0": ("simgrip.envs.pick_fragile:FragilePickEnv", {}, 300),
     "simgrip/PickMultiFragile-v0": ("simgrip.envs.pick_fragile:FragilePickMultiEnv", {}, 300),
     "simgrip/PlaceFragile-v0": ("simgrip.envs.pick_place:FragilePlaceEnv", {}, 400),
+    "simgrip/PickCradleFragile-v0": ("simgrip.envs.pick_cradle_fragile:FragileCradleEnv", {}, 300),
+    "simgrip/PickSphereFragile-v0": ("simgrip.envs.pick_sphere_fragile:FragileSphereEnv", {}, 300),
 }
 ENV_IDS = tuple(k for k, v in _ENVS.items() if v[0] == "simgrip.envs.pick:PickEnv")
 MULTI_ENV_IDS = tuple(k for k, v in _ENVS.items() if v[0] == "simgrip.envs.pick_multi:PickMultiEnv")
-FRAGILE_ENV_IDS = tuple(k for k, v in _ENVS.items() if v[0].split(":")[0] in ("simgrip.envs.pick_fragile",
-                                                                             "simgrip.envs.pick_place"))
+FRAGILE_ENV_IDS = tuple(k for k, v in _ENVS.items() if v[0].split(":")[0] in (
+    "simgrip.envs.pick_fragile", "simgrip.envs.pick_place", "simgrip.envs.pick_cradle_fragile",
+    "simgrip.envs.pick_sphere_fragile"))
 
 
 def register_envs() -> None:

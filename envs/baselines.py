@@ -16,10 +16,15 @@ Policies (actions ``(curvature command, palm speed)`` in ``[-1, 1]``; ``PlaceFra
 ``constant``    (``PlaceFragile-v0``: ``a_k`` x palm ``x`` command ``a_x`` in ``(-0.5, 0.5)``, palm ``z`` 0.5)
 ``openloop``    (``PlaceFragile-v0``: ramp to ``a_k`` over 25 steps, lift 20 steps, carry at full speed to
                 ``-x`` or ``+x`` over ``PLACE_DISTANCES``, lower 20 steps; grid ``a_k`` x side x distance)
+``openloop``    (``PickCradleFragile-v0``: claw open while the palm goes down for a fixed time to the
+                scripted controller's grasp height, then ramp from the claw to ``a_k`` over ``R`` steps,
+                wait 10, lift at ``a_p``; a constant action cannot lower the palm and then lift)
 ``oracle``      :class:`~simgrip.envs.scripted_fragile.OracleFragilePolicy` (knows the hidden window; for
                 ``PlaceFragile-v0`` inside :class:`~simgrip.envs.scripted_fragile.PlacePolicy`)
 ``observation`` :class:`~simgrip.envs.scripted_fragile.ObservationFragilePolicy` (the observation only;
-                ``PlaceFragile-v0``: :class:`~simgrip.envs.scripted_fragile.PlacePolicy`)
+                ``PlaceFragile-v0``: :class:`~simgrip.envs.scripted_fragile.PlacePolicy`;
+                ``PickCradleFragile-v0``: :class:`~simgrip.envs.scripted_fragile.CradleFragilePolicy`, its
+                oracle :class:`~simgrip.envs.scripted_fragile.OracleCradlePolicy`)
 ==============  ==============================================================================================
 
 ``--grid coarse`` uses every other curvature and one ramp/palm value (for tests).  Output: ``env``,
@@ -101,6 +106,33 @@ def _place_openloop(a_k, side, distance):
     return make
 
 
+def _grasp_height(u, depth: float) -> float:
+    """The scripted claw controllers' palm height [m] for the env's mid-range workpiece (its configuration, no
+    observation): the cradle's box edge, or a sphere's centre, ``depth`` finger lengths below the palm."""
+    if getattr(u, "grip", None) == "III":
+        from simgrip.envs.pick_model import PEDESTAL_HEIGHT
+        return PEDESTAL_HEIGHT + depth * u.length + u.r_tip
+    return 0.25 * sum(u.size_range) + depth * u.length
+
+
+def _claw_openloop(a_k, ramp, a_p, claw=0.68, depth=0.5):
+    """Cradle and sphere: claw open (``claw``), the palm moved at full speed for the steps that take a palm
+    started mid-range (``palm_start``) to the scripted controller's grasp height for the mid-range workpiece
+    (:func:`_grasp_height`), ramp the curvature to ``a_k`` over ``ramp`` steps, wait, lift at ``a_p``."""
+    def make(env, info, seed):
+        u = env.unwrapped
+        travel = _grasp_height(u, depth) - 0.5 * sum(u.palm_start)
+        n_move, v = int(round(abs(travel) / (u.palm_speed * u.dt))), float(np.sign(travel))
+
+        def act(obs, t):
+            if t < n_move:
+                return np.array([claw, v], dtype=np.float32)
+            k = claw + (a_k - claw) * min(1.0, (t - n_move + 1) / ramp)
+            return np.array([k, a_p if t >= n_move + ramp + _WAIT else 0.0], dtype=np.float32)
+        return act
+    return make
+
+
 def _scripted(cls):
     def make(env, info, seed):
         pol = cls()
@@ -115,7 +147,7 @@ def _random(env, info, seed):
     return lambda obs, t: space.sample()
 
 
-def _members(policy: str, grid: str, place: bool):
+def _members(policy: str, grid: str, place: bool, claw: str | None = None):
     kappas = KAPPA_GRID if grid == "full" else KAPPA_GRID[::2]
     palms = PALM_GRID if grid == "full" else (0.5,)
     ramps = RAMP_GRID if grid == "full" else (25,)
@@ -129,10 +161,14 @@ def _members(policy: str, grid: str, place: bool):
     if policy == "constant":
         return [({"kappa": k, "palm": p}, _constant(k, p)) for k in kappas for p in palms]
     if policy == "openloop":
-        return [({"kappa": k, "ramp_steps": r, "palm": p}, _openloop(k, r, p))
+        family = _claw_openloop if claw else _openloop
+        return [({"kappa": k, "ramp_steps": r, "palm": p}, family(k, r, p))
                 for k in kappas for r in ramps for p in palms]
     from simgrip.envs.scripted_fragile import ObservationFragilePolicy, OracleFragilePolicy, PlacePolicy
-    if place:
+    if claw:
+        from simgrip.envs.scripted_fragile import CLAW_POLICIES
+        oracle, observation = CLAW_POLICIES[claw]
+    elif place:
         oracle, observation = (lambda: PlacePolicy(OracleFragilePolicy())), PlacePolicy
     else:
         oracle, observation = OracleFragilePolicy, ObservationFragilePolicy
@@ -146,7 +182,10 @@ def evaluate(env_id: str, policy: str, seeds, grid: str = "full") -> dict:
     try:
         rows = []
         place = env.action_space.shape[0] == 3
-        for params, make in _members(policy, grid, place):
+        u = env.unwrapped
+        claw = "cradle" if getattr(u, "grip", None) == "III" else "sphere" if getattr(u, "shapes", ()) == (
+            "sphere",) else None
+        for params, make in _members(policy, grid, place, claw):
             counts = run_policy(env, make, seeds)
             rows.append({**params, "success_rate": counts["success"] / len(seeds), "outcomes": dict(counts)})
     finally:

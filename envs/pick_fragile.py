@@ -146,6 +146,12 @@ class _Fragile:
     def _episode(self) -> tuple[float, float, int]:  # pragma: no cover - defined by each env
         raise NotImplementedError
 
+    def _hold_force(self) -> float:
+        """The least normal force per finger that holds this episode's workpiece [N]: ``m g / (K mu)`` (``K``
+        fingers carrying the weight by friction on vertical faces); the cradle overrides it."""
+        mass, mu, k = self._episode()
+        return mass * self.g / (k * mu)
+
     def reset(self, *, seed=None, options=None):
         seed, options = check_reset(seed, options, (*self._PARENT_OPTIONS, "crush_limit"))
         crush = options.pop("crush_limit", None)
@@ -156,8 +162,7 @@ class _Fragile:
         ratio = _log_uniform(rng, *self.crush_ratio_range)
         self._validity.restart()
         obs, info = super().reset(seed=None, options=options)
-        mass, mu, k = self._episode()
-        self.hold_force = mass * self.g / (k * mu)
+        self.hold_force = self._hold_force()
         self.crush_limit = self.hold_force * ratio if crush is None else _pos("crush_limit", crush)
         info.update({"crush_limit": self.crush_limit, "hold_force": self.hold_force})
         return obs, info
@@ -227,7 +232,9 @@ class FragilePickMultiEnv(_Fragile, PickMultiEnv):
     started at 0.105-0.115 m): an off-centre
     cylinder (``offset_max = 0.005``: the first finger to touch pushes it, and the largest finger force
     exceeds the mean) 8 of 30 observation-only; spheres (``shapes=("sphere",)``: tilted contact normals,
-    so ``N_hold`` above is approximate, and a squeezed sphere is pressed out sideways) 0 of 16 centred.
+    so ``N_hold`` above is approximate, and a squeezed sphere is pressed out sideways) 0 of 16 centred with
+    this env's closing controller; the sphere task is ``simgrip/PickSphereFragile-v0``
+    (:mod:`simgrip.envs.pick_sphere_fragile`: its own ``N_hold`` and a claw controller).
     """
 
     _MASS_KEY = "mass"

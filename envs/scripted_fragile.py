@@ -17,6 +17,14 @@ that holds (``N_hold``).  They differ in how they stop the curvature:
   curvature once the force reaches the window's geometric middle
   ``sqrt(N_hold N_crush)``, then lifts.
 
+The claw tasks (``PickCradleFragile-v0``, ``PickSphereFragile-v0``) start the same recipe from a claw:
+:class:`CradleFragilePolicy` / :class:`SphereFragilePolicy` open the fingers and move the palm to a grasp
+height read off the observed workpiece (the box's lower edge, or the sphere's centre, ``depth`` finger lengths
+below the palm), close slowly while probing upwards, freeze on lift, and while lifting close a little more
+whenever the workpiece slides down in the grip (its observed height relative to the palm);
+:class:`OracleCradlePolicy` / :class:`OracleSpherePolicy` also ease the grip while the force is above the
+hidden window's middle.  ``CLAW_POLICIES`` maps each task to its (oracle, observation-only) pair.
+
 Observation indices are taken from the env's ``obs_slices`` (both envs), the
 actions are ``(curvature command, palm speed)`` (one shared curvature).
 """
@@ -27,7 +35,8 @@ import math
 
 import numpy as np
 
-__all__ = ["ObservationFragilePolicy", "OracleFragilePolicy", "PlacePolicy"]
+__all__ = ["CLAW_POLICIES", "CradleFragilePolicy", "ObservationFragilePolicy", "OracleCradlePolicy",
+           "OracleFragilePolicy", "OracleSpherePolicy", "PlacePolicy", "SphereFragilePolicy"]
 
 
 class _Closing:
@@ -163,3 +172,103 @@ class PlacePolicy:
         if lift <= self.down:
             self._phase = "rest"
         return np.array([a_k, a_x, -self.lower_speed if self._phase == "lower" else 0.0], dtype=np.float32)
+
+
+class CradleFragilePolicy(ObservationFragilePolicy):
+    """Observation-only cradle (Grip III, ``PickCradleFragile-v0``): open the fingers into a claw (``claw``, in
+    action units) while lowering the palm until the workpiece's lower edge is ``depth`` finger lengths below it
+    (read off the observed workpiece height), then close slowly while raising the palm slowly, freeze when the
+    workpiece leaves the pedestal (:class:`ObservationFragilePolicy`'s trigger and margin) and lift; while
+    lifting, close by ``slip_step`` (action units) each time the workpiece has slid ``slip_distance`` [m] further
+    down relative to the palm (its observed relative height: slip in the grip)."""
+
+    def __init__(self, *, claw: float = 0.68, depth: float = 0.5, descend_speed: float = 1.0,
+                 margin: float = 0.1, tip_gap: float = 2.0, slip_distance: float = 0.001, slip_step: float = 0.01,
+                 **kwargs):
+        kwargs.setdefault("start", claw)
+        super().__init__(margin=margin, **kwargs)
+        self.claw, self.depth, self.descend_speed, self.tip_gap = claw, depth, descend_speed, tip_gap
+        self.slip_distance, self.slip_step = slip_distance, slip_step
+
+    def reset(self, env, info=None):
+        super().reset(env, info)
+        u = env.unwrapped
+        sl = u.obs_slices
+        self._i_palm = sl["palm_height"].start
+        self._i_wz = sl["box_position"].stop - 1 if "box_position" in sl else sl["workpiece_position"].stop - 1
+        self._L, self._r_tip = float(u.length), float(u.r_tip)
+        self._half_h = 0.5 * float(getattr(u, "box_height", 0.0))
+        self._dz = float(u.palm_speed) * float(u.dt)
+        self._i_tipx = sl["tip_position"].start  # finger 0's tip x relative to the palm [l]
+        self._grasp = None
+        self._slip_ref = None  # the workpiece's height relative to the palm when the curvature was last set [m]
+
+    def _grasp_height(self, palm: float, rel_z: float) -> float:
+        """The palm height [m] that puts the box's lower edge ``depth`` finger lengths (plus the tip radius) below
+        the palm, from the palm height and the observed box centre relative to it [m]."""
+        bottom = palm + rel_z - self._half_h
+        return bottom + self.depth * self._L + self._r_tip
+
+    def _trigger(self, obs) -> bool:
+        # also stop closing where the tips would meet under a narrow workpiece (the fingers do not collide with
+        # each other: closed further they would pass through each other)
+        tips_meet = abs(float(obs[self._i_tipx])) * self._L <= self.tip_gap * self._r_tip
+        return tips_meet or super()._trigger(obs)
+
+    def __call__(self, obs):
+        palm = float(obs[self._i_palm]) * self._L
+        if self._grasp is None:
+            self._grasp = self._grasp_height(palm, float(obs[self._i_wz]) * self._L)
+            self._palm_cmd = palm
+        if abs(self._palm_cmd - self._grasp) > 1e-9:
+            v = float(np.clip((self._grasp - self._palm_cmd) / self._dz, -self.descend_speed, self.descend_speed))
+            self._palm_cmd += v * self._dz
+            return np.array([self.claw, v], dtype=np.float32)
+        if self._frozen is not None:  # slipping down the fingers (the observed position relative to the palm)
+            rel_z = float(obs[self._i_wz]) * self._L
+            if self._slip_ref is None:
+                self._slip_ref = rel_z
+            elif rel_z < self._slip_ref - self.slip_distance:
+                self._frozen = max(self._frozen - self.slip_step, -1.0)  # close a little
+                self._slip_ref = rel_z
+        return super().__call__(obs)
+
+
+
+class SphereFragilePolicy(CradleFragilePolicy):
+    """Observation-only K-finger pick of a sphere (``PickSphereFragile-v0``): :class:`CradleFragilePolicy` with the
+    palm brought to ``depth`` finger lengths above the sphere's observed centre (the tips reach below its
+    equator), then the same slow closing, freeze on lift and lift."""
+
+    def _grasp_height(self, palm: float, rel_z: float) -> float:
+        return palm + rel_z + self.depth * self._L
+
+
+class _OracleClaw:
+    """The claw controllers' oracle (knows the hidden window): once lifting, open the curvature by ``min_rate``
+    per step while the largest finger force is above ``sqrt(hold_force * crush_limit)`` (read at ``reset``)."""
+
+    def reset(self, env, info=None):
+        super().reset(env, info)
+        u = env.unwrapped
+        self._target = math.sqrt(u.hold_force * u.crush_limit)
+
+    def __call__(self, obs):
+        a = super().__call__(obs)
+        if self._frozen is not None and self._forces(obs).max() > self._target:
+            self._frozen = min(self._frozen + self.min_rate, 1.0)
+            a[0] = self._frozen
+        return a
+
+
+class OracleCradlePolicy(_OracleClaw, CradleFragilePolicy):
+    """:class:`CradleFragilePolicy` that also eases the grip above the hidden window's middle (an oracle)."""
+
+
+class OracleSpherePolicy(_OracleClaw, SphereFragilePolicy):
+    """:class:`SphereFragilePolicy` that also eases the grip above the hidden window's middle (an oracle)."""
+
+
+#: the claw tasks' (oracle, observation-only) controllers, by task
+CLAW_POLICIES = {"cradle": (OracleCradlePolicy, CradleFragilePolicy),
+                 "sphere": (OracleSpherePolicy, SphereFragilePolicy)}

@@ -1,0 +1,125 @@
+"""The fragile cradle (``PickCradleFragile-v0``) and sphere (``PickSphereFragile-v0``) tasks (issue 18).
+
+check_env, the info keys and determinism run for these ids in ``tests/test_pick_fragile.py`` (parametrised over
+``FRAGILE_ENV_IDS``); here: the crush windows' physical definitions, argument checks, the documented info keys,
+pickling mid-episode, headless rendering and the gap between feedback and fixed schedules.
+
+The gap tests run on seeds 7400-7411 (cradle) and 7420-7431 (sphere), which no other test uses (the ranges were
+chosen on seeds 5000-5049, the reported baselines use 6000-6049).  Bounds from the binomial spread of n = 12
+episodes (``scipy.stats.binom``):
+
+* observation-only controller: at least 8 of 12.  A controller whose true rate is 0.8 (the issue's target)
+  scores <= 7 with P = 0.073; one at 0.9 with P = 0.0043.
+* (sphere only) every member of the coarse fixed-schedule grid (9 constant actions, 9 open-loop schedules): at
+  most 6 of 12.  The cradle does not meet the issue's 20 % target for fixed schedules (its best open-loop
+  schedule is measured in ``docs/baselines/PickCradleFragile-v0-openloop.json``), so that half is not asserted
+  for it.
+  A member at the target's 0.2 reaches 7 with P = 0.0039 (18 members, union bound: < 7 %); a member at 0.8
+  stays <= 6 with P = 0.019, so a fixed schedule that solved the task would be caught.
+"""
+
+from __future__ import annotations
+
+import math
+import pickle
+
+import gymnasium as gym
+import numpy as np
+import pytest
+
+import simgrip.envs  # noqa: F401
+from simgrip.envs.baselines import evaluate
+from simgrip.envs.pick_cradle_fragile import FragileCradleEnv
+from simgrip.envs.pick_sphere_fragile import FragileSphereEnv
+
+IDS = ("simgrip/PickCradleFragile-v0", "simgrip/PickSphereFragile-v0")
+GAP_SEEDS = {"simgrip/PickCradleFragile-v0": list(range(7400, 7412)),
+             "simgrip/PickSphereFragile-v0": list(range(7420, 7432))}
+
+
+def test_crush_windows_are_the_documented_physical_bounds():
+    cradle = FragileCradleEnv()
+    sphere = FragileSphereEnv()
+    for seed in range(4):
+        _, info = cradle.reset(seed=seed)
+        # the cradle: each finger bears its share of the weight on a support
+        assert info["hold_force"] == pytest.approx(0.5 * info["box_mass"] * cradle.g, rel=1e-12)
+        assert 1.5 <= info["crush_limit"] / info["hold_force"] <= 2.5
+        assert 0.04 <= info["box_width"] <= 0.075 and cradle.grip == "III"
+        _, info = sphere.reset(seed=seed)
+        # the sphere: the least normal force of a contact force m g / K pointing up, on the friction cone's edge
+        mu = info["friction"]
+        assert info["hold_force"] == pytest.approx(info["mass"] * sphere.g / (3 * math.sqrt(1 + mu * mu)), rel=1e-12)
+        assert 1.5 <= info["crush_limit"] / info["hold_force"] <= 2.5
+        assert info["shape"] == "sphere" and 0.04 <= info["width"] <= 0.075
+    with pytest.raises(ValueError, match="grip"):
+        FragileCradleEnv(grip="I")
+    with pytest.raises(ValueError, match="shapes"):
+        FragileSphereEnv(shapes=("box",))
+    with pytest.raises(ValueError, match="crush_ratio_range"):
+        FragileSphereEnv(crush_ratio_range=(0.9, 2.0))
+
+
+@pytest.mark.parametrize("env_id", IDS)
+def test_every_info_key_is_documented(env_id):
+    env = gym.make(env_id)
+    env.reset(seed=0)
+    _, _, _, _, info = env.step(env.action_space.sample())
+    u = env.unwrapped
+    doc = (type(u).__doc__ or "") + (__import__(type(u).__module__, fromlist=["_"]).__doc__ or "")
+    missing = [k for k in info if f"``{k}``" not in doc]
+    assert not missing and "``is_success``" in doc, missing
+    env.close()
+
+
+@pytest.mark.parametrize("env_id", IDS)
+def test_pickle_mid_episode_continues_exactly(env_id):
+    env = gym.make(env_id).unwrapped
+    env.reset(seed=11, options={"crush_limit": 100.0})  # no crush: the episode runs on
+    for t in range(20):
+        env.step(np.array([0.68 - 0.01 * t, -0.5 if t < 10 else 0.0], dtype=np.float32))
+    twin = pickle.loads(pickle.dumps(env))
+    for t in range(10):
+        a = np.array([0.4, 0.2], dtype=np.float32)
+        o1, r1, *_ = env.step(a)
+        o2, r2, *_ = twin.step(a)
+        assert np.array_equal(o1, o2) and r1 == r2
+    assert twin.crush_limit == env.crush_limit
+
+
+@pytest.mark.parametrize("env_id", IDS)
+def test_headless_render(env_id, render_backend):
+    # render_backend (tests/conftest.py): skips only where the machine has no GL library at all
+    env = gym.make(env_id, render_mode="rgb_array", width=96, height=72)
+    try:
+        env.reset(seed=0)
+        frame = env.render()
+    finally:
+        env.close()
+    assert frame.shape == (72, 96, 3) and frame.dtype == np.uint8 and frame.std() > 0
+
+
+def test_cradle_crush_terminates_as_failure():
+    env = FragileCradleEnv()
+    obs, info = env.reset(seed=2, options={"box_mass": 0.02, "crush_limit": 0.02})
+    for t in range(150):  # lower the open claw around the box, then curl hard
+        a = np.array([0.68 if t < 20 else -1.0, -1.0 if t < 20 else 0.0], dtype=np.float32)
+        obs, r, term, trunc, info = env.step(a)
+        if term:
+            break
+    assert term and info["crushed"] and not info["is_success"] and max(info["normal_force"]) > 0.02
+
+
+@pytest.mark.parametrize("env_id", IDS)
+def test_feedback_beats_fixed_schedules_on_held_out_seeds(env_id):
+    seeds = GAP_SEEDS[env_id]
+    obs_only = evaluate(env_id, "observation", seeds)
+    assert obs_only["outcomes"].get("success", 0) >= 8, obs_only
+    if env_id == "simgrip/PickCradleFragile-v0":
+        # not asserted: the cradle's best open-loop schedule holds ~45 % (seeds 6000-6049 in
+        # docs/baselines/PickCradleFragile-v0-openloop.json), above the issue's 20 % target (see the module)
+        return
+    for family in ("constant", "openloop"):
+        rec = evaluate(env_id, family, seeds, grid="coarse")
+        best = max(m["outcomes"].get("success", 0) for m in rec["members"])
+        assert best <= 6, (family, rec["best"])
