@@ -430,10 +430,25 @@ def _fetch(fut, watch):
     the client has it turns the future back to lost/pending, and a plain
     ``result()`` would then wait for its recomputation for ever -- also on a
     cluster with no worker left (``watch`` fails the run then).
+
+    One gather is started on the client's event loop and each wait for it is
+    bounded, but a wait that ends never cancels it: ``Future.result(timeout=...)``
+    cancels the client's gather when it times out, and distributed shares one
+    pending gather among all callers (``Client._gather_future``), so a
+    transfer slower than the wait (a 2 MB result with a 1 ms wait, or a
+    sweep's batch on a loaded machine) left a cancelled gather that every
+    later fetch joined: each then failed with ``UnboundLocalError`` from
+    ``distributed.utils.sync`` and the run with "the Dask cluster failed"
+    (dask/distributed#8514; ``tests/test_runner_fetch.py``).  A gather left
+    behind (its result lost with a worker) ends on its own, or when the client
+    closes.
     """
+    import asyncio
+
+    gather = asyncio.run_coroutine_threadsafe(_gathered(fut), fut.client.loop.asyncio_loop)
     while True:
         try:
-            return fut.result(timeout=_FETCH_S)
+            return gather.result(timeout=_FETCH_S)
         except TimeoutError:
             if fut.status != "finished":
                 return _LOST
@@ -441,6 +456,11 @@ def _fetch(fut, watch):
                 watch.check()
         except Exception as exc:  # cancelled/lost: the cluster's failure, not fn's
             raise RunnerError(f"the Dask cluster failed: {type(exc).__name__}: {exc}") from None
+
+
+async def _gathered(fut):
+    """On the client's event loop: ``fut``'s result (raises what the gather raises)."""
+    return await fut.client.gather(fut, asynchronous=True)
 
 
 def _next_done(pending, watch):
