@@ -26,7 +26,7 @@ from simgrip.envs.arguments import check_number as _num
 from simgrip.envs.arguments import check_positive as _pos
 from simgrip.envs.arguments import check_range as _range
 from simgrip.envs.pick_multi_model import build_pick_multi_model, half_height, set_workpiece
-from simgrip.envs.pick_multi_observation import MultiObservation, WorkpieceContactForces, multi_reward
+from simgrip.envs.pick_multi_observation import MultiObservation, MultiReward, WorkpieceContactForces
 from simgrip.envs.pick_multi_workpiece import WORKPIECE_OPTIONS, WorkpieceParams, draw_workpiece
 from simgrip.envs.pick_reward import progress
 from simgrip.envs.pick_validity import FingerValidity
@@ -266,6 +266,7 @@ class PickMultiEnv(gym.Env):
         check_camera(self.model, self.camera)
         nk = 1 if self.shared_curvature else self.K
         self.action_space = spaces.Box(-1.0, 1.0, (nk + 1,), dtype=np.float32)
+        self._action_shape = (nk + 1,)
         self.observation_space = spaces.Box(self._observe.low, self._observe.high, dtype=np.float64)
         self.obs_layout, self.obs_slices = self._observe.layout, self._observe.slices
         self._renderers = {}
@@ -347,6 +348,11 @@ class PickMultiEnv(gym.Env):
         self._lifted_rel = None
         self._hold = 0.0
         self._phi = 0.0
+        w = self.workpiece
+        self._reward = MultiReward(fingers=self.K, mass=w.mass, g=self.g, friction=w.friction, w_lift=self.w_lift,
+                                   w_success=self.w_success, w_squeeze=self.w_squeeze, w_drop=self.w_drop,
+                                   squeeze_margin=self.squeeze_margin)
+        self._tilts = w.shape != "sphere"  # a sphere has no tilt to knock over
         self._needs_reset = True
 
     def _set_kappa(self, kappa):
@@ -389,7 +395,7 @@ class PickMultiEnv(gym.Env):
                              spin_friction=self.spin_friction)
         self.workpiece = work
         mujoco.mj_resetData(m, d)
-        self._reset_state()
+        self._reset_state()  # (after self.workpiece: the episode's reward constants)
         self._set_kappa(self._kappa)
         d.qpos[self.palm_qpos] = palm_z
         self._palm_target = palm_z
@@ -409,9 +415,11 @@ class PickMultiEnv(gym.Env):
         return self._get_obs(self._forces(d)), info
 
     def step(self, action):
+        # runs once per control step beside frame_skip mj_step calls: the state read as lists once, the reward's
+        # constants bound per episode (MultiReward), the arithmetic that of multi_reward and MultiObservation
         if self._needs_reset:
             raise ResetNeeded("step() called before reset() or after the episode terminated; call reset()")
-        a = check_action(action, self.action_space.shape)
+        a = check_action(action, self._action_shape)
         m, d = self.model, self.data
         lo, hi = self.kappa_range
         cmd = self._kappa_cmd
@@ -423,9 +431,11 @@ class PickMultiEnv(gym.Env):
         self._palm_target = min(max(self._palm_target + a[-1] * self.palm_speed * self.dt,
                                     self.palm_range[0]), self.palm_range[1])
         d.ctrl[0] = self._palm_target
-        self._check.clear()
-        mujoco.mj_step(m, d, nstep=self.frame_skip)
-        why = self._check()
+        check = self._check
+        check.clear()
+        mujoco.mj_step(m, d, self.frame_skip)  # nstep (positional: pybind's keyword parsing costs more)
+        q, v = d.qpos.tolist(), d.qvel.tolist()
+        why = check(q, v)
         if why is not None:
             self._needs_reset = True
             raise PhysicsError(f"step diverged ({why})")
@@ -433,37 +443,36 @@ class PickMultiEnv(gym.Env):
         forces = self._forces(d)
         normal, friction, side = forces
         wq = self.work_qpos
-        x, y, z, qw, qx, qy = d.qpos[wq:wq + 6].tolist()
+        x, y, z, qx, qy = q[wq], q[wq + 1], q[wq + 2], q[wq + 4], q[wq + 5]
         gain = z - self._z0
-        rel = z - float(d.qpos[self.palm_qpos])
+        rel = z - q[self.palm_qpos]
         touching = sum(f > 0.0 for f in normal)
         if self._lifted_rel is None and gain > _LIFTED and touching >= 2:
             self._lifted_rel = rel
         dropped = self._lifted_rel is not None and rel < self._lifted_rel - self.drop_distance
-        tilted = self.workpiece.shape != "sphere" and 1.0 - 2.0 * (qx * qx + qy * qy) < _COS_TILT
-        knocked = tilted or math.hypot(x - self._xy0[0], y - self._xy0[1]) > _SHIFT
-        self._hold = self._hold + self.dt if gain >= self.target_height and touching >= 2 else 0.0
-        success = self._hold >= self.hold_time - 1e-9
+        tilted = self._tilts and 1.0 - 2.0 * (qx * qx + qy * qy) < _COS_TILT
+        x0, y0 = self._xy0
+        knocked = tilted or math.hypot(x - x0, y - y0) > _SHIFT
+        self._hold = hold = self._hold + self.dt if gain >= self.target_height and touching >= 2 else 0.0
+        success = hold >= self.hold_time - 1e-9
         lost = (dropped or knocked) and not success
         phi = progress(gain, self.target_height, lost)
-        w = self.workpiece
-        reward, info = multi_reward(phi=phi, phi_prev=self._phi, success=success, lost=lost, side_forces=side,
-                                    mass=w.mass, g=self.g, friction=w.friction, w_lift=self.w_lift,
-                                    w_success=self.w_success, w_squeeze=self.w_squeeze, w_drop=self.w_drop,
-                                    squeeze_margin=self.squeeze_margin)
+        reward, r_lift, r_success, r_squeeze, r_drop = self._reward(phi, self._phi, success, lost, side)
         self._phi = phi
         terminated = bool(success or lost)
         self._needs_reset = terminated
-        info.update({
+        info = {
+            "reward_lift": r_lift, "reward_success": r_success, "reward_squeeze": r_squeeze, "reward_drop": r_drop,
             "is_success": success, "dropped": dropped and not success, "knocked_over": knocked and not success,
             "workpiece_lift": gain, "normal_force": np.array(normal), "friction_force": np.array(friction),
-            "side_force": np.array(side), "hold_time": self._hold, "fingers_touching": touching,
-        })
-        invalid = self._validity(d.qpos.tolist(), d)  # a finger through itself or another (envs.pick_validity)
+            "side_force": np.array(side), "hold_time": hold, "fingers_touching": touching,
+        }
+        invalid = self._validity(q, d)  # a finger through itself or another (envs.pick_validity)
         info["valid"] = not invalid
         if invalid:
             info["invalid"] = invalid
-        return self._get_obs(forces), reward, terminated, False, info
+        obs = self._observe.observe(d.qpos, q, v, cmd, kap, forces, self._z0, hold)
+        return obs, reward, terminated, False, info
 
     def render(self):
         if self.render_mode is None:

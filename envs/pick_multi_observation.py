@@ -21,7 +21,7 @@ import numpy as np
 
 from simgrip.envs.pick_observation import SPIN_TIME, finger_bounds
 
-__all__ = ["MultiObservation", "WorkpieceContactForces", "multi_obs_layout", "multi_reward"]
+__all__ = ["MultiObservation", "MultiReward", "WorkpieceContactForces", "multi_obs_layout", "multi_reward"]
 
 
 def multi_obs_layout(fingers: int, shape_points: int = 8, shared_curvature: bool = True) -> list[tuple[str, int]]:
@@ -145,12 +145,17 @@ class MultiObservation:
         """The observation of ``data``: ``forces`` are :class:`WorkpieceContactForces`' ``(normal, friction,
         side)``; ``kappa_cmd``, ``kappa`` the commanded and actual curvatures (arrays of 1 or K); ``z0`` the
         workpiece's starting height [m]; ``hold`` the time held at the target [s]."""
+        return self.observe(data.qpos, data.qpos.tolist(), data.qvel.tolist(), kappa_cmd, kappa, forces, z0, hold)
+
+    def observe(self, qpos, q: list, v: list, kappa_cmd, kappa, forces, z0: float, hold: float) -> np.ndarray:
+        """The observation from values already read (the environment's step): ``qpos`` the array
+        ``data.qpos`` (the fingers' block is read from it), ``q``, ``v`` its and ``data.qvel``'s lists; the rest
+        as :meth:`__call__`."""
         # everything from qpos / qvel (after the step; MuJoCo's xpos / xmat are those before its last
         # integration).  Arrays for the fingers (one cumsum, one product, one complex exp), Python floats for the
-        # rest (one tolist per block), one array write per block, then the clip in place.
+        # rest, one array write per block, then the clip in place.
         inv_l, K = self.inv_l, self.K
-        q, v = data.qpos, data.qvel
-        palm_z, palm_v = float(q[self.palm_qpos]), float(v[self.palm_dof])
+        palm_z, palm_v = q[self.palm_qpos], v[self.palm_dof]
         wq, wd = self.work_qpos, self.work_dof
         obs = np.empty(self.low.size)
         # header: palm height, curvature command and actual curvature in action units
@@ -159,14 +164,14 @@ class MultiObservation:
         head += [a * k + b for k in kappa_cmd.tolist()]
         head += [a * k + b for k in kappa.tolist()]
         obs[:self._shape_start] = head
-        theta = np.cumsum(q[self.hinge_qpos].reshape(K, self.n), axis=1)  # link angles
+        theta = np.cumsum(qpos[self.hinge_qpos].reshape(K, self.n), axis=1)  # link angles
         np.dot(theta, self._interp_t, out=obs[self._shape_start:self._tip_start].reshape(K, self.P))
         # tips by the chain's forward kinematics in each finger's plane: X + iZ = ds sum exp(i theta)
         tip = np.exp(1j * theta).sum(axis=1) * self._ds
         tips = obs[self._tip_start:self._tail_start].reshape(K, 2)
         tips[:, 0], tips[:, 1] = tip.real, tip.imag
-        x, y, z, qw, qx, qy, qz = q[wq:wq + 7].tolist()
-        vx, vy, vz, wx, wy, wz = v[wd:wd + 6].tolist()
+        x, y, z, qw, qx, qy, qz = q[wq:wq + 7]
+        vx, vy, vz, wx, wy, wz = v[wd:wd + 6]
         # rotation matrix of the unit quaternion (qw, qx, qy, qz); the free joint's angular velocity is in
         # the body frame: turned into the world frame
         r00, r01, r02 = 1 - 2 * (qy * qy + qz * qz), 2 * (qx * qy - qw * qz), 2 * (qx * qz + qw * qy)
@@ -179,13 +184,46 @@ class MultiObservation:
                 (r20 * wx + r21 * wy + r22 * wz) * st, (z - z0) / self.target_height]
         fu = self.force_unit
         normal, friction, _ = forces
+        log1p = math.log1p
         for fn, ff in zip(normal, friction):
-            tail += [math.log1p(max(fn, 0.0) / fu), math.log1p(max(ff, 0.0) / fu)]
+            tail += [log1p(max(fn, 0.0) / fu), log1p(max(ff, 0.0) / fu)]
         tail.append(min(hold / self.hold_time, 1.0) if self.hold_time > 0 else 0.0)
         obs[self._tail_start:] = tail
         np.maximum(obs, self.low, out=obs)
         np.minimum(obs, self.high, out=obs)
         return obs
+
+
+class MultiReward:
+    """One episode's reward for ``K`` fingers: :func:`multi_reward` with the weights and the workpiece's
+    constants bound once (made per episode, called every step; the same arithmetic).
+
+    Parameters
+    ----------
+    fingers : int
+        ``K``.
+    mass, g, friction, w_lift, w_success, w_squeeze, w_drop, squeeze_margin
+        As :func:`multi_reward`.
+    """
+
+    __slots__ = ("K", "w_lift", "w_success", "w_squeeze", "w_drop", "weight", "allow")
+
+    def __init__(self, *, fingers: int, mass: float, g: float, friction: float, w_lift: float, w_success: float,
+                 w_squeeze: float, w_drop: float, squeeze_margin: float):
+        self.K = int(fingers)
+        self.w_lift, self.w_success, self.w_squeeze, self.w_drop = w_lift, w_success, w_squeeze, w_drop
+        self.weight = mass * g
+        self.allow = squeeze_margin * self.weight / (self.K * friction)
+
+    def __call__(self, phi: float, phi_prev: float, success: bool, lost: bool, side_forces) -> tuple:
+        """``(reward, lift, success, squeeze, drop)`` of one step (arguments as :func:`multi_reward`'s)."""
+        weight, allow = self.weight, self.allow
+        xs = [max(s - allow, 0.0) / weight for s in side_forces]
+        r_squeeze = -self.w_squeeze * sum(x / (1.0 + x) for x in xs) / self.K
+        r_lift = self.w_lift * (phi - phi_prev)
+        r_success = self.w_success if success else 0.0
+        r_drop = -self.w_drop if lost else 0.0
+        return r_lift + r_success + r_squeeze + r_drop, r_lift, r_success, r_squeeze, r_drop
 
 
 def multi_reward(*, phi: float, phi_prev: float, success: bool, lost: bool, side_forces, mass: float, g: float,

@@ -328,6 +328,23 @@ def test_two_finger_reward_is_pick_v1s():
         assert tk == pytest.approx(t2, rel=1e-12, abs=1e-15)
 
 
+def test_bound_reward_is_multi_reward_bit_for_bit():
+    """The env's per-episode MultiReward returns multi_reward's sum and terms exactly (the same arithmetic)."""
+    from simgrip.envs.pick_multi_observation import MultiReward, multi_reward
+
+    rng = np.random.default_rng(4)
+    for K in (2, 3, 5):
+        w = dict(g=9.81, friction=float(rng.uniform(0.3, 1.2)), w_lift=10.0, w_success=20.0, w_squeeze=0.04,
+                 w_drop=10.0, squeeze_margin=2.0)
+        bound = MultiReward(fingers=K, mass=0.03, **w)
+        for _ in range(50):
+            step = dict(phi=float(rng.uniform()), phi_prev=float(rng.uniform()), success=bool(rng.uniform() < 0.2),
+                        lost=bool(rng.uniform() < 0.2))
+            sides = rng.uniform(0.0, 3.0, K).tolist()
+            r, terms = multi_reward(side_forces=sides, mass=0.03, **step, **w)
+            assert bound(step["phi"], step["phi_prev"], step["success"], step["lost"], sides) == (r, *terms.values())
+
+
 def test_contact_forces_and_tips_against_mujoco_and_the_chain():
     """The forces read from efc_force against mj_contactForce; the observed tips against the hinge chain's
     forward kinematics (simgrip.chain.link_positions) in each finger's plane."""
