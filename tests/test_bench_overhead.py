@@ -16,8 +16,9 @@ def test_ratios_are_times_over_their_own_parts(tmp_path, monkeypatch):
     assert rows[0]["case"] == "free n=16: settle/chain" and rows[0]["ratio"] == rows[0]["settle_s"] / rows[0]["chain_s"]
     call = bo._call_over_settle(2, links=16)
     assert call["ratio"] >= 1.0 and call["call_s"] >= call["settle_s"] > 0
-    sweep = bo._sweep_over_settle(3, "none")
-    assert sweep["ratio"] >= 1.0 and sweep["wall_per_point/settle"] >= 1.0 and sweep["points_per_s_per_core"] > 0
+    sweep = bo._sweep_over_settle(3, "none")  # the command, in a fresh process, at 3 points
+    assert sweep["case"].startswith("simgrip sweep I --kappa -7 -3 3 --links 32 --jobs 1 --reference none")
+    assert sweep["ratio"] >= 1.0 and sweep["point/settle"] >= 1.0 and sweep["points_per_s_per_core"] > 0
 
     # the record and its files: one row per ratio, checks only for the targets of the table
     monkeypatch.setattr(bo, "_settle_over_chain", lambda ns, reps: [{"case": f"free n={n}: settle/chain",

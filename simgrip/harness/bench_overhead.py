@@ -7,11 +7,14 @@ free rod, n = 16..256: settle / the chain's        fastest CPU time of interleav
 tridiagonal Newton                                 (:func:`simgrip.reference.solve_chain`)
 ``simulate("free", ..., links=256)``, 12 calls     median over the calls of each call's wall     <= 3
 with different kappa_bar: call / its settle        time over its own ``wall_time_s``
-a sweep point / its settle (Grip I,                median over the points of ``point_time_s /    <= 2
-kappa -7..-3, n = 32, in-process)                  wall_time_s`` (:mod:`simgrip.sweep.run`),
-                                                   with the BVP reference and with ``none``;
-                                                   and the whole sweep's wall per point over
-                                                   the median settle
+``simgrip sweep I --kappa -7 -3 300 --links 32      the whole sweep's wall per point over the     <= 2
+--jobs 1``: wall per point / the median settle     median ``wall_time_s`` (``sweep.json``'s
+                                                   throughput), the command itself run in a
+                                                   fresh process (imports, map and merge
+                                                   included), with ``--reference none`` and
+                                                   with the BVP reference; beside it the median
+                                                   over the points of ``point_time_s /
+                                                   wall_time_s`` (the point in the worker)
 =================================================  ============================================  ======
 
 Ratios of two times taken in the same process, the same seconds apart, hold
@@ -20,13 +23,22 @@ the fastest CPU time of each (:func:`simgrip.harness.timing.fastest_cpu_times`),
 the others divide each call's wall time by the settle's own wall time inside
 it.  Only the targets of the table are checked here; the sweep's ratio with the
 BVP reference counts the reference's solve in the point (the target is the
-simulation's: ``--reference none``).
+simulation's: ``--reference none``; the warm-started BVP alone costs about as
+much as the settle at n = 32).  The sweep is the issue's command as a user runs
+it (:data:`SWEEP_COMMAND`, 300 points also with ``quick``: the process's fixed
+costs, ~1 s of imports and the map, are part of what the ratio measures, and a
+shorter sweep would weigh them differently).
 """
 
 from __future__ import annotations
 
+import json
 import statistics
+import subprocess
+import sys
+import tempfile
 import time
+from pathlib import Path
 
 from simgrip.harness.tables import checks_md, write_record
 from simgrip.params import STANDARD
@@ -38,6 +50,10 @@ __all__ = ["overhead_ratios", "overhead_md", "write_overhead_bench", "TARGETS"]
 TARGETS = {"settle/chain": 2.5, "call/settle n=256": 3.0, "sweep point/settle": 2.0}
 #: kappa_bar of the free rod (bench_settle's standard case).
 FREE_KAPPA = -3.0
+#: The sweep of issue 19's table (``--out`` and ``--reference`` are added; ``--no-progress``: no bar in a log).
+SWEEP_COMMAND = ("sweep", "I", "--kappa", "-7", "-3", "300", "--links", "32", "--jobs", "1")
+#: Seconds one such sweep may take before the bench gives up on it (~4 s at 300 points on one core).
+SWEEP_TIMEOUT_S = 600
 
 
 def _settle_over_chain(ns, reps) -> list[dict]:
@@ -71,17 +87,32 @@ def _call_over_settle(calls: int, links: int = 256) -> dict:
 
 
 def _sweep_over_settle(points: int, reference: str) -> dict:
-    from simgrip.parallel.runner import RunnerOptions
-    from simgrip.sweep.grid import make_grid
-    from simgrip.sweep.run import run_sweep
+    """The issue's sweep with ``points`` kappa values (:data:`SWEEP_COMMAND`: 300) and ``--reference reference``,
+    run as the command in a fresh process; its ``sweep.json`` throughput.  ``ratio`` is the whole sweep's wall
+    per point over the median settle (the issue's figure), ``point/settle`` the median of each point's
+    ``point_time_s / wall_time_s``."""
+    cmd = list(SWEEP_COMMAND)
+    cmd[cmd.index("--kappa") + 3] = str(int(points))
+    with tempfile.TemporaryDirectory(prefix="simgrip-bench-sweep-") as tmp:
+        out = Path(tmp) / "sweep"
+        argv = cmd + ["--out", str(out), "--reference", reference, "--no-progress"]
+        import os
 
-    grid = make_grid("I", kappa=(-7, -3, points), links=32, reference=reference)
-    res = run_sweep(grid, options=RunnerOptions(jobs=1, progress=False), note=None)
-    t = res.throughput
-    return {"case": f"sweep I kappa -7..-3 x{points} n=32 --reference {reference}: point/settle",
+        import simgrip
+
+        env = dict(os.environ)  # the child imports this simgrip (a checkout run in place, or the installed one)
+        here = str(Path(simgrip.__file__).resolve().parents[1])
+        env["PYTHONPATH"] = os.pathsep.join([here] + ([env["PYTHONPATH"]] if env.get("PYTHONPATH") else []))
+        proc = subprocess.run([sys.executable, "-c", "import sys; from simgrip.cli import main; sys.exit(main())",
+                               *argv], capture_output=True, text=True, timeout=SWEEP_TIMEOUT_S, env=env)
+        if proc.returncode != 0:
+            raise RuntimeError(f"simgrip {' '.join(argv)} failed (exit {proc.returncode}): "
+                               f"{proc.stderr.strip().splitlines()[-1:] or ''}")
+        t = json.loads((out / "sweep.json").read_text(encoding="utf-8"))["throughput"]
+    return {"case": f"simgrip {' '.join(cmd)} --reference {reference}: wall per point/settle",
             "settle_s": t["settle_median_s"], "points_per_s_per_core": t["points_per_s_per_core"],
-            "wall_per_point_s": t["wall_per_point_s"], "wall_per_point/settle": t["wall_per_point_over_settle"],
-            "ratio": t["point_over_settle_median"]}
+            "wall_per_point_s": t["wall_per_point_s"], "point/settle": t["point_over_settle_median"],
+            "ratio": t["wall_per_point_over_settle"]}
 
 
 def overhead_ratios(*, quick: bool = False, repeats: int | None = None) -> dict:
@@ -93,9 +124,8 @@ def overhead_ratios(*, quick: bool = False, repeats: int | None = None) -> dict:
     with blas_threads(1):
         rows = _settle_over_chain((16, 32, 64, 128, 256), reps)
         rows.append(_call_over_settle(6 if quick else 12))
-        pts = 16 if quick else 32
-        rows.append(_sweep_over_settle(pts, "none"))
-        rows.append(_sweep_over_settle(pts, "bvp"))
+        rows.append(_sweep_over_settle(300, "none"))  # the issue's command as it is (see the module docstring)
+        rows.append(_sweep_over_settle(300, "bvp"))
     checks = {}
     for r in rows:
         if r["case"].startswith("free n="):
