@@ -2,20 +2,19 @@
 
 check_env, the info keys and determinism run for these ids in ``tests/test_pick_fragile.py`` (parametrised over
 ``FRAGILE_ENV_IDS``); here: the crush windows' physical definitions, argument checks, the documented info keys,
-pickling mid-episode, headless rendering and the gap between feedback and fixed schedules.
+pickling mid-episode, headless rendering and the observation-only controller's success on held-out seeds.
 
-The gap tests run on seeds 7400-7411 (cradle) and 7420-7431 (sphere), which no other test uses (the ranges were
-chosen on seeds 5000-5049, the reported baselines use 6000-6049).  Bounds from the binomial spread of n = 12
+The controller tests run on seeds 7400-7411 (cradle) and 7420-7431 (sphere), which no other test uses (the
+ranges were chosen on seeds 5000-5049, the reported baselines use 6000-6049).  Bounds from the binomial spread of n = 12
 episodes (``scipy.stats.binom``):
 
 * observation-only controller: at least 8 of 12.  A controller whose true rate is 0.8 (the issue's target)
-  scores <= 7 with P = 0.073; one at 0.9 with P = 0.0043.
-* (sphere only) every member of the coarse fixed-schedule grid (9 constant actions, 9 open-loop schedules): at
-  most 6 of 12.  The cradle does not meet the issue's 20 % target for fixed schedules (its best open-loop
-  schedule is measured in ``docs/baselines/PickCradleFragile-v0-openloop.json``), so that half is not asserted
-  for it.
-  A member at the target's 0.2 reaches 7 with P = 0.0039 (18 members, union bound: < 7 %); a member at 0.8
-  stays <= 6 with P = 0.019, so a fixed schedule that solved the task would be caught.
+  scores <= 7 with P = 0.073; one at 0.9 with P = 0.0043 (measured on seeds 6000-6049: sphere 49/50, cradle
+  40/50).
+* the fixed schedules' half of the issue's gap is NOT met by these tasks (measured on seeds 6000-6049, full
+  grids: best open-loop 48 % on the sphere, see ``docs/baselines/``), so it is not asserted: a test of the
+  coarse grid alone would pass only because the coarse grid skips the curvature (action 0.5) that holds half
+  of the spheres.
 """
 
 from __future__ import annotations
@@ -111,15 +110,10 @@ def test_cradle_crush_terminates_as_failure():
 
 
 @pytest.mark.parametrize("env_id", IDS)
-def test_feedback_beats_fixed_schedules_on_held_out_seeds(env_id):
-    seeds = GAP_SEEDS[env_id]
-    obs_only = evaluate(env_id, "observation", seeds)
+def test_observation_only_controller_on_held_out_seeds(env_id):
+    """The observation-only claw controller holds at least 8 of 12 held-out episodes.  The other half of the
+    issue's gap (fixed schedules <= 20 %) does not hold for these support grips and is not asserted: on seeds
+    6000-6049 the best open-loop schedule holds 48 % of the spheres and ~45 % of the cradled boxes
+    (``docs/baselines/*-openloop.json``; see the modules)."""
+    obs_only = evaluate(env_id, "observation", GAP_SEEDS[env_id])
     assert obs_only["outcomes"].get("success", 0) >= 8, obs_only
-    if env_id == "simgrip/PickCradleFragile-v0":
-        # not asserted: the cradle's best open-loop schedule holds ~45 % (seeds 6000-6049 in
-        # docs/baselines/PickCradleFragile-v0-openloop.json), above the issue's 20 % target (see the module)
-        return
-    for family in ("constant", "openloop"):
-        rec = evaluate(env_id, family, seeds, grid="coarse")
-        best = max(m["outcomes"].get("success", 0) for m in rec["members"])
-        assert best <= 6, (family, rec["best"])
