@@ -25,6 +25,7 @@ import tracemalloc
 
 import pytest
 
+from simgrip.parallel.dask_cluster import LOW_LEVEL_LOG_LENGTH
 from simgrip.parallel.runner import RunnerOptions, run_tasks
 
 pytest.importorskip("distributed")
@@ -51,6 +52,10 @@ def test_streamed_local_run_holds_constant_memory():
 
     def on_result(i, res):
         on_result.k += 1
+        if on_result.k == N1:  # the in-process scheduler's system-monitor history (0.5 s samples) is bounded
+            from distributed import Scheduler
+
+            held["monitor"] = [s.monitor.maxlen for s in list(Scheduler._instances) if s.status.name == "running"]
         if on_result.k in (N1, N2):
             gc.collect()
             held[on_result.k] = (_small_bytes(tracemalloc.take_snapshot()), tracemalloc.get_traced_memory()[0])
@@ -63,6 +68,9 @@ def test_streamed_local_run_holds_constant_memory():
                   collect=False, total=N2, on_result=on_result)
     finally:
         tracemalloc.stop()
+    # distributed's default keeps 7200 samples (an hour): the client grew ~0.5 kB a second, per batch on a slow
+    # machine (612 B per batch here on a loaded 2-core machine, nearly all of it the monitor's deques)
+    assert held["monitor"] and all(m is not None and m <= LOW_LEVEL_LOG_LENGTH for m in held["monitor"])
     small = (held[N2][0] - held[N1][0]) / (N2 - N1)
     total = (held[N2][1] - held[N1][1]) / (N2 - N1)
     assert small < MAX_GROWTH_PER_BATCH, f"the client held {small:.0f} B more in small objects per batch"

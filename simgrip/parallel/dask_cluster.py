@@ -100,9 +100,13 @@ def _start_local(cls, workers: int):
     # distributed.admin.low-level-log-length (1000) bounds the debugging logs the in-process scheduler and the
     # client keep: each BatchedSend's recent_message_log holds its last 1000 messages WHOLE (a batch's pickled
     # items going to a worker, its results coming back), so a sweep's client grew by a batch's messages per batch
-    # until ~1000 were held (tens of MB); LOW_LEVEL_LOG_LENGTH keeps the last few for a post-mortem
+    # until ~1000 were held (tens of MB); LOW_LEVEL_LOG_LENGTH keeps the last few for a post-mortem.
+    # distributed.admin.system-monitor.log-length (7200) is the history of the scheduler's system monitor (in
+    # this process: cpu, memory, time, net and disk rates, one sample each 0.5 s, only the dashboard reads it):
+    # the client grew ~0.5 kB a second for the first hour of any run, i.e. per batch on a slow machine
     with dask.config.set({"distributed.nanny.pre-spawn-environ.MALLOC_TRIM_THRESHOLD_": None,
-                          "distributed.admin.low-level-log-length": LOW_LEVEL_LOG_LENGTH}):
+                          "distributed.admin.low-level-log-length": LOW_LEVEL_LOG_LENGTH,
+                          "distributed.admin.system-monitor.log-length": LOW_LEVEL_LOG_LENGTH}):
         cluster = cls(
             n_workers=workers, threads_per_worker=1, processes=True, host="127.0.0.1",
             # the scheduler always serves HTTP (/health, /metrics): on 127.0.0.1 and a free port, so
