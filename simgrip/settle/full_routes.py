@@ -13,8 +13,12 @@ what it solves, and when it hands over to the dynamics.
 2. **Past the onset**, Grips I/II grasped at ``box_depth`` with every other contact frictionless (the
    free-boundary problem of :mod:`simgrip.reference.free_boundary`): continuation in the rest curvature from
    the point-contact state at :data:`FN_START` rad of total rest rotation, :data:`FN_STAGE` rad per stage,
-   each stage the bordered Newton (:meth:`~simgrip.settle.full_newton.FullNewton.solve_kkt`).  A box dropped
-   there leaves the finger alone to the dynamics, from the held shape (``settled = False``).
+   each stage the bordered Newton (:meth:`~simgrip.settle.full_newton.FullNewton.solve_kkt`).  Where the tip's
+   friction cannot carry the box at ``box_depth``, the box slides quasi-statically (:func:`_slide`) to the first
+   depth where it can (held there; the theory's :func:`~simgrip.reference.hold_full.slip_depth`: Grip I kappa
+   -10, mu_s 0.7088 at n = 32: 0.3956 against the theory's 0.3904, inside the hold band of
+   :mod:`tests.test_hold_full`).  A box that finds none drops and leaves the finger alone to the dynamics,
+   from the held shape (``settled = False``).
 
 Not routed (``(None, None)``: the dynamics settles): two fingers; friction at several contacts (``box_depth``
 None or ``extra_friction``: the load's split between sticking contacts depends on the path); the free rod past
@@ -29,7 +33,7 @@ import numpy as np
 
 from simgrip.settle.full_newton import FN_ITERS, FullNewton, NewtonResult
 
-__all__ = ["FN_CONE_MARGIN", "FN_CONE_PRECHECK", "FN_STAGE", "FN_START", "FN_TOL_SHARE", "newton_full"]
+__all__ = ["FN_CONE_MARGIN", "FN_CONE_PRECHECK", "FN_SLIDE_STEP", "FN_STAGE", "FN_START", "FN_TOL_SHARE", "newton_full"]
 
 #: Continuation: total rest rotation added per stage [rad].
 FN_STAGE = 1.0
@@ -43,6 +47,12 @@ FN_CONE_MARGIN = 1e-3
 #: The point-contact chain's tip force outside its friction cone by more than this fraction drops the box at
 #: once (MuJoCo's surface contact moves N by ~r_tip / l relative, 2e-3: far inside it).
 FN_CONE_PRECHECK = 0.05
+#: The quasi-static slide (:func:`_slide`): its march in the grasp depth [over l] (as the theory's
+#: :func:`~simgrip.reference.hold_full.slip_depth`), the depth [over l] to which its re-stick is found, and the
+#: depths [over l] past which the box has slid off the tip (the theory's valid range).
+FN_SLIDE_STEP = 0.01
+FN_SLIDE_TOL = 1e-6
+FN_SLIDE_RANGE = (0.05, 1.95)
 #: The solve's own stopping residual over the settle's tolerance (MuJoCo's judge then checks the settle's).
 FN_TOL_SHARE = 1e-2
 #: Balance residual (over rho g l, rho g l^2) of the continuation's intermediate stages (each only starts the
@@ -154,8 +164,66 @@ def _held(run: FullNewton, q0, rest, tol: float, budget: int):
         margin = abs(abs(lam) - p.mu_s * N)
         if margin <= FN_CONE_MARGIN * p.mu_s * N:
             return None, f"tip friction {abs(lam):.6g} at the cone's edge mu N = {p.mu_s * N:.6g}"
+        if abs(lam) >= p.mu_s * N and not tip_only:
+            slid = _slide(run, q, free, lam, depth, tol, budget, p.mu_s)
+            if slid is not None:  # the tip slid and stuck again, the box at another depth: held there
+                q, lam = slid
+                return NewtonResult(q, True, lam, run.iterations, run.evaluations, route + "+slide"), None
         return NewtonResult(q, abs(lam) < p.mu_s * N, lam, run.iterations, run.evaluations, route), None
     return None, why
+
+
+def _slide(run: FullNewton, q, free, lam, depth: float, tol: float, budget: int, mu: float):
+    """The quasi-static slide of a box whose tip cannot stick at ``depth``: ``(q, lam)`` where it sticks again,
+    or ``None`` where it does not within the box (it falls: the caller drops it).
+
+    The box slides down relative to the tip (Grip I's depth below the top edge shrinks, Grip II's above the
+    bottom edge grows) through rests at each depth with every contact but the tip's frictionless (the
+    free-boundary problem at that depth); it stops at the first depth where the tip's friction demand falls
+    inside the cone, ``|lam| <= mu N``.  Marched in :data:`FN_SLIDE_STEP` from ``depth`` (each rest warm from
+    the last), the crossing then found by ``brentq`` to :data:`FN_SLIDE_TOL` on ``|lam| - mu N (1 -
+    2 FN_CONE_MARGIN)`` (the state returned is inside the cone by twice the margin the judge leaves to the
+    dynamics: ~5e-4 l of depth past the crossing at Grip I kappa -10).  The theory's counterpart is
+    :func:`simgrip.reference.hold_full.slip_depth`."""
+    from scipy.optimize import brentq
+
+    sign = -1.0 if run.sc.grip == "I" else 1.0
+    near = {}  # depth -> (q, lam): warm starts
+
+    def at(d):
+        d0 = min(near, key=lambda x: abs(x - d))
+        left = budget - run.iterations
+        if left <= 0:
+            raise _SlideLost(f"Newton iteration budget {budget} spent")
+        ok, q1, l1 = run.solve_kkt(near[d0][0], free, tol, lam=near[d0][1], target=d, max_iter=min(FN_ITERS, left),
+                                   polish=True)
+        if not ok:
+            raise _SlideLost(f"no rest at depth {d:.6g}")
+        near[d] = (q1, l1)
+        return abs(l1) - mu * run.tip_normal(q1) * (1.0 - 2.0 * FN_CONE_MARGIN)
+
+    near[depth] = (q, lam)
+    a, d = depth, depth
+    try:
+        while True:
+            d = a + sign * FN_SLIDE_STEP
+            if not FN_SLIDE_RANGE[0] < d < FN_SLIDE_RANGE[1]:
+                return None
+            if at(d) < 0.0:
+                break
+            a = d
+        root = brentq(at, min(a, d), max(a, d), xtol=FN_SLIDE_TOL)
+        # the side of the root inside the cone
+        for x in (root, root + sign * FN_SLIDE_TOL):
+            if at(x) < 0.0:
+                return near[x]
+        return near[d]
+    except _SlideLost:
+        return None
+
+
+class _SlideLost(Exception):
+    """The slide's march found no rest (the box falls)."""
 
 
 def _alone(run: FullNewton, q0, rest, tol: float, budget: int):
