@@ -17,9 +17,10 @@ leaves a window of width ``r`` above the best possible grip.  Closing further pr
 sphere (the fingers' elastic squeeze, which does not scale with the weight), and too little curvature lets the
 sphere slip through the fingers (a drop).
 
-The draw (SI): diameter uniform in ``(0.04, 0.075)`` m (narrower spheres bring the tips together under them; the
-fingers do not collide with each other in the model), mass log-uniform in ``(0.01, 0.2)`` kg, friction uniform
-in ``(0.3, 1.2)``, centred (``offset_max = 0``), palm start ``(0.085, 0.09)`` m.
+The draw (SI): diameter uniform in ``(0.04, 0.09)`` m, an egg to an orange (narrower spheres bring the tips
+together under them; the fingers do not collide with each other in the model), mass log-uniform in
+``(0.01, 0.2)`` kg, friction uniform in ``(0.3, 1.2)``, centred (``offset_max = 0``), palm start ``(0.1, 0.105)``
+m (above the largest sphere; a controller moves the palm to its grasp height).
 
 Sensing is :class:`~simgrip.envs.pick_multi.PickMultiEnv`'s observation (finger shapes, tips, curvature command
 and actual value, palm height, the sphere's position, tilt, velocity and spin relative to the palm, its lift, the
@@ -49,13 +50,19 @@ plus :class:`~simgrip.envs.pick_multi.PickMultiEnv`'s reward terms (``reward_lif
 
 Baselines on held-out seeds 6000-6049 (``python -m simgrip.envs.baselines --env simgrip/PickSphereFragile-v0
 --policy P --seeds 6000-6049 --out docs/baselines/PickSphereFragile-v0-P.json``): random 0 %, best constant
-12 %, best open-loop 48 %, oracle 98 %, observation-only 98 %.  The open-loop family is the claw one (the palm
+0 %, best open-loop 30 %, oracle 88 %, observation-only 98 %.  The open-loop family is the claw one (the palm
 moved for a fixed time to the scripted controller's grasp height for the mid-range sphere, ramp to a constant
 curvature at a rate of the grid, lift at a speed of the grid).  **The issue's target (fixed schedules <= 20 %)
 is not met**: below the equator the hold is largely support, whose force scales with the weight by itself, so
-one gentle curvature (action 0.5, ``kappa_bar = -2.5``) holds 48 % of the spheres inside their windows (most of
-its failures push the sphere away: knocked over).  The ratio range was chosen on seeds 5000-5049, where the
-observation-only controller's largest force (no limit) has quartiles 1.14, 1.32, 1.52 ``N_hold``.
+one gentle curvature (action 0.5, ``kappa_bar = -2.5``) holds 30 % of the spheres inside their windows; most of
+its failures push a sphere whose size does not match its fixed grasp height away (knocked over, 21 of 50) or
+crush a light one (14).  History: with diameters ``(0.04, 0.075)`` m and the palm started at ``(0.085, 0.09)``
+m the same run gave open-loop 48 %, observation-only 98 %; the diameter range was widened after that run (so
+these seeds are no longer untouched by the choice).  On seeds 5000-5049 the widened task gave observation-only
+43/50 at ``crush_ratio_range = (1.5, 2.5)``, and with the earlier palm start the open-loop curvatures 0.4 and
+0.5 held 3-4 of 30 (seeds 5000-5029; ``(1.6, 2.6)``: 6 of 30), an estimate the held-out 30 % shows optimistic.
+The oracle eases the grip above the window's middle and so drops or
+crushes a few more spheres than the observation-only controller (88 %).
 """
 
 from __future__ import annotations
@@ -67,7 +74,7 @@ from simgrip.envs.pick_fragile import FRAGILE_DEFAULTS, FragilePickMultiEnv
 __all__ = ["FragileSphereEnv", "SPHERE_DEFAULTS"]
 
 #: the sphere's draw where it differs from :data:`~simgrip.envs.pick_fragile.FRAGILE_DEFAULTS`
-SPHERE_DEFAULTS = {"crush_ratio_range": (1.5, 2.5), "size_range": (0.04, 0.075)}
+SPHERE_DEFAULTS = {"crush_ratio_range": (1.5, 2.5), "size_range": (0.04, 0.09), "palm_start": (0.1, 0.105)}
 
 
 class FragileSphereEnv(FragilePickMultiEnv):
@@ -77,16 +84,18 @@ class FragileSphereEnv(FragilePickMultiEnv):
     See :mod:`simgrip.envs.pick_sphere_fragile` for the window, the draw and the info table
     (``info["is_success"]``, ``info["workpiece_lift"]``, ``info["crushed"]``, ``info["dropped"]``).  Arguments:
     those of :class:`~simgrip.envs.pick_fragile.FragilePickMultiEnv` (``shapes`` fixed to ``("sphere",)``) with
-    the defaults ``crush_ratio_range = (1.5, 2.5)``, ``size_range = (0.04, 0.075)`` m.
+    the defaults ``crush_ratio_range = (1.5, 2.5)``, ``size_range = (0.04, 0.09)`` m, ``palm_start = (0.1, 0.105)``
+    m.
     """
 
     def __init__(self, *, crush_ratio_range=SPHERE_DEFAULTS["crush_ratio_range"],
-                 size_range=SPHERE_DEFAULTS["size_range"], mass_range=FRAGILE_DEFAULTS["mass_range"], **kwargs):
+                 size_range=SPHERE_DEFAULTS["size_range"], mass_range=FRAGILE_DEFAULTS["mass_range"],
+                 palm_start=SPHERE_DEFAULTS["palm_start"], **kwargs):
         shapes = kwargs.pop("shapes", ("sphere",))
         if tuple(shapes) != ("sphere",):
             raise ValueError(f"shapes must be ('sphere',) for PickSphereFragile, got {shapes!r}")
         super().__init__(crush_ratio_range=crush_ratio_range, size_range=size_range, mass_range=mass_range,
-                         shapes=("sphere",), **kwargs)
+                         shapes=("sphere",), palm_start=palm_start, **kwargs)
 
     def _hold_force(self) -> float:
         """The least normal force per finger that carries the weight, ``m g / (K sqrt(1 + mu^2))`` [N]."""
