@@ -16,15 +16,15 @@ Policies (actions ``(curvature command, palm speed)`` in ``[-1, 1]``; ``PlaceFra
 ``constant``    (``PlaceFragile-v0``: ``a_k`` x palm ``x`` command ``a_x`` in ``(-0.5, 0.5)``, palm ``z`` 0.5)
 ``openloop``    (``PlaceFragile-v0``: ramp to ``a_k`` over 25 steps, lift 20 steps, carry at full speed to
                 ``-x`` or ``+x`` over ``PLACE_DISTANCES``, lower 20 steps; grid ``a_k`` x side x distance)
-``openloop``    (``PickCradleFragile-v0``: claw open while the palm goes down for a fixed time to the
-                scripted controller's grasp height, then ramp from the claw to ``a_k`` over ``R`` steps,
-                wait 10, lift at ``a_p``; a constant action cannot lower the palm and then lift)
+``openloop``    (``PickCradleFragile-v0``, ``PickSphereFragile-v0``: claw open while the palm moves for a
+                fixed time to the scripted controller's grasp height for the mid-range workpiece, then ramp
+                from the claw to ``a_k`` over ``R`` steps, wait 10, lift at ``a_p``; a constant action cannot
+                lower the palm and then lift)
 ``oracle``      :class:`~simgrip.envs.scripted_fragile.OracleFragilePolicy` (knows the hidden window; for
                 ``PlaceFragile-v0`` inside :class:`~simgrip.envs.scripted_fragile.PlacePolicy`)
 ``observation`` :class:`~simgrip.envs.scripted_fragile.ObservationFragilePolicy` (the observation only;
                 ``PlaceFragile-v0``: :class:`~simgrip.envs.scripted_fragile.PlacePolicy`;
-                ``PickCradleFragile-v0``: :class:`~simgrip.envs.scripted_fragile.CradleFragilePolicy`, its
-                oracle :class:`~simgrip.envs.scripted_fragile.OracleCradlePolicy`)
+                the cradle and the sphere: ``CLAW_POLICIES`` of :mod:`simgrip.envs.scripted_fragile`)
 ==============  ==============================================================================================
 
 ``--grid coarse`` uses every other curvature and one ramp/palm value (for tests).  Output: ``env``,
