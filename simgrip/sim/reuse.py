@@ -56,6 +56,7 @@ child) has its own too.  :func:`clear` empties the calling thread's cache.
 from __future__ import annotations
 
 import copy
+import functools
 import inspect
 import math
 import threading
@@ -198,10 +199,17 @@ VERIFIED_KEYWORDS = frozenset({
 })
 
 
+@functools.lru_cache(maxsize=16)
+def _signature(fn) -> inspect.Signature:
+    """``inspect.signature(fn)``, computed once per builder (~0.1 ms a call saved per scene; a documented
+    bounded cache: its keys are the few builder functions, 16 at most, least recently used dropped)."""
+    return inspect.signature(fn)
+
+
 def _structure(builder, args: tuple, kw: dict, skip: tuple) -> tuple | None:
     """The keywords of ``builder`` (defaults applied) but the parameter-valued ones, frozen; None when one
     outside :data:`VERIFIED_KEYWORDS` is not at its default (built fresh, never cached)."""
-    sig = inspect.signature(builder)
+    sig = _signature(builder)
     bound = sig.bind(*args, **kw)
     bound.apply_defaults()
     for k, v in bound.arguments.items():
@@ -328,7 +336,7 @@ def scene(grip: str, params, profile, n_links: int, **kw):
     dimless, phys = S.check_params(params)
     prof = as_profile(profile)
     n = check_finger_links(n_links)
-    bound = inspect.signature(S.build_scene).bind(grip, params, profile, n_links, **kw)
+    bound = _signature(S.build_scene).bind(grip, params, profile, n_links, **kw)
     bound.apply_defaults()
     a = bound.arguments
     fingers = a["fingers"]
@@ -422,7 +430,7 @@ def build_gripper(grip: str, params, profile, n_links: int, **kw):
     from simgrip.sim.workpiece import workpiece_inertia
 
     args = (grip, params, profile, n_links)
-    bound = inspect.signature(G.build_gripper).bind(*args, **kw)
+    bound = _signature(G.build_gripper).bind(*args, **kw)
     bound.apply_defaults()
     a = bound.arguments
     g, K, shape = G.check_gripper(grip, a["fingers"], a["workpiece"])
@@ -502,7 +510,7 @@ def _cradle(args, kw, a, K):
     prof = as_profile(profile)
     n = check_finger_links(n_links)
     r_link = check_positive("r_link", a["r_link"], 0.05)
-    ca = inspect.signature(build_cradle).parameters
+    ca = _signature(build_cradle).parameters
     r_corner = check_positive("r_corner", ca["r_corner"].default, 0.05)
     window = check_positive("contact_window", ca["contact_window"].default, 1.0)
     springs = chain_springs(prof, n)
