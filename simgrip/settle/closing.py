@@ -132,7 +132,7 @@ def place_on_chain(scene: Scene, run: Newton) -> bool:
     d.qpos[scene.joint_qpos] = ch.joint_angles[None, :]
     run.N, run.normal_active = np.zeros(0), []
     scene.model.opt.disableflags = run._flags if hasattr(run, "_flags") else scene.model.opt.disableflags
-    place_workpiece(scene, float(ch.tip[1]) * scene.length)
+    place_workpiece(scene, float(ch.tip[1]) * scene.length, forward=False)
     return True
 
 
@@ -188,7 +188,7 @@ def start_on_chain(scene: Scene, run: Newton | None) -> bool | None:
     scene.data.qpos[scene.joint_qpos] = ch.joint_angles[None, :]
     if run is not None:
         run.N, run.normal_active = np.zeros(0), []
-    place_workpiece(scene, float(ch.tip[1]) * scene.length)
+    place_workpiece(scene, float(ch.tip[1]) * scene.length, forward=False)
     return True
 
 
@@ -241,7 +241,7 @@ def close_grip(scene: Scene, run: Newton, tol: float, max_steps: int) -> bool:
         t = lo
         free_tip(t)
     z0 = finger_tip(scene)[1]
-    place_workpiece(scene, z0 * scene.length)
+    place_workpiece(scene, z0 * scene.length, forward=False)
     m.opt.disableflags = flags
     if _close_predicted(scene, run, target, t, z0, loose, min(max_steps, CLOSE_STAGE_ITERS), wdofs):
         return True

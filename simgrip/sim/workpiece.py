@@ -224,8 +224,15 @@ def hold_workpiece(scene: Scene, on: bool) -> None:
         d.qfrc_applied[dof] = weight if (on and name == "z") else 0.0
 
 
-def place_workpiece(scene: Scene, z: float) -> None:
-    """Put the workpiece's centre at height ``z`` [m] (joint or, when fixed, body position), forward."""
+def place_workpiece(scene: Scene, z: float, *, forward: bool = True) -> None:
+    """Put the workpiece's centre at height ``z`` [m] (joint or, when fixed, body position), forward.
+
+    ``forward=False`` skips the ``mj_forward`` (``O(n^3)`` in the serial chain's dense mass matrix: ~2 ms at
+    ``n = 256``) for a caller whose every reader evaluates MuJoCo at the state itself: the static settle's
+    closing (:mod:`simgrip.settle.closing`), whose Newton computes positions, contacts and forces at each
+    state it reads and ends with :func:`~simgrip.settle.statics.sync_scene` (``mj_forward`` leaves
+    ``qacc_warmstart`` as it finds it, so the settled data are the same bit for bit).
+    """
     m, d = scene.model, scene.data
     body_z = float(m.body_pos[scene.workpiece_body][2])
     for name, qa in zip(scene.workpiece_joints, scene.workpiece_qpos):
@@ -233,7 +240,8 @@ def place_workpiece(scene: Scene, z: float) -> None:
     if not scene.free_workpiece:
         m.body_pos[scene.workpiece_body][2] = z
     d.qvel[:] = 0.0
-    mujoco.mj_forward(m, d)
+    if forward:
+        mujoco.mj_forward(m, d)
 
 
 def lower_onto_fingers(scene: Scene) -> None:
