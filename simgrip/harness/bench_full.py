@@ -81,13 +81,9 @@ def _dynamics_only(sc):
 def _median_cpu(fns: dict, repeats: int) -> dict:
     """Median CPU seconds (``time.process_time``, one BLAS thread: the settle's own work, not the other jobs of
     a busy machine) of each ``fn()``, the functions run in turn ``repeats`` times (interleaved)."""
-    times = {k: [] for k in fns}
-    for _ in range(max(1, repeats)):
-        for k, fn in fns.items():
-            t0 = time.process_time()
-            fn()
-            times[k].append(time.process_time() - t0)
-    return {k: statistics.median(v) for k, v in times.items()}
+    from simgrip.harness.timing import interleaved_cpu_times
+
+    return {k: statistics.median(v) for k, v in interleaved_cpu_times(fns, repeats).items()}
 
 
 def _tip_normal(st, n: int) -> float:

@@ -8,7 +8,7 @@ import time
 
 import numpy as np
 
-__all__ = ["median_time", "fastest_cpu_times", "settle_from_start", "contact_force", "errors"]
+__all__ = ["median_time", "fastest_cpu_times", "interleaved_cpu_times", "settle_from_start", "contact_force", "errors"]
 
 
 def median_time(fn, repeats: int):
@@ -22,16 +22,22 @@ def median_time(fn, repeats: int):
     return out, statistics.median(times), min(times)
 
 
-def fastest_cpu_times(fns: dict, repeats: int) -> dict:
-    """Fastest CPU seconds (``time.process_time``) of each ``fn()`` of ``fns``, the functions run in turn
-    ``repeats`` times (at least once): interleaved, so their ratios hold on a busy machine."""
+def interleaved_cpu_times(fns: dict, repeats: int) -> dict:
+    """Every CPU time [s] (``time.process_time``) of each ``fn()`` of ``fns``, ``{key: [seconds, ...]}``, the
+    functions run in turn ``repeats`` times (at least once): interleaved, so their ratios hold on a busy
+    machine."""
     times = {k: [] for k in fns}
     for _ in range(max(1, repeats)):
         for k, fn in fns.items():
             t0 = time.process_time()
             fn()
             times[k].append(time.process_time() - t0)
-    return {k: min(v) for k, v in times.items()}
+    return times
+
+
+def fastest_cpu_times(fns: dict, repeats: int) -> dict:
+    """Fastest CPU seconds of each ``fn()`` of ``fns`` over :func:`interleaved_cpu_times`' runs."""
+    return {k: min(v) for k, v in interleaved_cpu_times(fns, repeats).items()}
 
 
 def settle_from_start(grip: str, kappa: float, n: int, **kw):
