@@ -24,7 +24,7 @@ from __future__ import annotations
 import statistics
 import time
 
-from simgrip.harness.tables import checks_md, write_record
+from simgrip.harness.tables import checks_md, ratio_lines, write_record
 
 __all__ = ["POINT_CASES", "TARGETS", "full_md", "full_speed", "write_full_bench"]
 
@@ -181,17 +181,12 @@ def full_speed(*, quick: bool = False, repeats: int | None = None) -> dict:
     return {"rows": rows, "checks": checks, "repeats": reps}
 
 
-def _fmt(v) -> str:
-    return f"{v:.3g}" if isinstance(v, float) else str(v)
-
-
 def full_md(rec: dict) -> str:
     """Markdown of :func:`full_speed`: one line per ratio (``before``: the dynamics alone), then the checks."""
     out = ["# The full-contact settle's speed (issue 17 s.5)", "",
            f"Medians of {rec['repeats']} interleaved runs (CPU seconds); `before`: the guarded dynamics alone "
            "over the same denominator.", ""]
-    for r in rec["rows"]:
-        out.append("- " + r["case"] + ": " + "; ".join(f"{k} {_fmt(v)}" for k, v in r.items() if k != "case"))
+    out += ratio_lines(rec["rows"])
     out += checks_md(rec["checks"])
     return "\n".join(out) + "\n"
 

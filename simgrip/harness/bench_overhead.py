@@ -41,7 +41,7 @@ import tempfile
 import time
 from pathlib import Path
 
-from simgrip.harness.tables import checks_md, write_record
+from simgrip.harness.tables import checks_md, ratio_lines, write_record
 from simgrip.params import STANDARD
 from simgrip.profiles import Uniform
 
@@ -143,17 +143,12 @@ def overhead_ratios(*, quick: bool = False, repeats: int | None = None) -> dict:
     return {"rows": rows, "checks": checks, "repeats": reps}
 
 
-def _fmt(v) -> str:
-    return f"{v:.3g}" if isinstance(v, float) else str(v)
-
-
 def overhead_md(rec: dict) -> str:
     """Markdown of :func:`overhead_ratios`: one line per ratio, then the checks."""
     out = ["# What surrounds the settle (issue 19)", "",
            f"settle/chain: fastest CPU time of {rec['repeats']} interleaved runs; the others: medians of each "
            "call's wall time over its own settle.", ""]
-    for r in rec["rows"]:
-        out.append("- " + r["case"] + ": " + "; ".join(f"{k} {_fmt(v)}" for k, v in r.items() if k != "case"))
+    out += ratio_lines(rec["rows"])
     out += checks_md(rec["checks"])
     return "\n".join(out) + "\n"
 

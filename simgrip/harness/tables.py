@@ -18,7 +18,7 @@ from __future__ import annotations
 import math
 import os
 
-__all__ = ["ratios", "summary_md", "skips_md", "fmt", "checks_md", "write_record"]
+__all__ = ["ratios", "summary_md", "skips_md", "fmt", "checks_md", "ratio_lines", "write_record"]
 
 GRIP_ORDER = ("free", "I", "II", "III")
 
@@ -199,6 +199,14 @@ def summary_md(res, load_avg) -> str:
     L += ["Reproduce: `simgrip bench" + (" --quick" if res.quick else "") + f"{jobs}` "
           "(or `python -c \"from simgrip.harness.bench import run_bench; run_bench('bench_out')\"`).", ""]
     return "\n".join(L)
+
+
+def ratio_lines(rows: list[dict]) -> list[str]:
+    """Markdown bullet lines of bench rows: ``- <case>: key value; ...`` (floats to 3 significant digits)."""
+    def val(v) -> str:
+        return f"{v:.3g}" if isinstance(v, float) else str(v)
+
+    return ["- " + r["case"] + ": " + "; ".join(f"{k} {val(v)}" for k, v in r.items() if k != "case") for r in rows]
 
 
 def checks_md(checks: dict) -> list[str]:
