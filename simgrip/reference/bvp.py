@@ -50,10 +50,10 @@ from typing import Callable
 
 import numpy as np
 from scipy import special as _sp
-from scipy.integrate import solve_bvp
 
 from simgrip.params import check_grip_iii_reach
 from simgrip.profiles import Concentrated, CurvatureProfile, Uniform
+from simgrip.reference.collocation import solve_collocation
 
 __all__ = ["Blend", "BvpProblem", "ElasticaError", "BvpSolution", "TOL_MID", "antiderivative", "grip_problem", "run_bvp", "system"]
 
@@ -238,7 +238,7 @@ def _tip_system(P: BvpProblem):
     B[3, 1], c[3] = 1.0, P.C
     if con:
         B[4, 2], c[4] = 1.0, P.target
-    return _with_bc(fun, fun_jac, A, B, c, con)
+    return fun, fun_jac, A, B, c
 
 
 def _two_segment_system(P: BvpProblem):
@@ -280,7 +280,7 @@ def _two_segment_system(P: BvpProblem):
     c[5] = -P.C
     if con:
         B[8, 2], c[8] = 1.0, P.target
-    return _with_bc(fun, fun_jac, A, B, c, con)
+    return fun, fun_jac, A, B, c
 
 
 def _clamp_rows(n: int, con: bool):
@@ -304,21 +304,27 @@ def _with_bc(fun, fun_jac, A, B, c, con: bool):
     return fun, bc, fun_jac, bc_jac
 
 
-def system(P: BvpProblem):
-    """``fun, bc, fun_jac, bc_jac`` for ``solve_bvp``, vectorised over the mesh."""
+def linear_system(P: BvpProblem):
+    """``fun, fun_jac, A, B, c``: the ODE and its Jacobian, vectorised over the mesh, and the linear boundary
+    conditions ``A y(0) + B y(1) = c`` (``(n + k, n)``, ``k = 1`` parameter ``N1`` when constrained)."""
     return _two_segment_system(P) if P.two_seg else _tip_system(P)
 
 
+def system(P: BvpProblem):
+    """``fun, bc, fun_jac, bc_jac`` for ``solve_bvp``, vectorised over the mesh."""
+    fun, fun_jac, A, B, c = linear_system(P)
+    return _with_bc(fun, fun_jac, A, B, c, P.constrained)
+
+
 def run_bvp(P: BvpProblem, x, y, p, tol: float) -> BvpSolution | None:
-    """One ``solve_bvp`` run; ``None`` unless it converged to a finite solution."""
-    fun, bc, fun_jac, bc_jac = system(P)
+    """One ``solve_bvp`` run (:func:`simgrip.reference.collocation.solve_collocation`: SciPy's algorithm step for
+    step, its Jacobian factored as a band matrix); ``None`` unless it converged to a finite solution."""
+    fun, fun_jac, A, B, c = linear_system(P)
     with warnings.catch_warnings(), np.errstate(all="ignore"):
         warnings.simplefilter("ignore")
         try:
-            r = solve_bvp(
-                fun, bc, x, y, p=p, fun_jac=fun_jac, bc_jac=bc_jac, tol=tol,
-                max_nodes=_MAX_NODES if tol < TOL_MID else _MAX_NODES_MID,
-            )
+            r = solve_collocation(fun, fun_jac, A, B, c, x, y, p, tol=tol,
+                                  max_nodes=_MAX_NODES if tol < TOL_MID else _MAX_NODES_MID)
         except (np.linalg.LinAlgError, ValueError, FloatingPointError, ZeroDivisionError):
             return None
     if r.status != 0 or not np.all(np.isfinite(r.y)):

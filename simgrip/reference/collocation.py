@@ -1,0 +1,353 @@
+"""SciPy's ``solve_bvp``, step for step, with its collocation Jacobian factored as a band matrix.
+
+:func:`solve_collocation` runs the algorithm of :func:`scipy.integrate.solve_bvp`
+(SciPy 1.17, ``scipy/integrate/_bvp.py``) on problems whose boundary
+conditions are linear, ``A y(a) + B y(b) = c`` with ``A, B, c`` constant: the
+same 4th-order Lobatto IIIA collocation equations on the same mesh, the same
+damped Newton iteration (affine-invariant criterion ``|J^-1 r|^2``, Armijo
+constant 0.2, at most 4 Jacobians and 8 iterations, the same stopping test on
+the collocation and boundary residuals), the same rms residual estimate (5-point
+Lobatto quadrature of the cubic spline's relative residual), the same node
+insertion and the same final test (``max rms <= tol``, boundary residual
+``<= tol``), returning the same spline.  Only the linear algebra differs:
+``solve_bvp`` builds a sparse matrix and factors it with SuperLU (column
+reordering, ~2/3 of a warm run's time at 600 nodes); here the unknowns are
+ordered node by node and the equations interval by interval, boundary rows at
+their ends, so the Jacobian is a band matrix that LAPACK's ``dgbtrf`` factors
+with partial pivoting in O(nodes) time.
+
+To make the system banded: each unknown parameter ``p_j`` becomes a constant
+state (equations ``p_j(i+1) - p_j(i) = 0``; the collocation rows of interval
+``i`` take their ``dPhi/dp`` on node ``i``'s copy), and each boundary row that
+couples both ends (``a_r . y(a) + b_r . y(b) = c_r``, Grip III's continuity at
+the contact) gets a constant state ``z_r`` with the two separated rows
+``a_r . y(a) - z_r = 0`` and ``b_r . y(b) + z_r = c_r``.  The augmented linear
+system has the original Newton step as its unique solution (the constant
+copies are equal, ``z_r = a_r . y(a)``), so the iterates are ``solve_bvp``'s up
+to rounding; the tests (``tests/test_collocation.py``) compare the two.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from functools import lru_cache
+
+import numpy as np
+from scipy.interpolate import PPoly
+from scipy.linalg.lapack import dgbtrf, dgbtrs
+
+__all__ = ["CollocationResult", "solve_collocation", "MESSAGES"]
+
+#: ``solve_bvp``'s messages by status (its ``TERMINATION_MESSAGES``).
+MESSAGES = {
+    0: "The algorithm converged to the desired accuracy.",
+    1: "The maximum number of mesh nodes is exceeded.",
+    2: "A singular Jacobian encountered when solving the collocation system.",
+    3: "The solver was unable to satisfy boundary conditions tolerance on iteration 10.",
+}
+_EPS = np.finfo(float).eps
+#: Band layouts kept (:func:`_band`, keyed on the problem's structure and the mesh size; ~0.5 MB each at 600
+#: nodes): the bounded cache of this module, enough for the mesh sizes one continuation visits.
+_BANDS = 16
+
+
+@dataclass
+class CollocationResult:
+    """What ``solve_bvp`` returns (the fields :mod:`simgrip.reference.bvp` reads): ``sol`` (the C1 cubic
+    spline, a :class:`~scipy.interpolate.PPoly`), ``x``, ``y``, ``yp``, ``p`` (``None`` without parameters),
+    ``rms_residuals``, ``niter``, ``status`` (:data:`MESSAGES`), ``message``, ``success``."""
+
+    sol: PPoly
+    p: np.ndarray | None
+    x: np.ndarray
+    y: np.ndarray
+    yp: np.ndarray
+    rms_residuals: np.ndarray
+    niter: int
+    status: int
+    message: str
+    success: bool
+
+
+class _Band:
+    """The banded layout of the augmented collocation system on ``m`` nodes (see the module docstring).
+
+    Unknowns: node ``i``'s block ``[y (n), p (k), z (q)]`` (``na = n + k + q``); equations: the left
+    boundary rows, then interval ``i``'s ``na`` rows (``n`` collocation, ``k + q`` copies), then the right
+    boundary rows.  ``(r, c)`` is stored at ``ab[kl + ku + r - c, c]`` (LAPACK's band storage with room for
+    the pivoting's fill)."""
+
+    def __init__(self, n: int, k: int, A: np.ndarray, B: np.ndarray, m: int):
+        left = np.flatnonzero(~np.any(B != 0.0, axis=1))
+        right = np.flatnonzero(~np.any(A != 0.0, axis=1) & np.any(B != 0.0, axis=1))
+        both = np.setdiff1d(np.arange(A.shape[0]), np.concatenate((left, right)))
+        q = both.size
+        self.n, self.k, self.q, self.m = n, k, q, m
+        self.na = na = n + k + q
+        self.left, self.right, self.both = left, right, both
+        self.nl, self.nr = left.size + q, right.size + q
+        if self.nl + self.nr != na:
+            raise ValueError(f"boundary conditions: {A.shape[0]} rows for {n} states and {k} parameters")
+        self.N = N = na * m
+        self.kl = self.nl + na - 1
+        self.ku = max(2 * na - 1 - self.nl, na - 1, 0)
+        rows = 2 * self.kl + self.ku + 1
+        self.shape = (rows, N)
+
+        def flat(r, c):
+            return (self.kl + self.ku + r - c) * N + c
+
+        i = np.arange(m - 1)[:, None, None]
+        a = np.arange(n)[None, :, None]
+        b = np.arange(n)[None, None, :]
+        r0 = self.nl + na * i + a  # collocation rows of interval i
+        self.i_d0 = flat(r0, na * i + b).ravel()  # d Phi_i / d y_i
+        self.i_d1 = flat(r0, na * (i + 1) + b).ravel()  # d Phi_i / d y_{i+1}
+        self.i_dp = flat(r0, na * i + n + np.arange(k)[None, None, :]).ravel() if k else None
+        t = np.zeros(self.shape)
+        tf = t.reshape(-1)
+        j = np.arange(k + q)[None, :]
+        rc = self.nl + na * np.arange(m - 1)[:, None] + n + j  # the copies' rows: x_{i+1} - x_i = 0
+        tf[flat(rc, na * np.arange(m - 1)[:, None] + n + j).ravel()] = -1.0
+        tf[flat(rc, na * np.arange(1, m)[:, None] + n + j).ravel()] = 1.0
+        # left rows: the separated ones, then a_r . y(a) - z_r; right rows: the separated ones, then b_r . y(b) + z_r
+        for r, src in enumerate(left):
+            tf[flat(r, np.arange(n))] = A[src]
+        for s, src in enumerate(both):
+            r = left.size + s
+            tf[flat(r, np.arange(n))] = A[src]
+            tf[flat(r, n + k + s)] = -1.0
+        base = N - self.nr
+        last = na * (m - 1)
+        for r, src in enumerate(right):
+            tf[flat(base + r, last + np.arange(n))] = B[src]
+        for s, src in enumerate(both):
+            r = base + right.size + s
+            tf[flat(r, last + np.arange(n))] = B[src]
+            tf[flat(r, last + n + k + s)] = 1.0
+        self.template = t
+
+    def matrix(self, d0, d1, dp) -> np.ndarray:
+        """The band array with the collocation blocks ``d0, d1`` (``(m-1, n, n)``) and ``dp`` (``(m-1, n, k)``)."""
+        ab = self.template.copy()
+        f = ab.reshape(-1)
+        f[self.i_d0] = d0.ravel()
+        f[self.i_d1] = d1.ravel()
+        if self.k:
+            f[self.i_dp] = dp.ravel()
+        return ab
+
+    def rhs(self, col_res, bc_res) -> np.ndarray:
+        """The augmented residual: ``bc_res`` split into its left and right rows, ``col_res`` by interval."""
+        out = np.zeros(self.N)
+        nl, n = self.nl, self.n
+        out[:self.left.size] = bc_res[self.left]
+        out[nl:nl + self.na * (self.m - 1)].reshape(self.m - 1, self.na)[:, :n] = col_res.T
+        tail = out[self.N - self.nr:]
+        tail[:self.right.size] = bc_res[self.right]
+        tail[self.right.size:] = bc_res[self.both]
+        return out
+
+    def split(self, step: np.ndarray):
+        """``(y_step (n, m), p_step (k,))`` of an augmented step."""
+        s = step.reshape(self.m, self.na)
+        return s[:, :self.n].T, s[0, self.n:self.n + self.k].copy()
+
+
+@lru_cache(maxsize=_BANDS)
+def _band(key, m: int) -> _Band:
+    """The :class:`_Band` of a structure ``key = (n, k, A bytes, B bytes)`` on ``m`` nodes (cached: a
+    continuation solves on the same mesh size again and again; read-only once built)."""
+    n, k, a, b = key
+    return _Band(n, k, np.frombuffer(a).reshape(n + k, n), np.frombuffer(b).reshape(n + k, n), m)
+
+
+class _Factor:
+    def __init__(self, band: _Band, ab: np.ndarray):
+        self.band = band
+        self.lu, self.piv, info = dgbtrf(ab, band.kl, band.ku, overwrite_ab=1)
+        self.singular = info != 0
+
+    def solve(self, res: np.ndarray):
+        x, _ = dgbtrs(self.lu, self.band.kl, self.band.ku, res, self.piv)
+        return self.band.split(x)
+
+
+def _collocation(fun, y, p, x, h):
+    """``solve_bvp``'s ``collocation_fun``: residuals at the interval midpoints, midpoint states, ``f``."""
+    f = fun(x, y, p)
+    y_middle = 0.5 * (y[:, 1:] + y[:, :-1]) - 0.125 * h * (f[:, 1:] - f[:, :-1])
+    f_middle = fun(x[:-1] + 0.5 * h, y_middle, p)
+    col_res = y[:, 1:] - y[:, :-1] - h / 6 * (f[:, :-1] + f[:, 1:] + 4 * f_middle)
+    return col_res, y_middle, f, f_middle
+
+
+def _jacobian_blocks(n, k, h, df_dy, df_dy_middle, df_dp, df_dp_middle):
+    """``solve_bvp``'s ``construct_global_jac`` formulas: the blocks ``d0, d1, dp`` of each interval."""
+    df_dy = np.transpose(df_dy, (2, 0, 1))
+    df_dy_middle = np.transpose(df_dy_middle, (2, 0, 1))
+    h = h[:, None, None]
+    eye = np.identity(n)
+    d0 = -eye - h / 6 * (df_dy[:-1] + 2 * df_dy_middle)
+    d0 -= h**2 / 12 * np.einsum("...ij,...jk->...ik", df_dy_middle, df_dy[:-1])
+    d1 = eye - h / 6 * (df_dy[1:] + 2 * df_dy_middle)
+    d1 += h**2 / 12 * np.einsum("...ij,...jk->...ik", df_dy_middle, df_dy[1:])
+    dp = None
+    if k:
+        df_dp = np.transpose(df_dp, (2, 0, 1))
+        df_dp_middle = np.transpose(df_dp_middle, (2, 0, 1)) + 0.125 * h * np.einsum(
+            "...ij,...jk->...ik", df_dy_middle, df_dp[:-1] - df_dp[1:])
+        dp = -h / 6 * (df_dp[:-1] + df_dp[1:] + 4 * df_dp_middle)
+    return d0, d1, dp
+
+
+def _spline_coefficients(y, yp, h):
+    """``solve_bvp``'s ``create_spline`` coefficients, shape ``(4, n, m - 1)`` (highest power first)."""
+    c = np.empty((4,) + y[:, :-1].shape)
+    slope = (y[:, 1:] - y[:, :-1]) / h
+    t = (yp[:, :-1] + yp[:, 1:] - 2 * slope) / h
+    c[0] = t / h
+    c[1] = (slope - yp[:, :-1]) / h - t
+    c[2] = yp[:, :-1]
+    c[3] = y[:, :-1]
+    return c
+
+
+def _spline(c, x) -> PPoly:
+    return PPoly(np.moveaxis(c, 1, 0), x, extrapolate=True, axis=1)
+
+
+def _rms_residuals(fun, c, x, h, p, r_middle, f_middle):
+    """``solve_bvp``'s ``estimate_rms_residuals``; the spline evaluated on each interval directly (the two
+    Lobatto points of interval ``i`` lie inside it, where ``PPoly`` evaluates the same cubic)."""
+    s = 0.5 * h * (3 / 7) ** 0.5
+    out = []
+    for d in (0.5 * h + s, 0.5 * h - s):
+        val = ((c[0] * d + c[1]) * d + c[2]) * d + c[3]
+        der = (3 * c[0] * d + 2 * c[1]) * d + c[2]
+        f = fun(x[:-1] + d, val, p)
+        r = (der - f) / (1 + np.abs(f))
+        out.append(np.sum(r * r, axis=0))
+    r_middle = r_middle / (1 + np.abs(f_middle))
+    r_middle = np.sum(r_middle * r_middle, axis=0)
+    return (0.5 * (32 / 45 * r_middle + 49 / 90 * (out[0] + out[1]))) ** 0.5
+
+
+def _newton(band, h, x, fun, fun_jac, bc, y, p, bvp_tol, bc_tol):
+    """``solve_bvp``'s ``solve_newton`` (same constants, same tests), solved on the band."""
+    n, k = band.n, band.k
+    tol_r = 2 / 3 * h * 5e-2 * bvp_tol
+    max_njev, max_iter, sigma, tau, n_trial = 4, 8, 0.2, 0.5, 4
+    x_middle = x[:-1] + 0.5 * h
+    col_res, y_middle, f, f_middle = _collocation(fun, y, p, x, h)
+    bc_res = bc(y[:, 0], y[:, -1])
+    res = band.rhs(col_res, bc_res)
+    njev, singular, recompute_jac = 0, False, True
+    for _ in range(max_iter):
+        if recompute_jac:
+            df_dy, df_dp = fun_jac(x, y, p)
+            df_dy_m, df_dp_m = fun_jac(x_middle, y_middle, p)
+            factor = _Factor(band, band.matrix(*_jacobian_blocks(n, k, h, df_dy, df_dy_m, df_dp, df_dp_m)))
+            njev += 1
+            if factor.singular:
+                singular = True
+                break
+            y_step, p_step = factor.solve(res)
+            cost = np.dot(y_step.ravel(), y_step.ravel()) + np.dot(p_step, p_step)
+        alpha = 1
+        for trial in range(n_trial + 1):
+            y_new = y - alpha * y_step
+            p_new = p - alpha * p_step
+            col_res, y_middle, f, f_middle = _collocation(fun, y_new, p_new, x, h)
+            bc_res = bc(y_new[:, 0], y_new[:, -1])
+            res = band.rhs(col_res, bc_res)
+            ys_new, ps_new = factor.solve(res)
+            cost_new = np.dot(ys_new.ravel(), ys_new.ravel()) + np.dot(ps_new, ps_new)
+            if cost_new < (1 - 2 * alpha * sigma) * cost:
+                break
+            if trial < n_trial:
+                alpha *= tau
+        y, p = y_new, p_new
+        if njev == max_njev:
+            break
+        if np.all(np.abs(col_res) < tol_r * (1 + np.abs(f_middle))) and np.all(np.abs(bc_res) < bc_tol):
+            break
+        if alpha == 1:
+            y_step, p_step, cost = ys_new, ps_new, cost_new
+            recompute_jac = False
+        else:
+            recompute_jac = True
+    return y, p, singular
+
+
+def solve_collocation(fun, fun_jac, A, B, c, x, y, p=None, *, tol: float = 1e-3, max_nodes: int = 1000,
+                      bc_tol: float | None = None) -> CollocationResult:
+    """``solve_bvp(fun, bc, x, y, p, fun_jac=fun_jac, bc_jac=..., tol=tol, max_nodes=max_nodes)`` for the
+    linear boundary conditions ``A y(a) + B y(b) = c`` (``A, B`` of shape ``(n + k, n)``, independent of
+    ``p``), with a banded LU (see the module docstring).
+
+    ``fun(x, y, p)`` returns ``(n, m)``; ``fun_jac(x, y, p)`` returns ``df/dy`` ``(n, n, m)``, with
+    parameters ``(df/dy, df/dp)``, ``df/dp`` ``(n, k, m)``.  Raises ``ValueError`` for a mesh that is
+    not strictly increasing or arrays of the wrong shapes (as ``solve_bvp``).
+    """
+    x = np.asarray(x, dtype=float)
+    if x.ndim != 1 or x.size < 2:
+        raise ValueError("`x` must be 1 dimensional with at least 2 nodes.")
+    h = np.diff(x)
+    if np.any(h <= 0):
+        raise ValueError("`x` must be strictly increasing.")
+    y = np.array(y, dtype=float)
+    if y.ndim != 2 or y.shape[1] != x.size:
+        raise ValueError(f"`y` must have shape (n, {x.size}), got {y.shape}")
+    p = np.zeros(0) if p is None else np.array(p, dtype=float).ravel()
+    n, k = y.shape[0], p.size
+    A, B, c = (np.asarray(v, dtype=float) for v in (A, B, c))
+    if A.shape != (n + k, n) or B.shape != (n + k, n) or c.shape != (n + k,):
+        raise ValueError(f"boundary conditions must be ({n + k}, {n}) matrices and a ({n + k},) vector")
+    tol = max(float(tol), 100 * _EPS)
+    bc_tol = tol if bc_tol is None else float(bc_tol)
+    if k:
+        jac = fun_jac
+    else:
+        def jac(t, z, q):
+            return fun_jac(t, z, None), None
+
+    def bc(ya, yb):
+        return A @ ya + B @ yb - c
+
+    key = (n, k, A.tobytes(), B.tobytes())
+    status, iteration = 0, 0
+    while True:
+        m = x.size
+        band = _band(key, m)
+        y, p, singular = _newton(band, h, x, fun, jac, bc, y, p, tol, bc_tol)
+        iteration += 1
+        col_res, y_middle, f, f_middle = _collocation(fun, y, p, x, h)
+        max_bc_res = np.max(np.abs(bc(y[:, 0], y[:, -1])))
+        r_middle = 1.5 * col_res / h
+        coef = _spline_coefficients(y, f, h)
+        rms_res = _rms_residuals(fun, coef, x, h, p, r_middle, f_middle)
+        if singular:
+            status = 2
+            break
+        insert_1, = np.nonzero((rms_res > tol) & (rms_res < 100 * tol))
+        insert_2, = np.nonzero(rms_res >= 100 * tol)
+        nodes_added = insert_1.size + 2 * insert_2.size
+        if m + nodes_added > max_nodes:
+            status = 1
+            break
+        if nodes_added > 0:
+            sol = _spline(coef, x)
+            x = np.sort(np.hstack((x, 0.5 * (x[insert_1] + x[insert_1 + 1]),
+                                   (2 * x[insert_2] + x[insert_2 + 1]) / 3,
+                                   (x[insert_2] + 2 * x[insert_2 + 1]) / 3)))
+            h = np.diff(x)
+            y = sol(x)
+        elif max_bc_res <= bc_tol:
+            status = 0
+            break
+        elif iteration >= 10:
+            status = 3
+            break
+    return CollocationResult(sol=_spline(coef, x), p=p if k else None, x=x, y=y, yp=f, rms_residuals=rms_res,
+                             niter=iteration, status=status, message=MESSAGES[status], success=status == 0)
