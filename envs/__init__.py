@@ -14,6 +14,7 @@ id                                what                                      max 
 ``simgrip/PlaceFragile-v0``       pinch, carry to a target, set down        400 (8 s)
 ``simgrip/PickCradleFragile-v0``  Grip III cradle of a fragile box          300 (6 s)
 ``simgrip/PickSphereFragile-v0``  K fingers around a fragile sphere         300 (6 s)
+``simgrip/...Fragile-v1``         the five above, v1's shaped reward        as v0
 ================================  ========================================  =========
 
 >>> import gymnasium as gym, simgrip.envs
@@ -44,12 +45,18 @@ _ENVS = {
     "simgrip/PlaceFragile-v0": ("simgrip.envs.pick_place:FragilePlaceEnv", {}, 400),
     "simgrip/PickCradleFragile-v0": ("simgrip.envs.pick_cradle_fragile:FragileCradleEnv", {}, 300),
     "simgrip/PickSphereFragile-v0": ("simgrip.envs.pick_sphere_fragile:FragileSphereEnv", {}, 300),
+    # v1: the same tasks, a reward a default learner can climb (simgrip.envs.pick_fragile_v1)
+    "simgrip/PickFragile-v1": ("simgrip.envs.pick_fragile_v1:FragilePickEnvV1", {}, 300),
+    "simgrip/PickMultiFragile-v1": ("simgrip.envs.pick_fragile_v1:FragilePickMultiEnvV1", {}, 300),
+    "simgrip/PlaceFragile-v1": ("simgrip.envs.pick_fragile_v1:FragilePlaceEnvV1", {}, 400),
+    "simgrip/PickCradleFragile-v1": ("simgrip.envs.pick_fragile_v1:FragileCradleEnvV1", {}, 300),
+    "simgrip/PickSphereFragile-v1": ("simgrip.envs.pick_fragile_v1:FragileSphereEnvV1", {}, 300),
 }
 ENV_IDS = tuple(k for k, v in _ENVS.items() if v[0] == "simgrip.envs.pick:PickEnv")
 MULTI_ENV_IDS = tuple(k for k, v in _ENVS.items() if v[0] == "simgrip.envs.pick_multi:PickMultiEnv")
 FRAGILE_ENV_IDS = tuple(k for k, v in _ENVS.items() if v[0].split(":")[0] in (
     "simgrip.envs.pick_fragile", "simgrip.envs.pick_place", "simgrip.envs.pick_cradle_fragile",
-    "simgrip.envs.pick_sphere_fragile"))
+    "simgrip.envs.pick_sphere_fragile", "simgrip.envs.pick_fragile_v1"))
 
 
 def register_envs() -> None:

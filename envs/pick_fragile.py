@@ -150,6 +150,11 @@ class _Fragile:
             return -self.w_success
         return 0.0
 
+    def _crush_penalty(self, normal_force) -> float:
+        """The size of the crush penalty (>= 0) given the step's per-finger normal forces [N]: ``w_drop`` in v0
+        (:mod:`simgrip.envs.pick_fragile_v1` grades it by the excess over the limit)."""
+        return self.w_drop
+
     def _episode(self) -> tuple[float, float, int]:  # pragma: no cover - defined by each env
         raise NotImplementedError
 
@@ -184,7 +189,7 @@ class _Fragile:
                 info["reward_success"] = 0.0
                 info["is_success"] = False
             if not (info["dropped"] or info["knocked_over"]):  # not already charged as lost
-                r_crush = -self.w_drop - self.w_lift * self._phi
+                r_crush = -self._crush_penalty(info["normal_force"]) - self.w_lift * self._phi
                 self._phi = 0.0
             terminated = True
             self._needs_reset = True

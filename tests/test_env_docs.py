@@ -6,7 +6,7 @@ import pytest
 import simgrip  # noqa: F401  registers the environments
 
 IDS = ["simgrip/Pick-v1", "simgrip/PickMulti-v0", "simgrip/PickFragile-v0", "simgrip/PickMultiFragile-v0",
-       "simgrip/PlaceFragile-v0"]
+       "simgrip/PlaceFragile-v0", "simgrip/PickFragile-v1", "simgrip/PickMultiFragile-v1", "simgrip/PlaceFragile-v1"]
 
 
 @pytest.mark.parametrize("env_id", IDS)

@@ -1,0 +1,154 @@
+r"""The fragile tasks, v1: the same tasks with a reward a default learner can climb (issue 18).
+
+``simgrip/PickFragile-v1``, ``simgrip/PickMultiFragile-v1``, ``simgrip/PlaceFragile-v1``,
+``simgrip/PickCradleFragile-v1`` and ``simgrip/PickSphereFragile-v1`` are their v0 envs
+(:mod:`simgrip.envs.pick_fragile`, :mod:`simgrip.envs.pick_place`, :mod:`simgrip.envs.pick_cradle_fragile`,
+:mod:`simgrip.envs.pick_sphere_fragile`) with **only the reward changed**: the draw, the observation, the
+action, and what success, a crush, a drop and a knock-over are (and when an episode terminates) are v0's, line
+for line (v1 calls v0's ``step`` and adds to its reward), so every fixed-schedule and scripted baseline of v0
+holds for v1 with the same seeds.
+
+Why (measured, ``docs/baselines/rl_pick_fragile/``): under v0's reward, random actions crush the workpiece
+within 3-8 steps, so nearly every early episode ends at ``-w_drop = -10`` while keeping the fingers open
+returns exactly 0; PPO and SAC with SB3 defaults settled on "fingers open" in all six runs (0 % success).  v1
+pays the steps of a grasp the learner can reach before it can succeed (touching the workpiece with every
+finger, then raising it), grades the crush penalty by how hard the limit was overrun (so squeezing less is
+better even among crushes), and drops the squeeze term (it read the hidden mass and friction every step; the
+crush limit now bounds the grip).
+
+Rewards (every term in ``info``):
+
+=================  ==================================================================  =====================
+term (info key)    value per step                                                       over an episode
+=================  ==================================================================  =====================
+``reward_touch``   ``+w_touch`` (0.02) when every finger's normal force on the          ``<= w_touch T``
+                   workpiece is > 0 and the step did not end in a crush, drop or        (6 for T = 300,
+                   knock-over (tactile contact: sensed)                                 8 for T = 400)
+``reward_lift``    ``w_lift (phi_t - phi_{t-1})``, ``phi = clip(lift / target, 0,       ``<= w_lift`` (10)
+                   1)``, 0 once lost or crushed (v0's; the lift is observed)
+``reward_place``   PlaceFragile only: v0's ``w_place (psi_t - psi_{t-1})``              ``<= w_place`` (10)
+``reward_success`` ``w_success`` once, on the terminating success step (v0's)          20 (Place: 30)
+``reward_crush``   on the crushing step: ``-w_crush (1/2 + x / (2 (1 + x)))`` with       in ``[-w_crush,
+                   ``x = (F - L) / L``, ``F`` the largest finger normal force of the    -w_crush/2]`` plus
+                   step (the reading that defines the crush), ``L`` the hidden          the lift taken back
+                   ``crush_limit``; plus the lift progress taken back                   (``-w_lift phi``)
+``reward_drop``    ``-w_drop`` once on a drop or knock-over (v0's term, v1's weight)    ``-w_drop`` (-5)
+``reward_squeeze`` 0 (``w_squeeze = 0``: v0's term read the hidden mass and friction)   0
+=================  ==================================================================  =====================
+
+Defaults: ``w_touch = 0.02``, ``w_crush = 5``, ``w_drop = 5``, ``w_squeeze = 0``; ``w_lift``, ``w_success``
+(and PlaceFragile's ``w_place``) as v0.  Ordering (registered time limits ``T``): any success returns at least
+``w_lift + w_success = 30`` (Place: ``w_place + w_success = 40``); no unsuccessful episode returns more than
+``w_touch T + w_lift`` (16; Place ``w_touch T + w_lift + w_place`` = 28); a crush or drop ends below what the
+same episode had earned, by at least ``w_crush / 2 = 2.5``.
+
+What each term reads: ``reward_touch`` the fingers' tactile normal forces (in the observation as
+``contact_force``); ``reward_lift`` and ``reward_place`` the workpiece's position (observed relative to the
+palm); the success, drop and knock-over terms fixed weights paid at their events.  The only hidden property a
+term reads is the crush limit ``L`` (and the grade's force ``F`` against it), used **only for the penalty at the
+moment of the crush**, the event that ends the episode.  The grade uses the same end-of-control-step reading
+(50 Hz) that the crush rule uses, so nothing is charged for an excess that rule did not see.  No term pays a
+holding force approaching the slip threshold ``N_hold = m g / (K mu)``: that threshold is hidden, and its sensed
+consequence, the workpiece rising with the palm instead of sliding in the grip, is what ``reward_lift`` pays.
+
+Info keys (every ``step``): v0's, unchanged in meaning (:mod:`simgrip.envs.pick_fragile`,
+:mod:`simgrip.envs.pick_place`), plus ``reward_touch``:
+
+=====================  ==========================================================================
+key                    meaning
+=====================  ==========================================================================
+``is_success``         the episode ended in success (v0's rule; terminates)
+``workpiece_lift``     workpiece centre's height gain since the start of the episode [m]
+``crushed``            a finger's normal force exceeded ``crush_limit`` this step (terminates)
+``dropped``            lifted, then sank ``drop_distance`` relative to the palm (terminates)
+``knocked_over``       tilted > 30 degrees or pushed > 3 cm sideways (terminates)
+``normal_force``       per finger: summed contact normal force on the workpiece [N]
+``friction_force``     per finger: friction force magnitude on the workpiece [N]
+``side_force``         per finger: horizontal (squeezing) part of the normal force [N]
+``hold_time``          time held at the target height [s]
+``crush_limit``        this episode's crush limit [N] (hidden from the observation)
+``fingers_touching``   K-finger envs: how many fingers touch the workpiece
+``valid``              no finger through itself or another (``invalid``: the messages, when not)
+``reward_*``           the terms of the table above (``reward_lift``, ``reward_success``,
+                       ``reward_squeeze``, ``reward_drop``, ``reward_crush``, ``reward_touch``;
+                       PlaceFragile also ``reward_place``)
+``place_error``        PlaceFragile: ``|x - x_t|`` [m]; ``carried``: lifted ``carry_height`` with
+                       both fingers on it; ``target_x``: the target [m]
+=====================  ==========================================================================
+"""
+
+from __future__ import annotations
+
+from simgrip.envs.arguments import check_number as _num
+from simgrip.envs.pick_cradle_fragile import FragileCradleEnv
+from simgrip.envs.pick_fragile import FragilePickEnv, FragilePickMultiEnv
+from simgrip.envs.pick_place import FragilePlaceEnv
+from simgrip.envs.pick_sphere_fragile import FragileSphereEnv
+
+__all__ = ["FragilePickEnvV1", "FragilePickMultiEnvV1", "FragilePlaceEnvV1", "FragileCradleEnvV1",
+           "FragileSphereEnvV1", "V1_REWARD_DEFAULTS", "graded_crush"]
+
+#: v1's reward weights (the others are v0's)
+V1_REWARD_DEFAULTS = {"w_touch": 0.02, "w_crush": 5.0, "w_drop": 5.0, "w_squeeze": 0.0}
+
+
+def graded_crush(force: float, limit: float, w_crush: float) -> float:
+    """The size (>= 0) of v1's crush penalty: ``w_crush (1/2 + x / (2 (1 + x)))``, ``x = max(force - limit, 0) /
+    limit`` (``force``, ``limit`` [N], ``limit > 0``): ``w_crush / 2`` at the limit, rising towards ``w_crush``
+    for an overrun many times the limit (bounded, so one hard squeeze cannot outweigh an episode)."""
+    x = max(force - limit, 0.0) / limit
+    return w_crush * (0.5 + 0.5 * x / (1.0 + x))
+
+
+class _ShapedV1:
+    """v1's reward on top of a v0 fragile env (a mixin placed before it): the touch term, the graded crush
+    penalty (through :meth:`_crush_penalty`, the hook v0's crush rule calls) and v1's default weights."""
+
+    def __init__(self, *, w_touch: float = V1_REWARD_DEFAULTS["w_touch"],
+                 w_crush: float = V1_REWARD_DEFAULTS["w_crush"], w_drop: float = V1_REWARD_DEFAULTS["w_drop"],
+                 w_squeeze: float = V1_REWARD_DEFAULTS["w_squeeze"], **kwargs):
+        self.w_touch = _num("w_touch", w_touch, positive=False)
+        self.w_crush = _num("w_crush", w_crush, positive=False)
+        super().__init__(w_drop=w_drop, w_squeeze=w_squeeze, **kwargs)
+
+    def _crush_penalty(self, normal_force) -> float:
+        return graded_crush(max(normal_force.tolist()), self.crush_limit, self.w_crush)
+
+    def step(self, action):
+        obs, reward, terminated, truncated, info = super().step(action)
+        lost = info["crushed"] or info["dropped"] or info["knocked_over"]
+        touching = min(info["normal_force"].tolist()) > 0.0
+        r_touch = self.w_touch if touching and not lost else 0.0
+        info["reward_touch"] = r_touch
+        return obs, reward + r_touch, terminated, truncated, info
+
+
+class FragilePickEnvV1(_ShapedV1, FragilePickEnv):
+    """``simgrip/PickFragile-v1``: :class:`~simgrip.envs.pick_fragile.FragilePickEnv` with v1's reward (see
+    :mod:`simgrip.envs.pick_fragile_v1`: the terms; ``info["is_success"]``, ``info["workpiece_lift"]``,
+    ``info["crushed"]``, ``info["dropped"]`` as v0).  Arguments: v0's plus ``w_touch = 0.02``, ``w_crush = 5``
+    (and the defaults ``w_drop = 5``, ``w_squeeze = 0``)."""
+
+
+class FragilePickMultiEnvV1(_ShapedV1, FragilePickMultiEnv):
+    """``simgrip/PickMultiFragile-v1``: :class:`~simgrip.envs.pick_fragile.FragilePickMultiEnv` with v1's reward
+    (:mod:`simgrip.envs.pick_fragile_v1`; the info keys ``is_success``, ``workpiece_lift``, ``crushed``,
+    ``dropped`` as v0).  ``reward_touch`` asks every one of the ``K`` fingers to touch."""
+
+
+class FragilePlaceEnvV1(_ShapedV1, FragilePlaceEnv):
+    """``simgrip/PlaceFragile-v1``: :class:`~simgrip.envs.pick_place.FragilePlaceEnv` with v1's reward
+    (:mod:`simgrip.envs.pick_fragile_v1`; ``reward_place`` and ``w_success = 30`` as v0; the info keys
+    ``is_success``, ``workpiece_lift``, ``crushed``, ``dropped`` as v0)."""
+
+
+class FragileCradleEnvV1(_ShapedV1, FragileCradleEnv):
+    """``simgrip/PickCradleFragile-v1``: :class:`~simgrip.envs.pick_cradle_fragile.FragileCradleEnv` with v1's
+    reward (:mod:`simgrip.envs.pick_fragile_v1`; info keys ``is_success``, ``workpiece_lift``, ``crushed``,
+    ``dropped`` as v0)."""
+
+
+class FragileSphereEnvV1(_ShapedV1, FragileSphereEnv):
+    """``simgrip/PickSphereFragile-v1``: :class:`~simgrip.envs.pick_sphere_fragile.FragileSphereEnv` with v1's
+    reward (:mod:`simgrip.envs.pick_fragile_v1`; info keys ``is_success``, ``workpiece_lift``, ``crushed``,
+    ``dropped`` as v0)."""
