@@ -5,7 +5,7 @@
 Policies (actions ``(curvature command, palm speed)`` in ``[-1, 1]``; ``PlaceFragile-v0``:
 ``(curvature, palm x, palm z)``):
 
-==============  ==============================================================================================
+=============== ==============================================================================================
 ``random``      uniform actions, the action space seeded with the episode seed
 ``constant``    every action of a grid (``--grid``): curvature ``a_k`` in ``KAPPA_GRID``, palm ``a_p`` in
                 ``PALM_GRID``, held for the whole episode; ``success_rate`` is the best of the grid *on the
@@ -25,7 +25,7 @@ Policies (actions ``(curvature command, palm speed)`` in ``[-1, 1]``; ``PlaceFra
 ``observation`` :class:`~simgrip.envs.scripted_fragile.ObservationFragilePolicy` (the observation only;
                 ``PlaceFragile-v0``: :class:`~simgrip.envs.scripted_fragile.PlacePolicy`;
                 the cradle and the sphere: ``CLAW_POLICIES`` of :mod:`simgrip.envs.scripted_fragile`)
-==============  ==============================================================================================
+=============== ==============================================================================================
 
 ``--grid coarse`` uses every other curvature and one ramp/palm value (for tests).  Output: ``env``,
 ``policy``, ``seeds``, ``success_rate`` (the best member's for the grids), ``outcomes`` (counts of

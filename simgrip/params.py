@@ -94,7 +94,7 @@ D_MAX = 1e4
 M_MAX = 1e4
 #: Largest static friction coefficient.
 MU_MAX = 100.0
-#: Largest |kappa_bar| (uniform curvature, peak of the concentrated profile).
+#: Largest ``|kappa_bar|`` (uniform curvature, peak of the concentrated profile).
 KAPPA_LIMIT = 100.0
 #: Largest concentration exponent of eq. (34): peak width 1/sqrt(8 alpha) = 0.035 l.
 ALPHA_MAX = 100.0
