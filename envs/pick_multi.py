@@ -2,7 +2,7 @@
 
 A thin Gymnasium layer over the K-finger pick models of
 :mod:`simgrip.envs.pick_multi_model` (the fingers built by simgrip's finger
-builder and placed as :func:`simgrip.sim.gripper.build_gripper` places them).
+builder and placed as :func:`simgrip.gripper.scene.build_gripper` places them).
 The observation, contact forces and reward terms live in
 :mod:`simgrip.envs.pick_multi_observation`; this module holds the arguments,
 the episode bookkeeping (the workpiece's draw: :mod:`simgrip.envs.pick_multi_workpiece`) and the Gymnasium API,
@@ -33,7 +33,7 @@ from simgrip.envs.pick_validity import FingerValidity
 from simgrip.params import DimensionlessParams, PhysicalParams
 from simgrip.sim.checks import PhysicsError, StateCheck, check_invalid_state
 from simgrip.sim.gl import make_renderer
-from simgrip.sim.gripper import WORKPIECES, check_gripper
+from simgrip.gripper.scene import WORKPIECES, check_gripper
 
 __all__ = ["PickMultiEnv", "WorkpieceParams"]
 
@@ -52,7 +52,7 @@ class PickMultiEnv(gym.Env):
     :func:`simgrip.sim.fingers.add_fingers`) spaced evenly around its
     vertical axis: finger ``k`` points along the azimuth ``2 pi k / K`` (finger
     0 along ``+x``) and bends in its own vertical plane, as in
-    :func:`simgrip.sim.gripper.build_gripper`.  The pneumatic pressure is the
+    :func:`simgrip.gripper.scene.build_gripper`.  The pneumatic pressure is the
     fingers' uniform intrinsic curvature :math:`\bar\kappa_0 = \ell\kappa_0`,
     which follows its command with a first-order lag (``kappa_tau``).  The
     agent curls the fingers around a workpiece resting on the table and lifts

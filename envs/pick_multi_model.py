@@ -9,8 +9,8 @@ adds, in code:
 * ``K`` fingers under the palm, built by
   :func:`simgrip.sim.fingers.add_fingers` (the hinge chain of every simgrip
   scene) and turned to the azimuths ``2 pi k / K`` by
-  :func:`simgrip.sim.gripper.orient_fingers`, exactly as
-  :func:`simgrip.sim.gripper.build_gripper` places them: finger ``k`` bends
+  :func:`simgrip.gripper.scene.orient_fingers`, exactly as
+  :func:`simgrip.gripper.scene.build_gripper` places them: finger ``k`` bends
   in its own vertical plane;
 * the workpiece on a free joint: a box (faces normal to the fingers' planes
   at zero yaw), a cylinder with a vertical axis, or a sphere; its inertia is
@@ -37,7 +37,7 @@ from simgrip.envs.pick_model import FINGER_PREFIX, PICK_SOLIMP, PICK_SOLREF, han
 from simgrip.profiles import Uniform
 from simgrip.sim.contacts import add_pair
 from simgrip.sim.fingers import FingerIndex, check_finger_links, index_fingers
-from simgrip.sim.gripper import finger_azimuths, orient_fingers
+from simgrip.gripper.scene import finger_azimuths, orient_fingers
 from simgrip.sim.workpiece import workpiece_inertia
 
 __all__ = ["GEOM_TYPES", "PickMultiModel", "build_pick_multi_model", "half_height", "set_workpiece", "workpiece_size"]

@@ -139,7 +139,7 @@ def build_parser() -> argparse.ArgumentParser:
                        help="with --contact full: friction on the contacts other than the tip's (off: frictionless, "
                        "the theory's determinate problem; on: every contact, statically indeterminate) "
                        "[default: off with --box-depth, else on]")
-        if name in ("simulate", "compare"):  # compare: symmetric scenes only (simgrip.compare_gripper)
+        if name in ("simulate", "compare"):  # compare: symmetric scenes only (simgrip.gripper.compare)
             p.add_argument("--fingers", type=int, default=None,
                            help="K >= 2 fingers around the palm axis holding a workpiece free in 3-D (Grips I, II: "
                            "the symmetry skip where exactly symmetric, else dynamics, see --method; III: a box with "
@@ -313,9 +313,9 @@ def _gripper_arguments(args, grip: str) -> dict | None:
     per_finger = args.kappa_per_finger is not None
     if (args.fingers is not None or args.workpiece is not None or args.contact_angle is not None or per_finger
             or args.offset is not None or args.workpiece_yaw is not None):
-        from simgrip.sim.gripper import uniform_profiles
+        from simgrip.gripper.scene import uniform_profiles
 
-        from simgrip.settle.gripper_symmetry import GRIPPER_METHODS
+        from simgrip.gripper.symmetry import GRIPPER_METHODS
 
         profile = None if per_finger else _profile(args, grip)
 
@@ -378,7 +378,7 @@ def _cmd_compare(args) -> str:
     params, links = _params(args), _links(args.links)
     gripper = _gripper_arguments(args, grip)
     if gripper is not None:
-        from simgrip.compare_gripper import compare_gripper
+        from simgrip.gripper.compare import compare_gripper
 
         result = compare_gripper(grip, params, gripper.pop("profile"), links, progress=_progress(args, links),
                                  **gripper)

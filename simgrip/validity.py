@@ -26,7 +26,7 @@ records what it finds on the state (a flag and a message in ``warnings``):
   1``); a message says so (the comparison then has no reference).
 * :func:`check_friction_cone` -- every grip: a hold at the friction cone's edge
   (the required ``mu`` within ``FRICTION_MARGIN`` of ``mu_s``, or beyond; the K-finger
-  gripper's margin, :data:`simgrip.settle.gripper_state.FRICTION_MARGIN`),
+  gripper's margin, :data:`simgrip.gripper.state.FRICTION_MARGIN`),
   where the settles' friction models and the BVP's may answer differently.
 * :func:`check_contact_depth` -- every grip: no contact is pressed deeper than
   :data:`DEPTH_FRACTION` of the finger geom's radius, and (Grips I/II) no tip's
@@ -185,7 +185,7 @@ def check_reach(scene, state) -> None:
     elastica BVP prescribes the tip on the face (``X(l) = b/2``) and can still
     find a held equilibrium there (the finger pulled onto the face), which the
     simulation cannot close into: the verdicts may differ, and the message says
-    why (the K-finger gripper's :func:`simgrip.settle.gripper_start.warn_unreached`).
+    why (the K-finger gripper's :func:`simgrip.gripper.start.warn_unreached`).
     """
     if state.held or not state.grip_matched or not scene.has_workpiece:
         return
@@ -230,16 +230,16 @@ def check_friction_cone(scene, state) -> None:
     """A held state at the friction cone's edge says so (``state.warnings``).
 
     The required ``mu`` in the theory's frame (``contact.required_mu``: the rod's
-    at a Grip III corner) within :data:`simgrip.settle.gripper_state.FRICTION_MARGIN`
+    at a Grip III corner) within :data:`simgrip.gripper.state.FRICTION_MARGIN`
     (2 %) of ``mu_s`` or beyond: a
     sticking contact saturated in MuJoCo's contact frame (whose normal at a Grip
     III corner is the carrying link's, not the rod's at ``gamma``) holds where the
     BVP's ``|f| <= mu_s n`` may not, and MuJoCo's soft cone creeps; the settles
     and the BVP may give different verdicts there.  ``M = 0`` with ``mu_s = 0`` is the
     cone's boundary itself (``|F_f| = mu_s N = 0``), held or not: the K-finger
-    gripper's message (:func:`simgrip.settle.gripper_state.warn_friction_boundary`).
+    gripper's message (:func:`simgrip.gripper.state.warn_friction_boundary`).
     """
-    from simgrip.settle.gripper_state import FRICTION_MARGIN  # one margin for every settle (lazy: no cycle)
+    from simgrip.gripper.state import FRICTION_MARGIN  # one margin for every settle (lazy: no cycle)
 
     mu = float(scene.params.mu_s)
     if scene.has_workpiece and float(scene.params.M) == 0.0 and mu == 0.0:

@@ -1,6 +1,6 @@
 """The K-finger gripper's and the elastica reference's states checked as :mod:`simgrip.validity` checks the planar ones.
 
-* :func:`check_gripper_valid` -- a K-finger :class:`~simgrip.settle.gripper_state.GripperState`: every finger
+* :func:`check_gripper_valid` -- a K-finger :class:`~simgrip.gripper.state.GripperState`: every finger
   against itself, every pair of fingers (their common base on the palm axis excepted), every link and tip
   against the held workpiece's 3-D solid (:func:`gripper_solid`: box, cylinder, sphere);
 * :func:`reference_violations` -- an :class:`~simgrip.reference.elastica.ElasticaSolution`: the BVP allows
@@ -128,7 +128,7 @@ def gripper_violations(scene, state) -> list[tuple[str, str]]:
 
 
 def check_gripper_valid(scene, state):
-    """:func:`check_valid` for a K-finger :class:`~simgrip.settle.gripper_state.GripperState`; returns ``state``.
+    """:func:`check_valid` for a K-finger :class:`~simgrip.gripper.state.GripperState`; returns ``state``.
 
     Each finger against itself, every pair of fingers (from the common base on the palm axis: pairs whose
     near ends are so close to it that straight fingers would touch are the palm's joint, not compared),

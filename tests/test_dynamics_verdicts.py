@@ -98,8 +98,8 @@ def test_weightless_cradle_is_held_by_the_dynamics_as_by_newton_and_the_bvp(D, k
 def test_weightless_four_finger_cradle_dynamics_holds():
     """The K = 4 cradle's dynamics replicates the planar dynamics: it dropped where the planar one did."""
     from simgrip.scenes import start_angles
-    from simgrip.settle.gripper_symmetry import settle_cradle_dynamics
-    from simgrip.sim.gripper import build_gripper
+    from simgrip.gripper.symmetry import settle_cradle_dynamics
+    from simgrip.gripper.scene import build_gripper
 
     p = _params(1e-2, 0.0, 100.0)
     sc = build_gripper("III", p, Uniform(-4.0), N, fingers=4, workpiece="box",
@@ -140,8 +140,8 @@ def test_workpiece_at_rest_touching_no_finger_is_not_held():
 
 def test_weightless_frictionless_four_finger_cradle_dynamics_answers():
     from simgrip.scenes import start_angles
-    from simgrip.settle.gripper_symmetry import settle_cradle_dynamics
-    from simgrip.sim.gripper import build_gripper
+    from simgrip.gripper.symmetry import settle_cradle_dynamics
+    from simgrip.gripper.scene import build_gripper
 
     p = _params(1.0, 0.0, 0.0)
     sc = build_gripper("III", p, Uniform(-4.0), N, fingers=4, workpiece="box",

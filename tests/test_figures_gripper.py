@@ -24,8 +24,8 @@ from simgrip import STANDARD, Uniform, figures
 from simgrip.figures import gripper as fg
 from simgrip.figures.catalog import FIGURES, GRIPPER_FIGURES, RENDERED_FIGURES
 from simgrip.reference import elastica
-from simgrip.settle.gripper import settle_gripper
-from simgrip.sim.gripper import build_gripper
+from simgrip.gripper.settle import settle_gripper
+from simgrip.gripper.scene import build_gripper
 
 #: Few points: dropped well below the feasible window (mu_s N = 0.90 M at -4.5), held inside it.
 KAPPAS = (-4.5, -5.5, -6.0)

@@ -1,4 +1,4 @@
-"""K-finger gripper scenes (simgrip.sim.gripper): structure, geometry, input checks."""
+"""K-finger gripper scenes (simgrip.gripper.scene): structure, geometry, input checks."""
 
 from __future__ import annotations
 
@@ -9,7 +9,7 @@ import numpy as np
 import pytest
 
 from simgrip import STANDARD, Uniform
-from simgrip.sim.gripper import GripperScene, build_gripper, check_gripper
+from simgrip.gripper.scene import GripperScene, build_gripper, check_gripper
 from simgrip.sim.workpiece import BOX_DEPTH
 
 N = 8

@@ -1,4 +1,4 @@
-"""The K = 4 cradle's scene (simgrip.sim.gripper_cradle): every finger's section is the planar Grip III scene."""
+"""The K = 4 cradle's scene (simgrip.gripper.cradle): every finger's section is the planar Grip III scene."""
 
 from __future__ import annotations
 
@@ -8,8 +8,8 @@ import pytest
 
 from simgrip import STANDARD, Uniform
 from simgrip.scenes import build_scene, start_angles
-from simgrip.sim.gripper import build_gripper, check_gripper
-from simgrip.sim.gripper_cradle import corner_name, cradle_start_angles
+from simgrip.gripper.scene import build_gripper, check_gripper
+from simgrip.gripper.cradle import corner_name, cradle_start_angles
 
 N = 16
 

@@ -35,7 +35,7 @@ There is no closed form for these grasps, so the tests check what must hold:
 
 With ``K >= 4`` fingers statics does not fix every finger's forces (a squeeze
 of the vertical shares, a twist of the out-of-plane forces); the settle keeps
-the balanced start's least-norm choice (:mod:`simgrip.settle.gripper_start`),
+the balanced start's least-norm choice (:mod:`simgrip.gripper.start`),
 which is what the convergence test of the four-finger box follows.
 """
 
@@ -49,8 +49,8 @@ import pytest
 from simgrip import STANDARD
 from simgrip.params import DimensionlessParams
 from simgrip.reference import solve_chain
-from simgrip.settle.gripper import settle_gripper
-from simgrip.sim.gripper import build_gripper
+from simgrip.gripper.settle import settle_gripper
+from simgrip.gripper.scene import build_gripper
 
 N = 16
 #: name -> (grip, profile, build keywords): off-centre, turned, unequal fingers, both grips.

@@ -1,4 +1,4 @@
-"""Off-centre, turned workpieces and a profile per finger (simgrip.sim.gripper_placement, build_gripper, the CLI).
+"""Off-centre, turned workpieces and a profile per finger (simgrip.gripper.placement, build_gripper, the CLI).
 
 The reach is checked against MuJoCo's own geometry: a tip centre at ``X =
 reach`` along the finger's ``E1`` lies ``r_tip`` from the compiled workpiece
@@ -16,8 +16,8 @@ import pytest
 from simgrip import STANDARD, Uniform
 from simgrip.chain import chain_springs
 from simgrip.cli import main
-from simgrip.sim.gripper import build_gripper, uniform_profiles
-from simgrip.sim.gripper_placement import check_offset, check_workpiece_yaw, place_fingers
+from simgrip.gripper.scene import build_gripper, uniform_profiles
+from simgrip.gripper.placement import check_offset, check_workpiece_yaw, place_fingers
 
 N = 8
 

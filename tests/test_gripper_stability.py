@@ -1,4 +1,4 @@
-"""Stability of the K-finger settle's balanced start (simgrip.settle.gripper_stability): the statics' second
+"""Stability of the K-finger settle's balanced start (simgrip.gripper.stability): the statics' second
 variation and MuJoCo's linearised dynamics, two independent answers, agree."""
 
 from __future__ import annotations
@@ -10,9 +10,9 @@ import pytest
 
 from simgrip import STANDARD
 from simgrip.harness.stress_gripper import _scene, make_gripper_cases
-from simgrip.settle.gripper_stability import (UNSTABLE_GROWTH, _cross_matrix, start_growth, start_stiffness)
-from simgrip.settle.gripper_start import start_forces
-from simgrip.sim.gripper import build_gripper
+from simgrip.gripper.stability import (UNSTABLE_GROWTH, _cross_matrix, start_growth, start_stiffness)
+from simgrip.gripper.start import start_forces
+from simgrip.gripper.scene import build_gripper
 
 CASES = make_gripper_cases(23)
 

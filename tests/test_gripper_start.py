@@ -1,4 +1,4 @@
-"""The K-finger settle's start (simgrip.settle.gripper_start): the balance of shares, the rest depth, the diagnosis."""
+"""The K-finger settle's start (simgrip.gripper.start): the balance of shares, the rest depth, the diagnosis."""
 
 from __future__ import annotations
 
@@ -9,11 +9,11 @@ import pytest
 
 from simgrip import STANDARD
 from simgrip.settle import SettleError
-from simgrip.settle.gripper import contact_rest_depth, settle_gripper
-from simgrip.settle import gripper_start
-from simgrip.settle.gripper_start import balance_shares, is_symmetric, rest_depth, start_forces, start_qpos
+from simgrip.gripper.settle import contact_rest_depth, settle_gripper
+from simgrip.gripper import start as gripper_start
+from simgrip.gripper.start import balance_shares, is_symmetric, rest_depth, start_forces, start_qpos
 from simgrip.harness.stress_gripper import _scene, make_gripper_cases
-from simgrip.sim.gripper import build_gripper
+from simgrip.gripper.scene import build_gripper
 
 
 def _equations(az, X, Y, N1, centre, s, n3):
@@ -95,7 +95,7 @@ def test_the_balanced_start_is_what_lets_the_settle_finish(monkeypatch):
     q = start_qpos(build(), timestep=st.timestep)
     assert q is not None and np.all(np.isfinite(q))
     monkeypatch.setattr(gripper_start, "is_symmetric", lambda scene: True)  # equal shares at each reach
-    import simgrip.settle.gripper as settle_module
+    import simgrip.gripper.settle as settle_module
 
     monkeypatch.setattr(settle_module, "is_symmetric", lambda scene: True)
     with pytest.raises(SettleError, match="did not converge"):

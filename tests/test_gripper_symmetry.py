@@ -1,4 +1,4 @@
-"""The symmetry skip (simgrip.settle.gripper_symmetry) against the K-finger dynamics, the planar settle and the BVP.
+"""The symmetry skip (simgrip.gripper.symmetry) against the K-finger dynamics, the planar settle and the BVP.
 
 Tolerances:
 
@@ -39,9 +39,9 @@ from simgrip.reference import elastica, solve_chain
 from simgrip.reference.inclined import solve_inclined
 from simgrip.scenes import build_scene
 from simgrip.settle import settle
-from simgrip.settle.gripper import GripperState, settle_gripper
-from simgrip.settle.gripper_symmetry import planar_scene, settle_symmetric, symmetry
-from simgrip.sim.gripper import build_gripper
+from simgrip.gripper.settle import GripperState, settle_gripper
+from simgrip.gripper.symmetry import planar_scene, settle_symmetric, symmetry
+from simgrip.gripper.scene import build_gripper
 from settle_cases import PEN_LIMIT
 
 KAPPA = {"I": -6.0, "II": 5.0}
@@ -319,7 +319,7 @@ def test_a_reused_planar_scene_gives_the_same_state():
 
 
 # ---------------------------------------------------------------------------
-# Grip III: the K = 4 cradle (simgrip.sim.gripper_cradle) is the planar Grip III per finger
+# Grip III: the K = 4 cradle (simgrip.gripper.cradle) is the planar Grip III per finger
 
 
 def _cradle(kappa=-4.0, n=N, params=STANDARD, **kw):

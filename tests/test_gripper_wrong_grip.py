@@ -16,8 +16,8 @@ import pytest
 from simgrip import STANDARD, Uniform
 from simgrip.cli import main
 from simgrip.settle import SettleError
-from simgrip.settle.gripper import settle_gripper
-from simgrip.sim.gripper import build_gripper
+from simgrip.gripper.settle import settle_gripper
+from simgrip.gripper.scene import build_gripper
 
 # (grip, kappa, K, workpiece): the issue's two reproductions and the other finger counts and workpieces
 WRONG_WAY = [("I", 5.0, 3, "cylinder"), ("II", -5.0, 4, "box"), ("I", 5.0, 2, "box"), ("II", -5.0, 3, "sphere")]
@@ -67,7 +67,7 @@ def _cradle(params, n):
 def _failing_skip(monkeypatch):
     """Inject a skip failure (the planar Newton's SettleError) to test the fallback; the planar dynamics (the
     cradle's fallback) still runs."""
-    import simgrip.settle.gripper_symmetry as gs
+    import simgrip.gripper.symmetry as gs
 
     real = gs._settle_exact
 
@@ -188,7 +188,7 @@ def test_frictionless_vertical_faces_drop_without_stepping():
 
 def test_holds_at_the_friction_cone_say_so():
     from simgrip.params import DimensionlessParams
-    from simgrip.settle.gripper_state import FRICTION_MARGIN
+    from simgrip.gripper.state import FRICTION_MARGIN
 
     need = settle_gripper(_scene("I", -6.0, 3, "cylinder")).records[0].required_mu
     edge = settle_gripper(build_gripper("I", STANDARD.replace(mu_s=need * (1 + FRICTION_MARGIN / 2)), Uniform(-6.0),

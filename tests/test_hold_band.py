@@ -45,8 +45,8 @@ from simgrip.reference import solve_chain
 from simgrip.scenes import build_scene
 from simgrip.settle import settle
 from simgrip.settle.dynamics import DYN_TOL, DYN_TOL_PER_WEIGHT
-from simgrip.settle.gripper import settle_gripper
-from simgrip.sim.gripper import build_gripper
+from simgrip.gripper.settle import settle_gripper
+from simgrip.gripper.scene import build_gripper
 
 N = 16  # the resolution the other hold/drop tests use
 KAPPA = {"I": -6.0, "II": 5.0, "III": -5.5}  # Grip III at -5.5: tip clear of the workpiece (condition (23))

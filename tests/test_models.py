@@ -84,7 +84,7 @@ GRIPPERS = [("I", 3, "cylinder", {}), ("II", 4, "box", {}), ("I", 2, "box", {}),
 
 @pytest.mark.parametrize("grip, fingers, shape, extra", GRIPPERS)
 def test_every_gripper_runs_a_second_without_warnings(grip, fingers, shape, extra):
-    from simgrip.sim.gripper import build_gripper
+    from simgrip.gripper.scene import build_gripper
 
     sc = build_gripper(grip, STANDARD, Uniform(KAPPA[grip]), N, fingers=fingers, workpiece=shape, **extra)
     _run_one_second(sc.model, sc.data, f"gripper {grip}, {fingers} fingers, {shape}, {extra}")

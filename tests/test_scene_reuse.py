@@ -23,9 +23,9 @@ from simgrip.params import DimensionlessParams, PhysicalParams
 from simgrip.profiles import Concentrated, Uniform
 from simgrip.scenes import build_scene
 from simgrip.settle import settle
-from simgrip.settle.gripper import settle_gripper
+from simgrip.gripper.settle import settle_gripper
 from simgrip.sim import reuse
-from simgrip.sim.gripper import build_gripper
+from simgrip.gripper.scene import build_gripper
 
 _SKIP_STATE = {"wall_time_s", "build_time_s"}
 

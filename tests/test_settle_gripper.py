@@ -1,4 +1,4 @@
-"""The K-finger dynamic settle (simgrip.settle.gripper, ``method="dynamics"``) against the planar settle and the BVP.
+"""The K-finger dynamic settle (simgrip.gripper.settle, ``method="dynamics"``) against the planar settle and the BVP.
 
 (The default, ``method="auto"``, settles an exactly symmetric scene by the symmetry skip instead:
 tests/test_gripper_symmetry.)
@@ -42,9 +42,9 @@ from simgrip.reference import elastica, solve_chain
 from simgrip.scenes import build_scene
 from simgrip.settle import SettleError, settle
 from simgrip.settle.dynamics import DYN_PEN_LIMIT
-from simgrip.settle.gripper import GripperState, contact_rest_depth, settle_gripper, straight_frequency
+from simgrip.gripper.settle import GripperState, contact_rest_depth, settle_gripper, straight_frequency
 from simgrip.reference.inclined import solve_inclined
-from simgrip.sim.gripper import build_gripper
+from simgrip.gripper.scene import build_gripper
 
 KAPPA = {"I": -6.0, "II": 5.0}
 N = 16

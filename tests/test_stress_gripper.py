@@ -78,8 +78,8 @@ def test_the_checks_can_fail(monkeypatch):
 def test_a_drop_is_explained_from_its_start(monkeypatch):
     """diagnose_start names the first reason that applies; run_gripper_case records it for drops and unsettled
     cases only, and gripper_counts tallies them."""
-    from simgrip.settle import gripper_stability as gst
-    from simgrip.settle import gripper_start as gs
+    from simgrip.gripper import stability as gst
+    from simgrip.gripper import start as gs
 
     case = make_gripper_cases(1)[0]
     real = gs.start_forces(sg._scene(case))

@@ -13,7 +13,7 @@ import numpy as np
 import pytest
 
 from simgrip import STANDARD, Uniform
-from simgrip.sim.gripper import build_gripper
+from simgrip.gripper.scene import build_gripper
 from simgrip.sim.symmetry import symmetry
 
 N = 16

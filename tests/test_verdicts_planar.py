@@ -278,7 +278,7 @@ def test_compare_fingers_reference_is_on_the_settled_branch_and_warns_as_the_pla
     """The K-finger compare had the planar one's wrong branch (I, kappa = -6, D = 1e4, b = 0.02: the BVP
     'dropped' with n = -1.5e5) and no warnings; it now follows finger 0's settled shape and carries the
     planar compare's verdict warnings."""
-    from simgrip.compare_gripper import compare_gripper
+    from simgrip.gripper.compare import compare_gripper
 
     res = compare_gripper("I", STIFF.replace(b=0.02), Uniform(-6.0), N, fingers=2, workpiece="box")
     sim, ref = res["simulation"], res["reference"]

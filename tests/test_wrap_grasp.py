@@ -21,7 +21,7 @@ SMALL_N = 16
 
 @pytest.fixture(scope="module")
 def wrap():
-    from simgrip.settle.gripper import settle_gripper
+    from simgrip.gripper.settle import settle_gripper
 
     scene = wg.wrap_scene(SMALL_N)
     return scene, settle_gripper(scene, contact="full")

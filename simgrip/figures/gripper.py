@@ -1,7 +1,7 @@
 """Pictures of K-finger grippers: a rendered settled grasp, and the normal force per finger against ``kappa_bar0``.
 
-* :func:`render_gripper` draws a :class:`~simgrip.sim.gripper.GripperScene`
-  (its current state, or a :class:`~simgrip.settle.gripper.GripperState`'s)
+* :func:`render_gripper` draws a :class:`~simgrip.gripper.scene.GripperScene`
+  (its current state, or a :class:`~simgrip.gripper.settle.GripperState`'s)
   offscreen with :class:`mujoco.Renderer` on the backend of
   :func:`simgrip.sim.gl.make_renderer` (``MUJOCO_GL``, else EGL, then OSMesa on
   a headless machine).  It draws a copy of the model, never the simulated one:
@@ -13,7 +13,7 @@
   their centre.  A palm disc, a floor, a light and a free camera that frames
   every finger and the workpiece are added.  The settled joint angles and
   workpiece pose are the simulation's, unchanged.
-* :func:`grasp_picture` builds, settles (:func:`simgrip.settle.gripper.settle_gripper`)
+* :func:`grasp_picture` builds, settles (:func:`simgrip.gripper.settle.settle_gripper`)
   and draws one of :data:`GRASPS` (Grip I at the paper's standard case);
   :func:`write_png` writes an image through :func:`simgrip.io.atomic_write`.
 * :func:`gripper_force_data` and :func:`plot_gripper_forces`: a cylinder held
@@ -154,9 +154,9 @@ def render_gripper(scene, state=None, *, width: int = 640, height: int = 480, az
 
     Parameters
     ----------
-    scene : simgrip.sim.gripper.GripperScene
-        Drawn in its current state (after :func:`~simgrip.settle.gripper.settle_gripper`: the settled one).
-    state : simgrip.settle.gripper.GripperState, optional
+    scene : simgrip.gripper.scene.GripperScene
+        Drawn in its current state (after :func:`~simgrip.gripper.settle.settle_gripper`: the settled one).
+    state : simgrip.gripper.settle.GripperState, optional
         A settled state of ``scene`` to draw instead (its ``qpos`` is set on ``scene.data``).
     width, height : int
         Pixels, 16 to 4096.
@@ -180,10 +180,10 @@ def render_gripper(scene, state=None, *, width: int = 640, height: int = 480, az
     import mujoco
 
     from simgrip.sim.gl import make_renderer
-    from simgrip.sim.gripper import GripperScene
+    from simgrip.gripper.scene import GripperScene
 
     if not isinstance(scene, GripperScene):
-        raise ValueError(f"scene must be a simgrip.sim.gripper.GripperScene, got {type(scene).__name__}")
+        raise ValueError(f"scene must be a simgrip.gripper.scene.GripperScene, got {type(scene).__name__}")
     width, height = _check_size("width", width), _check_size("height", height)
     elevation = _check_angle("elevation", elevation, -89.0, 89.0)
     if azimuth is not None:
@@ -248,13 +248,13 @@ def grasp_picture(fingers: int, workpiece: str, *, grip: str = GRASP_GRIP, kappa
                   links: int = LINKS, params: DimensionlessParams | None = None, **render):
     """Build, settle and draw a K-finger grasp: ``(image, state)``.
 
-    ``fingers``, ``workpiece``, ``grip`` as :func:`simgrip.sim.gripper.build_gripper`;
+    ``fingers``, ``workpiece``, ``grip`` as :func:`simgrip.gripper.scene.build_gripper`;
     ``kappa`` the uniform ``kappa_bar0`` of every finger; ``params`` default the
     paper's standard case; ``render`` goes to :func:`render_gripper`.
     """
     from simgrip.profiles import Uniform
-    from simgrip.settle.gripper import settle_gripper
-    from simgrip.sim.gripper import build_gripper
+    from simgrip.gripper.settle import settle_gripper
+    from simgrip.gripper.scene import build_gripper
 
     scene = build_gripper(grip, STANDARD if params is None else params, Uniform(kappa), links, fingers=fingers,
                           workpiece=workpiece)
@@ -286,7 +286,7 @@ def gripper_force_data(*, fingers=FORCE_FINGERS, kappas=SIM_KAPPAS, links: int =
     from simgrip.chain import check_links
     from simgrip.profiles import Uniform
     from simgrip.reference import elastica
-    from simgrip.settle.gripper import settle_gripper
+    from simgrip.gripper.settle import settle_gripper
     from simgrip.sim import reuse  # one compile per K, set in place for each kappa
 
     p = STANDARD if params is None else params

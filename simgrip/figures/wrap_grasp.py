@@ -1,8 +1,8 @@
 """A rendered wrap grasp (issue 17 s.5): three fingers curled around a sphere with ``contact="full"``.
 
-The K-finger gripper of :mod:`simgrip.sim.gripper` (Grip I, palm down, fingers clamped on the palm axis)
+The K-finger gripper of :mod:`simgrip.gripper.scene` (Grip I, palm down, fingers clamped on the palm axis)
 with every link free to touch the workpiece, itself and the other fingers
-(:func:`~simgrip.settle.gripper_full.settle_gripper_full`).  Why these numbers (:data:`WRAP`): a free finger
+(:func:`~simgrip.gripper.full.settle_gripper_full`).  Why these numbers (:data:`WRAP`): a free finger
 of uniform ``kappa_bar0 < 0`` curls into a circle of radius ``1/|kappa_bar0|`` centred on the palm axis, as
 is a sphere hanging below the palm; a sphere a little larger than that circle (``b/2 = 0.35`` against
 ``1/3.6 = 0.28``), its top ``0.02 l`` under the palm, lies inside the finger's rest shape, so the settled
@@ -38,10 +38,10 @@ LINKS = 32
 
 
 def wrap_scene(links: int):
-    """The unsettled :class:`~simgrip.sim.gripper.GripperScene` of :data:`WRAP` at ``links`` links per finger."""
+    """The unsettled :class:`~simgrip.gripper.scene.GripperScene` of :data:`WRAP` at ``links`` links per finger."""
     from simgrip.params import DimensionlessParams
     from simgrip.profiles import Uniform
-    from simgrip.sim.gripper import build_gripper
+    from simgrip.gripper.scene import build_gripper
 
     w = WRAP
     params = DimensionlessParams(D=w["D"], M=w["M"], mu_s=w["mu_s"], b=w["b"])
@@ -57,7 +57,7 @@ def wrap_violations(scene, state) -> list[str]:
     link at least ``R + r_link - MAX_PENETRATION`` from the sphere's centre (``R`` its radius, lengths over
     ``l``); and every finger touching the sphere at a link besides its last (the wrap, not a pinch).
     """
-    from simgrip.gripper import gripper_nodes
+    from simgrip.gripper.simulate import gripper_nodes
     from simgrip.intersection import crossing_pairs
 
     bad = []
@@ -106,7 +106,7 @@ def wrap_grasp_picture(links: int = LINKS, **render):
         No OpenGL backend renders offscreen here.
     """
     from simgrip.figures.gripper import render_gripper
-    from simgrip.settle.gripper import settle_gripper
+    from simgrip.gripper.settle import settle_gripper
 
     scene = wrap_scene(links)
     state = settle_gripper(scene, contact="full")

@@ -32,12 +32,12 @@ import sys
 import time
 from concurrent.futures import ProcessPoolExecutor
 
-from simgrip.settle.gripper_state import FRICTION_MARGIN
+from simgrip.gripper.state import FRICTION_MARGIN
 
 __all__ = ["MARGIN", "agreement_case", "couple_rotation", "method_agreement"]
 
 #: Disagreements of the methods closer than this to the friction cone (relative) are the threshold (the K-finger
-#: states warn there: :data:`simgrip.settle.gripper_state.FRICTION_MARGIN`, the same value).
+#: states warn there: :data:`simgrip.gripper.state.FRICTION_MARGIN`, the same value).
 MARGIN = FRICTION_MARGIN
 
 

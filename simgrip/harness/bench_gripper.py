@@ -8,7 +8,7 @@ one run measures, interleaved run by run:
 
 ========================  =====================================================
 ``full``                  the coupled K-finger dynamics
-                          (:func:`simgrip.settle.gripper.settle_gripper`,
+                          (:func:`simgrip.gripper.settle.settle_gripper`,
                           ``method="dynamics"``)
 ``single_dyn``            the planar one-finger dynamic settle of the same
                           per-finger problem (``settle(method="dynamics")`` of
@@ -16,7 +16,7 @@ one run measures, interleaved run by run:
 ``single_newton``         the planar one-finger default settle (Newton in link
                           angles, point contact)
 ``skip``                  the symmetry skip
-                          (:func:`simgrip.settle.gripper_symmetry.settle_symmetric`:
+                          (:func:`simgrip.gripper.symmetry.settle_symmetric`:
                           one planar Newton settle, its scene's build included,
                           replicated to K fingers)
 ``skip_reuse``            the same with its planar scene built once
@@ -55,9 +55,9 @@ N_LINKS = 32
 
 
 def _gripper(grip, kappa, n, K, shape, method):
-    from simgrip.settle.gripper import settle_gripper
-    from simgrip.settle.gripper_symmetry import planar_scene, settle_symmetric
-    from simgrip.sim.gripper import build_gripper
+    from simgrip.gripper.settle import settle_gripper
+    from simgrip.gripper.symmetry import planar_scene, settle_symmetric
+    from simgrip.gripper.scene import build_gripper
 
     sc = build_gripper(grip, STANDARD, Uniform(kappa), n, fingers=K, workpiece=shape)
     if method == "skip":

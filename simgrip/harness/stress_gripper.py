@@ -14,7 +14,7 @@ hold (:func:`run_gripper_case`):
 * it ends within the per-case wall-clock guard (a hang is a failure).
 
 A drop, or a settle that does not end, is explained from its start
-(:func:`diagnose_start`, :mod:`simgrip.settle.gripper_start`): ``start_mu``
+(:func:`diagnose_start`, :mod:`simgrip.gripper.start`): ``start_mu``
 (the largest friction coefficient the start's forces need at a finger),
 ``start_balanced`` / ``start_residual`` (whether a start with the workpiece
 level balances it at all), ``start_min_eigenvalue`` (the smallest
@@ -22,7 +22,7 @@ eigenvalue of the statics' second variation on the workpiece's admissible
 motions, negative: unstable) and ``start_growth`` (the largest eigenvalue
 modulus of the settle's one-step map linearised about the start, above
 ``1 + UNSTABLE_GROWTH``: unstable), both from
-:mod:`simgrip.settle.gripper_stability`.  Its
+:mod:`simgrip.gripper.stability`.  Its
 ``drop_reason`` is the first that applies of ``"wrong grip"`` (held, but a
 tip settled on the other grip's side of the palm, so reported not held:
 :func:`simgrip.validity.check_grip_shape`), ``"friction"`` (``start_mu >
@@ -41,7 +41,7 @@ per finger (a base curling onto the workpiece, each finger within
 ``+-KAPPA_SPREAD`` of it), ``D``, ``M``, ``mu_s``, ``b``, ``n``, and the
 workpiece off the palm axis by up to :data:`OFFSET_FRACTION` of its
 half-width (``K = 2``: along the fingers' plane only, see
-:mod:`simgrip.sim.gripper_placement`) and turned (box: up to
+:mod:`simgrip.gripper.placement`) and turned (box: up to
 :data:`MAX_BOX_YAW`).
 """
 
@@ -104,7 +104,7 @@ def make_gripper_cases(count: int, seed: int = 0, max_links: int = 32) -> list[d
 
 def _scene(case: dict):
     from simgrip.params import DimensionlessParams
-    from simgrip.sim.gripper import uniform_profiles
+    from simgrip.gripper.scene import uniform_profiles
     from simgrip.sim.reuse import build_gripper  # one compile per structure, set in place
 
     params = DimensionlessParams(D=case["D"], M=case["M"], b=case["b"], mu_s=case["mu_s"])
@@ -114,7 +114,7 @@ def _scene(case: dict):
 
 
 def _settle(case: dict):
-    from simgrip.settle.gripper import settle_gripper
+    from simgrip.gripper.settle import settle_gripper
 
     return settle_gripper(_scene(case))
 
@@ -123,8 +123,8 @@ def diagnose_start(case: dict) -> dict:
     """The start's ``start_mu``, ``start_balanced``, ``start_residual``, ``start_growth`` and the ``drop_reason``
     they give (see the module docstring; all but ``"wrong grip"``); the first three None when the start holds
     nothing."""
-    from simgrip.settle.gripper_stability import start_growth, start_stiffness
-    from simgrip.settle.gripper_start import start_forces
+    from simgrip.gripper.stability import start_growth, start_stiffness
+    from simgrip.gripper.start import start_forces
 
     f = start_forces(_scene(case))
     growth = start_growth(_scene(case))

@@ -30,7 +30,7 @@ held and, Grip III, condition (23) met):
 ``dynamics``
     the over-damped MuJoCo dynamics (planar ``method="dynamics"``; K-finger
     ``method="dynamics"``; the cradle: one finger's planar dynamics,
-    replicated, :func:`~simgrip.settle.gripper_symmetry.settle_cradle_dynamics`);
+    replicated, :func:`~simgrip.gripper.symmetry.settle_cradle_dynamics`);
 ``bvp``
     the elastica BVP of the state the planar default describes
     (:func:`simgrip.compare.reference_of`: started from the settled chain's
@@ -176,7 +176,7 @@ def _planar(grip, params, prof, n, method):
 def _gripper_scene(grip, params, prof, n, K, workpiece):
     """The K-finger scene as :func:`simgrip.gripper.simulate_gripper` builds it (Grip III from the theory's start)."""
     from simgrip.scenes import start_angles
-    from simgrip.sim.gripper import build_gripper
+    from simgrip.gripper.scene import build_gripper
 
     start = {"initial_angles": start_angles("III", params, prof, n)} if grip == "III" else {}
     return build_gripper(grip, params, prof, n, fingers=K, workpiece=workpiece, **start)
@@ -187,8 +187,8 @@ def audit_point(point: dict, links: int = LINKS) -> list[dict]:
     from simgrip.compare import reference_of
     from simgrip.params import DimensionlessParams
     from simgrip.profiles import Uniform
-    from simgrip.settle.gripper import settle_gripper
-    from simgrip.settle.gripper_symmetry import settle_cradle_dynamics
+    from simgrip.gripper.settle import settle_gripper
+    from simgrip.gripper.symmetry import settle_cradle_dynamics
 
     grip = point["grip"]
     params = DimensionlessParams(D=point["D"], M=point["M"], b=point["b"], mu_s=point["mu_s"], gamma=point["gamma"])

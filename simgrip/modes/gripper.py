@@ -1,6 +1,6 @@
-"""Modes of a K-finger gripper (:mod:`simgrip.sim.gripper`): K chains holding a workpiece free in 3-D.
+"""Modes of a K-finger gripper (:mod:`simgrip.gripper.scene`): K chains holding a workpiece free in 3-D.
 
-The settled gripper (:func:`simgrip.settle.gripper.settle_gripper`) is linearised
+The settled gripper (:func:`simgrip.gripper.settle.settle_gripper`) is linearised
 as the planar scenes are (:mod:`.linear`): each finger's tip (its centreline end,
 the point contact) sticks to the workpiece's material point in all three world
 directions (the workpiece has six dofs; ``mj_integratePos`` steps its free
@@ -65,13 +65,13 @@ def gripper_modes(grip, params, profile, links, *, fingers: int, workpiece: str 
     profile : CurvatureProfile, float or callable
         One profile for every finger.
     links, fingers, workpiece
-        As :func:`simgrip.sim.gripper.build_gripper`.
+        As :func:`simgrip.gripper.scene.build_gripper`.
     count : int
         Lowest modes of the whole gripper and of its symmetric subspace, ``1 <= count <= links - 1``.
     reference : bool
         Solve the linearised rod for the symmetric modes.
     settle_kw
-        Passed to :func:`simgrip.settle.gripper.settle_gripper`.
+        Passed to :func:`simgrip.gripper.settle.settle_gripper`.
 
     Returns
     -------
@@ -85,8 +85,8 @@ def gripper_modes(grip, params, profile, links, *, fingers: int, workpiece: str 
     from simgrip.modes import ModesError, reference_modes
     from simgrip.params import check_grip
     from simgrip.profiles import as_profile
-    from simgrip.settle.gripper import settle_gripper
-    from simgrip.sim.gripper import build_gripper
+    from simgrip.gripper.settle import settle_gripper
+    from simgrip.gripper.scene import build_gripper
     from simgrip.sim.scene import check_params
 
     grip = check_grip(grip)

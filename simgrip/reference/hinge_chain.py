@@ -16,7 +16,7 @@ the contact is ``N2 = -load`` (default ``load = params.M``, its weight share);
 a ``load`` of either sign is accepted (:func:`check_load`): a negative one is a
 friction force pushing the contact up, i.e. a finger whose friction pulls the
 workpiece down (a K-finger grasp's balance may need one,
-:mod:`simgrip.settle.gripper_start`).  The load enters only through the
+:mod:`simgrip.gripper.start`).  The load enters only through the
 linear term ``load Y(s_c)`` of the energy, so nothing else changes with its
 sign.  This is the exact settled state the
 MuJoCo chain built from the same springs must reach.  (For Grip III the couple

@@ -14,7 +14,7 @@ undoes such a step and retries it with more damping.  The bound is measured, not
 Each point may move ``(r_link + clearance) / 2``: two points closing on each other approach by at most the gap
 plus ``r_link``, so capsules that were apart overlap by at most half their contact distance after the step,
 and MuJoCo pushes them apart at the next.  Works on the planar :class:`~simgrip.sim.scene.Scene` (with
-:class:`~simgrip.settle.integrator.Dyn`) and the K-finger :class:`~simgrip.sim.gripper.GripperScene` (with
+:class:`~simgrip.settle.integrator.Dyn`) and the K-finger :class:`~simgrip.gripper.scene.GripperScene` (with
 :class:`FullGripperDynamics`); both expose a damping ``factor``.
 """
 

@@ -36,7 +36,7 @@ everything chosen from the model:
 :func:`run_to_rest` steps such an integrator until the velocity and the
 static residual are below their tolerances, :data:`DYN_BATCH` steps per
 ``mj_step`` call between tests.  The K-finger settle
-(:mod:`simgrip.settle.gripper_dynamics`) uses the same constants, bound
+(:mod:`simgrip.gripper.dynamics`) uses the same constants, bound
 and stop loop.
 """
 

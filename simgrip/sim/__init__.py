@@ -5,8 +5,9 @@
 ``workpiece``             the box: placement against the fingers, hold, place, lower, pose, slip
 ``contacts``              explicit contact pairs and the forces they carry
 ``scene``                 ``Scene``, ``build_scene``, ``set_curvature``, ``set_joint_angles``, ``finger_state``
-``gripper``               K-finger grippers around a box, cylinder or sphere free in 3-D (``build_gripper``)
 ``checks``                MuJoCo warnings and non-finite states as errors (``check_invalid_state``)
 ``gl``                    the offscreen OpenGL backend (EGL, then OSMesa, on a headless machine)
 ========================  ==============================================================
+
+The K-finger gripper's scene (``build_gripper``) is :mod:`simgrip.gripper.scene`.
 """

@@ -415,7 +415,7 @@ def build_scene(grip: str, params, profile, n_links: int, **kw):
 
 
 def build_gripper(grip: str, params, profile, n_links: int, **kw):
-    """:func:`simgrip.sim.gripper.build_gripper` through the cache (same arguments, same checks, same result).
+    """:func:`simgrip.gripper.scene.build_gripper` through the cache (same arguments, same checks, same result).
 
     ``yaw``, ``offset``, ``workpiece_yaw`` and ``contact_angle`` are structure (keyed); the parameters, the
     profiles and ``initial_angles`` are set in place.  The scene returned is owned by the cache (valid until
@@ -423,9 +423,9 @@ def build_gripper(grip: str, params, profile, n_links: int, **kw):
     """
     from simgrip.chain import link_positions
     from simgrip.params import _finite
-    from simgrip.sim import gripper as G
+    from simgrip.gripper import scene as G
     from simgrip.sim.fingers import check_finger_links
-    from simgrip.sim.gripper_placement import check_offset, check_workpiece_yaw, place_fingers
+    from simgrip.gripper.placement import check_offset, check_workpiece_yaw, place_fingers
     from simgrip.sim.scene import check_params, check_positive, set_joint_angles
     from simgrip.sim.workpiece import workpiece_inertia
 
@@ -495,10 +495,10 @@ def build_gripper(grip: str, params, profile, n_links: int, **kw):
 
 
 def _cradle(args, kw, a, K):
-    """The K-finger Grip III (:func:`simgrip.sim.gripper_cradle.build_cradle`) through the cache."""
-    from simgrip.sim import gripper as G
+    """The K-finger Grip III (:func:`simgrip.gripper.cradle.build_cradle`) through the cache."""
+    from simgrip.gripper import scene as G
     from simgrip.sim.fingers import check_finger_links
-    from simgrip.sim.gripper_cradle import START_NUMERIC, build_cradle, corner_name
+    from simgrip.gripper.cradle import START_NUMERIC, build_cradle, corner_name
     from simgrip.sim.scene import check_params, check_positive, root_spec, set_joint_angles
     from simgrip.sim.workpiece import BOX_HEIGHT, contact_links, corner_placement, cradle_start, workpiece_inertia
 

@@ -68,7 +68,7 @@ DEFAULT_R_CORNER = 1e-3
 class FingerScene:
     """What every compiled scene of fingers reads the same way: hinge addresses and the scales.
 
-    A base of :class:`Scene` and :class:`simgrip.sim.gripper.GripperScene`; it
+    A base of :class:`Scene` and :class:`simgrip.gripper.scene.GripperScene`; it
     reads their ``index`` (:class:`FingerIndex`) and ``physical``
     (:class:`PhysicalParams`) fields.
     """

@@ -1,7 +1,7 @@
-"""Whether a K-finger scene (:mod:`simgrip.sim.gripper`) is exactly symmetric, read from its compiled model.
+"""Whether a K-finger scene (:mod:`simgrip.gripper.scene`) is exactly symmetric, read from its compiled model.
 
 Where it is, every finger is the same planar problem and the K-finger
-settle may be one finger's (:mod:`simgrip.settle.gripper_symmetry`).
+settle may be one finger's (:mod:`simgrip.gripper.symmetry`).
 :func:`symmetry` reads the compiled model, not the builder's arguments, so
 that whatever the builder learns to do (offsets, turns, per-finger
 curvature) is seen.  Exact means:
@@ -17,7 +17,7 @@ curvature) is seen.  Exact means:
   box face whose normal is the finger's ``E1`` (box ``K`` = 2, 4), a
   vertical cylinder (any turn about its axis), a sphere (one contact angle);
 * Grips I/II: one tip--workpiece contact pair per finger and no other;
-  Grip III (the K = 4 cradle, :mod:`simgrip.sim.gripper_cradle`): every
+  Grip III (the K = 4 cradle, :mod:`simgrip.gripper.cradle`): every
   finger's links in the same window paired with one edge, the edges alike in
   the fingers' frames (along ``E3`` at the same place).
 """
@@ -31,11 +31,11 @@ import mujoco
 import numpy as np
 
 from simgrip.chain import chain_springs
-from simgrip.sim.gripper import GripperScene
+from simgrip.gripper.scene import GripperScene
 
 __all__ = ["EQUAL_RTOL", "SYMMETRIC_GRIPS", "Symmetry", "cradle_edges", "symmetry"]
 
-#: Grips the skip covers (III: the K = 4 cradle, :mod:`simgrip.sim.gripper_cradle`).
+#: Grips the skip covers (III: the K = 4 cradle, :mod:`simgrip.gripper.cradle`).
 SYMMETRIC_GRIPS = ("I", "II", "III")
 #: Relative round-off within which two model arrays count as equal (the builder computes every
 #: finger's from the same numbers; trigonometry of the azimuths leaves a few ulps).
@@ -69,7 +69,7 @@ def _wrap(a):
 def symmetry(scene: GripperScene) -> Symmetry:
     """Whether every finger of ``scene`` is the same planar problem (see the module docstring)."""
     if not isinstance(scene, GripperScene):
-        raise ValueError(f"scene must be a simgrip.sim.gripper.GripperScene, got {type(scene).__name__}")
+        raise ValueError(f"scene must be a simgrip.gripper.scene.GripperScene, got {type(scene).__name__}")
     m, K, n, L = scene.model, scene.fingers, scene.n, scene.length
     if scene.grip not in SYMMETRIC_GRIPS:
         return Symmetry(False, f"grip {scene.grip} (the skip covers {SYMMETRIC_GRIPS})")

@@ -63,7 +63,7 @@ BOX_HEIGHT = 2.0  # tall: a frictionless tip slides along the face while closing
 BOX_DEPTH = 0.2
 
 #: Least inertial mass of the workpiece per finger over ``rho l`` (:func:`inertial_mass`; its weight stays
-#: ``M``).  The K-finger gripper's floor (:data:`simgrip.sim.gripper.MIN_WORKPIECE_MASS`, one value for both):
+#: ``M``).  The K-finger gripper's floor (:data:`simgrip.gripper.scene.MIN_WORKPIECE_MASS`, one value for both):
 #: MuJoCo's soft contact rests at a depth proportional to the contact's mobility, i.e. to the workpiece's
 #: inverse mass, so a nearly massless workpiece sinks into the finger without bound (the planar dynamics
 #: dropped every weightless Grip III workpiece: the corner passed the rod).  Measured on the planar Grip III

@@ -59,7 +59,7 @@ def compare_gripper(grip: str, params: DimensionlessParams, profile, links: int,
     and the verdicts that disagree (:func:`simgrip.compare.verdict_warnings`).
     """
     from simgrip.compare import branch_warnings, chain_reference, reference_validity, verdict_warnings
-    from simgrip.gripper import gripper_record, simulate_gripper
+    from simgrip.gripper.simulate import gripper_record, simulate_gripper
     from simgrip.reference import elastica
     from simgrip.report import difference, elastica_record
 

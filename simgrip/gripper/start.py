@@ -1,8 +1,8 @@
-"""The start of the K-finger settle (:mod:`simgrip.settle.gripper`): every finger at its chain's equilibrium.
+"""The start of the K-finger settle (:mod:`simgrip.gripper.settle`): every finger at its chain's equilibrium.
 
 Each finger of a K-finger gripper is a planar hinge chain, rigid out of its
 plane; it touches the workpiece with its tip at ``X = scene.reach[k]``
-(:mod:`simgrip.sim.gripper_placement`; ``b/2`` when centred).  The settle
+(:mod:`simgrip.gripper.placement`; ``b/2`` when centred).  The settle
 starts every finger at the hinge chain's grip equilibrium
 (:func:`simgrip.reference.solve_chain`) with its tip there, carrying a
 vertical *share* ``s_k`` of the weight (``N2 = -s_k``), so that the
@@ -27,7 +27,7 @@ dynamics has only MuJoCo's contact softness left to settle.
   Whether the friction can carry a start's forces is not the start's
   business: :func:`start_forces` reports each finger's required ``mu``,
   and a start that needs more than ``mu_s`` drops; whether the balanced
-  start is a stable equilibrium is :mod:`simgrip.settle.gripper_stability`'s.
+  start is a stable equilibrium is :mod:`simgrip.gripper.stability`'s.
 * **Statically indeterminate internal forces** (``K >= 4``): the six
   equations do not fix the ``2K`` unknowns ``(s, N3)``; ``2K - 6`` internal
   modes (a squeeze of the vertical shares, a twist of the ``N3``) are free.
@@ -71,7 +71,8 @@ import numpy as np
 from simgrip.params import M_MAX
 from simgrip.reference import DiscreteError, solve_chain
 from simgrip.settle.state import SettleError
-from simgrip.sim.gripper import GripperScene
+from simgrip.gripper.rest_depth import contact_rest_depth
+from simgrip.gripper.scene import GripperScene
 
 __all__ = ["StartForces", "balance_shares", "contact_reach", "finger_chain", "is_symmetric", "rest_depth",
            "start_forces", "start_qpos", "unreached_fingers", "warn_unreached"]
@@ -288,11 +289,9 @@ def _balanced(scene: GripperScene, X0, centre0, inside=None):
 def rest_depth(N1, timestep: float, scene: GripperScene) -> np.ndarray:
     """How deep (over l) MuJoCo's soft contact rests under normal forces ``N1`` (over rho g l), per finger.
 
-    :func:`simgrip.settle.gripper_dynamics.contact_rest_depth` (``N tc^2 A_nn``: the contact's mobility through
+    :func:`simgrip.gripper.rest_depth.contact_rest_depth` (``N tc^2 A_nn``: the contact's mobility through
     the dynamics' step metric) at the scene's current state, at least :data:`START_INSIDE`.
     """
-    from simgrip.settle.gripper_dynamics import contact_rest_depth  # the dynamics' own law (imports this module)
-
     return np.maximum(START_INSIDE, contact_rest_depth(scene, N1, timestep))
 
 
@@ -301,7 +300,7 @@ class StartForces:
     """The forces of the start (:func:`start_qpos`), per finger, in the finger's frame (over ``rho g l``).
 
     ``N1`` (along ``E1``), ``N2 = -share`` (up) and ``N3`` (out of plane) are the force on the rod,
-    as :class:`~simgrip.settle.gripper.FingerRecord` reads the settled one; ``normal`` its component
+    as :class:`~simgrip.gripper.settle.FingerRecord` reads the settled one; ``normal`` its component
     along the workpiece's normal into the tip, ``tangential`` the magnitude of the rest, and
     ``required_mu = tangential / normal`` (``inf`` where ``normal <= 0``): the friction coefficient the
     start needs at each finger.  ``residual``: the largest of the workpiece's six equations the start

@@ -31,7 +31,7 @@ Geometry (lengths over ``l``; the palm axis is the world ``z`` axis):
 * Beyond the symmetric grasp: the workpiece may sit off the palm axis
   (``offset``, over ``l``) and turn about its own vertical axis
   (``workpiece_yaw``), both in the scene's frame (``yaw`` turns them with
-  the rest); box and cylinder only (:mod:`simgrip.sim.gripper_placement`
+  the rest); box and cylinder only (:mod:`simgrip.gripper.placement`
   finds where each finger's plane meets it, the *reach*).  Each finger may
   have its own curvature profile (``profile`` a sequence of ``K``): the same
   stiffness, its own rest angles.
@@ -40,29 +40,30 @@ Geometry (lengths over ``l``; the palm axis is the world ``z`` axis):
 
 The builder runs no solver: the fingers start at ``initial_angles`` (default
 straight) and the workpiece's centre level with their tips;
-:func:`simgrip.settle.gripper.settle_gripper` starts from the hinge chain's
+:func:`simgrip.gripper.settle.settle_gripper` starts from the hinge chain's
 grip equilibrium.  Grip III (the cradle) is built for a box with ``K = 4``
 (each finger carries the bottom edge of its face) by
-:mod:`simgrip.sim.gripper_cradle`.
+:mod:`simgrip.gripper.cradle`.
 """
 
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass, field
 
 import mujoco
 import numpy as np
 
-from simgrip.chain import ChainSprings, chain_springs, link_positions
+from simgrip.chain import chain_springs, link_positions
 from simgrip.params import DimensionlessParams, PhysicalParams, _finite, check_grip
-from simgrip.profiles import CurvatureProfile, as_profile
+from simgrip.profiles import as_profile
 from simgrip.sim.contacts import add_pair
-from simgrip.sim.fingers import FingerIndex, add_fingers, check_finger_links, index_fingers
-from simgrip.sim.gripper_placement import check_offset, check_workpiece_yaw, place_fingers
-from simgrip.sim.scene import FingerScene, check_params, check_positive, root_spec, set_joint_angles
+from simgrip.sim.fingers import add_fingers, check_finger_links
+from simgrip.gripper.placement import check_offset, check_workpiece_yaw, place_fingers
+from simgrip.sim.scene import check_params, check_positive, root_spec, set_joint_angles
 from simgrip.sim import workpiece as _workpiece
 from simgrip.sim.workpiece import BOX_DEPTH, BOX_HEIGHT, workpiece_inertia
+from simgrip.gripper.model import (_WORKPIECE_GEOM, GripperScene, _yaw_quat, compile_gripper, finger_azimuths,
+                                   orient_fingers, workpiece_body_mass)
 
 __all__ = ["GRIPPER_GRIPS", "WORKPIECES", "GripperScene", "build_gripper", "check_gripper", "finger_azimuths",
            "compile_gripper", "orient_fingers", "set_finger_angles", "uniform_profiles", "workpiece_body_mass",
@@ -79,136 +80,13 @@ DEFAULT_R_LINK = 2e-3
 #: Least inertial mass of the workpiece per finger over ``rho l``: the planar scene's floor, one value for both.
 MIN_WORKPIECE_MASS = _workpiece.MIN_WORKPIECE_MASS
 
-_WORKPIECE_GEOM = "workpiece_geom"
-
-
-@dataclass
-class GripperScene(FingerScene):
-    """A compiled K-finger scene and the addresses needed to read it.
-
-    ``joint_qpos``, ``joint_dof`` (K, n) and the scales ``length``,
-    ``force_scale``, ``moment_scale`` read as in the planar scene (:class:`FingerScene`).
-
-    Attributes
-    ----------
-    spec, model, data : MuJoCo objects
-    grip : {"I", "II"}
-    workpiece : {"box", "cylinder", "sphere"}
-    params : DimensionlessParams
-    physical : PhysicalParams
-        SI parameters the model is built in (dimensionless ones with ``l = rho = g = 1``).
-    profile : CurvatureProfile
-        Finger 0's profile (every finger's unless ``profiles`` differ).
-    n : int
-        Links per finger.
-    fingers : int
-        ``K``.
-    springs : ChainSprings
-        Dimensionless springs of finger 0 (every finger's unless ``profiles`` differ).
-    index : FingerIndex
-        The fingers' joint, body and geom addresses, shape (K, n).
-    azimuths : ndarray (K,)
-        Azimuth of each finger's plane [rad] (``yaw + 2 pi k / K``).
-    yaw : float
-        Rotation of the whole scene about the palm axis [rad].
-    workpiece_body, workpiece_geom : int
-    workpiece_qpos : ndarray (7,)
-        qpos addresses of the free joint (position, then quaternion).
-    workpiece_dof : ndarray (6,)
-        dof addresses (translation in the world frame, then rotation in the body frame).
-    size : ndarray (3,)
-        Box half sizes; cylinder ``(radius, half height, 0)``; sphere ``(radius, 0, 0)`` [m].
-    r_tip, r_link : float
-        Radii over ``l``.
-    contact_angle : float
-        Sphere: elevation of the start's contact normal [rad] (0 for box and cylinder).
-    offset : ndarray (2,)
-        The workpiece's centre off the palm axis over ``l``, scene frame (turned by ``yaw`` in the world).
-    workpiece_yaw : float
-        The workpiece's turn about its vertical axis relative to the fingers [rad].
-    profiles : tuple of CurvatureProfile
-        Every finger's profile, (K,).
-    finger_springs : tuple of ChainSprings
-        Every finger's springs, (K,).
-    reach : ndarray (K,)
-        ``X`` over ``l`` where each finger's tip centre meets the workpiece
-        (:func:`~simgrip.sim.gripper_placement.place_fingers`; ``b/2`` when centred).
-    normals : ndarray (K, 2)
-        The workpiece's outward horizontal normal there, ``(along E1, along E3)`` of the finger.
-    """
-
-    spec: mujoco.MjSpec
-    model: mujoco.MjModel
-    data: mujoco.MjData
-    grip: str
-    workpiece: str
-    params: DimensionlessParams
-    physical: PhysicalParams
-    profile: CurvatureProfile
-    n: int
-    fingers: int
-    springs: ChainSprings
-    index: FingerIndex
-    azimuths: np.ndarray
-    yaw: float
-    workpiece_body: int
-    workpiece_geom: int
-    workpiece_qpos: np.ndarray
-    workpiece_dof: np.ndarray
-    size: np.ndarray
-    r_tip: float
-    r_link: float
-    contact_angle: float = 0.0
-    offset: np.ndarray = field(default_factory=lambda: np.zeros(2))
-    workpiece_yaw: float = 0.0
-    profiles: tuple = ()
-    finger_springs: tuple = ()
-    reach: np.ndarray | None = None
-    normals: np.ndarray | None = None
-    #: ``"pairs"`` (one explicit pair per tip) or ``"full"`` (every link may touch: :mod:`simgrip.sim.full_contact`).
-    contact: str = "pairs"
-
-    @property
-    def tip_geom(self) -> np.ndarray:
-        """Tip sphere geom ids, (K,)."""
-        return self.index.tip_geom
-
-    @property
-    def workpiece_mass(self) -> float:
-        """Mass of the workpiece [kg]: ``K m`` (its weight; the model's inertial mass may be larger)."""
-        return self.physical.m * self.fingers
-
-    @property
-    def weight_relief(self) -> float:
-        """Upward force [N] that makes the model's gravity on the workpiece its true weight ``K m g``.
-
-        The model's workpiece has the inertial mass :func:`workpiece_body_mass` (floored for light
-        workpieces); the settles apply this force to its vertical dof, so only ``K m g`` is carried.
-        """
-        return (float(self.model.body_mass[self.workpiece_body]) - self.workpiece_mass) * self.physical.g
-
-    def frame(self, k: int) -> np.ndarray:
-        """Finger ``k``'s frame as rows ``(E1, E3, E2)`` in world coordinates.
-
-        ``E1`` horizontal, away from the palm axis in the finger's plane; ``E3``
-        horizontal, normal to the plane (the hinge axis is ``-E3``); ``E2 = z`` up.
-        A world vector ``v`` reads ``frame(k) @ v = (along E1, out of plane, up)``.
-        """
-        a = float(self.azimuths[k])
-        return np.array([[math.cos(a), math.sin(a), 0.0], [-math.sin(a), math.cos(a), 0.0], [0.0, 0.0, 1.0]])
-
-
-# ---------------------------------------------------------------------------
-# input checks
-
-
 def check_gripper(grip, fingers, workpiece) -> tuple[str, int, str]:
     """``(grip, K, workpiece)`` normalised, or ValueError naming the bad one.
 
     ``fingers`` is an integer ``>= 2``; ``workpiece`` one of :data:`WORKPIECES`;
     a box takes ``K = 2`` or ``4`` (one finger centred on each of two or four faces);
     ``grip`` one of :data:`GRIPPER_GRIPS`; Grip III (the cradle) a box with ``K = 4``
-    (:mod:`simgrip.sim.gripper_cradle`).
+    (:mod:`simgrip.gripper.cradle`).
     """
     g = check_grip(grip)
     if g not in GRIPPER_GRIPS:
@@ -258,7 +136,7 @@ def build_gripper(
     ----------
     grip : {"I", "II", "III"}
         Palm down (tip pinch), palm up, or the cradle (box, ``K = 4``:
-        :func:`simgrip.sim.gripper_cradle.build_cradle`, started from
+        :func:`simgrip.gripper.cradle.build_cradle`, started from
         ``initial_angles`` or the geometric cradle shape).
     params : PhysicalParams or DimensionlessParams
         ``M`` is the workpiece mass per finger; ``b`` the workpiece's width
@@ -317,7 +195,7 @@ def build_gripper(
         raise ValueError("box_gap: only a full-contact gripper (contact='full') places its workpiece by a gap")
     gap = DEFAULT_BOX_GAP if box_gap is None else check_positive("box_gap", box_gap, 1.0)
     if grip == "III":
-        from simgrip.sim.gripper_cradle import build_cradle
+        from simgrip.gripper.cradle import build_cradle
 
         if contact_angle != 0.0 or np.any(np.asarray(offset, dtype=float) != 0.0) or workpiece_yaw != 0.0:
             raise ValueError("offset, workpiece_yaw and contact_angle must be 0 for Grip III (the cradle is built "
@@ -385,22 +263,6 @@ def build_gripper(
     return scene
 
 
-def compile_gripper(spec: mujoco.MjSpec, *, fingers: int, n: int, **fields) -> GripperScene:
-    """Compile ``spec`` (``fingers`` fingers of ``n`` links named as :func:`~simgrip.sim.fingers.add_fingers`
-    names them, the workpiece body ``workpiece_body`` on a free joint with its geom) into a
-    :class:`GripperScene`: the finger and workpiece addresses are looked up in the compiled model, ``fields``
-    are the scene's other attributes."""
-    model = spec.compile()
-    index = index_fingers(model, fingers, n)
-    wb = mujoco.mj_name2id(model, mujoco.mjtObj.mjOBJ_BODY, "workpiece_body")
-    wj = int(model.body_jntadr[wb])
-    return GripperScene(
-        spec=spec, model=model, data=mujoco.MjData(model), n=n, fingers=fingers, index=index, workpiece_body=wb,
-        workpiece_geom=mujoco.mj_name2id(model, mujoco.mjtObj.mjOBJ_GEOM, _WORKPIECE_GEOM),
-        workpiece_qpos=np.arange(model.jnt_qposadr[wj], model.jnt_qposadr[wj] + 7),
-        workpiece_dof=np.arange(model.jnt_dofadr[wj], model.jnt_dofadr[wj] + 6), **fields)
-
-
 def _check_contact_angle(value, shape: str) -> float:
     try:
         beta = float(value)
@@ -451,22 +313,6 @@ def _start(initial_angles, K: int, n: int) -> np.ndarray:
     return np.array(np.broadcast_to(q, (K, n)))
 
 
-def finger_azimuths(fingers: int, yaw: float = 0.0) -> np.ndarray:
-    """Azimuth of each finger's plane [rad]: ``yaw + 2 pi k / K``, ``k = 0 .. K-1``."""
-    return yaw + 2.0 * math.pi * np.arange(int(fingers)) / int(fingers)
-
-
-def orient_fingers(spec: mujoco.MjSpec, azimuths, prefix: str = "") -> None:
-    """Turn the root of finger ``k`` (built by :func:`~simgrip.sim.fingers.add_fingers`, which mirrors
-    finger 1) to point along ``azimuths[k]`` [rad] about the vertical; each finger then bends in its own plane."""
-    for k, a in enumerate(azimuths):
-        spec.body(f"{prefix}f{k}_link0").quat = _yaw_quat(float(a))
-
-
-def _yaw_quat(a: float) -> list[float]:
-    return [math.cos(0.5 * a), 0.0, 0.0, math.sin(0.5 * a)]
-
-
 def _workpiece_size(shape: str, K: int, r: float, L: float) -> np.ndarray:
     """Geom size [m] of the workpiece whose surface lies ``r`` (over l) from its axis (centre)."""
     if shape == "box":
@@ -475,19 +321,6 @@ def _workpiece_size(shape: str, K: int, r: float, L: float) -> np.ndarray:
     if shape == "cylinder":
         return np.array([r, 0.5 * BOX_HEIGHT, 0.0]) * L
     return np.array([r, 0.0, 0.0]) * L
-
-
-def workpiece_body_mass(phys, K: int) -> float:
-    """The workpiece body's inertial mass [kg]: ``K m``, at least ``K`` :data:`MIN_WORKPIECE_MASS` ``rho l``.
-
-    Only the inertia is floored, not the weight: the settles apply the difference of the model's gravity
-    and the true weight ``K m g`` as an upward force on the workpiece (:attr:`GripperScene.weight_relief`),
-    so every static balance is the true ``M``'s (``M = 0`` included).  Why a floor: MuJoCo refuses a free
-    body without mass, and its soft contact rests at a depth proportional to the contact's mobility
-    (:func:`simgrip.settle.gripper_dynamics.contact_rest_depth`), which a nearly massless workpiece makes
-    unbounded: the tips sank through it and the dynamics dropped every workpiece with ``M < ~1e-3``.
-    """
-    return _workpiece.inertial_mass(K * phys.m, K, phys.rho, phys.length)
 
 
 def _add_workpiece(spec, shape: str, size, mass: float, centre, yaw: float) -> None:

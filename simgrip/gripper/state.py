@@ -6,7 +6,7 @@ each finger's contact force (``mj_contactForce``, summed over the tip's
 contacts with the workpiece) in the finger's own frame like the planar
 finger, and the workpiece's force and moment balance from the same forces
 and its weight.  The static residual and the velocity are the dynamics'
-(:class:`simgrip.settle.gripper_dynamics.GripperDynamics`).  Lengths are over
+(:class:`simgrip.gripper.dynamics.GripperDynamics`).  Lengths are over
 ``l``, forces over ``rho g l``, moments over ``rho g l^2``.
 """
 
@@ -20,7 +20,7 @@ import mujoco
 import numpy as np
 
 from simgrip.chain import link_positions
-from simgrip.sim.gripper import GripperScene
+from simgrip.gripper.scene import GripperScene
 
 __all__ = ["FRICTION_MARGIN", "warn_friction_boundary", "FingerRecord", "GripperState", "read_gripper_state"]
 
@@ -116,7 +116,7 @@ class GripperState:
     #: The scene's workpiece offset (over l, scene frame) and turn about its axis [rad] (:func:`build_gripper`).
     offset: np.ndarray = field(default_factory=lambda: np.zeros(2))
     workpiece_yaw: float = 0.0
-    #: How it was settled: ``"dynamics"`` or ``"symmetric"`` (:mod:`simgrip.settle.gripper_symmetry`).
+    #: How it was settled: ``"dynamics"`` or ``"symmetric"`` (:mod:`simgrip.gripper.symmetry`).
     method: str = "dynamics"
     #: Where the sticking friction acts: ``"surface"`` (MuJoCo's contact point on the tip sphere; the
     #: dynamics) or ``"point"`` (the finger's centreline, the paper's point contact; the skip's default).
@@ -124,7 +124,7 @@ class GripperState:
     #: Each finger's centreline in the scene's frame, (K, n + 1, 3) over ``l`` (:func:`simgrip.gripper.simulate_gripper`
     #: fills it from the scene; None when the state was settled from a scene elsewhere).
     nodes: np.ndarray | None = field(default=None, repr=False)
-    #: Every contact on a finger (:func:`simgrip.settle.gripper_full.gripper_contact_set`): filled by the
+    #: Every contact on a finger (:func:`simgrip.gripper.full.gripper_contact_set`): filled by the
     #: full-contact settle (``contact="full"``); None otherwise (the tips' contacts are ``records``).
     contact_set: list | None = None
 
@@ -133,7 +133,7 @@ def read_gripper_state(scene: GripperScene, dyn, held: bool, converged: bool, st
                        tol: float) -> GripperState:
     """The settled state at rest (``qvel = 0``) from MuJoCo's contact forces.
 
-    ``dyn`` is the settle's :class:`~simgrip.settle.gripper_dynamics.GripperDynamics` (its residual,
+    ``dyn`` is the settle's :class:`~simgrip.gripper.dynamics.GripperDynamics` (its residual,
     velocity and step ``h`` [s]); ``held`` whether the workpiece is held (no records when not);
     ``converged`` the run's verdict, further required ``residual <= tol`` (``tol`` over ``rho g l^2`` /
     ``rho g l``); ``steps`` the physics steps taken; ``t0`` the ``time.perf_counter()`` [s] at the

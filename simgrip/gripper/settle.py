@@ -1,19 +1,19 @@
-"""The settle of a K-finger gripper (:mod:`simgrip.sim.gripper`): the symmetry skip where exact, else dynamics.
+"""The settle of a K-finger gripper (:mod:`simgrip.gripper.scene`): the symmetry skip where exact, else dynamics.
 
 :func:`settle_gripper` by default (``method="auto"``) settles an exactly
 symmetric scene (:func:`simgrip.sim.symmetry.symmetry`) by the symmetry skip
-(:mod:`simgrip.settle.gripper_symmetry`: one finger's planar Newton settle,
+(:mod:`simgrip.gripper.symmetry`: one finger's planar Newton settle,
 the paper's point contact by default, replicated to K fingers), and any other
 scene by the over-damped dynamics (below), as the planar settle's
 default is the fast point-contact Newton and its dynamics the surface
 contact.  The state's ``method`` and ``contact`` say which ran.
 
-The dynamics (:mod:`simgrip.settle.gripper_dynamics`) is the planar
+The dynamics (:mod:`simgrip.gripper.dynamics`) is the planar
 ``settle(method="dynamics")``'s integrator (:mod:`simgrip.settle.integrator`)
 on all K fingers and the workpiece, with MuJoCo's dense constraint Jacobian
 up to :data:`GRIPPER_DENSE_NV` dofs.  This module drives it:
 
-* **Start** (:mod:`simgrip.settle.gripper_start`): every finger at the hinge chain's grip equilibrium
+* **Start** (:mod:`simgrip.gripper.start`): every finger at the hinge chain's grip equilibrium
   (:func:`simgrip.reference.solve_chain`, the tip a hair inside ``X = b/2``),
   the workpiece centred on the palm axis, level with the tips; an off-centre
   or turned workpiece, or unequal fingers, start with each finger at its own
@@ -51,8 +51,8 @@ up to :data:`GRIPPER_DENSE_NV` dofs.  This module drives it:
   half the step (at most three times).
 
 The static residual is the dynamics' (``qfrc_smooth + qfrc_constraint`` at
-``qvel = 0``, :mod:`simgrip.settle.gripper_dynamics`).
-:class:`GripperState` (:mod:`simgrip.settle.gripper_state`, re-exported here)
+``qvel = 0``, :mod:`simgrip.gripper.dynamics`).
+:class:`GripperState` (:mod:`simgrip.gripper.state`, re-exported here)
 reports one :class:`FingerRecord` per finger, read in the finger's own frame
 like the planar finger.
 """
@@ -67,13 +67,13 @@ import numpy as np
 from simgrip.settle import check_tol_steps
 from simgrip.settle.dynamics import DYN_PEN_LIMIT, DYN_TOL, DYN_TOL_PER_WEIGHT
 # FingerRecord, GripperState, contact_rest_depth and straight_frequency are re-exported (__all__)
-from simgrip.settle.gripper_dynamics import GripperDynamics, contact_rest_depth, settle_once, straight_frequency
-from simgrip.settle.gripper_start import is_symmetric, start_qpos, warn_unreached
-from simgrip.settle.gripper_state import FingerRecord, GripperState, read_gripper_state, warn_friction_boundary
+from simgrip.gripper.dynamics import GripperDynamics, contact_rest_depth, settle_once, straight_frequency
+from simgrip.gripper.start import is_symmetric, start_qpos, warn_unreached
+from simgrip.gripper.state import FingerRecord, GripperState, read_gripper_state, warn_friction_boundary
 from simgrip.settle.state import SettleError
 from simgrip.settle.statics import restore_options, save_options
 from simgrip.sim.checks import clear_warnings
-from simgrip.sim.gripper import GripperScene
+from simgrip.gripper.scene import GripperScene
 from simgrip.validity import check_grip_shape
 from simgrip.validity_shapes import check_gripper_valid
 
@@ -107,7 +107,7 @@ def settle_gripper(scene: GripperScene, *, tol: float | None = None, max_steps: 
     The default (``method=None``, ``"auto"``) is as the planar settle's: the
     fast static solve of the paper's point-contact problem where it is exact
     (one finger's planar Newton settle replicated to K,
-    :mod:`simgrip.settle.gripper_symmetry`), the over-damped dynamics with
+    :mod:`simgrip.gripper.symmetry`), the over-damped dynamics with
     MuJoCo's surface contact (see the module docstring) where it is not.  The
     state's ``method`` says which ran.  Where the skip fails (:class:`SettleError`,
     or an unconverged state) under ``"auto"``, the dynamics
@@ -149,9 +149,9 @@ def settle_gripper(scene: GripperScene, *, tol: float | None = None, max_steps: 
     GripperState
     """
     if not isinstance(scene, GripperScene):
-        raise ValueError(f"scene must be a simgrip.sim.gripper.GripperScene, got {type(scene).__name__}")
+        raise ValueError(f"scene must be a simgrip.gripper.scene.GripperScene, got {type(scene).__name__}")
     if scene.contact == "full" or contact == "full":  # every link touches (issue 17): the guarded dynamics
-        from simgrip.settle.gripper_full import settle_gripper_full
+        from simgrip.gripper.full import settle_gripper_full
 
         if scene.contact != "full" or contact not in (None, "full"):
             raise ValueError("contact: 'full' needs a gripper built with contact='full' and settles with it only")
@@ -161,7 +161,7 @@ def settle_gripper(scene: GripperScene, *, tol: float | None = None, max_steps: 
                                  1 if max_steps is None else max_steps)
         return check_gripper_valid(scene, settle_gripper_full(scene, tol=tol, max_steps=max_steps,
                                                               allow_unconverged=allow_unconverged))
-    from simgrip.settle.gripper_symmetry import symmetric_or_none
+    from simgrip.gripper.symmetry import symmetric_or_none
 
     t0 = time.perf_counter()
     try:
@@ -181,7 +181,7 @@ def settle_gripper(scene: GripperScene, *, tol: float | None = None, max_steps: 
     # scene (MuJoCo's surface contact), and the state says why it, not the skip, answered
     try:
         if scene.grip == "III":  # the cradle: one finger's planar dynamics, replicated
-            from simgrip.settle.gripper_symmetry import settle_cradle_dynamics
+            from simgrip.gripper.symmetry import settle_cradle_dynamics
 
             state = settle_cradle_dynamics(scene, tol=tol, max_steps=max_steps, allow_unconverged=allow_unconverged)
         else:
@@ -200,7 +200,7 @@ def settle_gripper(scene: GripperScene, *, tol: float | None = None, max_steps: 
 def _may_fall_back(scene: GripperScene, method: str | None, contact: str | None) -> bool:
     """Whether a failed symmetry skip falls back to the dynamics: ``method`` auto (None) and a contact the dynamics
     has (None or ``"surface"``; the point contact is the skip's only).  The cradle (Grip III) falls back to one
-    finger's planar dynamics, replicated (:func:`~simgrip.settle.gripper_symmetry.settle_cradle_dynamics`)."""
+    finger's planar dynamics, replicated (:func:`~simgrip.gripper.symmetry.settle_cradle_dynamics`)."""
     return method in (None, "auto") and contact in (None, "surface")
 
 

@@ -1,6 +1,6 @@
-"""Where each finger of a K-finger gripper meets an off-centre, yawed workpiece (:mod:`simgrip.sim.gripper`).
+"""Where each finger of a K-finger gripper meets an off-centre, yawed workpiece (:mod:`simgrip.gripper.scene`).
 
-The workpiece of :func:`simgrip.sim.gripper.build_gripper` may sit off the
+The workpiece of :func:`simgrip.gripper.scene.build_gripper` may sit off the
 palm axis (``offset = (dx, dy)`` over ``l``) and turned about its vertical
 axis by ``workpiece_yaw`` relative to the fingers; both are given in the
 scene's frame, the frame that the scene's ``yaw`` turns with everything
@@ -21,7 +21,7 @@ workpiece's footprint (a finger would start inside it), a finger meeting
 the box on an edge's rounded strip instead of a flat face, or two fingers
 with the workpiece off their common plane (it would hang from the line
 through the two contacts and swing about it).  A sphere is held
-centred only (its tips start on a circle of latitude, :func:`simgrip.settle.gripper`).
+centred only (its tips start on a circle of latitude, :func:`simgrip.gripper.settle`).
 """
 
 from __future__ import annotations

@@ -1,6 +1,6 @@
 """Grip III (the cradle) for a K = 4 gripper around a box: each finger carries the bottom edge of one face.
 
-:func:`simgrip.sim.gripper.build_gripper` builds ``grip="III"`` here.
+:func:`simgrip.gripper.scene.build_gripper` builds ``grip="III"`` here.
 
 Which edges carry the fingers, and why.  Each finger bends in its own
 vertical plane through the palm axis; with four fingers at azimuths ``2 pi
@@ -52,7 +52,8 @@ from simgrip.profiles import as_profile
 from simgrip.sim.contacts import add_pair
 from simgrip.sim.fingers import add_fingers, check_finger_links
 from simgrip.sim.scene import DEFAULT_R_CORNER, check_params, check_positive, root_spec, set_joint_angles
-from simgrip.sim.workpiece import BOX_HEIGHT, contact_links, corner_placement, cradle_start
+from simgrip.sim.workpiece import BOX_HEIGHT, contact_links, corner_placement, cradle_start, workpiece_inertia
+from simgrip.gripper.model import compile_gripper, finger_azimuths, orient_fingers, workpiece_body_mass
 
 __all__ = ["CRADLE_FINGERS", "DEFAULT_CONTACT_WINDOW", "START_NUMERIC", "build_cradle", "corner_name", "cradle_start_angles"]
 
@@ -84,7 +85,7 @@ def cradle_start_angles(model) -> np.ndarray:
 def build_cradle(params: PhysicalParams | DimensionlessParams, profile, n_links: int, *, fingers: int = 4,
                  yaw: float = 0.0, r_tip: float, r_link: float, r_corner: float = DEFAULT_R_CORNER,
                  initial_angles=None, contact_window: float = DEFAULT_CONTACT_WINDOW):
-    """Build and compile the K = 4 cradle (see the module docstring); a :class:`~simgrip.sim.gripper.GripperScene`.
+    """Build and compile the K = 4 cradle (see the module docstring); a :class:`~simgrip.gripper.scene.GripperScene`.
 
     ``params``: ``M`` per finger, ``gamma`` the contact's arc length the
     default start crosses ``X = b/2`` at; ``profile`` one profile (every
@@ -93,8 +94,6 @@ def build_cradle(params: PhysicalParams | DimensionlessParams, profile, n_links:
     ``l``.  ValueError naming the bad argument (``b`` when the box's corner
     would not sit at ``x > 0`` on the start shape).
     """
-    from simgrip.sim.gripper import compile_gripper, finger_azimuths, orient_fingers, workpiece_body_mass
-    from simgrip.sim.workpiece import workpiece_inertia
 
     if isinstance(fingers, bool) or fingers not in CRADLE_FINGERS:
         raise ValueError(f"fingers must be one of {CRADLE_FINGERS} for Grip III (one finger per face of the box), "

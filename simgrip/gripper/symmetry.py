@@ -1,13 +1,13 @@
 """The symmetry skip of a K-finger gripper: one finger's planar settle, replicated to K fingers.
 
-Where a K-finger scene (:mod:`simgrip.sim.gripper`) is exactly symmetric,
+Where a K-finger scene (:mod:`simgrip.gripper.scene`) is exactly symmetric,
 every finger is the same planar problem and the workpiece only slides along
 the palm axis, so the K-finger settled state is one planar finger's, turned
 to every azimuth.  :func:`settle_symmetric` settles that one finger with the
 planar static settle (:func:`simgrip.settle.settle`: Newton in link angles,
 tridiagonal, :mod:`simgrip.settle.chain_newton`) and returns a
-:class:`~simgrip.settle.gripper.GripperState` with the same fields as the
-K-finger dynamics (:func:`simgrip.settle.gripper.settle_gripper`).
+:class:`~simgrip.gripper.settle.GripperState` with the same fields as the
+K-finger dynamics (:func:`simgrip.gripper.settle.settle_gripper`).
 
 Exactness (:func:`~simgrip.sim.symmetry.symmetry`) is read from the compiled
 model: identical fingers evenly spaced about the palm axis, the workpiece on
@@ -56,7 +56,7 @@ import mujoco
 import numpy as np
 
 from simgrip.settle.state import SettleError
-from simgrip.sim.gripper import GripperScene
+from simgrip.gripper.scene import GripperScene
 from simgrip.sim.symmetry import EQUAL_RTOL, Symmetry, cradle_edges, symmetry
 from simgrip.validity import check_grip_shape
 
@@ -103,9 +103,9 @@ def _planar_cradle(scene: GripperScene):
     """The planar Grip III scene of the K = 4 cradle: the start it was built with, so the same box and contact links.
 
     As the planar cradle's settle, every settle of the scene starts from the shape the box was placed on
-    (:func:`simgrip.sim.gripper_cradle.cradle_start_angles`), not from the state a previous settle left.
+    (:func:`simgrip.gripper.cradle.cradle_start_angles`), not from the state a previous settle left.
     """
-    from simgrip.sim.gripper_cradle import cradle_start_angles
+    from simgrip.gripper.cradle import cradle_start_angles
     from simgrip.sim.scene import build_scene as build_model
 
     m, L = scene.model, scene.length
@@ -329,9 +329,8 @@ def _sphere_holds(scene: GripperScene, pst) -> bool:
 def _replicate(scene: GripperScene, pst, held: bool, converged: bool, steps: int, tolerance: float,
                allow_unconverged: bool, t0: float):
     """The K-finger state from the planar state ``pst`` (see the module docstring)."""
-    from simgrip.settle.gripper import FingerRecord, GripperState
-    from simgrip.settle.gripper_start import warn_unreached
-    from simgrip.settle.gripper_state import warn_friction_boundary
+    from simgrip.gripper.start import warn_unreached
+    from simgrip.gripper.state import FingerRecord, GripperState, warn_friction_boundary
 
     m, d, K = scene.model, scene.data, scene.fingers
     L, W = scene.length, scene.force_scale

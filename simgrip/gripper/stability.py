@@ -1,6 +1,6 @@
 """Is the K-finger settle's balanced start a *stable* equilibrium?  Two independent answers.
 
-The balanced start (:mod:`simgrip.settle.gripper_start`) is an equilibrium of
+The balanced start (:mod:`simgrip.gripper.start`) is an equilibrium of
 the workpiece and the chains; it may still be unstable (a pinched workpiece
 whose contact forces, turning with it, tip it further than the fingers'
 stiffness pulls it back).  The dynamics then leaves it exponentially, and a
@@ -45,8 +45,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from simgrip.settle.gripper_start import START_INSIDE, _start, balance_shares, finger_chain, is_symmetric, start_qpos
-from simgrip.sim.gripper import GripperScene
+from simgrip.gripper.start import START_INSIDE, _start, balance_shares, finger_chain, is_symmetric, start_qpos
+from simgrip.gripper.scene import GripperScene
 
 __all__ = ["FD_EPS", "STIFFNESS_STEP", "UNSTABLE_GROWTH", "StartStiffness", "start_growth", "start_stiffness"]
 
@@ -149,14 +149,14 @@ def start_stiffness(scene: GripperScene) -> StartStiffness | None:
 def start_growth(scene: GripperScene, step_factor: float = 1.0) -> float | None:
     """Largest ``|eigenvalue|`` of the settle's one-step map linearised about its start; None if it holds nothing.
 
-    The start is :func:`~simgrip.settle.gripper_start.start_qpos` at the dynamics' step ``step_factor h``
-    (:mod:`simgrip.settle.gripper_dynamics`' options), at rest; MuJoCo's solver is run to round-off for the
+    The start is :func:`~simgrip.gripper.start.start_qpos` at the dynamics' step ``step_factor h``
+    (:mod:`simgrip.gripper.dynamics`' options), at rest; MuJoCo's solver is run to round-off for the
     centred differences.  ``> 1 + UNSTABLE_GROWTH``: unstable (module docstring).  The model's options
     and state are restored.
     """
     import mujoco
 
-    from simgrip.settle.gripper_dynamics import GripperDynamics
+    from simgrip.gripper.dynamics import GripperDynamics
     from simgrip.settle.statics import restore_options, save_options
 
     m, d = scene.model, scene.data

@@ -1,7 +1,7 @@
 """K-finger grippers end to end: build the scene, settle it, and its record (``simgrip simulate --fingers K``).
 
-:func:`simulate_gripper` builds :func:`simgrip.sim.gripper.build_gripper` and
-settles it with :func:`simgrip.settle.gripper.settle_gripper`;
+:func:`simulate_gripper` builds :func:`simgrip.gripper.scene.build_gripper` and
+settles it with :func:`simgrip.gripper.settle.settle_gripper`;
 :func:`gripper_record` turns the settled state into the fields of the planar
 ``simulate`` record (:func:`simgrip.compare.settled_record`), those of the
 first finger at the top level, plus ``fingers``: one record per finger.
@@ -22,18 +22,18 @@ __all__ = ["gripper_record", "simulate_gripper"]
 def simulate_gripper(grip: str, params: DimensionlessParams, profile, links: int, *, fingers: int, workpiece: str,
                      yaw: float = 0.0, contact_angle: float = 0.0, offset=(0.0, 0.0), workpiece_yaw: float = 0.0,
                      progress=None, **settle_kw):
-    """Build the K-finger gripper and settle it; returns its :class:`~simgrip.settle.gripper.GripperState`.
+    """Build the K-finger gripper and settle it; returns its :class:`~simgrip.gripper.settle.GripperState`.
 
     ``profile`` is one profile or one per finger; ``yaw``, ``contact_angle`` [rad], ``offset`` (over l)
-    and ``workpiece_yaw`` [rad] go to :func:`~simgrip.sim.gripper.build_gripper`, extra keywords
+    and ``workpiece_yaw`` [rad] go to :func:`~simgrip.gripper.scene.build_gripper`, extra keywords
     (``method``: default ``"auto"``, the symmetry skip where the scene is exactly symmetric, else the
-    dynamics; ``contact``, ``tol``, ...) to :func:`~simgrip.settle.gripper.settle_gripper`.  The state's
+    dynamics; ``contact``, ``tol``, ...) to :func:`~simgrip.gripper.settle.settle_gripper`.  The state's
     ``build_time_s`` is the build and compile of the model [s] (``wall_time_s`` the settle alone);
     ``progress`` (:mod:`simgrip.progress`; None: silent) is told the phases.
     """
     from simgrip.progress import phase
-    from simgrip.settle.gripper import settle_gripper
-    from simgrip.sim.gripper import build_gripper
+    from simgrip.gripper.settle import settle_gripper
+    from simgrip.gripper.scene import build_gripper
 
     if not isinstance(profile, (list, tuple)):
         profile = as_profile(profile)
@@ -58,7 +58,7 @@ def simulate_gripper(grip: str, params: DimensionlessParams, profile, links: int
 
 def gripper_nodes(scene, link_angles) -> np.ndarray:
     """Each finger's centreline ``(K, n + 1, 3)`` over ``l`` in the scene's frame: finger ``k``'s plane is
-    vertical at its azimuth (:attr:`~simgrip.sim.gripper.GripperScene.azimuths`, the whole scene's ``yaw`` in it)."""
+    vertical at its azimuth (:attr:`~simgrip.gripper.scene.GripperScene.azimuths`, the whole scene's ``yaw`` in it)."""
     import numpy as np
 
     from simgrip.chain import link_positions

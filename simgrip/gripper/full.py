@@ -1,7 +1,7 @@
 """The settle of a full-contact K-finger gripper (``build_gripper(..., contact="full")``): every link touches.
 
 The planar full-contact settle's three phases (:mod:`simgrip.settle.full_contact`) on the K-finger dynamics
-(:class:`~simgrip.settle.gripper_dynamics.GripperDynamics`, with a damping ``factor`` for the guard:
+(:class:`~simgrip.gripper.dynamics.GripperDynamics`, with a damping ``factor`` for the guard:
 :class:`FullGripperDynamics`): a frictionless closing ramp of every finger's rest angles from the straight
 start with the workpiece held where it was built (below the palm), a release with friction, the workpiece
 dropped when it falls :data:`~simgrip.settle.dynamics.DYN_DROP_FALL` (or
@@ -21,8 +21,8 @@ import numpy as np
 from simgrip.settle.dynamics import DYN_CLOSE_RATE, DYN_DROP_FALL, DYN_DROP_SLIP, DYN_RELEASE_STEPS
 from simgrip.settle.full_contact import FULL_CLOSE_RATE_PER_RADIUS, FULL_PEN_LIMIT, contact_solref, ramp_rate
 from simgrip.settle.full_guard import GuardedSteps
-from simgrip.settle.gripper_dynamics import GripperDynamics
-from simgrip.settle.gripper_state import GripperState, read_gripper_state
+from simgrip.gripper.dynamics import GripperDynamics
+from simgrip.gripper.state import GripperState, read_gripper_state
 from simgrip.settle.state import SettleError
 from simgrip.settle.statics import CONTACT_IMPEDANCE, restore_options, save_options
 from simgrip.sim.full_contact import colliding_geoms
@@ -164,13 +164,13 @@ def settle_gripper_full(scene, *, tol: float, max_steps: int | None = None,
 
 
 def whole_finger_records(scene, state) -> list:
-    """Each touching finger's :class:`~simgrip.settle.gripper_state.FingerRecord` as the resultant of all its
+    """Each touching finger's :class:`~simgrip.gripper.state.FingerRecord` as the resultant of all its
     contacts with the workpiece (``state.contact_set``), not the tip's alone: ``N1, N2, N3`` the summed force in
     the finger's frame, ``normal = N1`` and ``friction = N2`` (the Grip I/II reading: ``E1`` is the normal of a
     side face), ``contact_angle`` 0, ``point`` the force-weighted mean contact point ``(X, Y, out of plane)``,
     ``moment`` 0 (several contact points have no one couple about the tip), ``required_mu`` ``sqrt(N2^2 +
     N3^2) / N1``."""
-    from simgrip.settle.gripper_state import FingerRecord
+    from simgrip.gripper.state import FingerRecord
 
     out = []
     for k in range(scene.fingers):
