@@ -77,12 +77,17 @@ def _examples():
     return out
 
 
-def _directive_python_blocks():
-    for page in PAGES:
-        for start, info, options, body, _ in fenced_blocks(page.read_text(encoding="utf-8")):
-            words = info.split()
-            if words[:1] in (["{code-block}"], ["{code}"], ["{sourcecode}"]) and words[1:2] in (["python"], ["py"]):
-                yield page.relative_to(ROOT), start, options
+def unrun_problems(text: str) -> list[str]:
+    """Python blocks of a page that are neither run (```python) nor marked ``:caption: not run: <reason>``."""
+    problems = []
+    for start, info, options, _, _ in fenced_blocks(text):
+        words = info.split()
+        if words[:1] in (["{code-block}"], ["{code}"], ["{sourcecode}"]) and words[1:2] in (["python"], ["py"]):
+            caption = options.get("caption", "").strip().strip("\"'")  # MyST reads a quoted value as YAML
+            if not re.match(r"not run: \S", caption):
+                problems.append(f"line {start}: a {{code-block}} python must carry ':caption: not run: <reason>' "
+                                f"(or be a ```python block, which the tests run)")
+    return problems
 
 
 EXAMPLES = _examples()
@@ -91,7 +96,7 @@ EXAMPLES = _examples()
 def test_docs_have_examples():
     """The pages the examples live on are found (a parser that finds nothing would pass every check)."""
     pages = {p.values[0] for p in EXAMPLES}
-    assert {"docs/getting-started.md", "docs/python.md", "docs/environments.md"} <= pages, pages
+    assert {"docs/getting-started.md", "docs/python.md", "docs/environments.md", "docs/sweeps.md"} <= pages, pages
 
 
 @pytest.mark.parametrize("page, line, source, expected", EXAMPLES)
@@ -109,11 +114,11 @@ def test_example_runs(page, line, source, expected, tmp_path, monkeypatch):
 
 def test_unrun_examples_say_why():
     """A Python block that is not executed is marked so on the page, with its reason."""
-    for page, line, options in _directive_python_blocks():
-        caption = options.get("caption", "")
-        assert re.match(r"not run: \S", caption), (
-            f"{page}:{line}: a {{code-block}} python must carry ':caption: not run: <reason>' "
-            f"(or be a ```python block, which the tests run)")
+    problems = [f"{p.relative_to(ROOT)} {x}" for p in PAGES for x in unrun_problems(p.read_text(encoding="utf-8"))]
+    assert not problems, "\n".join(problems)
+    bad = "```{code-block} python\n:caption: an example\n\nprint(1)\n```\n"
+    good = '```{code-block} python\n:caption: "not run: needs a cluster"\n\nprint(1)\n```\n'
+    assert len(unrun_problems(bad)) == 1 and unrun_problems(good) == []
 
 
 _LINK = re.compile(r"!?\[(?:[^\[\]]|\[[^\]]*\])*\]\(\s*<?([^)\s>]+)>?(?:\s+\"[^\"]*\")?\s*\)")
