@@ -43,6 +43,10 @@ CLOSE_TIMEOUT_S = 1.0
 CLOSE_GRACEFUL_S = 15.0
 #: Seconds an interrupted start is given to end (what it made is then closed by its own thread).
 START_ABORT_S = 1.0
+#: Seconds allowed at exit for worker spawns in progress to hand their children the start-up data (see _kill_left).
+SPAWN_FINISH_S = 0.5
+#: Seconds an abandoned cluster's event loop is held at exit (longer than any exit takes; see _freeze_loops).
+FROZEN_FOR_S = 30.0
 #: Local worker processes per core at most.  A task (a settle, a BVP solve) is one CPU-bound thread, so more
 #: processes than cores only share the cores (and cost ~150 MB each); two per core still lets a task that waits
 #: (I/O, a figure's file) overlap with one that computes.  ``--jobs`` above this is capped, not refused.
@@ -158,6 +162,52 @@ def descendants(pid: int | None = None) -> set[int]:
     return out
 
 
+def _freeze_loops(clusters, timeout: float) -> None:
+    """Hold each cluster's event loop in a callback that waits (until this process has exited), so that no
+    coroutine of the abandoned start goes on to create and spawn another worker.
+
+    Returns once every loop is inside the callback (the step it was running has ended), or after ``timeout``
+    seconds.  Only for the exit: the loops are never let go.
+    """
+    held = []
+    for cluster in clusters:
+        with contextlib.suppress(Exception):
+            entered = threading.Event()
+
+            def hold(entered=entered):
+                entered.set()
+                threading.Event().wait(FROZEN_FOR_S)
+
+            cluster.loop.add_callback(hold)
+            held.append(entered)
+    for entered in held:
+        entered.wait(timeout)
+
+
+def _finish_spawns(timeout: float) -> None:
+    """Let distributed's process threads end what they hold, within ``timeout`` seconds in all.
+
+    distributed runs every start, terminate and kill of a worker process in one thread per process
+    (``AsyncProcess``'s message-queue thread), in the order asked.  A ``stop`` message queued behind them
+    ends that thread once the ops before it are done, so joining it waits for a spawn in progress to have
+    written its child the start-up data (a few ms; the child is then killed whole, without a word).  The
+    threads are found by name (a closed nanny no longer refers to its process).
+    """
+    import time
+
+    threads = []
+    for thread in threading.enumerate():
+        name = thread.name or ""
+        if not (name.startswith("AsyncProcess ") and name.endswith(" watch message queue")) or not thread.is_alive():
+            continue
+        with contextlib.suppress(Exception):
+            thread._args[4].put_nowait({"op": "stop"})  # (selfref, process, loop, state, queue, exit_future)
+            threads.append(thread)
+    end = time.monotonic() + timeout
+    for thread in threads:
+        thread.join(max(0.0, end - time.monotonic()))
+
+
 def _kill(pids) -> None:
     for pid in pids:
         with contextlib.suppress(ProcessLookupError, PermissionError):
@@ -190,14 +240,17 @@ class LocalDask:
             lambda: _start_local(self._cls, self.workers), name="simgrip-cluster-start", block_sigint=True,
             discard=self._discard, on_give_up=self._end_workers, settle=START_ABORT_S)
 
+    def _clusters(self) -> list:
+        """This run's cluster objects, also one still starting (``SpecCluster._instances`` holds it from its start)."""
+        spec = sys.modules.get("distributed.deploy.spec")
+        return [c for c in list(spec.SpecCluster._instances) if type(c) is self._cls] if spec else []
+
     def _nannies(self) -> list:
         """The nannies of this run's cluster, also those still starting (distributed keeps them in ``_created``)."""
-        spec = sys.modules.get("distributed.deploy.spec")
         out = []
-        for c in list(spec.SpecCluster._instances) if spec else []:
-            if type(c) is self._cls:
-                with contextlib.suppress(Exception):
-                    out.extend(list(getattr(c, "_created", ())) + list(c.workers.values()))
+        for c in self._clusters():
+            with contextlib.suppress(Exception):
+                out.extend(list(getattr(c, "_created", ())) + list(c.workers.values()))
         return out
 
     def _end_workers(self) -> None:
@@ -220,7 +273,16 @@ class LocalDask:
         _kill(self.spawned())
 
     def _kill_left(self) -> None:
-        """Kill this cluster's worker processes still alive: those its nannies started, and its descendants."""
+        """Kill this cluster's worker processes still alive: those its nannies started, and its descendants.
+
+        At exit a nanny's start may still be handing its new worker the start-up data: multiprocessing
+        spawns the child, then writes it the pickled process over a pipe, in the nanny's own (daemon)
+        thread.  Exiting between the two closed the pipe under the child, which printed spawn's
+        ``EOFError: Ran out of input`` with a traceback under the command's one line.  So each such
+        thread is first let finish what it holds (:func:`_finish_spawns`), then every child is killed.
+        """
+        _freeze_loops(self._clusters(), SPAWN_FINISH_S)
+        _finish_spawns(SPAWN_FINISH_S)
         pids = set(self.spawned())
         for nanny in self._nannies():
             pid = getattr(getattr(getattr(nanny, "process", None), "process", None), "pid", None)
