@@ -178,3 +178,50 @@ def test_link_check_catches_a_broken_link(tmp_path):
     assert found == ["missing.md", "img.png"]
     assert _slug("Where the parameter space ends") == "where-the-parameter-space-ends"
     assert _slug("`simgrip sweep` on Dask") == "simgrip-sweep-on-dask"
+
+
+_CODE_SPAN = re.compile(r"`([^`\n]+)`")
+
+
+def _code_spans():
+    for page in PAGES + [ROOT / "README.md"]:
+        for m in _CODE_SPAN.finditer(page.read_text(encoding="utf-8")):
+            yield page.relative_to(ROOT), m.group(1)
+
+
+def _resolves(dotted: str) -> bool:
+    import importlib
+
+    parts = dotted.split(".")
+    for i in range(len(parts), 0, -1):
+        try:
+            obj = importlib.import_module(".".join(parts[:i]))
+        except ImportError:
+            continue
+        for attr in parts[i:]:
+            if not hasattr(obj, attr):
+                return False
+            obj = getattr(obj, attr)
+        return True
+    return False
+
+
+def test_names_in_the_docs_exist():
+    """Every ``simgrip.x.y`` the pages name imports, every repository path they name exists, and every
+    environment id they name is registered: a module moved or renamed cannot leave the docs behind."""
+    import gymnasium
+
+    import simgrip  # noqa: F401  registers the environments
+
+    stale = []
+    for page, span in _code_spans():
+        for name in re.findall(r"\bsimgrip(?:\.[A-Za-z_]\w*)+", span):
+            if not _resolves(name):
+                stale.append(f"{page}: {name} (no such module or attribute)")
+        for env_id in re.findall(r"\bsimgrip/[A-Z][A-Za-z]*-v\d+\b", span):
+            if env_id not in gymnasium.registry:
+                stale.append(f"{page}: {env_id} (no such environment)")
+        for path in re.findall(r"\b(?:simgrip|envs|tests|examples|models)/[a-z_][\w/.-]*\.(?:py|xml)\b", span):
+            if not (ROOT / path).exists():
+                stale.append(f"{page}: {path} (no such file)")
+    assert not stale, "the docs name what does not exist:\n" + "\n".join(sorted(set(stale)))
