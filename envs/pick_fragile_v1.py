@@ -18,9 +18,9 @@ crush limit now bounds the grip).
 
 Rewards (every term in ``info``):
 
-=================  ==================================================================  =====================
+================== ==================================================================  =====================
 term (info key)    value per step                                                       over an episode
-=================  ==================================================================  =====================
+================== ==================================================================  =====================
 ``reward_touch``   ``+w_touch`` (0.02) when every finger's normal force on the          ``<= w_touch T``
                    workpiece is > 0 and the step did not end in a crush, drop or        (6 for T = 300,
                    knock-over (tactile contact: sensed)                                 8 for T = 400)
@@ -28,13 +28,13 @@ term (info key)    value per step                                               
                    1)``, 0 once lost or crushed (v0's; the lift is observed)
 ``reward_place``   PlaceFragile only: v0's ``w_place (psi_t - psi_{t-1})``              ``<= w_place`` (10)
 ``reward_success`` ``w_success`` once, on the terminating success step (v0's)          20 (Place: 30)
-``reward_crush``   on the crushing step: ``-w_crush (1/2 + x / (2 (1 + x)))`` with       in ``[-w_crush,
+``reward_crush``   on the crushing step: ``-w_crush (1/2 + x / (2 (1 + x)))`` with      in ``[-w_crush,
                    ``x = (F - L) / L``, ``F`` the largest finger normal force of the    -w_crush/2]`` plus
                    step (the reading that defines the crush), ``L`` the hidden          the lift taken back
                    ``crush_limit``; plus the lift progress taken back                   (``-w_lift phi``)
 ``reward_drop``    ``-w_drop`` once on a drop or knock-over (v0's term, v1's weight)    ``-w_drop`` (-5)
 ``reward_squeeze`` 0 (``w_squeeze = 0``: v0's term read the hidden mass and friction)   0
-=================  ==================================================================  =====================
+================== ==================================================================  =====================
 
 Defaults: ``w_touch = 0.02``, ``w_crush = 5``, ``w_drop = 5``, ``w_squeeze = 0``; ``w_lift``, ``w_success``
 (and PlaceFragile's ``w_place``) as v0.  Ordering (registered time limits ``T``): any success returns at least
