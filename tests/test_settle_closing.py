@@ -133,6 +133,7 @@ def test_predicted_closing_equals_the_ramped_closing(monkeypatch, grip, kappa, n
 
 def test_closing_falls_back_to_the_ramp(monkeypatch):
     """An unusable chain start and prediction (here: the chain solver fails) leave the staged ramp in charge."""
+    import simgrip.reference.chain_start as chain_start
     import simgrip.reference.hinge_chain as D
 
     ref = settle(build_scene("I", STANDARD, Uniform(-6.0), 16))
@@ -141,6 +142,7 @@ def test_closing_falls_back_to_the_ramp(monkeypatch):
         raise D.DiscreteError("no")
 
     monkeypatch.setattr(D, "solve_chain", boom)
+    monkeypatch.setattr(chain_start, "grip_start", boom)  # (the chain start's own solve)
     st = settle(build_scene("I", STANDARD, Uniform(-6.0), 16))
     assert st.held and st.newton_iterations > ref.newton_iterations
     _same_grip_state(st, ref)

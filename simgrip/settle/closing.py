@@ -27,12 +27,12 @@ from __future__ import annotations
 import mujoco
 import numpy as np
 
-from simgrip.reference import DiscreteError, hinge_chain
+from simgrip.reference import DiscreteError, chain_start, hinge_chain
 from simgrip.settle.chain_model import gravity_factor
 from simgrip.settle.newton import Newton
 from simgrip.settle.state import SettleError, finger_tip
 from simgrip.sim.scene import BOX_HEIGHT, Scene, set_curvature
-from simgrip.sim.workpiece import hold_workpiece, place_workpiece
+from simgrip.sim.workpiece_motion import hold_workpiece, place_workpiece
 
 __all__ = ["close_grip", "finger_alone", "hold_workpiece", "place_on_chain", "place_workpiece", "release",
            "start_free", "start_on_chain"]
@@ -61,9 +61,9 @@ def start_free(scene: Scene) -> bool:
     chain solver fails.
     """
     try:
-        # the angles alone (solve_chain's, bit for bit): the free start needs no fields, nodes or stability
-        # eigenvalue (a quarter of the chain solve, ~10 % of the free settle at n = 16)
-        phi = hinge_chain.chain_angles("free", scene.params, scene.profile, scene.n, gravity=gravity_factor(scene))
+        # the angles alone (chain_angles' equilibrium by its own Newton steps on LAPACK, chain_start): the free
+        # start needs no fields, nodes or stability eigenvalue
+        phi = chain_start.free_start_angles(scene.params, scene.profile, scene.n, gravity=gravity_factor(scene))
     except (DiscreteError, ValueError):
         return False
     q = phi.copy()  # solve_chain's joint_angles, np.diff(phi, prepend=0) without its concatenation: phi_0 - 0 is phi_0
@@ -168,9 +168,9 @@ def start_on_chain(scene: Scene, run: Newton | None) -> bool | None:
     p = scene.params
     try:
         # the tip a hair inside the face so that MuJoCo reports the contact
-        # only the stability's sign is tested: the bisection stops once it is decided (same verdict)
-        ch = hinge_chain.solve_chain(scene.grip, p.replace(b=p.b - 2e-6), scene.profile, scene.n,
-                                     gravity=gravity_factor(scene), stability="sign")
+        # only the angles, tip, N1 and the stability's sign are read (solve_chain's, by chain_start)
+        ch = chain_start.grip_start(scene.grip, p.replace(b=p.b - 2e-6), scene.profile, scene.n,
+                                    gravity=gravity_factor(scene))
         # the free finger's equilibrium next to the grip's: Newton in link angles when the solve has the
         # chain model (O(n), from the grip shape), else the chain solver
         model = getattr(run, "model", None)
@@ -183,7 +183,7 @@ def start_on_chain(scene: Scene, run: Newton | None) -> bool | None:
             return False
     except (DiscreteError, ValueError):
         return None
-    if not (ch.success and ch.N1 > 0.0 and ch.min_eigenvalue > 0.0):
+    if not (ch.N1 > 0.0 and ch.stable):
         return None
     scene.data.qpos[scene.joint_qpos] = ch.joint_angles[None, :]
     if run is not None:
