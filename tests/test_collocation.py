@@ -108,3 +108,62 @@ def test_singular_system_reported_as_solve_bvp_does():
                     bc_jac=lambda ya, yb: (A2, B2), tol=1e-6)
     new = solve_collocation(f, fj, A2, B2, c, x, y, None, tol=1e-6)
     assert ref.status == 2 and new.status == 2 and new.message == ref.message
+
+
+# continue_collocation: a continuation's chord Newton ------------------------------------------------------------
+
+def _line(grip, kappas, params=STANDARD):
+    """Converged solutions of a grid line's first points and the problems of the next ones."""
+    sols = [solve(grip, params, Uniform(k))._raw for k in kappas[:2]]
+    probs = [checked_problem(grip, params, Uniform(k))[2] for k in kappas[2:]]
+    return sols, probs
+
+
+@pytest.mark.parametrize("grip, kappas", [("I", np.linspace(-7, -3, 300)[:6]), ("III", np.linspace(-6, -1, 60)[:6])])
+def test_chord_steps_from_a_neighbour_equal_a_solve(grip, kappas, monkeypatch):
+    """Along a grid line (the 300-point Grip I sweep's spacing; Grip III's two segments), each point from the
+    secant predictor of the two before it with the previous point's factorisation: accepted without a new
+    Jacobian, and equal to solve_collocation from the same start to the solver's tolerance (both stop by the
+    same Newton test, residuals 1.5 decades below tol; the states of two such iterates differ by the discrete
+    problem's conditioning times that, measured ~1e-10)."""
+    from simgrip.reference import collocation as C
+
+    (a, b), probs = _line(grip, kappas)
+    factors = []
+    real = C._Factor
+    monkeypatch.setattr(C, "_Factor", lambda *args: factors.append(1) or real(*args))
+    factor = None
+    for P in probs:
+        f, fj, A, B, c = bvp.linear_system(P)
+        y, p = 2 * b.y - (a.y if np.array_equal(a.x, b.x) else a.sol(b.x)), 2 * b.p - a.p  # the secant predictor
+        got = solve_collocation(f, fj, A, B, c, b.x, y, p, tol=1e-8) if factor is None else None
+        if factor is None:  # the first point: a full solve, whose factorisation the next ones take
+            factor = got.factor
+            a, b = b, bvp.BvpSolution(P, got.x, got.y, got.p, got.sol, 0.0, "")
+            continue
+        factors.clear()
+        new = C.continue_collocation(f, fj, A, B, c, b.x, y, p, tol=1e-8, factor=factor)
+        assert new is not None and new.success and factors == []
+        assert np.max(new.rms_residuals) <= 1e-8
+        ref = solve_collocation(f, fj, A, B, c, b.x, y, p, tol=1e-8)
+        np.testing.assert_array_equal(new.x, ref.x)
+        np.testing.assert_allclose(new.y, ref.y, rtol=0, atol=1e-8 * max(1.0, float(np.max(np.abs(ref.y)))))
+        np.testing.assert_allclose(new.p, ref.p, rtol=1e-8)
+        a, b = b, bvp.BvpSolution(P, new.x, new.y, new.p, new.sol, 0.0, "")
+
+
+def test_chord_refuses_what_solve_bvp_would_refine_or_not_reach():
+    """On a mesh too coarse for tol (solve_bvp would insert nodes) and from a start too far for its steps, it
+    returns None: the caller then runs the full solver."""
+    from simgrip.reference.collocation import continue_collocation
+
+    g = solve("I", STANDARD, Uniform(-5.5))._raw
+    _, _, P = checked_problem("I", STANDARD, Uniform(-5.45))
+    f, fj, A, B, c = bvp.linear_system(P)
+    x = g.x[::8] if g.x[::8][-1] == 1.0 else np.append(g.x[::8], 1.0)
+    assert continue_collocation(f, fj, A, B, c, x, g.sol(x), g.p, tol=1e-8) is None  # converges, rms > tol
+    ref = solve_collocation(f, fj, A, B, c, x, g.sol(x), g.p, tol=1e-8)
+    assert ref.success and ref.x.size > x.size
+    _, _, far = checked_problem("I", STANDARD, Uniform(-2.0))
+    f, fj, A, B, c = bvp.linear_system(far)
+    assert continue_collocation(f, fj, A, B, c, g.x, g.y, g.p, tol=1e-8, max_steps=1) is None

@@ -85,12 +85,12 @@ def test_a_walk_on_another_branch_is_solved_cold_and_says_so(monkeypatch):
     monkeypatch.setattr(sweep_point, "_simulation", _no_simulation)
     real = sweep_reference.warm
 
-    def astray(point, guess):
+    def astray(point, guess, *walk):
         if 4 <= point.index <= 6:  # the walk leaves the cold branch at point 4 and stays off until the end
             from dataclasses import replace
 
             return sweep_reference.cold(replace(point, kappa=point.kappa + 3.0))
-        return real(point, guess)
+        return real(point, guess, *walk)
 
     monkeypatch.setattr(sweep_reference, "warm", astray)
     grid = make_grid("I", kappa=(-7, -5, 9), links=LINKS)

@@ -53,9 +53,9 @@ from scipy import special as _sp
 
 from simgrip.params import check_grip_iii_reach
 from simgrip.profiles import Concentrated, CurvatureProfile, Uniform
-from simgrip.reference.collocation import solve_collocation
+from simgrip.reference.collocation import continue_collocation, solve_collocation
 
-__all__ = ["Blend", "BvpProblem", "ElasticaError", "BvpSolution", "TOL_MID", "antiderivative", "grip_problem", "run_bvp", "system"]
+__all__ = ["Blend", "BvpProblem", "ElasticaError", "BvpSolution", "TOL_MID", "antiderivative", "grip_problem", "run_bvp", "system", "warm_bvp"]
 
 TOL_MID = 1e-6  # tolerance of intermediate continuation steps
 _MAX_NODES = 6000  # per solve_bvp run at the final tolerance (tol 1e-8 needs ~1000)
@@ -319,15 +319,38 @@ def system(P: BvpProblem):
 def run_bvp(P: BvpProblem, x, y, p, tol: float) -> BvpSolution | None:
     """One ``solve_bvp`` run (:func:`simgrip.reference.collocation.solve_collocation`: SciPy's algorithm step for
     step, its Jacobian factored as a band matrix); ``None`` unless it converged to a finite solution."""
+    return _finished(P, _collocation_run(P, x, y, p, tol, None))
+
+
+def warm_bvp(P: BvpProblem, x, y, p, tol: float, factor=None) -> tuple[BvpSolution | None, object]:
+    """``P`` solved from a close start ``(x, y, p)`` (a continuation's predictor on a neighbour's mesh):
+    chord Newton steps with ``factor``, the neighbour's Jacobian factorisation
+    (:func:`~simgrip.reference.collocation.continue_collocation`, accepted only by ``solve_bvp``'s own tests
+    at ``tol``), else one :func:`run_bvp` from the same start.  Returns the solution (or ``None``) and the
+    factorisation to hand to the next point."""
+    r = _collocation_run(P, x, y, p, tol, factor, chord=True)
+    if r is None:
+        r = _collocation_run(P, x, y, p, tol, None)
+    sol = _finished(P, r)
+    return sol, (None if sol is None else r.factor)
+
+
+def _collocation_run(P: BvpProblem, x, y, p, tol: float, factor, chord: bool = False):
     fun, fun_jac, A, B, c = linear_system(P)
     with warnings.catch_warnings(), np.errstate(all="ignore"):
         warnings.simplefilter("ignore")
         try:
-            r = solve_collocation(fun, fun_jac, A, B, c, x, y, p, tol=tol,
-                                  max_nodes=_MAX_NODES if tol < TOL_MID else _MAX_NODES_MID)
+            if chord:
+                return continue_collocation(fun, fun_jac, A, B, c, x, y, p, tol=tol, factor=factor)
+            return solve_collocation(fun, fun_jac, A, B, c, x, y, p, tol=tol,
+                                     max_nodes=_MAX_NODES if tol < TOL_MID else _MAX_NODES_MID)
         except (np.linalg.LinAlgError, ValueError, FloatingPointError, ZeroDivisionError):
             return None
-    if r.status != 0 or not np.all(np.isfinite(r.y)):
+
+
+def _finished(P: BvpProblem, r) -> BvpSolution | None:
+    """The converged, finite run ``r`` as a :class:`BvpSolution`; ``None`` otherwise."""
+    if r is None or r.status != 0 or not np.all(np.isfinite(r.y)):
         return None
     if r.p is not None and not np.all(np.isfinite(r.p)):
         return None

@@ -36,7 +36,7 @@ import numpy as np
 from scipy.interpolate import PPoly
 from scipy.linalg.lapack import dgbtrf, dgbtrs
 
-__all__ = ["CollocationResult", "solve_collocation", "MESSAGES"]
+__all__ = ["CollocationResult", "solve_collocation", "continue_collocation", "MESSAGES"]
 
 #: ``solve_bvp``'s messages by status (its ``TERMINATION_MESSAGES``).
 MESSAGES = {
@@ -49,13 +49,20 @@ _EPS = np.finfo(float).eps
 #: Band layouts kept (:func:`_band`, keyed on the problem's structure and the mesh size; ~0.5 MB each at 600
 #: nodes): the bounded cache of this module, enough for the mesh sizes one continuation visits.
 _BANDS = 16
+#: :func:`continue_collocation`: most chord steps, and the largest ratio of two successive criteria
+#: ``|J^-1 r|^2`` a chord step may leave before the Jacobian is refactored.  From a secant predictor (error
+#: O(step^2)) with a neighbour's Jacobian (error O(step)) a chord step gains ~2 decades in the criterion; a
+#: ratio above 1e-2 (one decade in the step) means the factorisation is stale.
+_CHORD_STEPS = 6
+_CHORD_RATE = 1e-2
 
 
 @dataclass
 class CollocationResult:
     """What ``solve_bvp`` returns (the fields :mod:`simgrip.reference.bvp` reads): ``sol`` (the C1 cubic
     spline, a :class:`~scipy.interpolate.PPoly`), ``x``, ``y``, ``yp``, ``p`` (``None`` without parameters),
-    ``rms_residuals``, ``niter``, ``status`` (:data:`MESSAGES`), ``message``, ``success``."""
+    ``rms_residuals``, ``niter``, ``status`` (:data:`MESSAGES`), ``message``, ``success``; and ``factor``, the
+    banded LU of the last Newton Jacobian on the final mesh (:func:`continue_collocation` starts from it)."""
 
     sol: PPoly
     p: np.ndarray | None
@@ -67,6 +74,7 @@ class CollocationResult:
     status: int
     message: str
     success: bool
+    factor: object = None  # the last Newton factorisation on the final mesh (a start for a neighbour's Newton)
 
 
 class _Band:
@@ -163,8 +171,10 @@ def _band(key, m: int) -> _Band:
 
 
 class _Factor:
-    def __init__(self, band: _Band, ab: np.ndarray):
-        self.band = band
+    """The banded LU of one Newton Jacobian on the mesh ``x``."""
+
+    def __init__(self, band: _Band, ab: np.ndarray, x: np.ndarray):
+        self.band, self.x = band, x
         self.lu, self.piv, info = dgbtrf(ab, band.kl, band.ku, overwrite_ab=1)
         self.singular = info != 0
 
@@ -242,12 +252,12 @@ def _newton(band, h, x, fun, fun_jac, bc, y, p, bvp_tol, bc_tol):
     col_res, y_middle, f, f_middle = _collocation(fun, y, p, x, h)
     bc_res = bc(y[:, 0], y[:, -1])
     res = band.rhs(col_res, bc_res)
-    njev, singular, recompute_jac = 0, False, True
+    njev, singular, recompute_jac, factor = 0, False, True, None
     for _ in range(max_iter):
         if recompute_jac:
             df_dy, df_dp = fun_jac(x, y, p)
             df_dy_m, df_dp_m = fun_jac(x_middle, y_middle, p)
-            factor = _Factor(band, band.matrix(*_jacobian_blocks(n, k, h, df_dy, df_dy_m, df_dp, df_dp_m)))
+            factor = _Factor(band, band.matrix(*_jacobian_blocks(n, k, h, df_dy, df_dy_m, df_dp, df_dp_m)), x)
             njev += 1
             if factor.singular:
                 singular = True
@@ -277,19 +287,12 @@ def _newton(band, h, x, fun, fun_jac, bc, y, p, bvp_tol, bc_tol):
             recompute_jac = False
         else:
             recompute_jac = True
-    return y, p, singular
+    return y, p, singular, (col_res, f, f_middle), factor
 
 
-def solve_collocation(fun, fun_jac, A, B, c, x, y, p=None, *, tol: float = 1e-3, max_nodes: int = 1000,
-                      bc_tol: float | None = None) -> CollocationResult:
-    """``solve_bvp(fun, bc, x, y, p, fun_jac=fun_jac, bc_jac=..., tol=tol, max_nodes=max_nodes)`` for the
-    linear boundary conditions ``A y(a) + B y(b) = c`` (``A, B`` of shape ``(n + k, n)``, independent of
-    ``p``), with a banded LU (see the module docstring).
-
-    ``fun(x, y, p)`` returns ``(n, m)``; ``fun_jac(x, y, p)`` returns ``df/dy`` ``(n, n, m)``, with
-    parameters ``(df/dy, df/dp)``, ``df/dp`` ``(n, k, m)``.  Raises ``ValueError`` for a mesh that is
-    not strictly increasing or arrays of the wrong shapes (as ``solve_bvp``).
-    """
+def _checked(fun_jac, A, B, c, x, y, p, tol, bc_tol):
+    """The arguments of :func:`solve_collocation` checked as ``solve_bvp`` checks them, and the pieces both
+    solvers use: ``x, h, y, p, n, k, tol, bc_tol, jac, bc, key``."""
     x = np.asarray(x, dtype=float)
     if x.ndim != 1 or x.size < 2:
         raise ValueError("`x` must be 1 dimensional with at least 2 nodes.")
@@ -315,14 +318,26 @@ def solve_collocation(fun, fun_jac, A, B, c, x, y, p=None, *, tol: float = 1e-3,
     def bc(ya, yb):
         return A @ ya + B @ yb - c
 
-    key = (n, k, A.tobytes(), B.tobytes())
+    return x, h, y, p, n, k, tol, bc_tol, jac, bc, (n, k, A.tobytes(), B.tobytes())
+
+
+def solve_collocation(fun, fun_jac, A, B, c, x, y, p=None, *, tol: float = 1e-3, max_nodes: int = 1000,
+                      bc_tol: float | None = None) -> CollocationResult:
+    """``solve_bvp(fun, bc, x, y, p, fun_jac=fun_jac, bc_jac=..., tol=tol, max_nodes=max_nodes)`` for the
+    linear boundary conditions ``A y(a) + B y(b) = c`` (``A, B`` of shape ``(n + k, n)``, independent of
+    ``p``), with a banded LU (see the module docstring).
+
+    ``fun(x, y, p)`` returns ``(n, m)``; ``fun_jac(x, y, p)`` returns ``df/dy`` ``(n, n, m)``, with
+    parameters ``(df/dy, df/dp)``, ``df/dp`` ``(n, k, m)``.  Raises ``ValueError`` for a mesh that is
+    not strictly increasing or arrays of the wrong shapes (as ``solve_bvp``).
+    """
+    x, h, y, p, n, k, tol, bc_tol, jac, bc, key = _checked(fun_jac, A, B, c, x, y, p, tol, bc_tol)
     status, iteration = 0, 0
     while True:
         m = x.size
         band = _band(key, m)
-        y, p, singular = _newton(band, h, x, fun, jac, bc, y, p, tol, bc_tol)
-        iteration += 1
-        col_res, y_middle, f, f_middle = _collocation(fun, y, p, x, h)
+        y, p, singular, (col_res, f, f_middle), factor = _newton(band, h, x, fun, jac, bc, y, p, tol, bc_tol)
+        iteration += 1  # the collocation residuals at the final (y, p) are the Newton's last ones
         max_bc_res = np.max(np.abs(bc(y[:, 0], y[:, -1])))
         r_middle = 1.5 * col_res / h
         coef = _spline_coefficients(y, f, h)
@@ -350,4 +365,63 @@ def solve_collocation(fun, fun_jac, A, B, c, x, y, p=None, *, tol: float = 1e-3,
             status = 3
             break
     return CollocationResult(sol=_spline(coef, x), p=p if k else None, x=x, y=y, yp=f, rms_residuals=rms_res,
-                             niter=iteration, status=status, message=MESSAGES[status], success=status == 0)
+                             niter=iteration, status=status, message=MESSAGES[status], success=status == 0,
+                             factor=factor if factor is not None and not factor.singular else None)
+
+
+def continue_collocation(fun, fun_jac, A, B, c, x, y, p=None, *, tol: float, factor=None,
+                         max_steps: int = _CHORD_STEPS) -> CollocationResult | None:
+    """The collocation equations of :func:`solve_collocation` on the mesh ``x`` solved from a close start
+    ``(y, p)`` (a continuation's predictor) by chord Newton steps with ``factor``, the banded LU of a
+    neighbouring problem's Jacobian on the same mesh (``CollocationResult.factor``; factored here at the start
+    when ``None`` or of another mesh), refactored once at the current iterate when a step contracts the
+    affine-invariant criterion ``|J^-1 r|^2`` by less than :data:`_CHORD_RATE`.
+
+    It stops by ``solve_bvp``'s own Newton test (every collocation residual below
+    ``2/3 h 0.05 tol (1 + |f_middle|)``, boundary residuals below ``bc_tol``) and is accepted by its own final
+    test on this mesh (every interval's rms relative residual ``<= tol``, boundary residual ``<= bc_tol``):
+    what ``solve_bvp`` returns from this start without inserting nodes, to within its Newton test.  Returns
+    ``None`` where that does not happen within ``max_steps`` steps (the caller runs :func:`solve_collocation`,
+    which refines the mesh where it must); the result's ``factor`` is the one used, for the next point.
+    """
+    x, h, y, p, n, k, tol, bc_tol, jac, bc, key = _checked(fun_jac, A, B, c, x, y, p, tol, bc_tol=None)
+    band = _band(key, x.size)
+    tol_r = 2 / 3 * h * 5e-2 * tol
+    fresh = factor is None or factor.band is not band or not (factor.x is x or np.array_equal(factor.x, x))
+
+    def refactor(y, p):
+        col_res, y_middle, f, f_middle = _collocation(fun, y, p, x, h)
+        df_dy, df_dp = jac(x, y, p)
+        df_dy_m, df_dp_m = jac(x[:-1] + 0.5 * h, y_middle, p)
+        return _Factor(band, band.matrix(*_jacobian_blocks(n, k, h, df_dy, df_dy_m, df_dp, df_dp_m)), x)
+
+    if fresh:
+        factor = refactor(y, p)
+    cost_before = None
+    for step in range(max_steps + 1):
+        col_res, _, f, f_middle = _collocation(fun, y, p, x, h)
+        bc_res = bc(y[:, 0], y[:, -1])
+        if np.all(np.abs(col_res) < tol_r * (1 + np.abs(f_middle))) and np.all(np.abs(bc_res) < bc_tol):
+            break
+        if step == max_steps or factor.singular:
+            return None
+        res = band.rhs(col_res, bc_res)
+        ys, ps = factor.solve(res)
+        cost = np.dot(ys.ravel(), ys.ravel()) + np.dot(ps, ps)
+        if cost_before is not None and cost > _CHORD_RATE * cost_before:
+            if fresh:
+                return None  # a fresh Jacobian that does not contract: not a start Newton can take
+            factor, fresh = refactor(y, p), True
+            if factor.singular:
+                return None
+            ys, ps = factor.solve(res)
+            cost = np.dot(ys.ravel(), ys.ravel()) + np.dot(ps, ps)
+        if not np.isfinite(cost):
+            return None
+        y, p, cost_before = y - ys, p - ps, cost
+    coef = _spline_coefficients(y, f, h)
+    rms_res = _rms_residuals(fun, coef, x, h, p, 1.5 * col_res / h, f_middle)
+    if not (np.max(rms_res) <= tol and np.max(np.abs(bc_res)) <= bc_tol):
+        return None
+    return CollocationResult(sol=_spline(coef, x), p=p if k else None, x=x, y=y, yp=f, rms_residuals=rms_res,
+                             niter=1, status=0, message=MESSAGES[0], success=True, factor=factor)

@@ -57,24 +57,47 @@ def cold(point):
     return elastica.solve(point.grip, point.params(), Uniform(point.kappa), tol=TOL)
 
 
-def warm(point, guess):
-    """``point``'s reference by one ``solve_bvp`` run at tolerance :data:`TOL` from the converged ``guess``
-    (an :class:`~simgrip.reference.elastica.ElasticaSolution` of a neighbouring point: its mesh, states and
-    unknown parameters); ``None`` when that run does not converge."""
+def warm(point, guess, before=None, newton=None):
+    """``point``'s reference from the converged ``guess`` (an
+    :class:`~simgrip.reference.elastica.ElasticaSolution` of a neighbouring point: its mesh, states and
+    unknown parameters) at tolerance :data:`TOL`; ``None`` when it does not converge.
+
+    With ``before`` (the point before ``guess`` on the same line, the same spacing away) the start is the
+    secant predictor ``2 guess - before`` (states and parameters; ``before`` read on ``guess``'s mesh): its
+    error is second order in the step.  From it Newton runs on ``guess``'s mesh by chord steps with the
+    Jacobian factorisation ``newton["factor"]`` of the walk's last solve (updated here), accepted only by
+    ``solve_bvp``'s own Newton and residual tests at :data:`TOL`; otherwise (or without ``newton``) one
+    ``solve_bvp`` run from the same start (:func:`simgrip.reference.bvp.warm_bvp`).
+    """
     from simgrip.profiles import Uniform
     from simgrip.reference import elastica
-    from simgrip.reference.bvp import run_bvp
+    from simgrip.reference.bvp import run_bvp, warm_bvp
     from simgrip.reference.continuation import _mesh_guess
 
     grip, params, P = elastica.checked_problem(point.grip, point.params(), Uniform(point.kappa))
     raw = guess._raw
-    if raw.prob.two_seg == P.two_seg and raw.prob.constrained == P.constrained and raw.x.size <= _WARM_NODES \
-            and (not P.two_seg or raw.prob.gamma == P.gamma):
+    on_mesh = _same_layout(raw.prob, P) and raw.x.size <= _WARM_NODES
+    if on_mesh:
         x, y, p = raw.x, raw.y, (raw.p if P.constrained else None)
+        b = None if before is None else before._raw
+        if b is not None and _same_layout(b.prob, P):
+            yb = b.y if b.x.size == x.size and np.array_equal(b.x, x) else b.sol(x)
+            y = 2.0 * y - yb
+            if P.constrained:
+                p = 2.0 * p - b.p
     else:
         x, y, p = _mesh_guess(raw, P)
-    r = run_bvp(P, x, y, p, TOL)
+    if newton is None:
+        r = run_bvp(P, x, y, p, TOL)
+    else:
+        r, newton["factor"] = warm_bvp(P, x, y, p, TOL, newton.get("factor") if on_mesh else None)
     return None if r is None else elastica.ElasticaSolution.from_bvp(grip, params, r)
+
+
+def _same_layout(Q, P) -> bool:
+    """Whether a solution of ``Q`` is a start for ``P`` as it is: the same states (one or two segments, the
+    same contact ``gamma``) and parameters."""
+    return Q.two_seg == P.two_seg and Q.constrained == P.constrained and (not P.two_seg or Q.gamma == P.gamma)
 
 
 def theta_gap(a, b) -> float:
@@ -82,6 +105,19 @@ def theta_gap(a, b) -> float:
     from simgrip.reference.continuation import _JUMP_GRID
 
     return float(np.max(np.abs(a._raw.states(_JUMP_GRID)[0] - b._raw.states(_JUMP_GRID)[0])))
+
+
+def problem_key(point) -> tuple:
+    """What ``point``'s BVP depends on: the grip, ``kappa``, ``D``, ``M``, ``b`` and (Grip III) ``gamma``; not
+    ``mu`` (friction only enters the verdict, :meth:`~simgrip.reference.elastica.ElasticaSolution.from_bvp`)."""
+    return (point.grip, point.kappa, point.D, point.M, point.b, point.gamma if point.grip == "III" else None)
+
+
+def _repackaged(point, raw):
+    """The BVP solution ``raw`` of ``point``'s problem as ``point``'s reference (its own ``mu`` in the verdict)."""
+    from simgrip.reference import elastica
+
+    return elastica.ElasticaSolution.from_bvp(point.grip, point.params(), raw)
 
 
 def _message(exc: BaseException) -> str:
@@ -97,28 +133,40 @@ class _Segment:
         self.error = [""] * len(points)  # its cold solve's failure
         self.warning = [""] * len(points)
         self.seconds = [0.0] * len(points)  # every solve charged to the point it was for
+        self.colds = {}  # problem_key -> (raw BVP solution or None, error): the segment's cold solves
 
     def cold(self, k: int) -> None:
+        """Solve point ``k`` cold, or take the cold solve of an identical problem (:func:`problem_key`) in
+        this segment: a cold solve is a deterministic function of the problem, so both are the same."""
         t = time.perf_counter()
-        try:
-            self.sol[k] = cold(self.points[k])
-        except Exception as exc:  # noqa: BLE001 - ElasticaError, ValueError, ...: recorded with the point
-            self.sol[k], self.error[k] = None, _message(exc)
+        point, key = self.points[k], problem_key(self.points[k])
+        if key in self.colds:
+            raw, self.error[k] = self.colds[key]
+            self.sol[k] = None if raw is None else _repackaged(point, raw)
+        else:
+            try:
+                self.sol[k] = cold(point)
+            except Exception as exc:  # noqa: BLE001 - ElasticaError, ValueError, ...: recorded with the point
+                self.sol[k], self.error[k] = None, _message(exc)
+            self.colds[key] = (None if self.sol[k] is None else self.sol[k]._raw, self.error[k])
         self.seconds[k] += time.perf_counter() - t
 
     def walk(self, lo: int, hi: int) -> dict:
-        """Warm solves of ``lo+1..hi``, each from the previous (from the kept ``lo``); ``None`` once one fails."""
-        out, prev = {}, self.sol[lo]
+        """Warm solves of ``lo+1..hi``, each from the previous (from the kept ``lo``; from the second on with
+        the secant predictor of the two before it); ``None`` once one fails."""
+        out, prev, before, newton = {}, self.sol[lo], None, {}
         for k in range(lo + 1, hi + 1):
             s = None
-            if prev is not None:
+            if prev is not None and problem_key(self.points[k]) == problem_key(self.points[k - 1]):
+                s = _repackaged(self.points[k], prev._raw)  # the same BVP (a mu axis): the same solution
+            elif prev is not None:
                 t = time.perf_counter()
                 try:
-                    s = warm(self.points[k], prev)
+                    s = warm(self.points[k], prev, before, newton)
                 except Exception:  # noqa: BLE001 - a warm start that cannot: the cold solve decides
                     s = None
                 self.seconds[k] += time.perf_counter() - t
-            out[k] = prev = s
+            out[k], before, prev = s, prev, s
         return out
 
     def same(self, walked, k: int) -> bool:
