@@ -11,48 +11,59 @@ holds for v1 with the same seeds.
 Why (measured, ``docs/baselines/rl_pick_fragile/``): under v0's reward, random actions crush the workpiece
 within 3-8 steps, so nearly every early episode ends at ``-w_drop = -10`` while keeping the fingers open
 returns exactly 0; PPO and SAC with SB3 defaults settled on "fingers open" in all six runs (0 % success).  v1
-pays the steps of a grasp the learner can reach before it can succeed (touching the workpiece with every
-finger, then raising it), grades the crush penalty by how hard the limit was overrun (so squeezing less is
-better even among crushes), and drops the squeeze term (it read the hidden mass and friction every step; the
-crush limit now bounds the grip).
+pays the steps of a grasp the learner can reach before it can succeed (making contact with every finger,
+keeping it, raising the workpiece), grades the crush penalty by how hard the limit was overrun (0 at the
+limit: squeezing less is better even among crushes, and a gentle crush costs mostly the touch and lift it
+ends), and drops the squeeze term (it read the hidden mass and friction every step; the crush limit now bounds
+the grip).
 
-Rewards (every term in ``info``):
+A first design (no contact term, a crush penalty ``w_crush (1 + x / (1 + x)) / 2`` with ``w_crush = 5``) was
+measured and rejected: PPO (SB3 defaults, seed 0) drove the curvature command past the fingers-open end and
+stayed there (0 successes in 2264 training episodes, return exactly 0 from ~190k steps on), as under v0.  With
+the initial exploration noise (``sigma = 1`` on each action) every curvature crushes within ~7-26 steps (12 of
+12 seeds at every mean command), so only a reward in which touching and then crushing gently beats never
+touching leaves a gradient away from "fingers open".
 
-================== ==================================================================  =====================
-term (info key)    value per step                                                       over an episode
-================== ==================================================================  =====================
-``reward_touch``   ``+w_touch`` (0.02) when every finger's normal force on the          ``<= w_touch T``
-                   workpiece is > 0 and the step did not end in a crush, drop or        (6 for T = 300,
-                   knock-over (tactile contact: sensed)                                 8 for T = 400)
-``reward_lift``    ``w_lift (phi_t - phi_{t-1})``, ``phi = clip(lift / target, 0,       ``<= w_lift`` (10)
-                   1)``, 0 once lost or crushed (v0's; the lift is observed)
-``reward_place``   PlaceFragile only: v0's ``w_place (psi_t - psi_{t-1})``              ``<= w_place`` (10)
-``reward_success`` ``w_success`` once, on the terminating success step (v0's)          20 (Place: 30)
-``reward_crush``   on the crushing step: ``-w_crush (1/2 + x / (2 (1 + x)))`` with      in ``[-w_crush,
-                   ``x = (F - L) / L``, ``F`` the largest finger normal force of the    -w_crush/2]`` plus
-                   step (the reading that defines the crush), ``L`` the hidden          the lift taken back
-                   ``crush_limit``; plus the lift progress taken back                   (``-w_lift phi``)
-``reward_drop``    ``-w_drop`` once on a drop or knock-over (v0's term, v1's weight)    ``-w_drop`` (-5)
-``reward_squeeze`` 0 (``w_squeeze = 0``: v0's term read the hidden mass and friction)   0
-================== ==================================================================  =====================
+Rewards (every term in ``info``; ``T`` the registered time limit):
 
-Defaults: ``w_touch = 0.02``, ``w_crush = 5``, ``w_drop = 5``, ``w_squeeze = 0``; ``w_lift``, ``w_success``
-(and PlaceFragile's ``w_place``) as v0.  Ordering (registered time limits ``T``): any success returns at least
+==================  ====================================================================  ==================
+term (info key)     value per step                                                        over an episode
+==================  ====================================================================  ==================
+``reward_contact``  ``+w_contact`` once, on the first step on which every finger's        ``w_contact`` (1)
+                    normal force on the workpiece is > 0 (tactile contact: sensed)
+``reward_touch``    ``+w_touch`` when every finger's normal force on the workpiece is     ``<= w_touch T``
+                    > 0 and the step did not end in a crush, drop or knock-over           (6; Place 8)
+``reward_lift``     ``w_lift (phi_t - phi_{t-1})``, ``phi = clip(lift / target, 0, 1)``,  ``<= w_lift`` (10)
+                    0 once lost or crushed (v0's; the lift is observed)
+``reward_place``    PlaceFragile only: v0's ``w_place (psi_t - psi_{t-1})``               ``<= w_place`` (10)
+``reward_success``  ``w_success`` once, on the terminating success step (v0's)           20 (Place 30)
+``reward_crush``    on the crushing step: ``-w_crush x / (1 + x)``, ``x = (F - L) / L``,  ``(-w_crush, 0]``
+                    ``F`` the largest finger normal force of the step (the reading that   plus the lift
+                    defines the crush), ``L`` the hidden ``crush_limit``; plus the lift   taken back
+                    progress taken back (``-w_lift phi``, as v0)
+``reward_drop``     ``-w_drop`` once on a drop or knock-over (v0's term, v1's weight)     ``-w_drop`` (-5)
+``reward_squeeze``  0 (``w_squeeze = 0``: v0's term read the hidden mass and friction)    0
+==================  ====================================================================  ==================
+
+Defaults: ``w_contact = 1``, ``w_touch = 0.02``, ``w_crush = 2``, ``w_drop = 5``, ``w_squeeze = 0``;
+``w_lift``, ``w_success`` (and PlaceFragile's ``w_place``) as v0.  Ordering: any success returns at least
 ``w_lift + w_success = 30`` (Place: ``w_place + w_success = 40``); no unsuccessful episode returns more than
-``w_touch T + w_lift`` (16; Place ``w_touch T + w_lift + w_place`` = 28); a crush or drop ends below what the
-same episode had earned, by at least ``w_crush / 2 = 2.5``.
+``w_contact + w_touch T + w_lift`` (17; Place ``w_contact + w_touch T + w_lift + w_place = 29``).  Never
+touching returns 0; a crush gives up the lift earned and every later touch step, and costs up to ``w_crush``
+more the harder the limit was overrun.
 
-What each term reads: ``reward_touch`` the fingers' tactile normal forces (in the observation as
-``contact_force``); ``reward_lift`` and ``reward_place`` the workpiece's position (observed relative to the
-palm); the success, drop and knock-over terms fixed weights paid at their events.  The only hidden property a
-term reads is the crush limit ``L`` (and the grade's force ``F`` against it), used **only for the penalty at the
-moment of the crush**, the event that ends the episode.  The grade uses the same end-of-control-step reading
-(50 Hz) that the crush rule uses, so nothing is charged for an excess that rule did not see.  No term pays a
-holding force approaching the slip threshold ``N_hold = m g / (K mu)``: that threshold is hidden, and its sensed
-consequence, the workpiece rising with the palm instead of sliding in the grip, is what ``reward_lift`` pays.
+What each term reads: ``reward_contact`` and ``reward_touch`` the fingers' tactile normal forces (in the
+observation as ``contact_force``); ``reward_lift`` and ``reward_place`` the workpiece's position (observed
+relative to the palm); the success, drop and knock-over terms fixed weights paid at their events.  The only
+hidden property a term reads is the crush limit ``L`` (and the grade's force ``F`` against it), used **only for
+the penalty at the moment of the crush**, the event that ends the episode.  The grade uses the same
+end-of-control-step reading (50 Hz) that the crush rule uses, so nothing is charged for an excess that rule did
+not see.  No term pays a holding force approaching the slip threshold ``N_hold = m g / (K mu)``: that threshold
+is hidden, and its sensed consequence, the workpiece rising with the palm instead of sliding in the grip, is
+what ``reward_lift`` pays.
 
 Info keys (every ``step``): v0's, unchanged in meaning (:mod:`simgrip.envs.pick_fragile`,
-:mod:`simgrip.envs.pick_place`), plus ``reward_touch``:
+:mod:`simgrip.envs.pick_place`), plus ``reward_contact`` and ``reward_touch``:
 
 =====================  ==========================================================================
 key                    meaning
@@ -70,7 +81,8 @@ key                    meaning
 ``fingers_touching``   K-finger envs: how many fingers touch the workpiece
 ``valid``              no finger through itself or another (``invalid``: the messages, when not)
 ``reward_*``           the terms of the table above (``reward_lift``, ``reward_success``,
-                       ``reward_squeeze``, ``reward_drop``, ``reward_crush``, ``reward_touch``;
+                       ``reward_squeeze``, ``reward_drop``, ``reward_crush``, ``reward_contact``,
+                       ``reward_touch``;
                        PlaceFragile also ``reward_place``)
 ``place_error``        PlaceFragile: ``|x - x_t|`` [m]; ``carried``: lifted ``carry_height`` with
                        both fingers on it; ``target_x``: the target [m]
@@ -89,24 +101,28 @@ __all__ = ["FragilePickEnvV1", "FragilePickMultiEnvV1", "FragilePlaceEnvV1", "Fr
            "FragileSphereEnvV1", "V1_REWARD_DEFAULTS", "graded_crush"]
 
 #: v1's reward weights (the others are v0's)
-V1_REWARD_DEFAULTS = {"w_touch": 0.02, "w_crush": 5.0, "w_drop": 5.0, "w_squeeze": 0.0}
+V1_REWARD_DEFAULTS = {"w_contact": 1.0, "w_touch": 0.02, "w_crush": 2.0, "w_drop": 5.0, "w_squeeze": 0.0}
 
 
 def graded_crush(force: float, limit: float, w_crush: float) -> float:
-    """The size (>= 0) of v1's crush penalty: ``w_crush (1/2 + x / (2 (1 + x)))``, ``x = max(force - limit, 0) /
-    limit`` (``force``, ``limit`` [N], ``limit > 0``): ``w_crush / 2`` at the limit, rising towards ``w_crush``
-    for an overrun many times the limit (bounded, so one hard squeeze cannot outweigh an episode)."""
+    """The size (>= 0) of v1's crush penalty: ``w_crush x / (1 + x)``, ``x = max(force - limit, 0) / limit``
+    (``force``, ``limit`` [N], ``limit > 0``): 0 at the limit, ``w_crush / 2`` at twice it, rising towards
+    ``w_crush`` for an overrun many times the limit (bounded, so one hard squeeze cannot outweigh an episode)."""
     x = max(force - limit, 0.0) / limit
-    return w_crush * (0.5 + 0.5 * x / (1.0 + x))
+    return w_crush * x / (1.0 + x)
 
 
 class _ShapedV1:
-    """v1's reward on top of a v0 fragile env (a mixin placed before it): the touch term, the graded crush
-    penalty (through :meth:`_crush_penalty`, the hook v0's crush rule calls) and v1's default weights."""
+    """v1's reward on top of a v0 fragile env (a mixin placed before it): the contact and touch terms, the graded
+    crush penalty (through :meth:`_crush_penalty`, the hook v0's crush rule calls) and v1's default weights."""
 
-    def __init__(self, *, w_touch: float = V1_REWARD_DEFAULTS["w_touch"],
-                 w_crush: float = V1_REWARD_DEFAULTS["w_crush"], w_drop: float = V1_REWARD_DEFAULTS["w_drop"],
-                 w_squeeze: float = V1_REWARD_DEFAULTS["w_squeeze"], **kwargs):
+    _touched = False  # every finger has touched the workpiece this episode (reward_contact paid)
+
+    def __init__(self, *, w_contact: float = V1_REWARD_DEFAULTS["w_contact"],
+                 w_touch: float = V1_REWARD_DEFAULTS["w_touch"], w_crush: float = V1_REWARD_DEFAULTS["w_crush"],
+                 w_drop: float = V1_REWARD_DEFAULTS["w_drop"], w_squeeze: float = V1_REWARD_DEFAULTS["w_squeeze"],
+                 **kwargs):
+        self.w_contact = _num("w_contact", w_contact, positive=False)
         self.w_touch = _num("w_touch", w_touch, positive=False)
         self.w_crush = _num("w_crush", w_crush, positive=False)
         super().__init__(w_drop=w_drop, w_squeeze=w_squeeze, **kwargs)
@@ -114,26 +130,35 @@ class _ShapedV1:
     def _crush_penalty(self, normal_force) -> float:
         return graded_crush(max(normal_force.tolist()), self.crush_limit, self.w_crush)
 
+    def reset(self, *, seed=None, options=None):
+        self._touched = False
+        return super().reset(seed=seed, options=options)
+
     def step(self, action):
         obs, reward, terminated, truncated, info = super().step(action)
         lost = info["crushed"] or info["dropped"] or info["knocked_over"]
         touching = min(info["normal_force"].tolist()) > 0.0
         r_touch = self.w_touch if touching and not lost else 0.0
+        r_contact = 0.0
+        if touching and not self._touched:  # the first contact of every finger (paid even on a crushing step)
+            self._touched = True
+            r_contact = self.w_contact
+        info["reward_contact"] = r_contact
         info["reward_touch"] = r_touch
-        return obs, reward + r_touch, terminated, truncated, info
+        return obs, reward + r_contact + r_touch, terminated, truncated, info
 
 
 class FragilePickEnvV1(_ShapedV1, FragilePickEnv):
     """``simgrip/PickFragile-v1``: :class:`~simgrip.envs.pick_fragile.FragilePickEnv` with v1's reward (see
     :mod:`simgrip.envs.pick_fragile_v1`: the terms; ``info["is_success"]``, ``info["workpiece_lift"]``,
-    ``info["crushed"]``, ``info["dropped"]`` as v0).  Arguments: v0's plus ``w_touch = 0.02``, ``w_crush = 5``
-    (and the defaults ``w_drop = 5``, ``w_squeeze = 0``)."""
+    ``info["crushed"]``, ``info["dropped"]`` as v0).  Arguments: v0's plus ``w_contact = 1``, ``w_touch =
+    0.02``, ``w_crush = 2`` (and the defaults ``w_drop = 5``, ``w_squeeze = 0``)."""
 
 
 class FragilePickMultiEnvV1(_ShapedV1, FragilePickMultiEnv):
     """``simgrip/PickMultiFragile-v1``: :class:`~simgrip.envs.pick_fragile.FragilePickMultiEnv` with v1's reward
     (:mod:`simgrip.envs.pick_fragile_v1`; the info keys ``is_success``, ``workpiece_lift``, ``crushed``,
-    ``dropped`` as v0).  ``reward_touch`` asks every one of the ``K`` fingers to touch."""
+    ``dropped`` as v0).  ``reward_contact`` and ``reward_touch`` ask every one of the ``K`` fingers to touch."""
 
 
 class FragilePlaceEnvV1(_ShapedV1, FragilePlaceEnv):

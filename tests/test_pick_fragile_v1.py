@@ -25,7 +25,7 @@ PAIRS = [("simgrip/PickFragile-v0", "simgrip/PickFragile-v1"),
          ("simgrip/PickSphereFragile-v0", "simgrip/PickSphereFragile-v1")]
 OUTCOME = ("is_success", "workpiece_lift", "crushed", "dropped", "knocked_over", "crush_limit")
 REWARD_KEYS = ("reward_lift", "reward_success", "reward_squeeze", "reward_drop", "reward_crush", "reward_touch",
-               "reward_place")
+               "reward_contact", "reward_place")
 
 
 def _actions(space, n, seed):
@@ -58,6 +58,7 @@ def test_v1_is_v0_with_another_reward(pair):
     """Same seed and actions: identical observations, terminations and outcomes; v1's reward is its terms' sum."""
     seen = set()
     for seed in (11, 12):
+        contacts = 0
         actions = _actions(gym.make(pair[1]).action_space, 90, seed)
         v0, v1 = _run(pair[0], seed, actions), _run(pair[1], seed, actions)
         assert len(v0) == len(v1) > 3
@@ -71,13 +72,17 @@ def test_v1_is_v0_with_another_reward(pair):
                 seen.add(touching)
                 lost = i1["crushed"] or i1["dropped"] or i1["knocked_over"]
                 assert i1["reward_touch"] == (V1_REWARD_DEFAULTS["w_touch"] if touching and not lost else 0.0)
+                contacts += i1["reward_contact"] > 0.0
+                assert i1["reward_contact"] in (0.0, V1_REWARD_DEFAULTS["w_contact"])
+        assert contacts <= 1  # paid once per episode
     assert True in seen  # the sequences do reach the workpiece with every finger
 
 
 def test_graded_crush_closed_form():
     w = V1_REWARD_DEFAULTS["w_crush"]
-    assert graded_crush(1.0, 1.0, w) == w / 2  # barely over: half
-    assert graded_crush(3.0, 1.0, w) == pytest.approx(w * (0.5 + 0.5 * 2.0 / 3.0), rel=1e-15)  # x = 2
+    assert graded_crush(1.0, 1.0, w) == 0.0 and graded_crush(0.5, 1.0, w) == 0.0  # at (or below) the limit
+    assert graded_crush(2.0, 1.0, w) == w / 2  # twice the limit: half
+    assert graded_crush(4.0, 1.0, w) == pytest.approx(w * 0.75, rel=1e-15)  # x = 3
     values = [graded_crush(f, 0.2, w) for f in (0.2, 0.3, 1.0, 10.0, 1e6)]
     assert all(a < b for a, b in zip(values, values[1:])) and values[-1] < w
 
@@ -87,7 +92,7 @@ def test_crush_step_charges_the_graded_penalty_and_pickles():
     env.reset(seed=1, options={"box_mass": 0.05, "friction": 1.0, "crush_limit": 0.05})
     for _ in range(3):  # fingers open, palm still: nothing touched, nothing paid
         _, r, term, _, info = env.step(np.array([1.0, 0.0], dtype=np.float32))
-        assert not term and info["reward_touch"] == 0.0 and abs(r) < 1e-6
+        assert not term and info["reward_touch"] == info["reward_contact"] == 0.0 and abs(r) < 1e-6
     twin = pickle.loads(pickle.dumps(env))
     results = []
     for e in (env, twin):
@@ -102,7 +107,7 @@ def test_crush_step_charges_the_graded_penalty_and_pickles():
         # the graded penalty and the lift progress taken back (this step's, after its reward_lift was paid)
         expected = -graded_crush(max(info["normal_force"]), 0.05, e.w_crush) - e.w_lift * phi - info["reward_lift"]
         assert info["reward_crush"] == pytest.approx(expected, abs=1e-12)
-        assert -e.w_crush - e.w_lift <= info["reward_crush"] <= -e.w_crush / 2
+        assert -e.w_crush - e.w_lift < info["reward_crush"] <= 0.0
         results.append((obs, rewards))
     assert np.array_equal(results[0][0], results[1][0]) and results[0][1] == results[1][1]
 
@@ -121,5 +126,7 @@ def test_check_env_of_stable_baselines3_on_v1():
 def test_v1_arguments_checked():
     with pytest.raises(ValueError, match="w_touch"):
         FragilePickEnvV1(w_touch=float("nan"))
+    with pytest.raises(ValueError, match="w_contact"):
+        FragilePickEnvV1(w_contact="a")
     with pytest.raises(ValueError, match="w_crush"):
         FragilePickEnvV1(w_crush=-1.0)
