@@ -36,7 +36,7 @@ term (info key)     value per step                                              
 ``reward_lift``     ``w_lift (phi_t - phi_{t-1})``, ``phi = clip(lift / target, 0, 1)``,  ``<= w_lift`` (10)
                     0 once lost or crushed (v0's; the lift is observed)
 ``reward_place``    PlaceFragile only: v0's ``w_place (psi_t - psi_{t-1})``               ``<= w_place`` (10)
-``reward_success``  ``w_success`` once, on the terminating success step (v0's)           20 (Place 30)
+``reward_success``  ``w_success`` once, on the terminating success step (v0's)            20 (Place 30)
 ``reward_crush``    on the crushing step: ``-w_crush x / (1 + x)``, ``x = (F - L) / L``,  ``(-w_crush, 0]``
                     ``F`` the largest finger normal force of the step (the reading that   plus the lift
                     defines the crush), ``L`` the hidden ``crush_limit``; plus the lift   taken back
