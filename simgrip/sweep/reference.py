@@ -3,19 +3,27 @@
 Along a segment (:meth:`simgrip.sweep.grid.SweepGrid.segments`) of points
 ``0..m-1`` the references are solved as follows:
 
-1. the two ends are solved cold (:func:`cold`, what
+1. the first point is solved cold (:func:`cold`, what
    :func:`simgrip.sweep.point.evaluate_point` does at every point);
-2. from the first end a walk warm-starts each next point from the previous one
-   (:func:`warm`: one ``solve_bvp`` run at the final tolerance from the
-   neighbour's mesh, states and parameters, ~4x cheaper than a cold start at
-   n = 32) up to the last end;
-3. where the walk arrives on the cold solve's branch (``theta`` within
-   :data:`SAME_BRANCH_RAD` of it) the walk's interior points are kept;
-   otherwise the interval is bisected: the midpoint is solved cold, the left
+2. from it a walk warm-starts each next point from the previous ones
+   (:func:`warm`: the secant predictor of the two before it, then chord Newton
+   steps on the neighbour's mesh with the neighbour's Jacobian factorisation,
+   accepted only by ``solve_bvp``'s own Newton and residual tests at the final
+   tolerance, else one ``solve_bvp`` run from the same start; ~1/10 of a cold
+   start at n = 32) up to the last point;
+3. the last point's cold path is run without its final polish
+   (:meth:`_Segment.end_checked`); where the walk arrives on its branch
+   (``theta`` within :data:`SAME_BRANCH_RAD`) the whole walk is kept;
+4. otherwise the last point is solved cold, and where the walk is not on its
+   branch the interval is bisected: the midpoint is solved cold, the left
    half is checked against it with the same walk, the right half walked again
    from it.  A point whose walk was not on the cold branch ends up cold, with a
    warning (``bvp_warning``) saying so; a point whose warm step did not
    converge is solved cold.
+
+Points of a segment with the same BVP (:func:`problem_key`: a line along
+``mu``, which enters only the verdict) share one solution: the cold solve of
+one is the cold solve of all (it is a deterministic function of the problem).
 
 Why the check: a cold start chooses its branch by its own path (from the
 unloaded arc, :func:`simgrip.reference.continuation.cold_start`), and which
@@ -48,13 +56,14 @@ _WARM_NODES = 1200
 TOL = 1e-8
 
 
-def cold(point):
+def cold(point, tol: float = TOL):
     """``point``'s reference solved cold: :func:`simgrip.reference.elastica.solve` at its parameters, uniform
-    curvature (raises what it raises)."""
+    curvature (raises what it raises).  With ``tol = TOL_MID`` it is the same cold path without its final
+    polish (:func:`simgrip.reference.continuation.polish`): the branch check of a segment's far end."""
     from simgrip.profiles import Uniform
     from simgrip.reference import elastica
 
-    return elastica.solve(point.grip, point.params(), Uniform(point.kappa), tol=TOL)
+    return elastica.solve(point.grip, point.params(), Uniform(point.kappa), tol=tol)
 
 
 def warm(point, guess, before=None, newton=None):
@@ -169,6 +178,39 @@ class _Segment:
             out[k], before, prev = s, prev, s
         return out
 
+    def end_checked(self, last: int, walk: dict) -> bool:
+        """Keep the whole walk, ``last`` included, when it arrives on the branch of ``last``'s cold path
+        solved without its final polish (at ``TOL_MID``, ~0.45x a full cold solve: the polish from 1e-6 to
+        1e-8 refines the mesh twice); ``False`` (nothing kept) otherwise, and the full cold solve decides.
+
+        Why that is the cold solve's check: :func:`~simgrip.reference.continuation.cold_start` at ``TOL_MID``
+        takes exactly the steps it takes at 1e-8 but the last (the polish, Newton runs from a 1e-6 solution,
+        which cannot leave its equilibrium: the others are >= 0.1 rad away), so its branch is the cold
+        solve's; a 1e-6 and a 1e-8 solution of one equilibrium differ by ~1e-6 rad, far inside
+        :data:`SAME_BRANCH_RAD`.  The one difference: a polish that fails (its mesh past the node limit, met
+        only on hostile stiff inputs) sends the cold solve to its next strategy; here the walk, converged at
+        1e-8 on that branch, is kept."""
+        from simgrip.reference.bvp import TOL_MID
+
+        if any(walk[k] is None for k in range(1, last + 1)):
+            return False
+        key = problem_key(self.points[last])
+        t = time.perf_counter()
+        if key in self.colds:
+            raw = self.colds[key][0]
+            check = None if raw is None else _repackaged(self.points[last], raw)
+        else:
+            try:
+                check = cold(self.points[last], TOL_MID)
+            except Exception:  # noqa: BLE001 - the full cold solve decides (and records the failure)
+                check = None
+        self.seconds[last] += time.perf_counter() - t
+        if check is None or theta_gap(walk[last], check) > SAME_BRANCH_RAD:
+            return False
+        for k in range(1, last + 1):
+            self.sol[k] = walk[k]
+        return True
+
     def same(self, walked, k: int) -> bool:
         return walked is not None and self.sol[k] is not None and theta_gap(walked, self.sol[k]) <= SAME_BRANCH_RAD
 
@@ -201,6 +243,8 @@ def segment_references(points) -> list[tuple]:
     last = len(points) - 1
     seg.cold(0)
     if last > 0:
-        seg.cold(last)
-        seg.settle(0, last, seg.walk(0, last))
+        walk = seg.walk(0, last)
+        if not seg.end_checked(last, walk):
+            seg.cold(last)
+            seg.settle(0, last, walk)
     return list(zip(seg.sol, seg.error, seg.warning, seg.seconds))
