@@ -19,20 +19,9 @@ from __future__ import annotations
 
 import math
 
-import numpy as np
+from simgrip.settled import settled_record, simulate, tip_forces  # tip_forces re-exported (__all__)
 
 __all__ = ["compare_full", "tip_forces"]
-
-
-def tip_forces(state, r_tip: float) -> tuple[float, float]:
-    """``(N, F_f)`` over ``rho g l``: the normal and friction forces of finger 0's contacts with the workpiece
-    within ``3 r_tip`` (over ``l``) of its tip node, from ``state.contact_set`` (a full-contact settle's)."""
-    if state.contact_set is None:
-        raise ValueError("state: a full-contact settle's state (contact='full') lists its contacts; this one does not")
-    tip = np.asarray(state.nodes[0][-1], dtype=float)
-    near = [c for c in state.contact_set if c["finger"] == 0 and c["with"] == "workpiece"
-            and math.dist(c["point"], tip) < 3.0 * r_tip]
-    return sum(c["normal_force"] for c in near), sum(c["friction_force"] for c in near)
 
 
 def compare_full(grip: str, params, profile, links: int, *, box_depth: float, progress=None, **settle_kw) -> dict:
@@ -42,7 +31,6 @@ def compare_full(grip: str, params, profile, links: int, *, box_depth: float, pr
     ValueError for Grip III or the free rod (no box to grasp), or bad arguments; the reference's solver errors
     (``ConstrainedError``, ``FreeBoundaryError``, ``ElasticaError``) propagate (the CLI exits 1).
     """
-    from simgrip.compare import settled_record, simulate
     from simgrip.report import difference
     from simgrip.reference.full_contact import full_contact_record
 

@@ -9,7 +9,7 @@ Two defects of the planar over-damped dynamics (``settle(method="dynamics")``), 
   K-finger gripper's floor) and the weight stays exactly ``M`` (gravity compensation);
 * Grip III's drop test called a workpiece dropped on a fall or a separation of fixed size; now it is
   dropped only when it falls away: out of contact, moving down, with no finger beneath a corner
-  (:func:`simgrip.sim.workpiece.corners_over_fingers`).  A drop the point-contact statics do not share
+  (:func:`simgrip.sim.workpiece_motion.corners_over_fingers`).  A drop the point-contact statics do not share
   is checked against the static settle and warned (MuJoCo's surface contact couple, or the flow's path).
 """
 
@@ -26,7 +26,8 @@ from simgrip.scenes import build_scene
 from simgrip.settle import settle
 from simgrip.settle.chain_model import ChainModel
 from simgrip.sim.scene import finger_state
-from simgrip.sim.workpiece import MIN_WORKPIECE_MASS, corners_over_fingers
+from simgrip.sim.workpiece import MIN_WORKPIECE_MASS
+from simgrip.sim.workpiece_motion import corners_over_fingers
 
 N = 32
 

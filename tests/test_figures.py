@@ -151,10 +151,10 @@ def test_fig16_matches_fig07(fig07):
     sel = np.searchsorted(-d["kappa_I"], -d["kappa_load_I"])
     np.testing.assert_array_equal(d["max_load_I"] >= STANDARD.M, fig07["feasible"][sel])
     # and agrees with the elastica's own search
-    from simgrip.reference import elastica
+    from simgrip.reference import capacity
 
     i = int(np.flatnonzero(d["kappa_load_I"] == -5.0)[0])
-    ref = elastica.max_load("I", STANDARD, Uniform(-5.0), tol=1e-6)
+    ref = capacity.max_load("I", STANDARD, Uniform(-5.0), tol=1e-6)
     assert d["max_load_I"][i] == pytest.approx(ref, rel=2e-3)
     # Grip III carries the most at the strongest curvature of each range
     assert d["max_load_III"][-1] > max(d["max_load_I"][-1], d["max_load_II"][-1])

@@ -10,8 +10,8 @@ import pytest
 from simgrip import STANDARD, Uniform
 from simgrip.chain import chain_springs, link_positions
 from simgrip.sim.scene import build_scene
-from simgrip.sim.workpiece import (contact_links, cradle_contact, cradle_start, hold_workpiece, place_workpiece,
-                                   workpiece_pose)
+from simgrip.sim.workpiece import contact_links, cradle_contact, cradle_start
+from simgrip.sim.workpiece_motion import hold_workpiece, place_workpiece, workpiece_pose
 
 
 @pytest.mark.parametrize("b, gamma", [(0.6, 0.8), (0.2, 0.8), (1.2, 0.8), (0.6, 0.5)])

@@ -246,29 +246,11 @@ def full_contact_data(params: DimensionlessParams | None = None, *, kappas=KAPPA
     return data
 
 
-def _runs(x, y, mask):
-    """Contiguous runs of ``mask`` (sorted by x) as ``(x, y)`` pieces, each extended to its neighbours so
-    that the valid and invalid pieces meet."""
-    o = np.argsort(x)
-    x, y, mask = np.asarray(x)[o], np.asarray(y)[o], np.asarray(mask, bool)[o]
-    out, i = [], 0
-    while i < len(x):
-        j = i
-        while j + 1 < len(x) and mask[j + 1] == mask[i]:
-            j += 1
-        lo, hi = i, j if mask[i] else min(j + 1, len(x) - 1)
-        if not mask[i]:
-            lo = max(i - 1, 0)
-        out.append((bool(mask[i]), x[lo:hi + 1], y[lo:hi + 1]))
-        i = j + 1
-    return out
-
-
 def plot_full_contact(data: dict):
     """Draw ``fig07_full`` from :func:`full_contact_data`'s ``data``: (a) ``N``, (b) tip height vs
     ``-kappa_bar0``, (c) the shapes at ``shape_kappa``.  Returns a :class:`matplotlib.figure.Figure`
     (Agg canvas, not registered with pyplot)."""
-    from simgrip.figures.plot import _KBAR, _new_figure, _param_text
+    from simgrip.figures.plot import _KBAR, _new_figure, _param_text, _runs
 
     fig, (a, b, c) = _new_figure(3)
     xk = -np.asarray(data["kappa"], float)

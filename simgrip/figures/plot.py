@@ -31,6 +31,24 @@ _N_SHAPES = {"I": 7, "II": 7, "III": 6}  # shapes drawn (at integer / even kappa
 _KBAR = r"\bar{\kappa}_0"
 
 
+def _runs(x, y, mask):
+    """Contiguous runs of ``mask`` (sorted by x) as ``(x, y)`` pieces, each extended to its neighbours so
+    that the valid and invalid pieces meet (the full-contact and wrap figures' valid/invalid curves)."""
+    o = np.argsort(x)
+    x, y, mask = np.asarray(x)[o], np.asarray(y)[o], np.asarray(mask, bool)[o]
+    out, i = [], 0
+    while i < len(x):
+        j = i
+        while j + 1 < len(x) and mask[j + 1] == mask[i]:
+            j += 1
+        lo, hi = i, j if mask[i] else min(j + 1, len(x) - 1)
+        if not mask[i]:
+            lo = max(i - 1, 0)
+        out.append((bool(mask[i]), x[lo:hi + 1], y[lo:hi + 1]))
+        i = j + 1
+    return out
+
+
 def _new_figure(ncols, width=4.3, height=3.9):
     fig = Figure(figsize=(width * ncols, height), layout="constrained")
     FigureCanvasAgg(fig)

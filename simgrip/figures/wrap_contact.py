@@ -117,8 +117,7 @@ def wrap_contact_data(params: DimensionlessParams | None = None, *, kappas=WRAP_
 def plot_wrap_contact(data: dict):
     """Draw ``fig07_wrap``: (a) the tip force ``Q`` and the wrapped length, (b) the tip height, (c) the shapes at
     ``kappa = -10``.  Returns a :class:`matplotlib.figure.Figure` (Agg canvas, not registered with pyplot)."""
-    from simgrip.figures.full_contact import _runs
-    from simgrip.figures.plot import _KBAR, _new_figure
+    from simgrip.figures.plot import _KBAR, _new_figure, _runs
 
     fig, (a, b, c) = _new_figure(3)
     xk = -np.asarray(data["kappa"])

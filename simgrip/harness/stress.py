@@ -73,13 +73,9 @@ failures listed) and ``stability_map.png`` (per grip, ``kappa`` against
 
 from __future__ import annotations
 
-import contextlib
-import ctypes
 import dataclasses
 import math
-import re
 import sys
-import threading
 import time
 import traceback
 import warnings
@@ -87,6 +83,9 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from simgrip.harness.case_guard import INPUT_NAMES, names_an_input  # re-exported
+from simgrip.harness.case_guard import CaseTimeout as _Timeout
+from simgrip.harness.case_guard import deadline as _deadline
 from simgrip.harness.stress_cases import BOX, FULL_BOX, GRIPS, make_cases, make_full_cases, stress_profile
 from simgrip.io import check_output_dir, check_output_files_in, write_json
 
@@ -122,16 +121,6 @@ RESIDUAL_CAP = 1e-6
 #: A settled case that needed more steps (settle's own count) than this is "slow".
 SLOW_STEPS = 5000
 OUTCOMES = ("settled", "rejected", "unsettled", "failed")
-#: Input names a rejection must mention to count as "rejected" (else it is a failure).
-INPUT_NAMES = ("grip", "D", "M", "b", "mu_s", "gamma", "kappa", "profile", "links", "n_links", "initial_angles",
-               "alpha", "params", "fingers", "r_tip", "r_link", "r_corner", "tol", "max_steps")
-
-
-def names_an_input(message: str) -> bool:
-    """Whether an error message names one of :data:`INPUT_NAMES` as a word."""
-    return any(re.search(rf"(?<![A-Za-z_]){re.escape(k)}(?![A-Za-z_])", message) for k in INPUT_NAMES)
-
-
 # ---------------------------------------------------------------------------
 # invalid-state checks
 
@@ -175,42 +164,6 @@ def invalid_state_flags(scene, state, *, penetration_tol: float = PENETRATION_TO
 
 # ---------------------------------------------------------------------------
 # one case
-
-
-class _Timeout(Exception):
-    pass
-
-
-@contextlib.contextmanager
-def _deadline(seconds: float):
-    """Raise :class:`_Timeout` in the calling thread if the block runs longer than ``seconds``.
-
-    A timer thread injects the exception (``PyThreadState_SetAsyncExc``), so the
-    guard works in any thread (a Dask worker runs tasks outside its main
-    thread, where ``SIGALRM`` cannot be used).  It is raised at the next Python
-    instruction: a single C call that never returns is not interrupted.
-    """
-    tid = threading.get_ident()
-    lock = threading.Lock()
-    state = {"active": True, "fired": False}
-
-    def fire():
-        with lock:
-            if state["active"]:
-                state["fired"] = True
-                ctypes.pythonapi.PyThreadState_SetAsyncExc(ctypes.c_ulong(tid), ctypes.py_object(_Timeout))
-
-    timer = threading.Timer(seconds, fire)
-    timer.daemon = True
-    timer.start()
-    try:
-        yield
-    finally:
-        with lock:
-            state["active"] = False
-            timer.cancel()
-            if state["fired"]:  # fired but perhaps not raised yet: withdraw it
-                ctypes.pythonapi.PyThreadState_SetAsyncExc(ctypes.c_ulong(tid), None)
 
 
 def run_case(case: dict, *, timeout_s: float = CASE_TIMEOUT_S, max_steps: int | None = MAX_STEPS) -> dict:

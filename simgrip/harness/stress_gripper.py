@@ -54,6 +54,10 @@ import warnings
 
 import numpy as np
 
+from simgrip.harness.case_guard import CaseTimeout as _Timeout
+from simgrip.harness.case_guard import deadline as _deadline
+from simgrip.harness.case_guard import names_an_input
+
 __all__ = ["DROP_REASONS", "GRIPPER_SHAPES", "default_gripper_cases", "diagnose_start", "gripper_counts",
            "make_gripper_cases", "run_gripper_case"]
 
@@ -165,7 +169,6 @@ def _check(st) -> str | None:
 
 def run_gripper_case(case: dict, *, timeout_s: float = 60.0) -> dict:
     """Build and settle one K-finger case twice; the case with ``outcome``, ``error``, ``held``, ``steps``..."""
-    from simgrip.harness.stress import _deadline, _Timeout, names_an_input
     from simgrip.settle import SettleError
 
     rec = dict(case)

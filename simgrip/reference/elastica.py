@@ -17,8 +17,8 @@ with a ``tol = 1e-11`` solution to ~1e-12.
 
 The load-capacity functions (:func:`~simgrip.reference.capacity.least_mu`,
 :func:`~simgrip.reference.capacity.max_load`, ...) live in
-:mod:`simgrip.reference.capacity` and are also reachable here
-(``elastica.max_load``).
+:mod:`simgrip.reference.capacity` (also :mod:`simgrip.reference`'s: ``discrete.max_load``); capacity
+builds on this module, so this module does not import it back.
 """
 
 from __future__ import annotations
@@ -46,18 +46,6 @@ __all__ = [
 
 #: Number of points of the fine output grid of every solution.
 FINE_POINTS = 201
-
-# Names of simgrip.reference.capacity also reachable as ``elastica.<name>`` (imported on first use).
-_CAPACITY = ("least_mu", "max_load", "margin", "largest_load", "track_largest_load", "LoadCapacity")
-
-
-def __getattr__(name: str):
-    if name in _CAPACITY:
-        from simgrip.reference import capacity
-
-        return getattr(capacity, name)
-    raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
-
 
 @dataclass(frozen=True, eq=False)
 class ElasticaSolution:

@@ -244,7 +244,8 @@ def _settle(
             if not scene.has_workpiece and warm_start is None:
                 start_free(scene)  # a free finger from its chain equilibrium: the dynamics checks it is at rest
                 mujoco.mj_forward(m, d)
-            state = settle_dynamics(scene, tol, max_steps, warm_start, close, allow_unconverged, t0)
+            state = settle_dynamics(scene, tol, max_steps, warm_start, close, allow_unconverged, t0,
+                                    static_settle=settle)
             return _finish(scene, state, tol, allow_unconverged, "dynamic settle", f"{state.steps} steps")
         run = ChainNewton(scene)
         run.budget = max_steps  # every Newton iteration of this settle counts against max_steps

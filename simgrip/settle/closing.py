@@ -32,7 +32,7 @@ from simgrip.settle.chain_model import gravity_factor
 from simgrip.settle.newton import Newton
 from simgrip.settle.state import SettleError, finger_tip
 from simgrip.sim.scene import BOX_HEIGHT, Scene, set_curvature
-from simgrip.sim.workpiece import hold_workpiece, place_workpiece
+from simgrip.sim.workpiece_motion import hold_workpiece, place_workpiece
 
 __all__ = ["close_grip", "finger_alone", "hold_workpiece", "place_on_chain", "place_workpiece", "release",
            "start_free", "start_on_chain"]

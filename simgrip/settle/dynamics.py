@@ -17,7 +17,7 @@ The settle drives the over-damped integrator from a start to rest:
   between tests; the residual only once the velocity is small).  Drop: the tip slips :data:`DYN_DROP_SLIP` along the face
   or the workpiece falls out of contact (I/II); Grip III: the workpiece falls away (out of contact, moving
   down, a corner with no link it is paired with beneath it:
-  :func:`~simgrip.sim.workpiece.corners_over_fingers`), however far it sank while a corner carried it.
+  :func:`~simgrip.sim.workpiece_motion.corners_over_fingers`), however far it sank while a corner carried it.
   Then the finger settles alone.  A drop the static settle from the same start does not share carries a
   warning that says why (:func:`drop_warning`: MuJoCo's surface contact couple, or the flow's path).
 """
@@ -41,7 +41,7 @@ from simgrip.settle.integrator import (DYN_BATCH, DYN_DAMPING, DYN_FALL_STEP, DY
 from simgrip.settle.state import SettledState, SettleError, read_state
 from simgrip.settle.statics import restore_options, save_options
 from simgrip.sim.scene import Scene, set_curvature
-from simgrip.sim.workpiece import corners_over_fingers, lower_onto_fingers, slip_coordinate
+from simgrip.sim.workpiece_motion import corners_over_fingers, lower_onto_fingers, slip_coordinate
 
 __all__ = ["DYN_TOL", "DYN_TOL_PER_WEIGHT", "Dyn", "drop_warning", "dynamics_tolerance", "settle_dynamics"]
 
@@ -114,13 +114,12 @@ def _put_back(scene: Scene, state: SettledState) -> None:
     mujoco.mj_forward(scene.model, d)
 
 
-def _static_verdicts(scene: Scene, q_start, saved) -> dict:
-    """Whether the static settle holds the workpiece from the dynamics' start ``q_start``: ``{"point": held,
-    "surface": held}`` (``None``: that settle raised :class:`SettleError`; ``"surface"`` only where the point
-    contact holds).  Each settle runs on a copy of the model with the options ``saved`` before the dynamics
-    changed them (the scene's own model and data are left as the dynamics leaves them)."""
-    from simgrip.settle import settle  # simgrip.settle imports this module
-
+def _static_verdicts(scene: Scene, q_start, saved, settle) -> dict:
+    """Whether the static settle ``settle`` (:func:`simgrip.settle.settle`) holds the workpiece from the dynamics'
+    start ``q_start``: ``{"point": held, "surface": held}`` (``None``: that settle raised :class:`SettleError`;
+    ``"surface"`` only where the point contact holds).  Each settle runs on a copy of the model with the options
+    ``saved`` before the dynamics changed them (the scene's own model and data are left as the dynamics leaves
+    them)."""
     out = {}
     for contact in ("point", "surface"):
         m = copy.copy(scene.model)
@@ -161,8 +160,9 @@ def drop_warning(scene: Scene, verdicts: dict) -> str | None:
 
 
 def settle_dynamics(scene: Scene, tol: float, max_steps: int, warm_start, close: bool,
-                     allow_unconverged: bool, t0: float) -> SettledState:
-    """Over-damped settle; the time step halves (from the start) while penetration >= DYN_PEN_LIMIT,
+                     allow_unconverged: bool, t0: float, *, static_settle) -> SettledState:
+    """Over-damped settle (``static_settle``: the static settle that judges a drop, :func:`simgrip.settle.settle`,
+    handed down by it: the package imports this module, so this module does not import it back); the time step halves (from the start) while penetration >= DYN_PEN_LIMIT,
     or a contact tunnels (the tip sphere wholly inside the face, the corner across the rod's axis:
     the run stops there),
     and once when the workpiece drops: a drop counts when it happens at two time steps ``h`` and
@@ -216,7 +216,7 @@ def settle_dynamics(scene: Scene, tol: float, max_steps: int, warm_start, close:
     state.steps, state.forward_calls = steps, calls
     if not state.held and (dropped or first_drop is not None):
         # a drop is checked against the static settle from the same start: a disagreement says why
-        why = drop_warning(scene, _static_verdicts(scene, q0, saved))
+        why = drop_warning(scene, _static_verdicts(scene, q0, saved, static_settle))
         if why:
             state.warnings.append(why)
     return state

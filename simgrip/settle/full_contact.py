@@ -61,7 +61,7 @@ from simgrip.settle.dynamics import (DYN_CLOSE_RATE, DYN_DROP_FALL, DYN_DROP_SLI
                                      DYN_VTOL, Dyn)
 from simgrip.settle.state import SettledState, SettleError, read_state
 from simgrip.settle.statics import CONTACT_IMPEDANCE, CONTACT_STIFFNESS
-from simgrip.sim.full_contact import colliding_geoms
+from simgrip.sim.full_contact import colliding_geoms, grasp_depth  # grasp_depth re-exported (__all__)
 from simgrip.sim.scene import Scene, set_curvature
 
 __all__ = ["FULL_DEPTH_TOL", "FULL_GRASP_RATE", "FULL_LOAD_BLEND", "FULL_PEN_LIMIT", "contact_set", "contact_solref", "grasp_depth",
@@ -321,25 +321,6 @@ def _once(scene: Scene, tol: float, budget: int, factor: float, t0: float) -> tu
             state.warnings.append(f"grasp depth: the tip slipped to {got:.4g} l below the box's edge (asked "
                                   f"{scene.box_depth:.4g} l)")
     return state, state.penetration > FULL_PEN_LIMIT or _deepest(d) > limit
-
-
-def grasp_depth(scene, qpos=None) -> float:
-    """The grasp depth over ``l`` at ``qpos`` (default: the scene's): Grip I ``top - Y_tip``, Grip II
-    ``Y_tip - bottom``, where ``top``/``bottom`` is the box's face offset by ``r_link`` outward (the centreline
-    convention of :func:`~simgrip.sim.full_contact.check_grasp`) and ``Y_tip`` the first finger's tip node."""
-    m, d = scene.model, scene.data
-    q = d.qpos if qpos is None else qpos
-    if scene.grip not in ("I", "II") or scene.workpiece_body < 0:
-        raise ValueError(f"grip: a grasp depth needs Grip I or II's box, got {scene.grip!r}")
-    L = scene.length
-    phi = np.cumsum(q[scene.index.joint_qpos[0]])
-    y_tip = float(np.sum(np.sin(phi))) * L / scene.n
-    zc = float(m.body_pos[scene.workpiece_body][2])
-    for name, qa in zip(scene.workpiece_joints, scene.workpiece_qpos):
-        if name == "z":
-            zc += float(q[qa])
-    face = float(scene.box_half[2]) + scene.r_link * L
-    return ((zc + face - y_tip) if scene.grip == "I" else (y_tip - (zc - face))) / L
 
 
 class _Follow:

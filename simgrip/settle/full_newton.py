@@ -151,10 +151,10 @@ class FullNewton:
         return np.append(out, self.depth(q) - target)
 
     def depth(self, q) -> float:
-        """:func:`~simgrip.settle.full_contact.grasp_depth` at ``q`` (the same sums, without its checks: the
+        """:func:`~simgrip.sim.full_contact.grasp_depth` at ``q`` (the same sums, without its checks: the
         depth row is evaluated at every difference)."""
         if self._depth0 is None:
-            from simgrip.settle.full_contact import grasp_depth
+            from simgrip.sim.full_contact import grasp_depth
 
             q0 = np.zeros(self.m.nq)
             self._depth0 = grasp_depth(self.sc, q0)  # box at its built height, the finger straight along x

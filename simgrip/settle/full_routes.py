@@ -115,7 +115,7 @@ def _held(run: FullNewton, q0, rest, tol: float, budget: int):
     """Grips I/II with the box held by the tip's friction (:func:`newton_full`)."""
     from simgrip.reference import DiscreteError, hinge_chain
     from simgrip.settle.chain_model import gravity_factor
-    from simgrip.settle.full_contact import grasp_depth
+    from simgrip.sim.full_contact import grasp_depth
 
     sc = run.sc
     p, grav = sc.params, gravity_factor(sc)

@@ -18,7 +18,7 @@ import numpy as np
 from simgrip.chain import link_positions
 from simgrip.sim.checks import PhysicsError
 from simgrip.sim.scene import Scene
-from simgrip.sim.workpiece import workpiece_pose
+from simgrip.sim.workpiece_motion import workpiece_pose
 
 __all__ = ["SettleError", "FingerContact", "SettledState", "finger_tip", "read_state", "workpiece_pose"]
 

@@ -60,6 +60,7 @@ __all__ = [
     "colliding_geoms",
     "enable_full_contact",
     "full_box_centre",
+    "grasp_depth",
     "next_but_one_separated",
 ]
 
@@ -218,3 +219,22 @@ def full_box_centre(grip: str, gap: float, half_z: float) -> float:
     if not (math.isfinite(gap) and gap > 0.0):
         raise ValueError(f"box_gap must be positive and finite, got {gap!r}")
     return (gap + half_z) if grip == "II" else -(gap + half_z)
+
+
+def grasp_depth(scene, qpos=None) -> float:
+    """The grasp depth over ``l`` at ``qpos`` (default: the scene's): Grip I ``top - Y_tip``, Grip II
+    ``Y_tip - bottom``, where ``top``/``bottom`` is the box's face offset by ``r_link`` outward (the centreline
+    convention of :func:`~simgrip.sim.full_contact.check_grasp`) and ``Y_tip`` the first finger's tip node."""
+    m, d = scene.model, scene.data
+    q = d.qpos if qpos is None else qpos
+    if scene.grip not in ("I", "II") or scene.workpiece_body < 0:
+        raise ValueError(f"grip: a grasp depth needs Grip I or II's box, got {scene.grip!r}")
+    L = scene.length
+    phi = np.cumsum(q[scene.index.joint_qpos[0]])
+    y_tip = float(np.sum(np.sin(phi))) * L / scene.n
+    zc = float(m.body_pos[scene.workpiece_body][2])
+    for name, qa in zip(scene.workpiece_joints, scene.workpiece_qpos):
+        if name == "z":
+            zc += float(q[qa])
+    face = float(scene.box_half[2]) + scene.r_link * L
+    return ((zc + face - y_tip) if scene.grip == "I" else (y_tip - (zc - face))) / L

@@ -160,7 +160,7 @@ def cli_profile(args, grid, options: RunnerOptions):
     workers = options.jobs if options.jobs is not None and options.jobs > 1 else 2
     prof = profile_sweep(grid, workers=workers, batch_size=args.batch_size, progress=options.progress,
                          remote=options if options.remote else None)
-    from simgrip.sweep.run import versions
+    from simgrip.sweep.versions import versions
 
     prof["versions"] = versions()
     write_json(Path(out) / "throughput.json", prof)

@@ -48,7 +48,6 @@ import argparse
 
 import json
 import math
-import platform
 import sys
 import time
 from dataclasses import dataclass, field, replace
@@ -59,6 +58,7 @@ from simgrip.sweep.budget import cap_jobs, check_sweep, machine, worth_a_cluster
 from simgrip.sweep.grid import SEGMENT_POINTS, SweepGrid, make_grid
 from simgrip.sweep.map import check_map
 from simgrip.sweep.point import COLUMNS, evaluate_segment
+from simgrip.sweep.versions import versions  # re-exported
 from simgrip.sweep.store import PARTIAL, PartialStore, Tally, counts, iter_csv
 
 __all__ = ["SweepResult", "run_sweep", "add_arguments", "cli_sweep", "versions", "stderr_note"]
@@ -115,19 +115,6 @@ class SweepResult:
         if name not in COLUMNS and name != "index":
             raise ValueError(f"column must be one of {COLUMNS}, got {name!r}")
         return [r[name] for r in self.iter_rows()]
-
-
-def versions() -> dict:
-    """Versions of Python and of the packages that decide a sweep's numbers and how it ran."""
-    from importlib import metadata
-
-    out = {"python": platform.python_version()}
-    for pkg in ("simgrip", "mujoco", "numpy", "scipy", "dask", "distributed"):
-        try:
-            out[pkg] = metadata.version(pkg)
-        except metadata.PackageNotFoundError:
-            out[pkg] = None
-    return out
 
 
 def stderr_note(line: str) -> None:

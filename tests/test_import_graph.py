@@ -1,0 +1,162 @@
+"""No two simgrip modules import each other, however indirectly; no source file is over 600 lines (issue 21).
+
+The graph is read from the source with :mod:`ast`, nothing is imported.  Its
+nodes are the modules of ``simgrip/``, ``envs/`` and ``models/`` (shipped as
+``simgrip.envs``, ``simgrip.models``); an edge ``a -> b`` is any ``import`` or ``from ... import``
+statement in ``a`` that names ``b`` -- at module level, inside a function or
+method, and under ``if TYPE_CHECKING:`` alike.  Why the lazy ones count: an
+import moved into a function only defers the circle to the first call; the
+two modules still need each other and neither can be read, tested or moved
+without the other, which is what the design rule (data flows one way:
+parameters -> scene -> settle -> state -> comparison) forbids.  How a
+statement resolves: ``import a.b.c`` and ``from a.b import c`` name ``a.b.c``
+when that is a module, else the nearest package or module above it
+(``from a.b import name``: ``a.b``); relative imports are resolved against
+the importing module.  The implicit import of the parent packages that Python
+runs before a submodule is not an edge (``from simgrip.settle.state import X``
+depends on ``state``, not on everything ``simgrip/settle/__init__.py``
+re-exports).  ``importlib.import_module`` with a literal name is counted too.
+
+A circle is a strongly connected component of more than one module
+(Tarjan's algorithm, iterative: no recursion limit on a deep graph).
+"""
+
+from __future__ import annotations
+
+import ast
+from pathlib import Path
+
+import pytest
+
+ROOT = Path(__file__).resolve().parents[1]
+#: Source trees and the package name each is installed as (pyproject's package-dir).
+TREES = {"simgrip": "simgrip", "envs": "simgrip.envs", "models": "simgrip.models"}
+#: The issue's size limit: no file over this many lines.
+MAX_LINES = 600
+
+
+def modules() -> dict[str, tuple[Path, bool]]:
+    """Module name -> (path, is a package's ``__init__``) for every ``.py`` file of :data:`TREES`."""
+    out = {}
+    for tree, name in TREES.items():
+        for path in sorted((ROOT / tree).rglob("*.py")):
+            parts = list(path.relative_to(ROOT / tree).with_suffix("").parts)
+            package = parts[-1] == "__init__"
+            out[".".join([name] + (parts[:-1] if package else parts))] = (path, package)
+    return out
+
+
+def _known(name: str, mods) -> str | None:
+    """``name`` if it is a module of the tree, else the nearest module or package above it (None: outside)."""
+    while name and name not in mods:
+        name = name.rpartition(".")[0]
+    return name or None
+
+
+def imported(module: str, package: bool, node: ast.AST, mods) -> list[str]:
+    """The tree's modules one import statement (or ``importlib.import_module("literal")`` call) names."""
+    if isinstance(node, ast.Import):
+        return [t for t in (_known(a.name, mods) for a in node.names) if t]
+    if isinstance(node, ast.ImportFrom):
+        if node.level:
+            base = module.split(".")[: None if package else -1]
+            base = base[: len(base) - (node.level - 1)]
+            base_name = ".".join(base + ([node.module] if node.module else []))
+        else:
+            base_name = node.module
+        names = [f"{base_name}.{a.name}" for a in node.names]
+        return [t for t in (n if n in mods else _known(base_name, mods) for n in names) if t]
+    if (isinstance(node, ast.Call) and isinstance(node.func, ast.Attribute) and node.func.attr == "import_module"
+            and node.args and isinstance(node.args[0], ast.Constant) and isinstance(node.args[0].value, str)):
+        target = _known(node.args[0].value, mods)
+        return [target] if target else []
+    return []
+
+
+def import_graph() -> dict[str, set[str]]:
+    """Module -> the tree's modules it imports anywhere in its source (itself left out)."""
+    mods = modules()
+    graph = {m: set() for m in mods}
+    for module, (path, package) in mods.items():
+        for node in ast.walk(ast.parse(path.read_text(encoding="utf-8"), str(path))):
+            graph[module].update(t for t in imported(module, package, node, mods) if t != module)
+    return graph
+
+
+def strongly_connected(graph: dict[str, set[str]]) -> list[list[str]]:
+    """Tarjan's strongly connected components of ``graph``, iteratively; each sorted."""
+    index, low, stack, on_stack, comps = {}, {}, [], set(), []
+    counter = 0
+    for root in sorted(graph):
+        if root in index:
+            continue
+        index[root] = low[root] = counter
+        counter += 1
+        stack.append(root)
+        on_stack.add(root)
+        work = [(root, iter(sorted(graph[root])))]
+        while work:
+            v, successors = work[-1]
+            for w in successors:
+                if w not in index:
+                    index[w] = low[w] = counter
+                    counter += 1
+                    stack.append(w)
+                    on_stack.add(w)
+                    work.append((w, iter(sorted(graph[w]))))
+                    break
+                if w in on_stack:
+                    low[v] = min(low[v], index[w])
+            else:
+                work.pop()
+                if work:
+                    parent = work[-1][0]
+                    low[parent] = min(low[parent], low[v])
+                if low[v] == index[v]:
+                    comp = []
+                    while True:
+                        w = stack.pop()
+                        on_stack.discard(w)
+                        comp.append(w)
+                        if w == v:
+                            break
+                    comps.append(sorted(comp))
+    return comps
+
+
+def test_the_checker_finds_a_circle_and_not_a_chain():
+    """The check can fail: a three-module circle is one component, a chain is three of one."""
+    circle = {"a": {"b"}, "b": {"c"}, "c": {"a"}, "d": {"a"}}
+    assert sorted(map(tuple, strongly_connected(circle))) == [("a", "b", "c"), ("d",)]
+    chain = {"a": {"b"}, "b": {"c"}, "c": set()}
+    assert all(len(c) == 1 for c in strongly_connected(chain))
+
+
+def test_lazy_and_relative_imports_are_edges():
+    """An import inside a function and a relative import name their module (what the graph counts)."""
+    mods = {"p": (Path("p/__init__.py"), True), "p.a": (Path("p/a.py"), False), "p.b": (Path("p/b.py"), False)}
+    tree = ast.parse("def f():\n    from p import b\nfrom . import b\nfrom .b import x\nimport p.b.c\n")
+    found = [t for node in ast.walk(tree) for t in imported("p.a", False, node, mods)]
+    assert found == ["p.b"] * 4
+
+
+def test_graph_sees_the_whole_tree():
+    graph = import_graph()
+    assert "simgrip.gripper.settle" in graph and "simgrip.envs.pick" in graph
+    assert "simgrip.gripper.scene" in graph["simgrip.gripper.settle"]
+
+
+def test_no_import_circles():
+    """No strongly connected component of more than one module: no modules import each other."""
+    graph = import_graph()
+    circles = [c for c in strongly_connected(graph) if len(c) > 1]
+    lines = [" <-> ".join(c) + "\n    edges: " + ", ".join(f"{a} -> {b}" for a in c for b in sorted(graph[a]) if b in c)
+             for c in circles]
+    assert not circles, "import circles:\n" + "\n".join(lines)
+
+
+@pytest.mark.parametrize("tree", ["simgrip", "envs", "tests", "examples"])
+def test_no_file_over_600_lines(tree):
+    long = {str(p.relative_to(ROOT)): n for p in sorted((ROOT / tree).rglob("*.py"))
+            if (n := len(p.read_text(encoding="utf-8").splitlines())) > MAX_LINES}
+    assert not long, f"files over {MAX_LINES} lines: {long}"
