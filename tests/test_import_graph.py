@@ -124,6 +124,12 @@ def strongly_connected(graph: dict[str, set[str]]) -> list[list[str]]:
     return comps
 
 
+@pytest.fixture(scope="module")
+def graph() -> dict[str, set[str]]:
+    """The tree's import graph, read once for this file's tests (parsing every module: 1-3 s)."""
+    return import_graph()
+
+
 def test_the_checker_finds_a_circle_and_not_a_chain():
     """The check can fail: a three-module circle is one component, a chain is three of one."""
     circle = {"a": {"b"}, "b": {"c"}, "c": {"a"}, "d": {"a"}}
@@ -140,15 +146,13 @@ def test_lazy_and_relative_imports_are_edges():
     assert found == ["p.b"] * 4
 
 
-def test_graph_sees_the_whole_tree():
-    graph = import_graph()
+def test_graph_sees_the_whole_tree(graph):
     assert "simgrip.gripper.settle" in graph and "simgrip.envs.pick" in graph
     assert "simgrip.gripper.scene" in graph["simgrip.gripper.settle"]
 
 
-def test_no_import_circles():
+def test_no_import_circles(graph):
     """No strongly connected component of more than one module: no modules import each other."""
-    graph = import_graph()
     circles = [c for c in strongly_connected(graph) if len(c) > 1]
     lines = [" <-> ".join(c) + "\n    edges: " + ", ".join(f"{a} -> {b}" for a in c for b in sorted(graph[a]) if b in c)
              for c in circles]
@@ -160,3 +164,25 @@ def test_no_file_over_600_lines(tree):
     long = {str(p.relative_to(ROOT)): n for p in sorted((ROOT / tree).rglob("*.py"))
             if (n := len(p.read_text(encoding="utf-8").splitlines())) > MAX_LINES}
     assert not long, f"files over {MAX_LINES} lines: {long}"
+
+
+#: simgrip.gripper's modules in the order of its docstring's table: parameters -> scene -> settle -> state ->
+#: comparison; the first five build the scene.
+GRIPPER_ORDER = ("placement", "model", "cradle", "scene", "scene_symmetry", "state", "rest_depth", "start",
+                 "dynamics", "stability", "full", "symmetry", "settle", "simulate", "compare")
+GRIPPER_SCENE = GRIPPER_ORDER[:5]
+
+
+def test_the_gripper_package_flows_one_way(graph):
+    """Each module of simgrip.gripper imports only those before it in its table (so none imports its package
+    back), and the scene modules import no settle module (simgrip.settle or the gripper's own)."""
+    package = "simgrip.gripper."
+    listed = {m[len(package):] for m in graph if m.startswith(package)}
+    assert listed == set(GRIPPER_ORDER), "simgrip/gripper/__init__.py's table and GRIPPER_ORDER list every module"
+    for i, name in enumerate(GRIPPER_ORDER):
+        inside = {t[len(package):] for t in graph[package + name] if t.startswith(package)}
+        assert inside <= set(GRIPPER_ORDER[:i]), f"simgrip.gripper.{name} imports {sorted(inside - set(GRIPPER_ORDER[:i]))}"
+        assert "simgrip.gripper" not in graph[package + name], f"simgrip.gripper.{name} imports its package"
+    for name in GRIPPER_SCENE:
+        settle = sorted(t for t in graph[package + name] if t == "simgrip.settle" or t.startswith("simgrip.settle."))
+        assert not settle, f"scene module simgrip.gripper.{name} imports {settle}"

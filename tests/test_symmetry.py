@@ -1,4 +1,4 @@
-"""Whether a K-finger scene is exactly symmetric (simgrip.sim.symmetry), read from its compiled model.
+"""Whether a K-finger scene is exactly symmetric (simgrip.gripper.scene_symmetry), read from its compiled model.
 
 Every check must see a change of the model itself (not only of the builder's arguments), and keep
 what maps the scene into itself (a quarter turn of a K = 4 box, any turn of a cylinder).
@@ -14,7 +14,7 @@ import pytest
 
 from simgrip import STANDARD, Uniform
 from simgrip.gripper.scene import build_gripper
-from simgrip.sim.symmetry import symmetry
+from simgrip.gripper.scene_symmetry import symmetry
 
 N = 16
 CASES = [(2, "box"), (3, "cylinder"), (4, "box"), (5, "cylinder")]

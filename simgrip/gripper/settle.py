@@ -1,7 +1,7 @@
 """The settle of a K-finger gripper (:mod:`simgrip.gripper.scene`): the symmetry skip where exact, else dynamics.
 
 :func:`settle_gripper` by default (``method="auto"``) settles an exactly
-symmetric scene (:func:`simgrip.sim.symmetry.symmetry`) by the symmetry skip
+symmetric scene (:func:`simgrip.gripper.scene_symmetry.symmetry`) by the symmetry skip
 (:mod:`simgrip.gripper.symmetry`: one finger's planar Newton settle,
 the paper's point contact by default, replicated to K fingers), and any other
 scene by the over-damped dynamics (below), as the planar settle's
@@ -131,7 +131,7 @@ def settle_gripper(scene: GripperScene, *, tol: float | None = None, max_steps: 
         Return ``converged=False`` instead of raising :class:`SettleError`.
     method : {None, "auto", "symmetric", "dynamics"}
         None is ``"auto"``: ``"symmetric"`` where the scene is exactly
-        symmetric (:func:`simgrip.sim.symmetry.symmetry`), else
+        symmetric (:func:`simgrip.gripper.scene_symmetry.symmetry`), else
         ``"dynamics"``.  ``"symmetric"``: one finger's planar static settle
         replicated to K (ValueError naming ``method`` where the scene is not
         exactly symmetric); ``"dynamics"``: the over-damped dynamics of all K

@@ -9,7 +9,7 @@ tridiagonal, :mod:`simgrip.settle.chain_newton`) and returns a
 :class:`~simgrip.gripper.settle.GripperState` with the same fields as the
 K-finger dynamics (:func:`simgrip.gripper.settle.settle_gripper`).
 
-Exactness (:func:`~simgrip.sim.symmetry.symmetry`) is read from the compiled
+Exactness (:func:`~simgrip.gripper.scene_symmetry.symmetry`) is read from the compiled
 model: identical fingers evenly spaced about the palm axis, the workpiece on
 it, every finger meeting the same surface head on.
 
@@ -57,7 +57,7 @@ import numpy as np
 
 from simgrip.settle.state import SettleError
 from simgrip.gripper.scene import GripperScene
-from simgrip.sim.symmetry import EQUAL_RTOL, Symmetry, cradle_edges, symmetry
+from simgrip.gripper.scene_symmetry import EQUAL_RTOL, Symmetry, cradle_edges, symmetry
 from simgrip.validity import check_grip_shape
 
 __all__ = ["GRIPPER_METHODS", "Symmetry", "planar_scene", "settle_cradle_dynamics", "settle_symmetric",
