@@ -152,18 +152,21 @@ def test_chord_steps_from_a_neighbour_equal_a_solve(grip, kappas, monkeypatch):
         a, b = b, bvp.BvpSolution(P, new.x, new.y, new.p, new.sol, 0.0, "")
 
 
-def test_chord_refuses_what_solve_bvp_would_refine_or_not_reach():
-    """On a mesh too coarse for tol (solve_bvp would insert nodes) and from a start too far for its steps, it
-    returns None: the caller then runs the full solver."""
+def test_chord_on_a_coarse_mesh_refines_as_solve_bvp_and_refuses_a_far_start():
+    """On a mesh too coarse for tol the converged chord steps go on as solve_bvp goes on (nodes inserted where
+    the rms residual asks, the result equal to solve_collocation's from the same start to the tolerance); from
+    a start its steps cannot reach it returns None (the caller then runs the full solver)."""
     from simgrip.reference.collocation import continue_collocation
 
     g = solve("I", STANDARD, Uniform(-5.5))._raw
     _, _, P = checked_problem("I", STANDARD, Uniform(-5.45))
     f, fj, A, B, c = bvp.linear_system(P)
     x = g.x[::8] if g.x[::8][-1] == 1.0 else np.append(g.x[::8], 1.0)
-    assert continue_collocation(f, fj, A, B, c, x, g.sol(x), g.p, tol=1e-8) is None  # converges, rms > tol
-    ref = solve_collocation(f, fj, A, B, c, x, g.sol(x), g.p, tol=1e-8)
-    assert ref.success and ref.x.size > x.size
+    new = continue_collocation(f, fj, A, B, c, x, g.sol(x), g.p, tol=1e-8, max_nodes=6000)
+    ref = solve_collocation(f, fj, A, B, c, x, g.sol(x), g.p, tol=1e-8, max_nodes=6000)
+    assert ref.success and new.success and new.x.size > x.size and np.max(new.rms_residuals) <= 1e-8
+    s = np.linspace(0.0, 1.0, 41)
+    np.testing.assert_allclose(new.sol(s), ref.sol(s), rtol=0, atol=1e-8 * max(1.0, float(np.max(np.abs(ref.y)))))
     _, _, far = checked_problem("I", STANDARD, Uniform(-2.0))
     f, fj, A, B, c = bvp.linear_system(far)
     assert continue_collocation(f, fj, A, B, c, g.x, g.y, g.p, tol=1e-8, max_steps=1) is None

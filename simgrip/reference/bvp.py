@@ -340,10 +340,11 @@ def _collocation_run(P: BvpProblem, x, y, p, tol: float, factor, chord: bool = F
     with warnings.catch_warnings(), np.errstate(all="ignore"):
         warnings.simplefilter("ignore")
         try:
+            max_nodes = _MAX_NODES if tol < TOL_MID else _MAX_NODES_MID
             if chord:
-                return continue_collocation(fun, fun_jac, A, B, c, x, y, p, tol=tol, factor=factor)
-            return solve_collocation(fun, fun_jac, A, B, c, x, y, p, tol=tol,
-                                     max_nodes=_MAX_NODES if tol < TOL_MID else _MAX_NODES_MID)
+                return continue_collocation(fun, fun_jac, A, B, c, x, y, p, tol=tol, factor=factor,
+                                            max_nodes=max_nodes)
+            return solve_collocation(fun, fun_jac, A, B, c, x, y, p, tol=tol, max_nodes=max_nodes)
         except (np.linalg.LinAlgError, ValueError, FloatingPointError, ZeroDivisionError):
             return None
 

@@ -46,9 +46,13 @@ MESSAGES = {
     3: "The solver was unable to satisfy boundary conditions tolerance on iteration 10.",
 }
 _EPS = np.finfo(float).eps
-#: Band layouts kept (:func:`_band`, keyed on the problem's structure and the mesh size; ~0.5 MB each at 600
-#: nodes): the bounded cache of this module, enough for the mesh sizes one continuation visits.
-_BANDS = 16
+#: Band layouts kept (:func:`_band`, keyed on the problem's structure and the mesh size), and the most nodes
+#: of a kept one: the bounded cache of this module, enough for the mesh sizes one continuation visits (the
+#: 1e-8 references have 400-1200 nodes).  A layout holds its band template, ``(2 kl + ku + 1) x (n + k + q) m``
+#: floats and two index arrays, ~1.5 MB at 1000 nodes for Grips I/II, ~7 MB for Grip III, ~10 MB at the
+#: largest kept: at most ~80 MB in all.
+_BANDS = 8
+_CACHED_NODES = 1500
 #: :func:`continue_collocation`: most chord steps, and the largest ratio of two successive criteria
 #: ``|J^-1 r|^2`` a chord step may leave before the Jacobian is refactored.  From a secant predictor (error
 #: O(step^2)) with a neighbour's Jacobian (error O(step)) a chord step gains ~2 decades in the criterion; a
@@ -162,12 +166,21 @@ class _Band:
         return s[:, :self.n].T, s[0, self.n:self.n + self.k].copy()
 
 
-@lru_cache(maxsize=_BANDS)
 def _band(key, m: int) -> _Band:
-    """The :class:`_Band` of a structure ``key = (n, k, A bytes, B bytes)`` on ``m`` nodes (cached: a
-    continuation solves on the same mesh size again and again; read-only once built)."""
+    """The :class:`_Band` of a structure ``key = (n, k, A bytes, B bytes)`` on ``m`` nodes: cached up to
+    :data:`_CACHED_NODES` nodes (a continuation solves on the same mesh size again and again; a layout is
+    read-only once built), built afresh above."""
+    if m > _CACHED_NODES:
+        return _new_band(key, m)
+    return _cached_band(key, m)
+
+
+def _new_band(key, m: int) -> _Band:
     n, k, a, b = key
     return _Band(n, k, np.frombuffer(a).reshape(n + k, n), np.frombuffer(b).reshape(n + k, n), m)
+
+
+_cached_band = lru_cache(maxsize=_BANDS)(_new_band)
 
 
 class _Factor:
@@ -290,6 +303,17 @@ def _newton(band, h, x, fun, fun_jac, bc, y, p, bvp_tol, bc_tol):
     return y, p, singular, (col_res, f, f_middle), factor
 
 
+def _refined(x, rms_res, tol):
+    """``solve_bvp``'s node insertion: one node in the middle of each interval whose rms residual is in
+    ``(tol, 100 tol)``, two (thirds) in each at or above ``100 tol``."""
+    insert_1, = np.nonzero((rms_res > tol) & (rms_res < 100 * tol))
+    insert_2, = np.nonzero(rms_res >= 100 * tol)
+    if insert_1.size + insert_2.size == 0:
+        return x
+    return np.sort(np.hstack((x, 0.5 * (x[insert_1] + x[insert_1 + 1]), (2 * x[insert_2] + x[insert_2 + 1]) / 3,
+                              (x[insert_2] + 2 * x[insert_2 + 1]) / 3)))
+
+
 def _checked(fun_jac, A, B, c, x, y, p, tol, bc_tol):
     """The arguments of :func:`solve_collocation` checked as ``solve_bvp`` checks them, and the pieces both
     solvers use: ``x, h, y, p, n, k, tol, bc_tol, jac, bc, key``."""
@@ -345,19 +369,13 @@ def solve_collocation(fun, fun_jac, A, B, c, x, y, p=None, *, tol: float = 1e-3,
         if singular:
             status = 2
             break
-        insert_1, = np.nonzero((rms_res > tol) & (rms_res < 100 * tol))
-        insert_2, = np.nonzero(rms_res >= 100 * tol)
-        nodes_added = insert_1.size + 2 * insert_2.size
-        if m + nodes_added > max_nodes:
+        x_new = _refined(x, rms_res, tol)
+        if x_new.size > max_nodes:
             status = 1
             break
-        if nodes_added > 0:
-            sol = _spline(coef, x)
-            x = np.sort(np.hstack((x, 0.5 * (x[insert_1] + x[insert_1 + 1]),
-                                   (2 * x[insert_2] + x[insert_2 + 1]) / 3,
-                                   (x[insert_2] + 2 * x[insert_2 + 1]) / 3)))
-            h = np.diff(x)
-            y = sol(x)
+        if x_new.size > m:
+            y = _spline(coef, x)(x_new)
+            x, h = x_new, np.diff(x_new)
         elif max_bc_res <= bc_tol:
             status = 0
             break
@@ -370,7 +388,7 @@ def solve_collocation(fun, fun_jac, A, B, c, x, y, p=None, *, tol: float = 1e-3,
 
 
 def continue_collocation(fun, fun_jac, A, B, c, x, y, p=None, *, tol: float, factor=None,
-                         max_steps: int = _CHORD_STEPS) -> CollocationResult | None:
+                         max_steps: int = _CHORD_STEPS, max_nodes: int = 1000) -> CollocationResult | None:
     """The collocation equations of :func:`solve_collocation` on the mesh ``x`` solved from a close start
     ``(y, p)`` (a continuation's predictor) by chord Newton steps with ``factor``, the banded LU of a
     neighbouring problem's Jacobian on the same mesh (``CollocationResult.factor``; factored here at the start
@@ -380,9 +398,12 @@ def continue_collocation(fun, fun_jac, A, B, c, x, y, p=None, *, tol: float, fac
     It stops by ``solve_bvp``'s own Newton test (every collocation residual below
     ``2/3 h 0.05 tol (1 + |f_middle|)``, boundary residuals below ``bc_tol``) and is accepted by its own final
     test on this mesh (every interval's rms relative residual ``<= tol``, boundary residual ``<= bc_tol``):
-    what ``solve_bvp`` returns from this start without inserting nodes, to within its Newton test.  Returns
-    ``None`` where that does not happen within ``max_steps`` steps (the caller runs :func:`solve_collocation`,
-    which refines the mesh where it must); the result's ``factor`` is the one used, for the next point.
+    what ``solve_bvp`` returns from this start, to within its Newton test.  Where the rms test asks for
+    nodes, they are inserted as ``solve_bvp`` inserts them and :func:`solve_collocation` goes on from the
+    converged states (as ``solve_bvp``'s next iteration does; at most ``max_nodes``).  Returns ``None`` where
+    the steps do not meet the Newton test within ``max_steps`` or the run fails (the caller then runs
+    :func:`solve_collocation` from its start); the result's ``factor`` is the last one used, for the next
+    point.
     """
     x, h, y, p, n, k, tol, bc_tol, jac, bc, key = _checked(fun_jac, A, B, c, x, y, p, tol, bc_tol=None)
     band = _band(key, x.size)
@@ -421,7 +442,12 @@ def continue_collocation(fun, fun_jac, A, B, c, x, y, p=None, *, tol: float, fac
         y, p, cost_before = y - ys, p - ps, cost
     coef = _spline_coefficients(y, f, h)
     rms_res = _rms_residuals(fun, coef, x, h, p, 1.5 * col_res / h, f_middle)
-    if not (np.max(rms_res) <= tol and np.max(np.abs(bc_res)) <= bc_tol):
+    if not np.max(np.abs(bc_res)) <= bc_tol:
         return None
+    x_new = _refined(x, rms_res, tol)
+    if x_new.size > x.size:  # the mesh does not resolve this point: go on as solve_bvp goes on from here
+        r = solve_collocation(fun, fun_jac, A, B, c, x_new, _spline(coef, x)(x_new), p if k else None, tol=tol,
+                              max_nodes=max_nodes)
+        return r if r.success else None
     return CollocationResult(sol=_spline(coef, x), p=p if k else None, x=x, y=y, yp=f, rms_residuals=rms_res,
                              niter=1, status=0, message=MESSAGES[0], success=True, factor=factor)
