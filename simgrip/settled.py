@@ -109,7 +109,7 @@ def settled_record(state, params: DimensionlessParams, profile=None) -> dict:
     ``error_estimate`` (``settle(..., target_error=E)``: tip over ``l``, forces relative; else None),
     ``nodes`` and ``contacts`` (every contact on the finger: :mod:`simgrip.contact_report`); a held full-contact
     Grip I/II state also ``tip_normal_force`` and ``tip_friction_force`` (the contacts at the tip,
-    :func:`tip_forces`; ``normal_force`` is the resultant of all).  ``feasible`` is the
+    :func:`simgrip.compare_full.tip_forces`; ``normal_force`` is the resultant of all).  ``feasible`` is the
     simulation's verdict: the workpiece is held, its contacts are surface contacts
     (``contact_ok``: none deeper than half the finger's radius, no Grip I/II tip past
     the face; the record then carries ``contact_ok: False``) and, Grip III, condition
