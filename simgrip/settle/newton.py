@@ -204,8 +204,9 @@ class Newton:
         """Round-off floor of the contact force residual: ``K_c`` times the resolution of a distance."""
         if not self.normal_active:
             return 0.0
-        kc = float(np.max(self.kc[self.normal_active]))
-        return self.floor_ulps() * _EPS * kc * self.scene.length / self.scene.force_scale
+        kc = float(self.kc[self.normal_active].max())
+        ph = self.scene.physical  # (the scene's length and force_scale, read through one property)
+        return self.floor_ulps() * _EPS * kc * ph.length / ph.force_scale
 
     def floor_ulps(self) -> float:
         """Round-off of a contact distance in ulps of ``l``: :data:`FLOOR_ULPS`, or the chain's bound if larger.
@@ -321,9 +322,15 @@ class Newton:
         key = getattr(self, "_kc_at", None)
         if key is None:
             return False
-        now = self._kc_key(q)
-        return (key[1] == now[1] and key[7] == now[7]
-                and all(np.array_equal(a, b) for a, b in zip(key[:7], now[:7]) if not isinstance(a, list)))
+        m = self.scene.model
+        if key[1] != self.normal_active or key[7] != int(m.opt.disableflags):
+            return False
+        # (_kc_key's arrays compared where they live, without copying them first; the first difference decides)
+        for a, b in ((key[0], q), (key[2], self.kc), (key[3], m.pair_solref), (key[4], m.pair_solimp),
+                     (key[5], m.pair_friction), (key[6], m.body_pos)):
+            if not np.array_equal(a, b):
+                return False
+        return True
 
     def _update_kc(self, q) -> bool:
         """Read MuJoCo's contact stiffness at ``q``; True if it moved enough to matter."""
