@@ -218,7 +218,11 @@ def _tip_system(P: BvpProblem):
 
     def fun(t, y, p=None):
         c, sn, n1, n2 = _segment_rhs(y, p[0] if con else P.N1, P, t, 0, True)
-        return np.vstack((y[1] / D, n1 * sn - n2 * c, c, sn))
+        out = np.empty((4, t.size))  # the rows filled in place: np.vstack's checks cost as much as the rest
+        np.divide(y[1], D, out=out[0])
+        np.subtract(n1 * sn, n2 * c, out=out[1])
+        out[2], out[3] = c, sn
+        return out
 
     def fun_jac(t, y, p=None):
         c, sn, n1, n2 = _segment_rhs(y, p[0] if con else P.N1, P, t, 0, True)
@@ -254,8 +258,10 @@ def _two_segment_system(P: BvpProblem):
 
     def fun(t, y, p=None):
         (ca, sa, n1a, n2a), (cb, sb, n1b, n2b) = pieces(t, y, p)
-        return np.vstack((ga * y[1] / D, ga * (n1a * sa - n2a * ca), ga * ca, ga * sa,
-                          gb * y[5] / D, gb * (n1b * sb - n2b * cb), gb * cb, gb * sb))
+        out = np.empty((8, t.size))  # filled in place (see _tip_system)
+        out[0], out[1], out[2], out[3] = ga * y[1] / D, ga * (n1a * sa - n2a * ca), ga * ca, ga * sa
+        out[4], out[5], out[6], out[7] = gb * y[5] / D, gb * (n1b * sb - n2b * cb), gb * cb, gb * sb
+        return out
 
     def fun_jac(t, y, p=None):
         (ca, sa, n1a, n2a), (cb, sb, n1b, n2b) = pieces(t, y, p)

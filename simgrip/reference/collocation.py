@@ -212,14 +212,14 @@ def _jacobian_blocks(n, k, h, df_dy, df_dy_middle, df_dp, df_dp_middle):
     h = h[:, None, None]
     eye = np.identity(n)
     d0 = -eye - h / 6 * (df_dy[:-1] + 2 * df_dy_middle)
-    d0 -= h**2 / 12 * np.einsum("...ij,...jk->...ik", df_dy_middle, df_dy[:-1])
+    d0 -= h**2 / 12 * np.matmul(df_dy_middle, df_dy[:-1])  # solve_bvp's stacked_matmul (einsum): ~10x slower
     d1 = eye - h / 6 * (df_dy[1:] + 2 * df_dy_middle)
-    d1 += h**2 / 12 * np.einsum("...ij,...jk->...ik", df_dy_middle, df_dy[1:])
+    d1 += h**2 / 12 * np.matmul(df_dy_middle, df_dy[1:])
     dp = None
     if k:
         df_dp = np.transpose(df_dp, (2, 0, 1))
-        df_dp_middle = np.transpose(df_dp_middle, (2, 0, 1)) + 0.125 * h * np.einsum(
-            "...ij,...jk->...ik", df_dy_middle, df_dp[:-1] - df_dp[1:])
+        df_dp_middle = np.transpose(df_dp_middle, (2, 0, 1)) + 0.125 * h * np.matmul(
+            df_dy_middle, df_dp[:-1] - df_dp[1:])
         dp = -h / 6 * (df_dp[:-1] + df_dp[1:] + 4 * df_dp_middle)
     return d0, d1, dp
 
