@@ -167,10 +167,10 @@ def test_no_file_over_600_lines(tree):
 
 
 #: simgrip.gripper's modules in the order of its docstring's table: parameters -> scene -> settle -> state ->
-#: comparison; the first five build the scene.
-GRIPPER_ORDER = ("placement", "model", "cradle", "scene", "scene_symmetry", "state", "rest_depth", "start",
+#: comparison; the first six build the scene.
+GRIPPER_ORDER = ("placement", "model", "cradle", "scene", "scene_symmetry", "reuse", "state", "rest_depth", "start",
                  "dynamics", "stability", "full", "symmetry", "settle", "simulate", "compare")
-GRIPPER_SCENE = GRIPPER_ORDER[:5]
+GRIPPER_SCENE = GRIPPER_ORDER[:6]
 
 
 def test_the_gripper_package_flows_one_way(graph):
@@ -181,7 +181,8 @@ def test_the_gripper_package_flows_one_way(graph):
     assert listed == set(GRIPPER_ORDER), "simgrip/gripper/__init__.py's table and GRIPPER_ORDER list every module"
     for i, name in enumerate(GRIPPER_ORDER):
         inside = {t[len(package):] for t in graph[package + name] if t.startswith(package)}
-        assert inside <= set(GRIPPER_ORDER[:i]), f"simgrip.gripper.{name} imports {sorted(inside - set(GRIPPER_ORDER[:i]))}"
+        later = sorted(inside - set(GRIPPER_ORDER[:i]))
+        assert not later, f"simgrip.gripper.{name} imports {later}, listed after it"
         assert "simgrip.gripper" not in graph[package + name], f"simgrip.gripper.{name} imports its package"
     for name in GRIPPER_SCENE:
         settle = sorted(t for t in graph[package + name] if t == "simgrip.settle" or t.startswith("simgrip.settle."))

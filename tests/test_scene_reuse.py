@@ -24,6 +24,7 @@ from simgrip.profiles import Concentrated, Uniform
 from simgrip.scenes import build_scene
 from simgrip.settle import settle
 from simgrip.gripper.settle import settle_gripper
+from simgrip.gripper import reuse as gripper_reuse
 from simgrip.sim import reuse
 from simgrip.gripper.scene import build_gripper
 
@@ -211,16 +212,17 @@ def test_gripper_reuse_is_bit_identical(grip, K, shape):
             prof = [Uniform(float(rng.uniform(-3.0, -1.0))) for _ in range(K)]  # each finger its own
         kw = dict(fingers=K, workpiece=shape)
         if grip == "III" and i == 2:
-            kw["initial_angles"] = reuse.build_gripper(grip, params, prof, n, **kw).model.numeric_data[:n].copy()
+            cradle = gripper_reuse.build_gripper(grip, params, prof, n, **kw)
+            kw["initial_angles"] = cradle.model.numeric_data[:n].copy()
         elif i == 2:  # a start off the straight fingers: the workpiece (its free joint's qpos0) moves with the tips
             kw["initial_angles"] = rng.uniform(-0.2, 0.0, (K, n))
         try:
             fresh = build_gripper(grip, params, prof, n, **kw)
         except ValueError:
             with pytest.raises(ValueError):
-                reuse.build_gripper(grip, params, prof, n, **kw)
+                gripper_reuse.build_gripper(grip, params, prof, n, **kw)
             continue
-        used = reuse.build_gripper(grip, params, prof, n, **kw)
+        used = gripper_reuse.build_gripper(grip, params, prof, n, **kw)
         assert_same_model(used.model, fresh.model)
         assert_same_data(used.data, fresh.data, fresh.model)
         assert np.array_equal(used.size, fresh.size) and np.array_equal(used.reach, fresh.reach)
@@ -272,9 +274,9 @@ def test_bad_arguments_are_the_builders_errors():
         reuse.build_scene("I", {"D": 1.0}, Uniform(-2.0), 6)
     with pytest.raises(ValueError, match="b must exceed"):
         reuse.build_scene("I", dataclasses.replace(p, b=1e-3), Uniform(-2.0), 6)
-    reuse.build_gripper("I", p, Uniform(-2.0), 6, fingers=3, workpiece="cylinder")
+    gripper_reuse.build_gripper("I", p, Uniform(-2.0), 6, fingers=3, workpiece="cylinder")
     narrow = dataclasses.replace(p, b=0.0045)  # K = 3 tip spheres overlap on the circle of diameter b
-    for build in (build_gripper, reuse.build_gripper):
+    for build in (build_gripper, gripper_reuse.build_gripper):
         with pytest.raises(ValueError, match="fingers = 3"):
             build("I", narrow, Uniform(-2.0), 6, fingers=3, workpiece="cylinder")
     assert math.isfinite(reuse.build_scene("I", p, Uniform(-2.0), 6).model.stat.meaninertia)

@@ -287,7 +287,7 @@ def gripper_force_data(*, fingers=FORCE_FINGERS, kappas=SIM_KAPPAS, links: int =
     from simgrip.profiles import Uniform
     from simgrip.reference import elastica
     from simgrip.gripper.settle import settle_gripper
-    from simgrip.sim import reuse  # one compile per K, set in place for each kappa
+    from simgrip.gripper import reuse  # one compile per K, set in place for each kappa
 
     p = STANDARD if params is None else params
     fingers = tuple(int(k) for k in fingers)

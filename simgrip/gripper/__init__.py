@@ -12,6 +12,7 @@ planar BVP).  The modules follow the one-way flow parameters → scene → settl
 ``cradle``            Grip III with four fingers under a box's bottom edges (the scene)
 ``scene``             ``build_gripper``: the K fingers, the palm, the workpiece
 ``scene_symmetry``    whether a built scene is exactly symmetric, read from its compiled model
+``reuse``             ``build_gripper`` compiled once per structure, set in place (:mod:`simgrip.sim.reuse`)
 ``state``             ``GripperState``, ``FingerRecord`` and their reading from MuJoCo
 ``rest_depth``        how deep the soft contact rests under a normal force in the dynamics
 ``start``             the settle's start: the balanced shares, the rest depth, the chain per finger
@@ -24,7 +25,7 @@ planar BVP).  The modules follow the one-way flow parameters → scene → settl
 ``compare``           ``compare_gripper``: the settled gripper next to the elastica reference
 ====================  ==================================================================================
 
-The scene modules (``placement`` to ``scene_symmetry``) never import a settle
+The scene modules (``placement`` to ``reuse``) never import a settle
 module; ``tests/test_import_graph.py`` checks that, the order above and that
 no modules import each other.
 """

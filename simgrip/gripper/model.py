@@ -1,4 +1,4 @@
-"""The compiled K-finger model: :class:`GripperScene`, :func:`compile_gripper`, the fingers' azimuths, the workpiece's mass.
+"""The compiled K-finger model: :class:`GripperScene`, :func:`compile_gripper`, azimuths, the workpiece's mass.
 
 What both builders share -- :func:`simgrip.gripper.scene.build_gripper`
 (Grips I, II) and :func:`simgrip.gripper.cradle.build_cradle` (Grip III) --

@@ -109,7 +109,7 @@ def make_gripper_cases(count: int, seed: int = 0, max_links: int = 32) -> list[d
 def _scene(case: dict):
     from simgrip.params import DimensionlessParams
     from simgrip.gripper.scene import uniform_profiles
-    from simgrip.sim.reuse import build_gripper  # one compile per structure, set in place
+    from simgrip.gripper.reuse import build_gripper  # one compile per structure, set in place
 
     params = DimensionlessParams(D=case["D"], M=case["M"], b=case["b"], mu_s=case["mu_s"])
     return build_gripper(case["grip"], params, list(uniform_profiles(case["kappas"], case["fingers"])), case["n"],
