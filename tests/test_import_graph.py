@@ -187,3 +187,30 @@ def test_the_gripper_package_flows_one_way(graph):
     for name in GRIPPER_SCENE:
         settle = sorted(t for t in graph[package + name] if t == "simgrip.settle" or t.startswith("simgrip.settle."))
         assert not settle, f"scene module simgrip.gripper.{name} imports {settle}"
+
+
+#: Packages (or modules) below -> what they must never import: the references know no MuJoCo, the scene no
+#: solver, the settle no gripper or comparison; no physics imports the harness, the figures, the sweeps, the
+#: environments or the command line (docs/layout.md).
+_COMPARE = ("simgrip.compare", "simgrip.compare_full", "simgrip.settled", "simgrip.modes")
+_TOOLS = ("simgrip.harness", "simgrip.figures", "simgrip.sweep", "simgrip.envs", "simgrip.cli")
+LAYERS = {
+    "simgrip.reference": ("simgrip.sim", "simgrip.settle", "simgrip.gripper") + _COMPARE + _TOOLS,
+    "simgrip.sim": ("simgrip.settle", "simgrip.gripper") + _COMPARE + _TOOLS,
+    "simgrip.settle": ("simgrip.gripper",) + _COMPARE + _TOOLS,
+    "simgrip.gripper": ("simgrip.modes",) + _TOOLS,
+    "simgrip.compare": _TOOLS,
+    "simgrip.settled": _TOOLS,
+    "simgrip.modes": _TOOLS,
+}
+
+
+def _within(module: str, package: str) -> bool:
+    return module == package or module.startswith(package + ".")
+
+
+def test_the_layers_import_only_downwards(graph):
+    wrong = [f"{a} -> {b}" for low, high in LAYERS.items() for a in sorted(graph) if _within(a, low)
+             for b in sorted(graph[a]) if any(_within(b, h) for h in high)]
+    assert not wrong, "imports against the flow (parameters -> scene -> settle -> state -> comparison):\n" + \
+        "\n".join(wrong)
