@@ -109,19 +109,21 @@ class _Band:
         def flat(r, c):
             return (self.kl + self.ku + r - c) * N + c
 
-        i = np.arange(m - 1)[:, None, None]
-        a = np.arange(n)[None, :, None]
-        b = np.arange(n)[None, None, :]
-        r0 = self.nl + na * i + a  # collocation rows of interval i
-        self.i_d0 = flat(r0, na * i + b).ravel()  # d Phi_i / d y_i
-        self.i_d1 = flat(r0, na * (i + 1) + b).ravel()  # d Phi_i / d y_{i+1}
-        self.i_dp = flat(r0, na * i + n + np.arange(k)[None, None, :]).ravel() if k else None
+        # interval i's entries sit where interval 0's do, shifted na columns per interval (r - c is the same)
+        steps = na * np.arange(m - 1)[:, None]
+
+        def intervals(r0, c0):
+            return (steps + flat(r0, c0).ravel()[None, :]).ravel()
+
+        a, b = np.arange(n)[:, None], np.arange(n)[None, :]
+        self.i_d0 = intervals(self.nl + a, b)  # d Phi_i / d y_i
+        self.i_d1 = intervals(self.nl + a, na + b)  # d Phi_i / d y_{i+1}
+        self.i_dp = intervals(self.nl + a, n + np.arange(k)[None, :]) if k else None
         t = np.zeros(self.shape)
         tf = t.reshape(-1)
-        j = np.arange(k + q)[None, :]
-        rc = self.nl + na * np.arange(m - 1)[:, None] + n + j  # the copies' rows: x_{i+1} - x_i = 0
-        tf[flat(rc, na * np.arange(m - 1)[:, None] + n + j).ravel()] = -1.0
-        tf[flat(rc, na * np.arange(1, m)[:, None] + n + j).ravel()] = 1.0
+        j = np.arange(k + q)
+        tf[intervals(self.nl + n + j, n + j)] = -1.0  # the copies' rows: x_{i+1} - x_i = 0
+        tf[intervals(self.nl + n + j, na + n + j)] = 1.0
         # left rows: the separated ones, then a_r . y(a) - z_r; right rows: the separated ones, then b_r . y(b) + z_r
         for r, src in enumerate(left):
             tf[flat(r, np.arange(n))] = A[src]
