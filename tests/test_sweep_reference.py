@@ -7,6 +7,8 @@ one cold solve, and a walk along kappa takes no cold solve but its two ends.
 
 from __future__ import annotations
 
+import pytest
+
 from simgrip.sweep import point as sweep_point
 from simgrip.sweep import reference as sweep_reference
 from simgrip.sweep.grid import make_grid
@@ -19,13 +21,15 @@ def _no_simulation(point):
     return {**{c: None for c in sweep_point.SIM_COLUMNS}, "wall_time_s": None, "message": ""}
 
 
-def _counted(monkeypatch):
+def _counted(monkeypatch, tols=None):
     calls = {"cold": 0, "warm": 0}
     for name in calls:
         real = getattr(sweep_reference, name)
 
         def counted(*args, _real=real, _name=name):
             calls[_name] += 1
+            if _name == "cold" and tols is not None:
+                tols.append(args[1] if len(args) > 1 else sweep_reference.TOL)
             return _real(*args)
 
         monkeypatch.setattr(sweep_reference, name, counted)
@@ -51,12 +55,21 @@ def test_a_friction_line_is_one_cold_solve(monkeypatch):
 
 
 def test_a_kappa_walk_is_cold_at_its_ends_only(monkeypatch):
+    """The first point solved cold, the others walked, the last checked by its cold path without the final
+    polish (TOL_MID) and kept from the walk: equal to its full cold solve to the solver's tolerance."""
+    from simgrip.reference.bvp import TOL_MID
+
     monkeypatch.setattr(sweep_point, "_simulation", _no_simulation)
     grid = make_grid("I", kappa=(-7, -6, 12), links=LINKS)
-    calls = _counted(monkeypatch)
+    tols = []
+    calls = _counted(monkeypatch, tols)
     rows = evaluate_segment([grid.point(i) for i in range(grid.size)])
-    assert calls == {"cold": 2, "warm": 11}  # each point after the first, the last to compare with its cold solve
+    assert calls == {"cold": 2, "warm": 11} and tols == [sweep_reference.TOL, TOL_MID]
     assert all(r["bvp_warning"] == "" and r["bvp_message"] == "" for r in rows)
+    full = evaluate_point(grid.point(grid.size - 1))
+    # two 1e-8 solutions of one equilibrium (see tests/test_sweep_stream.py's FORCE_RTOL)
+    assert rows[-1]["bvp_normal_force"] == pytest.approx(full["bvp_normal_force"], rel=1e-6)
+    assert rows[-1]["bvp_feasible"] is full["bvp_feasible"]
 
 
 def test_problem_key_ignores_only_friction():

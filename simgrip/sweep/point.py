@@ -15,9 +15,10 @@ uniform curvature; none for a full-contact sweep,
 
 The reference at the cost of a continuation (:func:`evaluate_segment`): along
 a segment of the grid (:meth:`simgrip.sweep.grid.SweepGrid.segments`, fixed by
-the grid alone) the references are warm-started from their neighbours and
-checked against cold solves at the ends, where the walk is kept only when it
-ends on the cold solve's branch (:mod:`simgrip.sweep.reference`): each equals
+the grid alone) the references are warm-started from their neighbours (a
+predictor and chord Newton steps on the collocation equations of ``solve_bvp``)
+and checked against the cold solve's path at the ends, where the walk is kept
+only when it ends on the cold solve's branch (:mod:`simgrip.sweep.reference`): each equals
 the point's cold solve (:func:`evaluate_point`) to the solver's tolerance, so
 the verdicts are those of cold solves.  A point whose warm start reached
 another branch is solved cold and ``bvp_warning`` says so.
