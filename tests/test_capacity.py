@@ -7,6 +7,7 @@ where the stability eigenvalue of the branch vanishes like ``sqrt(M_fold - M)``.
 
 from __future__ import annotations
 
+import functools
 import math
 
 import pytest
@@ -28,16 +29,23 @@ from simgrip.reference import (
 )
 
 
-def test_grip_III_carries_the_most_load():
+@pytest.fixture(scope="module")
+def loads():
+    """``max_load(grip, STANDARD, Uniform(kappa))``, each (grip, kappa) searched once in this module: four tests
+    ask for the same Grip I loads (kappa = -5 in four, -6 in two); each is still compared with its own solve."""
+    return functools.cache(lambda grip, kappa: max_load(grip, STANDARD, Uniform(kappa)))
+
+
+def test_grip_III_carries_the_most_load(loads):
     ks = {"I": [-5.0, -6.0], "II": [4.5, 5.0, 5.5, 6.0], "III": [-4.0, -5.0]}
-    best = {g: max(max_load(g, STANDARD, Uniform(k)) for k in kk) for g, kk in ks.items()}
+    best = {g: max(loads(g, k) for k in kk) for g, kk in ks.items()}
     assert best["III"] > best["I"] and best["III"] > best["II"]
     assert math.isfinite(best["III"])
 
 
-def test_max_load_is_the_feasibility_boundary():
+def test_max_load_is_the_feasibility_boundary(loads):
     """At the returned M the grip is marginal: mu_s N = M (Grip I)."""
-    M = max_load("I", STANDARD, Uniform(-5.0))
+    M = loads("I", -5.0)
     sol = solve("I", STANDARD.replace(M=M), Uniform(-5.0))
     assert STANDARD.mu_s * sol.N1 == pytest.approx(M, abs=1e-6)
     assert least_mu("I", STANDARD, Uniform(-5.0)) == pytest.approx(STANDARD.M / solve("I", STANDARD, Uniform(-5.0)).N1)
@@ -54,9 +62,9 @@ def test_margin_is_non_negative_exactly_where_the_grip_holds():
             assert ("tip_clear" in terms) == (grip == "III")
 
 
-def test_largest_load_names_its_reason():
+def test_largest_load_names_its_reason(loads):
     friction = largest_load("I", STANDARD, Uniform(-5.0))
-    assert friction.reason == "friction" and friction.M == pytest.approx(max_load("I", STANDARD, Uniform(-5.0)))
+    assert friction.reason == "friction" and friction.M == pytest.approx(loads("I", -5.0))
     held = friction.solution
     assert held.feasible and 0 <= friction.M - held.params.M <= 1e-6
     none = largest_load("I", STANDARD, Uniform(-1.0))  # the finger pulls on the workpiece: nothing held
@@ -87,13 +95,13 @@ def test_a_fold_is_where_the_branch_loses_stability():
     assert lam[0.99] / lam[0.96] == pytest.approx(0.5, abs=0.06)
 
 
-def test_tracking_a_sweep_matches_independent_searches():
+def test_tracking_a_sweep_matches_independent_searches(loads):
     kappas = (-4.5, -5.0, -5.5, -6.0)
     profiles = [Uniform(k) for k in kappas]
     tracked = track_largest_load("I", STANDARD, profiles, sweep("I", STANDARD, profiles))
     for cap, prof in zip(tracked, profiles):
         assert cap.reason == "friction"
-        assert cap.M == pytest.approx(max_load("I", STANDARD, prof), abs=1e-7)
+        assert cap.M == pytest.approx(loads("I", prof.kappa), abs=1e-7)
     assert track_largest_load("I", STANDARD, []) == []
     with pytest.raises(ValueError, match="guesses"):
         track_largest_load("I", STANDARD, profiles, [None])
