@@ -65,11 +65,13 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass, fields
+from enum import Enum
 
 __all__ = [
     "PhysicalParams",
     "DimensionlessParams",
     "GRIPS",
+    "Grip",
     "check_grip",
     "check_grip_iii_reach",
     "STANDARD",
@@ -102,15 +104,51 @@ ALPHA_MAX = 100.0
 MAX_LINKS = 1000
 
 
-def check_grip(grip: str) -> str:
-    """Return ``grip`` normalised (``"i"`` -> ``"I"``), or raise ``ValueError`` naming ``grip``."""
+class Grip(str, Enum):
+    """A grip name that has been checked: what :func:`check_grip` returns.
+
+    A ``str`` equal (and hashing equal) to its name (``Grip.I == "I"``), which
+    prints, formats, ``repr``-s and serialises (JSON) as the plain name, so a
+    layer that reads a grip reads it as before; a layer handed a ``Grip`` knows
+    it is one of :data:`GRIPS` and :func:`check_grip` returns it unchanged
+    (parameters are checked once where they enter, issue 21).
+    """
+
+    FREE = "free"
+    I = "I"  # noqa: E741 (the paper's name)
+    II = "II"
+    III = "III"
+
+    __hash__ = str.__hash__
+    __str__ = str.__str__
+    __format__ = str.__format__
+
+    def __repr__(self) -> str:
+        return repr(self.value)
+
+    def __reduce_ex__(self, protocol):
+        return Grip, (self.value,)
+
+
+def check_grip(grip) -> Grip:
+    """Return ``grip`` checked and normalised (``"i"`` -> ``Grip.I``), or raise ``ValueError`` naming ``grip``.
+
+    A :class:`Grip` is returned as it is (it was checked where it entered).
+    """
+    if isinstance(grip, Grip):
+        return grip
+    return _parse_grip(grip)
+
+
+def _parse_grip(grip) -> Grip:
+    """The check itself: ``grip`` as a :class:`Grip` (``"i"``, ``" III "`` accepted), ValueError naming it."""
     if not isinstance(grip, str):
         raise ValueError(f"grip must be one of {GRIPS}, got {grip!r}")
     g = grip.strip()
     g = g if g == "free" else g.upper()
     if g not in GRIPS:
         raise ValueError(f"grip must be one of {GRIPS}, got {grip!r}")
-    return g
+    return Grip(g)
 
 
 def check_grip_iii_reach(gamma: float, b: float) -> None:
@@ -225,6 +263,20 @@ class DimensionlessParams:
         values.update(changes)
         return DimensionlessParams(**values)
 
+    def unit_physical(self) -> "PhysicalParams":
+        """These groups realised with ``l = rho = g = 1`` (``EI = D``, ``m = M``), as the scenes build them.
+
+        Equal, bit for bit, to ``to_physical(length=1.0, rho=1.0, g=1.0)``, whose products by 1 are exact,
+        but not checked again: every field is one of these groups, checked when they were built, and the
+        result's :meth:`PhysicalParams.dimensionless` is ``self``.
+        """
+        p = object.__new__(PhysicalParams)
+        for name, value in (("length", 1.0), ("EI", self.D), ("rho", 1.0), ("g", 1.0), ("m", self.M),
+                            ("b", self.b), ("mu_s", self.mu_s), ("gamma", self.gamma)):
+            object.__setattr__(p, name, value)
+        object.__setattr__(p, "_dimensionless", self)
+        return p
+
     def to_physical(self, length: float = 1.0, rho: float = 1.0, g: float = 9.81) -> "PhysicalParams":
         """Physical parameters with the given length [m], mass per length [kg/m] and gravity [m/s^2]."""
         length = _positive("length", length)
@@ -283,8 +335,8 @@ class PhysicalParams:
         b, gamma = _within_reach(self.b, self.gamma, self.length, si=True)
         object.__setattr__(self, "b", b)
         object.__setattr__(self, "gamma", gamma)
-        try:  # the model's range is stated in dimensionless groups
-            self.dimensionless()
+        try:  # the model's range is stated in dimensionless groups; kept: dimensionless() returns them
+            object.__setattr__(self, "_dimensionless", self._groups())
         except ValueError as exc:
             raise ValueError(
                 f"these physical parameters leave the model's range: {exc} "
@@ -292,7 +344,12 @@ class PhysicalParams:
             ) from None
 
     def dimensionless(self) -> DimensionlessParams:
-        """The paper's dimensionless groups ``D, M, b/l, mu_s, gamma/l``."""
+        """The paper's dimensionless groups ``D, M, b/l, mu_s, gamma/l`` (computed and checked once, on
+        construction)."""
+        return self._dimensionless
+
+    def _groups(self) -> DimensionlessParams:
+        """The groups computed from the fields (a ``DimensionlessParams``, which checks their range)."""
         w = self.rho * self.g * self.length  # weight of the rod [N], the force scale
         return DimensionlessParams(
             D=_ratio(self.EI, w * self.length * self.length),

@@ -41,8 +41,13 @@ def start_angles(grip: str, params: PhysicalParams | DimensionlessParams, profil
 
 
 def build_scene(grip: str, params: PhysicalParams | DimensionlessParams, profile, n_links: int, **kw):
-    """:func:`simgrip.sim.scene.build_scene` started from :func:`start_angles` unless ``initial_angles`` is given."""
-    if kw.get("initial_angles") is None and check_grip(grip) == "III":
+    """:func:`simgrip.sim.scene.build_scene` started from :func:`start_angles` unless ``initial_angles`` is given.
+
+    ``grip`` is checked here (:func:`~simgrip.params.check_grip`) and handed down as a
+    :class:`~simgrip.params.Grip`, which the layers below take as checked.
+    """
+    grip = check_grip(grip)
+    if kw.get("initial_angles") is None and grip == "III":
         # what start_angles reads is checked first, with the model layer's messages
         if not isinstance(params, (PhysicalParams, DimensionlessParams)):
             raise ValueError(f"params must be PhysicalParams or DimensionlessParams, got {type(params).__name__}")

@@ -47,7 +47,7 @@ import mujoco
 import numpy as np
 
 from simgrip.chain import chain_springs
-from simgrip.params import DimensionlessParams, PhysicalParams
+from simgrip.params import DimensionlessParams, Grip, PhysicalParams
 from simgrip.profiles import as_profile
 from simgrip.sim.contacts import add_pair
 from simgrip.sim.fingers import add_fingers, check_finger_links
@@ -151,7 +151,7 @@ def build_cradle(params: PhysicalParams | DimensionlessParams, profile, n_links:
             add_pair(spec, f"pair_f{k}_link{i}", f"f{k}_geom{i}", corner_name(k), phys.mu_s)
 
     scene = compile_gripper(
-        spec, fingers=K, n=n, grip="III", workpiece="box", params=dimless, physical=phys, profile=prof,
+        spec, fingers=K, n=n, grip=Grip.III, workpiece="box", params=dimless, physical=phys, profile=prof,
         springs=springs, azimuths=azimuths, yaw=float(yaw), size=size, r_tip=float(r_tip), r_link=r_link,
         contact_angle=0.0, profiles=(prof,) * K, finger_springs=(springs,) * K, reach=np.full(K, 0.5 * dimless.b),
         normals=np.tile([1.0, 0.0], (K, 1)))

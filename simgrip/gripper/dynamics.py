@@ -40,6 +40,7 @@ from simgrip.settle.integrator import (DYN_DAMPING, DYN_IMPRATIO, DYN_STEP, DYN_
                                        geometric_stiffness_bound, lowest_frequency, run_to_rest)
 from simgrip.gripper.rest_depth import contact_rest_depth  # re-exported (__all__)
 from simgrip.gripper.start import finger_chain
+from simgrip.params import Grip
 from simgrip.settle.state import SettleError
 from simgrip.settle.statics import CONTACT_IMPEDANCE, check_warnings
 from simgrip.gripper.scene import GripperScene
@@ -226,7 +227,7 @@ def settle_once(scene: GripperScene, dyn: GripperDynamics, tol: float, budget: i
         dyn.hold(True)
         m.opt.disableflags |= int(mujoco.mjtDisableBit.mjDSBL_CONTACT)
         for k in range(scene.fingers):
-            free = finger_chain(scene, "free", finger=k)
+            free = finger_chain(scene, Grip.FREE, finger=k)
             if free is not None:
                 d.qpos[scene.joint_qpos[k]] = free.joint_angles
         d.qvel[:] = 0.0

@@ -54,7 +54,7 @@ import mujoco
 import numpy as np
 
 from simgrip.chain import chain_springs, link_positions
-from simgrip.params import DimensionlessParams, PhysicalParams, _finite, check_grip
+from simgrip.params import DimensionlessParams, Grip, PhysicalParams, _finite, check_grip
 from simgrip.profiles import as_profile
 from simgrip.sim.contacts import add_pair
 from simgrip.sim.fingers import add_fingers, check_finger_links
@@ -80,8 +80,9 @@ DEFAULT_R_LINK = 2e-3
 #: Least inertial mass of the workpiece per finger over ``rho l``: the planar scene's floor, one value for both.
 MIN_WORKPIECE_MASS = _workpiece.MIN_WORKPIECE_MASS
 
-def check_gripper(grip, fingers, workpiece) -> tuple[str, int, str]:
-    """``(grip, K, workpiece)`` normalised, or ValueError naming the bad one.
+def check_gripper(grip, fingers, workpiece) -> tuple[Grip, int, str]:
+    """``(grip, K, workpiece)`` normalised (``grip`` a checked :class:`~simgrip.params.Grip`), or ValueError
+    naming the bad one.
 
     ``fingers`` is an integer ``>= 2``; ``workpiece`` one of :data:`WORKPIECES`;
     a box takes ``K = 2`` or ``4`` (one finger centred on each of two or four faces);
@@ -186,6 +187,15 @@ def build_gripper(
     GripperScene
     """
     grip, K, shape = check_gripper(grip, fingers, workpiece)
+    return _build_gripper(grip, params, profile, n_links, K=K, shape=shape, yaw=yaw, contact_angle=contact_angle,
+                          r_tip=r_tip, r_link=r_link, initial_angles=initial_angles, offset=offset,
+                          workpiece_yaw=workpiece_yaw, contact=contact, box_gap=box_gap)
+
+
+def _build_gripper(grip: Grip, params, profile, n_links, *, K: int, shape: str, yaw=0.0, contact_angle=0.0,
+                   r_tip=DEFAULT_R_TIP, r_link=DEFAULT_R_LINK, initial_angles=None, offset=(0.0, 0.0),
+                   workpiece_yaw=0.0, contact=None, box_gap=None) -> GripperScene:
+    """:func:`build_gripper` with ``(grip, K, shape)`` already through :func:`check_gripper` (not checked again)."""
     from simgrip.sim.full_contact import DEFAULT_BOX_GAP, check_contact_mode, enable_full_contact, full_box_centre
 
     mode = check_contact_mode(contact)

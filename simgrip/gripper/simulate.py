@@ -13,7 +13,7 @@ import math
 import time
 
 from simgrip.compare import settle_fields
-from simgrip.params import DimensionlessParams
+from simgrip.params import DimensionlessParams, Grip
 from simgrip.profiles import as_profile
 
 __all__ = ["gripper_record", "simulate_gripper"]
@@ -33,21 +33,22 @@ def simulate_gripper(grip: str, params: DimensionlessParams, profile, links: int
     """
     from simgrip.progress import phase
     from simgrip.gripper.settle import settle_gripper
-    from simgrip.gripper.scene import build_gripper
+    from simgrip.gripper.scene import _build_gripper, check_gripper
 
+    grip, K, shape = check_gripper(grip, fingers, workpiece)  # checked here, once; handed down as checked values
     if not isinstance(profile, (list, tuple)):
         profile = as_profile(profile)
     start = {}
-    if str(grip).strip().upper() == "III" and not isinstance(profile, (list, tuple)):
+    if grip == "III" and not isinstance(profile, (list, tuple)):
         from simgrip.scenes import start_angles  # the cradle starts where the theory does (the planar simulate's)
 
-        start["initial_angles"] = start_angles("III", params, profile, links)
+        start["initial_angles"] = start_angles(grip, params, profile, links)
     t0 = time.perf_counter()
     with phase(progress, f"building the model ({fingers} fingers x {links} links)"):
         if settle_kw.get("contact") == "full":  # every link touches (issue 17)
             start["contact"] = "full"
-        scene = build_gripper(grip, params, profile, links, fingers=fingers, workpiece=workpiece, yaw=yaw,
-                              contact_angle=contact_angle, offset=offset, workpiece_yaw=workpiece_yaw, **start)
+        scene = _build_gripper(grip, params, profile, links, K=K, shape=shape, yaw=yaw, contact_angle=contact_angle,
+                               offset=offset, workpiece_yaw=workpiece_yaw, **start)
     build_time_s = time.perf_counter() - t0
     with phase(progress, "settling"):
         state = settle_gripper(scene, **settle_kw)
@@ -117,7 +118,7 @@ def _stability(state, params: DimensionlessParams, profile) -> float:
             ch = discrete.solve_chain(state.grip, p, profile, state.links, contact_moment=r.moment,
                                       guess=state.link_angles[0])
         else:
-            ch = discrete.solve_chain("free", params, profile, state.links, guess=state.link_angles[0])
+            ch = discrete.solve_chain(Grip.FREE, params, profile, state.links, guess=state.link_angles[0])
         return float(ch.min_eigenvalue)
     except (discrete.DiscreteError, ValueError):
         return math.nan

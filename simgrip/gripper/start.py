@@ -68,7 +68,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from simgrip.params import M_MAX
+from simgrip.params import M_MAX, Grip
 from simgrip.reference import DiscreteError, solve_chain
 from simgrip.settle.state import SettleError
 from simgrip.gripper.rest_depth import contact_rest_depth
@@ -119,7 +119,7 @@ def unreached_fingers(scene: GripperScene, X=None, fingers: int | None = None) -
     X = contact_reach(scene) if X is None else np.asarray(X, dtype=float)
     out = []
     for k in range(scene.fingers if fingers is None else fingers):
-        free = finger_chain(scene, "free", finger=k)
+        free = finger_chain(scene, Grip.FREE, finger=k)
         if free is not None:
             tip_x = float(np.sum(np.cos(free.link_angles))) / scene.n
             if tip_x > X[k]:

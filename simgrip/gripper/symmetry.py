@@ -111,7 +111,7 @@ def _planar_cradle(scene: GripperScene):
     m, L = scene.model, scene.length
     edge = cradle_edges(scene)[0]
     q_start = cradle_start_angles(m)
-    pl = build_model("III", scene.physical, scene.profile, scene.n, r_tip=scene.r_tip, r_link=scene.r_link,
+    pl = build_model(scene.grip, scene.physical, scene.profile, scene.n, r_tip=scene.r_tip, r_link=scene.r_link,
                      r_corner=float(m.geom_size[edge][0]) / L, initial_angles=q_start)
     pm = pl.model
     links = sorted(int(np.nonzero(scene.index.link_geom[0] == m.pair_geom1[i])[0][0])

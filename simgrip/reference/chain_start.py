@@ -41,6 +41,7 @@ from typing import NamedTuple
 import numpy as np
 from scipy.linalg.lapack import dgtsv, dpttrf, dpttrs
 
+from simgrip.params import Grip
 from simgrip.reference.minimiser import GRADIENT_TOL, DiscreteEnergy, NewtonResult, grip_sign, minimise
 from simgrip.reference.stability import tri_factor
 
@@ -262,7 +263,7 @@ def free_start_angles(params, profile, n, *, gravity=1.0, guess=None) -> np.ndar
     :func:`~simgrip.reference.hinge_chain.chain_angles` itself.  Raises as it does."""
     from simgrip.reference.hinge_chain import chain_angles
 
-    _, params, prof, n, prob, _ = _problem("free", params, profile, n, gravity)
+    _, params, prof, n, prob, _ = _problem(Grip.FREE, params, profile, n, gravity)
     x0 = np.cumsum(prob.rest) if guess is None else np.asarray(guess, dtype=float)
     res = fast_newton(prob, x0) if x0.shape == (n,) else None
     if res is not None:

@@ -50,7 +50,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from simgrip.chain import ChainSprings, check_links, link_positions, springs_of
-from simgrip.params import M_MAX, DimensionlessParams, _finite
+from simgrip.params import M_MAX, DimensionlessParams, Grip, _finite
 from simgrip.reference.arguments import check_discrete
 from simgrip.reference.minimiser import (
     DiscreteEnergy,
@@ -321,7 +321,7 @@ def cradle_start_angles(params: DimensionlessParams, profile, n: int) -> np.ndar
         (the message names ``gamma``).
     """
     try:
-        return solve_chain("III", params, profile, check_links(n)).joint_angles
+        return solve_chain(Grip.III, params, profile, check_links(n)).joint_angles
     except DiscreteError as exc:
         raise ValueError(f"gamma: no Grip III hinge-chain equilibrium with the contact at gamma = "
                          f"{params.gamma:g} for this kappa profile ({exc})") from exc

@@ -223,11 +223,16 @@ class Scene(FingerScene):
 
 
 def check_params(params) -> tuple[DimensionlessParams, PhysicalParams]:
-    """``(dimensionless, physical)`` of ``params``; ``DimensionlessParams`` are realised with ``l = rho = g = 1``."""
+    """``(dimensionless, physical)`` of ``params``; ``DimensionlessParams`` are realised with ``l = rho = g = 1``.
+
+    Both dataclasses are checked when they are built; nothing is checked again here
+    (:meth:`~simgrip.params.PhysicalParams.dimensionless` returns the groups computed on construction,
+    :meth:`~simgrip.params.DimensionlessParams.unit_physical` copies checked groups).
+    """
     if isinstance(params, PhysicalParams):
         return params.dimensionless(), params
     if isinstance(params, DimensionlessParams):
-        return params, params.to_physical(length=1.0, rho=1.0, g=1.0)
+        return params, params.unit_physical()
     raise ValueError(f"params must be PhysicalParams or DimensionlessParams, got {type(params).__name__}")
 
 

@@ -1,0 +1,145 @@
+"""Arguments are checked once where they enter and handed down as checked values (issue 21).
+
+Each public call below counts the checks that do work:
+
+* the grip's parse (:func:`simgrip.params._parse_grip`, behind
+  :func:`~simgrip.params.check_grip`, which hands a :class:`~simgrip.params.Grip`
+  back unchanged);
+* a :class:`~simgrip.params.DimensionlessParams` built equal to the argument
+  (the argument's groups validated again: the old ``to_physical`` /
+  ``dimensionless`` round trip of every layer) -- a *new* value, such as the
+  settle's ``params.replace(b=b - 2e-6)``, is not a re-check and is not counted;
+* any :class:`~simgrip.params.PhysicalParams` built (the dimensionless argument
+  realised with ``l = rho = g = 1`` is checked groups copied, not re-validated);
+* :func:`simgrip.gripper.scene.check_gripper` (grip, fingers, workpiece).
+
+Before this (measured on the same calls, n = 16): ``simulate`` parsed the grip
+6-7 times and rebuilt the params 2-3 times; ``simulate_gripper`` parsed it 5-6
+times; ``gripper_record`` once more.  Every count here must now be the number
+of arguments that entered: one grip, zero re-validated params.
+"""
+
+from __future__ import annotations
+
+import collections
+
+import pytest
+
+import simgrip.params as P
+from simgrip.params import DimensionlessParams, Grip, check_grip
+
+LINKS = 16  # the counts do not depend on the resolution; 16 links settle in ~0.1 s
+
+
+@pytest.fixture
+def counts(monkeypatch):
+    """Counters of the checks that do work, wrapped for the test (the reuse caches cleared: the fresh-build path,
+    through every layer, is the one counted)."""
+    from simgrip.gripper import scene as gscene
+    from simgrip.sim import reuse
+
+    reuse.clear()
+    c = collections.Counter()
+    entered: list = []
+    parse, dp_init, pp_init, gripper = P._parse_grip, DimensionlessParams.__post_init__, P.PhysicalParams.__post_init__, \
+        gscene.check_gripper
+
+    def parse_w(grip):
+        c["grip parsed"] += 1
+        return parse(grip)
+
+    def dp_w(self):
+        dp_init(self)
+        if any(self == p for p in entered):
+            c["params re-validated"] += 1
+
+    def pp_w(self):
+        c["physical built"] += 1
+        pp_init(self)
+
+    def gripper_w(*a, **k):
+        c["check_gripper"] += 1
+        return gripper(*a, **k)
+
+    monkeypatch.setattr(P, "_parse_grip", parse_w)
+    monkeypatch.setattr(DimensionlessParams, "__post_init__", dp_w)
+    monkeypatch.setattr(P.PhysicalParams, "__post_init__", pp_w)
+    monkeypatch.setattr(gscene, "check_gripper", gripper_w)
+    c.entered = entered
+    yield c
+    reuse.clear()
+
+
+def _params(counts) -> DimensionlessParams:
+    p = DimensionlessParams()
+    counts.entered.append(p)
+    counts.clear()
+    return p
+
+
+@pytest.mark.parametrize("grip", ["I", "iii"])
+def test_simulate_checks_each_argument_once(counts, grip):
+    from simgrip.settled import simulate
+
+    p = _params(counts)
+    state = simulate(grip, p, 0.0, LINKS)
+    assert dict(counts) == {"grip parsed": 1}
+    assert state.grip is check_grip(grip)  # handed down as the checked value
+
+
+def test_compare_checks_each_argument_once(counts):
+    from simgrip.compare import compare
+
+    p = _params(counts)
+    out = compare("I", p, 0.0, LINKS)
+    assert dict(counts) == {"grip parsed": 1}
+    assert out["simulation"]["grip"] == "I"
+
+
+@pytest.mark.parametrize("grip,fingers,workpiece", [("I", 3, "cylinder"), ("III", 4, "box")])
+def test_simulate_gripper_checks_each_argument_once(counts, grip, fingers, workpiece):
+    from simgrip.gripper.simulate import gripper_record, simulate_gripper
+
+    p = _params(counts)
+    state = simulate_gripper(grip, p, 0.0, LINKS, fingers=fingers, workpiece=workpiece)
+    assert dict(counts) == {"grip parsed": 1, "check_gripper": 1}
+    counts.clear()
+    rec = gripper_record(state, p, 0.0)  # the state's grip is already checked
+    assert "grip parsed" not in counts and "params re-validated" not in counts and "physical built" not in counts
+    assert rec["grip"] == grip
+
+
+def test_sweep_point_checks_its_grip_with_the_grid(counts):
+    """A sweep's grip is checked once, with its grid; each point builds its params (the point's own entry)."""
+    from simgrip.sweep.grid import make_grid
+    from simgrip.sweep.point import evaluate_point
+
+    grid = make_grid("I", kappa=[0.0], links=LINKS, reference="none")
+    assert counts["grip parsed"] == 1 and isinstance(grid.grip, Grip)
+    point = next(iter(grid.points()))
+    counts.clear()
+    row = evaluate_point(point)
+    assert row["status"] == "settled"
+    assert "grip parsed" not in counts and "physical built" not in counts
+
+
+def test_grip_is_a_plain_str_to_readers():
+    """A checked grip reads, prints, hashes and serialises as its name: no reader of a grip changes."""
+    import json
+    import pickle
+
+    g = check_grip(" iii ")
+    assert g is Grip.III and check_grip(g) is g
+    assert g == "III" and {"III": 1}[g] == 1 and hash(g) == hash("III")
+    assert (str(g), f"{g}", repr(g), json.dumps(g)) == ("III", "III", "'III'", '"III"')
+    assert pickle.loads(pickle.dumps(g)) is g
+    with pytest.raises(ValueError, match="grip must be one of"):
+        check_grip("IV")
+
+
+def test_unit_physical_is_to_physical_bit_for_bit():
+    """The scenes' realisation of a dimensionless argument (not re-validated) equals the validated one exactly."""
+    for p in (DimensionlessParams(), DimensionlessParams(D=0.37, M=0.0, b=1.3, mu_s=0.0, gamma=0.9999),
+              DimensionlessParams(D=1e4, M=1e4, b=1e-9, mu_s=100.0, gamma=1e-9)):
+        u, v = p.unit_physical(), p.to_physical(length=1.0, rho=1.0, g=1.0)
+        assert u == v and u.dimensionless() is p and v.dimensionless() == p
