@@ -15,13 +15,12 @@ import numpy as np
 import pytest
 
 from simgrip import STANDARD, Concentrated, DimensionlessParams, Uniform
+from simgrip.reference.capacity import least_mu, max_load
 from simgrip.reference.elastica import (
     FINE_POINTS,
     ElasticaError,
     ElasticaSolution,
     kappa_sweep,
-    least_mu,
-    max_load,
     solve,
     sweep,
 )
