@@ -36,21 +36,40 @@ import numpy as np
 
 from simgrip.profiles import CurvatureProfile, as_profile
 
-__all__ = ["ChainSprings", "chain_springs", "springs_of", "MIN_LINKS", "check_links", "link_positions"]
+__all__ = ["ChainSprings", "Count", "chain_springs", "springs_of", "MIN_LINKS", "check_links", "link_positions"]
 
 #: Fewest links a finger may have (one clamp hinge plus one interior hinge).
 MIN_LINKS = 2
 
 
+class Count(int):
+    """A count that :func:`check_links` has checked: an ``int >= MIN_LINKS``, handed back unchanged by it.
+
+    A plain ``int`` to every reader (arithmetic on it gives ``int``); a layer handed one does not check it
+    again (issue 21: arguments checked once where they enter).  Bounds that depend on where the count is
+    used (MuJoCo's body depth, the reference's ``MAX_COUNT``) are still compared there.
+    """
+
+    __slots__ = ()
+
+
 def check_links(n, name: str = "links") -> int:
-    """Return ``n`` as an int, or raise ``ValueError`` naming ``name`` if it is not an integer >= 2."""
+    """Return ``n`` as an int (a :class:`Count`), or raise ``ValueError`` naming ``name`` if it is not an
+    integer >= 2.  A :class:`Count` is returned as it is."""
+    if type(n) is Count:
+        return n
+    return _parse_count(n, name)
+
+
+def _parse_count(n, name: str) -> Count:
+    """The check itself: ``n`` as a :class:`Count`, ValueError naming ``name``."""
     try:
         ni = int(n)
     except (TypeError, ValueError, OverflowError):  # OverflowError: int(inf)
         raise ValueError(f"{name} must be an integer >= {MIN_LINKS}, got {n!r}") from None
     if ni != n or ni < MIN_LINKS:
         raise ValueError(f"{name} must be an integer >= {MIN_LINKS}, got {n!r}")
-    return ni
+    return Count(ni)
 
 
 @dataclass(frozen=True)

@@ -44,12 +44,14 @@ def build_scene(grip: str, params: PhysicalParams | DimensionlessParams, profile
     """:func:`simgrip.sim.scene.build_scene` started from :func:`start_angles` unless ``initial_angles`` is given.
 
     ``grip`` is checked here (:func:`~simgrip.params.check_grip`) and handed down as a
-    :class:`~simgrip.params.Grip`, which the layers below take as checked.
+    :class:`~simgrip.params.Grip`, which the layers below take as checked (as ``n_links``, a
+    :class:`~simgrip.chain.Count`, for Grip III's start).
     """
     grip = check_grip(grip)
     if kw.get("initial_angles") is None and grip == "III":
         # what start_angles reads is checked first, with the model layer's messages
         if not isinstance(params, (PhysicalParams, DimensionlessParams)):
             raise ValueError(f"params must be PhysicalParams or DimensionlessParams, got {type(params).__name__}")
-        kw["initial_angles"] = start_angles(grip, params, as_profile(profile), check_finger_links(n_links))
+        profile, n_links = as_profile(profile), check_finger_links(n_links)
+        kw["initial_angles"] = start_angles(grip, params, profile, n_links)
     return _model.build_scene(grip, params, profile, n_links, **kw)

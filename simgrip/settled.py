@@ -41,10 +41,12 @@ def simulate(grip: str, params: DimensionlessParams, profile, links: int, *, pro
     """
     from simgrip.progress import phase
     from simgrip.settle import SettleError, settle
+    from simgrip.sim.fingers import check_finger_links
     from simgrip.sim.reuse import build_scene  # compiled once per structure, set in place (bit-identical)
 
-    grip = check_grip(grip)
+    grip = check_grip(grip)  # checked here, once, and handed down as checked values (a Grip, a Count)
     profile = as_profile(profile)
+    links = check_finger_links(links)
     auto = method in (None, "auto")
 
     full = {"contact": "full"} if settle_kw.get("contact") == "full" else {}  # every link touches (issue 17)

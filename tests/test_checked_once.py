@@ -11,12 +11,17 @@ Each public call below counts the checks that do work:
   settle's ``params.replace(b=b - 2e-6)``, is not a re-check and is not counted;
 * any :class:`~simgrip.params.PhysicalParams` built (the dimensionless argument
   realised with ``l = rho = g = 1`` is checked groups copied, not re-validated);
+* the link count's parse (:func:`simgrip.chain._parse_count`, behind
+  :func:`~simgrip.chain.check_links`, which hands a :class:`~simgrip.chain.Count`
+  back unchanged);
 * :func:`simgrip.gripper.scene.check_gripper` (grip, fingers, workpiece).
 
-Before this (measured on the same calls, n = 16): ``simulate`` parsed the grip
-6-7 times and rebuilt the params 2-3 times; ``simulate_gripper`` parsed it 5-6
-times; ``gripper_record`` once more.  Every count here must now be the number
-of arguments that entered: one grip, zero re-validated params.
+Before this (measured with this file on the same calls, n = 16, grip parses /
+link-count parses / params re-validated / physical built): ``simulate`` 6-7 / 6-8
+/ 2 / 2, ``compare`` 8 / 7 / 2 / 2, ``simulate_gripper`` 5-6 / 8-10 / 2 / 1, a
+sweep point (its grid already checked) 6 / 6 / 0 / 2, ``gripper_record`` 1 / 1.
+Every count here must now be the number of arguments that entered: one grip,
+one link count, zero re-validated params.
 """
 
 from __future__ import annotations
@@ -25,7 +30,9 @@ import collections
 
 import pytest
 
+import simgrip.chain as C
 import simgrip.params as P
+from simgrip.chain import Count, check_links
 from simgrip.params import DimensionlessParams, Grip, check_grip
 
 LINKS = 16  # the counts do not depend on the resolution; 16 links settle in ~0.1 s
@@ -41,8 +48,12 @@ def counts(monkeypatch):
     reuse.clear()
     c = collections.Counter()
     entered: list = []
-    parse, dp_init, pp_init, gripper = P._parse_grip, DimensionlessParams.__post_init__, P.PhysicalParams.__post_init__, \
-        gscene.check_gripper
+    links, parse, gripper = C._parse_count, P._parse_grip, gscene.check_gripper
+    dp_init, pp_init = DimensionlessParams.__post_init__, P.PhysicalParams.__post_init__
+
+    def links_w(n, name):
+        c["links parsed"] += 1
+        return links(n, name)
 
     def parse_w(grip):
         c["grip parsed"] += 1
@@ -61,6 +72,7 @@ def counts(monkeypatch):
         c["check_gripper"] += 1
         return gripper(*a, **k)
 
+    monkeypatch.setattr(C, "_parse_count", links_w)
     monkeypatch.setattr(P, "_parse_grip", parse_w)
     monkeypatch.setattr(DimensionlessParams, "__post_init__", dp_w)
     monkeypatch.setattr(P.PhysicalParams, "__post_init__", pp_w)
@@ -83,7 +95,7 @@ def test_simulate_checks_each_argument_once(counts, grip):
 
     p = _params(counts)
     state = simulate(grip, p, 0.0, LINKS)
-    assert dict(counts) == {"grip parsed": 1}
+    assert dict(counts) == {"grip parsed": 1, "links parsed": 1}
     assert state.grip is check_grip(grip)  # handed down as the checked value
 
 
@@ -92,7 +104,7 @@ def test_compare_checks_each_argument_once(counts):
 
     p = _params(counts)
     out = compare("I", p, 0.0, LINKS)
-    assert dict(counts) == {"grip parsed": 1}
+    assert dict(counts) == {"grip parsed": 1, "links parsed": 1}
     assert out["simulation"]["grip"] == "I"
 
 
@@ -102,10 +114,10 @@ def test_simulate_gripper_checks_each_argument_once(counts, grip, fingers, workp
 
     p = _params(counts)
     state = simulate_gripper(grip, p, 0.0, LINKS, fingers=fingers, workpiece=workpiece)
-    assert dict(counts) == {"grip parsed": 1, "check_gripper": 1}
+    assert dict(counts) == {"grip parsed": 1, "links parsed": 1, "check_gripper": 1}
     counts.clear()
     rec = gripper_record(state, p, 0.0)  # the state's grip is already checked
-    assert "grip parsed" not in counts and "params re-validated" not in counts and "physical built" not in counts
+    assert not counts, dict(counts)  # nothing re-checked: the state's values were checked when they entered
     assert rec["grip"] == grip
 
 
@@ -115,12 +127,12 @@ def test_sweep_point_checks_its_grip_with_the_grid(counts):
     from simgrip.sweep.point import evaluate_point
 
     grid = make_grid("I", kappa=[0.0], links=LINKS, reference="none")
-    assert counts["grip parsed"] == 1 and isinstance(grid.grip, Grip)
+    assert counts["grip parsed"] == 1 and isinstance(grid.grip, Grip) and isinstance(grid.links, Count)
     point = next(iter(grid.points()))
     counts.clear()
     row = evaluate_point(point)
     assert row["status"] == "settled"
-    assert "grip parsed" not in counts and "physical built" not in counts
+    assert "grip parsed" not in counts and "links parsed" not in counts and "physical built" not in counts
 
 
 def test_grip_is_a_plain_str_to_readers():
@@ -135,6 +147,19 @@ def test_grip_is_a_plain_str_to_readers():
     assert pickle.loads(pickle.dumps(g)) is g
     with pytest.raises(ValueError, match="grip must be one of"):
         check_grip("IV")
+
+
+def test_count_is_a_plain_int_to_readers():
+    """A checked count is an ``int`` (arithmetic, JSON, pickling as before) that :func:`check_links` passes through."""
+    import json
+    import pickle
+
+    n = check_links(16.0)
+    assert type(n) is Count and n == 16 and check_links(n) is n and type(n + 1) is int
+    assert (repr(n), json.dumps(n), hash(n)) == ("16", "16", hash(16))
+    assert pickle.loads(pickle.dumps(n)) == 16
+    with pytest.raises(ValueError, match="links must be an integer >= 2"):
+        check_links(1.5)
 
 
 def test_unit_physical_is_to_physical_bit_for_bit():

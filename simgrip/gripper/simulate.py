@@ -35,7 +35,10 @@ def simulate_gripper(grip: str, params: DimensionlessParams, profile, links: int
     from simgrip.gripper.settle import settle_gripper
     from simgrip.gripper.scene import _build_gripper, check_gripper
 
+    from simgrip.sim.fingers import check_finger_links
+
     grip, K, shape = check_gripper(grip, fingers, workpiece)  # checked here, once; handed down as checked values
+    links = check_finger_links(links)  # a Count: the layers below do not check it again
     if not isinstance(profile, (list, tuple)):
         profile = as_profile(profile)
     start = {}

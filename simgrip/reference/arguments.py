@@ -4,7 +4,10 @@ Each public function of :mod:`simgrip.reference` checks and converts its inputs
 once, with these helpers, and hands plain floats, ints and
 :class:`~simgrip.profiles.CurvatureProfile` objects to the internal functions,
 which do not check them again.  Every failure is a ``ValueError`` naming the
-parameter.
+parameter.  Values already checked where they entered simgrip (a
+:class:`~simgrip.params.Grip`, a :class:`~simgrip.chain.Count`, a
+``DimensionlessParams``, checked when it was built) pass through unchanged, so
+a solver called by the settle or a scene builder does not re-check them.
 """
 
 from __future__ import annotations
