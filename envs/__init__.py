@@ -15,6 +15,8 @@ id                                what                                      max 
 ``simgrip/PickCradleFragile-v0``  Grip III cradle of a fragile box          300 (6 s)
 ``simgrip/PickSphereFragile-v0``  K fingers around a fragile sphere         300 (6 s)
 ``simgrip/...Fragile-v1``         the five above, v1's shaped reward        as v0
+``simgrip/PickCradleFragile-v2``  v1's cradle, palm start height 13-29 cm   300 (6 s)
+``simgrip/PickSphereFragile-v2``  v1's sphere, palm start height 10-22 cm   300 (6 s)
 ================================  ========================================  =========
 
 >>> import gymnasium as gym, simgrip.envs
@@ -51,12 +53,16 @@ _ENVS = {
     "simgrip/PlaceFragile-v1": ("simgrip.envs.pick_fragile_v1:FragilePlaceEnvV1", {}, 400),
     "simgrip/PickCradleFragile-v1": ("simgrip.envs.pick_fragile_v1:FragileCradleEnvV1", {}, 300),
     "simgrip/PickSphereFragile-v1": ("simgrip.envs.pick_fragile_v1:FragileSphereEnvV1", {}, 300),
+    # v2: v1 with the hand started at an unknown height (a fixed descent misses the grasp height)
+    "simgrip/PickCradleFragile-v2": ("simgrip.envs.pick_cradle_fragile_v2:FragileCradleEnvV2", {}, 300),
+    "simgrip/PickSphereFragile-v2": ("simgrip.envs.pick_sphere_fragile_v2:FragileSphereEnvV2", {}, 300),
 }
 ENV_IDS = tuple(k for k, v in _ENVS.items() if v[0] == "simgrip.envs.pick:PickEnv")
 MULTI_ENV_IDS = tuple(k for k, v in _ENVS.items() if v[0] == "simgrip.envs.pick_multi:PickMultiEnv")
 FRAGILE_ENV_IDS = tuple(k for k, v in _ENVS.items() if v[0].split(":")[0] in (
     "simgrip.envs.pick_fragile", "simgrip.envs.pick_place", "simgrip.envs.pick_cradle_fragile",
-    "simgrip.envs.pick_sphere_fragile", "simgrip.envs.pick_fragile_v1"))
+    "simgrip.envs.pick_sphere_fragile", "simgrip.envs.pick_fragile_v1", "simgrip.envs.pick_cradle_fragile_v2",
+    "simgrip.envs.pick_sphere_fragile_v2"))
 
 
 def register_envs() -> None:

@@ -20,6 +20,9 @@ Policies (actions ``(curvature command, palm speed)`` in ``[-1, 1]``; ``PlaceFra
                 fixed time to the scripted controller's grasp height for the mid-range workpiece, then ramp
                 from the claw to ``a_k`` over ``R`` steps, wait 10, lift at ``a_p``; a constant action cannot
                 lower the palm and then lift)
+``openloop``    (``PickCradleFragile-v2``, ``PickSphereFragile-v2``: the env's ``openloop_grid``, the claw
+                schedule above with the descent ``descent_shift`` steps longer or shorter, see
+                :data:`simgrip.envs.pick_cradle_fragile_v2.OPENLOOP_GRID`)
 ``oracle``      :class:`~simgrip.envs.scripted_fragile.OracleFragilePolicy` (knows the hidden window; for
                 ``PlaceFragile-v0`` inside :class:`~simgrip.envs.scripted_fragile.PlacePolicy`)
 ``observation`` :class:`~simgrip.envs.scripted_fragile.ObservationFragilePolicy` (the observation only;
@@ -115,14 +118,15 @@ def _grasp_height(u, depth: float) -> float:
     return 0.25 * sum(u.size_range) + depth * u.length
 
 
-def _claw_openloop(a_k, ramp, a_p, claw=0.68, depth=0.5):
+def _claw_openloop(a_k, ramp, a_p, claw=0.68, depth=0.5, shift=0):
     """Cradle and sphere: claw open (``claw``), the palm moved at full speed for the steps that take a palm
     started mid-range (``palm_start``) to the scripted controller's grasp height for the mid-range workpiece
-    (:func:`_grasp_height`), ramp the curvature to ``a_k`` over ``ramp`` steps, wait, lift at ``a_p``."""
+    (:func:`_grasp_height`) plus ``shift`` steps, ramp the curvature to ``a_k`` over ``ramp`` steps, wait, lift at
+    ``a_p``."""
     def make(env, info, seed):
         u = env.unwrapped
         travel = _grasp_height(u, depth) - 0.5 * sum(u.palm_start)
-        n_move, v = int(round(abs(travel) / (u.palm_speed * u.dt))), float(np.sign(travel))
+        n_move, v = max(int(round(abs(travel) / (u.palm_speed * u.dt))) + shift, 0), float(np.sign(travel))
 
         def act(obs, t):
             if t < n_move:
@@ -147,7 +151,7 @@ def _random(env, info, seed):
     return lambda obs, t: space.sample()
 
 
-def _members(policy: str, grid: str, place: bool, claw: str | None = None):
+def _members(policy: str, grid: str, place: bool, claw: str | None = None, family_grid: dict | None = None):
     kappas = KAPPA_GRID if grid == "full" else KAPPA_GRID[::2]
     palms = PALM_GRID if grid == "full" else (0.5,)
     ramps = RAMP_GRID if grid == "full" else (25,)
@@ -160,6 +164,10 @@ def _members(policy: str, grid: str, place: bool, claw: str | None = None):
                 for k in kappas for sd in (-1.0, 1.0) for dd in dists]
     if policy == "constant":
         return [({"kappa": k, "palm": p}, _constant(k, p)) for k in kappas for p in palms]
+    if policy == "openloop" and family_grid:  # an env's own claw family (v2: the descent time shifted too)
+        g = {k: (v if grid == "full" else v[len(v) // 2:len(v) // 2 + 1]) for k, v in family_grid.items()}
+        return [({"kappa": k, "ramp_steps": r, "palm": p, "descent_shift": d}, _claw_openloop(k, r, p, shift=d))
+                for k in g["kappa"] for r in g["ramp_steps"] for p in g["palm"] for d in g["descent_shift"]]
     if policy == "openloop":
         family = _claw_openloop if claw else _openloop
         return [({"kappa": k, "ramp_steps": r, "palm": p}, family(k, r, p))
@@ -185,7 +193,7 @@ def evaluate(env_id: str, policy: str, seeds, grid: str = "full") -> dict:
         u = env.unwrapped
         claw = "cradle" if getattr(u, "grip", None) == "III" else "sphere" if getattr(u, "shapes", ()) == (
             "sphere",) else None
-        for params, make in _members(policy, grid, place, claw):
+        for params, make in _members(policy, grid, place, claw, getattr(u, "openloop_grid", None)):
             counts = run_policy(env, make, seeds)
             rows.append({**params, "success_rate": counts["success"] / len(seeds), "outcomes": dict(counts)})
     finally:
