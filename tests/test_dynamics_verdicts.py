@@ -120,7 +120,8 @@ def test_weightless_frictionless_tip_does_not_tunnel(grip, kappa):
 
 
 def test_light_grip_i_is_held_by_the_dynamics_as_by_newton():
-    # M = 1e-3 on the softest finger: the dynamics dropped it (the tip slid into the light box), Newton holds
+    # M = 1e-3 on the softest finger: the dynamics dropped it (the tip slid into the light box), Newton holds;
+    # its robustness to round-off of the start (MuJoCo's constraint solve converged): tests/test_dynamics_solver.py
     p = _params(1e-2, 1e-3, 1.0)
     st = settle(build_scene("I", p, Uniform(-3.5), N), method="dynamics")
     assert st.converged and st.held and settle(build_scene("I", p, Uniform(-3.5), N)).held

@@ -114,16 +114,17 @@ def _put_back(scene: Scene, state: SettledState) -> None:
     mujoco.mj_forward(scene.model, d)
 
 
-def _static_verdicts(scene: Scene, q_start, saved, settle) -> dict:
+def _static_verdicts(scene: Scene, q_start, saved, settle, ls_iterations: int) -> dict:
     """Whether the static settle ``settle`` (:func:`simgrip.settle.settle`) holds the workpiece from the dynamics'
     start ``q_start``: ``{"point": held, "surface": held}`` (``None``: that settle raised :class:`SettleError`;
     ``"surface"`` only where the point contact holds).  Each settle runs on a copy of the model with the options
-    ``saved`` before the dynamics changed them (the scene's own model and data are left as the dynamics leaves
-    them)."""
+    ``saved`` before the dynamics changed them, ``ls_iterations`` the line-search cap among them (the scene's own
+    model and data are left as the dynamics leaves them)."""
     out = {}
     for contact in ("point", "surface"):
         m = copy.copy(scene.model)
         restore_options(m, saved)
+        m.opt.ls_iterations = ls_iterations
         chk = dataclasses.replace(scene, model=m, data=mujoco.MjData(m))
         chk.data.qpos[:] = q_start
         mujoco.mj_forward(m, chk.data)
@@ -161,6 +162,19 @@ def drop_warning(scene: Scene, verdicts: dict) -> str | None:
 
 def settle_dynamics(scene: Scene, tol: float, max_steps: int, warm_start, close: bool,
                      allow_unconverged: bool, t0: float, *, static_settle) -> SettledState:
+    """Over-damped settle of ``scene`` (:func:`_settle_dynamics`); the constraint solver's line-search cap, which
+    :class:`Dyn` raises to :data:`~simgrip.settle.integrator.DYN_LS_ITERATIONS`, is put back on the way out (the
+    settle's own option restore does not know it)."""
+    ls_iterations = int(scene.model.opt.ls_iterations)
+    try:
+        return _settle_dynamics(scene, tol, max_steps, warm_start, close, allow_unconverged, t0,
+                                static_settle=static_settle, ls_iterations=ls_iterations)
+    finally:
+        scene.model.opt.ls_iterations = ls_iterations
+
+
+def _settle_dynamics(scene: Scene, tol: float, max_steps: int, warm_start, close: bool,
+                     allow_unconverged: bool, t0: float, *, static_settle, ls_iterations: int) -> SettledState:
     """Over-damped settle (``static_settle``: the static settle that judges a drop, :func:`simgrip.settle.settle`,
     handed down by it: the package imports this module, so this module does not import it back); the time step halves (from the start) while penetration >= DYN_PEN_LIMIT,
     or a contact tunnels (the tip sphere wholly inside the face, the corner across the rod's axis:
@@ -216,7 +230,7 @@ def settle_dynamics(scene: Scene, tol: float, max_steps: int, warm_start, close:
     state.steps, state.forward_calls = steps, calls
     if not state.held and (dropped or first_drop is not None):
         # a drop is checked against the static settle from the same start: a disagreement says why
-        why = drop_warning(scene, _static_verdicts(scene, q0, saved, static_settle))
+        why = drop_warning(scene, _static_verdicts(scene, q0, saved, static_settle, ls_iterations))
         if why:
             state.warnings.append(why)
     return state
