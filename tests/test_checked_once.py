@@ -5,8 +5,8 @@ Each public call below counts the checks that do work:
 * the grip's parse (:func:`simgrip.params._parse_grip`, behind
   :func:`~simgrip.params.check_grip`, which hands a :class:`~simgrip.params.Grip`
   back unchanged);
-* a :class:`~simgrip.params.DimensionlessParams` built equal to the argument
-  (the argument's groups validated again: the old ``to_physical`` /
+* a :class:`~simgrip.params.DimensionlessParams` built equal to the argument or
+  to one built before it (the same groups validated again: the old ``to_physical`` /
   ``dimensionless`` round trip of every layer) -- a *new* value, such as the
   settle's ``params.replace(b=b - 2e-6)``, is not a re-check and is not counted;
 * any :class:`~simgrip.params.PhysicalParams` built (the dimensionless argument
@@ -19,7 +19,8 @@ Each public call below counts the checks that do work:
 Before this (measured with this file on the same calls, n = 16, grip parses /
 link-count parses / params re-validated / physical built): ``simulate`` 6-7 / 6-8
 / 2 / 2, ``compare`` 8 / 7 / 2 / 2, ``simulate_gripper`` 5-6 / 8-10 / 2 / 1, a
-sweep point (its grid already checked) 6 / 6 / 0 / 2, ``gripper_record`` 1 / 1.
+sweep point (its grid already checked) 6 / 6 / 0 / 2, ``gripper_record`` 1 / 1,
+the command line's ``simulate`` 8-9 / 8-12 / 2-3 / 1-2.
 Every count here must now be the number of arguments that entered: one grip,
 one link count, zero re-validated params.
 """
@@ -63,6 +64,7 @@ def counts(monkeypatch):
         dp_init(self)
         if any(self == p for p in entered):
             c["params re-validated"] += 1
+        entered.append(self)
 
     def pp_w(self):
         c["physical built"] += 1
@@ -133,6 +135,19 @@ def test_sweep_point_checks_its_grip_with_the_grid(counts):
     row = evaluate_point(point)
     assert row["status"] == "settled"
     assert "grip parsed" not in counts and "links parsed" not in counts and "physical built" not in counts
+
+
+@pytest.mark.parametrize("argv", [["simulate", "III", "--links", "16", "--kappa", "-1"],
+                                  ["simulate", "I", "--links", "16", "--kappa", "0", "--fingers", "3",
+                                   "--workpiece", "cylinder"]])
+def test_cli_checks_each_argument_once(counts, capsys, argv):
+    """The command line checks its arguments where they enter (its parser) and hands them down checked."""
+    from simgrip.cli import main
+
+    assert main(argv) == 0
+    assert "grip" in capsys.readouterr().out  # the record was printed
+    assert counts["grip parsed"] == 1 and counts["links parsed"] == 1
+    assert "params re-validated" not in counts and "physical built" not in counts
 
 
 def test_grip_is_a_plain_str_to_readers():
