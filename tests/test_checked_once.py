@@ -20,7 +20,7 @@ Before this (measured with this file on the same calls, n = 16, grip parses /
 link-count parses / params re-validated / physical built): ``simulate`` 6-7 / 6-8
 / 2 / 2, ``compare`` 8 / 7 / 2 / 2, ``simulate_gripper`` 5-6 / 8-10 / 2 / 1, a
 sweep point (its grid already checked) 6 / 6 / 0 / 2, ``gripper_record`` 1 / 1,
-the command line's ``simulate`` 8-9 / 8-12 / 2-3 / 1-2.
+the command line's ``simulate`` 8-9 / 8-12 / 2 / 1-2.
 Every count here must now be the number of arguments that entered: one grip,
 one link count, zero re-validated params.
 """
