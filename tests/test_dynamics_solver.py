@@ -71,3 +71,17 @@ def test_each_constraint_solve_of_the_light_grip_i_converges(monkeypatch):
     assert st.converged and st.held
     assert grads and max(grads) <= sc.model.opt.tolerance
     assert sc.model.opt.ls_iterations == mujoco.MjModel.from_xml_string("<mujoco/>").opt.ls_iterations  # put back
+
+
+def test_a_settle_puts_the_line_search_cap_back_whatever_path_raised_it():
+    """save_options/restore_options carry ``ls_iterations``: the dynamics raises it (DYN_LS_ITERATIONS), and a
+    path that restores through them alone (the full-contact settle's dynamics fallback) left it raised."""
+    from simgrip.settle.statics import restore_options, save_options
+
+    scene = build_scene("I", DimensionlessParams(D=1.0, M=5.0, b=0.6, mu_s=1.0, gamma=0.8), Uniform(-5.0), 8)
+    m = scene.model
+    own = int(m.opt.ls_iterations)
+    saved = save_options(m)
+    m.opt.ls_iterations = integrator.DYN_LS_ITERATIONS
+    restore_options(m, saved)
+    assert int(m.opt.ls_iterations) == own

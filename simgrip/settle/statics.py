@@ -208,7 +208,8 @@ class RestResidual:
 @dataclass
 class SavedOptions:
     """A model's solver and contact options as :func:`save_options` found them (``dynamics``: integrator,
-    time step [s], cone, impratio, dof damping, pair dims and frictions)."""
+    time step [s], cone, impratio, dof damping, pair dims and frictions; ``ls_iterations``: the constraint
+    solver's line-search cap, which the dynamics raises)."""
 
     solref: np.ndarray
     solimp: np.ndarray
@@ -216,6 +217,7 @@ class SavedOptions:
     disableflags: int
     ccd: tuple
     dynamics: tuple = ()
+    ls_iterations: int = 50
 
 
 def save_options(m) -> SavedOptions:
@@ -224,7 +226,7 @@ def save_options(m) -> SavedOptions:
     dyn = (int(opt.integrator), float(opt.timestep), int(opt.cone), float(opt.impratio),
            m.dof_damping.copy(), m.pair_dim.copy(), m.pair_friction.copy())
     return SavedOptions(m.pair_solref.copy(), m.pair_solimp.copy(), int(opt.noslip_iterations), int(opt.disableflags),
-                  (float(opt.ccd_tolerance), int(opt.ccd_iterations)), dyn)
+                  (float(opt.ccd_tolerance), int(opt.ccd_iterations)), dyn, int(opt.ls_iterations))
 
 
 def restore_options(m, s: SavedOptions) -> None:
@@ -236,6 +238,7 @@ def restore_options(m, s: SavedOptions) -> None:
     opt.noslip_iterations = s.noslip
     opt.disableflags = s.disableflags
     opt.ccd_tolerance, opt.ccd_iterations = s.ccd
+    opt.ls_iterations = s.ls_iterations
     if s.dynamics:
         opt.integrator, opt.timestep, opt.cone, opt.impratio = s.dynamics[:4]
         m.dof_damping[:] = s.dynamics[4]
