@@ -36,8 +36,8 @@ import mujoco
 import numpy as np
 
 from simgrip.settle.dynamics import DYN_DROP_FALL, DYN_DROP_SLIP, DYN_VTOL
-from simgrip.settle.integrator import (DYN_DAMPING, DYN_IMPRATIO, DYN_STEP, DYN_TIMECONST, DYN_WORKPIECE_DAMPING,
-                                       geometric_stiffness_bound, lowest_frequency, run_to_rest)
+from simgrip.settle.integrator import (DYN_DAMPING, DYN_IMPRATIO, DYN_LS_ITERATIONS, DYN_STEP, DYN_TIMECONST,
+                                       DYN_WORKPIECE_DAMPING, geometric_stiffness_bound, lowest_frequency, run_to_rest)
 from simgrip.gripper.rest_depth import contact_rest_depth  # re-exported (__all__)
 from simgrip.gripper.start import finger_chain
 from simgrip.params import Grip
@@ -69,6 +69,7 @@ class GripperDynamics:
         m.opt.cone = mujoco.mjtCone.mjCONE_ELLIPTIC
         m.opt.impratio = DYN_IMPRATIO
         m.opt.noslip_iterations = 0
+        m.opt.ls_iterations = max(int(m.opt.ls_iterations), DYN_LS_ITERATIONS)  # as the planar Dyn (integrator.py)
         m.opt.disableflags |= int(mujoco.mjtDisableBit.mjDSBL_REFSAFE)
         m.dof_damping[:] = DYN_DAMPING * h * k
         wb = scene.workpiece_body
