@@ -24,6 +24,15 @@ the initial exploration noise (``sigma = 1`` on each action) every curvature cru
 12 seeds at every mean command), so only a reward in which touching and then crushing gently beats never
 touching leaves a gradient away from "fingers open".
 
+Measured with this reward (``python examples/rl_baselines.py --env simgrip/PickFragile-v1 --algo ppo --seeds 0
+--minutes 15 --checkpoint-minutes 5 --eval-seeds 8000-8049 --jobs 1 --out OUT``, one seed, run at ``nice 19``;
+``docs/baselines/rl_pick_fragile_v1/``): **0 % held-out success** at 5, 10 and 15 CPU-minutes (143k, 285k,
+448k steps), 0 successes in 7004 training episodes.  The learner does climb this reward (mean training return
+0.19 over the first 336 episodes, 2.7 over the last 583; episodes 8 -> 110 steps long), but to a local optimum:
+close gently, keep touching, never lift (held-out return 4.4, 3.7, 3.4 at the checkpoints; on 3 of the first 8
+held-out seeds it touches for the whole 300 steps with lift < 5 mm, the others crush a light workpiece within
+3-12 steps).  The issue's 80 % is not reached: lifting while touching has yet to pay more than touching alone.
+
 Rewards (every term in ``info``; ``T`` the registered time limit):
 
 ==================  ====================================================================  ==================

@@ -5,6 +5,10 @@ Needs the optional extra: ``pip install "simgrip[rl]"`` (Stable-Baselines3 and a
     python examples/rl_baselines.py --env simgrip/PickFragile-v0 --algo ppo sac --seeds 0 1 2 \\
         --minutes 15 --checkpoint-minutes 5 --eval-seeds 8000-8049 --jobs 2 --out runs/pick_fragile
 
+(``docs/baselines/rl_pick_fragile/``: 0 % for all six runs on v0; the same command on
+``simgrip/PickFragile-v1``, the shaped reward of :mod:`simgrip.envs.pick_fragile_v1`, with ``--algo ppo --seeds 0
+--jobs 1``: ``docs/baselines/rl_pick_fragile_v1/``, 0 % at 5, 10 and 15 CPU-minutes.)
+
 Each (algorithm, seed) is trained by ``examples/train_sb3.py`` (library defaults, one environment, one torch
 thread, ``--minutes`` of the process's CPU time, a checkpoint every ``--checkpoint-minutes``) in a *separate
 process*, at most ``--jobs`` at once (default 1, at most the machine's cores: each run uses one core, so its
