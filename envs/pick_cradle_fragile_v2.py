@@ -1,10 +1,11 @@
 r"""The fragile cradle, v2: the hand starts at an unknown height (issue 18), ``simgrip/PickCradleFragile-v2``.
 
 ``simgrip/PickCradleFragile-v1`` (:mod:`simgrip.envs.pick_fragile_v1`: v0's task,
-:mod:`simgrip.envs.pick_cradle_fragile`, with v1's shaped reward) with **one change to the draw**: the palm
+:mod:`simgrip.envs.pick_cradle_fragile`, with v1's shaped reward) with **two changes to the draw**: the palm
 starts at a height drawn uniformly from ``palm_start = (0.13, 0.29)`` m (v0 and v1: ``(0.13, 0.14)``), i.e. the
-hand arrives above the box at a height the controller must read rather than assume.  The box, the pedestal
-(4 cm), the crush window (``crush_limit = r m g / 2`` per finger, ``r`` log-uniform in ``(1.5, 2.5)``), the
+hand arrives above the box at a height the controller must read rather than assume; and the box is at most
+6.5 cm wide (``box_width_range = (0.04, 0.065)`` m; v0 and v1: up to 7.5 cm).  The box's height (3.5 cm), the
+pedestal (4 cm), the crush window (``crush_limit = r m g / 2`` per finger, ``r`` log-uniform in ``(1.5, 2.5)``), the
 reward (v1's, unchanged: its table is in :mod:`simgrip.envs.pick_fragile_v1`), the observation and the action
 are v1's.
 
@@ -17,6 +18,13 @@ palm and fingers press the box down on its pedestal (knocked over or crushed).  
 target height is kept in it) is ``palm_range = (0.05, 0.3)`` m (v0: ``(0.05, 0.25)``, raised to hold the higher
 starts); every grasp height and start lies inside it.
 
+The width: with v1's ``(0.04, 0.075)`` m and the wider start, the observation-only controller held 43 of 50 on
+seeds 5000-5049 but **39 of 50 (78 %) on the held-out seeds 6000-6049**; 12 of its 18 crushes on the two sets
+were of boxes wider than 6.5 cm (29 % of that range): 6 while closing, before the box left the pedestal (the
+closing links pressing the box's sides), 6 during the lift.  The width was then capped at 6.5 cm (chosen on
+seeds 5000-5049: observation-only 46 of 50, best open-loop 10 of 50), so seeds 6000-6049 are **not untouched**
+by that choice; seeds 6100-6149, untouched, are reported beside them.
+
 Per episode (SI):
 
 ====================  =========================================  ================================
@@ -25,7 +33,7 @@ drawn                 range                                      sensed by the a
 palm start height     uniform ``(0.13, 0.29)`` m                 yes: ``palm_height``, and the
                                                                  box's position relative to the
                                                                  palm (``box_position``)
-box width             uniform ``(0.04, 0.075)`` m                no (only through contact and
+box width             uniform ``(0.04, 0.065)`` m                no (only through contact and
                                                                  the finger shapes)
 box mass              log-uniform ``(0.01, 0.2)`` kg             no (hidden)
 friction              uniform ``(0.3, 1.2)``                     no (hidden)
@@ -70,12 +78,14 @@ from __future__ import annotations
 
 from simgrip.envs.pick_fragile_v1 import FragileCradleEnvV1
 
-__all__ = ["CRADLE_V2_PALM_RANGE", "CRADLE_V2_PALM_START", "FragileCradleEnvV2", "OPENLOOP_GRID"]
+__all__ = ["CRADLE_V2_PALM_RANGE", "CRADLE_V2_PALM_START", "CRADLE_V2_WIDTH", "FragileCradleEnvV2", "OPENLOOP_GRID"]
 
 #: v2's palm start range [m] (v0/v1: (0.13, 0.14))
 CRADLE_V2_PALM_START = (0.13, 0.29)
 #: v2's palm target range [m] (v0/v1: (0.05, 0.25))
 CRADLE_V2_PALM_RANGE = (0.05, 0.3)
+#: v2's box width range [m] (v0/v1: (0.04, 0.075))
+CRADLE_V2_WIDTH = (0.04, 0.065)
 
 #: the open-loop family searched by ``python -m simgrip.envs.baselines --policy openloop``: claw open (action
 #: 0.68) while the palm moves down at full speed for the steps that take a palm started mid-range to the grasp
@@ -89,12 +99,14 @@ OPENLOOP_GRID = {"kappa": (0.3, 0.4, 0.5), "ramp_steps": (1, 50), "palm": (1.0,)
 
 class FragileCradleEnvV2(FragileCradleEnvV1):
     """``simgrip/PickCradleFragile-v2``: :class:`~simgrip.envs.pick_fragile_v1.FragileCradleEnvV1` with the palm
-    started at a height drawn from ``palm_start = (0.13, 0.29)`` m, kept in ``palm_range = (0.05, 0.3)`` m (see
+    started at a height drawn from ``palm_start = (0.13, 0.29)`` m, kept in ``palm_range = (0.05, 0.3)`` m, and
+    the box width from ``box_width_range = (0.04, 0.065)`` m (see
     :mod:`simgrip.envs.pick_cradle_fragile_v2` for the draw, what is sensed, and the info table:
     ``info["is_success"]``, ``info["workpiece_lift"]``, ``info["crushed"]``, ``info["dropped"]``).  Arguments:
     v1's (v0's plus the reward weights)."""
 
     openloop_grid = OPENLOOP_GRID
 
-    def __init__(self, *, palm_start=CRADLE_V2_PALM_START, palm_range=CRADLE_V2_PALM_RANGE, **kwargs):
-        super().__init__(palm_start=palm_start, palm_range=palm_range, **kwargs)
+    def __init__(self, *, palm_start=CRADLE_V2_PALM_START, palm_range=CRADLE_V2_PALM_RANGE,
+                 box_width_range=CRADLE_V2_WIDTH, **kwargs):
+        super().__init__(palm_start=palm_start, palm_range=palm_range, box_width_range=box_width_range, **kwargs)

@@ -1,19 +1,22 @@
 """The claw tasks v2 (``PickCradleFragile-v2``, ``PickSphereFragile-v2``): v1 with the palm started at a height
-drawn from a 16 cm (cradle) or 12 cm (sphere) range, so that a fixed descent misses the grasp height (issue 18).
+drawn from a 16 cm (cradle) or 12 cm (sphere) range, so that a fixed descent misses the grasp height, and the
+cradle's box at most 6.5 cm wide (issue 18).
 
 Gymnasium's ``check_env``, the info keys and determinism run for these ids in ``tests/test_pick_fragile.py`` and
-``tests/test_env_determinism.py`` (``FRAGILE_ENV_IDS`` holds them); here: v2 is v1 but for the start height, the
-documented draw, SB3's checker, pickling mid-episode, headless rendering, and the gap between the observation-only
-controller and the tuned open-loop schedule on seeds 7600-7611 (cradle) and 7620-7631 (sphere), which no other
-test uses (the ranges and the open-loop member were chosen on seeds 5000-5049; the reported baselines use
-6000-6049).  Bounds from the binomial spread of n = 12 episodes (``scipy.stats.binom``):
+``tests/test_env_determinism.py`` (``FRAGILE_ENV_IDS`` holds them); here: v2 is v1 but for the draw, the
+documented start heights, SB3's checker, pickling mid-episode, headless rendering, and the gap between the
+observation-only controller and the tuned open-loop schedule on seeds 7600-7611 (cradle) and 7620-7631
+(sphere), which no other test uses (the ranges and the open-loop member were chosen on seeds 5000-5049; the
+reported baselines use 6000-6049 and 6100-6149).  Bounds from the binomial spread of n = 12 episodes
+(``scipy.stats.binom``):
 
 * observation-only controller: at least 8 of 12 (a controller at the issue's 0.8 scores <= 7 with P = 0.073; at
-  the tuning seeds' 0.86, P = 0.018).
+  the tuning seeds' 0.84-0.92, P <= 0.033).
 * the open-loop member tuned on seeds 5000-5049 (``docs/baselines/*-v2-openloop-tune.json``): at most 5 of 12.  A
-  schedule at the issue's 20 % reaches 6 with P = 0.019 (at its tuning rate, 10-12 %, P <= 0.0015); one that
-  solves the task (0.8) stays <= 5 with P = 0.0039.  It cannot tell 20 % from 40 % (that is what the 50-seed
-  JSONs are for); it catches a v2 whose start height no longer matters.
+  schedule at the issue's 20 % (the cradle's member on seeds 5000-5049) reaches 6 with P = 0.019 (the
+  sphere's, 10 %, with P = 0.0005); one that solves the task (0.8) stays <= 5 with P = 0.0039.  It cannot
+  tell 20 % from 40 % (that is what the 50-seed JSONs are for); it catches a v2 whose start height no longer
+  matters.
 """
 
 from __future__ import annotations
@@ -27,16 +30,17 @@ import pytest
 
 import simgrip.envs  # noqa: F401
 from simgrip.envs.baselines import _claw_openloop, evaluate, run_policy
-from simgrip.envs.pick_cradle_fragile_v2 import CRADLE_V2_PALM_START, FragileCradleEnvV2
+from simgrip.envs.pick_cradle_fragile_v2 import CRADLE_V2_PALM_START, CRADLE_V2_WIDTH, FragileCradleEnvV2
 from simgrip.envs.pick_sphere_fragile_v2 import SPHERE_V2_PALM_START, FragileSphereEnvV2
 
 IDS = ("simgrip/PickCradleFragile-v2", "simgrip/PickSphereFragile-v2")
-V1 = {"simgrip/PickCradleFragile-v2": "simgrip/PickCradleFragile-v1",
-      "simgrip/PickSphereFragile-v2": "simgrip/PickSphereFragile-v1"}
+#: v1 with v2's draw where it differs (the cradle's box width), the start height set per episode below
+V1 = {"simgrip/PickCradleFragile-v2": ("simgrip/PickCradleFragile-v1", {"box_width_range": CRADLE_V2_WIDTH}),
+      "simgrip/PickSphereFragile-v2": ("simgrip/PickSphereFragile-v1", {})}
 GAP_SEEDS = {"simgrip/PickCradleFragile-v2": list(range(7600, 7612)),
              "simgrip/PickSphereFragile-v2": list(range(7620, 7632))}
 #: the open-loop member (kappa, ramp steps, palm, descent shift) best on seeds 5000-5049 (ties: the grid's first)
-TUNED = {"simgrip/PickCradleFragile-v2": (0.4, 1, 1.0, -10), "simgrip/PickSphereFragile-v2": (0.4, 1, 1.0, -10)}
+TUNED = {"simgrip/PickCradleFragile-v2": (0.5, 50, 1.0, -5), "simgrip/PickSphereFragile-v2": (0.4, 1, 1.0, -10)}
 
 
 def _claw_actions(n):
@@ -44,11 +48,12 @@ def _claw_actions(n):
 
 
 @pytest.mark.parametrize("env_id", IDS)
-def test_v2_is_v1_but_for_the_start_height(env_id):
-    """Started at the same palm height (``options``), v2 and v1 give the same episode bit for bit."""
+def test_v2_is_v1_but_for_the_draw(env_id):
+    """Started at the same palm height (``options``), with the same width range, v2 and v1 give the same episode
+    bit for bit (the reward, the observation and the physics are v1's)."""
     out = []
-    for eid in (env_id, V1[env_id]):
-        env = gym.make(eid).unwrapped
+    for eid, kwargs in ((env_id, {}), V1[env_id]):
+        env = gym.make(eid, **kwargs).unwrapped
         obs, info = env.reset(seed=4, options={"palm_height": 0.12})
         rows = [obs, info["crush_limit"]]
         for a in _claw_actions(30):
