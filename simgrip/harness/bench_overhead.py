@@ -23,8 +23,9 @@ the fastest CPU time of each (:func:`simgrip.harness.timing.fastest_cpu_times`),
 the others divide each call's wall time by the settle's own wall time inside
 it.  Only the targets of the table are checked here; the sweep's ratio with the
 BVP reference counts the reference's solve in the point (the target is the
-simulation's: ``--reference none``; the warm-started BVP alone costs about as
-much as the settle at n = 32).  The sweep is the issue's command as a user runs
+simulation's: ``--reference none``; the warm-started BVP alone costs ~0.5-0.7x
+the settle at n = 32, a banded collocation Newton on the neighbour's factorisation,
+:mod:`simgrip.reference.collocation`).  The sweep is the issue's command as a user runs
 it (:data:`SWEEP_COMMAND`, 300 points: the process's fixed costs, ~1 s of
 imports and the map, are part of what the ratio measures, and a shorter sweep
 weighs them differently; the quick bench runs :data:`QUICK_SWEEP_POINTS` as a
