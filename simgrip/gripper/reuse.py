@@ -23,7 +23,7 @@ from simgrip.gripper.placement import check_offset, check_workpiece_yaw, place_f
 from simgrip.params import _finite
 from simgrip.profiles import as_profile
 from simgrip.sim.fingers import check_finger_links
-from simgrip.sim.reuse import (_cache, _Entry, _finish, _lookup, _set_body_pos, _set_links, _signature, _store,
+from simgrip.sim.reuse import (_cache, _cached_or_built, _finish, _set_body_pos, _set_links, _signature,
                                _structure)
 from simgrip.sim.scene import check_params, check_positive, root_spec, set_joint_angles
 from simgrip.sim.workpiece import BOX_HEIGHT, contact_links, corner_placement, cradle_start, workpiece_inertia
@@ -74,11 +74,8 @@ def build_gripper(grip: str, params, profile, n_links: int, **kw):
            _structure(G.build_gripper, args, kw, ("grip", "params", "profile", "n_links", "initial_angles")))
     const_inputs = (phys.rho.hex(), mass.hex(), size.tobytes(), np.array(centre).tobytes())
 
-    entry = _lookup(key) if key[-1] is not None else None
+    entry, sc = _cached_or_built(key, const_inputs, lambda: G.build_gripper(*args, **kw))
     if entry is None:
-        sc = G.build_gripper(*args, **kw)
-        if key[-1] is not None:
-            _store(key, _Entry(sc, const_inputs))
         return sc
     try:  # interrupted (an error, Ctrl-C, a deadline): the half-set entry is dropped
         entry.restore()
@@ -137,11 +134,8 @@ def _cradle(args, kw, a, K):
            _structure(G.build_gripper, args, kw, ("grip", "params", "profile", "n_links", "initial_angles")))
     const_inputs = (phys.rho.hex(), mass.hex(), size.tobytes(), float(zc + hz).hex())
 
-    entry = _lookup(key) if key[-1] is not None else None
+    entry, sc = _cached_or_built(key, const_inputs, lambda: G.build_gripper(*args, **kw))
     if entry is None:
-        sc = G.build_gripper(*args, **kw)
-        if key[-1] is not None:
-            _store(key, _Entry(sc, const_inputs))
         return sc
     try:  # interrupted (an error, Ctrl-C, a deadline): the half-set entry is dropped
         entry.restore()

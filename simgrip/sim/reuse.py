@@ -176,6 +176,18 @@ def _store(key, entry) -> None:
         c.popitem(last=False)
 
 
+def _cached_or_built(key, const_inputs, build):
+    """``(entry, None)`` for a structure cached before; else ``(None, build())``, the new scene stored when
+    ``key`` is cacheable (its last item, the structure, is not None)."""
+    entry = _lookup(key) if key[-1] is not None else None
+    if entry is not None:
+        return entry, None
+    sc = build()
+    if key[-1] is not None:
+        _store(key, _Entry(sc, const_inputs))
+    return None, sc
+
+
 def _freeze(v):
     """A hashable, bit-exact stand-in for a keyword's value (``-0.0`` and ``0.0`` differ)."""
     if isinstance(v, bool) or v is None or isinstance(v, (int, str)):
@@ -362,12 +374,8 @@ def scene(grip: str, params, profile, n_links: int, **kw):
     const_inputs = (phys.rho.hex(),) if place is None else (
         phys.rho.hex(), imass.hex(), place.half.tobytes(), float(place.center_z).hex())
 
-    entry = _lookup(key) if key[-1] is not None else None
+    entry, sc = _cached_or_built(key, const_inputs, lambda: S.build_scene(grip, params, profile, n_links, **kw))
     if entry is None:
-        sc = S.build_scene(grip, params, profile, n_links, **kw)
-        if key[-1] is None:
-            return sc
-        _store(key, _Entry(sc, const_inputs))
         return sc
 
     try:  # interrupted (an error, Ctrl-C, a deadline): the half-set entry is dropped
