@@ -56,7 +56,8 @@ def simulate(grip: str, params: DimensionlessParams, profile, links: int, *, pro
 
     def build():
         with phase(progress, f"building the model ({links} links per finger)"):
-            return build_scene(grip, params, profile, links, **full)
+            # forward=False: the settle follows at once and computes what it reads (bit-identical states)
+            return build_scene(grip, params, profile, links, forward=False, **full)
 
     t0 = time.perf_counter()
     scene = build()

@@ -521,13 +521,15 @@ def set_curvature(scene: Scene, profile) -> ChainSprings:
     return springs
 
 
-def set_joint_angles(scene: Scene, angles) -> None:
-    """Set every finger's hinge angles [rad] (shape (n,) or (fingers, n)), zero velocities, forward."""
+def set_joint_angles(scene: Scene, angles, *, forward: bool = True) -> None:
+    """Set every finger's hinge angles [rad] (shape (n,) or (fingers, n)), zero velocities, forward
+    (``forward=False``: MuJoCo's derived quantities are left for the caller to compute)."""
     q = np.asarray(angles, dtype=float)
     q = np.broadcast_to(q, (scene.fingers, scene.n))
     scene.data.qpos[scene.joint_qpos] = q
     scene.data.qvel[:] = 0.0
-    mujoco.mj_forward(scene.model, scene.data)
+    if forward:
+        mujoco.mj_forward(scene.model, scene.data)
 
 
 def finger_state(scene: Scene, data: mujoco.MjData | None = None, finger: int = 0):
