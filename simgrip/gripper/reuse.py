@@ -23,8 +23,7 @@ from simgrip.gripper.placement import check_offset, check_workpiece_yaw, place_f
 from simgrip.params import _finite
 from simgrip.profiles import as_profile
 from simgrip.sim.fingers import check_finger_links
-from simgrip.sim.reuse import (_cache, _cached_or_built, _finish, _set_body_pos, _set_links, _signature,
-                               _structure)
+from simgrip.sim.reuse import (_cached_or_built, _finish, _refilled, _set_body_pos, _signature, _structure)
 from simgrip.sim.scene import check_params, check_positive, root_spec, set_joint_angles
 from simgrip.sim.workpiece import BOX_HEIGHT, contact_links, corner_placement, cradle_start, workpiece_inertia
 
@@ -77,12 +76,8 @@ def build_gripper(grip: str, params, profile, n_links: int, **kw):
     entry, sc = _cached_or_built(key, const_inputs, lambda: G.build_gripper(*args, **kw))
     if entry is None:
         return sc
-    try:  # interrupted (an error, Ctrl-C, a deadline): the half-set entry is dropped
-        entry.restore()
-        sc = entry.scene
+    with _refilled(key, entry, finger_springs, phys, r_link) as sc:
         m = sc.model
-        _set_links(m, sc.index, finger_springs, phys.EI, phys.rho, L, r_link * L)
-        m.opt.gravity = [0.0, 0.0, -phys.g]
         wb = sc.workpiece_body
         _set_body_pos(m, wb, centre)
         m.body_mass[wb] = mass
@@ -94,9 +89,6 @@ def build_gripper(grip: str, params, profile, n_links: int, **kw):
         sc.size, sc.reach, sc.normals = size, place.reach, place.normal
         sc.profiles, sc.finger_springs = profs, finger_springs
         _finish(entry, const_inputs, lambda s: set_joint_angles(s, q0))
-    except BaseException:
-        _cache().pop(key, None)
-        raise
     return entry.scene
 
 
@@ -137,13 +129,9 @@ def _cradle(args, kw, a, K):
     entry, sc = _cached_or_built(key, const_inputs, lambda: G.build_gripper(*args, **kw))
     if entry is None:
         return sc
-    try:  # interrupted (an error, Ctrl-C, a deadline): the half-set entry is dropped
-        entry.restore()
-        sc = entry.scene
+    with _refilled(key, entry, [springs] * K, phys, r_link) as sc:
         m = sc.model
         yaw = float(sc.yaw)
-        _set_links(m, sc.index, [springs] * K, phys.EI, phys.rho, L, r_link * L)
-        m.opt.gravity = [0.0, 0.0, -phys.g]
         i = mujoco.mj_name2id(m, mujoco.mjtObj.mjOBJ_NUMERIC, START_NUMERIC)
         m.numeric_data[int(m.numeric_adr[i]):int(m.numeric_adr[i]) + n] = q0
         wb = sc.workpiece_body
@@ -171,7 +159,4 @@ def _cradle(args, kw, a, K):
         sc.size, sc.reach = size, np.full(K, 0.5 * dimless.b)
         sc.profiles, sc.finger_springs = (prof,) * K, (springs,) * K
         _finish(entry, const_inputs, lambda s: set_joint_angles(s, np.tile(q0, (K, 1))))
-    except BaseException:
-        _cache().pop(key, None)
-        raise
     return entry.scene

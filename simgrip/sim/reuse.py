@@ -56,6 +56,7 @@ child) has its own too.  :func:`clear` empties the calling thread's cache.
 
 from __future__ import annotations
 
+import contextlib
 import copy
 import functools
 import inspect
@@ -186,6 +187,23 @@ def _cached_or_built(key, const_inputs, build):
     if key[-1] is not None:
         _store(key, _Entry(sc, const_inputs))
     return None, sc
+
+
+@contextlib.contextmanager
+def _refilled(key, entry, finger_springs, phys, r_link: float):
+    """Set a cached entry's scene in place, the part every scene kind shares: the model restored, the links'
+    springs, masses and inertias and gravity written; yields the scene for the rest.  An interruption (an error,
+    Ctrl-C, a deadline) drops the half-set entry from the cache."""
+    try:
+        entry.restore()
+        sc = entry.scene
+        L = phys.length
+        _set_links(sc.model, sc.index, finger_springs, phys.EI, phys.rho, L, r_link * L)
+        sc.model.opt.gravity = [0.0, 0.0, -phys.g]
+        yield sc
+    except BaseException:
+        _cache().pop(key, None)
+        raise
 
 
 def _freeze(v):
@@ -381,12 +399,8 @@ def scene(grip: str, params, profile, n_links: int, *, forward: bool = True, **k
     if entry is None:
         return sc
 
-    try:  # interrupted (an error, Ctrl-C, a deadline): the half-set entry is dropped
-        entry.restore()
-        sc = entry.scene
+    with _refilled(key, entry, [springs] * fingers, phys, r_link) as sc:
         m = sc.model
-        _set_links(m, sc.index, [springs] * fingers, phys.EI, phys.rho, L, r_link * L)
-        m.opt.gravity = [0.0, 0.0, -phys.g]
         if place is not None:
             wb = sc.workpiece_body
             hx, hy, hz = (float(v) for v in place.half)
@@ -402,9 +416,6 @@ def scene(grip: str, params, profile, n_links: int, *, forward: bool = True, **k
         sc.params, sc.physical, sc.profile, sc.springs = dimless, phys, prof, springs
         sc.box_half = place.half if place is not None else np.zeros(3)
         _finish(entry, const_inputs, lambda s: S.set_joint_angles(s, q0, forward=forward))
-    except BaseException:
-        _cache().pop(key, None)
-        raise
     return entry.scene
 
 
