@@ -17,6 +17,7 @@ import simgrip.envs  # noqa: E402,F401  (registers the ids)
 from simgrip.envs import ENV_IDS  # noqa: E402
 from simgrip.envs.pick import OBS_LAYOUT, PickEnv  # noqa: E402
 from simgrip.envs.scripted import ScriptedPickPolicy  # noqa: E402
+from env_checks import assert_sb3_check_env_clean
 
 #: Warnings check_env may raise that we accept (none today); match on the message start.
 CHECK_ENV_ALLOWED = ()
@@ -367,11 +368,4 @@ def test_honest_scripted_controller_sees_only_the_observation():
 
 
 def test_check_env_of_stable_baselines3():
-    sb3_checker = pytest.importorskip("stable_baselines3.common.env_checker")
-    for env_id in ENV_IDS:
-        env = gym.make(env_id)
-        with warnings.catch_warnings(record=True) as caught:
-            warnings.simplefilter("always")
-            sb3_checker.check_env(env.unwrapped)
-        env.close()
-        assert not [str(w.message) for w in caught]
+    assert_sb3_check_env_clean(ENV_IDS)

@@ -32,6 +32,7 @@ import simgrip.envs  # noqa: F401
 from simgrip.envs.baselines import evaluate
 from simgrip.envs.pick_cradle_fragile import FragileCradleEnv
 from simgrip.envs.pick_sphere_fragile import FragileSphereEnv
+from env_checks import assert_headless_frame
 
 IDS = ("simgrip/PickCradleFragile-v0", "simgrip/PickSphereFragile-v0")
 GAP_SEEDS = {"simgrip/PickCradleFragile-v0": list(range(7400, 7412)),
@@ -90,14 +91,7 @@ def test_pickle_mid_episode_continues_exactly(env_id):
 
 @pytest.mark.parametrize("env_id", IDS)
 def test_headless_render(env_id, render_backend):
-    # render_backend (tests/conftest.py): skips only where the machine has no GL library at all
-    env = gym.make(env_id, render_mode="rgb_array", width=96, height=72)
-    try:
-        env.reset(seed=0)
-        frame = env.render()
-    finally:
-        env.close()
-    assert frame.shape == (72, 96, 3) and frame.dtype == np.uint8 and frame.std() > 0
+    assert_headless_frame(env_id)
 
 
 def test_cradle_crush_terminates_as_failure():

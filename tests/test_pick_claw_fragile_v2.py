@@ -22,7 +22,6 @@ reported baselines use 6000-6049 and 6100-6149).  Bounds from the binomial sprea
 from __future__ import annotations
 
 import pickle
-import warnings
 
 import gymnasium as gym
 import numpy as np
@@ -32,6 +31,7 @@ import simgrip.envs  # noqa: F401
 from simgrip.envs.baselines import _claw_openloop, evaluate, run_policy
 from simgrip.envs.pick_cradle_fragile_v2 import CRADLE_V2_PALM_START, CRADLE_V2_WIDTH, FragileCradleEnvV2
 from simgrip.envs.pick_sphere_fragile_v2 import SPHERE_V2_PALM_START, FragileSphereEnvV2
+from env_checks import assert_headless_frame, assert_sb3_check_env_clean
 
 IDS = ("simgrip/PickCradleFragile-v2", "simgrip/PickSphereFragile-v2")
 #: v1 with v2's draw where it differs (the cradle's box width), the start height set per episode below
@@ -91,14 +91,7 @@ def test_palm_range_and_start_checked():
 
 
 def test_check_env_of_stable_baselines3_on_v2():
-    sb3_checker = pytest.importorskip("stable_baselines3.common.env_checker")
-    for env_id in IDS:
-        env = gym.make(env_id)
-        with warnings.catch_warnings(record=True) as caught:
-            warnings.simplefilter("always")
-            sb3_checker.check_env(env.unwrapped)
-        env.close()
-        assert not [str(w.message) for w in caught]
+    assert_sb3_check_env_clean(IDS)
 
 
 @pytest.mark.parametrize("env_id", IDS)
@@ -118,13 +111,7 @@ def test_pickle_mid_episode_continues_exactly(env_id):
 
 @pytest.mark.parametrize("env_id", IDS)
 def test_headless_render(env_id, render_backend):
-    env = gym.make(env_id, render_mode="rgb_array", width=96, height=72)
-    try:
-        env.reset(seed=0)
-        frame = env.render()
-    finally:
-        env.close()
-    assert frame.shape == (72, 96, 3) and frame.dtype == np.uint8 and frame.std() > 0
+    assert_headless_frame(env_id)
 
 
 @pytest.mark.parametrize("env_id", IDS)

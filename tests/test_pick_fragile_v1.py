@@ -9,7 +9,6 @@ and ``test_env_determinism.py`` (``FRAGILE_ENV_IDS`` holds them); SB3's checker 
 from __future__ import annotations
 
 import pickle
-import warnings
 
 import gymnasium as gym
 import numpy as np
@@ -17,6 +16,7 @@ import pytest
 
 import simgrip.envs  # noqa: F401
 from simgrip.envs.pick_fragile_v1 import FragilePickEnvV1, V1_REWARD_DEFAULTS, graded_crush
+from env_checks import assert_sb3_check_env_clean
 
 PAIRS = [("simgrip/PickFragile-v0", "simgrip/PickFragile-v1"),
          ("simgrip/PickMultiFragile-v0", "simgrip/PickMultiFragile-v1"),
@@ -113,14 +113,7 @@ def test_crush_step_charges_the_graded_penalty_and_pickles():
 
 
 def test_check_env_of_stable_baselines3_on_v1():
-    sb3_checker = pytest.importorskip("stable_baselines3.common.env_checker")
-    for env_id in ("simgrip/PickFragile-v1", "simgrip/PlaceFragile-v1"):
-        env = gym.make(env_id)
-        with warnings.catch_warnings(record=True) as caught:
-            warnings.simplefilter("always")
-            sb3_checker.check_env(env.unwrapped)
-        env.close()
-        assert not [str(w.message) for w in caught]
+    assert_sb3_check_env_clean(("simgrip/PickFragile-v1", "simgrip/PlaceFragile-v1"))
 
 
 def test_v1_arguments_checked():
