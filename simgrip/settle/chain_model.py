@@ -131,6 +131,79 @@ def _structure(scene: Scene) -> dict:
     return out
 
 
+_GRAVITY_OFF = int(mujoco.mjtDisableBit.mjDSBL_GRAVITY)
+
+
+def _parameters(scene: Scene, st: dict) -> dict:
+    """:class:`ChainModel`'s parameters of the scene's model in the chain's units, computed once per set of values.
+
+    Stiffness ``k``, link length ``ds``, gravity moments ``c``, the springs' diagonal, the workpiece's weight,
+    dof scales and rest position, the pairs' radii and the per-pair arrays of
+    :meth:`ChainModel.pair_distances`: everything here is a function of the model fields and scene
+    scalars in the key (``jnt_stiffness``, ``body_mass``, ``body_ipos``, ``body_pos``, ``geom_size``,
+    ``geom_pos``, gravity as MuJoCo applies it, ``l``, ``rho g l``, the workpiece's mass), so the arrays
+    are the ones a fresh computation gives, bit for bit.  A settle of a scene whose parameters did not
+    change since the last one (a curvature sweep sets only ``qpos_spring``, which
+    :meth:`ChainModel.internal` reads live) finds them in the one-entry memo kept on the scene with the
+    model it was read from.  The arrays are read only (shared by every settle until a value changes).
+    """
+    m = scene.model
+    opt = m.opt
+    L, W = scene.length, scene.force_scale
+    key = (L, W, float(scene.workpiece_mass), int(opt.disableflags) & _GRAVITY_OFF, opt.gravity.tobytes(),
+           m.jnt_stiffness.tobytes(), m.body_mass.tobytes(), m.body_ipos.tobytes(), m.body_pos.tobytes(),
+           m.geom_size.tobytes(), m.geom_pos.tobytes())
+    memo = scene.__dict__.get("_chain_parameters")
+    if memo is not None and memo[0] is m and memo[1] is scene.index and memo[2] == key:
+        return memo[3]
+    nf, nl = scene.fingers, scene.n
+    n = nf * nl
+    bodies = st["bodies"]
+    out = {"L": L, "W": W}
+    out["k"] = k = m.jnt_stiffness[st["jnt"]] / (W * L)
+    out["ds"] = ds = float(m.body_pos[bodies[0, 1]][0]) / L
+    g = model_gravity(m)
+    # every finger at once (rows: the per-finger sums of the same terms in the same order)
+    mass = m.body_mass[bodies]
+    arm = m.body_ipos[bodies, 0] / L
+    beyond = np.zeros((nf, nl))  # the mass beyond each link: suffix sums, the last link's 0
+    beyond[:, :-1] = np.cumsum(mass[:, ::-1], axis=1)[:, ::-1][:, 1:]
+    out["c"] = (g * (mass * arm + ds * beyond) / W).reshape(-1)
+    # the next hinge's stiffness (0 beyond a finger's last link) and the springs' diagonal
+    k_next = np.zeros(n)
+    k_next[:-1] = k[1:]
+    k_next[nl - 1::nl] = 0.0
+    out["_k_next"] = k_next
+    out["_k_diag"] = -(k + k_next)
+    # the true weight (the model's body_mass may be a floored inertia whose extra weight gravity
+    # compensation relieves: simgrip.sim.workpiece.inertial_mass)
+    out["weight"] = float(scene.workpiece_mass) * g / W if scene.has_workpiece else 0.0
+    #: the workpiece dofs' scale: slides over l, the hinge in radians
+    out["wscale"] = np.array([1.0 if nm == "ry" else L for nm in st["wnames"]])
+    if scene.has_workpiece:
+        p = m.body_pos[scene.workpiece_body] / L
+        out["w0"] = np.array([p[0], p[2]])
+    pairs, pair_link = st["pairs"], st["pair_link"]
+    #: the radii each pair's distance subtracts (geom sizes: parameters)
+    out["radius"] = [(m.geom_size[g1][0] + (0.0 if sphere else m.geom_size[g2][0])) / L
+                     for (g1, g2), (_, _, sphere) in zip(pairs, pair_link)]
+    if pairs:  # pair_distances' arrays (the same values ChainModel._geom_local and the sizes give)
+        mir = st["mir"]
+        pf = np.array([f for f, _, _ in pair_link])
+        sph = np.array([sp for _, _, sp in pair_link])
+        out.update(_pf=pf, _pl=np.array([i for _, i, _ in pair_link]), _sph=sph,
+                   _gl=np.array([np.array([mir[f] * (m.geom_pos[g] / L)[0], (m.geom_pos[g] / L)[2]])
+                                 for (f, _, _), (_, g) in zip(pair_link, pairs)]),
+                   _hx=np.array([m.geom_size[g][0] / L for _, g in pairs]), _rad=np.array(out["radius"]),
+                   _pidx=[np.flatnonzero(pf == f) for f in range(nf)],
+                   _branch="face" if sph.all() else ("caps" if not sph.any() else "both"))
+    for v in list(out.values()) + out.get("_pidx", []):
+        if isinstance(v, np.ndarray):
+            v.setflags(write=False)
+    scene.__dict__["_chain_parameters"] = (m, scene.index, key, out)
+    return out
+
+
 @dataclass
 class Term:
     """A scalar function of ``x = (phi, y)``: value, gradient, diagonal + low-rank Hessian."""
@@ -151,48 +224,24 @@ class ChainModel:
     def __init__(self, scene: Scene):
         m = scene.model
         self.scene, self.m = scene, m
-        L, W = scene.length, scene.force_scale
-        self.L, self.W = L, W
         self.fingers = nf = scene.fingers
         self.nl = nl = scene.n
-        self.n = n = nf * nl  #: all link angles, finger after finger
+        self.n = nf * nl  #: all link angles, finger after finger
         st = self._struct = _structure(scene)  # (the index arrays: read once per compiled model)
         self.jq, self.jd = st["jq"], st["jd"]
-        self.k = m.jnt_stiffness[st["jnt"]] / (W * L)
-        bodies = self._bodies = st["bodies"]
+        self._bodies = st["bodies"]
         self.mir = st["mir"]
-        self.ds = float(m.body_pos[bodies[0, 1]][0]) / L
-        g = model_gravity(m)
-        # every finger at once (rows: the per-finger sums of the same terms in the same order)
-        mass = m.body_mass[bodies]
-        arm = m.body_ipos[bodies, 0] / L
-        beyond = np.zeros((nf, nl))  # the mass beyond each link: suffix sums, the last link's 0
-        beyond[:, :-1] = np.cumsum(mass[:, ::-1], axis=1)[:, ::-1][:, 1:]
-        self.c = (g * (mass * arm + self.ds * beyond) / W).reshape(-1)
         self.first, self.last = st["first"], st["last"]
-        # the next hinge's stiffness (0 beyond a finger's last link) and the springs' diagonal, once per settle
-        self._k_next = np.zeros(n)
-        self._k_next[:-1] = self.k[1:]
-        self._k_next[nl - 1::nl] = 0.0
-        self._k_diag = -(self.k + self._k_next)
         self.wnames = st["wnames"]
         self.nw = len(self.wnames)
         self.wq, self.wd = st["wq"], st["wd"]
-        # the true weight (the model's body_mass may be a floored inertia whose extra weight gravity
-        # compensation relieves: simgrip.sim.workpiece.inertial_mass)
-        self.weight = float(scene.workpiece_mass) * g / W if scene.has_workpiece else 0.0
-        #: the workpiece dofs' scale: slides over l, the hinge in radians
-        self.wscale = np.array([1.0 if nm == "ry" else L for nm in self.wnames])
-        if scene.has_workpiece:
-            p = m.body_pos[scene.workpiece_body] / L
-            self.w0 = np.array([p[0], p[2]])
+        #: the contact pairs (geom1, geom2) and, for each, (finger, link index of geom1, is the tip sphere)
+        self.pairs, self.pair_link = st["pairs"], st["pair_link"]
+        # the model's parameters in the chain's units (stiffness, gravity moments, radii, ...): read again only
+        # when a value they come from changed (_parameters)
+        self.__dict__.update(_parameters(scene, st))
         #: one-entry memos of :meth:`pose` and :meth:`_link` (keyed on their arguments' values; read-only results)
         self._pose_memo = self._link_memo = None
-        #: the contact pairs (geom1, geom2) and, for each, (finger, link index of geom1, is the tip sphere)
-        self.pairs, self.pair_link = self._struct["pairs"], self._struct["pair_link"]
-        #: the radii each pair's distance subtracts (geom sizes: parameters, read every settle)
-        self.radius = [(m.geom_size[g1][0] + (0.0 if sphere else m.geom_size[g2][0])) / L
-                       for (g1, g2), (_, _, sphere) in zip(self.pairs, self.pair_link)]
 
     @property
     def link_index(self) -> dict:
@@ -450,16 +499,6 @@ class ChainModel:
         """
         if not self.pairs:
             return np.zeros(0)
-        if not hasattr(self, "_pl"):
-            m, L = self.m, self.L
-            self._pf = np.array([f for f, _, _ in self.pair_link])
-            self._pl = np.array([i for _, i, _ in self.pair_link])
-            self._sph = np.array([sp for _, _, sp in self.pair_link])
-            self._gl = np.array([self._geom_local(f, g) for (f, _, _), (_, g) in zip(self.pair_link, self.pairs)])
-            self._hx = np.array([m.geom_size[g][0] / L for _, g in self.pairs])
-            self._rad = np.array(self.radius)
-            self._pidx = [np.flatnonzero(self._pf == f) for f in range(self.fingers)]
-            self._branch = "face" if self._sph.all() else ("caps" if not self._sph.any() else "both")
         O = np.empty((len(self.pairs), 2))
         A = np.empty(len(self.pairs))
         for f, mine in enumerate(self._pidx):

@@ -61,6 +61,7 @@ class ChainNewton(Newton):
         #: MuJoCo's contact distance minus the analytic one (round-off, over l), per pair
         self.dist_shift = np.zeros(len(self.pairs))
         self._memo = {}  # the state's geometry within one inner solve (_at)
+        self._judged = None  # (positions key, q, scaled MuJoCo residual) of a start :meth:`solve` found at rest
 
     def _update_kc(self, q) -> bool:
         """Read MuJoCo's contact stiffness and its contact distances' round-off at ``q``."""
@@ -105,7 +106,53 @@ class ChainNewton(Newton):
         m = self.scene.model
         if self.pairs and not (int(m.opt.disableflags) & int(mujoco.mjtDisableBit.mjDSBL_CONTACT)):
             return super().full_residual(q)
+        judged, self._judged = self._judged, None
+        if judged is not None and judged[0] == self._positions_key() and np.array_equal(judged[1], q):
+            return judged[2]  # (solve's own judgement at this very state: the same MuJoCo calls, not made twice)
         return self.rest_forces(q) / self.st.fscale
+
+    # -- a contact-free state that is already at rest: judged once ---------------------------
+    def solve(self, tol: float, max_iter: int, *, frozen=()) -> tuple[bool, str]:
+        """:meth:`Newton.solve`, but a contact-free start already in equilibrium is judged by MuJoCo alone.
+
+        Without contacts or sticks, and with the workpiece (if any) frozen, the inner Newton's first test
+        is whether the analytic residual at the start is below ``tol`` (or the angles' round-off floor);
+        then it takes no step and commits ``join(split(q))``.  That state's MuJoCo residual (``O(n)``:
+        :meth:`rest_forces`) is what the settle's judge reports; evaluated first, it decides the same
+        way (the analytic and MuJoCo balances are the same equations, apart in round-off) and the judge
+        reuses it.  Otherwise, or when the two could disagree (not finite), the Newton solve runs as ever.
+        A free rod started at the hinge chain's equilibrium (:func:`~simgrip.settle.closing.start_free`)
+        so settles with one ``mj_passive`` and ``mj_rne`` (issue 19: its fixed cost).
+        """
+        got = self._at_rest(tol, frozen)
+        if got:
+            return True, "ok"
+        return super().solve(tol, max_iter, frozen=frozen)
+
+    def _at_rest(self, tol: float, frozen) -> bool:
+        sc = self.scene
+        m, d = sc.model, sc.data
+        flags = int(m.opt.disableflags)
+        if (self.pairs and not flags & int(mujoco.mjtDisableBit.mjDSBL_CONTACT)) or self.sticks or self.st.d is not d:
+            return False
+        cm = self.model
+        fz = {int(j) for j in frozen}
+        if any(int(j) not in fz for j in cm.wd):
+            return False  # a free workpiece dof: its weight is a row the solve must take
+        self._flags = flags
+        self.normal_active, self.N = [], np.zeros(0)
+        q = d.qpos.copy()
+        phi, w = cm.split(q)
+        qq = cm.join(q, phi, w)  # the state the inner solve would commit
+        r = self.rest_forces(qq) / self.st.fscale  # (leaves d at qq, at rest, its positions computed)
+        free = np.ones(m.nv, bool)
+        free[list(fz)] = False
+        rf = r[free]
+        res = float(np.max(np.abs(rf))) if rf.size else 0.0
+        if not math.isfinite(res) or not (res < tol or res < angle_floor(sc, qq)):
+            return False
+        self._judged = (self._positions_key(), qq, r)
+        return True
 
     def _commit(self, q) -> None:
         """Leave the scene's data at ``q`` at rest, its positions computed (``mj_kinematics``, ``mj_comPos``).

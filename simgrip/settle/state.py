@@ -247,9 +247,10 @@ def read_state(scene: Scene, d, *, held: bool, method: str, residual: float, con
         np.cumsum((1.0 / n) * np.cos(p), out=nodes[f, 1:, 0])
         np.cumsum((1.0 / n) * np.sin(p), out=nodes[f, 1:, 1])
     contacts, pen_max = [], 0.0
-    wg = set(int(g) for g in scene.workpiece_geoms)
-    con = d.contact  # (one view of MuJoCo's contact arrays: each ``d.contact`` builds a new one)
-    geom1, geom2 = con.geom1[:d.ncon].tolist(), con.geom2[:d.ncon].tolist()
+    if held:  # (a state that holds nothing reads no contacts: MuJoCo's arrays are not looked at)
+        wg = set(int(g) for g in scene.workpiece_geoms)
+        con = d.contact  # (one view of MuJoCo's contact arrays: each ``d.contact`` builds a new one)
+        geom1, geom2 = con.geom1[:d.ncon].tolist(), con.geom2[:d.ncon].tolist()
     for f in range(scene.fingers if held else 0):
         mine = set(int(g) for g in scene.contact_geoms[f])
         cons = [i for i in range(d.ncon) if geom1[i] in mine and geom2[i] in wg]

@@ -53,6 +53,24 @@ def dof_scales(scene: Scene) -> tuple[np.ndarray, np.ndarray]:
     return force, length
 
 
+def _shared_dof_scales(scene: Scene) -> tuple[np.ndarray, np.ndarray]:
+    """:func:`dof_scales` of ``scene``, read only, computed again only when the model or a scale changed.
+
+    The arrays depend on the model's joint types and addresses (its structure) and the scene's three
+    scales: a one-entry memo on the scene, keyed on the model object and the scales, holds the values a
+    fresh :func:`dof_scales` gives.  :class:`Statics` (built by every settle) reads them, never writes.
+    """
+    key = (scene.moment_scale, scene.force_scale, scene.length)
+    memo = scene.__dict__.get("_dof_scales")
+    if memo is not None and memo[0] is scene.model and memo[1] == key:
+        return memo[2]
+    out = dof_scales(scene)
+    for a in out:
+        a.setflags(write=False)
+    scene.__dict__["_dof_scales"] = (scene.model, key, out)
+    return out
+
+
 def angle_floor(scene: Scene, qpos=None) -> float:
     """Round-off floor of the hinge rows of the static residual at ``qpos`` (over ``rho g l^2``).
 
@@ -128,7 +146,7 @@ class Statics:
         self.scene = scene
         self.m = scene.model
         self.d = mujoco.MjData(self.m) if data is None else data
-        self.fscale, self.lscale = dof_scales(scene)
+        self.fscale, self.lscale = _shared_dof_scales(scene)
         self.calls = 0
 
     def forces(self, q) -> np.ndarray:
