@@ -72,7 +72,7 @@ def _message(exc: BaseException) -> str:
 
 
 def _simulation(point: SweepPoint) -> dict:
-    from simgrip.settled import settled_record, simulate  # (simgrip.compare re-exports them; it imports more)
+    from simgrip.compare import settled_record, simulate
     from simgrip.profiles import Uniform
 
     out = {c: None for c in SIM_COLUMNS}
