@@ -1,0 +1,134 @@
+"""The settle's per-settle set-up read once per set of values, and a start at rest judged once (issue 19).
+
+:class:`~simgrip.settle.chain_model.ChainModel` reads its parameters through a one-entry memo on the scene
+(keyed on the model fields they come from) and a contact-free start already in equilibrium is judged by
+MuJoCo's balance alone (:meth:`~simgrip.settle.chain_newton.ChainNewton.solve`).  Each must give exactly
+what the computation it replaces gives: parameters edited in place are seen at once, and settled states
+are bit for bit those of the full inner Newton solve.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+
+import numpy as np
+import pytest
+
+from simgrip.params import STANDARD
+from simgrip.profiles import Uniform
+from simgrip.scenes import build_scene
+from simgrip.settle import settle
+from simgrip.settle.chain_model import ChainModel
+from simgrip.settle.chain_newton import ChainNewton
+
+_PARAMS = ("k", "ds", "c", "_k_next", "_k_diag", "weight", "wscale", "radius", "L", "W")
+
+
+def _fresh(scene) -> ChainModel:
+    scene.__dict__.pop("_chain_parameters", None)
+    return ChainModel(scene)
+
+
+def _same(a, b) -> bool:
+    return np.array_equal(np.asarray(a), np.asarray(b)) and np.asarray(a).dtype == np.asarray(b).dtype
+
+
+@pytest.mark.parametrize("grip,kappa,fingers", [("free", -3.0, 1), ("I", -6.0, 1), ("III", -4.0, 2)])
+def test_chain_parameters_follow_in_place_edits(grip, kappa, fingers):
+    """Stiffness, masses, gravity, geom sizes and positions edited in place: the next model reads the new
+    values, equal bit for bit to a computation without the memo; unchanged values are not read again."""
+    sc = build_scene(grip, STANDARD, Uniform(kappa), 10, fingers=fingers)
+    first = ChainModel(sc)
+    assert ChainModel(sc).k is first.k  # nothing changed: the memo's arrays
+    m = sc.model
+    # (edit, the parameter it must move): stiffness, masses, centres of mass, gravity, and the contact geoms
+    edits = [(lambda: m.jnt_stiffness.__imul__(1.5), "k"), (lambda: m.body_mass.__imul__(1.25), "c"),
+             (lambda: m.body_ipos.__imul__(1.1), "c"), (lambda: setattr(m.opt, "gravity", [0.0, 0.0, -4.0]), "c")]
+    if m.npair:
+        edits += [(lambda: m.geom_size.__imul__(1.01), "_rad"), (lambda: m.geom_pos.__iadd__(1e-3), "_gl")]
+    for edit, moved in edits:
+        before = ChainModel(sc)
+        edit()
+        got = ChainModel(sc)
+        want = _fresh(sc)
+        for name in _PARAMS + (("_gl", "_hx", "_rad", "_pf", "_pl", "_sph") if m.npair else ()):
+            assert _same(getattr(got, name), getattr(want, name)), name
+        assert not _same(getattr(before, moved), getattr(got, moved)), f"an edit of {moved} went unseen"
+    with pytest.raises(ValueError):  # shared between settles: read only
+        ChainModel(sc).k[0] = 0.0
+
+
+def _fields(st, skip=("wall_time_s",)):
+    out = {}
+    for f in dataclasses.fields(st):
+        if f.name in skip:
+            continue
+        v = getattr(st, f.name)
+        out[f.name] = v.tobytes() if isinstance(v, np.ndarray) else repr(v)
+    return out
+
+
+def _settle_both(make, monkeypatch, **kw):
+    """A settle as it runs, and the same settle with the at-rest judgement off (the inner Newton always)."""
+    sc = make()
+    fast = settle(sc, **kw)
+    data_fast = (sc.data.qpos.tobytes(), sc.data.xpos.tobytes(), sc.data.qfrc_passive.tobytes())
+    with monkeypatch.context() as mp:
+        mp.setattr(ChainNewton, "_at_rest", lambda self, tol, frozen: False)
+        sc2 = make()
+        slow = settle(sc2, **kw)
+        data_slow = (sc2.data.qpos.tobytes(), sc2.data.xpos.tobytes(), sc2.data.qfrc_passive.tobytes())
+    return fast, slow, data_fast, data_slow
+
+
+@pytest.mark.parametrize("kappa,n,D", [(-3.0, 16, 1.0), (-8.0, 33, 1.0), (2.0, 64, 1.0), (-3.0, 24, 0.05),
+                                       (-5.0, 12, 200.0)])
+def test_free_rod_at_rest_is_the_newton_state_bit_for_bit(kappa, n, D, monkeypatch):
+    """The free rod from the chain's equilibrium: the state judged at rest is the inner Newton's, every
+    field (the MuJoCo evaluations counted included) and the scene's data after.  A stiff rod (``D = 200``)
+    whose start is not within the tolerance takes its Newton step as before: the same state, the judgement
+    one more MuJoCo evaluation."""
+    p = STANDARD.replace(D=D)
+    fast, slow, df, ds = _settle_both(lambda: build_scene("free", p, Uniform(kappa), n), monkeypatch)
+    assert fast.converged and fast.newton_iterations == slow.newton_iterations
+    if D <= 1.0:  # the standard stiffness and softer: the start is at rest
+        assert fast.newton_iterations == 0
+    if fast.newton_iterations == 0:
+        assert _fields(fast) == _fields(slow)
+    else:
+        skip = ("wall_time_s", "forward_calls")
+        assert _fields(fast, skip) == _fields(slow, skip)
+        assert fast.forward_calls == slow.forward_calls + 1
+    assert df == ds
+
+
+def test_dropped_workpiece_finger_alone_is_unchanged(monkeypatch):
+    """A Grip I workpiece too heavy for its friction drops; the finger alone (contacts off, workpiece parked and
+    frozen) settles from the chain's free state: the same state either way."""
+    p = STANDARD.replace(M=40.0, mu_s=0.1)
+    fast, slow, df, ds = _settle_both(lambda: build_scene("I", p, Uniform(-6.0), 16), monkeypatch)
+    assert not fast.held
+    assert _fields(fast) == _fields(slow)
+    assert df == ds
+
+
+def test_a_start_away_from_rest_runs_the_newton_solve(monkeypatch):
+    """A warm start from another curvature is not at rest: the inner Newton takes its steps and lands where it
+    always did (only the count of MuJoCo evaluations has the judgement's one more)."""
+    def make():
+        sc = build_scene("free", STANDARD, Uniform(-3.0), 20)
+        make.prev = settle(build_scene("free", STANDARD, Uniform(-2.0), 20))
+        return sc
+
+    fast, slow, df, ds = _settle_both(make, monkeypatch, warm_start=None)
+    assert _fields(fast) == _fields(slow)
+    sc = make()
+    warm = settle(sc, warm_start=make.prev)
+    with monkeypatch.context() as mp:
+        mp.setattr(ChainNewton, "_at_rest", lambda self, tol, frozen: False)
+        sc2 = make()
+        warm2 = settle(sc2, warm_start=make.prev)
+    assert warm.newton_iterations > 0
+    assert _fields(warm, skip=("wall_time_s", "forward_calls")) == _fields(warm2, skip=("wall_time_s", "forward_calls"))
+    assert warm.forward_calls == warm2.forward_calls + 1
+    assert sc.data.qpos.tobytes() == sc2.data.qpos.tobytes()
