@@ -115,8 +115,21 @@ _OPTION_FIELDS = tuple(k for k in dir(mujoco.MjOption) if not k.startswith("_"))
 _MODEL_ARRAYS: tuple | None = None  # the names of MjModel's array fields (the same for every model)
 
 
+#: The sparse-matrix layout of the joint-space inertia and its factors (``M_*``, ``D_*``, ``B_*`` row addresses,
+#: counts and column indices, the ``map*`` permutations): integer arrays the compiler derives from the kinematic
+#: tree alone, which is part of a cache entry's key; nothing else writes them (MuJoCo reads them in every
+#: step).  :meth:`_Entry.restore` does not copy them back: at 256 links they are 1.26 of the model's 1.47 MB
+#: of arrays.  ``tests/test_scene_reuse.py`` compares every array of a used model with a fresh build's.
+_TREE_LAYOUT_SUFFIXES = ("_colind", "_rowadr", "_rownnz")
+
+
+def _tree_layout(name: str, v: np.ndarray) -> bool:
+    return v.dtype.kind == "i" and (name.startswith(("M_", "D_", "B_")) and name.endswith(_TREE_LAYOUT_SUFFIXES)
+                                    or name in ("mapM2D", "mapD2M", "mapM2M"))
+
+
 def _array_fields(m: mujoco.MjModel) -> list:
-    """Names of the model's writable, non-empty array fields."""
+    """Names of the model's writable, non-empty array fields but the tree's sparse layout (:func:`_tree_layout`)."""
     global _MODEL_ARRAYS
     if _MODEL_ARRAYS is None:
         names = []
@@ -133,7 +146,7 @@ def _array_fields(m: mujoco.MjModel) -> list:
     out = []
     for k in _MODEL_ARRAYS:
         v = getattr(m, k)
-        if v.size and v.flags.writeable:
+        if v.size and v.flags.writeable and not _tree_layout(k, v):
             out.append(k)
     return out
 
