@@ -197,6 +197,12 @@ def _parameters(scene: Scene, st: dict) -> dict:
                    _hx=np.array([m.geom_size[g][0] / L for _, g in pairs]), _rad=np.array(out["radius"]),
                    _pidx=[np.flatnonzero(pf == f) for f in range(nf)],
                    _branch="face" if sph.all() else ("caps" if not sph.any() else "both"))
+        if out["_branch"] == "face" and "ry" not in st["wnames"]:
+            # tip spheres on a face that does not turn (alpha = 0): pair_distances' arithmetic on Python floats
+            out["_face_rows"] = tuple((int(f), int(i) + 1, float(out["_gl"][j, 0]), float(out["_gl"][j, 1]),
+                                       float(out["_hx"][j]), float(out["_rad"][j]))
+                                      for j, (f, i, _) in enumerate(pair_link))
+    out.setdefault("_face_rows", None)
     for v in list(out.values()) + out.get("_pidx", []):
         if isinstance(v, np.ndarray):
             v.setflags(write=False)
@@ -499,6 +505,8 @@ class ChainModel:
         """
         if not self.pairs:
             return np.zeros(0)
+        if self._face_rows is not None:
+            return self._face_distances(nodes, y)
         O = np.empty((len(self.pairs), 2))
         A = np.empty(len(self.pairs))
         for f, mine in enumerate(self._pidx):
@@ -529,6 +537,25 @@ class ChainModel:
         if caps is None:
             return face
         return np.where(self._sph, face, caps)
+
+    def _face_distances(self, nodes, y) -> np.ndarray:
+        """:meth:`pair_distances` of tip spheres on faces that do not turn, on Python floats, bit for bit.
+
+        The workpiece has no ``ry`` dof, so every ``alpha`` is ``0.0`` and its cosine and sine are ``1.0`` and
+        ``0.0`` exactly; each element of the vectorised formula is then the same sequence of IEEE
+        operations on one pair's numbers (products, sums and differences in the same order, the written-out
+        row sums included), done here on floats: no array temporaries for one or two pairs.
+        """
+        ca, sa = 1.0, 0.0  # cos and sin of alpha = 0.0
+        out = []
+        for f, k, gl0, gl1, hx, rad in self._face_rows:
+            O = self.pose(f, y)[0]
+            rgl0 = ca * gl0 - sa * gl1
+            rgl1 = sa * gl0 + ca * gl1
+            bo0 = nodes.item(f, k, 0) - O.item(0)
+            bo1 = nodes.item(f, k, 1) - O.item(1)
+            out.append(((0.0 + ca * bo0) + sa * bo1) - (((0.0 + ca * rgl0) + sa * rgl1) + hx) - rad)
+        return np.array(out)
 
     def stick_term(self, s, phi, nodes, y) -> Term:
         """Sticking constraint ``t . (p_f - p_w) + offset`` (over l) of a :class:`Stick`."""

@@ -44,6 +44,11 @@ CHAIN_SOLVE_ITERS = 60
 CHAIN_FLOOR_ULPS = 2.0
 
 
+def _norm(x) -> float:
+    """``float(np.linalg.norm(x))`` of a 1-D float array: the same ``sqrt(x . x)`` without its argument handling."""
+    return math.sqrt(float(x.dot(x)))
+
+
 def _positions_only(m) -> bool:
     """:func:`~simgrip.settle.statics.sync_scene` computes positions only (no contact pairs, or contacts off)."""
     return m.npair == 0 or bool(int(m.opt.disableflags) & int(mujoco.mjtDisableBit.mjDSBL_CONTACT))
@@ -196,7 +201,7 @@ class ChainNewton(Newton):
         nw = yf.size
         nodes = self._at("nodes", phi, w, cm.nodes, phi) if (self.normal_active or self.sticks) else None
         F, diag, off = self._at("internal", phi, w, cm.internal, phi)
-        Fw = cm.workpiece_force()[yf]
+        Fw = self._fw  # (the workpiece's weight and applied force on its free dofs: fixed through a solve)
         act = self.normal_active
         pterms = [self._at(("pair", p), phi, w, cm.pair_term, p, phi, nodes, w) for p in act]
         sterms = [cm.stick_term(s, phi, nodes, w) for s in self.sticks] if self.sticks else []
@@ -312,6 +317,7 @@ class ChainNewton(Newton):
         free = np.zeros(sc.model.nv, bool)
         free[np.asarray(idx, dtype=int)] = True
         self.yf = np.array([j for j in range(cm.nw) if free[int(cm.wd[j])]], dtype=int)  # free workpiece dofs
+        self._fw = cm.workpiece_force()[self.yf]  # (read once a solve: _system adds to it, never in place)
         L, W = sc.length, sc.force_scale
         self.kc_dl = self.kc * L / W
         N = self.N.copy() / W
@@ -351,11 +357,12 @@ class ChainNewton(Newton):
             if self.sticks:
                 self._reanchor(state_q(phi, w))
             R, jacobian = self._system(phi, w, N, lam, stick_act, True)
-            if not np.all(np.isfinite(R)):
+            if not np.isfinite(R).all():
                 self._memo = {}
                 raise SettleError("settle diverged (non-finite residual)")
-            res_f = float(np.max(np.abs(R[:nf])))
-            res_c = float(np.max(np.abs(R[nf:] * self._row_scale(len(N), len(stick_act))))) if R.size > nf else 0.0
+            res_f = float(np.abs(R[:nf]).max())
+            rows = self._row_scale(len(N), len(stick_act))  # (contact rows in force units: this state's K_c)
+            res_c = float(np.abs(R[nf:] * rows).max()) if R.size > nf else 0.0
             # (r < max(tol, floor), the floor evaluated only where tol alone does not decide)
             if (res_f < tol or res_f < angle_floor(sc, state_q(phi, w))) and (
                     res_c < tol or res_c < self.noise_floor()):
@@ -372,8 +379,8 @@ class ChainNewton(Newton):
                     return finish(False, f"Newton iteration budget max_steps={self.budget} spent", state_q(phi, w), N, lam)
                 return finish(False, "max_iter", state_q(phi, w), N, lam)
             # (the acceptance's scaled residual: only a step needs it)
-            scale = np.concatenate([np.ones(nf), self._row_scale(len(N), len(stick_act))])  # rows in force units
-            res = float(np.max(np.abs(R * scale))) if R.size else 0.0
+            scale = np.concatenate([np.ones(nf), rows])  # rows in force units
+            res = float(np.abs(R * scale).max()) if R.size else 0.0
             self.iterations += 1
             try:
                 dphi, dw, dN, dl = self._step(jacobian())
@@ -381,7 +388,7 @@ class ChainNewton(Newton):
                 if polished:
                     break
                 return finish(False, "stalled", state_q(phi, w), N, lam)
-            merit = float(np.linalg.norm(R))
+            merit = _norm(R)
             if contacts and dist_at is not None and dist_at[0] is phi and dist_at[1] is w:
                 d0 = dist_at[2]  # computed at this very state when it was accepted
             else:
@@ -392,14 +399,14 @@ class ChainNewton(Newton):
                 ph, ww = phi + step * dphi, w + step * dw
                 Nn, ln = N + step * dN, lam + step * dl
                 Rn, _ = self._system(ph, ww, Nn, ln, stick_act, False)
-                ok = bool(np.all(np.isfinite(Rn)))
+                ok = bool(np.isfinite(Rn).all())
                 if ok and inact:  # pairs not yet touching: no tunnelling (move at most half their gap)
                     dn = self._distances(ph, ww)
                     ok = all(dn[p] > -PEN_MAX or d0[p] <= 0 for p in inact) and all(
                         d0[p] - dn[p] <= max(0.5 * d0[p], 0.0) + PEN_MAX for p in inact if d0[p] > 0)
-                mn = float(np.linalg.norm(Rn)) if ok else math.inf
+                mn = _norm(Rn) if ok else math.inf
                 if ok and (mn < (1.0 - 1e-4 * step) * merit or (
-                        float(np.max(np.abs(Rn * scale))) < 0.5 * res and mn < max(2.0 * merit, 1e-3 * tol ** 0.5))):
+                        float(np.abs(Rn * scale).max()) < 0.5 * res and mn < max(2.0 * merit, 1e-3 * tol ** 0.5))):
                     accepted = True
                     break
                 step *= 0.5
