@@ -18,27 +18,44 @@ module                    holds
 ========================  ================================================================
 """
 
-from simgrip.reference.capacity import (
-    LoadCapacity,
-    largest_load,
-    least_mu,
-    margin,
-    margin_terms,
-    max_load,
-    track_largest_load,
-)
-from simgrip.reference.elastica import FINE_POINTS, ElasticaError, ElasticaSolution, kappa_sweep, solve, sweep
-from simgrip.reference.inclined import InclinedContact, solve_inclined
-from simgrip.reference.hinge_chain import ChainEquilibrium, chain_energy, cradle_start_angles, solve_chain
-from simgrip.reference.minimiser import GRADIENT_TOL, DiscreteError, EnergyTerms
-from simgrip.reference.nodal import (
-    DiscreteSolution,
-    discrete_energy,
-    discrete_from_continuous,
-    solve_discrete,
-    stability_eigenvalue,
-)
-from simgrip.reference.stability import min_eigenvalue
+import importlib as _importlib
+
+# Each name is imported from its module on first use (PEP 562), not with the package: a settle needs the
+# hinge chain alone, and the eager imports (the BVP, capacity, nodal and inclined modules with SciPy's
+# optimize, interpolate and special) cost ~0.25 s of CPU in every process that settles (issue 19: a
+# 300-point sweep at 32 links settles in ~1 s).  ``from simgrip.reference import X`` works as before.
+_LAZY = {
+    "LoadCapacity": "capacity", "largest_load": "capacity", "least_mu": "capacity", "margin": "capacity",
+    "margin_terms": "capacity", "max_load": "capacity", "track_largest_load": "capacity",
+    "FINE_POINTS": "elastica", "ElasticaError": "elastica", "ElasticaSolution": "elastica",
+    "kappa_sweep": "elastica", "solve": "elastica", "sweep": "elastica",
+    "InclinedContact": "inclined", "solve_inclined": "inclined",
+    "ChainEquilibrium": "hinge_chain", "chain_energy": "hinge_chain", "cradle_start_angles": "hinge_chain",
+    "solve_chain": "hinge_chain",
+    "GRADIENT_TOL": "minimiser", "DiscreteError": "minimiser", "EnergyTerms": "minimiser",
+    "DiscreteSolution": "nodal", "discrete_energy": "nodal", "discrete_from_continuous": "nodal",
+    "solve_discrete": "nodal", "stability_eigenvalue": "nodal",
+    "min_eigenvalue": "stability",
+}
+
+
+def __getattr__(name: str):
+    module = _LAZY.get(name)
+    if module is None:
+        try:  # a submodule not imported yet (``reference.bvp`` after ``import simgrip.reference``)
+            return _importlib.import_module(f"{__name__}.{name}")
+        except ModuleNotFoundError as exc:
+            if exc.name != f"{__name__}.{name}":
+                raise
+        raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
+    value = getattr(_importlib.import_module(f"{__name__}.{module}"), name)
+    globals()[name] = value
+    return value
+
+
+def __dir__():
+    return sorted(set(globals()) | set(_LAZY))
+
 
 __all__ = [
     "ChainEquilibrium",

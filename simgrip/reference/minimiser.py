@@ -38,8 +38,6 @@ from dataclasses import dataclass
 from typing import NamedTuple
 
 import numpy as np
-from scipy.optimize import brentq
-
 from simgrip.profiles import CurvatureProfile
 from simgrip.reference.stability import tri_factor, tri_solve, tridiagonal_min_eigenvalue
 
@@ -325,6 +323,8 @@ def _arc_start(prob: DiscreteEnergy, unit_rest: np.ndarray, sign: float) -> tupl
     while t < 200.0:
         ct = prob.c(shape(sign * t))
         if ct <= 0:
+            from scipy.optimize import brentq  # here, not with the module: SciPy's optimize costs ~0.15 s to import
+
             root = brentq(lambda u: prob.c(shape(sign * u)), t_prev, t, xtol=1e-15, rtol=1e-15)
             x = shape(sign * root)
             return x, sign * root * unit_rest
