@@ -265,12 +265,13 @@ def _settle(
             if held:
                 held, converged, why = release(scene, run, tol, per)
         else:
+            started = False
             if not scene.has_workpiece and warm_start is None:
                 # a free finger starts from the hinge chain's free (energy-minimising) equilibrium, the
                 # MuJoCo finger's own: Newton only polishes, a soft rod (gravity far above the springs)
                 # settles like any other, and a bistable rod takes the same branch with both methods
-                start_free(scene)
-            converged, why = run.solve(tol, per, frozen=wdofs)
+                started = start_free(scene)
+            converged, why = run.solve(tol, per, frozen=wdofs, at_rest=started)  # (judged at once if at rest)
         if scene.has_workpiece and not held and (converged or why == "stalled") and not run.spent():
             # dropped: a release without an equilibrium (Newton stalls as the workpiece falls) is a
             # drop too; a spent budget or a solve that ran out of iterations is not (issue 16: a Grip I

@@ -117,20 +117,19 @@ class ChainNewton(Newton):
         return self.rest_forces(q) / self.st.fscale
 
     # -- a contact-free state that is already at rest: judged once ---------------------------
-    def solve(self, tol: float, max_iter: int, *, frozen=()) -> tuple[bool, str]:
-        """:meth:`Newton.solve`, but a contact-free start already in equilibrium is judged by MuJoCo alone.
+    def solve(self, tol: float, max_iter: int, *, frozen=(), at_rest: bool = False) -> tuple[bool, str]:
+        """:meth:`Newton.solve`; ``at_rest``: the caller has just put a contact-free scene at the hinge chain's
+        equilibrium (:func:`~simgrip.settle.closing.start_free`), so MuJoCo alone judges it first.
 
         Without contacts or sticks, and with the workpiece (if any) frozen, the inner Newton's first test
         is whether the analytic residual at the start is below ``tol`` (or the angles' round-off floor);
         then it takes no step and commits ``join(split(q))``.  That state's MuJoCo residual (``O(n)``:
         :meth:`rest_forces`) is what the settle's judge reports; evaluated first, it decides the same
         way (the analytic and MuJoCo balances are the same equations, apart in round-off) and the judge
-        reuses it.  Otherwise, or when the two could disagree (not finite), the Newton solve runs as ever.
-        A free rod started at the hinge chain's equilibrium (:func:`~simgrip.settle.closing.start_free`)
-        so settles with one ``mj_passive`` and ``mj_rne`` (issue 19: its fixed cost).
+        reuses it.  Otherwise (not at rest, contacts on, not finite) the Newton solve runs as ever.  A free
+        rod so settles with one ``mj_passive`` and ``mj_rne`` (issue 19: its fixed cost).
         """
-        got = self._at_rest(tol, frozen)
-        if got:
+        if at_rest and self._at_rest(tol, frozen):
             return True, "ok"
         return super().solve(tol, max_iter, frozen=frozen)
 

@@ -76,12 +76,15 @@ def start_free(scene: Scene) -> bool:
 def finger_alone(scene, run, tol, max_steps):
     """The workpiece is gone: park it (held, no contact) and settle the finger (from the chain's free state)."""
     m = scene.model
-    start_free(scene)
+    started = start_free(scene)
     hold_workpiece(scene, True)
     run.sticks, run.sliding, run.lam = [], {}, np.zeros(0)
     run.normal_active, run.N = [], np.zeros(0)
     m.opt.disableflags |= int(mujoco.mjtDisableBit.mjDSBL_CONTACT)
-    return run.solve(tol, max_steps, frozen=tuple(int(x) for x in scene.workpiece_dof))
+    frozen = tuple(int(x) for x in scene.workpiece_dof)
+    if started and hasattr(run, "_at_rest"):  # the chain Newton judges a start at rest by MuJoCo first
+        return run.solve(tol, max_steps, frozen=frozen, at_rest=True)
+    return run.solve(tol, max_steps, frozen=frozen)
 
 
 def release(scene: Scene, run: Newton, tol: float, max_steps: int) -> tuple[bool, bool, str]:
