@@ -338,10 +338,20 @@ class PickMultiEnv(gym.Env):
         """The paper's groups for the current episode, per finger (:meth:`physical_params`)."""
         return self.physical_params().dimensionless()
 
+    @property
+    def _kappa_cmd(self) -> np.ndarray:
+        """Commanded curvatures (1 shared or K; a copy)."""
+        return np.array(self._kcmd)
+
+    @property
+    def _kappa(self) -> np.ndarray:
+        """Actual curvatures after the lag (1 shared or K; a copy)."""
+        return np.array(self._kact)
+
     def _reset_state(self):
         nk = 1 if self.shared_curvature else self.K
-        self._kappa_cmd = np.zeros(nk)
-        self._kappa = np.zeros(nk)
+        self._kcmd = [0.0] * nk  # commanded curvatures (Python floats: the step's arithmetic, that of numpy)
+        self._kact = [0.0] * nk  # actual curvatures (after the lag)
         self._palm_target = float(self.palm_start[0])
         self._z0 = 0.0
         self._xy0 = (0.0, 0.0)
@@ -355,9 +365,9 @@ class PickMultiEnv(gym.Env):
         self._tilts = w.shape != "sphere"  # a sphere has no tilt to knock over
         self._needs_reset = True
 
-    def _set_kappa(self, kappa):
-        """Rest angles of every finger for the curvatures ``kappa`` (1 shared or K), written into the model."""
-        np.multiply(self._unit_rest, kappa[:, None], out=self._spring)
+    def _set_kappa(self, kappa: list):
+        """Rest angles of every finger for the curvatures ``kappa`` (1 shared or K floats), written into the model."""
+        np.multiply(self._unit_rest, kappa[0] if len(kappa) == 1 else np.array(kappa)[:, None], out=self._spring)
 
     def __getstate__(self):
         state = self.__dict__.copy()
@@ -374,7 +384,7 @@ class PickMultiEnv(gym.Env):
         self._select(self.workpiece.shape)
 
     def _get_obs(self, forces):
-        return self._observe(self.data, forces, self._kappa_cmd, self._kappa, self._z0, self._hold)
+        return self._observe(self.data, forces, self._kcmd, self._kact, self._z0, self._hold)
 
     # --------------------------------------------------------------- API
     def reset(self, *, seed=None, options=None):
@@ -396,7 +406,7 @@ class PickMultiEnv(gym.Env):
         self.workpiece = work
         mujoco.mj_resetData(m, d)
         self._reset_state()  # (after self.workpiece: the episode's reward constants)
-        self._set_kappa(self._kappa)
+        self._set_kappa(self._kact)
         d.qpos[self.palm_qpos] = palm_z
         self._palm_target = palm_z
         d.ctrl[0] = palm_z
@@ -422,12 +432,14 @@ class PickMultiEnv(gym.Env):
         a = check_action(action, self._action_shape)
         m, d = self.model, self.data
         lo, hi = self.kappa_range
-        cmd = self._kappa_cmd
-        cmd[:] = [lo + 0.5 * (v + 1.0) * (hi - lo) for v in a[:-1]]
+        alpha = self._lag_alpha
+        self._kcmd = cmd = [lo + 0.5 * (v + 1.0) * (hi - lo) for v in a[:-1]]
         # pneumatic lag: exact first-order response over one control step, rest angles held within it
-        kap = self._kappa
-        kap += self._lag_alpha * (cmd - kap)
-        self._set_kappa(kap)
+        self._kact = kap = [k + alpha * (c - k) for c, k in zip(cmd, self._kact)]
+        if len(kap) == 1:  # one shared command: one scalar times every finger's unit rest angles
+            np.multiply(self._unit_rest, kap[0], out=self._spring)
+        else:
+            self._set_kappa(kap)
         self._palm_target = min(max(self._palm_target + a[-1] * self.palm_speed * self.dt,
                                     self.palm_range[0]), self.palm_range[1])
         d.ctrl[0] = self._palm_target

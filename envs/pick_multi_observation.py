@@ -49,7 +49,9 @@ class WorkpieceContactForces:
 
     With elliptic friction cones (the pick models') a contact's constraint rows
     in ``data.efc_force`` are its contact-frame force (normal, tangent 1,
-    tangent 2, ...) and are read directly.
+    tangent 2, ...) and are read directly.  It runs on every environment step: the contacts' geom pairs are read
+    always (one ``tolist``), the constraint forces, addresses and normals only once a workpiece-finger contact is
+    found.
 
     Parameters
     ----------
@@ -74,18 +76,22 @@ class WorkpieceContactForces:
             return normal, friction, side
         fog, wg = self._fog, self.work_geom
         con = data.contact
-        frames = con.frame[:, 0:3].tolist()  # the contact normal
         ef = None
-        for (g1, g2), adr, nrm in zip(con.geom.tolist(), con.efc_address.tolist(), frames):
+        for i, (g1, g2) in enumerate(con.geom.tolist()):
             f = fog[g2] if g1 == wg else (fog[g1] if g2 == wg else -1)
-            if f < 0 or adr < 0:
+            if f < 0:
                 continue
-            if ef is None:
-                ef = data.efc_force.tolist()  # one conversion for all contacts
+            if ef is None:  # the first workpiece-finger contact: the rest is read once, for all contacts
+                adrs = con.efc_address.tolist()
+                nx, ny = con.frame[:, 0].tolist(), con.frame[:, 1].tolist()  # the contact normals' x and y
+                ef = data.efc_force.tolist()
+            adr = adrs[i]
+            if adr < 0:
+                continue
             fn = ef[adr]
             normal[f] += fn
             friction[f] += math.hypot(ef[adr + 1], ef[adr + 2])
-            side[f] += fn * math.hypot(nrm[0], nrm[1])
+            side[f] += fn * math.hypot(nx[i], ny[i])
         return normal, friction, side
 
 
@@ -145,12 +151,13 @@ class MultiObservation:
         """The observation of ``data``: ``forces`` are :class:`WorkpieceContactForces`' ``(normal, friction,
         side)``; ``kappa_cmd``, ``kappa`` the commanded and actual curvatures (arrays of 1 or K); ``z0`` the
         workpiece's starting height [m]; ``hold`` the time held at the target [s]."""
-        return self.observe(data.qpos, data.qpos.tolist(), data.qvel.tolist(), kappa_cmd, kappa, forces, z0, hold)
+        return self.observe(data.qpos, data.qpos.tolist(), data.qvel.tolist(), np.asarray(kappa_cmd, float).tolist(),
+                            np.asarray(kappa, float).tolist(), forces, z0, hold)
 
     def observe(self, qpos, q: list, v: list, kappa_cmd, kappa, forces, z0: float, hold: float) -> np.ndarray:
         """The observation from values already read (the environment's step): ``qpos`` the array
-        ``data.qpos`` (the fingers' block is read from it), ``q``, ``v`` its and ``data.qvel``'s lists; the rest
-        as :meth:`__call__`."""
+        ``data.qpos`` (the fingers' block is read from it), ``q``, ``v`` its and ``data.qvel``'s lists,
+        ``kappa_cmd``, ``kappa`` sequences of floats; the rest as :meth:`__call__`."""
         # everything from qpos / qvel (after the step; MuJoCo's xpos / xmat are those before its last
         # integration).  Arrays for the fingers (one cumsum, one product, one complex exp), Python floats for the
         # rest, one array write per block, then the clip in place.
@@ -161,8 +168,8 @@ class MultiObservation:
         # header: palm height, curvature command and actual curvature in action units
         a, b = self._k_scale
         head = [palm_z * inv_l]
-        head += [a * k + b for k in kappa_cmd.tolist()]
-        head += [a * k + b for k in kappa.tolist()]
+        head += [a * k + b for k in kappa_cmd]
+        head += [a * k + b for k in kappa]
         obs[:self._shape_start] = head
         theta = np.cumsum(qpos[self.hinge_qpos].reshape(K, self.n), axis=1)  # link angles
         np.dot(theta, self._interp_t, out=obs[self._shape_start:self._tip_start].reshape(K, self.P))
