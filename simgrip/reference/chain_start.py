@@ -78,7 +78,7 @@ class _Fused:
             return x, np.cos(x)
         w = p.w
         d = -w * np.sin(x)
-        nd = math.sqrt(float(np.dot(d, d)))
+        nd = math.sqrt(float(d.dot(d)))
         if nd == 0.0 or not math.isfinite(float(x.sum())):
             return None
         d = d / nd
@@ -86,10 +86,10 @@ class _Fused:
         for _ in range(40):
             y = x + t * d
             cy = np.cos(y)
-            cv = float(np.dot(w, cy)) + p.c0
+            cv = float(w.dot(cy)) + p.c0
             if abs(cv) <= self.ctol:
                 return y, cy
-            dc = -float(np.dot(w * np.sin(y), d))
+            dc = -float((w * np.sin(y)).dot(d))
             if dc == 0.0:
                 return None
             t += -cv / dc
@@ -97,7 +97,7 @@ class _Fused:
                 return None
         y = x + t * d
         cy = np.cos(y)
-        return (y, cy) if abs(float(np.dot(w, cy)) + p.c0) <= 100 * self.ctol else None
+        return (y, cy) if abs(float(w.dot(cy)) + p.c0) <= 100 * self.ctol else None
 
     def at(self, x, cx):
         """``(energy, r, chi, gn, scale, sin x)`` at ``x`` (``cx = cos x``)."""
@@ -111,7 +111,7 @@ class _Fused:
         g[:-1] -= m[1:]
         g += p.a * cx
         g += p.lin
-        v = float(0.5 * np.dot(m, dq) + np.dot(p.a, sx) + np.dot(p.lin, x))
+        v = float(0.5 * m.dot(dq) + p.a.dot(sx) + p.lin.dot(x))
         t = self.dk * (np.abs(q) + self.absrest)
         s = t.copy()
         s[:-1] += t[1:]
@@ -119,8 +119,8 @@ class _Fused:
         chi = 0.0
         if p.w is not None:
             a = -p.w * sx
-            aa = float(np.dot(a, a))
-            chi = -float(np.dot(a, g)) / aa if aa > 0 else 0.0
+            aa = float(a.dot(a))
+            chi = -float(a.dot(g)) / aa if aa > 0 else 0.0
             g += chi * a
             s += abs(chi) * self.absw
         scale = max(float(s.max()), 1e-300)
@@ -170,11 +170,11 @@ def fast_newton(prob: DiscreteEnergy, x0, *, tol: float = GRADIENT_TOL, max_iter
             if info != 0:
                 return None
             y, u = yu[:, 0], yu[:, 1]
-            au = float(np.dot(a, u))
+            au = float(a.dot(u))
             if not (au > 0 if definite else au < 0):
                 return None
-            p = -y + (float(np.dot(a, y)) / au) * u
-            p -= (np.dot(a, p) / np.dot(a, a)) * a  # tangent to round-off (as the minimiser)
+            p = -y + (float(a.dot(y)) / au) * u
+            p -= (a.dot(p) / a.dot(a)) * a  # tangent to round-off (as the minimiser)
         else:
             if not definite:
                 return None
@@ -188,7 +188,7 @@ def fast_newton(prob: DiscreteEnergy, x0, *, tol: float = GRADIENT_TOL, max_iter
         hp = diag * p
         hp[:-1] += f.off * p[1:]
         hp[1:] += f.off * p[:-1]
-        pred = float(np.dot(r, p) + 0.5 * np.dot(p, hp))
+        pred = float(r.dot(p) + 0.5 * p.dot(hp))
         got = f.restore(x + p)
         if got is None:
             return None
@@ -234,14 +234,14 @@ def _arc_start(prob: DiscreteEnergy, unit_rest, sign: float):
     tol = 1e-15 * (float(np.sum(np.abs(w))) + abs(c0) + prob.half_b)
     for _ in range(100):
         ang = sign * t * us
-        c = float(np.dot(w, np.cos(ang))) + c0
+        c = float(w.dot(np.cos(ang))) + c0
         if abs(c) <= tol or hi - lo <= 1e-15 * max(1.0, hi):
             break
         if c > 0:
             lo = t
         else:
             hi = t
-        dc = -float(np.dot(w, np.sin(ang) * us)) * sign
+        dc = -float(w.dot(np.sin(ang) * us)) * sign
         tn = t - c / dc if dc != 0 else 0.5 * (lo + hi)
         t = tn if lo < tn < hi else 0.5 * (lo + hi)
     return sign * t * us
