@@ -257,7 +257,7 @@ class ChainModel:
     # -- kinematics -------------------------------------------------------------
     def split(self, q) -> tuple[np.ndarray, np.ndarray]:
         """Link angles (finger after finger) and the workpiece dofs (slides over l, hinge in rad) from ``qpos``."""
-        phi = np.cumsum(np.asarray(q)[self.jq].reshape(self.fingers, self.nl), axis=1).reshape(-1)
+        phi = np.asarray(q)[self.jq].reshape(self.fingers, self.nl).cumsum(axis=1).reshape(-1)
         return phi, np.asarray(q)[self.wq] / self.wscale
 
     def join(self, q, phi, y) -> np.ndarray:
@@ -275,8 +275,8 @@ class ChainModel:
         """Nodes (x, z) over l of every finger in its own frame (finger 1 mirrored in x): (fingers, nl + 1, 2)."""
         ph = np.asarray(phi).reshape(self.fingers, self.nl)
         out = np.zeros((self.fingers, self.nl + 1, 2))  # (the same sums as cumsum of stacked segments)
-        np.cumsum(self.ds * np.cos(ph), axis=1, out=out[:, 1:, 0])
-        np.cumsum(self.ds * np.sin(ph), axis=1, out=out[:, 1:, 1])
+        (self.ds * np.cos(ph)).cumsum(axis=1, out=out[:, 1:, 0])
+        (self.ds * np.sin(ph)).cumsum(axis=1, out=out[:, 1:, 1])
         return out
 
     def pose(self, f, y):
@@ -346,7 +346,7 @@ class ChainModel:
         """
         phi = np.array(phi0, dtype=float)
         F, diag, off = self.internal(phi)
-        res = float(np.max(np.abs(self.to_q(F))))
+        res = float(np.abs(self.to_q(F)).max())
         for _ in range(max_iter):
             if res < tol:
                 return phi
@@ -357,7 +357,7 @@ class ChainModel:
             step = 1.0
             for _ls in range(30):
                 Fn, dn, on = self.internal(phi + step * d)
-                rn = float(np.max(np.abs(self.to_q(Fn))))
+                rn = float(np.abs(self.to_q(Fn)).max())
                 if rn < res or rn < tol:
                     break
                 step *= 0.5
@@ -378,7 +378,7 @@ class ChainModel:
 
     def to_q(self, F) -> np.ndarray:
         """Link-angle force -> hinge force (suffix sums within each finger)."""
-        return np.cumsum(np.asarray(F).reshape(self.fingers, self.nl)[:, ::-1], axis=1)[:, ::-1].reshape(-1)
+        return np.asarray(F).reshape(self.fingers, self.nl)[:, ::-1].cumsum(axis=1)[:, ::-1].reshape(-1)
 
     # -- terms ------------------------------------------------------------------
     def _link(self, phi, f, i):

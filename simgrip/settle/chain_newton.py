@@ -152,7 +152,7 @@ class ChainNewton(Newton):
         free = np.ones(m.nv, bool)
         free[list(fz)] = False
         rf = r[free]
-        res = float(np.max(np.abs(rf))) if rf.size else 0.0
+        res = float(np.abs(rf).max()) if rf.size else 0.0
         if not math.isfinite(res) or not (res < tol or res < angle_floor(sc, qq)):
             return False
         self._judged = (self._positions_key(), qq, r)
@@ -336,7 +336,7 @@ class ChainNewton(Newton):
                 self.kc_dl = self.kc * L / W
 
         read_kc(phi, w)
-        if (N.size and not np.all(N)) or (lam.size and not np.all(lam)):
+        if (N.size and not N.all()) or (lam.size and not lam.all()):
             N, lam = self._estimate_multipliers(phi, w, N, lam, stick_act)
         stiffen(N)
 
@@ -443,7 +443,7 @@ class ChainNewton(Newton):
         A = np.stack([np.concatenate([cm.to_q(c[:n]), c[n:][yf]]) for c in cols], 1)
         x, *_ = np.linalg.lstsq(A, -b, rcond=1e-12)
         nn = len(self.normal_active)
-        if not np.all(np.isfinite(x)) or np.any(x[:nn] < 0.0):
+        if not np.isfinite(x).all() or (x[:nn] < 0.0).any():
             return N, lam
         return x[:nn], x[nn:]
 

@@ -221,8 +221,8 @@ class Newton:
         memo = self._floor_memo  # the last state's (qpos bytes, value): a solve asks ~8 times, mostly at one state
         if memo is not None and memo[0] == q.tobytes():
             return memo[1]
-        phi = np.cumsum(q[np.asarray(sc.joint_qpos)], axis=-1)
-        big = float(np.max(np.abs(phi))) if phi.size else 0.0
+        phi = q[np.asarray(sc.joint_qpos)].cumsum(axis=-1)
+        big = float(np.abs(phi).max()) if phi.size else 0.0
         out = max(FLOOR_ULPS, sc.n * (1.0 + 0.5 * big))
         self._floor_memo = (q.tobytes(), out)
         return out
@@ -487,6 +487,6 @@ def read_newton(scene: Scene, run: Newton, t0: float, held: bool, converged: boo
                     mu = abs(float(fric[k])) / float(normals[k])
         return forces, mu
 
-    return read_state(scene, sd, held=held, method="newton", residual=float(np.max(np.abs(full))),
+    return read_state(scene, sd, held=held, method="newton", residual=float(np.abs(full).max()),
                       converged=converged, steps=run.iterations, newton_iterations=run.iterations,
                       forward_calls=run.st.calls, wall_time_s=time.perf_counter() - t0, friction=friction)

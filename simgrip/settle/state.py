@@ -241,11 +241,11 @@ def read_state(scene: Scene, d, *, held: bool, method: str, residual: float, con
     """
     m, L, n = scene.model, scene.length, scene.n
     q = np.array(d.qpos[scene.joint_qpos])
-    phi = np.cumsum(q, axis=1)
+    phi = q.cumsum(axis=1)
     nodes = np.zeros((phi.shape[0], n + 1, 2))  # link_positions of each finger (the same sums, no temporaries)
     for f, p in enumerate(phi):
-        np.cumsum((1.0 / n) * np.cos(p), out=nodes[f, 1:, 0])
-        np.cumsum((1.0 / n) * np.sin(p), out=nodes[f, 1:, 1])
+        ((1.0 / n) * np.cos(p)).cumsum(out=nodes[f, 1:, 0])
+        ((1.0 / n) * np.sin(p)).cumsum(out=nodes[f, 1:, 1])
     contacts, pen_max = [], 0.0
     if held:  # (a state that holds nothing reads no contacts: MuJoCo's arrays are not looked at)
         wg = set(int(g) for g in scene.workpiece_geoms)

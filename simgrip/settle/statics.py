@@ -91,11 +91,11 @@ def angle_floor(scene: Scene, qpos=None) -> float:
     jq = np.asarray(scene.joint_qpos, dtype=int)
     if jq.size == 0:
         return 0.0
-    phi = np.abs(np.cumsum(q[jq].reshape(-1, jq.shape[-1]), axis=-1))
+    phi = np.abs(q[jq].reshape(-1, jq.shape[-1]).cumsum(axis=-1))
     big = phi.copy()  # max |phi| at each hinge (the first's: |phi_0|, as max(|phi_0|, 0))
     np.maximum(phi[:, 1:], phi[:, :-1], out=big[:, 1:])
     k = m.jnt_stiffness[m.dof_jntid[np.asarray(scene.joint_dof, dtype=int).reshape(big.shape)]]
-    return float(ANGLE_FLOOR_ULPS * _EPS * np.max(k * big) / scene.moment_scale)
+    return float(ANGLE_FLOOR_ULPS * _EPS * (k * big).max() / scene.moment_scale)
 
 
 @dataclass
