@@ -26,10 +26,16 @@ BVP reference counts the reference's solve in the point (the target is the
 simulation's: ``--reference none``; the warm-started BVP alone costs ~0.5-0.7x
 the settle at n = 32, a banded collocation Newton on the neighbour's factorisation,
 :mod:`simgrip.reference.collocation`).  The sweep is the issue's command as a user runs
-it (:data:`SWEEP_COMMAND`, 300 points: the process's fixed costs, ~1 s of
-imports and the map, are part of what the ratio measures, and a shorter sweep
-weighs them differently; the quick bench runs :data:`QUICK_SWEEP_POINTS` as a
-smoke run, its ratio not the issue's figure).
+it (:data:`SWEEP_COMMAND`, 300 points), timed by :func:`simgrip.sweep.run.run_sweep`
+itself (``sweep.json``'s ``wall_time_s``): from the call's start to ``sweep.json``,
+so the imports the sweep makes (the settle's: SciPy's linalg and the hinge
+chain, ~0.35 s of CPU), the first compile, the merge into ``sweep.csv`` and
+``map.png`` (~0.05 s, Pillow) are in the ratio, while what precedes the call
+(the interpreter, ``simgrip.cli`` and MuJoCo's import, argument parsing:
+~0.5 s) is not.  Those fixed costs weigh ~0.3-0.5 in the ratio at 300 points
+(more as the settle gets faster; a shorter sweep weighs them more): the quick
+bench runs :data:`QUICK_SWEEP_POINTS` as a smoke run, its ratio not the
+issue's figure.
 """
 
 from __future__ import annotations
