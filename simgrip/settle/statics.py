@@ -119,19 +119,22 @@ class Stick:
         material point; re-anchoring every Newton iteration integrates the
         no-slip condition of the contact point along the path.
         """
-        t = self.tangent(d)
-        pf, pw = self.points(d)
+        xmat, xpos = d.xmat, d.xpos  # (one view each: every ``d.xmat`` builds a new one)
+        t = xmat[self.t_body].reshape(3, 3) @ self.t_local  # (tangent)
+        pf = xpos[self.body_f] + xmat[self.body_f].reshape(3, 3) @ self.local_f  # (points)
+        pw = xpos[self.body_w] + xmat[self.body_w].reshape(3, 3) @ self.local_w
         g_old = float(t @ (pf - pw))
-        self.local_f = d.xmat[self.body_f].reshape(3, 3).T @ (point - d.xpos[self.body_f])
-        self.local_w = d.xmat[self.body_w].reshape(3, 3).T @ (point - d.xpos[self.body_w])
+        self.local_f = xmat[self.body_f].reshape(3, 3).T @ (point - xpos[self.body_f])
+        self.local_w = xmat[self.body_w].reshape(3, 3).T @ (point - xpos[self.body_w])
         self.offset += g_old  # new anchors coincide: t . (pf - pw) = 0
 
     def tangent(self, d) -> np.ndarray:
         return d.xmat[self.t_body].reshape(3, 3) @ self.t_local
 
     def points(self, d) -> tuple[np.ndarray, np.ndarray]:
-        pf = d.xpos[self.body_f] + d.xmat[self.body_f].reshape(3, 3) @ self.local_f
-        pw = d.xpos[self.body_w] + d.xmat[self.body_w].reshape(3, 3) @ self.local_w
+        xmat, xpos = d.xmat, d.xpos
+        pf = xpos[self.body_f] + xmat[self.body_f].reshape(3, 3) @ self.local_f
+        pw = xpos[self.body_w] + xmat[self.body_w].reshape(3, 3) @ self.local_w
         return pf, pw
 
 
