@@ -18,10 +18,10 @@ keeps the usual step cheap:
   (one broadcast over every pair of links of every finger; for two fingers from a common base, the pairs
   that close to it are the palm's joint and not compared, :func:`simgrip.validity.chain_violations`).
 
-The last screen runs as one matrix product over every pair of links in preallocated buffers
+The last screen runs as two matrix products over every pair of links in preallocated buffers
 (:meth:`FingerValidity._bound_clear`: the midpoint bound against the exact path's clearance, with every hinge
 within ``pi/2``): it answers valid only where the steps below would, so it changes no verdict, only the cost
-(issue 18: ~10 numpy calls instead of ~20 and the pair gathers).  Only what the screen lets through is measured
+(issue 18: six numpy calls instead of ~20 and the pair gathers).  Only what the screen lets through is measured
 exactly: first the pairs the bound left open, by their exact
 segment distance (:func:`simgrip.intersection.segment_distances`, what the exact check measures): all of them
 farther than the limit (by the relative ``CLEAR_MARGIN``) and every hinge within ``pi/2`` (adjacent links cannot
@@ -131,14 +131,10 @@ class FingerValidity:
         self._bind_bound(w0, n)
 
     def _bind_bound(self, w0: list, n: int) -> None:
-        """Precompute :meth:`_bound_clear`'s thresholds and buffers (the links' half lengths at the rest pose: rigid
-        links keep them to round-off)."""
+        """Precompute :meth:`_bound_clear`'s pair matrices, thresholds and buffers (the links' half lengths at the rest
+        pose: rigid links keep them to round-off)."""
         K = len(w0)
         half = np.concatenate([0.5 * np.linalg.norm(np.diff(w, axis=0), axis=1) for w in w0])
-        # a pair is cleared when its midpoints are farther apart than the exact path's clearance plus both half
-        # lengths, the relative _ROUND_OFF above it (the bound and the exact distances are computed in floating
-        # point, ~1e-16 of the chain's size); compared on twice the midpoints, squared: (2 T)^2
-        T = (self._limit * (1.0 + CLEAR_MARGIN) + half[:, None] + half[None, :]) * (1.0 + _ROUND_OFF)
         keep = np.zeros((K * n, K * n), dtype=bool)
         for f in range(K):
             for g in range(f, K):
@@ -146,18 +142,34 @@ class FingerValidity:
         if self._skip_one:  # links i and i+2 of one finger: proved apart by the link between them (_near_clear)
             i = np.arange(K * n - 2)
             keep[i, i + 2] &= (i // n) != ((i + 2) // n)
-        # |S_i - S_j|^2 < (2 T)^2  <=>  (|S_i|^2 + |S_j|^2 - (2 T)^2) / 2 < S_i . S_j  (S: twice the midpoints); the
-        # right side is one matrix product.  A pair never compared gets -inf: its left side is +inf
-        self._T2h = np.where(keep, 0.5 * (2.0 * T) ** 2, -np.inf)
+        pi, pj = np.nonzero(keep)
+        # twice the midpoint of link k of finger f is node k + node k+1 (nodes: the link bodies' origins in
+        # data.xpos, then the tip geom in data.geom_xpos); one row per pair holds S_i - S_j as +-1 entries over
+        # the span of bodies and the span of tip geoms, so the pairs' differences are two matrix products
+        bodies, tips = self._bodies, self._tips
+        self._body_cols = (int(bodies.min()), int(bodies.max()) + 1)
+        self._tip_cols = (int(tips.min()), int(tips.max()) + 1)
+        Qb = np.zeros((pi.size, self._body_cols[1] - self._body_cols[0]))
+        Qt = np.zeros((pi.size, self._tip_cols[1] - self._tip_cols[0]))
+        for row, (a, b) in enumerate(zip(pi.tolist(), pj.tolist())):
+            for link, sign in ((a, 1.0), (b, -1.0)):
+                f, k = divmod(link, n)
+                for node in (k, k + 1):
+                    if node < n:
+                        Qb[row, bodies[f, node] - self._body_cols[0]] += sign
+                    else:
+                        Qt[row, tips[f] - self._tip_cols[0]] += sign
+        # a pair is cleared when its midpoints are farther apart than the exact path's clearance plus both half
+        # lengths, the relative _ROUND_OFF above it: the bound and the exact distances are computed in floating
+        # point (~1e-16 of the coordinates, metres from the origin at most).  Each row is divided by twice its
+        # threshold T, so a pair is cleared when its row's squared norm is at least 1
+        T = (self._limit * (1.0 + CLEAR_MARGIN) + half[pi] + half[pj]) * (1.0 + _ROUND_OFF)
+        self._Qb, self._Qt = Qb / (2.0 * T[:, None]), Qt / (2.0 * T[:, None])
         self._hinges = [a for row in self._jq for a in row]
-        b = self._flat
-        self._body_span = (int(b[0]), int(b[0]) + b.size) if np.array_equal(b, np.arange(b[0], b[0] + b.size)) else None
-        self._W = np.empty((K, n + 1, 3))
-        self._S = np.empty((K, n, 3))
-        self._G = np.empty((K * n, K * n))
-        self._m = np.empty(K * n)
-        self._lhs = np.empty((K * n, K * n))
-        self._flags = np.empty((K * n, K * n), dtype=bool)
+        self._D = np.empty((pi.size, 3))
+        self._Dt = np.empty((pi.size, 3))
+        self._d2 = np.empty(pi.size)
+        self._ones = np.ones(3)
 
     def nodes(self, d) -> list:
         """Each finger's world nodes ``(n+1, 3)`` [m] in ``d``: its link bodies' origins, then its tip."""
@@ -198,23 +210,16 @@ class FingerValidity:
         aside, as :meth:`_near_clear` sets them aside) ``|M_i - M_j| - h_i - h_j`` above the exact path's
         clearance ``(1 + CLEAR_MARGIN)`` times the limit by the relative ``_ROUND_OFF``.  Whatever the exact path
         would then compare, its bound or its exact distances clear it, so it answers valid too: this is a shortcut
-        to the same verdict, one matrix product over all pairs in preallocated buffers (a few numpy calls instead
-        of the exact path's ~20)."""
+        to the same verdict: two matrix products give every pair's midpoint difference over its threshold
+        (precomputed rows), six numpy calls in preallocated buffers instead of the exact path's ~20 and its gathers."""
         for a in self._hinges:
             if not -_HALF_PI < q[a] < _HALF_PI:
                 return False
-        W, K = self._W, self._W.shape[0]
-        n = W.shape[1] - 1
-        span = self._body_span
-        W[:, :n] = (data.xpos[span[0]:span[1]] if span else data.xpos[self._flat]).reshape(K, n, 3)
-        W[:, n] = data.geom_xpos[self._tips]
-        W -= W[0, 0].copy()  # relative to finger 0's base: coordinates of the fingers' size (round-off ~1e-17 m^2)
-        S = np.add(W[:, 1:], W[:, :-1], out=self._S).reshape(K * n, 3)  # twice the midpoints
-        G = np.matmul(S, S.T, out=self._G)
-        m = np.multiply(G.diagonal(), 0.5, out=self._m)
-        lhs = np.add.outer(m, m, out=self._lhs)
-        lhs -= self._T2h
-        return not np.less(lhs, G, out=self._flags).any()
+        (b0, b1), (t0, t1) = self._body_cols, self._tip_cols
+        D = np.dot(self._Qb, data.xpos[b0:b1], out=self._D)  # (S_i - S_j) / (2 T) of every pair
+        D += np.dot(self._Qt, data.geom_xpos[t0:t1], out=self._Dt)
+        D *= D
+        return np.dot(D, self._ones, out=self._d2).min() >= 1.0
 
     def _check(self, q: list, data) -> list:
         if self._cap > 0.0 and self._mild(q):
