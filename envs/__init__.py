@@ -17,6 +17,11 @@ id                                what                                      max 
 ``simgrip/...Fragile-v1``         the five above, v1's shaped reward        as v0
 ``simgrip/PickCradleFragile-v2``  v1's cradle, palm start height 13-29 cm   300 (6 s)
 ``simgrip/PickSphereFragile-v2``  v1's sphere, palm start height 10-22 cm   300 (6 s)
+``simgrip/PickFragile-v2``        v1's pinch, curvature through a valve     300 (6 s)
+``simgrip/PickMultiFragile-v2``   v1's K fingers, through a valve           300 (6 s)
+``simgrip/PlaceFragile-v2``       v1's pick-and-place, through a valve      400 (8 s)
+``simgrip/PickCradleFragile-v3``  v2's cradle, through a valve              300 (6 s)
+``simgrip/PickSphereFragile-v3``  v2's sphere, through a valve              300 (6 s)
 ================================  ========================================  =========
 
 >>> import gymnasium as gym, simgrip.envs
@@ -56,13 +61,19 @@ _ENVS = {
     # v2: v1 with the hand started at an unknown height (a fixed descent misses the grasp height)
     "simgrip/PickCradleFragile-v2": ("simgrip.envs.pick_cradle_fragile_v2:FragileCradleEnvV2", {}, 300),
     "simgrip/PickSphereFragile-v2": ("simgrip.envs.pick_sphere_fragile_v2:FragileSphereEnvV2", {}, 300),
+    # the newest of each: the curvature through a valve (its action a rate), simgrip.envs.pick_fragile_v2
+    "simgrip/PickFragile-v2": ("simgrip.envs.pick_fragile_v2:FragilePickEnvV2", {}, 300),
+    "simgrip/PickMultiFragile-v2": ("simgrip.envs.pick_fragile_v2:FragilePickMultiEnvV2", {}, 300),
+    "simgrip/PlaceFragile-v2": ("simgrip.envs.pick_fragile_v2:FragilePlaceEnvV2", {}, 400),
+    "simgrip/PickCradleFragile-v3": ("simgrip.envs.pick_fragile_v2:FragileCradleEnvV3", {}, 300),
+    "simgrip/PickSphereFragile-v3": ("simgrip.envs.pick_fragile_v2:FragileSphereEnvV3", {}, 300),
 }
 ENV_IDS = tuple(k for k, v in _ENVS.items() if v[0] == "simgrip.envs.pick:PickEnv")
 MULTI_ENV_IDS = tuple(k for k, v in _ENVS.items() if v[0] == "simgrip.envs.pick_multi:PickMultiEnv")
 FRAGILE_ENV_IDS = tuple(k for k, v in _ENVS.items() if v[0].split(":")[0] in (
     "simgrip.envs.pick_fragile", "simgrip.envs.pick_place", "simgrip.envs.pick_cradle_fragile",
     "simgrip.envs.pick_sphere_fragile", "simgrip.envs.pick_fragile_v1", "simgrip.envs.pick_cradle_fragile_v2",
-    "simgrip.envs.pick_sphere_fragile_v2"))
+    "simgrip.envs.pick_sphere_fragile_v2", "simgrip.envs.pick_fragile_v2"))
 
 
 def register_envs() -> None:

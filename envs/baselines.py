@@ -28,6 +28,11 @@ Policies (actions ``(curvature command, palm speed)`` in ``[-1, 1]``; ``PlaceFra
 ``observation`` :class:`~simgrip.envs.scripted_fragile.ObservationFragilePolicy` (the observation only;
                 ``PlaceFragile-v0``: :class:`~simgrip.envs.scripted_fragile.PlacePolicy`;
                 the cradle and the sphere: ``CLAW_POLICIES`` of :mod:`simgrip.envs.scripted_fragile`)
+``constant``    (a valve env, :mod:`simgrip.envs.valve`: the curvature action is a rate, held it ramps the
+                command to an end of its range: ``VALVE_GRID`` x ``PALM_GRID``)
+``openloop``,   (a valve env: the absolute-command family or controller above, each step's command reached
+``oracle``,     through the valve as fast as it allows, :func:`~simgrip.envs.valve.absolute_to_valve`)
+``observation``
 =============== ==============================================================================================
 
 ``--grid coarse`` uses every other curvature and one ramp/palm value (for tests).  Output: ``env``,
@@ -46,13 +51,16 @@ from collections import Counter
 import gymnasium as gym
 import numpy as np
 
-__all__ = ["KAPPA_GRID", "PALM_GRID", "PLACE_DISTANCES", "RAMP_GRID", "run_policy", "evaluate", "main"]
+__all__ = ["KAPPA_GRID", "PALM_GRID", "PLACE_DISTANCES", "RAMP_GRID", "VALVE_GRID", "run_policy", "evaluate", "main"]
 
 KAPPA_GRID = tuple(round(float(a), 2) for a in np.linspace(-1.0, 0.6, 17))  # 0.1 apart: force steps of ~0.3 N
 PALM_GRID = (0.25, 0.5, 1.0)
 RAMP_GRID = (1, 50)  # steps: 0.02 s, 1 s
 PLACE_DISTANCES = (0.05, 0.08)  # [m] carried by the pick-and-place open-loop family
 _WAIT = 10  # steps between the end of the ramp and the lift
+#: a valve env's constant curvature actions (rates, :mod:`simgrip.envs.valve`): from full rate to the slowest
+#: that still reaches first contact within the episode (0.07 x 0.02 x 300 steps = 0.42 of the ~0.5 travelled)
+VALVE_GRID = (-1.0, -0.5, -0.3, -0.2, -0.15, -0.1, -0.07, 0.0)
 
 
 def _outcome(info: dict, truncated: bool) -> str:
@@ -145,13 +153,41 @@ def _scripted(cls):
     return make
 
 
+def _through_valve(make):
+    """Run an absolute-command policy (``make``'s ``act``) on a valve env: each step's curvature command becomes
+    the valve action that moves towards it as fast as the valve allows (:func:`~simgrip.envs.valve.absolute_to_valve`;
+    a one-step ramp becomes a full-rate ramp)."""
+    from simgrip.envs.valve import absolute_to_valve
+
+    def make_valve(env, info, seed):
+        act, u = make(env, info, seed), env.unwrapped
+
+        def valve_act(obs, t):
+            a = np.array(act(obs, t), dtype=np.float32)
+            a[0] = absolute_to_valve(a[0], u.valve_command, u.kappa_rate)
+            return a
+        return valve_act
+    return make_valve
+
+
 def _random(env, info, seed):
     space = env.action_space
     space.seed(seed)
     return lambda obs, t: space.sample()
 
 
-def _members(policy: str, grid: str, place: bool, claw: str | None = None, family_grid: dict | None = None):
+def _members(policy: str, grid: str, place: bool, claw: str | None = None, family_grid: dict | None = None,
+             valve: bool = False):
+    if valve and policy == "constant":  # a constant valve action: ramp at that rate (to an end of the range)
+        rates = VALVE_GRID if grid == "full" else VALVE_GRID[::3]
+        palms = PALM_GRID if grid == "full" else (0.5,)
+        if place:
+            xs = (-0.5, 0.5) if grid == "full" else (0.5,)
+            return [({"kappa_rate_action": k, "palm_x": x, "palm": 0.5}, _constant(k, x, 0.5))
+                    for k in rates for x in xs]
+        return [({"kappa_rate_action": k, "palm": p}, _constant(k, p)) for k in rates for p in palms]
+    if valve and policy != "random":  # the absolute-command families and controllers, through the valve
+        return [(params, _through_valve(make)) for params, make in _members(policy, grid, place, claw, family_grid)]
     kappas = KAPPA_GRID if grid == "full" else KAPPA_GRID[::2]
     palms = PALM_GRID if grid == "full" else (0.5,)
     ramps = RAMP_GRID if grid == "full" else (25,)
@@ -193,7 +229,9 @@ def evaluate(env_id: str, policy: str, seeds, grid: str = "full") -> dict:
         u = env.unwrapped
         claw = "cradle" if getattr(u, "grip", None) == "III" else "sphere" if getattr(u, "shapes", ()) == (
             "sphere",) else None
-        for params, make in _members(policy, grid, place, claw, getattr(u, "openloop_grid", None)):
+        from simgrip.envs.valve import ValveCommand
+        valve = isinstance(u, ValveCommand)
+        for params, make in _members(policy, grid, place, claw, getattr(u, "openloop_grid", None), valve):
             counts = run_policy(env, make, seeds)
             rows.append({**params, "success_rate": counts["success"] / len(seeds), "outcomes": dict(counts)})
     finally:

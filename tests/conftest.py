@@ -101,4 +101,4 @@ def pytest_configure(config):
     # is); those ids stay, tested as they are (issue 18; their retirement is a separate decision).  Appended
     # last: it wins over "error".
     config.addinivalue_line("filterwarnings",
-                            "ignore:.*simgrip/[A-Za-z]*Fragile-v[01] is out of date:DeprecationWarning")
+                            "ignore:.*simgrip/[A-Za-z]*Fragile-v[012] is out of date:DeprecationWarning")

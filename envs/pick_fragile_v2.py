@@ -1,0 +1,85 @@
+r"""The fragile tasks through a valve: the curvature action is a rate (issue 18), v2 (cradle and sphere v3).
+
+``simgrip/PickFragile-v2``, ``simgrip/PickMultiFragile-v2``, ``simgrip/PlaceFragile-v2``,
+``simgrip/PickCradleFragile-v3`` and ``simgrip/PickSphereFragile-v3`` are the newest earlier version of each
+task (``PickFragile-v1`` ... ``PlaceFragile-v1``; the cradle's and the sphere's v2, whose hand starts at an
+unknown height) with **two changes**:
+
+1. **The valve** (:mod:`simgrip.envs.valve`): ``action[0]`` moves the curvature command by at most
+   ``kappa_rate = 0.02`` action units per control step (the whole range in 2 s) instead of setting it; 0 holds
+   the pressure.  The palm actions are unchanged.
+2. **The crush window** of the pinch, the K-finger cylinder and the place task: ``crush_ratio_range =
+   V2_CRUSH_RATIO`` (v0/v1: ``(1.3, 1.7)``; the cradle and the sphere keep their ``(1.5, 2.5)``); see below for
+   why and what it gives the fixed schedules.
+
+Everything else (the draw of size, mass and friction, the observation, v1's reward, what success, a crush, a
+drop and a knock-over are) is the earlier version's.
+
+Info keys (every ``step``, the same in all five):
+
+=====================  ==========================================================================
+key                    meaning
+=====================  ==========================================================================
+``is_success``         lifted ``target_height`` and held ``hold_time``, never crushed (terminates;
+                       PlaceFragile: set down on the target, see :mod:`simgrip.envs.pick_place`)
+``workpiece_lift``     workpiece centre's height gain since the start of the episode [m]
+``crushed``            a finger's normal force exceeded ``crush_limit`` this step (terminates)
+``dropped``            lifted, then sank ``drop_distance`` relative to the palm (terminates)
+``knocked_over``       tilted or pushed sideways out of reach (terminates)
+``normal_force``       per finger: summed contact normal force on the workpiece [N]
+``crush_limit``        this episode's crush limit [N] (hidden from the observation)
+``valid``              no finger through itself or another (``invalid``: the messages, when not)
+``reward_*``           v1's terms (:mod:`simgrip.envs.pick_fragile_v1`)
+=====================  ==========================================================================
+"""
+
+from __future__ import annotations
+
+from simgrip.envs.pick_cradle_fragile_v2 import FragileCradleEnvV2
+from simgrip.envs.pick_fragile_v1 import FragilePickEnvV1, FragilePickMultiEnvV1, FragilePlaceEnvV1
+from simgrip.envs.pick_sphere_fragile_v2 import FragileSphereEnvV2
+from simgrip.envs.valve import ValveCommand
+
+__all__ = ["FragilePickEnvV2", "FragilePickMultiEnvV2", "FragilePlaceEnvV2", "FragileCradleEnvV3",
+           "FragileSphereEnvV3", "V2_CRUSH_RATIO"]
+
+#: the crush ratio's range of the valve versions (v0/v1: (1.3, 1.7))
+V2_CRUSH_RATIO = (1.6, 2.6)
+
+
+class _ValveV2(ValveCommand):
+    """The valve and v2's crush window (a mixin before the earlier version)."""
+
+    def __init__(self, *, crush_ratio_range=V2_CRUSH_RATIO, **kwargs):
+        super().__init__(crush_ratio_range=crush_ratio_range, **kwargs)
+
+
+class FragilePickEnvV2(_ValveV2, FragilePickEnvV1):
+    """``simgrip/PickFragile-v2``: :class:`~simgrip.envs.pick_fragile_v1.FragilePickEnvV1` (two-finger pinch)
+    through the valve (:mod:`simgrip.envs.pick_fragile_v2`; info ``is_success``, ``workpiece_lift``,
+    ``crushed``, ``dropped``).  Arguments: v1's plus ``kappa_rate = 0.02``; ``crush_ratio_range`` defaults to
+    ``V2_CRUSH_RATIO``."""
+
+
+class FragilePickMultiEnvV2(_ValveV2, FragilePickMultiEnvV1):
+    """``simgrip/PickMultiFragile-v2``: :class:`~simgrip.envs.pick_fragile_v1.FragilePickMultiEnvV1` (``K = 3``
+    fingers around a cylinder) through the valve (:mod:`simgrip.envs.pick_fragile_v2`; info ``is_success``,
+    ``workpiece_lift``, ``crushed``, ``dropped``)."""
+
+
+class FragilePlaceEnvV2(_ValveV2, FragilePlaceEnvV1):
+    """``simgrip/PlaceFragile-v2``: :class:`~simgrip.envs.pick_fragile_v1.FragilePlaceEnvV1` (pick, carry, set
+    down) through the valve (:mod:`simgrip.envs.pick_fragile_v2`; info ``is_success``, ``workpiece_lift``,
+    ``crushed``, ``dropped``)."""
+
+
+class FragileCradleEnvV3(ValveCommand, FragileCradleEnvV2):
+    """``simgrip/PickCradleFragile-v3``: :class:`~simgrip.envs.pick_cradle_fragile_v2.FragileCradleEnvV2` (the
+    cradle, hand started at an unknown height) through the valve (:mod:`simgrip.envs.pick_fragile_v2`; info
+    ``is_success``, ``workpiece_lift``, ``crushed``, ``dropped``)."""
+
+
+class FragileSphereEnvV3(ValveCommand, FragileSphereEnvV2):
+    """``simgrip/PickSphereFragile-v3``: :class:`~simgrip.envs.pick_sphere_fragile_v2.FragileSphereEnvV2` (``K =
+    3`` fingers around a sphere, hand started at an unknown height) through the valve
+    (:mod:`simgrip.envs.pick_fragile_v2`; info ``is_success``, ``workpiece_lift``, ``crushed``, ``dropped``)."""
