@@ -249,20 +249,50 @@ def _signature(fn) -> inspect.Signature:
     return inspect.signature(fn)
 
 
-def _structure(builder, args: tuple, kw: dict, skip: tuple, bound=None) -> tuple | None:
+@functools.lru_cache(maxsize=16)
+def _plain_layout(fn) -> tuple | None:
+    """``(positional names, {keyword-only name: default})`` of a signature made of positional-or-keyword
+    parameters without defaults, then keyword-only ones with defaults (every builder's); None for any other
+    (bound by :mod:`inspect`).  Same bounded cache as :func:`_signature`."""
+    pos, kwd = [], {}
+    for p in _signature(fn).parameters.values():
+        if p.kind is p.POSITIONAL_OR_KEYWORD and p.default is p.empty and not kwd:
+            pos.append(p.name)
+        elif p.kind is p.KEYWORD_ONLY and p.default is not p.empty:
+            kwd[p.name] = p.default
+        else:
+            return None
+    return tuple(pos), kwd
+
+
+def _arguments(fn, args: tuple, kw: dict) -> dict:
+    """``fn``'s arguments for ``fn(*args, **kw)``, defaults applied, in its signature's order: what
+    ``inspect.Signature.bind`` and ``apply_defaults`` give (and raise), at a tenth of their cost where the
+    call fits :func:`_plain_layout` (every positional given, only known keywords)."""
+    lay = _plain_layout(fn)
+    if lay is not None and len(args) == len(lay[0]) and all(k in lay[1] for k in kw):
+        out = dict(zip(lay[0], args))
+        for k, d in lay[1].items():
+            out[k] = kw[k] if k in kw else d
+        return out
+    bound = _signature(fn).bind(*args, **kw)
+    bound.apply_defaults()
+    return dict(bound.arguments)
+
+
+def _structure(builder, args: tuple, kw: dict, skip: tuple, arguments: dict | None = None) -> tuple | None:
     """The keywords of ``builder`` (defaults applied) but the parameter-valued ones, frozen; None when one
-    outside :data:`VERIFIED_KEYWORDS` is not at its default (built fresh, never cached).  ``bound``: the
-    arguments already bound to ``builder``'s signature with defaults applied (not bound again)."""
+    outside :data:`VERIFIED_KEYWORDS` is not at its default (built fresh, never cached).  ``arguments``:
+    :func:`_arguments` of the call, when the caller has them already."""
     sig = _signature(builder)
-    if bound is None:
-        bound = sig.bind(*args, **kw)
-        bound.apply_defaults()
-    for k, v in bound.arguments.items():
+    if arguments is None:
+        arguments = _arguments(builder, args, kw)
+    for k, v in arguments.items():
         if k not in VERIFIED_KEYWORDS:
             d = sig.parameters[k].default
             if d is inspect.Parameter.empty or _freeze(v) != _freeze(d):
                 return None
-    return tuple((k, _freeze(v)) for k, v in bound.arguments.items() if k not in skip)
+    return tuple((k, _freeze(v)) for k, v in arguments.items() if k not in skip)
 
 
 def _set_links(m, index, springs_list, EI: float, rho: float, length: float, r_link: float) -> None:
@@ -384,9 +414,7 @@ def scene(grip: str, params, profile, n_links: int, *, forward: bool = True, **k
     dimless, phys = S.check_params(params)
     prof = as_profile(profile)
     n = check_finger_links(n_links)
-    bound = _signature(S.build_scene).bind(grip, params, profile, n_links, **kw)
-    bound.apply_defaults()
-    a = bound.arguments
+    a = _arguments(S.build_scene, (grip, params, profile, n_links), kw)
     fingers = a["fingers"]
     if fingers not in (1, 2) or isinstance(fingers, bool):  # the builder's message
         return S.build_scene(grip, params, profile, n_links, **kw)
@@ -403,7 +431,7 @@ def scene(grip: str, params, profile, n_links: int, *, forward: bool = True, **k
 
     key = ("scene", grip, n, phys.length.hex(), None if place is None else tuple(int(i) for i in place.links),
            _structure(S.build_scene, (grip, params, profile, n_links), kw,
-                      ("grip", "params", "profile", "n_links", "initial_angles"), bound))
+                      ("grip", "params", "profile", "n_links", "initial_angles"), a))
     L = phys.length
     mass = phys.m * fingers
     imass = inertial_mass(mass, fingers, phys.rho, L) if place is not None else 0.0
