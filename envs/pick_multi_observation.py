@@ -16,6 +16,7 @@ over ``K`` fingers and the least holding force per finger ``m g / (K mu)``.
 from __future__ import annotations
 
 import math
+from itertools import accumulate
 
 import numpy as np
 
@@ -95,6 +96,25 @@ class WorkpieceContactForces:
         return normal, friction, side
 
 
+def _numpy_sum(x: list) -> float:
+    """``sum(x)`` in the order of numpy's pairwise summation of a contiguous row of ``4 <= len(x) <= 64`` (four
+    partial sums over blocks of four, combined pairwise, then the remainder, then added to the reduction's 0),
+    so that a Python sum equals ``np.add.reduce`` to the last bit (the tips' ``np.exp(1j theta).sum(axis=1)``
+    before issue 18; ``tests/test_env_step_reference.py`` holds the observation to it)."""
+    n = len(x)
+    r0, r1, r2, r3 = x[0], x[1], x[2], x[3]
+    m = n - n % 4
+    for i in range(4, m, 4):
+        r0 += x[i]
+        r1 += x[i + 1]
+        r2 += x[i + 2]
+        r3 += x[i + 3]
+    total = (r0 + r1) + (r2 + r3)
+    for i in range(m, n):
+        total += x[i]
+    return 0.0 + total
+
+
 class MultiObservation:
     """Turns the state of a K-finger pick model into the environment's observation vector.
 
@@ -146,6 +166,10 @@ class MultiObservation:
         self._shape_start = self.slices["finger_shape"].start
         self._tip_start = self.slices["tip_position"].start
         self._tail_start = self.slices["workpiece_position"].start
+        self._low_l, self._high_l = self.low.tolist(), self.high.tolist()
+        # the fingers' hinges in qpos: a slice (the builder's contiguous block) or a list of addresses
+        self._hq = hinge_qpos if isinstance(hinge_qpos, slice) else np.asarray(hinge_qpos).ravel().tolist()
+        self._python_tips = 4 <= n <= 64  # _numpy_sum's range (else numpy sums the tips, as it always did)
 
     def __call__(self, data, forces, kappa_cmd, kappa, z0: float, hold: float) -> np.ndarray:
         """The observation of ``data``: ``forces`` are :class:`WorkpieceContactForces`' ``(normal, friction,
@@ -159,24 +183,33 @@ class MultiObservation:
         ``data.qpos`` (the fingers' block is read from it), ``q``, ``v`` its and ``data.qvel``'s lists,
         ``kappa_cmd``, ``kappa`` sequences of floats; the rest as :meth:`__call__`."""
         # everything from qpos / qvel (after the step; MuJoCo's xpos / xmat are those before its last
-        # integration).  Arrays for the fingers (one cumsum, one product, one complex exp), Python floats for the
-        # rest, one array write per block, then the clip in place.
-        inv_l, K = self.inv_l, self.K
+        # integration), on Python floats but for the shape samples' product, clipped in Python, one array at the end
+        # (issue 18: right after the physics every numpy call costs several microseconds)
+        inv_l, K, n = self.inv_l, self.K, self.n
         palm_z, palm_v = q[self.palm_qpos], v[self.palm_dof]
         wq, wd = self.work_qpos, self.work_dof
-        obs = np.empty(self.low.size)
         # header: palm height, curvature command and actual curvature in action units
         a, b = self._k_scale
-        head = [palm_z * inv_l]
-        head += [a * k + b for k in kappa_cmd]
-        head += [a * k + b for k in kappa]
-        obs[:self._shape_start] = head
-        theta = np.cumsum(qpos[self.hinge_qpos].reshape(K, self.n), axis=1)  # link angles
-        np.dot(theta, self._interp_t, out=obs[self._shape_start:self._tip_start].reshape(K, self.P))
-        # tips by the chain's forward kinematics in each finger's plane: X + iZ = ds sum exp(i theta)
-        tip = np.exp(1j * theta).sum(axis=1) * self._ds
-        tips = obs[self._tip_start:self._tail_start].reshape(K, 2)
-        tips[:, 0], tips[:, 1] = tip.real, tip.imag
+        vals = [palm_z * inv_l]
+        vals += [a * k + b for k in kappa_cmd]
+        vals += [a * k + b for k in kappa]
+        if self._python_tips:
+            # link angles (cumulative hinge angles, np.cumsum's order); the shape samples by one product (BLAS, as
+            # before); the tips by the chain's forward kinematics in each finger's plane, X + iZ = ds sum exp(i theta),
+            # in Python floats summed in numpy's order (_numpy_sum)
+            hq = self._hq
+            qh = q[hq] if type(hq) is slice else [q[j] for j in hq]
+            theta = [list(accumulate(qh[f * n:(f + 1) * n])) for f in range(K)]
+            vals += np.dot(np.array(theta), self._interp_t).ravel().tolist()
+            ds, cos, sin = self._ds, math.cos, math.sin
+            for c in theta:
+                vals += [_numpy_sum([cos(t) for t in c]) * ds, _numpy_sum([sin(t) for t in c]) * ds]
+        else:
+            theta = np.cumsum(qpos[self.hinge_qpos].reshape(K, n), axis=1)
+            vals += np.dot(theta, self._interp_t).ravel().tolist()
+            tip = np.exp(1j * theta).sum(axis=1) * self._ds
+            for X, Z in zip(tip.real.tolist(), tip.imag.tolist()):
+                vals += [X, Z]
         x, y, z, qw, qx, qy, qz = q[wq:wq + 7]
         vx, vy, vz, wx, wy, wz = v[wd:wd + 6]
         # rotation matrix of the unit quaternion (qw, qx, qy, qz); the free joint's angular velocity is in
@@ -185,20 +218,18 @@ class MultiObservation:
         r10, r11, r12 = 2 * (qx * qy + qw * qz), 1 - 2 * (qx * qx + qz * qz), 2 * (qy * qz - qw * qx)
         r20, r21, r22 = 2 * (qx * qz - qw * qy), 2 * (qy * qz + qw * qx), 1 - 2 * (qx * qx + qy * qy)
         st = SPIN_TIME
-        tail = [x * inv_l, y * inv_l, (z - palm_z) * inv_l, r02, r12,
-                vx * inv_l, vy * inv_l, (vz - palm_v) * inv_l,
-                (r00 * wx + r01 * wy + r02 * wz) * st, (r10 * wx + r11 * wy + r12 * wz) * st,
-                (r20 * wx + r21 * wy + r22 * wz) * st, (z - z0) / self.target_height]
+        vals += [x * inv_l, y * inv_l, (z - palm_z) * inv_l, r02, r12,
+                 vx * inv_l, vy * inv_l, (vz - palm_v) * inv_l,
+                 (r00 * wx + r01 * wy + r02 * wz) * st, (r10 * wx + r11 * wy + r12 * wz) * st,
+                 (r20 * wx + r21 * wy + r22 * wz) * st, (z - z0) / self.target_height]
         fu = self.force_unit
         normal, friction, _ = forces
         log1p = math.log1p
         for fn, ff in zip(normal, friction):
-            tail += [log1p(max(fn, 0.0) / fu), log1p(max(ff, 0.0) / fu)]
-        tail.append(min(hold / self.hold_time, 1.0) if self.hold_time > 0 else 0.0)
-        obs[self._tail_start:] = tail
-        np.maximum(obs, self.low, out=obs)
-        np.minimum(obs, self.high, out=obs)
-        return obs
+            vals += [log1p(max(fn, 0.0) / fu), log1p(max(ff, 0.0) / fu)]
+        vals.append(min(hold / self.hold_time, 1.0) if self.hold_time > 0 else 0.0)
+        # clipped to the bounds in Python (np.maximum / np.minimum's results for finite values), one array
+        return np.array([lo_ if x < lo_ else (hi_ if x > hi_ else x) for x, lo_, hi_ in zip(vals, self._low_l, self._high_l)])
 
 
 class MultiReward:
