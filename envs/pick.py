@@ -552,6 +552,7 @@ class PickEnv(gym.Env):
         gain = box_z - self._z0
         rel = box_z - q[pq]
         n0, f0, n1, f1, s0, s1 = forces
+        self._normal = (n0, n1)  # info["normal_force"] as floats, for the subclasses' per-step rules
         both = n0 > 0.0 and n1 > 0.0
         lifted_rel = self._lifted_rel
         if lifted_rel is None and gain > 0.005 and both:

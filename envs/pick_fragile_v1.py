@@ -146,7 +146,7 @@ class _ShapedV1:
     def step(self, action):
         obs, reward, terminated, truncated, info = super().step(action)
         lost = info["crushed"] or info["dropped"] or info["knocked_over"]
-        touching = min(info["normal_force"].tolist()) > 0.0
+        touching = min(self._normal) > 0.0  # info["normal_force"], as floats
         r_touch = self.w_touch if touching and not lost else 0.0
         r_contact = 0.0
         if touching and not self._touched:  # the first contact of every finger (paid even on a crushing step)

@@ -454,6 +454,7 @@ class PickMultiEnv(gym.Env):
 
         forces = self._forces(d)
         normal, friction, side = forces
+        self._normal = normal  # info["normal_force"] as floats, for the subclasses' per-step rules
         wq = self.work_qpos
         x, y, z, qx, qy = q[wq], q[wq + 1], q[wq + 2], q[wq + 4], q[wq + 5]
         gain = z - self._z0

@@ -128,14 +128,16 @@ class FragilePlaceEnv(FragilePickEnv):
         self._psi = 0.0
 
     def _extend(self, obs) -> np.ndarray:
-        px = float(self.data.qpos[self._palm_x_qpos])
-        bx = float(self.data.qpos[self.box_qpos])
+        # on Python floats, one array at the end (np.clip's values for finite entries)
+        q = self.data.qpos
+        px, bx = float(q[self._palm_x_qpos]), float(q[self.box_qpos])
         inv_l = 1.0 / self.length
-        obs = np.asarray(obs, dtype=np.float64).copy()
-        obs[self._tip_x] -= px * inv_l
-        obs[self._hold_i] = min(self._place_hold / self.place_time, 1.0)
-        extra = np.clip([(bx - px) * inv_l, (self.target_x - px) * inv_l], -10.0, 10.0)
-        return np.concatenate([obs, extra])
+        vals = np.asarray(obs, dtype=np.float64).tolist()
+        vals[self._tip_x] -= px * inv_l
+        vals[self._hold_i] = min(self._place_hold / self.place_time, 1.0)
+        for x in ((bx - px) * inv_l, (self.target_x - px) * inv_l):
+            vals.append(-10.0 if x < -10.0 else (10.0 if x > 10.0 else x))
+        return np.array(vals)
 
     def reset(self, *, seed=None, options=None):
         target = None
@@ -166,7 +168,7 @@ class FragilePlaceEnv(FragilePickEnv):
         obs, reward, terminated, truncated, info = super().step(action)
         q = d.qpos
         bx, gain = float(q[self.box_qpos]), float(q[self.box_qpos + 2]) - self._z0
-        both = min(info["normal_force"].tolist()) > 0.0
+        both = min(self._normal) > 0.0  # info["normal_force"], as floats
         lost = terminated  # the parent ends an episode only on a loss here (its own success never fires)
         if gain >= self.carry_height and both:
             self._carried = True
