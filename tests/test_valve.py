@@ -15,7 +15,7 @@ import simgrip.envs  # noqa: F401
 from simgrip.envs.pick_fragile_v1 import FragilePickEnvV1
 from simgrip.envs.pick_fragile_v2 import V2_CRUSH_RATIO, FragilePickEnvV2
 from simgrip.envs.valve import KAPPA_RATE, absolute_to_valve
-from tests.env_checks import assert_sb3_check_env_clean
+from env_checks import assert_sb3_check_env_clean
 
 VALVE_IDS = ("simgrip/PickFragile-v2", "simgrip/PickMultiFragile-v2", "simgrip/PlaceFragile-v2",
              "simgrip/PickCradleFragile-v3", "simgrip/PickSphereFragile-v3")
