@@ -125,3 +125,21 @@ def test_a_warm_start_is_not_judged_first(monkeypatch):
     assert warm.newton_iterations > 0
     assert _fields(warm) == _fields(warm2)
     assert sc.data.qpos.tobytes() == sc2.data.qpos.tobytes()
+
+
+def test_a_judgement_is_not_reused_once_the_balance_changed():
+    """The judge reuses the at-rest judgement only at the same positions with the same rest angles, stiffness,
+    gravity and applied forces: after a change it evaluates MuJoCo again (and finds the new imbalance)."""
+    from simgrip.settle.closing import start_free
+    from simgrip.settle.statics import configure_statics
+
+    sc = build_scene("free", STANDARD, Uniform(-3.0), 16)
+    run = ChainNewton(sc)
+    configure_statics(sc)
+    assert start_free(sc)
+    assert run.solve(1e-10, 50, at_rest=True) == (True, "ok")
+    assert run._judged is not None
+    sc.model.qpos_spring[sc.joint_qpos[0]] += 0.01  # (the rest angles edited in place, the positions unchanged)
+    r = run.full_residual(sc.data.qpos)
+    assert run._judged is None
+    assert float(np.abs(r).max()) > 1e-4  # the new imbalance, not the judged one (~1e-12)

@@ -112,7 +112,8 @@ class ChainNewton(Newton):
         if self.pairs and not (int(m.opt.disableflags) & int(mujoco.mjtDisableBit.mjDSBL_CONTACT)):
             return super().full_residual(q)
         judged, self._judged = self._judged, None
-        if judged is not None and judged[0] == self._positions_key() and np.array_equal(judged[1], q):
+        if (judged is not None and judged[0] == self._positions_key() and np.array_equal(judged[1], q)
+                and judged[3] == self._balance_inputs()):
             return judged[2]  # (solve's own judgement at this very state: the same MuJoCo calls, not made twice)
         return self.rest_forces(q) / self.st.fscale
 
@@ -155,8 +156,15 @@ class ChainNewton(Newton):
         res = float(np.abs(rf).max()) if rf.size else 0.0
         if not math.isfinite(res) or not (res < tol or res < angle_floor(sc, qq)):
             return False
-        self._judged = (self._positions_key(), qq, r)
+        self._judged = (self._positions_key(), qq, r, self._balance_inputs())
         return True
+
+    def _balance_inputs(self) -> tuple:
+        """What MuJoCo's balance at rest reads besides the positions: rest angles, stiffness, gravity and the
+        applied forces (a judgement is reused only while they are unchanged)."""
+        m = self.scene.model
+        return (m.qpos_spring.tobytes(), m.jnt_stiffness.tobytes(), m.opt.gravity.tobytes(), int(m.opt.disableflags),
+                self.scene.data.qfrc_applied.tobytes())
 
     def _commit(self, q) -> None:
         """Leave the scene's data at ``q`` at rest, its positions computed (``mj_kinematics``, ``mj_comPos``).
