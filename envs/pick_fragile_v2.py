@@ -41,16 +41,21 @@ from simgrip.envs.pick_sphere_fragile_v2 import FragileSphereEnvV2
 from simgrip.envs.valve import ValveCommand
 
 __all__ = ["FragilePickEnvV2", "FragilePickMultiEnvV2", "FragilePlaceEnvV2", "FragileCradleEnvV3",
-           "FragileSphereEnvV3", "V2_CRUSH_RATIO"]
+           "FragileSphereEnvV3", "V2_CRUSH_RATIO", "V2_MASS"]
 
-#: the crush ratio's range of the valve versions (v0/v1: (1.3, 1.7))
-V2_CRUSH_RATIO = (1.6, 2.6)
+#: the crush ratio's range of the valve pinch, K-finger and place tasks (v0/v1: (1.3, 1.7))
+V2_CRUSH_RATIO = (1.5, 2.2)
+#: their workpiece mass range [kg], log-uniform (v0/v1: (0.01, 0.2))
+V2_MASS = (0.005, 0.5)
 
 
 class _ValveV2(ValveCommand):
-    """The valve and v2's crush window (a mixin before the earlier version)."""
+    """The valve and v2's draw (a mixin before the earlier version): the crush window and the mass range."""
+
+    _MASS_ARG = "box_mass_range"
 
     def __init__(self, *, crush_ratio_range=V2_CRUSH_RATIO, **kwargs):
+        kwargs.setdefault(self._MASS_ARG, V2_MASS)
         super().__init__(crush_ratio_range=crush_ratio_range, **kwargs)
 
 
@@ -65,6 +70,8 @@ class FragilePickMultiEnvV2(_ValveV2, FragilePickMultiEnvV1):
     """``simgrip/PickMultiFragile-v2``: :class:`~simgrip.envs.pick_fragile_v1.FragilePickMultiEnvV1` (``K = 3``
     fingers around a cylinder) through the valve (:mod:`simgrip.envs.pick_fragile_v2`; info ``is_success``,
     ``workpiece_lift``, ``crushed``, ``dropped``)."""
+
+    _MASS_ARG = "mass_range"
 
 
 class FragilePlaceEnvV2(_ValveV2, FragilePlaceEnvV1):
