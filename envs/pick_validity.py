@@ -19,8 +19,9 @@ keeps the usual step cheap:
   that close to it are the palm's joint and not compared, :func:`simgrip.validity.chain_violations`).
 
 The last screen runs as two matrix products over every pair of links in preallocated buffers
-(:meth:`FingerValidity._bound_clear`: the midpoint bound against the exact path's clearance, with every hinge
-within ``pi/2``): it answers valid only where the steps below would, so it changes no verdict, only the cost
+(:meth:`FingerValidity._bound`: the midpoint bound against the exact path's clearance, with every hinge
+within ``pi/2``): it answers valid only where the steps below would, and it goes straight to
+:func:`~simgrip.validity.chain_violations` only where they would, so it changes no verdict, only the cost
 (issue 18: six numpy calls instead of ~20 and the pair gathers).  Only what the screen lets through is measured
 exactly: first the pairs the bound left open, by their exact
 segment distance (:func:`simgrip.intersection.segment_distances`, what the exact check measures): all of them
@@ -165,6 +166,10 @@ class FingerValidity:
         # threshold T, so a pair is cleared when its row's squared norm is at least 1
         T = (self._limit * (1.0 + CLEAR_MARGIN) + half[pi] + half[pj]) * (1.0 + _ROUND_OFF)
         self._Qb, self._Qt = Qb / (2.0 * T[:, None]), Qt / (2.0 * T[:, None])
+        # the other way round: midpoints closer than the clearance (by _ROUND_OFF) put the pair's exact distance
+        # below it, so the exact path cannot prove the state valid (:meth:`_bound`); same scale as the rows
+        self._C = (self._limit * (1.0 + CLEAR_MARGIN) * (1.0 - _ROUND_OFF) / T) ** 2
+        self._pair_self = np.where(pi // n == pj // n, pi // n, -1).tolist()  # the finger of a self pair, else -1
         self._hinges = [a for row in self._jq for a in row]
         self._D = np.empty((pi.size, 3))
         self._Dt = np.empty((pi.size, 3))
@@ -205,28 +210,48 @@ class FingerValidity:
         return list(self._last)
 
     def _bound_clear(self, q: list, data) -> bool:
-        """True when every pair the exact path could compare is proved clear by its midpoint bound (module
-        docstring): every hinge within ``pi/2``, and for every pair of the mask (links ``i``, ``i + 2`` of one finger
-        aside, as :meth:`_near_clear` sets them aside) ``|M_i - M_j| - h_i - h_j`` above the exact path's
-        clearance ``(1 + CLEAR_MARGIN)`` times the limit by the relative ``_ROUND_OFF``.  Whatever the exact path
-        would then compare, its bound or its exact distances clear it, so it answers valid too: this is a shortcut
-        to the same verdict: two matrix products give every pair's midpoint difference over its threshold
-        (precomputed rows), six numpy calls in preallocated buffers instead of the exact path's ~20 and its gathers."""
+        """:meth:`_bound` proves the state valid."""
+        return self._bound(q, data) > 0
+
+    def _bound(self, q: list, data) -> int:
+        """1 when every pair the exact path could compare is proved clear by its midpoint bound (module docstring):
+        every hinge within ``pi/2``, and for every pair of the mask (links ``i``, ``i + 2`` of one finger aside, as
+        :meth:`_near_clear` sets them aside) ``|M_i - M_j| - h_i - h_j`` above the exact path's clearance ``(1 +
+        CLEAR_MARGIN)`` times the limit by the relative ``_ROUND_OFF``: whatever the exact path would then compare,
+        its bound or its exact distances clear it, so it answers valid too.  -1 when the exact path cannot prove
+        it valid: a pair it compares (a pair of two fingers: their nodes' boxes come within the limit; of one
+        finger: one that turned more than ``pi/2``) has midpoints closer than the clearance, so it is near and its
+        exact distance is below the clearance (:meth:`_near_clear` fails), and only
+        :func:`~simgrip.validity.chain_violations` decides.  0 otherwise.  Shortcuts to the same verdict: two
+        matrix products give every pair's midpoint difference over its threshold (precomputed rows), six numpy
+        calls in preallocated buffers instead of the exact path's ~20 and its gathers."""
         for a in self._hinges:
             if not -_HALF_PI < q[a] < _HALF_PI:
-                return False
+                return 0
+        if not self._d2.size:  # no pair is ever compared (the exact path answers valid too)
+            return 1
         (b0, b1), (t0, t1) = self._body_cols, self._tip_cols
         D = np.dot(self._Qb, data.xpos[b0:b1], out=self._D)  # (S_i - S_j) / (2 T) of every pair
         D += np.dot(self._Qt, data.geom_xpos[t0:t1], out=self._Dt)
         D *= D
-        return np.dot(D, self._ones, out=self._d2).min() >= 1.0
+        d2 = np.dot(D, self._ones, out=self._d2)
+        if d2.min() >= 1.0:
+            return 1
+        for p in np.flatnonzero(d2 < self._C).tolist():
+            f = self._pair_self[p]
+            if f < 0 or self._turned_one(q, f):
+                return -1
+        return 0
 
     def _check(self, q: list, data) -> list:
         if self._cap > 0.0 and self._mild(q):
             return []
-        if self._bound_clear(q, data):
+        bound = self._bound(q, data)
+        if bound > 0:
             return []
         W = self._world(data)  # (K, n+1, 3)
+        if bound < 0:
+            return self._violations(W)
         K = W.shape[0]
         # the pairs compared: the self pairs of each finger that turned more than pi/2 (one that turned less cannot
         # reach itself, module docstring) and the pairs of two fingers whose nodes' bounding boxes come within the
@@ -257,6 +282,11 @@ class FingerValidity:
             return []
         if self._near_clear(q, W, i[near], j[near]):
             return []
+        return self._violations(W)
+
+    def _violations(self, W: np.ndarray) -> list:
+        """:func:`~simgrip.validity.chain_violations`' messages for the nodes ``W`` ``(K, n+1, 3)`` [m]."""
+        K = W.shape[0]
         world = [W[f] for f in range(K)]
         planar = []
         for f, w in enumerate(world):
