@@ -1,19 +1,46 @@
 r"""The fragile tasks through a valve: the curvature action is a rate (issue 18), v2 (cradle and sphere v3).
 
 ``simgrip/PickFragile-v2``, ``simgrip/PickMultiFragile-v2``, ``simgrip/PlaceFragile-v2``,
-``simgrip/PickCradleFragile-v3`` and ``simgrip/PickSphereFragile-v3`` are the newest earlier version of each
-task (``PickFragile-v1`` ... ``PlaceFragile-v1``; the cradle's and the sphere's v2, whose hand starts at an
-unknown height) with **two changes**:
+``simgrip/PickCradleFragile-v3`` and ``simgrip/PickSphereFragile-v3`` are the previous version of each task
+(``PickFragile-v1``, ``PickMultiFragile-v1``, ``PlaceFragile-v1``; the cradle's and the sphere's v2, whose hand
+starts at an unknown height) with these changes:
 
-1. **The valve** (:mod:`simgrip.envs.valve`): ``action[0]`` moves the curvature command by at most
-   ``kappa_rate = 0.02`` action units per control step (the whole range in 2 s) instead of setting it; 0 holds
-   the pressure.  The palm actions are unchanged.
-2. **The crush window** of the pinch, the K-finger cylinder and the place task: ``crush_ratio_range =
-   V2_CRUSH_RATIO`` (v0/v1: ``(1.3, 1.7)``; the cradle and the sphere keep their ``(1.5, 2.5)``); see below for
-   why and what it gives the fixed schedules.
+1. **The valve** (all five, :mod:`simgrip.envs.valve`): ``action[0]`` moves the curvature command by at most
+   ``kappa_rate = 0.02`` action units per control step (the whole range in 2 s at 50 Hz) instead of setting
+   it; 0 holds the pressure.  The palm actions are unchanged.
+2. **The draw** of the pinch, the K-finger cylinder and the place task: the mass log-uniform over ``V2_MASS =
+   (0.005, 0.5)`` kg (v1: 0.01-0.2) and the crush ratio log-uniform over ``V2_CRUSH_RATIO = (1.5, 2.2)`` (v1:
+   1.3-1.7).  The cradle and the sphere keep v2's draw (crush ratio 1.5-2.5).
 
-Everything else (the draw of size, mass and friction, the observation, v1's reward, what success, a crush, a
-drop and a knock-over are) is the earlier version's.
+Everything else (size and friction, the observation, v1's reward, what success, a crush, a drop and a
+knock-over are) is the previous version's.
+
+Per episode (pinch, K-finger, place; SI):
+
+=================  ==========================================  ============================================
+drawn              range                                       sensed by the agent?
+=================  ==========================================  ============================================
+width (diameter)   uniform ``(0.03, 0.075)`` m                 yes: the fingers' shapes once they touch
+mass               log-uniform ``(0.005, 0.5)`` kg             no (hidden); its weight shows as slip
+friction           uniform ``(0.3, 1.2)``                      no (hidden)
+crush ratio ``r``  log-uniform ``(1.5, 2.2)``                  no (hidden; ``crush_limit = r N_hold``)
+=================  ==========================================  ============================================
+
+``N_hold = m g / (K mu)`` per finger spans 0.020-8.2 N with ``K = 2`` (a 5 g berry on grippy skin to a 0.5 kg
+cup on slick plastic; 0.014-5.5 N with ``K = 3``); the fully curled finger presses ~11 N.
+
+**Why the valve** (measured while designing, Stable-Baselines3 PPO defaults, one training seed, 20 episodes on
+seeds 9000-9019, v1's draw unless stated): with v1's absolute command a memoryless policy must output its own
+last command to keep a grip, and its initial exploration (``sigma = 1``) moves the force over the whole range
+every step.  Absolute command, crush ratio 2.5-5: 0 % after 2 CPU-min, while the same window through the valve
+reached 60 % after 2 and 75 % after 6 CPU-min.  Through the valve the window still decides: 1.3-1.7 gave 0
+successes in 809 training episodes (4 CPU-min), 1.6-2.6 gave 20 / 25 / 40 % after 2 / 4 / 6 CPU-min.
+
+**Why the draw**: a wider window alone lets fixed schedules in: the best open-loop schedule of
+``simgrip.envs.baselines`` held 43 % of seeds 6000-6029 at crush ratio 2-3.5 and 40 % at 1.6-2.6 (v1's
+masses).  Spreading the masses over 100x instead of 20x spreads the holding forces the same fixed curvature
+must meet: 23 % at 1.6-2.6 and 20 % at 1.5-2.2 (best of the grid on those 30 seeds themselves).  The
+observation-only controller keeps its 80 %: 26 / 30 (pinch) and 25 / 30 (K fingers) there.
 
 Info keys (every ``step``, the same in all five):
 
