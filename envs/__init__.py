@@ -9,20 +9,18 @@ id                                what                                      max 
 ``simgrip/Pick-v1``               Grip I: palm-down tip pinch (50 Hz)       200 (4 s)
 ``simgrip/PickCradle-v1``         Grip III: cradle from a pedestal (50 Hz)  250 (5 s)
 ``simgrip/PickMulti-v0``          K fingers around a box, cylinder, sphere  200 (4 s)
-``simgrip/PickFragile-v0``        Grip I pinch of a fragile workpiece       300 (6 s)
-``simgrip/PickMultiFragile-v0``   K fingers around a fragile workpiece      300 (6 s)
-``simgrip/PlaceFragile-v0``       pinch, carry to a target, set down        400 (8 s)
-``simgrip/PickCradleFragile-v0``  Grip III cradle of a fragile box          300 (6 s)
-``simgrip/PickSphereFragile-v0``  K fingers around a fragile sphere         300 (6 s)
-``simgrip/...Fragile-v1``         the five above, v1's shaped reward        as v0
-``simgrip/PickCradleFragile-v2``  v1's cradle, palm start height 13-29 cm   300 (6 s)
-``simgrip/PickSphereFragile-v2``  v1's sphere, palm start height 10-22 cm   300 (6 s)
-``simgrip/PickFragile-v2``        v1's pinch, curvature through a valve     300 (6 s)
-``simgrip/PickMultiFragile-v2``   v1's K fingers, through a valve           300 (6 s)
-``simgrip/PlaceFragile-v2``       v1's pick-and-place, through a valve      400 (8 s)
-``simgrip/PickCradleFragile-v3``  v2's cradle, through a valve              300 (6 s)
-``simgrip/PickSphereFragile-v3``  v2's sphere, through a valve              300 (6 s)
+``simgrip/PickFragile-v2``        Grip I pinch of a fragile workpiece       300 (6 s)
+``simgrip/PickMultiFragile-v2``   K fingers around a fragile workpiece      300 (6 s)
+``simgrip/PlaceFragile-v2``       pinch, carry to a target, set down        400 (8 s)
+``simgrip/PickCradleFragile-v3``  Grip III cradle, hand start height drawn  300 (6 s)
+``simgrip/PickSphereFragile-v3``  K fingers around a sphere, height drawn   300 (6 s)
 ================================  ========================================  =========
+
+The five fragile tasks (a hidden crush limit per episode) command the curvature through a valve (the action
+is its rate, :mod:`simgrip.envs.pick_fragile_v2`).  Their older versions are retired, not registered:
+``PickFragile``, ``PickMultiFragile``, ``PlaceFragile`` v0-v1 and ``PickCradleFragile``,
+``PickSphereFragile`` v0-v2 (``RETIRED``); ``gym.make(retired_spec("simgrip/PickFragile-v1"))`` still builds
+one exactly, with its time limit.
 
 >>> import gymnasium as gym, simgrip.envs
 >>> env = gym.make("simgrip/Pick-v1")          # doctest: +SKIP
@@ -30,22 +28,37 @@ id                                what                                      max 
 Extra keyword arguments of ``gym.make`` go to :class:`simgrip.envs.pick.PickEnv`
 (:class:`simgrip.envs.pick_multi.PickMultiEnv` for ``PickMulti``).  ``ENV_IDS``
 are the two-finger ids (``PickEnv``), ``MULTI_ENV_IDS`` the K-finger ones.
-The v0 ids are retired (v1 changed the reward and the observation, see the
+``FRAGILE_ENV_IDS`` are the registered fragile ids.
+The v0 ids of ``Pick`` and ``PickCradle`` are retired (v1 changed the reward and the observation, see the
 version history in :class:`~simgrip.envs.pick.PickEnv`); Gymnasium answers
-``gym.make("simgrip/Pick-v0")`` with ``DeprecatedEnv`` naming v1.
+``gym.make("simgrip/Pick-v0")`` with ``DeprecatedEnv`` naming v1, and a retired fragile id with
+``DeprecatedEnv`` naming its newest version.
 """
 
 from __future__ import annotations
 
-from gymnasium.envs.registration import register, registry
+from gymnasium.envs.registration import EnvSpec, register, registry
 
-__all__ = ["ENV_IDS", "FRAGILE_ENV_IDS", "MULTI_ENV_IDS", "register_envs"]
+__all__ = ["ENV_IDS", "FRAGILE_ENV_IDS", "MULTI_ENV_IDS", "RETIRED", "register_envs", "retired_spec"]
 
 #: id -> (entry point, kwargs, max_episode_steps)
 _ENVS = {
     "simgrip/Pick-v1": ("simgrip.envs.pick:PickEnv", {"grip": "I"}, 200),
     "simgrip/PickCradle-v1": ("simgrip.envs.pick:PickEnv", {"grip": "III"}, 250),
     "simgrip/PickMulti-v0": ("simgrip.envs.pick_multi:PickMultiEnv", {}, 200),
+    # the newest of each: the curvature through a valve (its action a rate), simgrip.envs.pick_fragile_v2
+    "simgrip/PickFragile-v2": ("simgrip.envs.pick_fragile_v2:FragilePickEnvV2", {}, 300),
+    "simgrip/PickMultiFragile-v2": ("simgrip.envs.pick_fragile_v2:FragilePickMultiEnvV2", {}, 300),
+    "simgrip/PlaceFragile-v2": ("simgrip.envs.pick_fragile_v2:FragilePlaceEnvV2", {}, 400),
+    "simgrip/PickCradleFragile-v3": ("simgrip.envs.pick_fragile_v2:FragileCradleEnvV3", {}, 300),
+    "simgrip/PickSphereFragile-v3": ("simgrip.envs.pick_fragile_v2:FragileSphereEnvV3", {}, 300),
+}
+#: Retired ids (issue 18), not registered: id -> (entry point, kwargs, max_episode_steps), as they were
+#: registered.  Each task's newest version (in ``_ENVS``) subclasses its class; ``gym.make`` of a retired id
+#: raises ``gymnasium.error.DeprecatedEnv`` naming that version; :func:`retired_spec` builds one exactly
+#: (the stored baselines in ``docs/baselines/`` and the reference of ``tests/test_env_step_reference.py``
+#: were recorded over them).
+RETIRED = {
     # issue 18: fragile workpieces (a crush limit per episode), see simgrip.envs.pick_fragile
     "simgrip/PickFragile-v0": ("simgrip.envs.pick_fragile:FragilePickEnv", {}, 300),
     "simgrip/PickMultiFragile-v0": ("simgrip.envs.pick_fragile:FragilePickMultiEnv", {}, 300),
@@ -61,19 +74,25 @@ _ENVS = {
     # v2: v1 with the hand started at an unknown height (a fixed descent misses the grasp height)
     "simgrip/PickCradleFragile-v2": ("simgrip.envs.pick_cradle_fragile_v2:FragileCradleEnvV2", {}, 300),
     "simgrip/PickSphereFragile-v2": ("simgrip.envs.pick_sphere_fragile_v2:FragileSphereEnvV2", {}, 300),
-    # the newest of each: the curvature through a valve (its action a rate), simgrip.envs.pick_fragile_v2
-    "simgrip/PickFragile-v2": ("simgrip.envs.pick_fragile_v2:FragilePickEnvV2", {}, 300),
-    "simgrip/PickMultiFragile-v2": ("simgrip.envs.pick_fragile_v2:FragilePickMultiEnvV2", {}, 300),
-    "simgrip/PlaceFragile-v2": ("simgrip.envs.pick_fragile_v2:FragilePlaceEnvV2", {}, 400),
-    "simgrip/PickCradleFragile-v3": ("simgrip.envs.pick_fragile_v2:FragileCradleEnvV3", {}, 300),
-    "simgrip/PickSphereFragile-v3": ("simgrip.envs.pick_fragile_v2:FragileSphereEnvV3", {}, 300),
 }
 ENV_IDS = tuple(k for k, v in _ENVS.items() if v[0] == "simgrip.envs.pick:PickEnv")
 MULTI_ENV_IDS = tuple(k for k, v in _ENVS.items() if v[0] == "simgrip.envs.pick_multi:PickMultiEnv")
-FRAGILE_ENV_IDS = tuple(k for k, v in _ENVS.items() if v[0].split(":")[0] in (
-    "simgrip.envs.pick_fragile", "simgrip.envs.pick_place", "simgrip.envs.pick_cradle_fragile",
-    "simgrip.envs.pick_sphere_fragile", "simgrip.envs.pick_fragile_v1", "simgrip.envs.pick_cradle_fragile_v2",
-    "simgrip.envs.pick_sphere_fragile_v2", "simgrip.envs.pick_fragile_v2"))
+FRAGILE_ENV_IDS = tuple(k for k, v in _ENVS.items() if v[0].split(":")[0] == "simgrip.envs.pick_fragile_v2")
+
+
+def retired_spec(env_id: str) -> EnvSpec:
+    """The :class:`~gymnasium.envs.registration.EnvSpec` of a retired id (a key of ``RETIRED``), exactly as it
+    was registered (entry point, keyword arguments, ``max_episode_steps``): ``gym.make(retired_spec(env_id))``
+    builds it, keyword arguments of ``gym.make`` going to its class as for a registered id.
+
+    Raises ValueError naming ``env_id`` when it is not a retired id (a registered one is made by its id)."""
+    if not isinstance(env_id, str) or env_id not in RETIRED:
+        registered = isinstance(env_id, str) and env_id in _ENVS
+        raise ValueError(f"env_id: {env_id!r} is not a retired simgrip id"
+                         + ("; it is registered: gym.make it by its id" if registered else
+                            f" (retired: {', '.join(RETIRED)})"))
+    entry, kwargs, steps = RETIRED[env_id]
+    return EnvSpec(id=env_id, entry_point=entry, kwargs=dict(kwargs), max_episode_steps=steps)
 
 
 def register_envs() -> None:

@@ -1,6 +1,9 @@
 """Non-learned baselines of the fragile pick tasks, one command each, written as JSON (issue 18).
 
-``python -m simgrip.envs.baselines --env simgrip/PickFragile-v0 --policy constant --seeds 5000-5049 --out F.json``
+``python -m simgrip.envs.baselines --env simgrip/PickFragile-v2 --policy constant --seeds 5000-5049 --out F.json``
+
+``--env``: a registered fragile id (``simgrip.envs.FRAGILE_ENV_IDS``) or a retired one (``simgrip.envs.RETIRED``,
+built through :func:`~simgrip.envs.retired_spec`: the stored JSONs of ``docs/baselines/`` name them).
 
 Policies (actions ``(curvature command, palm speed)`` in ``[-1, 1]``; ``PlaceFragile-v0``:
 ``(curvature, palm x, palm z)``):
@@ -221,8 +224,12 @@ def _members(policy: str, grid: str, place: bool, claw: str | None = None, famil
 
 
 def evaluate(env_id: str, policy: str, seeds, grid: str = "full") -> dict:
-    """Run ``policy`` on ``env_id`` (``gym.make``, its registered time limit) over ``seeds``; the JSON record."""
-    env = gym.make(env_id)
+    """Run ``policy`` on ``env_id`` (``gym.make``, its registered time limit; a retired id of
+    ``simgrip.envs.RETIRED`` through :func:`~simgrip.envs.retired_spec`, its time limit as it was registered)
+    over ``seeds``; the JSON record."""
+    from simgrip.envs import RETIRED, retired_spec
+
+    env = gym.make(retired_spec(env_id) if env_id in RETIRED else env_id)
     try:
         rows = []
         place = env.action_space.shape[0] == 3
@@ -258,11 +265,12 @@ def _seeds(text: str) -> list[int]:
 def main(argv=None) -> int:
     """The command line; returns the exit status (2 on a bad argument)."""
     import simgrip.envs  # noqa: F401  (registers the ids)
-    from simgrip.envs import FRAGILE_ENV_IDS
+    from simgrip.envs import FRAGILE_ENV_IDS, RETIRED
     from simgrip.io import atomic_write, check_output_file
 
     p = argparse.ArgumentParser(prog="python -m simgrip.envs.baselines", description=__doc__.splitlines()[0])
-    p.add_argument("--env", required=True, choices=FRAGILE_ENV_IDS)
+    # the retired ids too: the stored JSONs of docs/baselines/ were written with them
+    p.add_argument("--env", required=True, choices=FRAGILE_ENV_IDS + tuple(RETIRED))
     p.add_argument("--policy", required=True, choices=("random", "constant", "openloop", "oracle", "observation"))
     p.add_argument("--seeds", type=_seeds, default=_seeds("5000-5049"), help="A-B, inclusive (default 5000-5049)")
     p.add_argument("--grid", choices=("full", "coarse"), default="full")

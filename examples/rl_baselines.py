@@ -204,7 +204,8 @@ def plot(summary: dict, results: list[dict], path: Path) -> None:
 
 def main(argv=None) -> int:
     p = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
-    p.add_argument("--env", required=True, help="registered env id, e.g. simgrip/PickFragile-v0")
+    p.add_argument("--env", required=True, help="registered env id, e.g. simgrip/PickFragile-v2, or a retired "
+                   "simgrip one (simgrip.envs.RETIRED: the runs of docs/baselines/ name them)")
     p.add_argument("--algo", nargs="+", choices=ALGOS, default=list(ALGOS), help="algorithms (default ppo sac)")
     p.add_argument("--seeds", nargs="+", type=_seed, default=[0, 1, 2], help="training seeds (default 0 1 2)")
     p.add_argument("--minutes", type=_positive(float), default=15.0, help="CPU-minute budget per run (default 15)")
@@ -232,7 +233,7 @@ def main(argv=None) -> int:
     import simgrip.envs  # noqa: F401  (registers the ids)
     from simgrip.io import check_output_dir, check_output_files_in, write_json
 
-    if args.env not in gym.registry:
+    if args.env not in gym.registry and args.env not in simgrip.envs.RETIRED:  # train_sb3.py builds a retired one
         p.error(f"--env: unknown id {args.env!r}")
     algos = list(dict.fromkeys(args.algo))
     try:

@@ -64,9 +64,16 @@ def _positive(kind):
     return parse
 
 
+def _spec(env_id: str):
+    """What ``gym.make`` takes for ``env_id``: the id, or a retired simgrip id's spec (``simgrip.envs.RETIRED``)."""
+    from simgrip.envs import RETIRED, retired_spec
+
+    return retired_spec(env_id) if env_id in RETIRED else env_id
+
+
 def evaluate(model, env_id: str, episodes: int, seed0: int) -> dict:
     """Run the deterministic policy of ``model`` for ``episodes`` episodes on seeds ``seed0 + i``."""
-    env = gym.make(env_id)
+    env = gym.make(_spec(env_id))
     try:
         results = run_episodes(env, lambda obs: model.predict(obs, deterministic=True)[0], episodes, seed0)
     finally:
@@ -122,7 +129,8 @@ def train(algo: str, env_id: str, *, steps: int, minutes: float, seed: int, out:
                                  int(bool(info.get("is_success", False)))))
             return spent() < budget
 
-    env = make_vec_env(env_id, n_envs=1, seed=seed)
+    spec = _spec(env_id)  # make_vec_env calls a non-string: a retired id's spec goes through gym.make
+    env = make_vec_env(spec if isinstance(spec, str) else (lambda: gym.make(spec)), n_envs=1, seed=seed)
     model = cls("MlpPolicy", env, seed=seed, verbose=0)
     model.learn(total_timesteps=steps, callback=Budget())
     wall, cpu = time.perf_counter() - t_start, time.process_time() - c_start
@@ -188,7 +196,8 @@ def plot_curves(out: Path, window: int = 100) -> Path | None:
 def main(argv=None) -> int:
     p = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     p.add_argument("--algo", nargs="+", choices=ALGOS, default=list(ALGOS), help="algorithms, trained one after the other")
-    p.add_argument("--env", default="simgrip/Pick-v1", help="registered env id (default simgrip/Pick-v1)")
+    p.add_argument("--env", default="simgrip/Pick-v1",
+                   help="registered env id, or a retired simgrip one (simgrip.envs.RETIRED; default simgrip/Pick-v1)")
     p.add_argument("--minutes", type=_positive(float), default=15.0, help="time budget per algorithm (default 15)")
     p.add_argument("--clock", choices=("cpu", "wall"), default="cpu",
                    help="what --minutes counts: the process's CPU time (default) or wall-clock time")
@@ -207,7 +216,7 @@ def main(argv=None) -> int:
         import torch
     except ImportError:
         p.error('needs Stable-Baselines3 and PyTorch: pip install "simgrip[rl]"')
-    if args.env not in gym.registry:
+    if args.env not in gym.registry and args.env not in simgrip.envs.RETIRED:
         p.error(f"--env: unknown id {args.env!r}")
     try:  # simgrip.io's output-path policy: a folder, and no FIFO/device/folder where a result file goes
         out = check_output_dir(args.out, "--out")

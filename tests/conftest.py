@@ -97,8 +97,3 @@ def pytest_configure(config):
 
     if signal.getsignal(signal.SIGINT) == signal.SIG_IGN:
         signal.signal(signal.SIGINT, signal.default_int_handler)
-    # Gymnasium warns that a v0 id is out of date once its v1 is registered (and the claw tasks' v1 once their v2
-    # is); those ids stay, tested as they are (issue 18; their retirement is a separate decision).  Appended
-    # last: it wins over "error".
-    config.addinivalue_line("filterwarnings",
-                            "ignore:.*simgrip/[A-Za-z]*Fragile-v[012] is out of date:DeprecationWarning")

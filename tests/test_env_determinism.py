@@ -1,5 +1,6 @@
-"""Every registered pick env is deterministic: same seed, same actions -> identical observations, rewards, ends
-and info (every key, arrays included), in a fresh env and in one reused after another episode.
+"""Every registered pick env, and every retired one (``simgrip.envs.RETIRED``, built through ``retired_spec``), is
+deterministic: same seed, same actions -> identical observations, rewards, ends and info (every key, arrays
+included), in a fresh env and in one reused after another episode.
 
 Actions mix a curl-and-lift schedule (the fingers meet the workpiece, the validity probe's exact paths run) with
 seeded noise, some outside [-1, 1] (clipped by the env).
@@ -7,12 +8,12 @@ seeded noise, some outside [-1, 1] (clipped by the env).
 
 from __future__ import annotations
 
-import gymnasium as gym
 import numpy as np
 import pytest
 
 import simgrip.envs  # noqa: F401
-from simgrip.envs import ENV_IDS, FRAGILE_ENV_IDS, MULTI_ENV_IDS
+from simgrip.envs import ENV_IDS, FRAGILE_ENV_IDS, MULTI_ENV_IDS, RETIRED
+from env_checks import make
 
 
 def _same(a, b) -> bool:
@@ -47,15 +48,15 @@ def _episode(env, actions, seed: int) -> list:
     return out
 
 
-@pytest.mark.parametrize("env_id", sorted(set(ENV_IDS) | set(MULTI_ENV_IDS) | set(FRAGILE_ENV_IDS)))
+@pytest.mark.parametrize("env_id", sorted(set(ENV_IDS) | set(MULTI_ENV_IDS) | set(FRAGILE_ENV_IDS) | set(RETIRED)))
 def test_same_seed_same_actions_identical_everything(env_id):
-    env = gym.make(env_id).unwrapped
+    env = make(env_id).unwrapped
     actions = _actions(env.action_space, 40, seed=3)
     first = _episode(env, actions, seed=21)
     _episode(env, _actions(env.action_space, 25, seed=4), seed=5)  # another episode in between
     second = _episode(env, actions, seed=21)
     env.close()
-    fresh = gym.make(env_id).unwrapped
+    fresh = make(env_id).unwrapped
     third = _episode(fresh, actions, seed=21)
     fresh.close()
     assert len(first) > 5  # the episode ran some steps

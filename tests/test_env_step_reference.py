@@ -8,7 +8,8 @@ returns (observation bytes, reward, flags, every ``info`` key and value, in orde
 stored actions and compares the digests: any change of an observation, reward, termination or info entry, by
 a single bit, fails it, naming the env, episode and step.  The physics is MuJoCo's, so the reference holds
 for the MuJoCo version it was recorded with (stored beside it; another version skips, saying so).  An
-intended change of an env's output regenerates the file with the command above.
+intended change of an env's output regenerates the file with the command above.  Ids retired since they were
+recorded (``simgrip.envs.RETIRED``) are replayed through ``retired_spec``: every recorded id stays checked.
 """
 
 from __future__ import annotations
@@ -16,7 +17,6 @@ from __future__ import annotations
 import dataclasses
 import hashlib
 import sys
-import warnings
 from pathlib import Path
 
 import numpy as np
@@ -56,25 +56,37 @@ def _replay(env, seed: int, actions) -> list[bytes]:
     return out
 
 
-def _record() -> None:  # pragma: no cover - regenerates the reference
+def _make(env_id: str):
+    """``gym.make`` of a registered id, or of a retired one through ``retired_spec``."""
     import gymnasium as gym
+
+    from simgrip.envs import RETIRED, retired_spec
+
+    return gym.make(retired_spec(env_id) if env_id in RETIRED else env_id)
+
+
+def _record() -> None:  # pragma: no cover - regenerates the reference
     import mujoco
 
-    from simgrip.envs import _ENVS, FRAGILE_ENV_IDS
+    from simgrip.envs import _ENVS, FRAGILE_ENV_IDS, RETIRED
     from simgrip.envs.baselines import _members
     from simgrip.envs.scripted import ScriptedPickPolicy
     from simgrip.envs.scripted_multi import ScriptedMultiPolicy
+    from simgrip.envs.valve import ValveCommand
 
-    arrays = {"mujoco_version": np.array(mujoco.__version__), "ids": np.array(list(_ENVS))}
-    for k, env_id in enumerate(_ENVS):
-        env = gym.make(env_id)
+    # the recorded order (an id's k seeds its random actions), the retired ids in place, the newer ones after
+    ids = [i for i in _ENVS if i not in FRAGILE_ENV_IDS] + list(RETIRED) + list(FRAGILE_ENV_IDS)
+    arrays = {"mujoco_version": np.array(mujoco.__version__), "ids": np.array(ids)}
+    for k, env_id in enumerate(ids):
+        env = _make(env_id)
         u = env.unwrapped
         n = env.action_space.shape[0]
         obs, info = env.reset(seed=SEED)
-        if env_id in FRAGILE_ENV_IDS:
+        if env_id in FRAGILE_ENV_IDS or env_id in RETIRED:
             claw = "cradle" if getattr(u, "grip", None) == "III" else \
                 "sphere" if getattr(u, "shapes", ()) == ("sphere",) else None
-            act = _members("observation", "full", n == 3, claw, None)[0][1](env, info, SEED)
+            valve = isinstance(u, ValveCommand)
+            act = _members("observation", "full", n == 3, claw, None, valve)[0][1](env, info, SEED)
         else:
             pol = (ScriptedMultiPolicy if "Multi" in env_id else ScriptedPickPolicy)()
             pol.reset(u, info)
@@ -97,7 +109,6 @@ def _record() -> None:  # pragma: no cover - regenerates the reference
 
 
 def test_env_steps_match_the_reference():
-    import gymnasium as gym
     import mujoco
 
     import simgrip.envs  # noqa: F401  (registers the ids)
@@ -105,21 +116,19 @@ def test_env_steps_match_the_reference():
     ref = np.load(DATA)
     if str(ref["mujoco_version"]) != mujoco.__version__:
         pytest.skip(f"reference recorded with MuJoCo {ref['mujoco_version']}, this is {mujoco.__version__}")
-    with warnings.catch_warnings():
-        warnings.simplefilter("ignore", DeprecationWarning)  # the retired-version notices of v0 / v1 ids
-        for k, env_id in enumerate(ref["ids"].tolist()):
-            env = gym.make(env_id)
-            try:
-                for e in (0, 1):
-                    got = np.frombuffer(b"".join(_replay(env, SEED + e, ref[f"a{k}_{e}"])), dtype=np.uint64)
-                    want = ref[f"d{k}_{e}"]
-                    bad = [i for i in range(min(got.size, want.size)) if got[i] != want[i]]
-                    assert not bad and got.size == want.size, (
-                        f"{env_id}, episode {e}: output differs from the reference at "
-                        f"{'reset' if bad and bad[0] == 0 else 'step %d' % (bad[0] if bad else min(got.size, want.size))}"
-                        f" ({got.size - 1} steps replayed, {want.size - 1} recorded)")
-            finally:
-                env.close()
+    for k, env_id in enumerate(ref["ids"].tolist()):
+        env = _make(env_id)  # a retired id through retired_spec (no deprecation notice)
+        try:
+            for e in (0, 1):
+                got = np.frombuffer(b"".join(_replay(env, SEED + e, ref[f"a{k}_{e}"])), dtype=np.uint64)
+                want = ref[f"d{k}_{e}"]
+                bad = [i for i in range(min(got.size, want.size)) if got[i] != want[i]]
+                assert not bad and got.size == want.size, (
+                    f"{env_id}, episode {e}: output differs from the reference at "
+                    f"{'reset' if bad and bad[0] == 0 else 'step %d' % (bad[0] if bad else min(got.size, want.size))}"
+                    f" ({got.size - 1} steps replayed, {want.size - 1} recorded)")
+        finally:
+            env.close()
 
 
 if __name__ == "__main__":  # pragma: no cover

@@ -1,8 +1,10 @@
 """The fragile cradle (``PickCradleFragile-v0``) and sphere (``PickSphereFragile-v0``) tasks (issue 18).
 
+Both ids are retired (``simgrip.envs.RETIRED``): built here through ``retired_spec`` (``env_checks.make``).
 check_env, the info keys and determinism run for these ids in ``tests/test_pick_fragile.py`` (parametrised over
-``FRAGILE_ENV_IDS``); here: the crush windows' physical definitions, argument checks, the documented info keys,
-pickling mid-episode, headless rendering and the observation-only controller's success on held-out seeds.
+``FRAGILE_ENV_IDS`` and ``RETIRED``); here: the crush windows' physical definitions, argument checks, the
+documented info keys, pickling mid-episode, headless rendering and the observation-only controller's success on
+held-out seeds.
 
 The controller tests run on seeds 7400-7411 (cradle) and 7420-7431 (sphere), which no other test uses (the
 ranges were chosen on seeds 5000-5049, the reported baselines use 6000-6049).  Bounds from the binomial spread of n = 12
@@ -24,7 +26,6 @@ from __future__ import annotations
 import math
 import pickle
 
-import gymnasium as gym
 import numpy as np
 import pytest
 
@@ -32,7 +33,7 @@ import simgrip.envs  # noqa: F401
 from simgrip.envs.baselines import evaluate
 from simgrip.envs.pick_cradle_fragile import FragileCradleEnv
 from simgrip.envs.pick_sphere_fragile import FragileSphereEnv
-from env_checks import assert_headless_frame
+from env_checks import assert_headless_frame, make
 
 IDS = ("simgrip/PickCradleFragile-v0", "simgrip/PickSphereFragile-v0")
 GAP_SEEDS = {"simgrip/PickCradleFragile-v0": list(range(7400, 7412)),
@@ -64,7 +65,7 @@ def test_crush_windows_are_the_documented_physical_bounds():
 
 @pytest.mark.parametrize("env_id", IDS)
 def test_every_info_key_is_documented(env_id):
-    env = gym.make(env_id)
+    env = make(env_id)
     env.reset(seed=0)
     _, _, _, _, info = env.step(env.action_space.sample())
     u = env.unwrapped
@@ -76,7 +77,7 @@ def test_every_info_key_is_documented(env_id):
 
 @pytest.mark.parametrize("env_id", IDS)
 def test_pickle_mid_episode_continues_exactly(env_id):
-    env = gym.make(env_id).unwrapped
+    env = make(env_id).unwrapped
     env.reset(seed=11, options={"crush_limit": 100.0})  # no crush: the episode runs on
     for t in range(20):
         env.step(np.array([0.68 - 0.01 * t, -0.5 if t < 10 else 0.0], dtype=np.float32))
@@ -121,7 +122,7 @@ def test_sphere_fixed_schedules_stay_below_the_target_on_held_out_seeds():
 
     env_id = "simgrip/PickSphereFragile-v0"
     seeds = GAP_SEEDS[env_id]
-    env = gym.make(env_id)
+    env = make(env_id)
     try:
         for a_k in (0.3, 0.4, 0.5, 0.6):
             for ramp, palm in ((1, 0.5), (50, 1.0)):

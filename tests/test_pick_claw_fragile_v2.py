@@ -3,7 +3,8 @@ drawn from a 16 cm (cradle) or 12 cm (sphere) range, so that a fixed descent mis
 cradle's box at most 6.5 cm wide (issue 18).
 
 Gymnasium's ``check_env``, the info keys and determinism run for these ids in ``tests/test_pick_fragile.py`` and
-``tests/test_env_determinism.py`` (``FRAGILE_ENV_IDS`` holds them); here: v2 is v1 but for the draw, the
+``tests/test_env_determinism.py`` (``RETIRED`` holds them, v1 and v2 retired: built through ``retired_spec``,
+``env_checks.make``); here: v2 is v1 but for the draw, the
 documented start heights, SB3's checker, pickling mid-episode, headless rendering, and the gap between the
 observation-only controller and the tuned open-loop schedule on seeds 7600-7611 (cradle) and 7620-7631
 (sphere), which no other test uses (the ranges and the open-loop member were chosen on seeds 5000-5049; the
@@ -23,7 +24,6 @@ from __future__ import annotations
 
 import pickle
 
-import gymnasium as gym
 import numpy as np
 import pytest
 
@@ -31,7 +31,7 @@ import simgrip.envs  # noqa: F401
 from simgrip.envs.baselines import _claw_openloop, evaluate, run_policy
 from simgrip.envs.pick_cradle_fragile_v2 import CRADLE_V2_PALM_START, CRADLE_V2_WIDTH, FragileCradleEnvV2
 from simgrip.envs.pick_sphere_fragile_v2 import SPHERE_V2_PALM_START, FragileSphereEnvV2
-from env_checks import assert_headless_frame, assert_sb3_check_env_clean
+from env_checks import assert_headless_frame, assert_sb3_check_env_clean, make
 
 IDS = ("simgrip/PickCradleFragile-v2", "simgrip/PickSphereFragile-v2")
 #: v1 with v2's draw where it differs (the cradle's box width), the start height set per episode below
@@ -53,7 +53,7 @@ def test_v2_is_v1_but_for_the_draw(env_id):
     bit for bit (the reward, the observation and the physics are v1's)."""
     out = []
     for eid, kwargs in ((env_id, {}), V1[env_id]):
-        env = gym.make(eid, **kwargs).unwrapped
+        env = make(eid, **kwargs).unwrapped
         obs, info = env.reset(seed=4, options={"palm_height": 0.12})
         rows = [obs, info["crush_limit"]]
         for a in _claw_actions(30):
@@ -71,7 +71,7 @@ def test_v2_is_v1_but_for_the_draw(env_id):
 
 @pytest.mark.parametrize("env_id, start", [(IDS[0], CRADLE_V2_PALM_START), (IDS[1], SPHERE_V2_PALM_START)])
 def test_palm_start_drawn_over_the_documented_range(env_id, start):
-    env = gym.make(env_id).unwrapped
+    env = make(env_id).unwrapped
     z = []
     for seed in range(20):
         obs, _ = env.reset(seed=seed)
@@ -96,7 +96,7 @@ def test_check_env_of_stable_baselines3_on_v2():
 
 @pytest.mark.parametrize("env_id", IDS)
 def test_pickle_mid_episode_continues_exactly(env_id):
-    env = gym.make(env_id).unwrapped
+    env = make(env_id).unwrapped
     env.reset(seed=11, options={"crush_limit": 100.0})  # no crush: the episode runs on
     for a in _claw_actions(20):
         env.step(a)
@@ -119,7 +119,7 @@ def test_observation_only_beats_the_tuned_open_loop_schedule(env_id):
     seeds = GAP_SEEDS[env_id]
     obs_only = evaluate(env_id, "observation", seeds)
     assert obs_only["outcomes"].get("success", 0) >= 8, obs_only
-    env = gym.make(env_id)
+    env = make(env_id)
     try:
         counts = run_policy(env, _claw_openloop(*TUNED[env_id][:3], shift=TUNED[env_id][3]), seeds)
     finally:

@@ -19,23 +19,23 @@ import pickle
 import subprocess
 import sys
 
-import gymnasium as gym
 import numpy as np
 import pytest
 from gymnasium.utils.env_checker import check_env
 
 import simgrip.envs  # noqa: F401
-from simgrip.envs import FRAGILE_ENV_IDS
+from simgrip.envs import FRAGILE_ENV_IDS, RETIRED
 from simgrip.envs.baselines import evaluate
 from simgrip.envs.pick_fragile import FragilePickEnv
+from env_checks import make
 
 GAP_SEEDS = list(range(7000, 7012))
 INFO_KEYS = ("is_success", "workpiece_lift", "crushed", "dropped")
 
 
-@pytest.mark.parametrize("env_id", FRAGILE_ENV_IDS)
+@pytest.mark.parametrize("env_id", FRAGILE_ENV_IDS + tuple(RETIRED))  # the retired versions too
 def test_check_env_info_keys_and_determinism(env_id):
-    env = gym.make(env_id).unwrapped
+    env = make(env_id).unwrapped
     check_env(env, skip_render_check=True)
 
     def rollout():

@@ -3,20 +3,20 @@
 v1 must change the reward only: for the same seed and actions, v1 and v0 give bit-identical observations,
 terminations and outcome keys (so v0's baselines hold for v1), and v1's reward is exactly the sum of its
 documented terms.  Gymnasium's ``check_env`` and determinism over the v1 ids run in ``test_pick_fragile.py``
-and ``test_env_determinism.py`` (``FRAGILE_ENV_IDS`` holds them); SB3's checker and pickling here.
+and ``test_env_determinism.py`` (over ``RETIRED``, which holds v0 and v1 now, built through ``retired_spec``:
+``env_checks.make``); SB3's checker and pickling here.
 """
 
 from __future__ import annotations
 
 import pickle
 
-import gymnasium as gym
 import numpy as np
 import pytest
 
 import simgrip.envs  # noqa: F401
 from simgrip.envs.pick_fragile_v1 import FragilePickEnvV1, V1_REWARD_DEFAULTS, graded_crush
-from env_checks import assert_sb3_check_env_clean
+from env_checks import assert_sb3_check_env_clean, make
 
 PAIRS = [("simgrip/PickFragile-v0", "simgrip/PickFragile-v1"),
          ("simgrip/PickMultiFragile-v0", "simgrip/PickMultiFragile-v1"),
@@ -41,7 +41,7 @@ def _actions(space, n, seed):
 
 
 def _run(env_id, seed, actions):
-    env = gym.make(env_id).unwrapped
+    env = make(env_id).unwrapped
     obs, info = env.reset(seed=seed)
     rows = [(obs, None, False, info)]
     for a in actions:
@@ -59,7 +59,7 @@ def test_v1_is_v0_with_another_reward(pair):
     seen = set()
     for seed in (11, 12):
         contacts = 0
-        actions = _actions(gym.make(pair[1]).action_space, 90, seed)
+        actions = _actions(make(pair[1]).action_space, 90, seed)
         v0, v1 = _run(pair[0], seed, actions), _run(pair[1], seed, actions)
         assert len(v0) == len(v1) > 3
         for (o0, _, t0, i0), (o1, r1, t1, i1) in zip(v0, v1):
