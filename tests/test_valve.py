@@ -13,7 +13,7 @@ import pytest
 
 import simgrip.envs  # noqa: F401
 from simgrip.envs.pick_fragile_v1 import FragilePickEnvV1
-from simgrip.envs.pick_fragile_v2 import V2_CRUSH_RATIO, FragilePickEnvV2
+from simgrip.envs.pick_fragile_v2 import V2_CRUSH_RATIO, V2_MASS, FragilePickEnvV2
 from simgrip.envs.valve import KAPPA_RATE, absolute_to_valve
 from env_checks import assert_sb3_check_env_clean
 
@@ -43,8 +43,8 @@ def test_the_command_is_the_clipped_running_sum_of_the_rates(env_id):
 
 def test_a_valve_env_is_its_v1_env_driven_by_the_command_the_valve_reaches():
     """The same seed and the command sequence the valve reaches give v1 (absolute command) the same episode:
-    the valve changes what the action means, nothing else (the crush window set equal)."""
-    v2, v1 = FragilePickEnvV2(), FragilePickEnvV1(crush_ratio_range=V2_CRUSH_RATIO)
+    the valve changes what the action means, nothing else (the draw set equal)."""
+    v2, v1 = FragilePickEnvV2(), FragilePickEnvV1(crush_ratio_range=V2_CRUSH_RATIO, box_mass_range=V2_MASS)
     o2, i2 = v2.reset(seed=11)
     o1, i1 = v1.reset(seed=11)
     assert i1["crush_limit"] == i2["crush_limit"] and np.array_equal(o1, o2)
