@@ -40,9 +40,9 @@ successes in 809 training episodes (4 CPU-min), 1.6-2.6 gave 20 / 25 / 40 % afte
 ``simgrip.envs.baselines`` held 43 % of seeds 6000-6029 at crush ratio 2-3.5 and 40 % at 1.6-2.6 (v1's
 masses).  Spreading the masses over 100x instead of 20x spreads the holding forces the same fixed curvature
 must meet: 23 % at 1.6-2.6 and 20 % at 1.5-2.2 (best of the grid on those 30 seeds themselves).  The narrower
-1.5-2.2 was measured and rejected: PPO made 0 successes in 1290 training episodes (4 CPU-min; also 0 with the
-touch term removed, ``w_touch = 0``) and its 15-CPU-min runs stayed at 0 successes by 5 CPU-min, settled on
-touching without lifting; at 1.6-2.6 with these masses it reached 30 / 50 % after 2 / 4 CPU-min.
+1.5-2.2 was measured and rejected: PPO's first 5 CPU-min (pinch and K fingers, two training seeds each) made 0
+successes in 3244 training episodes, settled on touching without lifting (v1's touch term pays 6 over an
+episode), and with that term removed (``w_touch = 0``) 0 in 1290 episodes (pinch, 4 CPU-min); at 1.6-2.6 with these masses it reached 30 / 50 % after 2 / 4 CPU-min.
 
 Info keys (every ``step``, the same in all five; PlaceFragile adds four, below):
 
