@@ -42,7 +42,8 @@ masses).  Spreading the masses over 100x instead of 20x spreads the holding forc
 must meet: 23 % at 1.6-2.6 and 20 % at 1.5-2.2 (best of the grid on those 30 seeds themselves).  The narrower
 1.5-2.2 was measured and rejected: PPO's first 5 CPU-min (pinch and K fingers, two training seeds each) made 0
 successes in 3244 training episodes, settled on touching without lifting (v1's touch term pays 6 over an
-episode), and with that term removed (``w_touch = 0``) 0 in 1290 episodes (pinch, 4 CPU-min); at 1.6-2.6 with these masses it reached 30 / 50 % after 2 / 4 CPU-min.
+episode), and with that term removed (``w_touch = 0``) 0 in 1290 episodes (pinch, 4 CPU-min); at 1.6-2.6
+with these masses it reached 30 / 50 % after 2 / 4 CPU-min.
 
 Info keys (every ``step``, the same in all five; PlaceFragile adds four, below):
 
