@@ -37,6 +37,10 @@ ITEM_BYTES = 20_000  # each item (and its result) a 20 kB payload, as a batch of
 #: bytes of all allocations per batch: distributed's default 1000-entry logs kept every message whole, 46.5 kB per
 #: batch here (the item to the worker, the result back); with LOW_LEVEL_LOG_LENGTH ~1 kB
 MAX_TOTAL_GROWTH_PER_BATCH = ITEM_BYTES // 5
+#: the total is compared as the least of WINDOW readings after N1 and before N2: one reading may catch up to a few
+#: items' 20 kB payloads in flight (a loaded machine: the workers lag, the comms hold more), the least of many
+#: catches the memory the client keeps (measured on a 2-core machine at load 8: one reading 5.7 kB per batch)
+WINDOW = 50
 
 
 def _identity(x):
@@ -52,6 +56,8 @@ def test_streamed_local_run_holds_constant_memory():
 
     def on_result(i, res):
         on_result.k += 1
+        if N1 <= on_result.k < N1 + WINDOW or on_result.k > N2 - WINDOW:  # all bytes now (no collection: cheap)
+            lows.setdefault(on_result.k < N2 - WINDOW, []).append(tracemalloc.get_traced_memory()[0])
         if on_result.k == N1:  # the in-process scheduler's system-monitor history (0.5 s samples) is bounded
             from distributed import Scheduler
 
@@ -61,6 +67,7 @@ def test_streamed_local_run_holds_constant_memory():
             held[on_result.k] = (_small_bytes(tracemalloc.take_snapshot()), tracemalloc.get_traced_memory()[0])
 
     on_result.k = 0
+    lows = {}
     tracemalloc.start(1)
     try:
         items = (os.urandom(ITEM_BYTES) for _ in range(N2))
@@ -72,6 +79,6 @@ def test_streamed_local_run_holds_constant_memory():
     # machine (612 B per batch here on a loaded 2-core machine, nearly all of it the monitor's deques)
     assert held["monitor"] and all(m is not None and m <= LOW_LEVEL_LOG_LENGTH for m in held["monitor"])
     small = (held[N2][0] - held[N1][0]) / (N2 - N1)
-    total = (held[N2][1] - held[N1][1]) / (N2 - N1)
+    total = (min(lows[False]) - min(lows[True])) / (N2 - N1)
     assert small < MAX_GROWTH_PER_BATCH, f"the client held {small:.0f} B more in small objects per batch"
     assert total < MAX_TOTAL_GROWTH_PER_BATCH, f"the client held {total:.0f} B more per batch"
