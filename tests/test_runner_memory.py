@@ -20,7 +20,10 @@ are not trimmed yet: at most 64 x ~300 B spread over N2 - N1 = 600 batches,
 from __future__ import annotations
 
 import gc
+import json
 import os
+import subprocess
+import sys
 import tracemalloc
 
 import pytest
@@ -51,7 +54,8 @@ def _small_bytes(snapshot) -> int:
     return sum(t.size for t in snapshot.traces if t.size < SMALL_BLOCK)
 
 
-def test_streamed_local_run_holds_constant_memory():
+def _measure() -> dict:
+    """The run and its readings (in a process of its own: see the test)."""
     held = {}
 
     def on_result(i, res):
@@ -75,10 +79,24 @@ def test_streamed_local_run_holds_constant_memory():
                   collect=False, total=N2, on_result=on_result)
     finally:
         tracemalloc.stop()
-    # distributed's default keeps 7200 samples (an hour): the client grew ~0.5 kB a second, per batch on a slow
-    # machine (612 B per batch here on a loaded 2-core machine, nearly all of it the monitor's deques)
-    assert held["monitor"] and all(m is not None and m <= LOW_LEVEL_LOG_LENGTH for m in held["monitor"])
     small = (held[N2][0] - held[N1][0]) / (N2 - N1)
     total = (min(lows[False]) - min(lows[True])) / (N2 - N1)
-    assert small < MAX_GROWTH_PER_BATCH, f"the client held {small:.0f} B more in small objects per batch"
-    assert total < MAX_TOTAL_GROWTH_PER_BATCH, f"the client held {total:.0f} B more per batch"
+    return {"monitor": held["monitor"], "small": small, "total": total}
+
+
+def test_streamed_local_run_holds_constant_memory():
+    # tracemalloc counts every allocation of the process: run in a fresh interpreter, so that what earlier tests
+    # left running in this one (threads, caches) is not counted as the runner's growth (the full suite's process
+    # showed 5.7-6.5 kB per batch where the same test alone, before or after, shows well under the bound)
+    done = subprocess.run([sys.executable, __file__], capture_output=True, text=True, timeout=300)
+    assert done.returncode == 0, done.stderr[-2000:]
+    res = json.loads(done.stdout.strip().splitlines()[-1])
+    # distributed's default keeps 7200 samples (an hour): the client grew ~0.5 kB a second, per batch on a slow
+    # machine (612 B per batch here on a loaded 2-core machine, nearly all of it the monitor's deques)
+    assert res["monitor"] and all(m is not None and m <= LOW_LEVEL_LOG_LENGTH for m in res["monitor"])
+    assert res["small"] < MAX_GROWTH_PER_BATCH, f"the client held {res['small']:.0f} B more in small objects a batch"
+    assert res["total"] < MAX_TOTAL_GROWTH_PER_BATCH, f"the client held {res['total']:.0f} B more per batch"
+
+
+if __name__ == "__main__":
+    print(json.dumps(_measure()))
