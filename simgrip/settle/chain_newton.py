@@ -42,6 +42,9 @@ __all__ = ["ChainNewton"]
 CHAIN_SOLVE_ITERS = 60
 #: The analytic contact rows are polished to this many ulps of ``K_c l`` when one step gets there.
 CHAIN_FLOOR_ULPS = 2.0
+#: A full Newton step that cut the scaled residual at least this much (quadratic convergence: the Jacobian hardly
+#: changed over it) is followed by a chord step for MuJoCo's ``K_c`` read back at the new state (:meth:`_chord`).
+CHORD_GAIN = 1e-3
 
 
 def _norm(x) -> float:
@@ -232,6 +235,7 @@ class ChainNewton(Newton):
         gn = np.array([t.value + self.dist_shift[p] + N[k] / self.kc_dl[p] for k, (t, p) in enumerate(zip(pterms, act))])
         gs = np.array([sterms[i].value for i in stick_act])
         R = np.concatenate([cm.to_q(F), Fw, gn, gs])
+        self._parts = (F, Fw, gn, gs)  # (the last state's pieces in the Jacobian's rows: a chord step's right side)
         if not with_jacobian:
             return R, None
         # the Jacobian is assembled only when a step is taken (a converged state needs none)
@@ -390,7 +394,8 @@ class ChainNewton(Newton):
             res = float(np.abs(R * scale).max()) if R.size else 0.0
             self.iterations += 1
             try:
-                dphi, dw, dN, dl = self._step(jacobian())
+                jac = jacobian()
+                dphi, dw, dN, dl = self._step(jac)
             except (np.linalg.LinAlgError, ValueError):
                 if polished:
                     break
@@ -422,16 +427,65 @@ class ChainNewton(Newton):
                     break
                 return finish(False, "stalled", state_q(phi, w), N, lam)
             phi, w, N, lam = ph, ww, Nn, ln
+            kc_was, shift_was = self.kc_dl, self.dist_shift.copy()  # (read_kc replaces the one, edits the other)
             read_kc(phi, w)
             stiffen(N)
-            if contacts:  # a pair that starts touching joins the set at once
-                dn = self._distances(phi, w)
-                dist_at = (phi, w, dn)
-                newp = [p for p in range(len(self.pairs)) if p not in self.normal_active and dn[p] < 0.0]
-                if newp:
-                    self.normal_active = self.normal_active + newp
-                    N = np.append(N, np.zeros(len(newp)))
+            chord = (contacts and step == 1.0 and not inact and self.friction_at == "centreline"
+                     and self.iterations < max_iter and float(np.abs(Rn * scale).max()) <= CHORD_GAIN * res)
+            for last in (False, True):  # the step's state, then (at most once) the chord step's
+                if contacts:  # a pair that starts touching joins the set at once
+                    dn = self._distances(phi, w)
+                    dist_at = (phi, w, dn)
+                    newp = [p for p in range(len(self.pairs)) if p not in self.normal_active and dn[p] < 0.0]
+                    if newp:
+                        self.normal_active = self.normal_active + newp
+                        N = np.append(N, np.zeros(len(newp)))
+                        chord = False
+                got = None if last or not chord else self._chord(jac, N, kc_was, shift_was)
+                if got is None:
+                    break
+                phi, w, N, lam = phi + got[0], w + got[1], N + got[2], lam + got[3]
+                read_kc(phi, w)
+                stiffen(N)
         return finish(True, "ok", state_q(phi, w), N, lam)
+
+    def _chord(self, jac, N, kc_was, shift_was):
+        """A chord step after a quadratic-phase Newton step: MuJoCo's ``K_c`` and distance round-off read back at the
+        new state; ``(dphi, dw, dN, dlambda)``, or None when they did not move (or the solve fails).
+
+        ``K_c`` is MuJoCo's soft contact at rest read at each accepted state (:meth:`_update_kc`); it moves with the
+        configuration (~1e-6 relative for a 1e-6 rad turn of a link: the contact's inverse inertia), and a
+        Newton step that moved the state puts the contact rows ``dist + N / K_c`` off by that change alone.
+        The step's Jacobian (``jac``, ``_jacobian``'s arguments) is the state's to the step's size: the
+        residual of the step's state (the line search's pieces, the contact rows with the new ``K_c`` and
+        distance shift) solved with it is Newton's next step up to ``O(|step|)`` relative, without assembling
+        and factoring another bordered system or a line search.  The next iteration evaluates the state as
+        ever (sticks re-anchored, full residual) and decides: converged, or another Newton step.  It counts
+        as an iteration (budgets).  Taken only with the friction on the centreline (the point contact): there
+        re-anchoring a stick keeps its constraint, while friction at the surface follows the rolling contact
+        point, whose re-anchoring moves the friction's arm and needs the next Newton step anyway (measured:
+        the chord then adds an iteration, the surface settles of Grips I/II take 6 instead of 4).
+        """
+        F, Fw, gn, gs = self._parts
+        act = self.normal_active
+        if len(act) != gn.size:
+            return None
+        ka = self.kc_dl[act]
+        moved = (self.dist_shift[act] - shift_was[act]) + N * (1.0 / ka - 1.0 / kc_was[act])
+        if not np.any(moved):
+            return None
+        diag, off, P, Q, E, _, _, nz = jac
+        nw, nn = self.yf.size, len(act)
+        rb = np.zeros(E.shape[0])
+        rb[:nw] = -Fw
+        rb[nw + nz:nw + nz + nn] = -(gn + moved)
+        rb[nw + nz + nn:] = -gs
+        self.iterations += 1
+        try:
+            out = self._step((diag, off, P, Q, E, -F, rb, nz))
+        except (np.linalg.LinAlgError, ValueError):
+            return None
+        return out if all(np.isfinite(x).all() for x in out) else None
 
     def _estimate_multipliers(self, phi, w, N, lam, stick_act):
         """Least-squares multipliers at a fixed state: ``min |F + G_n' N + G_s' lambda|`` (hinge rows in q).
