@@ -401,47 +401,62 @@ class ChainModel:
         """``f = v . (p - c)``: ``p`` on link ``i`` of finger ``f``, ``c = O + R(alpha) c_loc`` on the workpiece.
 
         ``kind``: ``"link"`` (``v = R(phi_i) v_loc`` turns with the link) or
-        ``"work"`` (``v = R(alpha) v_loc`` turns with the workpiece).
+        ``"work"`` (``v = R(alpha) v_loc`` turns with the workpiece).  The plane's 2-vectors are worked on as
+        Python floats (each a handful of products: numpy's per-call cost is most of a 2-vector operation's);
+        only the ``O(n)`` and workpiece rows are arrays.
         """
         n, nw, ds = self.n, self.nw, self.ds
         O, alpha, dO, da = self.pose(f, y)
-        Ra = _rot(alpha)
-        Rc = Ra @ c_loc
-        c = O + Rc
-        dc = dO + da[:, None] * _perp(Rc)[None, :]
+        ca, sa = math.cos(alpha), math.sin(alpha)
+        cl0, cl1 = float(c_loc[0]), float(c_loc[1])
+        rc0, rc1 = ca * cl0 - sa * cl1, sa * cl0 + ca * cl1  # R(alpha) c_loc
+        o0, o1 = float(O[0]), float(O[1])
+        pc0, pc1 = float(p[0]) - (o0 + rc0), float(p[1]) - (o1 + rc1)  # p - c
         g0, nk, tk = self._link(phi, f, i)
         gi = g0 + i
-        rel = p - nodes[f, i]
-        v = (_rot(phi[gi]) if kind == "link" else Ra) @ v_loc
-        pv = _perp(v)
+        nd = nodes[f, i]
+        rel0, rel1 = float(p[0]) - float(nd[0]), float(p[1]) - float(nd[1])  # p - node_i
+        vl0, vl1 = float(v_loc[0]), float(v_loc[1])
+        if kind == "link":
+            cv, sv = math.cos(float(phi[gi])), math.sin(float(phi[gi]))
+        else:
+            cv, sv = ca, sa
+        v0, v1 = cv * vl0 - sv * vl1, sv * vl0 + cv * vl1
+        v = np.array([v0, v1])
+        v_rel = v0 * rel0 + v1 * rel1
+        v_pc = v0 * pc0 + v1 * pc1
+        # d c / d y = dO + dalpha perp(R c_loc): its product with v
+        dc_v = dO @ v + da * (v1 * rc0 - v0 * rc1)
         grad = np.zeros(n + nw)
         grad[g0:gi] = ds * (nk @ v)
-        grad[gi] = float(v @ _perp(rel))
-        grad[n:] = -(dc @ v)
+        grad[gi] = v1 * rel0 - v0 * rel1  # v . perp(rel)
+        grad[n:] = -dc_v
         diag = np.zeros(n)
         diag[g0:gi] = -ds * (tk @ v)
-        diag[gi] = -float(v @ rel)
-        value = float(v @ (p - c))
+        diag[gi] = -v_rel
+        pv = np.array([-v1, v0])  # perp(v)
+        pv_pc = v0 * pc1 - v1 * pc0  # perp(v) . (p - c)
         if kind == "link":
-            grad[gi] += float(pv @ (p - c))
-            diag[gi] += 2.0 * float(v @ rel) - float(v @ (p - c))
+            grad[gi] += pv_pc
+            diag[gi] += 2.0 * v_rel - v_pc
             U = np.zeros((n + nw, 3))
             U[gi, 0] = 1.0
             U[g0:gi, 1] = ds * (nk @ pv)
-            U[n:, 1] = -(dc @ pv)
+            U[n:, 1] = -(dO @ pv + da * (v0 * rc0 + v1 * rc1))  # -(dc . perp(v))
             U[n:, 2] = da
-            S = np.array([[0.0, 1.0, 0.0], [1.0, 0.0, 0.0], [0.0, 0.0, float(v @ Rc)]])
-            return Term(value, grad, diag, U, S)
+            S = np.array([[0.0, 1.0, 0.0], [1.0, 0.0, 0.0], [0.0, 0.0, v0 * rc0 + v1 * rc1]])
+            return Term(v_pc, grad, diag, U, S)
         if not da.any():
-            return Term(value, grad, diag, np.zeros((n + nw, 0)), np.zeros((0, 0)))
-        grad[n:] += da * float(pv @ (p - c))
+            return Term(v_pc, grad, diag, np.zeros((n + nw, 0)), np.zeros((0, 0)))
+        grad[n:] += da * pv_pc
         U = np.zeros((n + nw, 2))
         U[g0:gi, 0] = ds * (nk @ pv)
-        U[gi, 0] = float(pv @ _perp(rel))
+        U[gi, 0] = -v1 * -rel1 + v0 * rel0  # perp(v) . perp(rel) = v . rel
         U[n:, 0] = -(dO @ pv)
         U[n:, 1] = da
-        S = np.array([[0.0, 1.0], [1.0, -float(v @ (p - O))]])
-        return Term(value, grad, diag, U, S)
+        po0, po1 = float(p[0]) - o0, float(p[1]) - o1
+        S = np.array([[0.0, 1.0], [1.0, -(v0 * po0 + v1 * po1)]])
+        return Term(v_pc, grad, diag, U, S)
 
     def norm_term(self, phi, nodes, f, i, p, c_loc, y) -> Term:
         """``f = |c - p|``: ``p`` on link ``i`` of finger ``f``, ``c = O + R(alpha) c_loc`` on the workpiece."""
@@ -478,8 +493,8 @@ class ChainModel:
         R = self.radius[p]
         c_loc = self._geom_local(f, g2)
         if sphere:  # tip sphere on the box's outer face (turning with the workpiece)
-            face = c_loc + np.array([self.m.geom_size[g2][0] / self.L, 0.0])
-            t = self.dot_term(phi, nodes, f, i, nodes[f, i + 1], face, y, np.array([1.0, 0.0]), "work")
+            face = (float(c_loc[0]) + float(self.m.geom_size[g2][0]) / self.L, float(c_loc[1]) + 0.0)
+            t = self.dot_term(phi, nodes, f, i, nodes[f, i + 1], face, y, (1.0, 0.0), "work")
             t.value -= R
             return t
         O, alpha, _, _ = self.pose(f, y)  # corner capsule axis (along y)
@@ -562,12 +577,16 @@ class ChainModel:
         f, i = self.link_index[s.body_f]
         L = self.L
         gi = f * self.nl + i
-        ti = np.array([math.cos(phi[gi]), math.sin(phi[gi])])
-        pf = nodes[f, i] + (s.local_f[0] * ti + s.local_f[2] * _perp(ti)) / L
-        pw_loc = self.local(f, s.local_w / L)
+        ct, st = math.cos(float(phi[gi])), math.sin(float(phi[gi]))  # the link's tangent
+        lf0, lf2 = float(s.local_f[0]), float(s.local_f[2])
+        nd = nodes[f, i]
+        pf = (float(nd[0]) + (lf0 * ct - lf2 * st) / L, float(nd[1]) + (lf0 * st + lf2 * ct) / L)
+        mf = float(self.mir[f])
+        pw_loc = (mf * (float(s.local_w[0]) / L), float(s.local_w[2]) / L)
         if s.t_body == s.body_f:
-            t = self.dot_term(phi, nodes, f, i, pf, pw_loc, y, np.array([s.t_local[0], s.t_local[2]]), "link")
+            t = self.dot_term(phi, nodes, f, i, pf, pw_loc, y, (float(s.t_local[0]), float(s.t_local[2])), "link")
         else:
-            t = self.dot_term(phi, nodes, f, i, pf, pw_loc, y, self.local(f, s.t_local), "work")
+            t = self.dot_term(phi, nodes, f, i, pf, pw_loc, y, (mf * float(s.t_local[0]), float(s.t_local[2])),
+                              "work")
         t.value += s.offset / L
         return t

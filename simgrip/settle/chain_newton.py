@@ -71,12 +71,21 @@ class ChainNewton(Newton):
         self._memo = {}  # the state's geometry within one inner solve (_at)
         self._judged = None  # (positions key, q, scaled MuJoCo residual) of a start :meth:`solve` found at rest
 
-    def _update_kc(self, q) -> bool:
-        """Read MuJoCo's contact stiffness and its contact distances' round-off at ``q``."""
+    def _update_kc(self, q, at=None) -> bool:
+        """Read MuJoCo's contact stiffness and its contact distances' round-off at ``q``.
+
+        ``at``: the inner solve's state ``(phi, w)`` whose :meth:`ChainModel.join` is ``q``; the round-off
+        (``dist_shift``) is then MuJoCo's distance at ``q`` less the analytic one at that very state, the one
+        the contact rows evaluate (and its distances, :meth:`_distances`, are computed once).  Without it the
+        analytic distance is evaluated at ``split(q)``.
+        """
         moved = super()._update_kc(q)  # MuJoCo's balance at q is now in the scratch data
         sd, cm = self.st.d, self.model
-        phi, w = cm.split(q)
-        da = cm.pair_distances(phi, cm.nodes(phi), w)
+        if at is not None:
+            da = self._distances(*at)
+        else:
+            phi, w = cm.split(q)
+            da = cm.pair_distances(phi, cm.nodes(phi), w)
         found, dist = self._kc_cons, sd.contact.dist  # (the contacts Newton._update_kc found in the data at q)
         for p in self.normal_active:
             cons = found[p]
@@ -214,7 +223,7 @@ class ChainNewton(Newton):
         Fw = self._fw  # (the workpiece's weight and applied force on its free dofs: fixed through a solve)
         act = self.normal_active
         pterms = [self._at(("pair", p), phi, w, cm.pair_term, p, phi, nodes, w) for p in act]
-        sterms = [cm.stick_term(s, phi, nodes, w) for s in self.sticks] if self.sticks else []
+        sterms = [self._stick_at(i, phi, w, nodes) for i in range(len(self.sticks))] if self.sticks else []
         mu = {i: float(self.scene.model.pair_friction[self._pair_of(s)][0]) for i, s in enumerate(self.sticks)
               if i in self.sliding}  # (only the sliding sticks' friction enters)
         coef = []  # (term, multiplier) pairs of the force
@@ -315,6 +324,20 @@ class ChainNewton(Newton):
         self._memo[key] = (phi, w, out)
         return out
 
+    def _stick_at(self, i, phi, w, nodes):
+        """Stick ``i``'s term at the state ``(phi, w)`` (:meth:`ChainModel.stick_term`), computed once per state and
+        anchoring: a stick's anchors are replaced (new arrays, :meth:`Stick.reanchor`), never edited in place, so
+        the same state with the same anchor arrays and offset gives the same term bit for bit."""
+        s = self.sticks[i]
+        key = (s.local_f, s.local_w, s.t_local, s.offset, s.body_f, s.t_body)
+        hit = self._memo.get(("stick", i))
+        if hit is not None and hit[0] is phi and hit[1] is w and hit[2][:3] == tuple(id(a) for a in key[:3]) \
+                and hit[2][3:] == key[3:]:
+            return hit[3]
+        out = self.model.stick_term(s, phi, nodes, w)
+        self._memo[("stick", i)] = (phi, w, (id(s.local_f), id(s.local_w), id(s.t_local)) + key[3:], out, key[:3])
+        return out
+
     def _distances(self, phi, w) -> np.ndarray:
         """Every pair's analytic signed distance at the state ``(phi, w)`` (:meth:`_at`)."""
         cm = self.model
@@ -340,7 +363,7 @@ class ChainNewton(Newton):
         nf = cm.n + self.yf.size
         def read_kc(ph, ww):  # MuJoCo's contact stiffness at an accepted state (one mj_inverse)
             if contacts and self.normal_active:
-                self._update_kc(cm.join(q, ph, ww))
+                self._update_kc(cm.join(q, ph, ww), at=(ph, ww))
                 self.kc_dl = self.kc * L / W
 
         def stiffen(NN):  # a contact the forces would press deeper than PEN_STIFFEN: stiffer (Newton.stiffen)
@@ -348,7 +371,11 @@ class ChainNewton(Newton):
                 self.kc_dl = self.kc * L / W
 
         read_kc(phi, w)
+        anchored = False
         if (N.size and not N.all()) or (lam.size and not lam.all()):
+            if self.sticks:  # (the first iteration's anchoring, done first: the estimate's stick terms are its)
+                self._reanchor(cm.join(q, phi, w))
+                anchored = True
             N, lam = self._estimate_multipliers(phi, w, N, lam, stick_act)
         stiffen(N)
 
@@ -365,8 +392,9 @@ class ChainNewton(Newton):
         dist_at = None  # (phi, w, pair distances) of the last accepted state
         max_iter = min(max_iter, self.iterations + CHAIN_SOLVE_ITERS)
         while True:
-            if self.sticks:
+            if self.sticks and not anchored:
                 self._reanchor(state_q(phi, w))
+            anchored = False
             R, jacobian = self._system(phi, w, N, lam, stick_act, True)
             if not np.isfinite(R).all():
                 self._memo = {}
@@ -499,7 +527,7 @@ class ChainNewton(Newton):
         F, _, _ = self._at("internal", phi, w, cm.internal, phi)
         b = np.concatenate([cm.to_q(F), cm.workpiece_force()[yf]])
         cols = [self._at(("pair", p), phi, w, cm.pair_term, p, phi, nodes, w).grad for p in self.normal_active]
-        cols += [cm.stick_term(self.sticks[i], phi, nodes, w).grad for i in stick_act]
+        cols += [self._stick_at(i, phi, w, nodes).grad for i in stick_act]
         if not cols:
             return N, lam
         A = np.stack([np.concatenate([cm.to_q(c[:n]), c[n:][yf]]) for c in cols], 1)
