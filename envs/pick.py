@@ -25,9 +25,8 @@ import gymnasium as gym
 import mujoco
 import numpy as np
 from gymnasium import spaces
-from gymnasium.error import ResetNeeded
 
-from simgrip.envs.arguments import check_action, check_camera, check_reset, set_finger_arguments, set_task_arguments
+from simgrip.envs.arguments import check_camera, check_reset, set_finger_arguments, set_task_arguments
 from simgrip.envs.arguments import check_bool as _bool
 from simgrip.envs.arguments import check_positive as _pos
 from simgrip.envs.arguments import check_range as _range
@@ -35,6 +34,7 @@ from simgrip.envs.pick_contacts import BoxContactForces
 from simgrip.envs.pick_model import build_pick_model, resize_workpiece
 from simgrip.envs.pick_observation import OBS_LAYOUT, PickObservation, obs_layout
 from simgrip.envs.pick_reward import PickReward, progress
+from simgrip.envs.pick_step import CheckedStep, reset_needed
 from simgrip.envs.pick_validity import FingerValidity
 from simgrip.params import DimensionlessParams, PhysicalParams
 from simgrip.sim.checks import PhysicsError, StateCheck, check_invalid_state
@@ -55,7 +55,7 @@ class BoxParams:
     friction: float
 
 
-class PickEnv(gym.Env):
+class PickEnv(CheckedStep, gym.Env):
     r"""Pick a box off a table with two soft pneumatic fingers (curvature control).
 
     ## Description
@@ -413,16 +413,6 @@ class PickEnv(gym.Env):
             np.multiply.outer((k0, k1), self._unit_rest, out=self._rest_buf)
             self.model.qpos_spring[self._spring_idx] = self._rest_buf.ravel()
 
-    @property
-    def _kappa_cmd(self) -> np.ndarray:
-        """Commanded curvatures of fingers 0 and 1 (a copy)."""
-        return np.array(self._kcmd)
-
-    @property
-    def _kappa(self) -> np.ndarray:
-        """Actual curvatures of fingers 0 and 1 (after the lag; a copy)."""
-        return np.array(self._kact)
-
     def _reset_state(self):
         self._kcmd = (0.0, 0.0)  # commanded curvatures of fingers 0 and 1
         self._kact = (0.0, 0.0)  # actual curvatures (after the lag)
@@ -521,14 +511,14 @@ class PickEnv(gym.Env):
         }
         return self._get_obs(forces, d.qpos.tolist(), d.qvel.tolist()), info
 
-    def step(self, action):
-        # Every line here runs once per control step beside frame_skip mj_step calls: constants and views are
-        # bound once (_bind_views), arrays read as lists (one tolist each) and combined in Python.
+    def _step_checked(self, a: list):
+        # step(action) checks the action (pick_step.CheckedStep). Every line here runs once per control step beside
+        # frame_skip mj_step calls: constants and views are bound once (_bind_views), arrays read as lists (one
+        # tolist each) and combined in Python.
         if self._needs_reset:
-            raise ResetNeeded("step() called before reset() or after the episode terminated; call reset()")
+            raise reset_needed()
         lo, hi, per_finger, alpha, palm_lo, palm_hi, palm_step, dt, fs, bq, pq, target, hold_time, drop = self._consts
         model, data, check, qpos, qvel, ctrl, tip0, tip1, contact_forces, observe = self._hot
-        a = check_action(action, self._action_shape)
         k0 = lo + 0.5 * (a[0] + 1.0) * (hi - lo)
         k1 = lo + 0.5 * (a[1] + 1.0) * (hi - lo) if per_finger else k0
         self._kcmd = (k0, k1)

@@ -143,8 +143,8 @@ class _ShapedV1:
         self._touched = False
         return super().reset(seed=seed, options=options)
 
-    def step(self, action):
-        obs, reward, terminated, truncated, info = super().step(action)
+    def _step_checked(self, a: list):
+        obs, reward, terminated, truncated, info = super()._step_checked(a)
         lost = info["crushed"] or info["dropped"] or info["knocked_over"]
         touching = min(self._normal) > 0.0  # info["normal_force"], as floats
         r_touch = self.w_touch if touching and not lost else 0.0

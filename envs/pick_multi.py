@@ -18,9 +18,8 @@ import gymnasium as gym
 import mujoco
 import numpy as np
 from gymnasium import spaces
-from gymnasium.error import ResetNeeded
 
-from simgrip.envs.arguments import check_action, check_camera, check_reset, set_finger_arguments, set_task_arguments
+from simgrip.envs.arguments import check_camera, check_reset, set_finger_arguments, set_task_arguments
 from simgrip.envs.arguments import check_bool as _bool
 from simgrip.envs.arguments import check_number as _num
 from simgrip.envs.arguments import check_positive as _pos
@@ -28,7 +27,7 @@ from simgrip.envs.arguments import check_range as _range
 from simgrip.envs.pick_multi_model import build_pick_multi_model, half_height, set_workpiece
 from simgrip.envs.pick_multi_observation import MultiObservation, MultiReward, WorkpieceContactForces
 from simgrip.envs.pick_multi_workpiece import WORKPIECE_OPTIONS, WorkpieceParams, draw_workpiece
-from simgrip.envs.pick_reward import progress
+from simgrip.envs.pick_step import CheckedStep, reset_needed
 from simgrip.envs.pick_validity import FingerValidity
 from simgrip.params import DimensionlessParams, PhysicalParams
 from simgrip.sim.checks import PhysicsError, StateCheck, check_invalid_state
@@ -42,7 +41,7 @@ _SHIFT = 0.03  # knocked away beyond this horizontal shift [m]
 _LIFTED = 0.005  # the workpiece counts as lifted once this high above its start [m]
 
 
-class PickMultiEnv(gym.Env):
+class PickMultiEnv(CheckedStep, gym.Env):
     r"""Pick a box, cylinder or sphere off a table with ``K`` soft pneumatic fingers (curvature control).
 
     ## Description
@@ -270,6 +269,10 @@ class PickMultiEnv(gym.Env):
         self.observation_space = spaces.Box(self._observe.low, self._observe.high, dtype=np.float64)
         self.obs_layout, self.obs_slices = self._observe.layout, self._observe.slices
         self._renderers = {}
+        # the constants step reads, in one tuple (read once, at construction)
+        self._consts = (self.kappa_range[0], self.kappa_range[1], self._lag_alpha, self.palm_range[0],
+                        self.palm_range[1], self.palm_speed, self.dt, self.frame_skip, self.work_qpos, self.palm_qpos,
+                        self.target_height, self.hold_time, self.drop_distance)
         self._reset_state()
 
     # ------------------------------------------------------------------ model
@@ -315,6 +318,8 @@ class PickMultiEnv(gym.Env):
         self._spring = self.model.qpos_spring[flat[0]:flat[0] + flat.size].reshape(self.K, self.n)
         self._check = StateCheck(self.data)
         self._unit_rest = np.tile(self._pm.unit_rest, (self.K, 1))
+        d = self.data  # what step reads and writes, in one tuple (one attribute lookup)
+        self._hot = (self.model, d, self._check, d.qpos, d.qvel, d.ctrl, d.warning.number)
 
     @property
     def joint_qpos(self) -> np.ndarray:
@@ -337,16 +342,6 @@ class PickMultiEnv(gym.Env):
     def dimensionless(self) -> DimensionlessParams:
         """The paper's groups for the current episode, per finger (:meth:`physical_params`)."""
         return self.physical_params().dimensionless()
-
-    @property
-    def _kappa_cmd(self) -> np.ndarray:
-        """Commanded curvatures (1 shared or K; a copy)."""
-        return np.array(self._kcmd)
-
-    @property
-    def _kappa(self) -> np.ndarray:
-        """Actual curvatures after the lag (1 shared or K; a copy)."""
-        return np.array(self._kact)
 
     def _reset_state(self):
         nk = 1 if self.shared_curvature else self.K
@@ -372,7 +367,7 @@ class PickMultiEnv(gym.Env):
     def __getstate__(self):
         state = self.__dict__.copy()
         state["_renderers"] = {}
-        state["_spring"] = state["_check"] = None
+        state["_spring"] = state["_check"] = state["_hot"] = None
         # the builder's MjSpec cannot be pickled; models, data and addresses travel (one copy each: pickle keeps
         # self.model / self.data and their entries in the dicts the same objects)
         state["_models"] = {s: dataclasses.replace(pm, spec=None) for s, pm in state["_models"].items()}
@@ -424,15 +419,15 @@ class PickMultiEnv(gym.Env):
                 "palm_height": palm_z, "dimensionless": self.dimensionless()}
         return self._get_obs(self._forces(d)), info
 
-    def step(self, action):
-        # runs once per control step beside frame_skip mj_step calls: the state read as lists once, the reward's
-        # constants bound per episode (MultiReward), the arithmetic that of multi_reward and MultiObservation
+    def _step_checked(self, a: list):
+        # step(action) checks the action (pick_step.CheckedStep). Runs once per control step beside frame_skip
+        # mj_step calls: the constants bound once (_consts) and the views per model (_select, _hot), the state read
+        # as lists once, the reward's constants bound per episode (MultiReward), the arithmetic that of
+        # multi_reward and MultiObservation (min / max written out as comparisons, the same values)
         if self._needs_reset:
-            raise ResetNeeded("step() called before reset() or after the episode terminated; call reset()")
-        a = check_action(action, self._action_shape)
-        m, d = self.model, self.data
-        lo, hi = self.kappa_range
-        alpha = self._lag_alpha
+            raise reset_needed()
+        lo, hi, alpha, palm_lo, palm_hi, palm_step, dt, fs, wq, pq, target, hold_time, drop = self._consts
+        m, d, check, qpos, qvel, ctrl, warnings = self._hot
         self._kcmd = cmd = [lo + 0.5 * (v + 1.0) * (hi - lo) for v in a[:-1]]
         # pneumatic lag: exact first-order response over one control step, rest angles held within it
         self._kact = kap = [k + alpha * (c - k) for c, k in zip(cmd, self._kact)]
@@ -440,13 +435,13 @@ class PickMultiEnv(gym.Env):
             np.multiply(self._unit_rest, kap[0], out=self._spring)
         else:
             self._set_kappa(kap)
-        self._palm_target = min(max(self._palm_target + a[-1] * self.palm_speed * self.dt,
-                                    self.palm_range[0]), self.palm_range[1])
-        d.ctrl[0] = self._palm_target
-        check = self._check
-        check.clear()
-        mujoco.mj_step(m, d, self.frame_skip)  # nstep (positional: pybind's keyword parsing costs more)
-        q, v = d.qpos.tolist(), d.qvel.tolist()
+        palm = self._palm_target + a[-1] * palm_step * dt
+        palm = palm_lo if palm_lo > palm else palm  # max(palm, palm_lo)
+        self._palm_target = palm = palm_hi if palm_hi < palm else palm  # min(palm, palm_hi)
+        ctrl[0] = palm
+        warnings.fill(0)  # check.clear()
+        mujoco.mj_step(m, d, fs)  # nstep (positional: pybind's keyword parsing costs more)
+        q, v = qpos.tolist(), qvel.tolist()
         why = check(q, v)
         if why is not None:
             self._needs_reset = True
@@ -455,21 +450,26 @@ class PickMultiEnv(gym.Env):
         forces = self._forces(d)
         normal, friction, side = forces
         self._normal = normal  # info["normal_force"] as floats, for the subclasses' per-step rules
-        wq = self.work_qpos
         x, y, z, qx, qy = q[wq], q[wq + 1], q[wq + 2], q[wq + 4], q[wq + 5]
         gain = z - self._z0
-        rel = z - q[self.palm_qpos]
-        touching = sum(f > 0.0 for f in normal)
-        if self._lifted_rel is None and gain > _LIFTED and touching >= 2:
-            self._lifted_rel = rel
-        dropped = self._lifted_rel is not None and rel < self._lifted_rel - self.drop_distance
+        rel = z - q[pq]
+        touching = sum([f > 0.0 for f in normal])
+        lifted_rel = self._lifted_rel
+        if lifted_rel is None and gain > _LIFTED and touching >= 2:
+            self._lifted_rel = lifted_rel = rel
+        dropped = lifted_rel is not None and rel < lifted_rel - drop
         tilted = self._tilts and 1.0 - 2.0 * (qx * qx + qy * qy) < _COS_TILT
         x0, y0 = self._xy0
         knocked = tilted or math.hypot(x - x0, y - y0) > _SHIFT
-        self._hold = hold = self._hold + self.dt if gain >= self.target_height and touching >= 2 else 0.0
-        success = hold >= self.hold_time - 1e-9
+        self._hold = hold = self._hold + dt if gain >= target and touching >= 2 else 0.0
+        success = hold >= hold_time - 1e-9
         lost = (dropped or knocked) and not success
-        phi = progress(gain, self.target_height, lost)
+        if lost:  # progress(gain, target, lost), written out
+            phi = 0.0
+        else:
+            phi = gain / target
+            phi = 0.0 if 0.0 > phi else phi
+            phi = 1.0 if 1.0 < phi else phi
         reward, r_lift, r_success, r_squeeze, r_drop = self._reward(phi, self._phi, success, lost, side)
         self._phi = phi
         terminated = bool(success or lost)
@@ -484,7 +484,7 @@ class PickMultiEnv(gym.Env):
         info["valid"] = not invalid
         if invalid:
             info["invalid"] = invalid
-        obs = self._observe.observe(d.qpos, q, v, cmd, kap, forces, self._z0, hold)
+        obs = self._observe.observe(qpos, q, v, cmd, kap, forces, self._z0, hold)
         return obs, reward, terminated, False, info
 
     def render(self):

@@ -16,7 +16,6 @@ over ``K`` fingers and the least holding force per finger ``m g / (K mu)``.
 from __future__ import annotations
 
 import math
-from itertools import accumulate
 
 import numpy as np
 
@@ -96,6 +95,9 @@ class WorkpieceContactForces:
         return normal, friction, side
 
 
+_accumulate = np.add.accumulate
+
+
 def _numpy_sum(x: list) -> float:
     """``sum(x)`` in the order of numpy's pairwise summation of a contiguous row of ``4 <= len(x) <= 64`` (four
     partial sums over blocks of four, combined pairwise, then the remainder, then added to the reduction's 0),
@@ -113,6 +115,26 @@ def _numpy_sum(x: list) -> float:
     for i in range(m, n):
         total += x[i]
     return 0.0 + total
+
+
+def _tip_function(n: int):
+    """``tip(c, ds) -> [X, Z]``: ``[_numpy_sum(cos c) * ds, _numpy_sum(sin c) * ds]`` for the ``n`` link angles
+    ``c`` (``4 <= n <= 64``), compiled once per ``n`` with :func:`_numpy_sum`'s additions written out (the same
+    operations in the same order: equal to the last bit, ``tests/test_pick_multi.py``), without its loops and
+    lists (issue 18: the K-finger observation runs on every step)."""
+    if not 4 <= n <= 64:
+        raise ValueError(f"n must lie in [4, 64] (numpy's pairwise block), got {n!r}")
+    m = n - n % 4
+    xs = [f"x{i}" for i in range(n)]
+    total = "(({}) + ({})) + (({}) + ({}))".format(*(" + ".join(xs[j:m:4]) for j in range(4)))
+    for i in range(m, n):
+        total = f"({total}) + {xs[i]}"
+    names = ", ".join(xs)
+    src = (f"def tip(c, ds, cos=math.cos, sin=math.sin):\n    {names}, = map(cos, c)\n    X = 0.0 + ({total})\n"
+           f"    {names}, = map(sin, c)\n    return [X * ds, (0.0 + ({total})) * ds]\n")
+    scope = {"math": math}
+    exec(compile(src, f"<pick_multi_observation tip n={n}>", "exec"), scope)  # noqa: S102 - our own source
+    return scope["tip"]
 
 
 class MultiObservation:
@@ -166,10 +188,22 @@ class MultiObservation:
         self._shape_start = self.slices["finger_shape"].start
         self._tip_start = self.slices["tip_position"].start
         self._tail_start = self.slices["workpiece_position"].start
+        # the tilt's index in the list of the shape, tip, workpiece and lift entries (observe)
+        self._tilt_at = self.slices["workpiece_tilt"].start - self.slices["finger_shape"].start
         self._low_l, self._high_l = self.low.tolist(), self.high.tolist()
-        # the fingers' hinges in qpos: a slice (the builder's contiguous block) or a list of addresses
-        self._hq = hinge_qpos if isinstance(hinge_qpos, slice) else np.asarray(hinge_qpos).ravel().tolist()
         self._python_tips = 4 <= n <= 64  # _numpy_sum's range (else numpy sums the tips, as it always did)
+        self._tip = _tip_function(n) if self._python_tips else None
+        self._qpos = self._hinge_view = None  # observe's view of the hinges and the qpos array it views
+
+    def __getstate__(self):
+        # the compiled tip function and the view of one MjData's qpos are made again (__setstate__, observe)
+        state = self.__dict__.copy()
+        state["_tip"] = state["_qpos"] = state["_hinge_view"] = None
+        return state
+
+    def __setstate__(self, state):
+        self.__dict__.update(state)
+        self._tip = _tip_function(self.n) if self._python_tips else None
 
     def __call__(self, data, forces, kappa_cmd, kappa, z0: float, hold: float) -> np.ndarray:
         """The observation of ``data``: ``forces`` are :class:`WorkpieceContactForces`' ``(normal, friction,
@@ -188,28 +222,27 @@ class MultiObservation:
         inv_l, K, n = self.inv_l, self.K, self.n
         palm_z, palm_v = q[self.palm_qpos], v[self.palm_dof]
         wq, wd = self.work_qpos, self.work_dof
-        # header: palm height, curvature command and actual curvature in action units
+        # header: curvature command and actual curvature in action units
         a, b = self._k_scale
-        vals = [palm_z * inv_l]
-        vals += [a * k + b for k in kappa_cmd]
-        vals += [a * k + b for k in kappa]
+        kk = [a * k + b for k in kappa_cmd]
+        kk += [a * k + b for k in kappa]
         if self._python_tips:
-            # link angles (cumulative hinge angles, np.cumsum's order); the shape samples by one product (BLAS, as
-            # before); the tips by the chain's forward kinematics in each finger's plane, X + iZ = ds sum exp(i theta),
-            # in Python floats summed in numpy's order (_numpy_sum)
-            hq = self._hq
-            qh = q[hq] if type(hq) is slice else [q[j] for j in hq]
-            theta = [list(accumulate(qh[f * n:(f + 1) * n])) for f in range(K)]
-            vals += np.dot(np.array(theta), self._interp_t).ravel().tolist()
-            ds, cos, sin = self._ds, math.cos, math.sin
-            for c in theta:
-                vals += [_numpy_sum([cos(t) for t in c]) * ds, _numpy_sum([sin(t) for t in c]) * ds]
+            # link angles (cumulative hinge angles: np.cumsum, sequential as itertools.accumulate was); the shape
+            # samples by one product (BLAS, as before); the tips by the chain's forward kinematics in each finger's
+            # plane, X + iZ = ds sum exp(i theta), in Python floats summed in numpy's order (_numpy_sum, _tip)
+            if qpos is not self._qpos:  # the (K, n) view of the hinges, bound once per data (qpos is one array)
+                self._qpos, self._hinge_view = qpos, qpos[self.hinge_qpos].reshape(K, n)
+            theta = _accumulate(self._hinge_view, 1)  # np.cumsum(..., axis=1) without its wrapper
+            mid = np.dot(theta, self._interp_t).ravel().tolist()
+            tip, ds = self._tip, self._ds
+            for c in theta.tolist():
+                mid += tip(c, ds)
         else:
             theta = np.cumsum(qpos[self.hinge_qpos].reshape(K, n), axis=1)
-            vals += np.dot(theta, self._interp_t).ravel().tolist()
+            mid = np.dot(theta, self._interp_t).ravel().tolist()
             tip = np.exp(1j * theta).sum(axis=1) * self._ds
             for X, Z in zip(tip.real.tolist(), tip.imag.tolist()):
-                vals += [X, Z]
+                mid += [X, Z]
         x, y, z, qw, qx, qy, qz = q[wq:wq + 7]
         vx, vy, vz, wx, wy, wz = v[wd:wd + 6]
         # rotation matrix of the unit quaternion (qw, qx, qy, qz); the free joint's angular velocity is in
@@ -218,17 +251,28 @@ class MultiObservation:
         r10, r11, r12 = 2 * (qx * qy + qw * qz), 1 - 2 * (qx * qx + qz * qz), 2 * (qy * qz - qw * qx)
         r20, r21, r22 = 2 * (qx * qz - qw * qy), 2 * (qy * qz + qw * qx), 1 - 2 * (qx * qx + qy * qy)
         st = SPIN_TIME
-        vals += [x * inv_l, y * inv_l, (z - palm_z) * inv_l, r02, r12,
-                 vx * inv_l, vy * inv_l, (vz - palm_v) * inv_l,
-                 (r00 * wx + r01 * wy + r02 * wz) * st, (r10 * wx + r11 * wy + r12 * wz) * st,
-                 (r20 * wx + r21 * wy + r22 * wz) * st, (z - z0) / self.target_height]
+        mid += [x * inv_l, y * inv_l, (z - palm_z) * inv_l, r02, r12,
+                vx * inv_l, vy * inv_l, (vz - palm_v) * inv_l,
+                (r00 * wx + r01 * wy + r02 * wz) * st, (r10 * wx + r11 * wy + r12 * wz) * st,
+                (r20 * wx + r21 * wy + r22 * wz) * st, (z - z0) / self.target_height]
         fu = self.force_unit
         normal, friction, _ = forces
         log1p = math.log1p
-        for fn, ff in zip(normal, friction):
-            vals += [log1p(max(fn, 0.0) / fu), log1p(max(ff, 0.0) / fu)]
-        vals.append(min(hold / self.hold_time, 1.0) if self.hold_time > 0 else 0.0)
-        # clipped to the bounds in Python (np.maximum / np.minimum's results for finite values), one array
+        fl = []
+        for fn, ff in zip(normal, friction):  # max(f, 0.0), written out
+            fl += [log1p((0.0 if 0.0 > fn else fn) / fu), log1p((0.0 if 0.0 > ff else ff) / fu)]
+        p = palm_z * inv_l
+        hold_obs = min(hold / self.hold_time, 1.0) if self.hold_time > 0 else 0.0  # in [0, 1] (hold >= 0)
+        # the usual case, clipped by comparisons only (identity inside the bounds): the shape, tip, position,
+        # velocity, spin and lift entries (bounds +-5 or wider) within +-5, the tilt within +-1, the curvatures
+        # within +-2 (their bounds: +-2 or wider), the palm height in [0, 10], the forces in [0, 20].  Else every
+        # entry is clipped to its bound, as always (np.maximum / np.minimum's results for finite values)
+        t0 = self._tilt_at
+        if (-5.0 <= min(mid) and max(mid) <= 5.0 and -1.0 <= mid[t0] <= 1.0 and -1.0 <= mid[t0 + 1] <= 1.0
+                and -2.0 <= min(kk) and max(kk) <= 2.0 and 0.0 <= p <= 10.0 and 0.0 <= min(fl)
+                and max(fl) <= 20.0):
+            return np.array([p, *kk, *mid, *fl, hold_obs])
+        vals = [p, *kk, *mid, *fl, hold_obs]
         return np.array([lo_ if x < lo_ else (hi_ if x > hi_ else x) for x, lo_, hi_ in zip(vals, self._low_l, self._high_l)])
 
 
@@ -257,7 +301,7 @@ class MultiReward:
         """``(reward, lift, success, squeeze, drop)`` of one step (arguments as :func:`multi_reward`'s)."""
         weight, allow = self.weight, self.allow
         xs = [max(s - allow, 0.0) / weight for s in side_forces]
-        r_squeeze = -self.w_squeeze * sum(x / (1.0 + x) for x in xs) / self.K
+        r_squeeze = -self.w_squeeze * sum([x / (1.0 + x) for x in xs]) / self.K  # (a list: sum's own order)
         r_lift = self.w_lift * (phi - phi_prev)
         r_success = self.w_success if success else 0.0
         r_drop = -self.w_drop if lost else 0.0

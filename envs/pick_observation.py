@@ -191,8 +191,21 @@ class PickObservation:
                     math.log1p(forces[0] / fu), math.log1p(forces[1] / fu), math.log1p(forces[2] / fu),
                     math.log1p(forces[3] / fu), hold_obs]
         else:  # finger 0 and the box's z
-            vals = [palm_z * inv_l, 2.0 * (c0 - lo) / span - 1.0, 2.0 * (k0 - lo) / span - 1.0,
-                    *self.finger_shape(q, 0), x0 * inv_l, (z0_tip - palm_z) * inv_l, (bz - palm_z) * inv_l, (v[bd + 2] - palm_v) * inv_l,
-                    (bz - z0) / th, math.log1p(forces[0] / fu), math.log1p(forces[1] / fu), hold_obs]
+            h = self._hinges[0]
+            c = list(accumulate(q[h] if type(h) is slice else [q[j] for j in h]))  # link angles (finger_shape)
+            mid = [wa * c[i] + wb * c[i + 1] for i, wa, wb in self._lerp]
+            mid += [x0 * inv_l, (z0_tip - palm_z) * inv_l, (bz - palm_z) * inv_l, (v[bd + 2] - palm_v) * inv_l,
+                    (bz - z0) / th]
+            p = palm_z * inv_l
+            f0, f1 = math.log1p(forces[0] / fu), math.log1p(forces[1] / fu)
+            # the usual case, clipped by comparisons only: the shape, tip, box and lift entries (bounds +-5 or
+            # wider) within +-5, the palm height in [0, 10], the forces in [0, 20]; the curvatures (in [lo, hi],
+            # so within [-1, 1] in action units; bounds [-2, 2] or wider) and the hold (in [0, 1]) are inside
+            # their bounds by construction.  Else every entry is clipped, as always.
+            if (-5.0 <= min(mid) and max(mid) <= 5.0 and 0.0 <= p <= 10.0 and 0.0 <= f0 <= 20.0
+                    and 0.0 <= f1 <= 20.0):
+                return np.array([p, 2.0 * (c0 - lo) / span - 1.0, 2.0 * (k0 - lo) / span - 1.0, *mid, f0, f1,
+                                 hold_obs])
+            vals = [p, 2.0 * (c0 - lo) / span - 1.0, 2.0 * (k0 - lo) / span - 1.0, *mid, f0, f1, hold_obs]
         return np.array([lo_ if x < lo_ else (hi_ if x > hi_ else x)
                          for x, lo_, hi_ in zip(vals, self._low, self._high)])

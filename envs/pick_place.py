@@ -41,7 +41,6 @@ import mujoco
 import numpy as np
 from gymnasium import spaces
 
-from simgrip.envs.arguments import check_action
 from simgrip.envs.arguments import check_number as _num
 from simgrip.envs.arguments import check_positive as _pos
 from simgrip.envs.arguments import check_range as _range
@@ -157,15 +156,14 @@ class FragilePlaceEnv(FragilePickEnv):
         info["target_x"] = self.target_x
         return self._extend(obs), info
 
-    def step(self, action):
-        a = check_action(action, self._action_shape)
+    def _step_checked(self, a: list):
         d = self.data
         self._palm_x_target = min(max(self._palm_x_target + a[1] * self.palm_speed * self.dt, -self.x_range),
                                   self.x_range)
         d.ctrl[1] = self._palm_x_target
         if not self._needs_reset:  # the knock-over rule's "pushed 3 cm" follows the palm
             self._xy0 = (float(d.qpos[self._palm_x_qpos]) + self._dxy[0], self._dxy[1])
-        obs, reward, terminated, truncated, info = super().step(action)
+        obs, reward, terminated, truncated, info = super()._step_checked(a)
         q = d.qpos
         bx, gain = float(q[self.box_qpos]), float(q[self.box_qpos + 2]) - self._z0
         both = min(self._normal) > 0.0  # info["normal_force"], as floats

@@ -24,8 +24,6 @@ from __future__ import annotations
 
 import math
 
-import numpy as np
-
 from simgrip.envs.arguments import check_action
 
 __all__ = ["KAPPA_RATE", "ValveCommand", "absolute_to_valve"]
@@ -65,11 +63,12 @@ class ValveCommand:
         return obs, info
 
     def step(self, action):
+        # the action is checked once: the env's layers take the checked list (simgrip.envs.pick_step.CheckedStep)
         a = check_action(action, self._action_shape)
         c = self._valve + self.kappa_rate * a[0]
         self._valve = c = -1.0 if c < -1.0 else (1.0 if c > 1.0 else c)
         a[0] = c
-        return super().step(np.array(a))
+        return self._step_checked(a)
 
 
 def absolute_to_valve(target: float, command: float, kappa_rate: float) -> float:

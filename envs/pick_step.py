@@ -1,0 +1,52 @@
+"""What the two-finger and the K-finger pick environments share around ``step``.
+
+:class:`CheckedStep` splits ``step`` in two: ``step(action)`` checks the episode and the action
+(:func:`simgrip.envs.arguments.check_action`: a list of floats clipped to ``[-1, 1]``) and hands the list to
+``_step_checked(a)``, which every layer of an environment (the fragile tasks' crush rule and reward, the place
+task, the env itself) overrides and chains with ``super()._step_checked(a)``.  A layer that reads the action
+first (the valve of :mod:`simgrip.envs.valve`) checks it once and calls ``_step_checked`` itself, so the action
+is checked once per step however many layers there are (issue 18: the env layer's Python time per control
+step).  It also holds the curvature properties both environments had.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+from gymnasium.error import ResetNeeded
+
+from simgrip.envs.arguments import check_action
+
+__all__ = ["CheckedStep", "reset_needed"]
+
+
+def reset_needed() -> ResetNeeded:
+    """The error of a ``step`` before ``reset`` or after the episode terminated."""
+    return ResetNeeded("step() called before reset() or after the episode terminated; call reset()")
+
+
+class CheckedStep:
+    """``step`` = check, then ``_step_checked`` (a mixin placed before ``gym.Env``; module docstring).
+
+    ``_kcmd``, ``_kact``: the commanded and actual curvatures (sequences of floats) the environment keeps.
+    """
+
+    _needs_reset = True
+
+    def step(self, action):
+        if self._needs_reset:
+            raise reset_needed()
+        return self._step_checked(check_action(action, self._action_shape))
+
+    def _step_checked(self, a: list):  # pragma: no cover - defined by each environment
+        """One control step for the checked action ``a`` (list of floats in ``[-1, 1]``): ``step``'s result."""
+        raise NotImplementedError
+
+    @property
+    def _kappa_cmd(self) -> np.ndarray:
+        """Commanded curvatures (both fingers, or 1 shared / K; a copy)."""
+        return np.array(self._kcmd)
+
+    @property
+    def _kappa(self) -> np.ndarray:
+        """Actual curvatures after the lag (both fingers, or 1 shared / K; a copy)."""
+        return np.array(self._kact)
