@@ -252,6 +252,8 @@ class PickEnv(CheckedStep, gym.Env):
     * v0: initial version.
     """
 
+    _tactile_unit: float | None = None  # the tactile scale W [N] (None: g times the mean mass)
+
     metadata = {"render_modes": ["rgb_array"], "render_fps": 50}
 
     def __init__(
@@ -327,7 +329,8 @@ class PickEnv(CheckedStep, gym.Env):
         na = 3 if self.per_finger else 2
         self.action_space = spaces.Box(-1.0, 1.0, (na,), dtype=np.float32)
         self._action_shape = (na,)
-        self._force_unit = self.g * float(np.mean(self.box_mass_range))
+        # W of the tactile observation log(1 + F/W) [N]: the mean weight, or a subclass's sensor scale
+        self._force_unit = self._tactile_unit or self.g * float(np.mean(self.box_mass_range))
         self._observe = PickObservation(
             n_links=self.n, shape_points=self.shape_points, per_finger=self.per_finger, kappa_range=self.kappa_range,
             length=self.length, target_height=self.target_height, hold_time=self.hold_time,

@@ -178,6 +178,8 @@ class PickMultiEnv(CheckedStep, gym.Env):
     * v0: first version.
     """
 
+    _tactile_unit: float | None = None  # the tactile scale W [N] (None: g times the mean mass)
+
     metadata = {"render_modes": ["rgb_array"], "render_fps": 50}
 
     def __init__(
@@ -298,7 +300,8 @@ class PickMultiEnv(CheckedStep, gym.Env):
         self.palm_qpos, self.palm_dof = pm.palm_qpos, pm.palm_dof
         self.work_qpos, self.work_dof = pm.work_qpos, pm.work_dof
         self._hinges = pm.fingers.hinge_qpos
-        self._force_unit = self.g * float(np.mean(self.mass_range))
+        # W of the tactile observation log(1 + F/W) [N]: the mean weight, or a subclass's sensor scale
+        self._force_unit = self._tactile_unit or self.g * float(np.mean(self.mass_range))
         self._observe = MultiObservation(
             fingers=self.K, n_links=self.n, shape_points=self.shape_points, shared_curvature=self.shared_curvature,
             kappa_range=self.kappa_range, length=self.length, target_height=self.target_height,
