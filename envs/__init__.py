@@ -9,17 +9,18 @@ id                                what                                      max 
 ``simgrip/Pick-v1``               Grip I: palm-down tip pinch (50 Hz)       200 (4 s)
 ``simgrip/PickCradle-v1``         Grip III: cradle from a pedestal (50 Hz)  250 (5 s)
 ``simgrip/PickMulti-v0``          K fingers around a box, cylinder, sphere  200 (4 s)
-``simgrip/PickFragile-v2``        Grip I pinch of a fragile workpiece       300 (6 s)
-``simgrip/PickMultiFragile-v2``   K fingers around a fragile workpiece      300 (6 s)
-``simgrip/PlaceFragile-v2``       pinch, carry to a target, set down        400 (8 s)
-``simgrip/PickCradleFragile-v3``  Grip III cradle, hand start height drawn  300 (6 s)
-``simgrip/PickSphereFragile-v3``  K fingers around a sphere, height drawn   300 (6 s)
+``simgrip/PickFragile-v3``        Grip I pinch of a fragile workpiece       300 (6 s)
+``simgrip/PickMultiFragile-v3``   K fingers around a fragile workpiece      300 (6 s)
+``simgrip/PlaceFragile-v3``       pinch, carry to a target, set down        400 (8 s)
+``simgrip/PickCradleFragile-v4``  Grip III cradle, hand start height drawn  300 (6 s)
+``simgrip/PickSphereFragile-v4``  K fingers around a sphere, height drawn   300 (6 s)
 ================================  ========================================  =========
 
 The five fragile tasks (a hidden crush limit per episode) command the curvature through a valve (the action
-is its rate, :mod:`simgrip.envs.pick_fragile_v2`).  Their older versions are retired, not registered:
-``PickFragile``, ``PickMultiFragile``, ``PlaceFragile`` v0-v1 and ``PickCradleFragile``,
-``PickSphereFragile`` v0-v2 (``RETIRED``); ``gym.make(retired_spec("simgrip/PickFragile-v1"))`` still builds
+is its rate, :mod:`simgrip.envs.pick_fragile_v2`) and observe the contact forces on a tactile sensor's scale
+(:mod:`simgrip.envs.pick_fragile_v3`).  Their older versions are retired, not registered:
+``PickFragile``, ``PickMultiFragile``, ``PlaceFragile`` v0-v2 and ``PickCradleFragile``,
+``PickSphereFragile`` v0-v3 (``RETIRED``); ``gym.make(retired_spec("simgrip/PickFragile-v2"))`` still builds
 one exactly, with its time limit.
 
 >>> import gymnasium as gym, simgrip.envs
@@ -46,12 +47,12 @@ _ENVS = {
     "simgrip/Pick-v1": ("simgrip.envs.pick:PickEnv", {"grip": "I"}, 200),
     "simgrip/PickCradle-v1": ("simgrip.envs.pick:PickEnv", {"grip": "III"}, 250),
     "simgrip/PickMulti-v0": ("simgrip.envs.pick_multi:PickMultiEnv", {}, 200),
-    # the newest of each: the curvature through a valve (its action a rate), simgrip.envs.pick_fragile_v2
-    "simgrip/PickFragile-v2": ("simgrip.envs.pick_fragile_v2:FragilePickEnvV2", {}, 300),
-    "simgrip/PickMultiFragile-v2": ("simgrip.envs.pick_fragile_v2:FragilePickMultiEnvV2", {}, 300),
-    "simgrip/PlaceFragile-v2": ("simgrip.envs.pick_fragile_v2:FragilePlaceEnvV2", {}, 400),
-    "simgrip/PickCradleFragile-v3": ("simgrip.envs.pick_fragile_v2:FragileCradleEnvV3", {}, 300),
-    "simgrip/PickSphereFragile-v3": ("simgrip.envs.pick_fragile_v2:FragileSphereEnvV3", {}, 300),
+    # the newest of each: the valve, the tactile forces on the sensor's scale (simgrip.envs.pick_fragile_v3)
+    "simgrip/PickFragile-v3": ("simgrip.envs.pick_fragile_v3:FragilePickEnvV3", {}, 300),
+    "simgrip/PickMultiFragile-v3": ("simgrip.envs.pick_fragile_v3:FragilePickMultiEnvV3", {}, 300),
+    "simgrip/PlaceFragile-v3": ("simgrip.envs.pick_fragile_v3:FragilePlaceEnvV3", {}, 400),
+    "simgrip/PickCradleFragile-v4": ("simgrip.envs.pick_fragile_v3:FragileCradleEnvV4", {}, 300),
+    "simgrip/PickSphereFragile-v4": ("simgrip.envs.pick_fragile_v3:FragileSphereEnvV4", {}, 300),
 }
 #: Retired ids (issue 18), not registered: id -> (entry point, kwargs, max_episode_steps), as they were
 #: registered.  Each task's newest version (in ``_ENVS``) subclasses its class; ``gym.make`` of a retired id
@@ -74,10 +75,16 @@ RETIRED = {
     # v2: v1 with the hand started at an unknown height (a fixed descent misses the grasp height)
     "simgrip/PickCradleFragile-v2": ("simgrip.envs.pick_cradle_fragile_v2:FragileCradleEnvV2", {}, 300),
     "simgrip/PickSphereFragile-v2": ("simgrip.envs.pick_sphere_fragile_v2:FragileSphereEnvV2", {}, 300),
+    # the curvature through a valve (its action a rate; cradle and sphere v3), simgrip.envs.pick_fragile_v2
+    "simgrip/PickFragile-v2": ("simgrip.envs.pick_fragile_v2:FragilePickEnvV2", {}, 300),
+    "simgrip/PickMultiFragile-v2": ("simgrip.envs.pick_fragile_v2:FragilePickMultiEnvV2", {}, 300),
+    "simgrip/PlaceFragile-v2": ("simgrip.envs.pick_fragile_v2:FragilePlaceEnvV2", {}, 400),
+    "simgrip/PickCradleFragile-v3": ("simgrip.envs.pick_fragile_v2:FragileCradleEnvV3", {}, 300),
+    "simgrip/PickSphereFragile-v3": ("simgrip.envs.pick_fragile_v2:FragileSphereEnvV3", {}, 300),
 }
 ENV_IDS = tuple(k for k, v in _ENVS.items() if v[0] == "simgrip.envs.pick:PickEnv")
 MULTI_ENV_IDS = tuple(k for k, v in _ENVS.items() if v[0] == "simgrip.envs.pick_multi:PickMultiEnv")
-FRAGILE_ENV_IDS = tuple(k for k, v in _ENVS.items() if v[0].split(":")[0] == "simgrip.envs.pick_fragile_v2")
+FRAGILE_ENV_IDS = tuple(k for k, v in _ENVS.items() if v[0].split(":")[0] == "simgrip.envs.pick_fragile_v3")
 
 
 def retired_spec(env_id: str) -> EnvSpec:

@@ -45,36 +45,7 @@ successes in 3244 training episodes, settled on touching without lifting (v1's t
 episode), and with that term removed (``w_touch = 0``) 0 in 1290 episodes (pinch, 4 CPU-min); at 1.6-2.6
 with these masses it reached 30 / 50 % after 2 / 4 CPU-min.
 
-Info keys (every ``step``, the same in all five; PlaceFragile adds four, below):
-
-=====================  ==========================================================================
-key                    meaning
-=====================  ==========================================================================
-``is_success``         lifted ``target_height`` and held ``hold_time``, never crushed (terminates;
-                       PlaceFragile: carried and set down on the target, :mod:`simgrip.envs.pick_place`)
-``workpiece_lift``     workpiece centre's height gain since the start of the episode [m]
-``crushed``            a finger's normal force exceeded ``crush_limit`` this step (terminates)
-``dropped``            lifted, then sank ``drop_distance`` relative to the palm (terminates)
-``knocked_over``       tilted or pushed sideways out of reach (terminates)
-``normal_force``       per finger: summed contact normal force on the workpiece [N]
-``friction_force``     per finger: friction force magnitude on the workpiece [N]
-``side_force``         per finger: horizontal (squeezing) part of the normal force [N]
-``hold_time``          time held at the target height [s]
-``crush_limit``        this episode's crush limit [N] (hidden from the observation)
-``fingers_touching``   K-finger tasks: how many fingers touch the workpiece
-``valid``              no finger through itself or another (``invalid``: the messages, when not)
-``reward_lift``        v1's reward terms (:mod:`simgrip.envs.pick_fragile_v1`): lift progress,
-``reward_success``     success, squeeze (0), drop or knock-over, crush (graded), first contact
-``reward_squeeze``     of every finger, touching
-``reward_drop``
-``reward_crush``
-``reward_contact``
-``reward_touch``
-``reward_place``       PlaceFragile: progress towards the target (v0's term)
-``place_error``        PlaceFragile: ``|x - x_t|``, the workpiece's distance from the target [m]
-``carried``            PlaceFragile: the workpiece has been carried (lifted ``carry_height``)
-``target_x``           PlaceFragile: the target's ``x`` [m]
-=====================  ==========================================================================
+Info keys: those of :mod:`simgrip.envs.pick_fragile_v3`'s table (v3 changed only the observation).
 """
 
 from __future__ import annotations
