@@ -33,7 +33,7 @@ from simgrip.envs.arguments import check_range as _range
 from simgrip.envs.pick_contacts import BoxContactForces
 from simgrip.envs.pick_model import build_pick_model, resize_workpiece
 from simgrip.envs.pick_observation import OBS_LAYOUT, PickObservation, obs_layout
-from simgrip.envs.pick_reward import PickReward, progress
+from simgrip.envs.pick_reward import PickReward
 from simgrip.envs.pick_step import CheckedStep, reset_needed
 from simgrip.envs.pick_validity import FingerValidity
 from simgrip.params import DimensionlessParams, PhysicalParams
@@ -465,7 +465,7 @@ class PickEnv(CheckedStep, gym.Env):
         self._tips = (d.geom_xpos[int(self.fingers.tip_geom[0])], d.geom_xpos[int(self.fingers.tip_geom[1])])
         # what step() reads, in one tuple (one attribute lookup); the constants beside it never change
         self._hot = (self.model, d, self._check, self._qpos, self._qvel, self._ctrl, self._tips[0], self._tips[1],
-                     self._contact_forces, self._observe)
+                     self._contact_forces, self._observe, d.warning.number, self._spring_view, self._unit_rest2)
         self._consts = (self.kappa_range[0], self.kappa_range[1], self.per_finger, self._lag_alpha,
                         self.palm_range[0], self.palm_range[1], self.palm_speed, self.dt, self.frame_skip,
                         self.box_qpos, self.palm_qpos, self.target_height, self.hold_time, self.drop_distance)
@@ -521,7 +521,7 @@ class PickEnv(CheckedStep, gym.Env):
         if self._needs_reset:
             raise reset_needed()
         lo, hi, per_finger, alpha, palm_lo, palm_hi, palm_step, dt, fs, bq, pq, target, hold_time, drop = self._consts
-        model, data, check, qpos, qvel, ctrl, tip0, tip1, contact_forces, observe = self._hot
+        model, data, check, qpos, qvel, ctrl, tip0, tip1, contact_forces, observe, warnings, rest, unit = self._hot
         k0 = lo + 0.5 * (a[0] + 1.0) * (hi - lo)
         k1 = lo + 0.5 * (a[1] + 1.0) * (hi - lo) if per_finger else k0
         self._kcmd = (k0, k1)
@@ -529,10 +529,14 @@ class PickEnv(CheckedStep, gym.Env):
         c0, c1 = self._kact
         c0, c1 = c0 + alpha * (k0 - c0), c1 + alpha * (k1 - c1)
         self._kact = (c0, c1)
-        self._set_rest(c0, c1)
-        self._palm_target = palm = min(max(self._palm_target + a[-1] * palm_step * dt, palm_lo), palm_hi)
+        if rest is not None and c0 == c1:  # _set_rest(c0, c1), written out for its usual case
+            np.multiply(unit, c0, out=rest)
+        else:
+            self._set_rest(c0, c1)
+        palm = self._palm_target + a[-1] * palm_step * dt  # min(max(., palm_lo), palm_hi), written out
+        self._palm_target = palm = palm_lo if palm_lo > palm else (palm_hi if palm_hi < palm else palm)
         ctrl[0] = palm
-        check.clear()
+        warnings.fill(0)  # check.clear()
         mujoco.mj_step(model, data, fs)  # nstep = frame_skip (positional: pybind's keyword parsing costs more)
         q, v = qpos.tolist(), qvel.tolist()
         why = check(q, v)
@@ -558,7 +562,8 @@ class PickEnv(CheckedStep, gym.Env):
         self._hold = hold = self._hold + dt if gain >= target and both else 0.0
         success = hold >= hold_time - 1e-9
         lost = (dropped or knocked) and not success
-        phi = progress(gain, target, lost)
+        phi = 0.0 if lost else gain / target  # progress(gain, target, lost), written out (the same values)
+        phi = 0.0 if 0.0 > phi else (1.0 if 1.0 < phi else phi)
         reward, r_lift, r_success, r_squeeze, r_drop = self._reward(phi, self._phi, success, lost, s0, s1)
         self._phi = phi
         terminated = success or lost

@@ -438,9 +438,8 @@ class PickMultiEnv(CheckedStep, gym.Env):
             np.multiply(self._unit_rest, kap[0], out=self._spring)
         else:
             self._set_kappa(kap)
-        palm = self._palm_target + a[-1] * palm_step * dt
-        palm = palm_lo if palm_lo > palm else palm  # max(palm, palm_lo)
-        self._palm_target = palm = palm_hi if palm_hi < palm else palm  # min(palm, palm_hi)
+        palm = self._palm_target + a[-1] * palm_step * dt  # min(max(., palm_lo), palm_hi), written out
+        self._palm_target = palm = palm_lo if palm_lo > palm else (palm_hi if palm_hi < palm else palm)
         ctrl[0] = palm
         warnings.fill(0)  # check.clear()
         mujoco.mj_step(m, d, fs)  # nstep (positional: pybind's keyword parsing costs more)
@@ -467,12 +466,8 @@ class PickMultiEnv(CheckedStep, gym.Env):
         self._hold = hold = self._hold + dt if gain >= target and touching >= 2 else 0.0
         success = hold >= hold_time - 1e-9
         lost = (dropped or knocked) and not success
-        if lost:  # progress(gain, target, lost), written out
-            phi = 0.0
-        else:
-            phi = gain / target
-            phi = 0.0 if 0.0 > phi else phi
-            phi = 1.0 if 1.0 < phi else phi
+        phi = 0.0 if lost else gain / target  # progress(gain, target, lost), written out (the same values)
+        phi = 0.0 if 0.0 > phi else (1.0 if 1.0 < phi else phi)
         reward, r_lift, r_success, r_squeeze, r_drop = self._reward(phi, self._phi, success, lost, side)
         self._phi = phi
         terminated = bool(success or lost)

@@ -18,7 +18,7 @@ keeps the usual step cheap:
   (one broadcast over every pair of links of every finger; for two fingers from a common base, the pairs
   that close to it are the palm's joint and not compared, :func:`simgrip.validity.chain_violations`).
 
-The last screen runs as two matrix products over every pair of links in preallocated buffers
+The last screen runs as one matrix product over every pair of links in preallocated buffers
 (:meth:`FingerValidity._bound`: the midpoint bound against the exact path's clearance, with every hinge
 within ``pi/2``): it answers valid only where the steps below would, and it goes straight to
 :func:`~simgrip.validity.chain_violations` only where they would, so it changes no verdict, only the cost
@@ -61,6 +61,7 @@ _PAIR_CACHE = 256
 #: relative margin of :meth:`FingerValidity._bound_clear`'s thresholds over round-off (~1e-16 of the chain's size)
 _ROUND_OFF = 1e-8
 _HALF_PI = 0.5 * math.pi
+_min = np.minimum.reduce  # ndarray.min without its Python wrapper
 
 
 class FingerValidity:
@@ -166,13 +167,20 @@ class FingerValidity:
         # threshold T, so a pair is cleared when its row's squared norm is at least 1
         T = (self._limit * (1.0 + CLEAR_MARGIN) + half[pi] + half[pj]) * (1.0 + _ROUND_OFF)
         self._Qb, self._Qt = Qb / (2.0 * T[:, None]), Qt / (2.0 * T[:, None])
+        # _bound's one product: the nodes' coordinates (bodies, then tips) gathered in _P, times the rows of both
+        # matrices side by side, transposed (3 x pairs: BLAS's fast shape for three coordinates)
+        self._QT = np.ascontiguousarray(np.hstack([self._Qb, self._Qt]).T)
+        self._nb = self._body_cols[1] - self._body_cols[0]
+        self._P = np.empty((self._nb + self._tip_cols[1] - self._tip_cols[0], 3))
+        self._DT = np.empty((3, pi.size))
         # the other way round: midpoints closer than the clearance (by _ROUND_OFF) put the pair's exact distance
         # below it, so the exact path cannot prove the state valid (:meth:`_bound`); same scale as the rows
         self._C = (self._limit * (1.0 + CLEAR_MARGIN) * (1.0 - _ROUND_OFF) / T) ** 2
         self._pair_self = np.where(pi // n == pj // n, pi // n, -1).tolist()  # the finger of a self pair, else -1
         self._hinges = [a for row in self._jq for a in row]
-        self._D = np.empty((pi.size, 3))
-        self._Dt = np.empty((pi.size, 3))
+        # the hinges' qpos as one slice where contiguous (the builder's case): _bound reads their min and max
+        h = self._hinges
+        self._hinge_slice = slice(h[0], h[-1] + 1) if h == list(range(h[0], h[0] + len(h))) else None
         self._d2 = np.empty(pi.size)
         self._ones = np.ones(3)
 
@@ -222,20 +230,28 @@ class FingerValidity:
         it valid: a pair it compares (a pair of two fingers: their nodes' boxes come within the limit; of one
         finger: one that turned more than ``pi/2``) has midpoints closer than the clearance, so it is near and its
         exact distance is below the clearance (:meth:`_near_clear` fails), and only
-        :func:`~simgrip.validity.chain_violations` decides.  0 otherwise.  Shortcuts to the same verdict: two
-        matrix products give every pair's midpoint difference over its threshold (precomputed rows), six numpy
-        calls in preallocated buffers instead of the exact path's ~20 and its gathers."""
-        for a in self._hinges:
-            if not -_HALF_PI < q[a] < _HALF_PI:
+        :func:`~simgrip.validity.chain_violations` decides.  0 otherwise.  Shortcuts to the same verdict: one
+        matrix product gives every pair's midpoint difference over its threshold (precomputed rows, transposed:
+        3 x pairs), six numpy calls in preallocated buffers instead of the exact path's ~20 and its gathers."""
+        h = self._hinge_slice
+        if h is not None:  # the step's state is finite (checked before): min / max decide as the loop below
+            qh = q[h]
+            if not (-_HALF_PI < min(qh) and max(qh) < _HALF_PI):
                 return 0
+        else:
+            for a in self._hinges:
+                if not -_HALF_PI < q[a] < _HALF_PI:
+                    return 0
         if not self._d2.size:  # no pair is ever compared (the exact path answers valid too)
             return 1
         (b0, b1), (t0, t1) = self._body_cols, self._tip_cols
-        D = np.dot(self._Qb, data.xpos[b0:b1], out=self._D)  # (S_i - S_j) / (2 T) of every pair
-        D += np.dot(self._Qt, data.geom_xpos[t0:t1], out=self._Dt)
-        D *= D
-        d2 = np.dot(D, self._ones, out=self._d2)
-        if d2.min() >= 1.0:
+        P, nb = self._P, self._nb
+        P[:nb] = data.xpos[b0:b1]
+        P[nb:] = data.geom_xpos[t0:t1]
+        D = np.dot(P.T, self._QT, out=self._DT)  # (S_i - S_j) / (2 T) of every pair, one column each
+        np.multiply(D, D, out=D)
+        d2 = np.dot(self._ones, D, out=self._d2)
+        if _min(d2) >= 1.0:
             return 1
         for p in np.flatnonzero(d2 < self._C).tolist():
             f = self._pair_self[p]
