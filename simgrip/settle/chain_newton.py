@@ -11,7 +11,11 @@ the fingers) and share the border: the workpiece's ``x, z, ry`` and both
 fingers' contact and stick rows.
 Contact rows are ``dist + N / K_c = 0`` (length units); the line search and
 the convergence test use the residual in MuJoCo's dofs (hinge moments are
-suffix sums of the link-angle forces).
+suffix sums of the link-angle forces).  ``K_c`` is MuJoCo's, read back at each
+accepted state; it moves with the configuration (~3e-6 relative over the
+first step of a Grip I start, enough to put the contact row ~1e3 times above
+its floor), so a quadratic-phase step is followed by a chord step with its own
+Jacobian (:meth:`ChainNewton._chord`) rather than a whole second iteration.
 
 MuJoCo stays the judge: the contact set is MuJoCo's (``mj_geomDistance``),
 ``K_c`` is read back from MuJoCo's contact force at each converged solve, and
