@@ -199,7 +199,7 @@ class _Fragile:
         if "box_lift" in info:
             info["workpiece_lift"] = info.pop("box_lift")
         if self._final_check:  # PlaceFragile declares its own success after this and checks there
-            reward += self._final_validity(info, terminated)
+            reward += self._final_validity(info, terminated) if terminated else 0.0  # (0.0: what it returns)
         return obs, reward + r_crush, terminated, truncated, info
 
 
