@@ -15,7 +15,6 @@ array once.
 from __future__ import annotations
 
 import math
-from itertools import accumulate
 
 import numpy as np
 
@@ -84,6 +83,21 @@ def _bounds(kappa_range, shape_points: int, per_finger: bool):
     return layout, slices, pick, low, high
 
 
+def _shape_function(hinges, lerp: tuple):
+    """``shape(q) -> list``: one finger's shape samples from ``q = data.qpos.tolist()``, ``hinges`` its qpos
+    addresses (a slice or a list), ``lerp`` the ``(i, w_a, w_b)`` of each sample (``theta = w_a c[i] + w_b
+    c[i+1]``, ``c`` the link angles: the hinges' running sum).  Compiled once with the loops written out: the
+    same additions and products in the same order as ``itertools.accumulate`` and the weighted sums (issue 18:
+    the observation runs on every step)."""
+    addrs = list(range(hinges.start, hinges.stop)) if isinstance(hinges, slice) else [int(a) for a in hinges]
+    body = [f"    c0 = q[{addrs[0]}]"] + [f"    c{k} = c{k - 1} + q[{a}]" for k, a in enumerate(addrs[1:], 1)]
+    samples = ", ".join(f"{float(wa)!r} * c{i} + {float(wb)!r} * c{i + 1}" for i, wa, wb in lerp)
+    src = "def shape(q):\n" + "\n".join(body) + f"\n    return [{samples}]\n"
+    scope: dict = {}
+    exec(compile(src, "<pick_observation shape>", "exec"), scope)  # noqa: S102 - our own source
+    return scope["shape"]
+
+
 class PickObservation:
     """Turns the state of a pick model into the environment's observation vector.
 
@@ -146,6 +160,16 @@ class PickObservation:
             w = float(min(max((s_k - s_link[i]) / (s_link[i + 1] - s_link[i]), 0.0), 1.0))
             lerp.append((i, 1.0 - w, w))
         self._lerp = tuple(lerp)
+        self._shapes = tuple(_shape_function(h, self._lerp) for h in self._hinges)
+
+    def __getstate__(self):
+        state = self.__dict__.copy()
+        state["_shapes"] = None  # compiled functions: made again from the hinges and weights (__setstate__)
+        return state
+
+    def __setstate__(self, state):
+        self.__dict__.update(state)
+        self._shapes = tuple(_shape_function(h, self._lerp) for h in self._hinges)
 
     def __call__(self, data, forces, kappa_cmd, kappa, z0: float, hold: float, qpos: list | None = None) -> np.ndarray:
         """The observation of ``data``.
@@ -163,9 +187,7 @@ class PickObservation:
 
     def finger_shape(self, q: list, finger: int) -> list:
         """Tangent angles [rad] of ``finger`` at the ``shape_points`` arc lengths, from ``q = data.qpos.tolist()``."""
-        h = self._hinges[finger]
-        c = list(accumulate(q[h] if type(h) is slice else [q[j] for j in h]))  # link angles
-        return [wa * c[i] + wb * c[i + 1] for i, wa, wb in self._lerp]
+        return self._shapes[finger](q)  # (_shape_function: the link angles' running sum, then the weights)
 
     def observe(self, q: list, v: list, tip0, tip1, c0: float, c1: float, k0: float, k1: float, forces,
                 z0: float, hold: float) -> np.ndarray:
@@ -195,9 +217,7 @@ class PickObservation:
                     math.log1p(forces[0] / fu), math.log1p(forces[1] / fu), math.log1p(forces[2] / fu),
                     math.log1p(forces[3] / fu), hold_obs]
         else:  # finger 0 and the box's z
-            h = self._hinges[0]
-            c = list(accumulate(q[h] if type(h) is slice else [q[j] for j in h]))  # link angles (finger_shape)
-            mid = [wa * c[i] + wb * c[i + 1] for i, wa, wb in self._lerp]
+            mid = self._shapes[0](q)  # finger_shape(q, 0)
             mid += [x0 * inv_l, (z0_tip - palm_z) * inv_l, (bz - palm_z) * inv_l, (v[bd + 2] - palm_v) * inv_l,
                     (bz - z0) / th]
             p = palm_z * inv_l

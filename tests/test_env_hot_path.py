@@ -4,7 +4,8 @@
 shortcuts themselves, on inputs the recorded episodes may not reach:
 
 * the K-finger observation's tip sums (``_tip_function``: ``_numpy_sum``'s additions written out) equal
-  ``_numpy_sum`` to the last bit, the sign of zero included, for every link count it serves;
+  ``_numpy_sum`` to the last bit, the sign of zero included, for every link count it serves, and the two-finger
+  observation's compiled shape samples (``_shape_function``) equal the running sum and weights they replace;
 * both observations' comparison-only clipping (taken when every entry lies inside its bound) gives the bytes
   of the full per-entry clipping, on the envs' own states and on states pushed outside the bounds;
 * the action is checked once per step however many layers an env has (the valve's check is the only one),
@@ -47,6 +48,32 @@ def test_tip_sums_equal_numpy_sum_to_the_bit():
     for bad in (3, 65):
         with pytest.raises(ValueError, match="n must lie in"):
             _tip_function(bad)
+
+
+@pytest.mark.parametrize("n_links, shape_points", [(12, 8), (5, 3), (20, 7), (2, 2)])
+def test_shape_samples_equal_the_running_sum_and_weights_to_the_bit(n_links, shape_points):
+    """The compiled finger shape (``_shape_function``) against ``itertools.accumulate`` and the weighted sums it
+    replaced, for both fingers, contiguous (a slice) and scattered (a list) hinge addresses."""
+    from itertools import accumulate
+
+    from simgrip.envs.pick_observation import PickObservation
+
+    rng = np.random.default_rng(n_links)
+    size = 2 * n_links + 30
+    scattered = rng.permutation(np.arange(3, size))[:2 * n_links]
+    for hinges in ((slice(7, 7 + 2 * n_links),), scattered):
+        obs = PickObservation(n_links=n_links, shape_points=shape_points, per_finger=True, kappa_range=(-10.0, 0.0),
+                              length=0.1, target_height=0.06, hold_time=0.5, force_unit=0.4, palm_qpos=0,
+                              palm_dof=0, box_qpos=0, box_dof=0, tips=(0, 1), hinge_qpos=hinges)
+        for trial in range(50):
+            q = (rng.normal(0.0, (1e-6, 0.3, 3.0)[trial % 3], size)).tolist()
+            for f in (0, 1):
+                h = obs._hinges[f]
+                c = list(accumulate(q[h] if type(h) is slice else [q[j] for j in h]))
+                want = [wa * c[i] + wb * c[i + 1] for i, wa, wb in obs._lerp]
+                assert _bits(obs.finger_shape(q, f)) == _bits(want)
+        copy = pickle.loads(pickle.dumps(obs))  # the compiled functions are made again
+        assert _bits(copy.finger_shape(q, 1)) == _bits(obs.finger_shape(q, 1))
 
 
 def _pick_inputs(env):
