@@ -1,0 +1,49 @@
+"""PlaceFragile-v3's observation-only pick-and-place controller (:class:`~simgrip.envs.scripted_fragile.PlacePolicy`
+with its :class:`~simgrip.envs.scripted_fragile.PlaceGripPolicy`), issue 18."""
+
+import gymnasium as gym
+import numpy as np
+import pytest
+
+import simgrip.envs  # noqa: F401  (registers the ids)
+from simgrip.envs.scripted_fragile import ObservationFragilePolicy, PlaceGripPolicy, PlacePolicy
+from simgrip.envs.valve import absolute_to_valve
+
+# a 6 g workpiece on grippy skin: N_hold = m g / (2 mu) = 0.027 N, and the narrowest window of the draw (1.6 N_hold)
+LIGHT = {"box_mass": 0.006, "friction": 1.1, "box_width": 0.05, "target_x": 0.06}
+
+
+def _run(grip, options):
+    env = gym.make("simgrip/PlaceFragile-v3")
+    u = env.unwrapped
+    obs, info = env.reset(seed=0, options={k: v for k, v in options.items() if k != "crush_ratio"})
+    obs, info = env.reset(seed=0, options={**{k: v for k, v in options.items() if k != "crush_ratio"},
+                                           "crush_limit": options["crush_ratio"] * u.hold_force})
+    pol = PlacePolicy(grip)
+    pol.reset(env, info)
+    peak = 0.0
+    while True:
+        a = np.array(pol(obs), dtype=np.float32)
+        a[0] = absolute_to_valve(a[0], u.valve_command, u.kappa_rate)  # as simgrip.envs.baselines runs it
+        obs, _, term, trunc, info = env.step(a)
+        peak = max(peak, max(info["normal_force"]))
+        if term or trunc:
+            env.close()
+            return info, peak / u.hold_force
+
+
+def test_place_grip_catches_a_light_workpiece_in_the_narrowest_window():
+    info, peak = _run(PlaceGripPolicy(), {**LIGHT, "crush_ratio": 1.6})
+    assert info["is_success"] and not info["crushed"], info
+    assert peak < 1.6
+    # the pick task's grip (full valve rate into the contact) carries the force through that window
+    info, peak = _run(ObservationFragilePolicy(), {**LIGHT, "crush_ratio": 1.6})
+    assert info["crushed"] and peak > 1.6
+
+
+def test_place_policy_closes_on_creep_only_with_an_observation_grip():
+    from simgrip.envs.scripted_fragile import OracleFragilePolicy
+    assert PlacePolicy().slip_frac > 0.0 and isinstance(PlacePolicy().grip, PlaceGripPolicy)
+    assert PlacePolicy(OracleFragilePolicy()).slip_frac == 0.0
+    with pytest.raises(TypeError):
+        PlaceGripPolicy(no_such_argument=1)
