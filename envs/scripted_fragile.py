@@ -165,7 +165,8 @@ class PlaceGripPolicy(ObservationFragilePolicy):
                  lift_trigger: float = 0.0001, margin: float = 0.05, probe_speed: float = 0.05, **kwargs):
         super().__init__(margin=margin, lift_trigger=lift_trigger, min_rate=min_rate, rel_rate=rel_rate,
                          probe_speed=probe_speed, **kwargs)
-        self.approach, self.fast_rate, self.approach_rate, self.max_rate = approach, fast_rate, approach_rate, max_rate
+        self.approach, self.fast_rate, self.approach_rate = approach, fast_rate, approach_rate
+        self.max_rate = max_rate
 
     def reset(self, env, info=None):
         super().reset(env, info)
@@ -216,6 +217,11 @@ class PlacePolicy:
     middle; both rules off: with the creep rule the oracle crushed more, 67 instead of 68 % on seeds 6100-6199
     and 48 instead of 60 % on 6200-6249, measured with the carry started from rest).
 
+    On an env with an absolute curvature command (the retired ``PlaceFragile-v0``/``-v1``, crush ratio 1.3-1.7)
+    it is the controller their stored baselines were measured with: :class:`ObservationFragilePolicy`'s grip by
+    default, no force feedback, the palm still in ``x`` until lifted (these defaults gave 62 % there instead of
+    82 % on seeds 6000-6049 of ``PlaceFragile-v0``; the oracle 76 instead of 84 %).
+
     ``PlaceFragile-v3`` (``python -m simgrip.envs.baselines --policy observation``, ``--policy oracle``), success
     on seeds 6100-6199 (tuned on) / 6200-6249 (checked) / 6000-6049 (held out): observation 65 / 60 / 74 % with
     :class:`ObservationFragilePolicy`'s grip, the palm still in ``x`` until lifted (then at once at the speed
@@ -226,6 +232,7 @@ class PlacePolicy:
     def __init__(self, grip=None, *, ramp: float = 0.02, align: float = 0.003, lower_speed: float = 0.4,
                  down: float = 0.05, x_step: float = 0.05, slip_distance: float = 0.0015, slip_window: int = 10,
                  slip_frac: float | None = None, slip_cap: float = 0.3, ease: float = 1.4, ease_frac: float = 0.01):
+        self._default_grip = grip is None
         self.grip = PlaceGripPolicy() if grip is None else grip
         self.ramp, self.align, self.lower_speed, self.down = ramp, align, lower_speed, down
         self.x_step = x_step  # the largest change of the palm's x command per step (its acceleration: inertial
@@ -237,8 +244,16 @@ class PlacePolicy:
         self.ease, self.ease_frac = ease, ease_frac
 
     def reset(self, env, info=None):
-        self.grip.reset(env, info)
+        from simgrip.envs.valve import ValveCommand
+
         u = env.unwrapped
+        # an absolute curvature command (the retired PlaceFragile-v0/-v1, crush ratio 1.3-1.7): the controller
+        # their stored baselines were measured with (ObservationFragilePolicy's grip, no force feedback, the palm
+        # still in x until lifted)
+        self._legacy = not isinstance(u, ValveCommand)
+        if self._default_grip:
+            self.grip = ObservationFragilePolicy() if self._legacy else PlaceGripPolicy()
+        self.grip.reset(env, info)
         sl = u.obs_slices
         self._i_lift = sl["box_lift"].start
         self._i_wx, self._i_tx = sl["workpiece_x"].start, sl["target_x"].start
@@ -270,7 +285,7 @@ class PlacePolicy:
         a_k, a_z = (float(v) for v in self.grip(obs))
         if self.grip._frozen is None:
             return np.array([a_k, 0.0, a_z], dtype=np.float32)
-        if self.slip_frac > 0.0:  # the grip's force feedback (observation grips): ease, or close on creep
+        if self.slip_frac > 0.0 and not self._legacy:  # the force feedback (observation grips): ease, or close
             g = self.grip
             f = float(g._forces(obs).max())
             if self._n_freeze is None:
@@ -288,7 +303,7 @@ class PlacePolicy:
         if self._phase == "grip" and lift >= 1.0:
             self._phase = "carry"
         if self._phase == "grip":  # towards the target already while lifting (a shorter carry: less creep)
-            return np.array([a_k, a_x, a_z], dtype=np.float32)
+            return np.array([a_k, 0.0 if self._legacy else a_x, a_z], dtype=np.float32)
         if self._phase == "carry" and abs(err) < self.align:
             self._phase = "lower"
         if self._phase == "carry":

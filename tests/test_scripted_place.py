@@ -46,9 +46,20 @@ def test_the_pick_grip_crushes_the_lightest():
     assert info["crushed"] and peak > LIGHT["crush_ratio"]
 
 
-def test_place_policy_closes_on_creep_only_with_an_observation_grip():
+def test_place_policy_grip_by_env_and_feedback_only_with_an_observation_grip():
     from simgrip.envs.scripted_fragile import OracleFragilePolicy
-    assert PlacePolicy().slip_frac > 0.0 and isinstance(PlacePolicy().grip, PlaceGripPolicy)
+    assert PlacePolicy().slip_frac > 0.0
     assert PlacePolicy(OracleFragilePolicy()).slip_frac == 0.0
+    # the valve task gets the place grip; the retired absolute-command PlaceFragile-v0 the controller its stored
+    # baselines were measured with (ObservationFragilePolicy's grip, no force feedback)
+    for env_id, cls, legacy in (("simgrip/PlaceFragile-v3", PlaceGripPolicy, False),
+                                ("simgrip/PlaceFragile-v0", ObservationFragilePolicy, True)):
+        from simgrip.envs import RETIRED, retired_spec
+        env = gym.make(retired_spec(env_id) if env_id in RETIRED else env_id)
+        _, info = env.reset(seed=0)
+        pol = PlacePolicy()
+        pol.reset(env, info)
+        assert type(pol.grip) is cls and pol._legacy is legacy
+        env.close()
     with pytest.raises(TypeError):
         PlaceGripPolicy(no_such_argument=1)
