@@ -34,7 +34,7 @@ from simgrip.envs.pick_contacts import BoxContactForces
 from simgrip.envs.pick_model import build_pick_model, resize_workpiece
 from simgrip.envs.pick_observation import OBS_LAYOUT, PickObservation, obs_layout
 from simgrip.envs.pick_reward import PickReward
-from simgrip.envs.pick_step import CheckedStep, reset_needed
+from simgrip.envs.pick_step import CheckedStep
 from simgrip.envs.pick_validity import FingerValidity
 from simgrip.params import DimensionlessParams, PhysicalParams
 from simgrip.sim.checks import PhysicsError, StateCheck, check_invalid_state
@@ -515,11 +515,9 @@ class PickEnv(CheckedStep, gym.Env):
         return self._get_obs(forces, d.qpos.tolist(), d.qvel.tolist()), info
 
     def _step_checked(self, a: list):
-        # step(action) checks the action (pick_step.CheckedStep). Every line here runs once per control step beside
+        # step(action) checked the episode and the action (pick_step.CheckedStep). Every line here runs once per control step beside
         # frame_skip mj_step calls: constants and views are bound once (_bind_views), arrays read as lists (one
         # tolist each) and combined in Python.
-        if self._needs_reset:
-            raise reset_needed()
         lo, hi, per_finger, alpha, palm_lo, palm_hi, palm_step, dt, fs, bq, pq, target, hold_time, drop = self._consts
         model, data, check, qpos, qvel, ctrl, tip0, tip1, contact_forces, observe, warnings, rest, unit = self._hot
         k0 = lo + 0.5 * (a[0] + 1.0) * (hi - lo)

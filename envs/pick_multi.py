@@ -27,7 +27,7 @@ from simgrip.envs.arguments import check_range as _range
 from simgrip.envs.pick_multi_model import build_pick_multi_model, half_height, set_workpiece
 from simgrip.envs.pick_multi_observation import MultiObservation, MultiReward, WorkpieceContactForces
 from simgrip.envs.pick_multi_workpiece import WORKPIECE_OPTIONS, WorkpieceParams, draw_workpiece
-from simgrip.envs.pick_step import CheckedStep, reset_needed
+from simgrip.envs.pick_step import CheckedStep
 from simgrip.envs.pick_validity import FingerValidity
 from simgrip.params import DimensionlessParams, PhysicalParams
 from simgrip.sim.checks import PhysicsError, StateCheck, check_invalid_state
@@ -423,12 +423,10 @@ class PickMultiEnv(CheckedStep, gym.Env):
         return self._get_obs(self._forces(d)), info
 
     def _step_checked(self, a: list):
-        # step(action) checks the action (pick_step.CheckedStep). Runs once per control step beside frame_skip
+        # step(action) checked the episode and the action (pick_step.CheckedStep). Runs once per control step beside frame_skip
         # mj_step calls: the constants bound once (_consts) and the views per model (_select, _hot), the state read
         # as lists once, the reward's constants bound per episode (MultiReward), the arithmetic that of
         # multi_reward and MultiObservation (min / max written out as comparisons, the same values)
-        if self._needs_reset:
-            raise reset_needed()
         lo, hi, alpha, palm_lo, palm_hi, palm_step, dt, fs, wq, pq, target, hold_time, drop = self._consts
         m, d, check, qpos, qvel, ctrl, warnings = self._hot
         self._kcmd = cmd = [lo + 0.5 * (v + 1.0) * (hi - lo) for v in a[:-1]]

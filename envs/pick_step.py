@@ -3,10 +3,10 @@
 :class:`CheckedStep` splits ``step`` in two: ``step(action)`` checks the episode and the action
 (:func:`simgrip.envs.arguments.check_action`: a list of floats clipped to ``[-1, 1]``) and hands the list to
 ``_step_checked(a)``, which every layer of an environment (the fragile tasks' crush rule and reward, the place
-task, the env itself) overrides and chains with ``super()._step_checked(a)``.  A layer that reads the action
-first (the valve of :mod:`simgrip.envs.valve`) checks it once and calls ``_step_checked`` itself, so the action
-is checked once per step however many layers there are (issue 18: the env layer's Python time per control
-step).  It also holds the curvature properties both environments had.
+task, the valve of :mod:`simgrip.envs.valve`, the env itself) overrides and chains with
+``super()._step_checked(a)``, so the episode and the action are checked once per step however many layers
+there are (issue 18: the env layer's Python time per control step), before any layer changes its state.  It
+also holds the curvature properties both environments had.
 """
 
 from __future__ import annotations
@@ -16,12 +16,7 @@ from gymnasium.error import ResetNeeded
 
 from simgrip.envs.arguments import check_action
 
-__all__ = ["CheckedStep", "reset_needed"]
-
-
-def reset_needed() -> ResetNeeded:
-    """The error of a ``step`` before ``reset`` or after the episode terminated."""
-    return ResetNeeded("step() called before reset() or after the episode terminated; call reset()")
+__all__ = ["CheckedStep"]
 
 
 class CheckedStep:
@@ -34,7 +29,7 @@ class CheckedStep:
 
     def step(self, action):
         if self._needs_reset:
-            raise reset_needed()
+            raise ResetNeeded("step() called before reset() or after the episode terminated; call reset()")
         return self._step_checked(check_action(action, self._action_shape))
 
     def _step_checked(self, a: list):  # pragma: no cover - defined by each environment

@@ -24,8 +24,6 @@ from __future__ import annotations
 
 import math
 
-from simgrip.envs.arguments import check_action
-
 __all__ = ["KAPPA_RATE", "ValveCommand", "absolute_to_valve"]
 
 #: default valve rate: the curvature command's largest change per control step [action units]
@@ -62,13 +60,13 @@ class ValveCommand:
         self._valve = float(obs[self.obs_slices["kappa_command"]][0])
         return obs, info
 
-    def step(self, action):
-        # the action is checked once: the env's layers take the checked list (simgrip.envs.pick_step.CheckedStep)
-        a = check_action(action, self._action_shape)
+    def _step_checked(self, a: list):
+        # the first layer of the step's chain (simgrip.envs.pick_step.CheckedStep: step checked the episode and
+        # the action once): the rate becomes the absolute command the layers below read
         c = self._valve + self.kappa_rate * a[0]
         self._valve = c = -1.0 if c < -1.0 else (1.0 if c > 1.0 else c)
         a[0] = c
-        return self._step_checked(a)
+        return super()._step_checked(a)
 
 
 def absolute_to_valve(target: float, command: float, kappa_rate: float) -> float:

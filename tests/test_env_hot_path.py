@@ -173,6 +173,8 @@ def test_multi_observation_clips_as_the_full_clip(make):
 def test_the_action_is_checked_once_per_step(cls, monkeypatch):
     calls = []
     for module in (pick_step, valve):
+        if not hasattr(module, "check_action"):  # (the valve is a layer of the checked chain: it checks nothing)
+            continue
         orig = module.check_action
 
         def counted(action, shape, _orig=orig):
