@@ -33,7 +33,7 @@ from simgrip.envs.arguments import check_range as _range
 from simgrip.envs.pick_contacts import BoxContactForces
 from simgrip.envs.pick_model import build_pick_model, resize_workpiece
 from simgrip.envs.pick_observation import OBS_LAYOUT, PickObservation, obs_layout
-from simgrip.envs.pick_reward import PickReward
+from simgrip.envs.pick_reward import PickReward, progress
 from simgrip.envs.pick_step import CheckedStep
 from simgrip.envs.pick_validity import FingerValidity
 from simgrip.params import DimensionlessParams, PhysicalParams
@@ -560,8 +560,7 @@ class PickEnv(CheckedStep, gym.Env):
         self._hold = hold = self._hold + dt if gain >= target and both else 0.0
         success = hold >= hold_time - 1e-9
         lost = (dropped or knocked) and not success
-        phi = 0.0 if lost else gain / target  # progress(gain, target, lost), written out (the same values)
-        phi = 0.0 if 0.0 > phi else (1.0 if 1.0 < phi else phi)
+        phi = progress(gain, target, lost)
         reward, r_lift, r_success, r_squeeze, r_drop = self._reward(phi, self._phi, success, lost, s0, s1)
         self._phi = phi
         terminated = success or lost

@@ -27,6 +27,7 @@ from simgrip.envs.arguments import check_range as _range
 from simgrip.envs.pick_multi_model import build_pick_multi_model, half_height, set_workpiece
 from simgrip.envs.pick_multi_observation import MultiObservation, MultiReward, WorkpieceContactForces
 from simgrip.envs.pick_multi_workpiece import WORKPIECE_OPTIONS, WorkpieceParams, draw_workpiece
+from simgrip.envs.pick_reward import progress
 from simgrip.envs.pick_step import CheckedStep
 from simgrip.envs.pick_validity import FingerValidity
 from simgrip.params import DimensionlessParams, PhysicalParams
@@ -464,8 +465,7 @@ class PickMultiEnv(CheckedStep, gym.Env):
         self._hold = hold = self._hold + dt if gain >= target and touching >= 2 else 0.0
         success = hold >= hold_time - 1e-9
         lost = (dropped or knocked) and not success
-        phi = 0.0 if lost else gain / target  # progress(gain, target, lost), written out (the same values)
-        phi = 0.0 if 0.0 > phi else (1.0 if 1.0 < phi else phi)
+        phi = progress(gain, target, lost)
         reward, r_lift, r_success, r_squeeze, r_drop = self._reward(phi, self._phi, success, lost, side)
         self._phi = phi
         terminated = bool(success or lost)
