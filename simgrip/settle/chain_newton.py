@@ -338,13 +338,13 @@ class ChainNewton(Newton):
         anchoring: a stick's anchors are replaced (new arrays, :meth:`Stick.reanchor`), never edited in place, so
         the same state with the same anchor arrays and offset gives the same term bit for bit."""
         s = self.sticks[i]
-        key = (s.local_f, s.local_w, s.t_local, s.offset, s.body_f, s.t_body)
+        anchors, values = (s.local_f, s.local_w, s.t_local), (s.offset, s.body_f, s.t_body)
         hit = self._memo.get(("stick", i))
-        if hit is not None and hit[0] is phi and hit[1] is w and hit[2][:3] == tuple(id(a) for a in key[:3]) \
-                and hit[2][3:] == key[3:]:
-            return hit[3]
+        if (hit is not None and hit[0] is phi and hit[1] is w and all(a is b for a, b in zip(hit[2], anchors))
+                and hit[3] == values):
+            return hit[4]
         out = self.model.stick_term(s, phi, nodes, w)
-        self._memo[("stick", i)] = (phi, w, (id(s.local_f), id(s.local_w), id(s.t_local)) + key[3:], out, key[:3])
+        self._memo[("stick", i)] = (phi, w, anchors, values, out)
         return out
 
     def _distances(self, phi, w) -> np.ndarray:
