@@ -18,7 +18,7 @@ from simgrip.contact_report import contact_records, node_records
 from simgrip.params import DimensionlessParams, check_grip
 from simgrip.profiles import as_profile
 
-__all__ = ["settle_fields", "settled_record", "simulate", "tip_forces"]
+__all__ = ["settle_fields", "settled_record", "simulate", "tip_forces", "verdict_fields"]
 
 
 def simulate(grip: str, params: DimensionlessParams, profile, links: int, *, progress=None, method=None,
@@ -64,7 +64,8 @@ def simulate(grip: str, params: DimensionlessParams, profile, links: int, *, pro
     build_time_s = time.perf_counter() - t0
     try:
         with phase(progress, "settling"):
-            state = settle(scene, method="newton" if auto else method, **settle_kw)
+            # sync=False: the cached scene is reset before its next use and nobody else sees its data
+            state = settle(scene, method="newton" if auto else method, **{"sync": False, **settle_kw})
     except SettleError as exc:
         if not (auto and settle_kw.get("contact") in (None, "surface") and settle_kw.get("target_error") is None):
             raise
@@ -122,23 +123,23 @@ def settled_record(state, params: DimensionlessParams, profile=None) -> dict:
     """
     c = state.contact
     grip = state.grip
+    v = verdict_fields(state)
     rec = {
         "source": "simulation",
         "grip": grip,
         "links": int(state.links),
-        "tip": [float(state.tip[0][0]), float(state.tip[0][1])] if state.tip.ndim == 2 else [float(v) for v in state.tip],
-        "normal_force": float(state.normal_force),
+        "tip": v["tip"],
+        "normal_force": v["normal_force"],
         "friction_force": float(state.friction_force),
-        "required_mu": float(state.required_mu) if c is not None else 0.0,
-        "feasible": (bool(state.held and state.tip_clear and getattr(state, "contact_ok", True)) if grip != "free"
-                     else True) and bool(getattr(state, "valid", True)),
-        "valid": bool(getattr(state, "valid", True)),
+        "required_mu": v["required_mu"],
+        "feasible": v["feasible"],
+        "valid": v["valid"],
         "min_eigenvalue": None if profile is None else _stability(state, grip, params, as_profile(profile)),
         "N1": float(state.N1),
         "N2": float(state.N2),
         **settle_fields(state),
         "method": state.method,
-        "warnings": list(state.warnings),
+        "warnings": v["warnings"],
         "extrapolated": bool(state.extrapolated),
         "error_estimate": state.error_estimate,
         "params": {"D": params.D, "M": params.M, "b": params.b, "mu_s": params.mu_s, "gamma": params.gamma},
@@ -164,6 +165,27 @@ def settled_record(state, params: DimensionlessParams, profile=None) -> dict:
 
         rec["tip_normal_force"], rec["tip_friction_force"] = tip_forces(state, DEFAULT_R_TIP)
     return rec
+
+
+def verdict_fields(state) -> dict:
+    """The fields of :func:`settled_record` that say what the settle found, without the per-node and per-contact
+    lists (a sweep's row, :mod:`simgrip.sweep.point`): ``tip`` (finger 0's, over ``l``), ``normal_force``,
+    ``required_mu`` (0 without a contact), ``feasible``, ``valid``, ``warnings``, and :func:`settle_fields`'
+    ``held``, ``wall_time_s``, ``penetration``, ``converged``; the same values as the record's."""
+    tip = state.tip
+    return {
+        "tip": [float(tip[0][0]), float(tip[0][1])] if tip.ndim == 2 else [float(v) for v in tip],
+        "normal_force": float(state.normal_force),
+        "required_mu": float(state.required_mu) if state.contact is not None else 0.0,
+        "feasible": (bool(state.held and state.tip_clear and getattr(state, "contact_ok", True))
+                     if state.grip != "free" else True) and bool(getattr(state, "valid", True)),
+        "valid": bool(getattr(state, "valid", True)),
+        "warnings": list(state.warnings),
+        "held": bool(state.held),
+        "wall_time_s": float(state.wall_time_s),
+        "penetration": float(state.penetration),
+        "converged": bool(state.converged),
+    }
 
 
 def settle_fields(state) -> dict:

@@ -152,6 +152,7 @@ def _settle(
     allow_unconverged: bool = False,
     method: str = "newton",
     contact: str | None = None,
+    sync: bool = True,
 ) -> SettledState:
     """Drive ``scene`` to static equilibrium (see the module docstring).
 
@@ -193,6 +194,12 @@ def _settle(
         for Grips I/II, ``~r_link f`` for III; compare against the
         couple-aware reference with ``contact_moment``).  ``"dynamics"`` is
         always ``"surface"`` (MuJoCo's own friction).
+    sync : bool
+        Leave the scene's data at the settled state (``mj_forward``, or the positions of a
+        contact-free chain: :func:`.statics.sync_scene`; ~0.1 ms at ``n = 32``), as the default does.
+        ``False`` leaves it where the solve's last evaluation left it, for a caller that discards the
+        scene (:func:`simgrip.compare.simulate`'s cached scene, reset before its next use): the returned
+        state is read before and is the same either way.
 
     Returns
     -------
@@ -209,7 +216,7 @@ def _settle(
     if method not in ("newton", "dynamics"):
         raise ValueError(f"method must be 'newton' or 'dynamics', got {method!r}")
     if isinstance(scene, Scene) and (scene.contact == "full" or contact == "full"):
-        return _settle_full(scene, tol, max_steps, warm_start, close, allow_unconverged, contact)
+        return _settle_full(scene, tol, max_steps, warm_start, close, allow_unconverged, contact, sync)
     if contact is None:
         contact = "point" if method == "newton" else "surface"
     if contact not in ("point", "surface") or (method == "dynamics" and contact != "surface"):
@@ -291,12 +298,12 @@ def _settle(
         restore_options(m, saved)
         d.qfrc_applied[:] = 0.0
         d.qvel[:] = 0.0
-        if run is None or not run.positions_current():  # (a contact-free state's positions are already there)
+        if sync and (run is None or not run.positions_current()):  # (a contact-free state's are there already)
             sync_scene(scene)
     return state
 
 
-def _settle_full(scene, tol, max_steps, warm_start, close, allow_unconverged, contact) -> SettledState:
+def _settle_full(scene, tol, max_steps, warm_start, close, allow_unconverged, contact, sync=True) -> SettledState:
     """``contact="full"`` (:mod:`.full_contact`): the over-damped dynamics with every contact on, whatever
     ``method`` (the full-contact Newton is not built); ``tol`` defaults to the dynamics' creep floor."""
     from simgrip.settle.full_contact import settle_full
@@ -323,7 +330,8 @@ def _settle_full(scene, tol, max_steps, warm_start, close, allow_unconverged, co
         restore_options(m, saved)
         d.qfrc_applied[:] = 0.0
         d.qvel[:] = 0.0
-        sync_scene(scene)
+        if sync:
+            sync_scene(scene)
     return state
 
 

@@ -10,7 +10,7 @@ message; the BVP is solved independently of the simulation
 uniform curvature; none for a full-contact sweep,
 :mod:`simgrip.sweep.grid`) and its failure leaves the ``bvp_*`` columns empty with
 ``bvp_message``.  All the physics comes from the library's public functions
-(:func:`simgrip.compare.simulate`, :func:`simgrip.compare.settled_record`,
+(:func:`simgrip.compare.simulate`, :func:`simgrip.settled.verdict_fields`,
 :func:`simgrip.reference.elastica.solve`).
 
 The reference at the cost of a continuation (:func:`evaluate_segment`): along
@@ -72,8 +72,9 @@ def _message(exc: BaseException) -> str:
 
 
 def _simulation(point: SweepPoint) -> dict:
-    from simgrip.compare import settled_record, simulate
+    from simgrip.compare import simulate
     from simgrip.profiles import Uniform
+    from simgrip.settled import verdict_fields  # (settled_record's fields, less its node/contact lists)
 
     out = {c: None for c in SIM_COLUMNS}
     out.update(wall_time_s=None, message="")
@@ -81,7 +82,7 @@ def _simulation(point: SweepPoint) -> dict:
         params = point.params()
         state = simulate(point.grip, params, Uniform(point.kappa), point.links, method=point.method,
                          **point.settle_options())
-        rec = settled_record(state, params)
+        rec = verdict_fields(state)
     except ValueError as exc:
         out.update(status="rejected", message=_message(exc))
         return out
@@ -95,14 +96,14 @@ def _simulation(point: SweepPoint) -> dict:
         status="settled" if rec["converged"] else "unsettled",
         held=bool(rec["held"]),
         feasible=bool(rec["feasible"]),
-        valid=bool(rec.get("valid", True)),
+        valid=bool(rec["valid"]),
         normal_force=float(rec["normal_force"]),
         required_mu=float(rec["required_mu"]),
         tip_x=float(rec["tip"][0]),
         tip_z=float(rec["tip"][1]),
         penetration=float(rec["penetration"]),
         wall_time_s=float(rec["wall_time_s"]),
-        message="; ".join(str(w) for w in rec.get("warnings", ())),
+        message="; ".join(str(w) for w in rec["warnings"]),
     )
     return out
 
