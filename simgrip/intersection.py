@@ -14,8 +14,9 @@ built on these (which distance is too close, which tolerance) are
   segments whose boxes, one grown by ``limit``, do not overlap cannot be within
   it), in blocks of links first, so a smooth chain costs ``O(n)`` pairs, not ``O(n^2)``.
 * :func:`self_clear_below` -- which pairs of links of a planar polyline the range of
-  its tangents alone proves neither crossing nor within a limit (``O(n log n)``; the
-  exact tests above then see only the rest).
+  its tangents (then, for a curled rod, the distances of the links' midpoints) proves
+  neither crossing nor within a limit (``O(n log n)``; the exact tests above then see
+  only the rest).
 * :func:`box_sdf`, :func:`cylinder_sdf`, :func:`sphere_sdf` -- signed distance
   to a convex solid in its own frame (negative inside).
 * :func:`segment_box_sdf_2d` -- the least signed distance along planar
@@ -30,7 +31,7 @@ import math
 
 import numpy as np
 
-__all__ = ["CLEAR_MARGIN", "box_sdf", "candidate_pairs", "close_link_pairs", "crossing_pairs", "cylinder_sdf",
+__all__ = ["CLEAR_MARGIN", "FAR_PAIR_LINKS", "box_sdf", "candidate_pairs", "close_link_pairs", "crossing_pairs", "cylinder_sdf",
            "segment_box_sdf_2d", "segment_distances", "segment_min_sdf", "self_clear", "self_clear_below", "sphere_sdf"]
 
 _EPS = 1e-300
@@ -185,7 +186,9 @@ def self_clear_below(nodes, limit: float, gap: int) -> int:
     one; doubled windows from the halves' extremes, so O(n) a band) and the bound ``(d_k - 1) h_min
     cos(R/2)``, which must exceed ``limit`` by :data:`CLEAR_MARGIN` (bounds and exact distances are both
     computed in floating point).  A smooth rod, whose tangent turns little over a short arc, passes at
-    every ``n``; a rod curled through more than ``pi`` over a band's window does not (the exact tests run).
+    every ``n``; where a band's window is curled through ``pi`` or more, the pairs from that band's ``d_k``
+    on are tried by the links' midpoints instead (:func:`_far_pairs_clear`: a uniform curl of ``|kappa_bar|``
+    up to ~2 pi passes), and only where that fails too are they left to the exact tests.
     """
     P = np.asarray(nodes, dtype=float)
     if P.ndim != 2 or P.shape[1] != 2 or len(P) < 2:
@@ -225,9 +228,41 @@ def self_clear_below(nodes, limit: float, gap: int) -> int:
     while d_k <= m - 1:
         R = grow(min(2 * d_k, m))
         if not (R < math.pi and (d_k - 1) * h_min * math.cos(0.5 * R) > need):
-            return d_k
+            return m if _far_pairs_clear(P, d, d_k, need) else d_k
         d_k *= 2
     return m
+
+
+#: The most links on each side of :func:`_far_pairs_clear`'s pairs (its work is their square: 128 x 128 ~ 30 us).
+FAR_PAIR_LINKS = 128
+
+
+def _far_pairs_clear(P, d, d_k: int, need: float) -> bool:
+    """True when every pair of links ``j - i >= d_k`` of the polyline ``P`` is proved farther apart than ``need``.
+
+    ``d = P[1:] - P[:-1]`` (the links).  The proof, for the rods :func:`self_clear_below`'s tangent range leaves
+    open (curled through ``pi`` or more over a band's window, e.g. a uniform curl ``|kappa_bar| > pi``): every
+    point of link ``k`` lies within ``h_k / 2`` of its midpoint ``c_k`` (a segment is within half its length of
+    its centre), so by the triangle inequality any two points of links ``i`` and ``j`` are at least
+    ``|c_i - c_j| - h_i / 2 - h_j / 2`` apart.  When that bound exceeds ``need`` (``limit`` raised by
+    :data:`CLEAR_MARGIN`, which covers the round-off of the bound and of the exact distances) for every pair,
+    no pair is within ``limit`` and none crosses (crossing links are 0 apart).  ``O(K^2)`` for the ``K = n -
+    d_k`` links on each side, so only tried for ``K <= FAR_PAIR_LINKS``; False (not proved) otherwise.
+    """
+    m = len(d)
+    K = m - d_k
+    if K <= 0:
+        return True
+    if K > FAR_PAIR_LINKS:
+        return False
+    c = P[:-1] + 0.5 * d  # midpoints
+    half = 0.5 * np.sqrt(d[:, 0] * d[:, 0] + d[:, 1] * d[:, 1])
+    # pair (a, b): link i = a, link j = d_k + b; j - i >= d_k is b >= a (the upper triangle with its diagonal)
+    dx = c[:K, 0, None] - c[None, d_k:, 0]
+    dy = c[:K, 1, None] - c[None, d_k:, 1]
+    bound = np.sqrt(dx * dx + dy * dy) - half[:K, None] - half[None, d_k:]
+    a = np.arange(K)
+    return bool(np.min(bound, where=a[:, None] <= a[None, :], initial=np.inf) > need)
 
 
 def box_sdf(points, half) -> np.ndarray:
