@@ -111,10 +111,11 @@ class _Entry:
         else:
             for dst, src in self.fields:  # same shapes and dtypes: an exact copy (a quarter of np.copyto's call cost)
                 dst[...] = src
+        mo, to, ms, ts = m.opt, t.opt, m.stat, t.stat  # (one view each: every ``m.opt`` builds a new one)
         for name in _OPTION_FIELDS:
-            setattr(m.opt, name, getattr(t.opt, name))
+            setattr(mo, name, getattr(to, name))
         for name in ("center", "extent", "meaninertia", "meanmass", "meansize"):
-            setattr(m.stat, name, getattr(t.stat, name))
+            setattr(ms, name, getattr(ts, name))
 
 
 _OPTION_FIELDS = tuple(k for k in dir(mujoco.MjOption) if not k.startswith("_"))
