@@ -27,9 +27,11 @@ Policies (actions ``(curvature command, palm speed)`` in ``[-1, 1]``; ``PlaceFra
                 schedule above with the descent ``descent_shift`` steps longer or shorter, see
                 :data:`simgrip.envs.pick_cradle_fragile_v2.OPENLOOP_GRID`)
 ``oracle``      :class:`~simgrip.envs.scripted_fragile.OracleFragilePolicy` (knows the hidden window; for
-                ``PlaceFragile-v0`` inside :class:`~simgrip.envs.scripted_fragile.PlacePolicy`)
+                ``PlaceFragile-v0``/``-v1`` inside :class:`~simgrip.envs.scripted_fragile.AbsolutePlacePolicy`,
+                for a valve PlaceFragile inside :class:`~simgrip.envs.scripted_fragile.PlacePolicy`)
 ``observation`` :class:`~simgrip.envs.scripted_fragile.ObservationFragilePolicy` (the observation only;
-                ``PlaceFragile-v0``: :class:`~simgrip.envs.scripted_fragile.PlacePolicy`;
+                ``PlaceFragile-v0``/``-v1``: :class:`~simgrip.envs.scripted_fragile.AbsolutePlacePolicy`, a
+                valve PlaceFragile: :class:`~simgrip.envs.scripted_fragile.PlacePolicy`;
                 the cradle and the sphere: ``CLAW_POLICIES`` of :mod:`simgrip.envs.scripted_fragile`)
 ``constant``    (a valve env, :mod:`simgrip.envs.valve`: the curvature action is a rate, held it ramps the
                 command to an end of its range: ``VALVE_GRID`` x ``PALM_GRID``)
@@ -180,7 +182,7 @@ def _random(env, info, seed):
 
 
 def _members(policy: str, grid: str, place: bool, claw: str | None = None, family_grid: dict | None = None,
-             valve: bool = False):
+             valve: bool = False, through_valve: bool = False):
     if valve and policy == "constant":  # a constant valve action: ramp at that rate (to an end of the range)
         rates = VALVE_GRID if grid == "full" else VALVE_GRID[::3]
         palms = PALM_GRID if grid == "full" else (0.5,)
@@ -190,7 +192,8 @@ def _members(policy: str, grid: str, place: bool, claw: str | None = None, famil
                     for k in rates for x in xs]
         return [({"kappa_rate_action": k, "palm": p}, _constant(k, p)) for k in rates for p in palms]
     if valve and policy != "random":  # the absolute-command families and controllers, through the valve
-        return [(params, _through_valve(make)) for params, make in _members(policy, grid, place, claw, family_grid)]
+        return [(params, _through_valve(make))
+                for params, make in _members(policy, grid, place, claw, family_grid, through_valve=True)]
     kappas = KAPPA_GRID if grid == "full" else KAPPA_GRID[::2]
     palms = PALM_GRID if grid == "full" else (0.5,)
     ramps = RAMP_GRID if grid == "full" else (25,)
@@ -211,12 +214,14 @@ def _members(policy: str, grid: str, place: bool, claw: str | None = None, famil
         family = _claw_openloop if claw else _openloop
         return [({"kappa": k, "ramp_steps": r, "palm": p}, family(k, r, p))
                 for k in kappas for r in ramps for p in palms]
-    from simgrip.envs.scripted_fragile import ObservationFragilePolicy, OracleFragilePolicy, PlacePolicy
+    from simgrip.envs.scripted_fragile import (AbsolutePlacePolicy, ObservationFragilePolicy, OracleFragilePolicy,
+                                               PlacePolicy)
     if claw:
         from simgrip.envs.scripted_fragile import CLAW_POLICIES
         oracle, observation = CLAW_POLICIES[claw]
     elif place:
-        oracle, observation = (lambda: PlacePolicy(OracleFragilePolicy())), PlacePolicy
+        cls = PlacePolicy if through_valve else AbsolutePlacePolicy  # a valve env, or the retired v0/v1
+        oracle, observation = (lambda: cls(OracleFragilePolicy())), cls
     else:
         oracle, observation = OracleFragilePolicy, ObservationFragilePolicy
     make = {"random": _random, "oracle": _scripted(oracle), "observation": _scripted(observation)}[policy]

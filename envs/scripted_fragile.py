@@ -17,10 +17,12 @@ that holds (``N_hold``).  They differ in how they stop the curvature:
   curvature once the force reaches the window's geometric middle
   ``sqrt(N_hold N_crush)``, then lifts.
 
-The pick-and-place task (``PlaceFragile-v0`` ... ``-v3``): :class:`PlacePolicy` grips with
+The pick-and-place task (valve ``PlaceFragile-v2``, ``-v3``): :class:`PlacePolicy` grips with
 :class:`PlaceGripPolicy` (the same recipe paced for the pneumatic lag: slow near contact, closing by a fraction of
 what is closed, a slower probe), carries and sets down, and follows the observed finger forces while carrying
 (closes when the workpiece creeps down in the grip, eases above 1.4 times the force at the freeze).
+:class:`AbsolutePlacePolicy` is the controller the retired absolute-command ``PlaceFragile-v0``/``-v1`` were
+measured with.
 
 The claw tasks (``PickCradleFragile-v0``, ``PickSphereFragile-v0``) start the same recipe from a claw:
 :class:`CradleFragilePolicy` / :class:`SphereFragilePolicy` open the fingers and move the palm to a grasp
@@ -41,7 +43,8 @@ import math
 import numpy as np
 
 __all__ = ["CLAW_POLICIES", "CradleFragilePolicy", "ObservationFragilePolicy", "OracleCradlePolicy",
-           "OracleFragilePolicy", "OracleSpherePolicy", "PlaceGripPolicy", "PlacePolicy", "SphereFragilePolicy"]
+           "OracleFragilePolicy", "OracleSpherePolicy", "PlaceGripPolicy", "PlacePolicy", "SphereFragilePolicy",
+           "AbsolutePlacePolicy"]
 
 
 class _Closing:
@@ -193,47 +196,17 @@ class PlaceGripPolicy(ObservationFragilePolicy):
         return np.array([self._cmd, self.probe_speed if self._contact_at is not None else 0.0], dtype=np.float32)
 
 
-class PlacePolicy:
-    """Pick-and-place (``PlaceFragile-v0``): grip and lift with ``grip`` (a :class:`PlaceGripPolicy` by default,
-    or an :class:`OracleFragilePolicy`) up to the carry height, carry the workpiece over the target (palm ``x``
-    speed proportional to the observed ``target_x - workpiece_x``, saturating ``ramp`` [m] away, changing that
-    speed by at most ``x_step`` per step, from the freeze on: while lifting too), lower it until it stops sinking
-    on the table (the observed lift below ``down`` of the carry height), and wait there.  Actions ``(curvature,
-    palm x, palm z)``.
+class _PlaceCarry:
+    """The carry and set-down shared by :class:`PlacePolicy` (valve envs) and :class:`AbsolutePlacePolicy`; each
+    defines ``_default_grip_policy()`` and ``_check_env(unwrapped_env)`` (refuses the other kind of env)."""
 
-    With an observation-only grip, from the freeze on, the grip follows the observed finger forces:
-
-    * creep: whenever the workpiece has crept ``slip_distance`` [m] down relative to the palm (its observed
-      height relative to the palm) over the last ``slip_window`` steps, close by ``slip_frac`` of the curvature
-      closed since contact (about that fraction more force), at most ``slip_cap`` of it in all.  A heavy
-      workpiece held near ``N_hold`` creeps down its soft grip at ~0.3 mm per step and is dropped (2 cm) within
-      the carry; a window of 10 steps does not answer the bounce of the lift's start;
-    * ease: while the largest finger force is above ``ease`` times its value at the freeze (about ``N_hold``;
-      every crush limit is at least 1.6 ``N_hold``), open by ``ease_frac`` of the curvature closed since contact
-      per step instead (a heavy workpiece swinging in the grip at the carry's start, or closed on by the creep
-      rule, presses one finger harder).
-
-    ``slip_frac`` None: 0.05, or 0 with an :class:`OracleFragilePolicy` grip (frozen in the hidden window's
-    middle; both rules off: with the creep rule the oracle crushed more, 67 instead of 68 % on seeds 6100-6199
-    and 48 instead of 60 % on 6200-6249, measured with the carry started from rest).
-
-    On an env with an absolute curvature command (the retired ``PlaceFragile-v0``/``-v1``, crush ratio 1.3-1.7)
-    it is the controller their stored baselines were measured with: :class:`ObservationFragilePolicy`'s grip by
-    default, no force feedback, the palm still in ``x`` until lifted (these defaults gave 62 % there instead of
-    82 % on seeds 6000-6049 of ``PlaceFragile-v0``; the oracle 76 instead of 84 %).
-
-    ``PlaceFragile-v3`` (``python -m simgrip.envs.baselines --policy observation``, ``--policy oracle``), success
-    on seeds 6100-6199 (tuned on) / 6200-6249 (checked) / 6000-6049 (held out): observation 65 / 60 / 74 % with
-    :class:`ObservationFragilePolicy`'s grip, the palm still in ``x`` until lifted (then at once at the speed
-    ramped meanwhile) and no force feedback, 85 / 82 / 82 %
-    with these defaults; the oracle 68 / 60 / 78 % then, 76 / 68 / 82 % now.  Left (observation): heavy
-    workpieces (> 0.15 kg, most of them slippery) knocked over or crushed while carried."""
+    _feedback = True  # follow the observed finger forces from the freeze on (ease / close on creep)
+    _x_while_lifting = True  # the palm moves towards the target already while lifting
 
     def __init__(self, grip=None, *, ramp: float = 0.02, align: float = 0.003, lower_speed: float = 0.4,
                  down: float = 0.05, x_step: float = 0.05, slip_distance: float = 0.0015, slip_window: int = 10,
                  slip_frac: float | None = None, slip_cap: float = 0.3, ease: float = 1.4, ease_frac: float = 0.01):
-        self._default_grip = grip is None
-        self.grip = PlaceGripPolicy() if grip is None else grip
+        self.grip = self._default_grip_policy() if grip is None else grip
         self.ramp, self.align, self.lower_speed, self.down = ramp, align, lower_speed, down
         self.x_step = x_step  # the largest change of the palm's x command per step (its acceleration: inertial
         # loads m a press one finger harder, and a fragile workpiece's window is narrow)
@@ -244,15 +217,8 @@ class PlacePolicy:
         self.ease, self.ease_frac = ease, ease_frac
 
     def reset(self, env, info=None):
-        from simgrip.envs.valve import ValveCommand
-
         u = env.unwrapped
-        # an absolute curvature command (the retired PlaceFragile-v0/-v1, crush ratio 1.3-1.7): the controller
-        # their stored baselines were measured with (ObservationFragilePolicy's grip, no force feedback, the palm
-        # still in x until lifted)
-        self._legacy = not isinstance(u, ValveCommand)
-        if self._default_grip:
-            self.grip = ObservationFragilePolicy() if self._legacy else PlaceGripPolicy()
+        self._check_env(u)
         self.grip.reset(env, info)
         sl = u.obs_slices
         self._i_lift = sl["box_lift"].start
@@ -285,7 +251,7 @@ class PlacePolicy:
         a_k, a_z = (float(v) for v in self.grip(obs))
         if self.grip._frozen is None:
             return np.array([a_k, 0.0, a_z], dtype=np.float32)
-        if self.slip_frac > 0.0 and not self._legacy:  # the force feedback (observation grips): ease, or close
+        if self._feedback and self.slip_frac > 0.0:  # the force feedback (observation grips): ease, or close
             g = self.grip
             f = float(g._forces(obs).max())
             if self._n_freeze is None:
@@ -303,7 +269,7 @@ class PlacePolicy:
         if self._phase == "grip" and lift >= 1.0:
             self._phase = "carry"
         if self._phase == "grip":  # towards the target already while lifting (a shorter carry: less creep)
-            return np.array([a_k, 0.0 if self._legacy else a_x, a_z], dtype=np.float32)
+            return np.array([a_k, a_x if self._x_while_lifting else 0.0, a_z], dtype=np.float32)
         if self._phase == "carry" and abs(err) < self.align:
             self._phase = "lower"
         if self._phase == "carry":
@@ -311,6 +277,74 @@ class PlacePolicy:
         if lift <= self.down:
             self._phase = "rest"
         return np.array([a_k, a_x, -self.lower_speed if self._phase == "lower" else 0.0], dtype=np.float32)
+
+
+class PlacePolicy(_PlaceCarry):
+    """Pick-and-place on a valve env (``PlaceFragile-v2``, ``-v3``): grip and lift with ``grip`` (a
+    :class:`PlaceGripPolicy` by default, or an :class:`OracleFragilePolicy`) up to the carry height, carry the workpiece over the target (palm ``x``
+    speed proportional to the observed ``target_x - workpiece_x``, saturating ``ramp`` [m] away, changing that
+    speed by at most ``x_step`` per step, from the freeze on: while lifting too), lower it until it stops sinking
+    on the table (the observed lift below ``down`` of the carry height), and wait there.  Actions ``(curvature,
+    palm x, palm z)``.
+
+    With an observation-only grip, from the freeze on, the grip follows the observed finger forces:
+
+    * creep: whenever the workpiece has crept ``slip_distance`` [m] down relative to the palm (its observed
+      height relative to the palm) over the last ``slip_window`` steps, close by ``slip_frac`` of the curvature
+      closed since contact (about that fraction more force), at most ``slip_cap`` of it in all.  A heavy
+      workpiece held near ``N_hold`` creeps down its soft grip at ~0.3 mm per step and is dropped (2 cm) within
+      the carry; a window of 10 steps does not answer the bounce of the lift's start;
+    * ease: while the largest finger force is above ``ease`` times its value at the freeze (about ``N_hold``;
+      every crush limit is at least 1.6 ``N_hold``), open by ``ease_frac`` of the curvature closed since contact
+      per step instead (a heavy workpiece swinging in the grip at the carry's start, or closed on by the creep
+      rule, presses one finger harder).
+
+    ``slip_frac`` None: 0.05, or 0 with an :class:`OracleFragilePolicy` grip (frozen in the hidden window's
+    middle; both rules off: with the creep rule the oracle crushed more, 67 instead of 68 % on seeds 6100-6199
+    and 48 instead of 60 % on 6200-6249, measured with the carry started from rest).
+
+    It outputs an absolute curvature command (as the grips do); :mod:`simgrip.envs.baselines` turns it into the
+    valve's rate (``absolute_to_valve``).  The retired absolute-command ``PlaceFragile-v0``/``-v1`` are driven by
+    :class:`AbsolutePlacePolicy` (``reset`` refuses them here, naming it).
+
+    ``PlaceFragile-v3`` (``python -m simgrip.envs.baselines --policy observation``, ``--policy oracle``), success
+    on seeds 6100-6199 (tuned on) / 6200-6249 (checked) / 6000-6049 (held out): observation 65 / 60 / 74 % with
+    :class:`ObservationFragilePolicy`'s grip, the palm still in ``x`` until lifted (then at once at the speed
+    ramped meanwhile) and no force feedback, 85 / 82 / 82 %
+    with these defaults; the oracle 68 / 60 / 78 % then, 76 / 68 / 82 % now.  Left (observation): heavy
+    workpieces (> 0.15 kg, most of them slippery) knocked over or crushed while carried."""
+
+    def _default_grip_policy(self):
+        return PlaceGripPolicy()
+
+    def _check_env(self, u) -> None:
+        from simgrip.envs.valve import ValveCommand
+
+        if not isinstance(u, ValveCommand):
+            raise TypeError(f"PlacePolicy drives a valve env (PlaceFragile-v2, -v3), not {type(u).__name__}: "
+                            "use AbsolutePlacePolicy for the absolute-command PlaceFragile-v0/-v1")
+
+
+class AbsolutePlacePolicy(_PlaceCarry):
+    """Pick-and-place on the retired absolute-command ``PlaceFragile-v0``/``-v1`` (crush ratio 1.3-1.7): the
+    controller their stored baselines were measured with, :class:`PlacePolicy`'s carry and set-down with
+    :class:`ObservationFragilePolicy`'s grip by default, no force feedback and the palm still in ``x`` until
+    lifted (:class:`PlacePolicy`'s defaults gave 62 % there instead of 82 % on seeds 6000-6049 of
+    ``PlaceFragile-v0``; the oracle 76 instead of 84 %).  Arguments as :class:`PlacePolicy`'s (the force
+    feedback's are not used)."""
+
+    _feedback = False
+    _x_while_lifting = False
+
+    def _default_grip_policy(self):
+        return ObservationFragilePolicy()
+
+    def _check_env(self, u) -> None:
+        from simgrip.envs.valve import ValveCommand
+
+        if isinstance(u, ValveCommand):
+            raise TypeError(f"AbsolutePlacePolicy drives an absolute-command env (PlaceFragile-v0, -v1), not the "
+                            f"valve env {type(u).__name__}: use PlacePolicy")
 
 
 class CradleFragilePolicy(ObservationFragilePolicy):

@@ -108,13 +108,13 @@ def test_cli_json_and_bad_arguments(tmp_path):
 
 def test_place_observes_the_target_and_the_scripted_pick_places():
     from simgrip.envs.pick_place import FragilePlaceEnv
-    from simgrip.envs.scripted_fragile import PlacePolicy
+    from simgrip.envs.scripted_fragile import AbsolutePlacePolicy
 
     env = FragilePlaceEnv()
     obs, info = env.reset(seed=7200, options={"target_x": -0.06})
     assert env.observation_space.contains(obs)
     assert obs[env.obs_slices["target_x"]][0] == pytest.approx(-0.06 / env.length, abs=1e-12)  # palm at x = 0
-    pol = PlacePolicy()
+    pol = AbsolutePlacePolicy()
     pol.reset(env, info)
     for _ in range(400):
         obs, r, term, trunc, info = env.step(pol(obs))

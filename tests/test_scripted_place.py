@@ -51,15 +51,20 @@ def test_place_policy_grip_by_env_and_feedback_only_with_an_observation_grip():
     assert PlacePolicy().slip_frac > 0.0
     assert PlacePolicy(OracleFragilePolicy()).slip_frac == 0.0
     # the valve task gets the place grip; the retired absolute-command PlaceFragile-v0 the controller its stored
-    # baselines were measured with (ObservationFragilePolicy's grip, no force feedback)
-    for env_id, cls, legacy in (("simgrip/PlaceFragile-v3", PlaceGripPolicy, False),
-                                ("simgrip/PlaceFragile-v0", ObservationFragilePolicy, True)):
-        from simgrip.envs import RETIRED, retired_spec
+    # baselines were measured with (AbsolutePlacePolicy: ObservationFragilePolicy's grip, no force feedback); each
+    # refuses the other kind of env, naming the one to use
+    from simgrip.envs import RETIRED, retired_spec
+    from simgrip.envs.scripted_fragile import AbsolutePlacePolicy
+    for env_id, policy, grip, other in (("simgrip/PlaceFragile-v3", PlacePolicy, PlaceGripPolicy, AbsolutePlacePolicy),
+                                        ("simgrip/PlaceFragile-v0", AbsolutePlacePolicy, ObservationFragilePolicy,
+                                         PlacePolicy)):
         env = gym.make(retired_spec(env_id) if env_id in RETIRED else env_id)
         _, info = env.reset(seed=0)
-        pol = PlacePolicy()
+        pol = policy()
         pol.reset(env, info)
-        assert type(pol.grip) is cls and pol._legacy is legacy
+        assert type(pol.grip) is grip
+        with pytest.raises(TypeError, match=policy.__name__):
+            other().reset(env, info)
         env.close()
     with pytest.raises(TypeError):
         PlaceGripPolicy(no_such_argument=1)
