@@ -1,0 +1,120 @@
+"""Long random rollouts of every registered pick env are bit-identical to a reference recorded before a change.
+
+``tests/test_env_step_reference.py`` replays one scripted episode and 30 random steps per id; this test adds
+longer runs of the kind ``simgrip.envs.throughput.measure_throughput`` times (issue 18, item 5: the env layer's
+overhead over bare ``mj_step``), so that a per-step shortcut is checked where curled fingers, crushes, drops,
+knock-overs, invalid states and resets happen:
+
+* ``uniform``: actions uniform in ``[-1, 1]`` (the throughput measure's), ``STEPS`` steps, a new episode
+  (``reset(seed=SEED + step)``) after each termination;
+* ``smooth``: a random walk clipped to ``[-1.2, 1.2]`` (clipping, held grips, lifts), likewise.
+
+``tests/data/env_rollout_reference.npz`` holds the actions and a digest per ``reset`` / ``step`` of everything
+it returns (``test_env_step_reference._digest``: observation bytes, reward, flags, every ``info`` key and value
+in order).  It was recorded (``python tests/test_env_rollout_reference.py``) by the code before the issue-18
+item-5 pass of the env layer (commit 4640f23, run from a worktree of it); any change of a returned value by a
+single bit fails the test, naming the id, run and step.  The physics is MuJoCo's: the reference holds for the
+MuJoCo version it was recorded with (stored beside it; another version skips, saying so).  An intended change
+of an env's output regenerates the file with the command above.
+"""
+
+from __future__ import annotations
+
+import sys
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+sys.path.insert(0, str(Path(__file__).parent))
+from test_env_step_reference import _digest  # noqa: E402  (the canonical digest of a step's output)
+
+DATA = Path(__file__).parent / "data" / "env_rollout_reference.npz"
+SEED = 9100
+STEPS = 400
+RUNS = ("uniform", "smooth")
+
+
+def _actions(run: str, k: int, n: int) -> np.ndarray:
+    """The ``run``'s actions for the ``k``-th id (``n`` entries each): float16 values (stored as such: half the
+    file), passed as float32 as the measure passes its actions."""
+    rng = np.random.default_rng(SEED + 10 * k + RUNS.index(run))
+    if run == "uniform":
+        return rng.uniform(-1.0, 1.0, (STEPS, n)).astype(np.float16)
+    steps = rng.normal(0.0, 0.25, (STEPS, n))
+    a = np.empty((STEPS, n))
+    x = np.zeros(n)
+    for t in range(STEPS):
+        x = np.clip(x + steps[t], -1.2, 1.2)
+        a[t] = x
+    return a.astype(np.float16)
+
+
+def _rollout(env, seed: int, actions) -> list[bytes]:
+    """Digests of ``reset(seed)`` and of every step of ``actions``, a new episode after each termination."""
+    obs, info = env.reset(seed=seed)
+    out = [_digest(obs, info)]
+    for t, a in enumerate(actions.astype(np.float32)):
+        obs, r, te, tr, info = env.step(a)
+        out.append(_digest(obs, r, te, tr, info))
+        if te or tr:
+            obs, info = env.reset(seed=seed + t + 1)
+            out.append(_digest(obs, info))
+    return out
+
+
+def _make(env_id: str):
+    import gymnasium as gym
+
+    return gym.make(env_id).unwrapped  # (the measure's env: no time limit, so the runs go on)
+
+
+def _record() -> None:  # pragma: no cover - regenerates the reference
+    import mujoco
+
+    from simgrip.envs import _ENVS
+
+    ids = list(_ENVS)
+    arrays = {"mujoco_version": np.array(mujoco.__version__), "ids": np.array(ids)}
+    for k, env_id in enumerate(ids):
+        env = _make(env_id)
+        for run in RUNS:
+            actions = _actions(run, k, env.action_space.shape[0])
+            digests = _rollout(env, SEED + k, actions)
+            arrays[f"a{k}_{run}"] = actions
+            arrays[f"d{k}_{run}"] = np.frombuffer(b"".join(digests), dtype=np.uint64)
+            print(env_id, run, len(digests) - STEPS - 1, "resets")
+        env.close()
+    np.savez_compressed(DATA, **arrays)
+
+
+def test_long_rollouts_match_the_reference():
+    import mujoco
+
+    import simgrip.envs  # noqa: F401  (registers the ids)
+
+    ref = np.load(DATA)
+    if str(ref["mujoco_version"]) != mujoco.__version__:
+        pytest.skip(f"reference recorded with MuJoCo {ref['mujoco_version']}, this is {mujoco.__version__}")
+    resets = 0
+    for k, env_id in enumerate(ref["ids"].tolist()):
+        env = _make(env_id)
+        try:
+            for run in RUNS:
+                actions = ref[f"a{k}_{run}"]  # (stored: a change of numpy's random streams changes nothing here)
+                got = np.frombuffer(b"".join(_rollout(env, SEED + k, actions)), dtype=np.uint64)
+                want = ref[f"d{k}_{run}"]
+                bad = np.flatnonzero(got[:want.size] != want[:got.size])
+                assert not bad.size and got.size == want.size, (
+                    f"{env_id}, {run} run: output differs from the reference at digest "
+                    f"{int(bad[0]) if bad.size else min(got.size, want.size)} ({got.size} replayed, {want.size} recorded)")
+                resets += want.size - STEPS - 1
+        finally:
+            env.close()
+    assert resets > 10, "the runs should reach terminations (and the resets after them)"
+
+
+if __name__ == "__main__":  # pragma: no cover
+    if sys.argv[1:] not in ([], ["--regenerate"]):
+        raise SystemExit("usage: python tests/test_env_rollout_reference.py [--regenerate]")
+    _record()
