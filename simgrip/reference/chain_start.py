@@ -39,7 +39,7 @@ import math
 from typing import NamedTuple
 
 import numpy as np
-from scipy.linalg.lapack import dgtsv, dpttrf, dpttrs
+from simgrip.lapack import dgtsv, dpttrf, dpttrs  # LAPACK without scipy.linalg's import cost
 
 from simgrip.params import Grip
 from simgrip.reference.minimiser import GRADIENT_TOL, DiscreteEnergy, NewtonResult, grip_sign, minimise

@@ -42,7 +42,6 @@ from __future__ import annotations
 import math
 
 import numpy as np
-import scipy.linalg as sla
 
 __all__ = ["min_eigenvalue", "null_basis", "tri_factor", "tri_solve", "tridiagonal_min_eigenvalue"]
 
@@ -93,9 +92,13 @@ def min_eigenvalue(hessian: np.ndarray, constraint_gradient: np.ndarray | None =
     r = _weighted(weights, h.shape[0])
     h = r[:, None] * h * r[None, :]
     if constraint_gradient is None:
+        import scipy.linalg as sla
+
         return float(sla.eigvalsh(h, subset_by_index=[0, 0])[0])
     z = null_basis(r * np.asarray(constraint_gradient, dtype=float))
     hr = z.T @ h @ z
+    import scipy.linalg as sla
+
     return float(sla.eigvalsh(0.5 * (hr + hr.T), subset_by_index=[0, 0])[0])
 
 
@@ -152,6 +155,8 @@ def tridiagonal_min_eigenvalue(diag: np.ndarray, off: np.ndarray, a: np.ndarray 
     if a is None:
         if diag.size == 1:
             return float(diag[0])
+        import scipy.linalg as sla
+
         return float(sla.eigvalsh_tridiagonal(diag, off, select="i", select_range=(0, 0))[0])
     dl, ol, al = diag.tolist(), off.tolist(), np.asarray(a, float).tolist()
     rad = np.abs(np.concatenate([[0.0], off])) + np.abs(np.concatenate([off, [0.0]]))
