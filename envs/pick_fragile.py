@@ -196,10 +196,11 @@ class _Fragile:
         info["crushed"] = crushed
         info["reward_crush"] = r_crush
         info["crush_limit"] = self.crush_limit
-        if "box_lift" in info:
-            info["workpiece_lift"] = info.pop("box_lift")
-        if self._final_check:  # PlaceFragile declares its own success after this and checks there
-            reward += self._final_validity(info, terminated) if terminated else 0.0  # (0.0: what it returns)
+        lift = info.pop("box_lift", None)  # the two-finger env's name, moved to the end as workpiece_lift
+        if lift is not None:
+            info["workpiece_lift"] = lift
+        if terminated and self._final_check:  # PlaceFragile declares its own success after this and checks there
+            reward += self._final_validity(info, terminated)  # (not terminated: 0.0, what it returns)
         return obs, reward + r_crush, terminated, truncated, info
 
 

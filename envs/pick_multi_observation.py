@@ -117,24 +117,55 @@ def _numpy_sum(x: list) -> float:
     return 0.0 + total
 
 
-def _tip_function(n: int):
-    """``tip(c, ds) -> [X, Z]``: ``[_numpy_sum(cos c) * ds, _numpy_sum(sin c) * ds]`` for the ``n`` link angles
-    ``c`` (``4 <= n <= 64``), compiled once per ``n`` with :func:`_numpy_sum`'s additions written out (the same
-    operations in the same order: equal to the last bit, ``tests/test_pick_multi.py``), without its loops and
-    lists (issue 18: the K-finger observation runs on every step)."""
-    if not 4 <= n <= 64:
-        raise ValueError(f"n must lie in [4, 64] (numpy's pairwise block), got {n!r}")
+def _sum_source(n: int) -> str:
+    """:func:`_numpy_sum`'s additions over the names ``x0 .. x{n-1}`` written out, as one expression."""
     m = n - n % 4
     xs = [f"x{i}" for i in range(n)]
     total = "(({}) + ({})) + (({}) + ({}))".format(*(" + ".join(xs[j:m:4]) for j in range(4)))
     for i in range(m, n):
         total = f"({total}) + {xs[i]}"
-    names = ", ".join(xs)
+    return total
+
+
+def _check_links(n: int) -> None:
+    if not 4 <= n <= 64:
+        raise ValueError(f"n must lie in [4, 64] (numpy's pairwise block), got {n!r}")
+
+
+def _tip_function(n: int):
+    """``tip(c, ds) -> [X, Z]``: ``[_numpy_sum(cos c) * ds, _numpy_sum(sin c) * ds]`` for the ``n`` link angles
+    ``c`` (``4 <= n <= 64``), compiled once per ``n`` with :func:`_numpy_sum`'s additions written out (the same
+    operations in the same order: equal to the last bit, ``tests/test_pick_multi.py``), without its loops and
+    lists (issue 18: the K-finger observation runs on every step)."""
+    _check_links(n)
+    total, names = _sum_source(n), ", ".join(f"x{i}" for i in range(n))
     src = (f"def tip(c, ds, cos=math.cos, sin=math.sin):\n    {names}, = map(cos, c)\n    X = 0.0 + ({total})\n"
            f"    {names}, = map(sin, c)\n    return [X * ds, (0.0 + ({total})) * ds]\n")
     scope = {"math": math}
     exec(compile(src, f"<pick_multi_observation tip n={n}>", "exec"), scope)  # noqa: S102 - our own source
     return scope["tip"]
+
+
+def _tips_function(n: int, fingers: int):
+    """``tips(shapes, rows, ds) -> [*shapes[0], ..., *shapes[K-1], X_0, Z_0, X_1, Z_1, ...]``: the ``fingers``
+    rows of ``shapes`` (the shape samples) flattened, then :func:`_tip_function`'s ``tip(c, ds)`` of each of the
+    ``fingers`` rows of link angles ``rows`` (each a sequence of ``n`` angles), the same operations in the same
+    order, in one compiled call (issue 18: one call per step instead of ``K`` and the lists between them)."""
+    _check_links(n)
+    K = int(fingers)
+    if K < 1:
+        raise ValueError(f"fingers must be a positive integer, got {fingers!r}")
+    total, names = _sum_source(n), ", ".join(f"x{i}" for i in range(n))
+    body = "".join(f"    {names}, = map(cos, c{f})\n    X{f} = 0.0 + ({total})\n"
+                   f"    {names}, = map(sin, c{f})\n    Z{f} = 0.0 + ({total})\n" for f in range(K))
+    rows = ", ".join(f"c{f}" for f in range(K))
+    heads = ", ".join(f"h{f}" for f in range(K))
+    out = ", ".join([f"*h{f}" for f in range(K)] + [f"X{f} * ds, Z{f} * ds" for f in range(K)])
+    src = (f"def tips(shapes, rows, ds, cos=math.cos, sin=math.sin):\n    {heads}, = shapes\n    {rows}, = rows\n"
+           f"{body}    return [{out}]\n")
+    scope = {"math": math}
+    exec(compile(src, f"<pick_multi_observation tips n={n} K={K}>", "exec"), scope)  # noqa: S102 - our own source
+    return scope["tips"]
 
 
 class MultiObservation:
@@ -196,18 +227,18 @@ class MultiObservation:
         self._tilt_at = self.slices["workpiece_tilt"].start - self.slices["finger_shape"].start
         self._low_l, self._high_l = self.low.tolist(), self.high.tolist()
         self._python_tips = 4 <= n <= 64  # _numpy_sum's range (else numpy sums the tips, as it always did)
-        self._tip = _tip_function(n) if self._python_tips else None
+        self._tips = _tips_function(n, self.K) if self._python_tips else None
         self._qpos = self._hinge_view = None  # observe's view of the hinges and the qpos array it views
 
     def __getstate__(self):
-        # the compiled tip function and the view of one MjData's qpos are made again (__setstate__, observe)
+        # the compiled tips function and the view of one MjData's qpos are made again (__setstate__, observe)
         state = self.__dict__.copy()
-        state["_tip"] = state["_qpos"] = state["_hinge_view"] = None
+        state["_tips"] = state["_qpos"] = state["_hinge_view"] = None
         return state
 
     def __setstate__(self, state):
         self.__dict__.update(state)
-        self._tip = _tip_function(self.n) if self._python_tips else None
+        self._tips = _tips_function(self.n, self.K) if self._python_tips else None
 
     def __call__(self, data, forces, kappa_cmd, kappa, z0: float, hold: float) -> np.ndarray:
         """The observation of ``data``: ``forces`` are :class:`WorkpieceContactForces`' ``(normal, friction,
@@ -237,10 +268,7 @@ class MultiObservation:
             if qpos is not self._qpos:  # the (K, n) view of the hinges, bound once per data (qpos is one array)
                 self._qpos, self._hinge_view = qpos, qpos[self.hinge_qpos].reshape(K, n)
             theta = _accumulate(self._hinge_view, 1)  # np.cumsum(..., axis=1) without its wrapper
-            mid = np.dot(theta, self._interp_t).ravel().tolist()
-            tip, ds = self._tip, self._ds
-            for c in theta.tolist():
-                mid += tip(c, ds)
+            mid = self._tips(np.dot(theta, self._interp_t).tolist(), theta.tolist(), self._ds)
         else:
             theta = np.cumsum(qpos[self.hinge_qpos].reshape(K, n), axis=1)
             mid = np.dot(theta, self._interp_t).ravel().tolist()
@@ -269,13 +297,13 @@ class MultiObservation:
         hold_obs = min(hold / self.hold_time, 1.0) if self.hold_time > 0 else 0.0  # in [0, 1] (hold >= 0)
         # the usual case, clipped by comparisons only (identity inside the bounds): the shape, tip, position,
         # velocity, spin and lift entries (bounds +-5 or wider) within +-5, the tilt within +-1, the curvatures
-        # within +-2 (their bounds: +-2 or wider), the palm height in [0, 10], the forces in [0, 20].  Else every
-        # entry is clipped to its bound, as always (np.maximum / np.minimum's results for finite values; _fast_clip
-        # False: always)
+        # within +-2 (their bounds: +-2 or wider), the palm height in [0, 10], the forces at most 20 (at least 0:
+        # log1p of a quotient >= 0; a NaN stays NaN either way).  Else every entry is clipped to its bound, as
+        # always (np.maximum / np.minimum's results for finite values; _fast_clip False: always)
         t0 = self._tilt_at
         if (self._fast_clip and -5.0 <= min(mid) and max(mid) <= 5.0 and -1.0 <= mid[t0] <= 1.0
                 and -1.0 <= mid[t0 + 1] <= 1.0 and -2.0 <= min(kk) and max(kk) <= 2.0 and 0.0 <= p <= 10.0
-                and 0.0 <= min(fl) and max(fl) <= 20.0):
+                and max(fl) <= 20.0):
             return np.array([p, *kk, *mid, *fl, hold_obs])
         vals = [p, *kk, *mid, *fl, hold_obs]
         return np.array([lo_ if x < lo_ else (hi_ if x > hi_ else x) for x, lo_, hi_ in zip(vals, self._low_l, self._high_l)])
@@ -305,8 +333,9 @@ class MultiReward:
     def __call__(self, phi: float, phi_prev: float, success: bool, lost: bool, side_forces) -> tuple:
         """``(reward, lift, success, squeeze, drop)`` of one step (arguments as :func:`multi_reward`'s)."""
         weight, allow = self.weight, self.allow
-        xs = [max(s - allow, 0.0) / weight for s in side_forces]
-        r_squeeze = -self.w_squeeze * sum([x / (1.0 + x) for x in xs]) / self.K  # (a list: sum's own order)
+        # x / (1 + x), x = max(s - allow, 0) / weight, per finger, in one list (sum's own order, as multi_reward)
+        terms = [(x := max(s - allow, 0.0) / weight) / (1.0 + x) for s in side_forces]
+        r_squeeze = -self.w_squeeze * sum(terms) / self.K
         r_lift = self.w_lift * (phi - phi_prev)
         r_success = self.w_success if success else 0.0
         r_drop = -self.w_drop if lost else 0.0

@@ -30,6 +30,15 @@ class CheckedStep:
     def step(self, action):
         if self._needs_reset:
             raise ResetNeeded("step() called before reset() or after the episode terminated; call reset()")
+        # the usual action: a float array of the right shape, every entry in [-1, 1] (so finite), which
+        # check_action returns as its list unchanged; anything else goes through check_action
+        if type(action) is np.ndarray and action.shape == self._action_shape and action.dtype.kind == "f":
+            a = action.tolist()
+            for v in a:
+                if not -1.0 <= v <= 1.0:  # (NaN too: every comparison with it is False)
+                    break
+            else:
+                return self._step_checked(a)
         return self._step_checked(check_action(action, self._action_shape))
 
     def _step_checked(self, a: list):  # pragma: no cover - defined by each environment

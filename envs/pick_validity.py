@@ -209,13 +209,15 @@ class FingerValidity:
 
     def __call__(self, q: list, data, force: bool = False) -> list:
         """The violation messages in this state (empty: valid); between every-k checks, the last check's."""
-        due = force or self.every == 1 or self._calls % self.every == 0
-        self._calls += 1
-        self.checked = due
-        if not due:
-            return list(self._last)
-        self._last = self._check(q, data)
-        return list(self._last)
+        calls = self._calls
+        self._calls = calls + 1
+        if force or calls % self.every == 0:  # (every == 1: always)
+            self.checked = True
+            self._last = last = self._check(q, data)
+        else:
+            self.checked = False
+            last = self._last
+        return list(last) if last else []  # a new list either way (the caller's to keep)
 
     def _bound_clear(self, q: list, data) -> bool:
         """:meth:`_bound` proves the state valid."""

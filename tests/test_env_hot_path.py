@@ -4,12 +4,14 @@
 shortcuts themselves, on inputs the recorded episodes may not reach:
 
 * the K-finger observation's tip sums (``_tip_function``: ``_numpy_sum``'s additions written out) equal
-  ``_numpy_sum`` to the last bit, the sign of zero included, for every link count it serves, and the two-finger
-  observation's compiled shape samples (``_shape_function``) equal the running sum and weights they replace;
+  ``_numpy_sum`` to the last bit, the sign of zero included, for every link count it serves, the K fingers' one
+  call (``_tips_function``) equals each finger's, and the two-finger observation's compiled shape samples
+  (``_shape_function``) equal the running sum and weights they replace;
 * both observations' comparison-only clipping (taken when every entry lies inside its bound) gives the bytes
   of the full per-entry clipping, on the envs' own states and on states pushed outside the bounds;
-* the action is checked once per step however many layers an env has (the valve's check is the only one),
-  and the checks still raise as before;
+* the action is checked once per step however many layers an env has (by ``CheckedStep.step`` itself for a float
+  array of the right shape inside ``[-1, 1]``, else by one ``check_action`` call), and the checks still raise as
+  before;
 * a pickled K-finger env (its observation holds a compiled function and a view of the data) continues exactly.
 """
 
@@ -26,7 +28,7 @@ from simgrip.envs import pick_step, valve
 from simgrip.envs.pick import PickEnv
 from simgrip.envs.pick_fragile_v2 import FragilePickEnvV2, FragilePickMultiEnvV2, FragilePlaceEnvV2
 from simgrip.envs.pick_multi import PickMultiEnv
-from simgrip.envs.pick_multi_observation import _numpy_sum, _tip_function
+from simgrip.envs.pick_multi_observation import _numpy_sum, _tip_function, _tips_function
 
 
 def _bits(values) -> list[str]:
@@ -48,6 +50,27 @@ def test_tip_sums_equal_numpy_sum_to_the_bit():
     for bad in (3, 65):
         with pytest.raises(ValueError, match="n must lie in"):
             _tip_function(bad)
+
+
+def test_tips_of_all_fingers_equal_each_fingers_tip_to_the_bit():
+    """``_tips_function`` (one compiled call for the K fingers of a step) gives the shape rows flattened, then each
+    row's ``_tip_function`` result, in order, to the last bit (the sign of zero included)."""
+    rng = np.random.default_rng(6)
+    for n in (4, 5, 12, 13, 64):
+        tip = _tip_function(n)
+        for K in (1, 2, 3, 5):
+            tips = _tips_function(n, K)
+            for trial in range(20):
+                rows = rng.normal(0.0, (1e-9, 1.0, 30.0)[trial % 3], (K, n)).tolist()
+                if trial % 4 == 0:
+                    rows = [[rng.choice((0.0, -0.0, 0.5 * math.pi, math.pi)) for _ in range(n)] for _ in range(K)]
+                shapes = rng.normal(0.0, 1.0, (K, 1 + trial % 4)).tolist()
+                want = [x for s in shapes for x in s] + [x for c in rows for x in tip(c, 0.25)]
+                assert _bits(tips(shapes, rows, 0.25)) == _bits(want), (n, K)
+    with pytest.raises(ValueError, match="n must lie in"):
+        _tips_function(3, 2)
+    with pytest.raises(ValueError, match="fingers"):
+        _tips_function(12, 0)
 
 
 @pytest.mark.parametrize("n_links, shape_points", [(12, 8), (5, 3), (20, 7), (2, 2)])
@@ -187,13 +210,18 @@ def test_the_action_is_checked_once_per_step(cls, monkeypatch):
     env.reset(seed=1)
     calls.clear()
     rng = np.random.default_rng(2)
-    steps = 0
+    steps = inside = 0
     for _ in range(15):
-        _, _, term, _, _ = env.step(rng.uniform(-1.2, 1.2, env.action_space.shape).astype(np.float32))
+        a = rng.uniform(-1.2, 1.2, env.action_space.shape).astype(np.float32)
+        a[0] = 1.1 if steps % 3 else 0.5  # some actions entirely inside [-1, 1], most not
+        inside += bool(np.all(np.abs(a) <= 1.0))
+        _, _, term, _, _ = env.step(a)
         steps += 1
         if term:
             break
-    assert len(calls) == steps
+    # an action of the right shape and dtype entirely inside [-1, 1] is checked by CheckedStep.step itself (what
+    # check_action would return is its list unchanged); every other one by one check_action call
+    assert inside and len(calls) == steps - inside
     with pytest.raises(ValueError, match="finite"):
         env.step(np.full(env.action_space.shape, np.nan, np.float32))
     with pytest.raises(ValueError, match="shape"):
