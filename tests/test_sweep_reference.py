@@ -7,6 +7,7 @@ one cold solve, and a walk along kappa takes no cold solve but its two ends.
 
 from __future__ import annotations
 
+import numpy as np
 import pytest
 
 from simgrip.sweep import point as sweep_point
@@ -55,8 +56,9 @@ def test_a_friction_line_is_one_cold_solve(monkeypatch):
 
 
 def test_a_kappa_walk_is_cold_at_its_ends_only(monkeypatch):
-    """The first point solved cold, the others walked, the last checked by its cold path without the final
-    polish (TOL_MID) and kept from the walk: equal to its full cold solve to the solver's tolerance."""
+    """The first point solved by its cold path without the final polish (TOL_MID) and finished on a sized mesh,
+    the others walked, the last checked by its cold path without the final polish and kept from the walk: both
+    ends equal to their full cold solves to the solver's tolerance."""
     from simgrip.reference.bvp import TOL_MID
 
     monkeypatch.setattr(sweep_point, "_simulation", _no_simulation)
@@ -64,12 +66,40 @@ def test_a_kappa_walk_is_cold_at_its_ends_only(monkeypatch):
     tols = []
     calls = _counted(monkeypatch, tols)
     rows = evaluate_segment([grid.point(i) for i in range(grid.size)])
-    assert calls == {"cold": 2, "warm": 11} and tols == [sweep_reference.TOL, TOL_MID]
+    assert calls == {"cold": 2, "warm": 11} and tols == [TOL_MID, TOL_MID]
     assert all(r["bvp_warning"] == "" and r["bvp_message"] == "" for r in rows)
-    full = evaluate_point(grid.point(grid.size - 1))
-    # two 1e-8 solutions of one equilibrium (see tests/test_sweep_stream.py's FORCE_RTOL)
-    assert rows[-1]["bvp_normal_force"] == pytest.approx(full["bvp_normal_force"], rel=1e-6)
-    assert rows[-1]["bvp_feasible"] is full["bvp_feasible"]
+    for k in (0, grid.size - 1):
+        full = evaluate_point(grid.point(k))
+        # two 1e-8 solutions of one equilibrium (see tests/test_sweep_stream.py's FORCE_RTOL)
+        assert rows[k]["bvp_normal_force"] == pytest.approx(full["bvp_normal_force"], rel=1e-6)
+        assert rows[k]["bvp_feasible"] is full["bvp_feasible"]
+
+
+@pytest.mark.parametrize("grip, kappa, D", [("I", -7.0, 1.0), ("I", -3.0, 1.0), ("II", 4.5, 1.0),
+                                            ("II", 4.0, 0.5), ("III", -4.0, 1.0)])
+def test_a_sized_mesh_is_as_accurate_as_its_estimate_says(grip, kappa, D):
+    """The walk's meshes (sweep.reference.on_sized_mesh) against the full 1e-8 cold solve: the sized start's N1
+    and theta within 10 x its Richardson estimate (fourth order assumed: the estimate is within ~1.5x of the
+    error measured on Grip I, 10x leaves room for the other grips) and that estimate within TOL; the cold mesh
+    thinned to every 8th node is refused where its estimate exceeds TOL and otherwise also within 10x."""
+    g = make_grid(grip, kappa=kappa, D=D, links=LINKS)
+    point = g.point(0)
+    full = sweep_reference.cold(point)
+    sol, factor = sweep_reference.sized_start(point)
+    assert sol is not None and factor is not None
+    est = sweep_reference.walk_error(sol)
+    assert est <= sweep_reference.TOL
+    idx = np.searchsorted(full._raw.x, sol._raw.x)
+    assert sol._raw.x.size < full._raw.x.size  # coarser than solve_bvp's (else nothing is gained)
+    s = np.linspace(0.0, 1.0, 41)
+    err = max(abs(sol.N1 / full.N1 - 1.0), float(np.max(np.abs(sol._raw.states(s)[0] - full._raw.states(s)[0]))))
+    assert err <= 10 * max(est, 1e-12), (err, est, idx.size)
+    coarse = full._raw.x[sweep_reference._thinned(full._raw.x, 8)]
+    r, _ = sweep_reference.on_sized_mesh(full, [coarse])
+    if r is not None:
+        e8 = sweep_reference.walk_error(r)
+        assert e8 <= sweep_reference.TOL
+        assert abs(float(r.p[0]) / full.N1 - 1.0) <= 10 * max(e8, 1e-12)
 
 
 def test_problem_key_ignores_only_friction():

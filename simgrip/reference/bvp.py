@@ -55,7 +55,7 @@ from simgrip.params import check_grip_iii_reach
 from simgrip.profiles import Concentrated, CurvatureProfile, Uniform
 from simgrip.reference.collocation import continue_collocation, solve_collocation
 
-__all__ = ["Blend", "BvpProblem", "ElasticaError", "BvpSolution", "TOL_MID", "antiderivative", "grip_problem", "run_bvp", "system", "warm_bvp"]
+__all__ = ["Blend", "BvpProblem", "ElasticaError", "BvpSolution", "TOL_MID", "antiderivative", "grip_problem", "run_bvp", "system", "warm_bvp", "mesh_bvp"]
 
 TOL_MID = 1e-6  # tolerance of intermediate continuation steps
 _MAX_NODES = 6000  # per solve_bvp run at the final tolerance (tol 1e-8 needs ~1000)
@@ -341,7 +341,18 @@ def warm_bvp(P: BvpProblem, x, y, p, tol: float, factor=None) -> tuple[BvpSoluti
     return sol, (None if sol is None else r.factor)
 
 
-def _collocation_run(P: BvpProblem, x, y, p, tol: float, factor, chord: bool = False):
+def mesh_bvp(P: BvpProblem, x, y, p, tol: float, factor=None) -> tuple[BvpSolution | None, object]:
+    """``P``'s collocation equations solved on the mesh ``x`` as it is from a close start ``(y, p)``: the
+    chord Newton steps of :func:`warm_bvp` (with ``factor``, a neighbour's factorisation on ``x``, or a fresh
+    one) stopped by ``solve_bvp``'s Newton and boundary tests at ``tol``, no node inserted (``refine=False``
+    of :func:`~simgrip.reference.collocation.continue_collocation`): the mesh's own discretisation, which
+    the caller sizes.  Returns the solution (its ``rms`` that of ``x``) or ``None``, and the factorisation."""
+    r = _collocation_run(P, x, y, p, tol, factor, chord=True, refine=False)
+    sol = _finished(P, r)
+    return sol, (None if sol is None else r.factor)
+
+
+def _collocation_run(P: BvpProblem, x, y, p, tol: float, factor, chord: bool = False, refine: bool = True):
     fun, fun_jac, A, B, c = linear_system(P)
     with warnings.catch_warnings(), np.errstate(all="ignore"):
         warnings.simplefilter("ignore")
@@ -349,7 +360,7 @@ def _collocation_run(P: BvpProblem, x, y, p, tol: float, factor, chord: bool = F
             max_nodes = _MAX_NODES if tol < TOL_MID else _MAX_NODES_MID
             if chord:
                 return continue_collocation(fun, fun_jac, A, B, c, x, y, p, tol=tol, factor=factor,
-                                            max_nodes=max_nodes)
+                                            max_nodes=max_nodes, refine=refine)
             return solve_collocation(fun, fun_jac, A, B, c, x, y, p, tol=tol, max_nodes=max_nodes)
         except (np.linalg.LinAlgError, ValueError, FloatingPointError, ZeroDivisionError):
             return None

@@ -239,7 +239,12 @@ def _spline_coefficients(y, yp, h):
 
 
 def _spline(c, x) -> PPoly:
-    return PPoly(np.moveaxis(c, 1, 0), x, extrapolate=True, axis=1)
+    """``PPoly(np.moveaxis(c, 1, 0), x, extrapolate=True, axis=1)`` (``solve_bvp``'s spline) built without its
+    checks: the same coefficient array (``(4, m - 1, n)``, contiguous) and breakpoints as the constructor
+    stores, so the same values (its checks, ~1/3 of a chord step, hold by construction: ``x`` strictly
+    increasing, checked by :func:`_checked`)."""
+    return PPoly.construct_fast(np.ascontiguousarray(np.transpose(c, (0, 2, 1))),
+                                np.ascontiguousarray(x, dtype=np.float64), True, 1)
 
 
 def _rms_residuals(fun, c, x, h, p, r_middle, f_middle):
@@ -390,7 +395,8 @@ def solve_collocation(fun, fun_jac, A, B, c, x, y, p=None, *, tol: float = 1e-3,
 
 
 def continue_collocation(fun, fun_jac, A, B, c, x, y, p=None, *, tol: float, factor=None,
-                         max_steps: int = _CHORD_STEPS, max_nodes: int = 1000) -> CollocationResult | None:
+                         max_steps: int = _CHORD_STEPS, max_nodes: int = 1000,
+                         refine: bool = True) -> CollocationResult | None:
     """The collocation equations of :func:`solve_collocation` on the mesh ``x`` solved from a close start
     ``(y, p)`` (a continuation's predictor) by chord Newton steps with ``factor``, the banded LU of a
     neighbouring problem's Jacobian on the same mesh (``CollocationResult.factor``; factored here at the start
@@ -406,6 +412,11 @@ def continue_collocation(fun, fun_jac, A, B, c, x, y, p=None, *, tol: float, fac
     the steps do not meet the Newton test within ``max_steps`` or the run fails (the caller then runs
     :func:`solve_collocation` from its start); the result's ``factor`` is the last one used, for the next
     point.
+
+    With ``refine=False`` the equations are solved on ``x`` as it is: the result is accepted by the Newton
+    and boundary tests alone (no rms test, no node inserted; ``rms_residuals`` are those of ``x``, which may
+    exceed ``tol``).  The caller sizes ``x`` for the accuracy it needs (the sweep's walk,
+    :mod:`simgrip.sweep.reference`: the discretisation error measured against a ``tol`` solution).
     """
     x, h, y, p, n, k, tol, bc_tol, jac, bc, key = _checked(fun_jac, A, B, c, x, y, p, tol, bc_tol=None)
     band = _band(key, x.size)
@@ -446,7 +457,7 @@ def continue_collocation(fun, fun_jac, A, B, c, x, y, p=None, *, tol: float, fac
     rms_res = _rms_residuals(fun, coef, x, h, p, 1.5 * col_res / h, f_middle)
     if not np.max(np.abs(bc_res)) <= bc_tol:
         return None
-    x_new = _refined(x, rms_res, tol)
+    x_new = _refined(x, rms_res, tol) if refine else x
     if x_new.size > x.size:  # the mesh does not resolve this point: go on as solve_bvp goes on from here
         r = solve_collocation(fun, fun_jac, A, B, c, x_new, _spline(coef, x)(x_new), p if k else None, tol=tol,
                               max_nodes=max_nodes)

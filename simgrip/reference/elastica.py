@@ -25,6 +25,7 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass, field
+from functools import lru_cache
 from typing import Sequence
 
 import numpy as np
@@ -189,6 +190,12 @@ def grip_side(grip: str) -> float:
 
 
 def _fine_grid(gamma: float | None) -> np.ndarray:
+    """The arc lengths a solution is sampled on (a fresh array: the solution owns it)."""
+    return _fine_grid_of(gamma).copy()
+
+
+@lru_cache(maxsize=64)
+def _fine_grid_of(gamma: float | None) -> np.ndarray:
     k = FINE_POINTS - 1
     if gamma is None or gamma >= 1.0:
         return np.linspace(0.0, 1.0, FINE_POINTS)

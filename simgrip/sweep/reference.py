@@ -3,14 +3,21 @@
 Along a segment (:meth:`simgrip.sweep.grid.SweepGrid.segments`) of points
 ``0..m-1`` the references are solved as follows:
 
-1. the first point is solved cold (:func:`cold`, what
-   :func:`simgrip.sweep.point.evaluate_point` does at every point);
+1. the first point is solved by its cold path without the final polish
+   (:func:`sized_start`: :func:`cold` at ``TOL_MID``, the branch of the full
+   cold solve, what :func:`simgrip.sweep.point.evaluate_point` does at every
+   point), finished by Newton on that solve's mesh or a refinement of it, the
+   first whose discretisation error is within :data:`TOL` (:func:`walk_error`);
+   where that fails, or the segment is one BVP, it is solved cold in full;
 2. from it a walk warm-starts each next point from the previous ones
    (:func:`warm`: the quadratic predictor of the three before it, then chord Newton
-   steps on the neighbour's mesh with the neighbour's Jacobian factorisation,
-   accepted only by ``solve_bvp``'s own Newton and residual tests at the final
-   tolerance, else one ``solve_bvp`` run from the same start; ~1/10 of a cold
-   start at n = 32) up to the last point;
+   steps with the previous point's Jacobian factorisation, stopped by
+   ``solve_bvp``'s own Newton test at the final tolerance) on the first point's
+   mesh (:func:`on_sized_mesh`: ``N1`` and ``theta`` within :data:`TOL` of a 1e-8
+   ``solve_bvp`` solve at 1/3-1/5 of its nodes), the walk's last point checked by
+   the same error estimate (else the walk is run again on ``solve_bvp``'s
+   meshes: the neighbour's, accepted by its residual test, else one
+   ``solve_bvp`` run from the same start) up to the last point;
 3. the last point's cold path is run without its final polish
    (:meth:`_Segment.end_checked`); where the walk arrives on its branch
    (``theta`` within :data:`SAME_BRANCH_RAD`) the whole walk is kept;
@@ -54,6 +61,10 @@ SAME_BRANCH_RAD = 1e-3
 _WARM_NODES = 1200
 #: The tolerance of :func:`simgrip.reference.elastica.solve` (its default): warm and cold solves meet it alike.
 TOL = 1e-8
+#: Thinnings of a cold reference's mesh tried for a walk (:func:`walk_mesh`), coarsest first, and the fewest nodes
+#: a walk's mesh may have (below it the fourth-order asymptotics the error estimate assumes are not trusted).
+WALK_THINNING = (4, 2)
+WALK_MIN_NODES = 41
 
 
 def cold(point, tol: float = TOL):
@@ -82,25 +93,22 @@ def warm(point, guess, before=(), newton=None):
     """
     from simgrip.profiles import Uniform
     from simgrip.reference import elastica
-    from simgrip.reference.bvp import run_bvp, warm_bvp
+    from simgrip.reference.bvp import mesh_bvp, run_bvp, warm_bvp
     from simgrip.reference.continuation import _mesh_guess
 
     grip, params, P = elastica.checked_problem(point.grip, point.params(), Uniform(point.kappa))
     raw = guess._raw
+    mesh = None if newton is None else newton.get("mesh")
+    if mesh is not None and _same_layout(raw.prob, P):
+        x, y, p = _predicted(mesh, guess, before, P)
+        r, factor = mesh_bvp(P, x, y, p, TOL, newton.get("factor"))
+        if r is not None:
+            newton["factor"] = factor
+            return elastica.ElasticaSolution.from_bvp(grip, params, r)
+        newton["factor"] = None  # not converged on the walk's mesh: solve_bvp's way from the neighbour below
     on_mesh = _same_layout(raw.prob, P) and raw.x.size <= _WARM_NODES
     if on_mesh:
-        x, y, p = raw.x, raw.y, (raw.p if P.constrained else None)
-        hist = []
-        for b in before[:2]:
-            if b is None or not _same_layout(b._raw.prob, P):
-                break
-            b = b._raw
-            hist.append((b.y if b.x.size == x.size and np.array_equal(b.x, x) else b.sol(x), b.p))
-        coef = {0: (1.0,), 1: (2.0, -1.0), 2: (3.0, -3.0, 1.0)}[len(hist)]
-        if len(hist):
-            y = coef[0] * y + sum(c * h[0] for c, h in zip(coef[1:], hist))
-            if P.constrained:
-                p = coef[0] * p + sum(c * h[1] for c, h in zip(coef[1:], hist))
+        x, y, p = _predicted(raw.x, guess, before, P)
     else:
         x, y, p = _mesh_guess(raw, P)
     if newton is None:
@@ -108,6 +116,123 @@ def warm(point, guess, before=(), newton=None):
     else:
         r, newton["factor"] = warm_bvp(P, x, y, p, TOL, newton.get("factor") if on_mesh else None)
     return None if r is None else elastica.ElasticaSolution.from_bvp(grip, params, r)
+
+
+def _predicted(x, guess, before, P):
+    """``(x, y, p)``: the predictor of :func:`warm` on the mesh ``x`` from ``guess`` and the solutions
+    ``before`` it (states read on ``x``: the arrays themselves where a solution lives on ``x``)."""
+    def on_x(b):
+        return b.y if b.x is x or (b.x.size == x.size and np.array_equal(b.x, x)) else b.sol(x)
+
+    raw = guess._raw
+    y, p = on_x(raw), (raw.p if P.constrained else None)
+    hist = []
+    for b in before[:2]:
+        if b is None or not _same_layout(b._raw.prob, P):
+            break
+        hist.append((on_x(b._raw), b._raw.p))
+    coef = {0: (1.0,), 1: (2.0, -1.0), 2: (3.0, -3.0, 1.0)}[len(hist)]
+    if len(hist):
+        y = coef[0] * y + sum(c * h[0] for c, h in zip(coef[1:], hist))
+        if P.constrained:
+            p = coef[0] * p + sum(c * h[1] for c, h in zip(coef[1:], hist))
+    return x, y, p
+
+
+def _thinned(x: np.ndarray, f: int) -> np.ndarray:
+    """Every ``f``-th node of ``x``, its last node kept."""
+    idx = np.arange(0, x.size, f)
+    return idx if idx[-1] == x.size - 1 else np.append(idx, x.size - 1)
+
+
+def _gap(a, b, idx) -> float:
+    """Discretisation gap between ``a`` (a solution on ``b``'s nodes ``idx``) and ``b``: the largest of the
+    relative difference of ``N1`` (constrained problems) and of ``theta`` [rad] at ``a``'s nodes."""
+    n = a.y.shape[0]
+    out = float(np.max(np.abs(a.y[0:n:4] - b.y[0:n:4, idx])))
+    if a.prob.constrained:
+        out = max(out, abs(float(a.p[0]) - float(b.p[0])) / max(abs(float(b.p[0])), 1e-300))
+    return out if np.isfinite(out) else np.inf
+
+
+def _doubled(x: np.ndarray) -> np.ndarray:
+    """``x`` with a node in the middle of each interval."""
+    out = np.empty(2 * x.size - 1)
+    out[0::2] = x
+    out[1::2] = 0.5 * (x[:-1] + x[1:])
+    return out
+
+
+def on_sized_mesh(sol, meshes):
+    """``(solution, factor)``: ``sol``'s problem solved on the first of ``meshes`` (node arrays in ``[0, 1]``)
+    whose discretisation error (:func:`walk_error`) is within :data:`TOL`, from ``sol`` read on it, with the
+    Jacobian factorisation there; ``(None, None)`` where none is.
+
+    Why a mesh coarser than ``solve_bvp``'s at 1e-8 is as accurate for the comparison: ``solve_bvp`` sizes
+    its mesh by its rms residual test on the cubic spline between nodes (third order in the spacing: 400-1200
+    nodes at 1e-8 on n = 32's grids), while the nodal states and ``N1`` are fourth order, far more accurate,
+    and the comparison reads ``N1`` and ``theta`` only (the verdict, the branch check).  Measured on the
+    300-point Grip I line at n = 32 against the 1e-8 solve: its mesh thinned to every 4th node leaves
+    1.4e-9..6e-9 in ``N1`` (relative), every 8th 2e-8..9e-8 (x16 per doubling of the spacing), the 1e-6
+    solve's mesh (82-307 nodes) 8e-11..4e-9; the Richardson estimate of :func:`walk_error` matched each within
+    a factor 1.5.  ``TOL`` (1e-8) is 100x inside the 1e-6 at which two 1e-8 solves of one equilibrium are
+    taken as equal (``tests/test_sweep_stream.py``) and 6e4x inside the chain's own discretisation error at
+    n = 32 (~6e-4), what the reference is compared with."""
+    from simgrip.reference.bvp import mesh_bvp
+
+    raw = sol._raw
+    for x in meshes:
+        if x.size < WALK_MIN_NODES or x.size > _WARM_NODES:
+            continue
+        same = x.size == raw.x.size and np.array_equal(x, raw.x)
+        y = raw.y if same else raw.sol(x)
+        r, factor = mesh_bvp(raw.prob, x, y, raw.p if raw.prob.constrained else None, TOL)
+        if r is not None and walk_error(r) <= TOL:
+            return r, factor
+    return None, None
+
+
+def walk_mesh(sol):
+    """``(x, factor)``: the mesh a walk from the :data:`TOL` reference ``sol`` (a cold solve) solves on, and
+    the Jacobian factorisation there: ``sol``'s mesh thinned to every ``f``-th node (its node density kept),
+    ``f`` in :data:`WALK_THINNING`, the first accurate enough (:func:`on_sized_mesh`); ``(None, None)``
+    where none is (the walk then runs on ``solve_bvp``'s meshes, as a cold solve refines them)."""
+    raw = sol._raw
+    r, factor = on_sized_mesh(sol, (raw.x[_thinned(raw.x, f)] for f in WALK_THINNING))
+    return (None, None) if r is None else (r.x, factor)
+
+
+def sized_start(point):
+    """``(reference, factor)`` of the first point of a walked segment: its cold path at ``TOL_MID`` (the cold
+    solve's own steps but the final polish, which is Newton from a 1e-6 solution and cannot leave its
+    equilibrium: the same branch, see :meth:`_Segment.end_checked`), finished on that solve's mesh, or that
+    mesh doubled, the first within :data:`TOL` (:func:`on_sized_mesh`: the polish's accuracy at ~1/4 of its
+    cost); ``(None, None)`` where either step fails (the caller solves the point cold)."""
+    from simgrip.reference import elastica
+    from simgrip.reference.bvp import TOL_MID
+
+    try:
+        mid = cold(point, TOL_MID)
+    except Exception:  # noqa: BLE001 - the full cold solve decides (and records the failure)
+        return None, None
+    x = mid._raw.x
+    r, factor = on_sized_mesh(mid, (x, _doubled(x), _doubled(_doubled(x))))
+    if r is None:
+        return None, None
+    return elastica.ElasticaSolution.from_bvp(point.grip, point.params(), r), factor
+
+
+def walk_error(sol) -> float:
+    """The discretisation error of a reference on its own mesh (an ``ElasticaSolution`` or its
+    ``BvpSolution``), estimated by Richardson: its problem solved on every other node of its mesh from its
+    nodal values, the gap (:func:`_gap`: relative ``N1``, ``theta`` in rad) over ``2^4 - 1`` (fourth order at
+    the nodes, as measured, see :func:`on_sized_mesh`); ``inf`` where that does not converge."""
+    from simgrip.reference.bvp import mesh_bvp
+
+    raw = getattr(sol, "_raw", sol)
+    idx = _thinned(raw.x, 2)
+    r, _ = mesh_bvp(raw.prob, raw.x[idx], raw.y[:, idx], raw.p if raw.prob.constrained else None, TOL)
+    return np.inf if r is None else _gap(r, raw, idx) / 15.0
 
 
 def _same_layout(Q, P) -> bool:
@@ -167,10 +292,45 @@ class _Segment:
             self.colds[key] = (None if self.sol[k] is None else self.sol[k]._raw, self.error[k])
         self.seconds[k] += time.perf_counter() - t
 
-    def walk(self, lo: int, hi: int) -> dict:
+    def start(self):
+        """Point 0 of a walked segment by :func:`sized_start`; returns the walk's ``(mesh, factor)``, or ``None``
+        (nothing kept: point 0 is then solved cold).  A segment that is one BVP (a line along ``mu``) walks
+        nothing: its point 0 is solved cold, as every point of the line then is."""
+        if all(problem_key(p) == problem_key(self.points[0]) for p in self.points[1:]):
+            return None
+        t = time.perf_counter()
+        sol, factor = sized_start(self.points[0])
+        self.seconds[0] += time.perf_counter() - t
+        if sol is None:
+            return None
+        self.sol[0] = sol
+        return sol._raw.x, factor
+
+    def walk(self, lo: int, hi: int, sized=None) -> dict:
         """Warm solves of ``lo+1..hi``, each from the previous (from the kept ``lo``; from the second on with
-        the predictor of the ones before it); ``None`` once one fails."""
-        out, prev, before, newton = {}, self.sol[lo], (), {}
+        the predictor of the ones before it); ``None`` once one fails.  On the walk's mesh
+        (:func:`walk_mesh`) where one is found and the walk's end meets its error estimate
+        (:func:`walk_error`), else on the neighbours' ``solve_bvp`` meshes.  ``sized``: ``(x, factor)``, the
+        mesh ``lo``'s reference was solved on (:func:`sized_start`), else :func:`walk_mesh` finds one."""
+        if sized is not None:
+            mesh, factor = sized
+        else:
+            t = time.perf_counter()
+            mesh, factor = (None, None) if self.sol[lo] is None else walk_mesh(self.sol[lo])
+            if lo + 1 <= hi:
+                self.seconds[lo + 1] += time.perf_counter() - t
+        out = self._walk(lo, hi, {} if mesh is None else {"mesh": mesh, "factor": factor})
+        end = out.get(hi)
+        if mesh is not None and end is not None and end._raw.x is mesh:
+            t = time.perf_counter()
+            ok = walk_error(end) <= TOL
+            self.seconds[hi] += time.perf_counter() - t
+            if not ok:
+                out = self._walk(lo, hi, {})
+        return out
+
+    def _walk(self, lo: int, hi: int, newton: dict) -> dict:
+        out, prev, before = {}, self.sol[lo], ()
         for k in range(lo + 1, hi + 1):
             s = None
             if prev is not None and problem_key(self.points[k]) == problem_key(self.points[k - 1]):
@@ -248,9 +408,11 @@ def segment_references(points) -> list[tuple]:
         return []
     seg = _Segment(points)
     last = len(points) - 1
-    seg.cold(0)
+    sized = seg.start() if last > 0 else None
+    if sized is None:
+        seg.cold(0)
     if last > 0:
-        walk = seg.walk(0, last)
+        walk = seg.walk(0, last, sized)
         if not seg.end_checked(last, walk):
             seg.cold(last)
             seg.settle(0, last, walk)
