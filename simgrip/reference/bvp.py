@@ -215,13 +215,19 @@ def _segment_rhs(y, N1, P: BvpProblem, s, i, loaded: bool):
 def _tip_system(P: BvpProblem):
     """Free rod and Grips I/II: one segment, contact (if any) at the tip."""
     D, con = P.D, P.constrained
+    K, t1, N2t2, g = P.K, P.t1, P.N2 + P.t2, P.g
 
     def fun(t, y, p=None):
-        c, sn, n1, n2 = _segment_rhs(y, p[0] if con else P.N1, P, t, 0, True)
-        out = np.empty((4, t.size))  # the rows filled in place: np.vstack's checks cost as much as the rest
+        # _segment_rhs's operations, in its order, written into the rows (np.vstack's checks cost as much as
+        # the rest): the same values
+        out = np.empty((4, t.size))
+        th = y[0] + K(t)
+        c = np.cos(th, out=out[2])
+        sn = np.sin(th, out=out[3])
+        n1 = (p[0] if con else P.N1) + t1
+        n2 = N2t2 - g * (1.0 - t)
         np.divide(y[1], D, out=out[0])
         np.subtract(n1 * sn, n2 * c, out=out[1])
-        out[2], out[3] = c, sn
         return out
 
     def fun_jac(t, y, p=None):
@@ -346,7 +352,8 @@ def mesh_bvp(P: BvpProblem, x, y, p, tol: float, factor=None) -> tuple[BvpSoluti
     chord Newton steps of :func:`warm_bvp` (with ``factor``, a neighbour's factorisation on ``x``, or a fresh
     one) stopped by ``solve_bvp``'s Newton and boundary tests at ``tol``, no node inserted (``refine=False``
     of :func:`~simgrip.reference.collocation.continue_collocation`): the mesh's own discretisation, which
-    the caller sizes.  Returns the solution (its ``rms`` that of ``x``) or ``None``, and the factorisation."""
+    the caller sizes.  Returns the solution (its ``rms`` NaN: not estimated, see ``refine=False``) or ``None``,
+    and the factorisation."""
     r = _collocation_run(P, x, y, p, tol, factor, chord=True, refine=False)
     sol = _finished(P, r)
     return sol, (None if sol is None else r.factor)

@@ -45,6 +45,8 @@ MESSAGES = {
     2: "A singular Jacobian encountered when solving the collocation system.",
     3: "The solver was unable to satisfy boundary conditions tolerance on iteration 10.",
 }
+#: The message of a solve on a given mesh (:func:`continue_collocation` with ``refine=False``).
+ON_MESH = "Newton converged on the given mesh (no residual test: its discretisation is sized by the caller)."
 _EPS = np.finfo(float).eps
 #: Band layouts kept (:func:`_band`, keyed on the problem's structure and the mesh size), and the most nodes
 #: of a kept one: the bounded cache of this module, enough for the mesh sizes one continuation visits (the
@@ -414,9 +416,10 @@ def continue_collocation(fun, fun_jac, A, B, c, x, y, p=None, *, tol: float, fac
     point.
 
     With ``refine=False`` the equations are solved on ``x`` as it is: the result is accepted by the Newton
-    and boundary tests alone (no rms test, no node inserted; ``rms_residuals`` are those of ``x``, which may
-    exceed ``tol``).  The caller sizes ``x`` for the accuracy it needs (the sweep's walk,
-    :mod:`simgrip.sweep.reference`: the discretisation error measured against a ``tol`` solution).
+    and boundary tests alone (no rms test, no node inserted) and its ``rms_residuals`` are not estimated (all
+    NaN: the spline's residual between nodes is not what such a mesh is sized by, ~1/6 of a chord step's
+    cost).  The caller sizes ``x`` for the accuracy it needs (the sweep's walk, :mod:`simgrip.sweep.reference`:
+    the nodal discretisation error estimated by Richardson).
     """
     x, h, y, p, n, k, tol, bc_tol, jac, bc, key = _checked(fun_jac, A, B, c, x, y, p, tol, bc_tol=None)
     band = _band(key, x.size)
@@ -454,10 +457,16 @@ def continue_collocation(fun, fun_jac, A, B, c, x, y, p=None, *, tol: float, fac
             return None
         y, p, cost_before = y - ys, p - ps, cost
     coef = _spline_coefficients(y, f, h)
+    if not refine:
+        if not np.max(np.abs(bc_res)) <= bc_tol:
+            return None
+        return CollocationResult(sol=_spline(coef, x), p=p if k else None, x=x, y=y, yp=f,
+                                 rms_residuals=np.full(x.size - 1, np.nan), niter=1, status=0, message=ON_MESH,
+                                 success=True, factor=factor)
     rms_res = _rms_residuals(fun, coef, x, h, p, 1.5 * col_res / h, f_middle)
     if not np.max(np.abs(bc_res)) <= bc_tol:
         return None
-    x_new = _refined(x, rms_res, tol) if refine else x
+    x_new = _refined(x, rms_res, tol)
     if x_new.size > x.size:  # the mesh does not resolve this point: go on as solve_bvp goes on from here
         r = solve_collocation(fun, fun_jac, A, B, c, x_new, _spline(coef, x)(x_new), p if k else None, tol=tol,
                               max_nodes=max_nodes)
