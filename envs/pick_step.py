@@ -1,7 +1,9 @@
 """What the two-finger and the K-finger pick environments share around ``step``.
 
 :class:`CheckedStep` splits ``step`` in two: ``step(action)`` checks the episode and the action
-(:func:`simgrip.envs.arguments.check_action`: a list of floats clipped to ``[-1, 1]``) and hands the list to
+(:func:`simgrip.envs.arguments.check_action`: a list of floats clipped to ``[-1, 1]``; a float array of the
+action's shape already inside ``[-1, 1]`` is read as its list here, what ``check_action`` returns for it) and
+hands the list to
 ``_step_checked(a)``, which every layer of an environment (the fragile tasks' crush rule and reward, the place
 task, the valve of :mod:`simgrip.envs.valve`, the env itself) overrides and chains with
 ``super()._step_checked(a)``, so the episode and the action are checked once per step however many layers
