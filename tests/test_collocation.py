@@ -170,3 +170,27 @@ def test_chord_on_a_coarse_mesh_refines_as_solve_bvp_and_refuses_a_far_start():
     _, _, far = checked_problem("I", STANDARD, Uniform(-2.0))
     f, fj, A, B, c = bvp.linear_system(far)
     assert continue_collocation(f, fj, A, B, c, g.x, g.y, g.p, tol=1e-8, max_steps=1) is None
+
+
+# Spline: solve_bvp's PPoly without scipy.interpolate ------------------------------------------------------------
+
+def test_spline_equals_ppoly_bit_for_bit():
+    """Random cubics on random increasing breakpoints, evaluated inside, at every breakpoint (the half-open
+    intervals, the closed last one), outside (extrapolation) and at scalars and 2-d arrays: the values, shapes
+    and signs of zero of scipy's PPoly (the spline solve_bvp returns), exactly."""
+    from scipy.interpolate import PPoly
+
+    from simgrip.reference.collocation import _spline
+
+    rng = np.random.default_rng(3)
+    for _ in range(100):
+        x = np.unique(np.concatenate(([0.0, 1.0], rng.random(int(rng.integers(0, 300))))))
+        n = int(rng.integers(1, 9))
+        c = rng.normal(size=(4, n, x.size - 1)) * 10.0 ** float(rng.integers(-5, 5))
+        ref = PPoly(np.moveaxis(c, 1, 0), x, extrapolate=True, axis=1)
+        new = _spline(c, x)
+        t = np.concatenate((rng.random(200) * 1.4 - 0.2, x, [-0.0, np.nextafter(1.0, 2.0), -1e-300]))
+        for tt in (t, t[:200].reshape(20, 10), 0.5, np.float64(x[-1])):
+            a, b = ref(tt), new(tt)
+            assert a.shape == b.shape
+            assert np.array_equal(a, b) and np.array_equal(np.signbit(a), np.signbit(b))

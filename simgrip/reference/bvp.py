@@ -49,7 +49,6 @@ from dataclasses import dataclass
 from typing import Callable
 
 import numpy as np
-from scipy import special as _sp
 
 from simgrip.params import check_grip_iii_reach
 from simgrip.profiles import Concentrated, CurvatureProfile, Uniform
@@ -95,6 +94,8 @@ def antiderivative(profile: CurvatureProfile) -> Callable[[np.ndarray], np.ndarr
         k = profile.kappa
         return lambda s: k * np.asarray(s, dtype=float)
     if isinstance(profile, Concentrated):
+        from scipy import special as _sp  # lazily: ~0.1 s of CPU, needed by this profile only
+
         a = profile.alpha + 1.0
         c = profile.p * profile.kappa_max * 4.0**profile.alpha * _sp.beta(a, a)
         return lambda s: c * _sp.betainc(a, a, np.clip(np.asarray(s, dtype=float), 0.0, 1.0))

@@ -26,10 +26,10 @@ from dataclasses import replace as _dc_replace
 from typing import Callable
 
 import numpy as np
-from scipy.optimize import brentq
 
 from simgrip.profiles import Uniform
 from simgrip.reference.bvp import TOL_MID, Blend, BvpProblem, BvpSolution, ElasticaError, run_bvp
+from simgrip.reference.extensions import brentq  # scipy.optimize.brentq without scipy.optimize's import cost
 
 __all__ = ["MAX_BVP_RUNS", "MAX_JUMP", "Budget", "cold_start", "continue_along", "linear_path", "solve_from"]
 

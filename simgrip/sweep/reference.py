@@ -213,7 +213,9 @@ def sized_start(point):
     solve's own steps but the final polish, which is Newton from a 1e-6 solution and cannot leave its
     equilibrium: the same branch, see :meth:`_Segment.end_checked`), finished on that solve's mesh, or that
     mesh doubled, the first within :data:`TOL` (:func:`on_sized_mesh`: the polish's accuracy at ~1/4 of its
-    cost); ``(None, None)`` where either step fails (the caller solves the point cold)."""
+    cost); ``(None, None)`` where either step fails (the caller solves the point cold).  As for the walk's end
+    (:meth:`_Segment.end_checked`), the one difference from the full cold solve: where its polish would fail
+    (met only on hostile stiff inputs) and send it to its next strategy, this keeps the 1e-6 solve's branch."""
     from simgrip.reference import elastica
     from simgrip.reference.bvp import TOL_MID
 
