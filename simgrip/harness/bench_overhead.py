@@ -23,13 +23,15 @@ the fastest CPU time of each (:func:`simgrip.harness.timing.fastest_cpu_times`),
 the others divide each call's wall time by the settle's own wall time inside
 it.  Only the targets of the table are checked here; the sweep's ratio with the
 BVP reference counts the reference's solve in the point (the target is the
-simulation's: ``--reference none``; the warm-started BVP alone costs ~0.5-0.7x
-the settle at n = 32, a banded collocation Newton on the neighbour's factorisation,
-:mod:`simgrip.reference.collocation`).  The sweep is the issue's command as a user runs
+simulation's: ``--reference none``; the warm-started BVP alone costs ~0.45x
+the settle at n = 32: chord steps of a banded collocation Newton on a mesh sized
+once per 32-point segment, a cubic predictor,
+:mod:`simgrip.reference.collocation`, :mod:`simgrip.sweep.reference`).  The sweep is the issue's command as a user runs
 it (:data:`SWEEP_COMMAND`, 300 points), timed by :func:`simgrip.sweep.run.run_sweep`
 itself (``sweep.json``'s ``wall_time_s``): from the call's start to ``sweep.json``,
-so the imports the sweep makes (the settle's: SciPy's linalg and the hinge
-chain, ~0.35 s of CPU), the first compile, the merge into ``sweep.csv`` and
+so the imports the sweep makes (the settle's and the reference's; neither
+imports ``scipy.linalg``, ``.optimize`` or ``.interpolate``: their compiled
+routines come through :mod:`simgrip.lapack`), the first compile, the merge into ``sweep.csv`` and
 ``map.png`` (~0.05 s, Pillow) are in the ratio, while what precedes the call
 (the interpreter, ``simgrip.cli`` and MuJoCo's import, argument parsing:
 ~0.5 s) is not.  Those fixed costs weigh ~0.3-0.5 in the ratio at 300 points
