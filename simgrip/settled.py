@@ -171,7 +171,7 @@ def verdict_fields(state) -> dict:
     """The fields of :func:`settled_record` that say what the settle found, without the per-node and per-contact
     lists (a sweep's row, :mod:`simgrip.sweep.point`): ``tip`` (finger 0's, over ``l``), ``normal_force``,
     ``required_mu`` (0 without a contact), ``feasible``, ``valid``, ``warnings``, and :func:`settle_fields`'
-    ``held``, ``wall_time_s``, ``penetration``, ``converged``; the same values as the record's."""
+    (``held``, ``wall_time_s``, ``penetration``, ``converged``, ...); the same values as the record's."""
     tip = state.tip
     return {
         "tip": [float(tip[0][0]), float(tip[0][1])] if tip.ndim == 2 else [float(v) for v in tip],
@@ -181,10 +181,7 @@ def verdict_fields(state) -> dict:
                      if state.grip != "free" else True) and bool(getattr(state, "valid", True)),
         "valid": bool(getattr(state, "valid", True)),
         "warnings": list(state.warnings),
-        "held": bool(state.held),
-        "wall_time_s": float(state.wall_time_s),
-        "penetration": float(state.penetration),
-        "converged": bool(state.converged),
+        **settle_fields(state),
     }
 
 
