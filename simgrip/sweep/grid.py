@@ -176,6 +176,11 @@ class SweepPoint:
     reference: str = "bvp"
     contact: str | None = None
     box_depth: float | None = None
+    #: ``(axis, value)``: the grid point after this one on its line (the run along the fastest-varying swept
+    #: axis that :meth:`SweepGrid.segments` cuts), that axis's next value; ``None`` at a line's end.  A segment
+    #: that ends before its line does checks its walk there (:func:`simgrip.sweep.reference.segment_references`);
+    #: the simulation does not read it.
+    after: tuple | None = None
 
     def settle_options(self) -> dict:
         """Keywords of :func:`simgrip.compare.simulate` for the point's contact: none for the method's default
@@ -255,13 +260,25 @@ class SweepGrid:
         idx = np.unravel_index(int(index), self.shape)
         vals = {a: self.axes[a][i] for a, i in zip(AXES, idx)}
         return SweepPoint(index=int(index), grip=self.grip, links=self.links, method=self.method,
-                          reference=self.reference, contact=self.contact, box_depth=self.box_depth, **vals)
+                          reference=self.reference, contact=self.contact, box_depth=self.box_depth,
+                          after=self._after(int(index)), **vals)
 
     def points(self):
         """Every point, in grid order."""
         for i, combo in enumerate(itertools.product(*(self.axes[a] for a in AXES))):
             yield SweepPoint(i, self.grip, *combo, links=self.links, method=self.method, reference=self.reference,
-                             contact=self.contact, box_depth=self.box_depth)
+                             contact=self.contact, box_depth=self.box_depth, after=self._after(i))
+
+    def _after(self, index: int) -> tuple | None:
+        """``SweepPoint.after`` of point ``index``: the fastest-varying swept axis and its value at the next
+        point on the line (the axes after it have one value each, so the position on the line is ``index``
+        modulo the line's length); ``None`` at a line's end or without a swept axis."""
+        swept = self.swept
+        if not swept:
+            return None
+        values = self.axes[swept[-1]]
+        pos = index % len(values)
+        return None if pos == len(values) - 1 else (swept[-1], values[pos + 1])
 
     def segments(self, max_points: int = SEGMENT_POINTS):
         """The grid cut into continuation segments: ``(start, stop)`` index ranges (``stop`` exclusive), in order.

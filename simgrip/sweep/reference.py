@@ -18,9 +18,15 @@ Along a segment (:meth:`simgrip.sweep.grid.SweepGrid.segments`) of points
    the same error estimate (else the walk is run again on ``solve_bvp``'s
    meshes: the neighbour's, accepted by its residual test, else one
    ``solve_bvp`` run from the same start) up to the last point;
-3. the last point's cold path is run without its final polish
-   (:meth:`_Segment.end_checked`); where the walk arrives on its branch
-   (``theta`` within :data:`SAME_BRANCH_RAD`) the whole walk is kept;
+3. where the segment ends before its line, the walk takes one more warm step,
+   to the next segment's first point, whose cold path without its final
+   polish is run (:meth:`_Segment.ahead_checked`; kept, :data:`_AHEAD`: it is
+   the next segment's start, so a segment run next in the same process does
+   not solve it again); where the step arrives on its branch (``theta`` within
+   :data:`SAME_BRANCH_RAD`) the whole walk is kept; otherwise, or at a line's
+   end, the last point's cold path is run without its final polish
+   (:meth:`_Segment.end_checked`), and where the walk arrives on its branch the
+   whole walk is kept;
 4. otherwise the last point is solved cold, and where the walk is not on its
    branch the interval is bisected: the midpoint is solved cold, the left
    half is checked against it with the same walk, the right half walked again
@@ -221,10 +227,16 @@ def sized_start(point):
     from simgrip.reference import elastica
     from simgrip.reference.bvp import TOL_MID
 
-    try:
-        mid = cold(point, TOL_MID)
-    except Exception:  # noqa: BLE001 - the full cold solve decides (and records the failure)
-        return None, None
+    key = problem_key(point)
+    if key in _AHEAD:  # this process solved it as the previous segment's check ahead: the same solve
+        if _AHEAD[key] is None:
+            return None, None
+        mid = _repackaged(point, _AHEAD[key])
+    else:
+        try:
+            mid = cold(point, TOL_MID)
+        except Exception:  # noqa: BLE001 - the full cold solve decides (and records the failure)
+            return None, None
     x = mid._raw.x
     r, factor = on_sized_mesh(mid, (x, _doubled(x), _doubled(_doubled(x))))
     if r is None:
@@ -329,15 +341,63 @@ class _Segment:
             mesh, factor = (None, None) if self.sol[lo] is None else walk_mesh(self.sol[lo])
             if lo + 1 <= hi:
                 self.seconds[lo + 1] += time.perf_counter() - t
-        out = self._walk(lo, hi, {} if mesh is None else {"mesh": mesh, "factor": factor})
+        self.newton = {} if mesh is None else {"mesh": mesh, "factor": factor}
+        out = self._walk(lo, hi, self.newton)
         end = out.get(hi)
         if mesh is not None and end is not None and end._raw.x is mesh:
             t = time.perf_counter()
             ok = walk_error(end) <= TOL
             self.seconds[hi] += time.perf_counter() - t
             if not ok:
-                out = self._walk(lo, hi, {})
+                self.newton = {}
+                out = self._walk(lo, hi, self.newton)
         return out
+
+    def ahead_checked(self, last: int, walk: dict) -> bool:
+        """Keep the whole walk ``1..last`` when one more warm step, to the point after the segment on its line
+        (:attr:`~simgrip.sweep.grid.SweepPoint.after`), arrives on that point's cold branch (its cold path at
+        ``TOL_MID``, as :meth:`end_checked`); ``False`` (nothing kept) otherwise, or where the segment ends its
+        line.  That cold path is the next segment's start (:func:`sized_start`) and is kept for it
+        (:data:`_AHEAD`): a segment run next in this process does not solve it again.
+
+        What it changes against :meth:`end_checked`: the walk's verified ends are the segment's first point
+        and the next segment's first (33 points apart) instead of the segment's last (32), so the check of the
+        segment's last point is saved (its cold path is one of two per segment).  Where the check ahead fails,
+        the caller checks the last point as before (every cold solve, bisection and warning as without it).
+        Assumed, as between any walk's verified ends: the cold branch does not leave and come back between
+        them; a cold branch left at the segment's last point alone, back at the next point, is not seen."""
+        from dataclasses import replace
+
+        from simgrip.reference.bvp import TOL_MID
+
+        point = self.points[last]
+        if point.after is None or any(walk[k] is None for k in range(1, last + 1)):
+            return False
+        axis, value = point.after
+        nxt = replace(point, index=point.index + 1, after=None, **{axis: value})
+        key = problem_key(nxt)
+        if key == problem_key(point):
+            return False
+        t = time.perf_counter()
+        steps = [self.sol[0]] + [walk[k] for k in range(1, last + 1)]
+        try:
+            ext = warm(nxt, steps[-1], tuple(reversed(steps[-4:-1])), self.newton)
+        except Exception:  # noqa: BLE001 - a warm step that cannot: the last point is checked instead
+            ext = None
+        if key in _AHEAD:
+            raw = _AHEAD[key]
+        else:
+            try:
+                raw = cold(nxt, TOL_MID)._raw
+            except Exception:  # noqa: BLE001 - the next segment's cold solve decides (and records the failure)
+                raw = None
+            _keep_ahead(key, raw)
+        self.seconds[last] += time.perf_counter() - t
+        if ext is None or raw is None or theta_gap(ext, _repackaged(nxt, raw)) > SAME_BRANCH_RAD:
+            return False
+        for k in range(1, last + 1):
+            self.sol[k] = walk[k]
+        return True
 
     def _walk(self, lo: int, hi: int, newton: dict) -> dict:
         out, prev, before = {}, self.sol[lo], ()
@@ -410,6 +470,23 @@ class _Segment:
         self.settle(mid, hi, self.walk(mid, hi))
 
 
+#: The checks ahead of the last segments (:meth:`_Segment.ahead_checked`: ``problem_key -> raw TOL_MID cold
+#: path, or None where it failed``), newest last: the start of the next segment (:func:`sized_start`) where it
+#: runs in the same process.  A cold path is a deterministic function of its problem, so a start taken from
+#: here is the one solved again: the references do not depend on which process ran which segment.
+_AHEAD: dict = {}
+#: Most checks kept (a sweep's segments run in line order; a few for interleaved callers), ~10-50 kB each.
+_AHEAD_KEPT = 4
+
+
+def _keep_ahead(key, raw) -> None:
+    """Keep the check ahead ``raw`` of ``key`` in :data:`_AHEAD` (bounded: the oldest dropped)."""
+    _AHEAD.pop(key, None)
+    _AHEAD[key] = raw
+    while len(_AHEAD) > _AHEAD_KEPT:
+        _AHEAD.pop(next(iter(_AHEAD)))
+
+
 def segment_references(points) -> list[tuple]:
     """``(solution or None, error message, warning, seconds)`` of each of ``points`` (one segment, in order),
     each solution that of the point's cold solve to the solver's tolerance (see the module docstring)."""
@@ -423,6 +500,8 @@ def segment_references(points) -> list[tuple]:
         seg.cold(0)
     if last > 0:
         walk = seg.walk(0, last, sized)
+        if sized is not None and seg.ahead_checked(last, walk):
+            return list(zip(seg.sol, seg.error, seg.warning, seg.seconds))
         if not seg.end_checked(last, walk):
             seg.cold(last)
             seg.settle(0, last, walk)
