@@ -9,8 +9,8 @@ id                                what                                      max 
 ``simgrip/Pick-v1``               Grip I: palm-down tip pinch (50 Hz)       200 (4 s)
 ``simgrip/PickCradle-v1``         Grip III: cradle from a pedestal (50 Hz)  250 (5 s)
 ``simgrip/PickMulti-v0``          K fingers around a box, cylinder, sphere  200 (4 s)
-``simgrip/PickFragile-v3``        Grip I pinch of a fragile workpiece       300 (6 s)
-``simgrip/PickMultiFragile-v3``   K fingers around a fragile workpiece      300 (6 s)
+``simgrip/PickFragile-v4``        Grip I pinch of a fragile workpiece       300 (6 s)
+``simgrip/PickMultiFragile-v4``   K fingers around a fragile workpiece      300 (6 s)
 ``simgrip/PlaceFragile-v3``       pinch, carry to a target, set down        400 (8 s)
 ``simgrip/PickCradleFragile-v4``  Grip III cradle, hand start height drawn  300 (6 s)
 ``simgrip/PickSphereFragile-v4``  K fingers around a sphere, height drawn   300 (6 s)
@@ -18,8 +18,9 @@ id                                what                                      max 
 
 The five fragile tasks (a hidden crush limit per episode) command the curvature through a valve (the action
 is its rate, :mod:`simgrip.envs.pick_fragile_v2`) and observe the contact forces on a tactile sensor's scale
-(:mod:`simgrip.envs.pick_fragile_v3`).  Their older versions are retired, not registered:
-``PickFragile``, ``PickMultiFragile``, ``PlaceFragile`` v0-v2 and ``PickCradleFragile``,
+(:mod:`simgrip.envs.pick_fragile_v3`); the pinch and the K fingers start from a pre-grasp
+(:mod:`simgrip.envs.pick_fragile_v4`).  Their older versions are retired, not registered:
+``PickFragile``, ``PickMultiFragile`` v0-v3, ``PlaceFragile`` v0-v2 and ``PickCradleFragile``,
 ``PickSphereFragile`` v0-v3 (``RETIRED``); ``gym.make(retired_spec("simgrip/PickFragile-v2"))`` still builds
 one exactly, with its time limit.
 
@@ -48,8 +49,9 @@ _ENVS = {
     "simgrip/PickCradle-v1": ("simgrip.envs.pick:PickEnv", {"grip": "III"}, 250),
     "simgrip/PickMulti-v0": ("simgrip.envs.pick_multi:PickMultiEnv", {}, 200),
     # the newest of each: the valve, the tactile forces on the sensor's scale (simgrip.envs.pick_fragile_v3)
-    "simgrip/PickFragile-v3": ("simgrip.envs.pick_fragile_v3:FragilePickEnvV3", {}, 300),
-    "simgrip/PickMultiFragile-v3": ("simgrip.envs.pick_fragile_v3:FragilePickMultiEnvV3", {}, 300),
+    # the pinch and the K fingers started from a pre-grasp, masses up to 0.25 kg (simgrip.envs.pick_fragile_v4)
+    "simgrip/PickFragile-v4": ("simgrip.envs.pick_fragile_v4:FragilePickEnvV4", {}, 300),
+    "simgrip/PickMultiFragile-v4": ("simgrip.envs.pick_fragile_v4:FragilePickMultiEnvV4", {}, 300),
     "simgrip/PlaceFragile-v3": ("simgrip.envs.pick_fragile_v3:FragilePlaceEnvV3", {}, 400),
     "simgrip/PickCradleFragile-v4": ("simgrip.envs.pick_fragile_v3:FragileCradleEnvV4", {}, 300),
     "simgrip/PickSphereFragile-v4": ("simgrip.envs.pick_fragile_v3:FragileSphereEnvV4", {}, 300),
@@ -81,10 +83,14 @@ RETIRED = {
     "simgrip/PlaceFragile-v2": ("simgrip.envs.pick_fragile_v2:FragilePlaceEnvV2", {}, 400),
     "simgrip/PickCradleFragile-v3": ("simgrip.envs.pick_fragile_v2:FragileCradleEnvV3", {}, 300),
     "simgrip/PickSphereFragile-v3": ("simgrip.envs.pick_fragile_v2:FragileSphereEnvV3", {}, 300),
+    # the tactile forces on the sensor's scale (simgrip.envs.pick_fragile_v3), started straight
+    "simgrip/PickFragile-v3": ("simgrip.envs.pick_fragile_v3:FragilePickEnvV3", {}, 300),
+    "simgrip/PickMultiFragile-v3": ("simgrip.envs.pick_fragile_v3:FragilePickMultiEnvV3", {}, 300),
 }
 ENV_IDS = tuple(k for k, v in _ENVS.items() if v[0] == "simgrip.envs.pick:PickEnv")
 MULTI_ENV_IDS = tuple(k for k, v in _ENVS.items() if v[0] == "simgrip.envs.pick_multi:PickMultiEnv")
-FRAGILE_ENV_IDS = tuple(k for k, v in _ENVS.items() if v[0].split(":")[0] == "simgrip.envs.pick_fragile_v3")
+FRAGILE_ENV_IDS = tuple(k for k, v in _ENVS.items()
+                        if v[0].split(":")[0] in ("simgrip.envs.pick_fragile_v3", "simgrip.envs.pick_fragile_v4"))
 
 
 def retired_spec(env_id: str) -> EnvSpec:

@@ -13,7 +13,8 @@ Policies (actions ``(curvature command, palm speed)`` in ``[-1, 1]``; ``PlaceFra
 ``constant``    every action of a grid (``--grid``): curvature ``a_k`` in ``KAPPA_GRID``, palm ``a_p`` in
                 ``PALM_GRID``, held for the whole episode; ``success_rate`` is the best of the grid *on the
                 evaluated seeds themselves* (an optimistic bound for the family)
-``openloop``    every schedule of the family "ramp the curvature command linearly from straight (+1) to ``a_k``
+``openloop``    every schedule of the family "ramp the curvature command linearly from straight (+1; where a
+                valve env starts it, ``PickFragile-v4``'s pre-grasp) to ``a_k``
                 over ``R`` steps, hold it; palm still until ``R + 10`` steps, then up at ``a_p``", over the
                 grid ``a_k`` x ``RAMP_GRID`` x ``PALM_GRID`` (best of the grid on the evaluated seeds)
 ``constant``    (``PlaceFragile-v0``: ``a_k`` x palm ``x`` command ``a_x`` in ``(-0.5, 0.5)``, palm ``z`` 0.5)
@@ -98,8 +99,10 @@ def _constant(*a):
 
 def _openloop(a_k, ramp, a_p):
     def make(env, info, seed):
+        start = getattr(env.unwrapped, "valve_command", 1.0)  # straight (+1), or a valve env's pre-grasp
+
         def act(obs, t):
-            k = 1.0 + (a_k - 1.0) * min(1.0, (t + 1) / ramp)
+            k = start + (a_k - start) * min(1.0, (t + 1) / ramp)
             return np.array([k, a_p if t >= ramp + _WAIT else 0.0], dtype=np.float32)
         return act
     return make

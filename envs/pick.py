@@ -500,6 +500,7 @@ class PickEnv(CheckedStep, gym.Env):
         d.ctrl[0] = palm_z
         d.qpos[self.box_qpos:self.box_qpos + 3] = [0.0, 0.0, self._pedestal_h + 0.5 * self.box_height]
         d.qpos[self.box_qpos + 3:self.box_qpos + 7] = [1.0, 0.0, 0.0, 0.0]
+        self._start_shape()  # the fingers' shape before the settle (a subclass's pre-grasp; here straight)
         with check_invalid_state(d, "reset: settling the fingers and box"):
             mujoco.mj_forward(m, d)
             if self.settle_steps:
@@ -513,6 +514,9 @@ class PickEnv(CheckedStep, gym.Env):
             "dimensionless": self.dimensionless(),
         }
         return self._get_obs(forces, d.qpos.tolist(), d.qvel.tolist()), info
+
+    def _start_shape(self):
+        """Shape the fingers before the reset's settle: straight here (see :mod:`simgrip.envs.pick_fragile_v4`)."""
 
     def _step_checked(self, a: list):
         # step(action) checked the episode and the action (pick_step.CheckedStep). Every line here runs once per control step beside

@@ -382,6 +382,9 @@ class PickMultiEnv(CheckedStep, gym.Env):
         self.__dict__.update(state)
         self._select(self.workpiece.shape)
 
+    def _start_shape(self):
+        """Shape the fingers before the reset's settle: straight here (see :mod:`simgrip.envs.pick_fragile_v4`)."""
+
     def _get_obs(self, forces):
         return self._observe(self.data, forces, self._kcmd, self._kact, self._z0, self._hold)
 
@@ -412,6 +415,7 @@ class PickMultiEnv(CheckedStep, gym.Env):
         wq = self.work_qpos
         d.qpos[wq:wq + 3] = [offset[0], offset[1], half_height(shape, size)]
         d.qpos[wq + 3:wq + 7] = [math.cos(0.5 * yaw), 0.0, 0.0, math.sin(0.5 * yaw)]
+        self._start_shape()  # the fingers' shape before the settle (a subclass's pre-grasp; here straight)
         with check_invalid_state(d, "reset: settling the fingers and workpiece"):
             mujoco.mj_forward(m, d)
             if self.settle_steps:

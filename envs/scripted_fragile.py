@@ -64,7 +64,9 @@ class _Closing:
         self._i_force = sl["contact_force"]
         self._force_unit = float(u._force_unit)
         self._lift_unit = float(u.target_height)  # the observed lift is in units of the target height [m]
-        self._cmd = self.start
+        # closing starts at `start`, or where a valve env already starts the command (a pre-grasp,
+        # simgrip.envs.pick_fragile_v4; the v2/v3 valve starts straight, +1)
+        self._cmd = min(self.start, getattr(u, "valve_command", self.start))
         self._frozen = None
         self._contact_at = None
         self._lift_steps = 0

@@ -15,7 +15,7 @@ import numpy as np
 import pytest
 
 import simgrip.envs  # noqa: F401  registers the environments
-from simgrip.envs import FRAGILE_ENV_IDS, retired_spec
+from simgrip.envs import FRAGILE_ENV_IDS, RETIRED, retired_spec
 from simgrip.envs.pick_fragile_v3 import TACTILE_RESOLUTION, FragilePickEnvV3
 
 #: each v3 id and the retired version it changes
@@ -26,13 +26,22 @@ PREVIOUS = {"simgrip/PickFragile-v3": "simgrip/PickFragile-v2",
             "simgrip/PickSphereFragile-v4": "simgrip/PickSphereFragile-v3"}
 
 
+#: the v3 pinch and K fingers, retired by v4 (simgrip.envs.pick_fragile_v4, which keeps v3's tactile scale)
+V4 = {"simgrip/PickFragile-v4": "simgrip/PickFragile-v3", "simgrip/PickMultiFragile-v4": "simgrip/PickMultiFragile-v3"}
+
+
+def _make(env_id, **kwargs):
+    return gym.make(retired_spec(env_id) if env_id in RETIRED else env_id, **kwargs)
+
+
 def test_every_registered_fragile_id_is_a_tactile_version():
-    assert sorted(PREVIOUS) == sorted(FRAGILE_ENV_IDS)
+    registered = {V4.get(k, k) for k in FRAGILE_ENV_IDS}
+    assert sorted(PREVIOUS) == sorted(registered)
 
 
 @pytest.mark.parametrize("env_id", sorted(PREVIOUS))
 def test_same_physics_and_infos_as_the_previous_version_forces_rescaled(env_id):
-    new, old = gym.make(env_id), gym.make(retired_spec(PREVIOUS[env_id]))
+    new, old = _make(env_id), gym.make(retired_spec(PREVIOUS[env_id]))
     try:
         un, uo = new.unwrapped, old.unwrapped
         assert un._force_unit == TACTILE_RESOLUTION and uo._force_unit > 10 * TACTILE_RESOLUTION
@@ -81,10 +90,11 @@ def test_a_light_workpieces_window_is_resolved():
     env.close()
 
 
-def test_tactile_resolution_argument():
-    env = gym.make("simgrip/PickFragile-v3", tactile_resolution=0.5)
+@pytest.mark.parametrize("env_id", ["simgrip/PickFragile-v3", "simgrip/PickFragile-v4"])
+def test_tactile_resolution_argument(env_id):
+    env = _make(env_id, tactile_resolution=0.5)
     assert env.unwrapped.tactile_resolution == 0.5 and env.unwrapped._force_unit == 0.5
     env.close()
     for bad in (0, -0.01, float("nan"), float("inf"), "soft", None):
         with pytest.raises(ValueError, match="tactile_resolution"):
-            gym.make("simgrip/PickMultiFragile-v3", tactile_resolution=bad)
+            _make(env_id.replace("Pick", "PickMulti"), tactile_resolution=bad)
