@@ -22,7 +22,16 @@ The last screen runs as one matrix product over every pair of links in prealloca
 (:meth:`FingerValidity._bound`: the midpoint bound against the exact path's clearance, with every hinge
 within ``pi/2``): it answers valid only where the steps below would, and it goes straight to
 :func:`~simgrip.validity.chain_violations` only where they would, so it changes no verdict, only the cost
-(issue 18: six numpy calls instead of ~20 and the pair gathers).  Only what the screen lets through is measured
+(issue 18: six numpy calls instead of ~20 and the pair gathers).  Before the pair rows it tries **coarse rows**
+(:func:`_coarse_spans`): the links cut into runs of ``c ~ sqrt(n)`` links, one row per pair of runs whose link pairs
+are all compared.  Every point of a run lies within half its arc of its chord's midpoint ``M`` (from a point at arc
+``s`` of ``a`` nodes ``A``, ``B``: ``|p - A| <= s``, ``|p - B| <= a - s``), and a link's midpoint ``m`` within half the
+run's arc less half the link's of ``M``, so ``|M_A - M_B| - a_A/2 - a_B/2`` is at most each covered pair's midpoint
+bound ``|m_i - m_j| - h_i - h_j``: a run pair cleared clears each of its pairs' rows, and all coarse rows cleared answer
+valid as the pair rows would (the pairs of runs that mix compared and not compared link pairs, e.g. adjacent runs of
+one finger, keep their compared pairs' own rows).  ``n = 12``: 65 rows for two fingers instead of 233, 132 for three
+instead of 564; the usual state is cleared there (issue 18, item 5: ``Pick-v1`` checks every step).
+Only what the screen lets through is measured
 exactly: first the pairs the bound left open, by their exact
 segment distance (:func:`simgrip.intersection.segment_distances`, what the exact check measures): all of them
 farther than the limit (by the relative ``CLEAR_MARGIN``) and every hinge within ``pi/2`` (adjacent links cannot
@@ -62,6 +71,25 @@ _PAIR_CACHE = 256
 _ROUND_OFF = 1e-8
 _HALF_PI = 0.5 * math.pi
 _min = np.minimum.reduce  # ndarray.min without its Python wrapper
+
+
+def _coarse_spans(keep: np.ndarray, K: int, n: int) -> list:
+    """The coarse rows of :meth:`FingerValidity._bound` as pairs of runs ``((f, a, b), (g, c, e))``: the links are cut
+    into runs of ``c = max(2, round(sqrt(n)))``; a pair of runs all of whose link pairs ``keep`` (the pair matrix,
+    ``K n`` square) compares is one row, and of any other pair of runs each compared link pair is its own row."""
+    c = max(2, int(round(math.sqrt(n))))
+    runs = [(a, min(a + c, n)) for a in range(0, n, c)]
+    spans = []
+    for f in range(K):
+        for g in range(f, K):
+            for a, b in runs:
+                for c0, e in runs:
+                    block = keep[f * n + a:f * n + b, g * n + c0:g * n + e]
+                    if block.all():
+                        spans.append(((f, a, b), (g, c0, e)))
+                    else:
+                        spans += [((f, a + i, a + i + 1), (g, c0 + j, c0 + j + 1)) for i, j in zip(*np.nonzero(block))]
+    return spans
 
 
 class FingerValidity:
@@ -151,25 +179,20 @@ class FingerValidity:
         bodies, tips = self._bodies, self._tips
         self._body_cols = (int(bodies.min()), int(bodies.max()) + 1)
         self._tip_cols = (int(tips.min()), int(tips.max()) + 1)
-        Qb = np.zeros((pi.size, self._body_cols[1] - self._body_cols[0]))
-        Qt = np.zeros((pi.size, self._tip_cols[1] - self._tip_cols[0]))
-        for row, (a, b) in enumerate(zip(pi.tolist(), pj.tolist())):
-            for link, sign in ((a, 1.0), (b, -1.0)):
-                f, k = divmod(link, n)
-                for node in (k, k + 1):
-                    if node < n:
-                        Qb[row, bodies[f, node] - self._body_cols[0]] += sign
-                    else:
-                        Qt[row, tips[f] - self._tip_cols[0]] += sign
         # a pair is cleared when its midpoints are farther apart than the exact path's clearance plus both half
         # lengths, the relative _ROUND_OFF above it: the bound and the exact distances are computed in floating
         # point (~1e-16 of the coordinates, metres from the origin at most).  Each row is divided by twice its
         # threshold T, so a pair is cleared when its row's squared norm is at least 1
-        T = (self._limit * (1.0 + CLEAR_MARGIN) + half[pi] + half[pj]) * (1.0 + _ROUND_OFF)
-        self._Qb, self._Qt = Qb / (2.0 * T[:, None]), Qt / (2.0 * T[:, None])
+        spans = [((a // n, a % n, a % n + 1), (b // n, b % n, b % n + 1)) for a, b in zip(pi.tolist(), pj.tolist())]
+        self._Qb, self._Qt, T = self._rows(spans, half, n)
         # _bound's one product: the nodes' coordinates (bodies, then tips) gathered in _P, times the rows of both
         # matrices side by side, transposed (3 x pairs: BLAS's fast shape for three coordinates)
         self._QT = np.ascontiguousarray(np.hstack([self._Qb, self._Qt]).T)
+        # the coarse rows tried first (:meth:`_bound`): the same bound over runs of links (module docstring)
+        Cb, Ct, _ = self._rows(_coarse_spans(keep, K, n), half, n)
+        self._QcT = np.ascontiguousarray(np.hstack([Cb, Ct]).T)
+        self._DcT = np.empty((3, self._QcT.shape[1]))
+        self._dc2 = np.empty(self._QcT.shape[1])
         self._nb = self._body_cols[1] - self._body_cols[0]
         self._P = np.empty((self._nb + self._tip_cols[1] - self._tip_cols[0], 3))
         self._DT = np.empty((3, pi.size))
@@ -183,6 +206,27 @@ class FingerValidity:
         self._hinge_slice = slice(h[0], h[-1] + 1) if h == list(range(h[0], h[0] + len(h))) else None
         self._d2 = np.empty(pi.size)
         self._ones = np.ones(3)
+
+    def _rows(self, spans: list, half: np.ndarray, n: int) -> tuple:
+        """The bound's rows for ``spans``, pairs of runs of links ``((f, a, b), (g, c, e))`` (links ``a .. b-1`` of
+        finger ``f`` against links ``c .. e-1`` of finger ``g``): per row ``(S_A - S_B) / (2 T)`` as its body and tip
+        columns, ``S`` a run's end nodes summed (twice its chord's midpoint), ``T`` the exact path's clearance plus
+        both runs' half arcs (the half lengths ``half`` summed), the relative ``_ROUND_OFF`` above; and ``T``."""
+        bodies, tips = self._bodies, self._tips
+        Qb = np.zeros((len(spans), self._body_cols[1] - self._body_cols[0]))
+        Qt = np.zeros((len(spans), self._tip_cols[1] - self._tip_cols[0]))
+        T = np.empty(len(spans))
+        for row, runs in enumerate(spans):
+            T[row] = self._limit * (1.0 + CLEAR_MARGIN)
+            for (f, a, b), sign in zip(runs, (1.0, -1.0)):
+                T[row] += float(np.sum(half[f * n + a:f * n + b]))
+                for node in (a, b):
+                    if node < n:
+                        Qb[row, bodies[f, node] - self._body_cols[0]] += sign
+                    else:
+                        Qt[row, tips[f] - self._tip_cols[0]] += sign
+        T *= 1.0 + _ROUND_OFF
+        return Qb / (2.0 * T[:, None]), Qt / (2.0 * T[:, None]), T
 
     def nodes(self, d) -> list:
         """Each finger's world nodes ``(n+1, 3)`` [m] in ``d``: its link bodies' origins, then its tip."""
@@ -234,7 +278,8 @@ class FingerValidity:
         exact distance is below the clearance (:meth:`_near_clear` fails), and only
         :func:`~simgrip.validity.chain_violations` decides.  0 otherwise.  Shortcuts to the same verdict: one
         matrix product gives every pair's midpoint difference over its threshold (precomputed rows, transposed:
-        3 x pairs), six numpy calls in preallocated buffers instead of the exact path's ~20 and its gathers."""
+        3 x pairs), six numpy calls in preallocated buffers instead of the exact path's ~20 and its gathers; the coarse
+        rows first (module docstring: all of them cleared clear every pair's row), then the pair rows."""
         h = self._hinge_slice
         if h is not None:  # the step's state is finite (checked before): min / max decide as the loop below
             qh = q[h]
@@ -250,6 +295,11 @@ class FingerValidity:
         P, nb = self._P, self._nb
         P[:nb] = data.xpos[b0:b1]
         P[nb:] = data.geom_xpos[t0:t1]
+        # first the coarse rows (runs of links: a quarter of the rows for n = 12); all cleared clears every pair
+        D = np.dot(P.T, self._QcT, out=self._DcT)
+        np.multiply(D, D, out=D)
+        if _min(np.dot(self._ones, D, out=self._dc2)) >= 1.0:
+            return 1
         D = np.dot(P.T, self._QT, out=self._DT)  # (S_i - S_j) / (2 T) of every pair, one column each
         np.multiply(D, D, out=D)
         d2 = np.dot(self._ones, D, out=self._d2)
