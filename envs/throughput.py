@@ -13,7 +13,11 @@ difference between the replay's end state and the environment's, over every
 chunk and both replays: 0 when the replay is faithful).
 
 The overhead is the environment's extra time (action checks, curvature lag,
-contact forces, observation, reward) over the raw stepping.  On a shared
+contact forces, observation, reward) over the raw stepping.  Both sides are timed
+per control step alike: each ``env.step`` call alone, each control step's
+``mj_step`` calls alone; the harness's own work (the replay's log of rest angles
+and controls, its writes of them before the replay's steps) is outside both
+timings.  On a shared
 machine the load changes while it runs, so the overhead is the median over
 chunks of each chunk's ratio (the environment and its raw replay run within
 milliseconds of each other and see the same load); the rates are the best
@@ -135,16 +139,16 @@ def _measure(env, steps: int, seed: int, repeats: int, chunk: int, timer) -> tup
         while i < steps:
             mujoco.mj_getState(m, d, start, kind)
             spring0 = spring[idx].copy()
-            n, done = 0, False
-            t0 = timer()
+            n, done, t_env = 0, False, 0.0
             while n < chunk and i + n < steps and not done:
-                _, _, term, trunc, _ = env.step(actions[i + n])
-                log_spring[n] = spring[idx]
+                a = actions[i + n]
+                t0 = timer()  # each step timed alone, as the replay times each control step's physics
+                _, _, term, trunc, _ = env.step(a)
+                t_env += timer() - t0
+                log_spring[n] = spring[idx]  # the replay's log, outside the timing as the replay's writes are
                 log_ctrl[n] = ctrl
                 n += 1
                 done = term or trunc
-            t_env = timer() - t0
-            # the logging above is part of the env timing: a few hundred ns per step, on the safe side
             total["env"] += t_env
             mujoco.mj_getState(m, d, end, kind)
             for mode in ("single", "nstep"):
