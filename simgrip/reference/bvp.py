@@ -376,9 +376,9 @@ def _collocation_run(P: BvpProblem, x, y, p, tol: float, factor, chord: bool = F
 
 def _finished(P: BvpProblem, r) -> BvpSolution | None:
     """The converged, finite run ``r`` as a :class:`BvpSolution`; ``None`` otherwise."""
-    if r is None or r.status != 0 or not np.all(np.isfinite(r.y)):
+    if r is None or r.status != 0 or not np.isfinite(r.y).all():
         return None
-    if r.p is not None and not np.all(np.isfinite(r.p)):
+    if r.p is not None and not np.isfinite(r.p).all():
         return None
     rp = np.asarray(r.p, dtype=float) if r.p is not None else np.zeros(0)
     return BvpSolution(P, r.x, r.y, rp, r.sol, float(np.max(r.rms_residuals)), r.message)

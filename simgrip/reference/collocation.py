@@ -92,56 +92,29 @@ class _Band:
     the pivoting's fill), ``ab`` in Fortran order: the order LAPACK reads, so ``dgbtrf`` factors it in place
     (from C order its wrapper first transposes a copy: ~2/3 of the factorisation's time at 300 nodes)."""
 
-    def __init__(self, n: int, k: int, A: np.ndarray, B: np.ndarray, m: int):
-        left = np.flatnonzero(~np.any(B != 0.0, axis=1))
-        right = np.flatnonzero(~np.any(A != 0.0, axis=1) & np.any(B != 0.0, axis=1))
-        both = np.setdiff1d(np.arange(A.shape[0]), np.concatenate((left, right)))
-        q = both.size
-        self.n, self.k, self.q, self.m = n, k, q, m
-        self.na = na = n + k + q
-        self.left, self.right, self.both = left, right, both
-        self.nl, self.nr = left.size + q, right.size + q
-        if self.nl + self.nr != na:
-            raise ValueError(f"boundary conditions: {A.shape[0]} rows for {n} states and {k} parameters")
-        self.N = N = na * m
-        self.kl = self.nl + na - 1
-        self.ku = max(2 * na - 1 - self.nl, na - 1, 0)
-        rows = 2 * self.kl + self.ku + 1
+    def __init__(self, n: int, k: int, A: np.ndarray, B: np.ndarray, m: int, layout: "_Layout | None" = None):
+        L = _Layout(n, k, A, B) if layout is None else layout
+        self.n, self.k, self.q, self.m = n, k, L.q, m
+        self.na, self.left, self.right, self.both, self.nl, self.nr = L.na, L.left, L.right, L.both, L.nl, L.nr
+        self.kl, self.ku = L.kl, L.ku
+        rows = L.rows
+        self.N = N = L.na * m
         self.shape = (rows, N)
-
-        def flat(r, c):  # the position of (r, c) in the Fortran-order band array's memory
-            return c * rows + (self.kl + self.ku + r - c)
-
         # interval i's entries sit where interval 0's do, shifted na columns per interval (r - c is the same)
-        steps = na * rows * np.arange(m - 1)[:, None]
-
-        def intervals(r0, c0):
-            return (steps + flat(r0, c0).ravel()[None, :]).ravel()
-
-        a, b = np.arange(n)[:, None], np.arange(n)[None, :]
-        self.i_d0 = intervals(self.nl + a, b)  # d Phi_i / d y_i
-        self.i_d1 = intervals(self.nl + a, na + b)  # d Phi_i / d y_{i+1}
-        self.i_dp = intervals(self.nl + a, n + np.arange(k)[None, :]) if k else None
+        steps = L.na * rows * np.arange(m - 1)[:, None]
+        self.i_d0 = (steps + L.o_d0).ravel()  # d Phi_i / d y_i
+        self.i_d1 = (steps + L.o_d1).ravel()  # d Phi_i / d y_{i+1}
+        self.i_dp = (steps + L.o_dp).ravel() if k else None
         t = np.zeros((N, rows))  # the transpose of the band array, C order: its memory is the array's in Fortran order
         tf = t.reshape(-1)
-        j = np.arange(k + q)
-        tf[intervals(self.nl + n + j, n + j)] = -1.0  # the copies' rows: x_{i+1} - x_i = 0
-        tf[intervals(self.nl + n + j, na + n + j)] = 1.0
+        tf[(steps + L.o_copy0).ravel()] = -1.0  # the copies' rows: x_{i+1} - x_i = 0
+        tf[(steps + L.o_copy1).ravel()] = 1.0
         # left rows: the separated ones, then a_r . y(a) - z_r; right rows: the separated ones, then b_r . y(b) + z_r
-        for r, src in enumerate(left):
-            tf[flat(r, np.arange(n))] = A[src]
-        for s, src in enumerate(both):
-            r = left.size + s
-            tf[flat(r, np.arange(n))] = A[src]
-            tf[flat(r, n + k + s)] = -1.0
-        base = N - self.nr
-        last = na * (m - 1)
-        for r, src in enumerate(right):
-            tf[flat(base + r, last + np.arange(n))] = B[src]
-        for s, src in enumerate(both):
-            r = base + right.size + s
-            tf[flat(r, last + np.arange(n))] = B[src]
-            tf[flat(r, last + n + k + s)] = 1.0
+        shift = L.na * (m - 1) * rows  # the right rows' entries sit where they would on one interval, shifted
+        for pos, val in L.left_entries:
+            tf[pos] = val
+        for pos, val in L.right_entries:
+            tf[pos + shift] = val
         self.template = t.T  # (rows, N), Fortran order
 
     def matrix(self, d0, d1, dp) -> np.ndarray:
@@ -172,6 +145,64 @@ class _Band:
         return s[:, :self.n].T, s[0, self.n:self.n + self.k].copy()
 
 
+class _Layout:
+    """What a :class:`_Band` of the structure ``(n, k, A, B)`` shares on any number of nodes: the boundary rows'
+    split (left, right, both ends), the band widths, the positions of interval 0's entries in the band array's
+    memory (interval ``i``'s are shifted ``na * rows`` per interval) and the boundary rows' entries (the right
+    ones as on a one-interval mesh, shifted by the intervals before the last)."""
+
+    def __init__(self, n: int, k: int, A: np.ndarray, B: np.ndarray):
+        left = np.flatnonzero(~np.any(B != 0.0, axis=1))
+        right = np.flatnonzero(~np.any(A != 0.0, axis=1) & np.any(B != 0.0, axis=1))
+        both = np.setdiff1d(np.arange(A.shape[0]), np.concatenate((left, right)))
+        q = both.size
+        self.q, self.na = q, n + k + q
+        na = self.na
+        self.left, self.right, self.both = left, right, both
+        self.nl, self.nr = left.size + q, right.size + q
+        if self.nl + self.nr != na:
+            raise ValueError(f"boundary conditions: {A.shape[0]} rows for {n} states and {k} parameters")
+        self.kl = self.nl + na - 1
+        self.ku = max(2 * na - 1 - self.nl, na - 1, 0)
+        self.rows = rows = 2 * self.kl + self.ku + 1
+
+        def flat(r, c):  # the position of (r, c) in the Fortran-order band array's memory
+            return c * rows + (self.kl + self.ku + r - c)
+
+        a, b = np.arange(n)[:, None], np.arange(n)[None, :]
+        self.o_d0 = flat(self.nl + a, b).ravel()[None, :]
+        self.o_d1 = flat(self.nl + a, na + b).ravel()[None, :]
+        self.o_dp = flat(self.nl + a, n + np.arange(k)[None, :]).ravel()[None, :] if k else None
+        j = np.arange(k + q)
+        self.o_copy0 = flat(self.nl + n + j, n + j).ravel()[None, :]
+        self.o_copy1 = flat(self.nl + n + j, na + n + j).ravel()[None, :]
+        cols = np.arange(n)
+        self.left_entries = []
+        for r, src in enumerate(left):
+            self.left_entries.append((flat(r, cols), A[src]))
+        for s, src in enumerate(both):
+            r = left.size + s
+            self.left_entries.append((flat(r, cols), A[src]))
+            self.left_entries.append((flat(r, n + k + s), -1.0))
+        # on m nodes the right rows are rows N - nr + r and columns na (m - 1) + c: flat() of those is that of
+        # rows na - nr + r and columns c, plus na (m - 1) rows (r - c is the same)
+        base = na - self.nr
+        self.right_entries = []
+        for r, src in enumerate(right):
+            self.right_entries.append((flat(base + r, cols), B[src]))
+        for s, src in enumerate(both):
+            r = base + right.size + s
+            self.right_entries.append((flat(r, cols), B[src]))
+            self.right_entries.append((flat(r, n + k + s), 1.0))
+
+
+@lru_cache(maxsize=_BANDS)
+def _layout(key) -> _Layout:
+    """The :class:`_Layout` of a structure ``key = (n, k, A bytes, B bytes)`` (cached: a few per process)."""
+    n, k, a, b = key
+    return _Layout(n, k, np.frombuffer(a).reshape(n + k, n), np.frombuffer(b).reshape(n + k, n))
+
+
 def _band(key, m: int) -> _Band:
     """The :class:`_Band` of a structure ``key = (n, k, A bytes, B bytes)`` on ``m`` nodes: cached up to
     :data:`_CACHED_NODES` nodes (a continuation solves on the same mesh size again and again; a layout is
@@ -183,7 +214,7 @@ def _band(key, m: int) -> _Band:
 
 def _new_band(key, m: int) -> _Band:
     n, k, a, b = key
-    return _Band(n, k, np.frombuffer(a).reshape(n + k, n), np.frombuffer(b).reshape(n + k, n), m)
+    return _Band(n, k, None, None, m, _layout(key))
 
 
 _cached_band = lru_cache(maxsize=_BANDS)(_new_band)
@@ -269,10 +300,45 @@ class Spline:
         out += c[0] * (s2 * s)
         return out.T.reshape((self.c.shape[2],) + t.shape)
 
+    def end_value(self, t: float) -> np.ndarray:
+        """``self(t)[:, 0]`` for one ``t`` in the last interval (``t >= x[-2]``; the right end, ``x[-1]``): the
+        same arithmetic on the last interval's coefficients alone (each value computed elementwise alike)."""
+        return _cubic(self.c[:, -1, :], t - self.x[-2])
+
+
+def _cubic(c: np.ndarray, s) -> np.ndarray:
+    """:meth:`Spline.__call__`'s evaluation of the cubics ``c`` (``(4, n)``, highest power first) at ``s``."""
+    s2 = s * s
+    out = ((0.0 + c[3]) + c[2] * s) + c[1] * s2
+    out += c[0] * (s2 * s)
+    return out
+
 
 def _spline(c, x) -> Spline:
     """``solve_bvp``'s spline from the coefficients ``c`` of :func:`_spline_coefficients` (``(4, n, m - 1)``)."""
     return Spline(np.ascontiguousarray(np.transpose(c, (0, 2, 1))), np.ascontiguousarray(x, dtype=np.float64))
+
+
+class _LazySpline(Spline):
+    """The :class:`Spline` of states ``y`` with slopes ``yp`` on the mesh ``x`` (spacing ``h``), its coefficients
+    (:func:`_spline_coefficients`, as :func:`_spline` lays them out) computed on first use: a walk's solutions
+    are read on a few points, most never (:func:`continue_collocation` with ``refine=False``).  The same
+    values as the eager spline; :meth:`end_value` reads the last interval alone."""
+
+    def __init__(self, y, yp, h, x):
+        self._y, self._yp, self._h, self.x, self._c = y, yp, h, np.ascontiguousarray(x, dtype=np.float64), None
+
+    @property
+    def c(self) -> np.ndarray:
+        if self._c is None:
+            self._c = np.ascontiguousarray(np.transpose(_spline_coefficients(self._y, self._yp, self._h), (0, 2, 1)))
+        return self._c
+
+    def end_value(self, t: float) -> np.ndarray:
+        if self._c is not None:
+            return super().end_value(t)
+        c = _spline_coefficients(self._y[:, -2:], self._yp[:, -2:], self._h[-1:])[:, :, 0]  # elementwise alike
+        return _cubic(c, t - self.x[-2])
 
 
 def _rms_residuals(fun, c, x, h, p, r_middle, f_middle):
@@ -328,7 +394,7 @@ def _newton(band, h, x, fun, fun_jac, bc, y, p, bvp_tol, bc_tol):
         y, p = y_new, p_new
         if njev == max_njev:
             break
-        if np.all(np.abs(col_res) < tol_r * (1 + np.abs(f_middle))) and np.all(np.abs(bc_res) < bc_tol):
+        if (np.abs(col_res) < tol_r * (1 + np.abs(f_middle))).all() and (np.abs(bc_res) < bc_tol).all():
             break
         if alpha == 1:
             y_step, p_step, cost = ys_new, ps_new, cost_new
@@ -356,7 +422,7 @@ def _checked(fun_jac, A, B, c, x, y, p, tol, bc_tol):
     if x.ndim != 1 or x.size < 2:
         raise ValueError("`x` must be 1 dimensional with at least 2 nodes.")
     h = np.diff(x)
-    if np.any(h <= 0):
+    if (h <= 0).any():
         raise ValueError("`x` must be strictly increasing.")
     y = np.array(y, dtype=float)
     if y.ndim != 2 or y.shape[1] != x.size:
@@ -464,7 +530,7 @@ def continue_collocation(fun, fun_jac, A, B, c, x, y, p=None, *, tol: float, fac
     for step in range(max_steps + 1):
         col_res, _, f, f_middle = _collocation(fun, y, p, x, h)
         bc_res = bc(y[:, 0], y[:, -1])
-        if np.all(np.abs(col_res) < tol_r * (1 + np.abs(f_middle))) and np.all(np.abs(bc_res) < bc_tol):
+        if (np.abs(col_res) < tol_r * (1 + np.abs(f_middle))).all() and (np.abs(bc_res) < bc_tol).all():
             break
         if step == max_steps or factor.singular:
             return None
@@ -482,13 +548,13 @@ def continue_collocation(fun, fun_jac, A, B, c, x, y, p=None, *, tol: float, fac
         if not np.isfinite(cost):
             return None
         y, p, cost_before = y - ys, p - ps, cost
-    coef = _spline_coefficients(y, f, h)
     if not refine:
         if not np.max(np.abs(bc_res)) <= bc_tol:
             return None
-        return CollocationResult(sol=_spline(coef, x), p=p if k else None, x=x, y=y, yp=f,
+        return CollocationResult(sol=_LazySpline(y, f, h, x), p=p if k else None, x=x, y=y, yp=f,
                                  rms_residuals=np.full(x.size - 1, np.nan), niter=1, status=0, message=ON_MESH,
                                  success=True, factor=factor)
+    coef = _spline_coefficients(y, f, h)
     rms_res = _rms_residuals(fun, coef, x, h, p, 1.5 * col_res / h, f_middle)
     if not np.max(np.abs(bc_res)) <= bc_tol:
         return None

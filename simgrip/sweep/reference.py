@@ -52,11 +52,12 @@ the switches).
 
 from __future__ import annotations
 
+import math
 import time
 
 import numpy as np
 
-__all__ = ["SAME_BRANCH_RAD", "cold", "warm", "segment_references"]
+__all__ = ["SAME_BRANCH_RAD", "Reference", "cold", "warm", "segment_references"]
 
 #: Two converged references (tolerance 1e-8) whose ``theta`` differ by less than this [rad] are one equilibrium:
 #: the same branch solved twice agrees to ~1e-8 rad (the collocation tolerance carried through the mesh), while
@@ -116,7 +117,7 @@ def warm(point, guess, before=(), newton=None):
         r, factor = mesh_bvp(P, x, y, p, TOL, newton.get("factor"))
         if r is not None:
             newton["factor"] = factor
-            return elastica.ElasticaSolution.from_bvp(grip, params, r)
+            return Reference(grip, params, r)
         newton["factor"] = None  # not converged on the walk's mesh: solve_bvp's way from the neighbour below
     on_mesh = _same_layout(raw.prob, P) and raw.x.size <= _WARM_NODES
     if on_mesh:
@@ -127,7 +128,67 @@ def warm(point, guess, before=(), newton=None):
         r = run_bvp(P, x, y, p, TOL)
     else:
         r, newton["factor"] = warm_bvp(P, x, y, p, TOL, newton.get("factor") if on_mesh else None)
-    return None if r is None else elastica.ElasticaSolution.from_bvp(grip, params, r)
+    return None if r is None else Reference(grip, params, r)
+
+
+class Reference:
+    """A reference as the sweep reads it: :meth:`ElasticaSolution.from_bvp
+    <simgrip.reference.elastica.ElasticaSolution.from_bvp>`'s ``N1``, ``normal_force``, ``required_mu`` and
+    ``feasible`` (the same values: the same operations on the same numbers, the tip read at ``s = 1`` alone
+    instead of on the 201-point grid, where each value is computed elementwise alike; tested against it), and
+    the BVP solution ``_raw``; any other attribute of the ``ElasticaSolution`` is built on first access.
+    Saves the sampling of every walked point on the fine grid (~1/6 of a warm step)."""
+
+    __slots__ = ("grip", "params", "_raw", "_full", "N1", "normal_force", "required_mu", "feasible")
+
+    def __init__(self, grip: str, params, raw):
+        self.grip, self.params, self._raw, self._full = grip, params, raw, None
+        P = raw.prob
+        tip = _tip(raw)
+        N1 = N2 = n = f = req = 0.0
+        feas = {}
+        if grip != "free":
+            cs = raw.contact_state()
+            N1, N2 = raw.N1, P.N2
+            if grip == "III":
+                thg = cs[0]
+                f = N1 * math.cos(thg) + N2 * math.sin(thg)
+                n = -N1 * math.sin(thg) + N2 * math.cos(thg)
+            else:
+                n, f = N1, N2
+            req = abs(f) / n if n > 0 else math.inf
+            feas = {"contact": bool(n > 0), "friction": bool(n > 0 and abs(f) <= params.mu_s * n)}
+            if grip == "III":
+                feas["tip_clear"] = bool(tip[1] < cs[3])
+            else:
+                feas["grip_shape"] = bool((-1.0 if grip == "I" else 1.0) * tip[1] > 0.0)
+        self.N1, self.normal_force, self.required_mu = float(N1), float(n), float(req)
+        self.feasible = all(feas.values())
+
+    def __getattr__(self, name):
+        if name.startswith("__"):
+            raise AttributeError(name)
+        from simgrip.reference import elastica
+
+        if self._full is None:
+            self._full = elastica.ElasticaSolution.from_bvp(self.grip, self.params, self._raw)
+        return getattr(self._full, name)
+
+
+_TIP = np.array([1.0])
+
+
+def _tip(raw) -> np.ndarray:
+    """``(X, Y)`` of the rod's end (``s = 1``) as ``raw.states`` reads it: its spline at ``t = 1`` (the last
+    interval's cubic, :meth:`~simgrip.reference.collocation.Spline.end_value`: the same value; Grip III's outer
+    segment maps ``s = 1`` to ``(1 - gamma) / (1 - gamma) = 1`` exactly); ``states`` itself for any other
+    ``sol``."""
+    from simgrip.reference.collocation import Spline
+
+    if isinstance(raw.sol, Spline):
+        v = raw.sol.end_value(1.0)
+        return v[6:8] if raw.prob.two_seg else v[2:4]
+    return raw.states(_TIP)[2:4, 0]
 
 
 def _predicted(x, guess, before, P):
@@ -278,9 +339,7 @@ def problem_key(point) -> tuple:
 
 def _repackaged(point, raw):
     """The BVP solution ``raw`` of ``point``'s problem as ``point``'s reference (its own ``mu`` in the verdict)."""
-    from simgrip.reference import elastica
-
-    return elastica.ElasticaSolution.from_bvp(point.grip, point.params(), raw)
+    return Reference(point.grip, point.params(), raw)
 
 
 def _message(exc: BaseException) -> str:
