@@ -119,7 +119,7 @@ def _structure(scene: Scene) -> dict:
     first[::nl] = True
     last = np.zeros(n, bool)
     last[nl - 1::nl] = True
-    out = {"link_index": link_index, "pairs": pairs, "pair_link": pair_link, "bodies": bodies,
+    out = {"first_at": np.flatnonzero(first), "last_at": np.flatnonzero(last), "link_index": link_index, "pairs": pairs, "pair_link": pair_link, "bodies": bodies,
            "jq": np.asarray(scene.joint_qpos, int).reshape(-1), "jd": jd, "jnt": m.dof_jntid[jd],
            "mir": np.asarray(scene.mirror, float), "first": first, "last": last,
            "wnames": tuple(scene.workpiece_joints), "wq": np.asarray(scene.workpiece_qpos, int),
@@ -238,8 +238,13 @@ class ChainModel:
         self._bodies = st["bodies"]
         self.mir = st["mir"]
         self.first, self.last = st["first"], st["last"]
+        self._first_at, self._last_at = st["first_at"], st["last_at"]  # (their positions)
         self.wnames = st["wnames"]
         self.nw = len(self.wnames)
+        #: the workpiece turns (an ``ry`` dof): else every pose's ``dalpha`` is zero and a workpiece-turning
+        #: term has no Hessian beyond its diagonal (:meth:`dot_term`)
+        self._turns = any(nm not in ("x", "z") for nm in st["wnames"])
+        self._no_rank = (np.zeros((self.n + self.nw, 0)), np.zeros((0, 0)))  # (empty: nothing to write into)
         self.wq, self.wd = st["wq"], st["wd"]
         #: the contact pairs (geom1, geom2) and, for each, (finger, link index of geom1, is the tip sphere)
         self.pairs, self.pair_link = st["pairs"], st["pair_link"]
@@ -325,11 +330,11 @@ class ChainModel:
         phi = np.asarray(phi, dtype=float)
         q = phi.copy()  # joint angles: phi_i - phi_(i-1) within a finger, phi_i at its first link
         q[1:] -= phi[:-1]
-        q[self.first] = phi[self.first]
+        q[self._first_at] = phi[self._first_at]  # (the mask's positions: the same elements, no mask scan)
         s = self.k * (q - self.m.qpos_spring[self.jq])  # read each time: the rest angles are edited
-        sn = np.zeros_like(s)  # the next hinge's moment, 0 beyond a finger's last link
+        sn = np.empty_like(s)  # the next hinge's moment, 0 beyond a finger's last link
         sn[:-1] = s[1:]
-        sn[self.last] = 0.0
+        sn[self._last_at] = 0.0  # (every finger's last link, the array's last element among them)
         kk = self._k_next
         F = sn - s - self.c * np.cos(phi)
         diag = self._k_diag + self.c * np.sin(phi)
@@ -356,14 +361,15 @@ class ChainModel:
                 return None
             step = 1.0
             for _ls in range(30):
-                Fn, dn, on = self.internal(phi + step * d)
+                trial = phi + step * d
+                Fn, dn, on = self.internal(trial)
                 rn = float(np.abs(self.to_q(Fn)).max())
                 if rn < res or rn < tol:
                     break
                 step *= 0.5
             else:
                 return None
-            phi, F, diag, off, res = phi + step * d, Fn, dn, on, rn
+            phi, F, diag, off, res = trial, Fn, dn, on, rn  # (the accepted trial: phi + step d)
         return phi if res < tol else None
 
     def workpiece_force(self) -> np.ndarray:
@@ -446,8 +452,8 @@ class ChainModel:
             U[n:, 2] = da
             S = np.array([[0.0, 1.0, 0.0], [1.0, 0.0, 0.0], [0.0, 0.0, v0 * rc0 + v1 * rc1]])
             return Term(v_pc, grad, diag, U, S)
-        if not da.any():
-            return Term(v_pc, grad, diag, np.zeros((n + nw, 0)), np.zeros((0, 0)))
+        if not self._turns:  # (da is all zero: pose's dalpha has an entry only for an ry dof)
+            return Term(v_pc, grad, diag, *self._no_rank)
         grad[n:] += da * pv_pc
         U = np.zeros((n + nw, 2))
         U[g0:gi, 0] = ds * (nk @ pv)

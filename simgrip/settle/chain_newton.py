@@ -357,9 +357,8 @@ class ChainNewton(Newton):
         sc = self.scene
         cm = self.model
         self._memo = {}
-        free = np.zeros(sc.model.nv, bool)
-        free[np.asarray(idx, dtype=int)] = True
-        self.yf = np.array([j for j in range(cm.nw) if free[int(cm.wd[j])]], dtype=int)  # free workpiece dofs
+        free = set(np.asarray(idx, dtype=int).tolist())  # (the free dofs' indices; their membership is all that is read)
+        self.yf = np.array([j for j, dof in enumerate(cm.wd.tolist()) if dof in free], dtype=int)  # free workpiece dofs
         self._fw = cm.workpiece_force()[self.yf]  # (read once a solve: _system adds to it, never in place)
         L, W = sc.length, sc.force_scale
         self.kc_dl = self.kc * L / W
@@ -536,12 +535,16 @@ class ChainNewton(Newton):
         n, yf = cm.n, self.yf
         nodes = self._at("nodes", phi, w, cm.nodes, phi)
         F, _, _ = self._at("internal", phi, w, cm.internal, phi)
-        b = np.concatenate([cm.to_q(F), cm.workpiece_force()[yf]])
+        b = np.concatenate([cm.to_q(F), self._fw])  # (self._fw: workpiece_force()[yf], read at the solve's start)
         cols = [self._at(("pair", p), phi, w, cm.pair_term, p, phi, nodes, w).grad for p in self.normal_active]
         cols += [self._stick_at(i, phi, w, nodes).grad for i in stick_act]
         if not cols:
             return N, lam
-        A = np.stack([np.concatenate([cm.to_q(c[:n]), c[n:][yf]]) for c in cols], 1)
+        G = np.stack(cols, 1)  # (n + nw, columns)
+        A = np.empty((n + yf.size, G.shape[1]))
+        # every column's hinge rows at once: to_q's suffix sums run down each column in the same order
+        A[:n] = G[:n].reshape(cm.fingers, cm.nl, -1)[:, ::-1].cumsum(axis=1)[:, ::-1].reshape(n, -1)
+        A[n:] = G[n:][yf]
         x, *_ = np.linalg.lstsq(A, -b, rcond=1e-12)
         nn = len(self.normal_active)
         if not np.isfinite(x).all() or (x[:nn] < 0.0).any():

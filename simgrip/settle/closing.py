@@ -150,10 +150,9 @@ def touch(scene: Scene, run: Newton) -> None:
         if gap <= 0.0:
             break
         d.qpos[wz[0]] -= gap + 1e-9 * scene.length
-    # positions only: the release's next step (Newton.stick_now) evaluates MuJoCo's balance at this state itself,
-    # and mj_forward's contact forces would be read by nothing (it leaves the solver's warm start as it was)
-    mujoco.mj_kinematics(scene.model, d)
-    mujoco.mj_comPos(scene.model, d)
+    # nothing more: the release's next step (Newton.stick_now, touch's only caller's) evaluates MuJoCo's balance at
+    # this state itself (mj_inverse: positions, contacts and forces), before anything reads the data; positions
+    # computed here (mj_kinematics, mj_comPos) would be overwritten unread
 
 
 def start_on_chain(scene: Scene, run: Newton | None) -> bool | None:

@@ -276,7 +276,8 @@ class Newton:
             self.kc[p] *= f / old  # until read back
             self.kc_factor[p] = f
             changed = True
-        self.stiffening = float(np.max(self.kc_factor)) if self.kc_factor.size else 1.0
+        if changed:  # (else kc_factor is as the last assignment of stiffening left it: __init__, here, restore_contact)
+            self.stiffening = float(np.max(self.kc_factor)) if self.kc_factor.size else 1.0
         return changed
 
     def _set_solref(self, p: int, f: float) -> None:
@@ -328,7 +329,8 @@ class Newton:
         # (_kc_key's arrays compared where they live, without copying them first; the first difference decides)
         for a, b in ((key[0], q), (key[2], self.kc), (key[3], m.pair_solref), (key[4], m.pair_solimp),
                      (key[5], m.pair_friction), (key[6], m.body_pos)):
-            if not np.array_equal(a, b):
+            b = np.asarray(b)  # (np.array_equal's test on float arrays, without its argument handling)
+            if a.shape != b.shape or not bool((a == b).all()):
                 return False
         return True
 
