@@ -259,8 +259,11 @@ class MultiObservation:
         wq, wd = self.work_qpos, self.work_dof
         # header: curvature command and actual curvature in action units
         a, b = self._k_scale
-        kk = [a * k + b for k in kappa_cmd]
-        kk += [a * k + b for k in kappa]
+        if len(kappa_cmd) == 1:  # one shared command (the default): the comprehensions below, written out
+            kk = [a * kappa_cmd[0] + b, a * kappa[0] + b]
+        else:
+            kk = [a * k + b for k in kappa_cmd]
+            kk += [a * k + b for k in kappa]
         if self._python_tips:
             # link angles (cumulative hinge angles: np.cumsum, sequential as itertools.accumulate was); the shape
             # samples by one product (BLAS, as before); the tips by the chain's forward kinematics in each finger's
@@ -333,9 +336,14 @@ class MultiReward:
     def __call__(self, phi: float, phi_prev: float, success: bool, lost: bool, side_forces) -> tuple:
         """``(reward, lift, success, squeeze, drop)`` of one step (arguments as :func:`multi_reward`'s)."""
         weight, allow = self.weight, self.allow
-        # x / (1 + x), x = max(s - allow, 0) / weight, per finger, in one list (sum's own order, as multi_reward)
-        terms = [(x := max(s - allow, 0.0) / weight) / (1.0 + x) for s in side_forces]
-        r_squeeze = -self.w_squeeze * sum(terms) / self.K
+        # sum of x / (1 + x), x = max(s - allow, 0) / weight, per finger, as multi_reward: max written out (it keeps
+        # its first argument unless 0.0 > it) and the sum as sum's own float loop (from 0.0, in order)
+        total = 0.0
+        for s in side_forces:
+            x = s - allow
+            x = (0.0 if 0.0 > x else x) / weight
+            total += x / (1.0 + x)
+        r_squeeze = -self.w_squeeze * total / self.K
         r_lift = self.w_lift * (phi - phi_prev)
         r_success = self.w_success if success else 0.0
         r_drop = -self.w_drop if lost else 0.0

@@ -15,7 +15,13 @@ __all__ = ["PickReward", "pick_reward", "progress"]
 
 def progress(gain: float, target_height: float, lost: bool) -> float:
     """The progress potential ``phi = clip(gain / target_height, 0, 1)``, 0 once the box is lost (gain [m])."""
-    return 0.0 if lost else min(max(gain / target_height, 0.0), 1.0)
+    if lost:
+        return 0.0
+    # min(max(x, 0.0), 1.0) written out (per step; the same value: max keeps x unless 0.0 > x, NaN and -0.0
+    # included, min keeps it unless 1.0 < it)
+    x = gain / target_height
+    x = 0.0 if 0.0 > x else x
+    return 1.0 if 1.0 < x else x
 
 
 class PickReward:
@@ -48,8 +54,9 @@ class PickReward:
         r_lift = self.w_lift * (phi - phi_prev)
         # squeeze beyond what holds the box, side contacts only, bounded per step
         weight, allow = self.weight, self.allow
-        x0 = max(s0 - allow, 0.0) / weight
-        x1 = max(s1 - allow, 0.0) / weight
+        x0, x1 = s0 - allow, s1 - allow  # max(x, 0.0) / weight, written out (max keeps x unless 0.0 > x)
+        x0 = (0.0 if 0.0 > x0 else x0) / weight
+        x1 = (0.0 if 0.0 > x1 else x1) / weight
         r_squeeze = -0.5 * self.w_squeeze * (x0 / (1.0 + x0) + x1 / (1.0 + x1))
         r_success = self.w_success if success else 0.0
         r_drop = -self.w_drop if lost else 0.0
