@@ -119,9 +119,10 @@ def _structure(scene: Scene) -> dict:
     first[::nl] = True
     last = np.zeros(n, bool)
     last[nl - 1::nl] = True
-    out = {"first_at": np.flatnonzero(first), "last_at": np.flatnonzero(last), "link_index": link_index, "pairs": pairs, "pair_link": pair_link, "bodies": bodies,
+    out = {"link_index": link_index, "pairs": pairs, "pair_link": pair_link, "bodies": bodies,
            "jq": np.asarray(scene.joint_qpos, int).reshape(-1), "jd": jd, "jnt": m.dof_jntid[jd],
-           "mir": np.asarray(scene.mirror, float), "first": first, "last": last,
+           "mir": np.asarray(scene.mirror, float), "first": first, "last": last, "first_at": np.flatnonzero(first),
+           "last_at": np.flatnonzero(last),
            "wnames": tuple(scene.workpiece_joints), "wq": np.asarray(scene.workpiece_qpos, int),
            "wd": np.asarray(scene.workpiece_dof, int)}
     for v in out.values():
@@ -238,11 +239,10 @@ class ChainModel:
         self._bodies = st["bodies"]
         self.mir = st["mir"]
         self.first, self.last = st["first"], st["last"]
-        self._first_at, self._last_at = st["first_at"], st["last_at"]  # (their positions)
+        self._first_at, self._last_at = st["first_at"], st["last_at"]  # (their indices)
         self.wnames = st["wnames"]
         self.nw = len(self.wnames)
-        #: the workpiece turns (an ``ry`` dof): else every pose's ``dalpha`` is zero and a workpiece-turning
-        #: term has no Hessian beyond its diagonal (:meth:`dot_term`)
+        #: the workpiece turns (``ry``): else every ``dalpha`` is 0, a term's Hessian its diagonal (:meth:`dot_term`)
         self._turns = any(nm not in ("x", "z") for nm in st["wnames"])
         self._no_rank = (np.zeros((self.n + self.nw, 0)), np.zeros((0, 0)))  # (empty: nothing to write into)
         self.wq, self.wd = st["wq"], st["wd"]
@@ -327,19 +327,19 @@ class ChainModel:
     # -- internal forces --------------------------------------------------------
     def internal(self, phi) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         """Spring and gravity force on the link angles, and its tridiagonal Jacobian (diag, off; 0 between fingers)."""
-        phi = np.asarray(phi, dtype=float)
+        F, diag = self._force_diag(np.asarray(phi, dtype=float), self.m.qpos_spring[self.jq])  # (rest: read each time)
+        return F, diag, self._k_next[:-1].copy()
+
+    def _force_diag(self, phi, rest) -> tuple[np.ndarray, np.ndarray]:
+        """:meth:`internal`'s force and Jacobian diagonal at float64 ``phi``, hinge rest angles ``rest`` (rad)."""
         q = phi.copy()  # joint angles: phi_i - phi_(i-1) within a finger, phi_i at its first link
         q[1:] -= phi[:-1]
         q[self._first_at] = phi[self._first_at]  # (the mask's positions: the same elements, no mask scan)
-        s = self.k * (q - self.m.qpos_spring[self.jq])  # read each time: the rest angles are edited
+        s = self.k * (q - rest)
         sn = np.empty_like(s)  # the next hinge's moment, 0 beyond a finger's last link
         sn[:-1] = s[1:]
         sn[self._last_at] = 0.0  # (every finger's last link, the array's last element among them)
-        kk = self._k_next
-        F = sn - s - self.c * np.cos(phi)
-        diag = self._k_diag + self.c * np.sin(phi)
-        off = kk[:-1].copy()
-        return F, diag, off
+        return sn - s - self.c * np.cos(phi), self._k_diag + self.c * np.sin(phi)
 
     def free_equilibrium(self, phi0, tol: float = 1e-12, max_iter: int = 50):
         """The fingers alone (no contact) at equilibrium, by Newton from ``phi0``; None if it fails.
@@ -349,8 +349,9 @@ class ChainModel:
         backtracking line search on ``|F|`` guards the rest.  Not checked for
         stability: callers use it near a known stable branch.
         """
+        rest, off = self.m.qpos_spring[self.jq], self._k_next[:-1].copy()  # (internal's: fixed through this solve)
         phi = np.array(phi0, dtype=float)
-        F, diag, off = self.internal(phi)
+        F, diag = self._force_diag(phi, rest)
         res = float(np.abs(self.to_q(F)).max())
         for _ in range(max_iter):
             if res < tol:
@@ -362,14 +363,14 @@ class ChainModel:
             step = 1.0
             for _ls in range(30):
                 trial = phi + step * d
-                Fn, dn, on = self.internal(trial)
+                Fn, dn = self._force_diag(trial, rest)
                 rn = float(np.abs(self.to_q(Fn)).max())
                 if rn < res or rn < tol:
                     break
                 step *= 0.5
             else:
                 return None
-            phi, F, diag, off, res = trial, Fn, dn, on, rn  # (the accepted trial: phi + step d)
+            phi, F, diag, res = trial, Fn, dn, rn  # (the accepted trial: phi + step d)
         return phi if res < tol else None
 
     def workpiece_force(self) -> np.ndarray:

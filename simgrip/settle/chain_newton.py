@@ -357,7 +357,7 @@ class ChainNewton(Newton):
         sc = self.scene
         cm = self.model
         self._memo = {}
-        free = set(np.asarray(idx, dtype=int).tolist())  # (the free dofs' indices; their membership is all that is read)
+        free = set(np.asarray(idx, dtype=int).tolist())  # (the free dofs: only membership is read)
         self.yf = np.array([j for j, dof in enumerate(cm.wd.tolist()) if dof in free], dtype=int)  # free workpiece dofs
         self._fw = cm.workpiece_force()[self.yf]  # (read once a solve: _system adds to it, never in place)
         L, W = sc.length, sc.force_scale
