@@ -225,6 +225,9 @@ class MultiObservation:
         self._tail_start = self.slices["workpiece_position"].start
         # the tilt's index in the list of the shape, tip, workpiece and lift entries (observe)
         self._tilt_at = self.slices["workpiece_tilt"].start - self.slices["finger_shape"].start
+        # the shape samples' count and bound [rad] (observe's second comparison-only case)
+        self._n_shape = self.K * self.P
+        self._shape_lo, self._shape_hi = (float(x) for x in bounds["finger_shape"])
         self._low_l, self._high_l = self.low.tolist(), self.high.tolist()
         self._python_tips = 4 <= n <= 64  # _numpy_sum's range (else numpy sums the tips, as it always did)
         self._tips = _tips_function(n, self.K) if self._python_tips else None
@@ -309,6 +312,14 @@ class MultiObservation:
                 and max(fl) <= 20.0):
             return np.array([p, *kk, *mid, *fl, hold_obs])
         vals = [p, *kk, *mid, *fl, hold_obs]
+        # next the curled fingers' case (a claw's shape samples beyond -5 rad): the same test with the shape samples
+        # against their own bound, still identity inside the bounds
+        S = self._n_shape
+        shape, rest = mid[:S], mid[S:]
+        if (self._fast_clip and self._shape_lo <= min(shape) and max(shape) <= self._shape_hi and -5.0 <= min(rest)
+                and max(rest) <= 5.0 and -1.0 <= mid[t0] <= 1.0 and -1.0 <= mid[t0 + 1] <= 1.0 and -2.0 <= min(kk)
+                and max(kk) <= 2.0 and 0.0 <= p <= 10.0 and max(fl) <= 20.0):
+            return np.array(vals)
         return np.array([lo_ if x < lo_ else (hi_ if x > hi_ else x) for x, lo_, hi_ in zip(vals, self._low_l, self._high_l)])
 
 
