@@ -218,15 +218,25 @@ def _tip_system(P: BvpProblem):
     D, con = P.D, P.constrained
     K, t1, N2t2, g = P.K, P.t1, P.N2 + P.t2, P.g
 
+    memo = []  # (t, K(t), n2(t)) of the last two arrays t: a Newton run alternates the nodes and the midpoints
+
     def fun(t, y, p=None):
         # _segment_rhs's operations, in its order, written into the rows (np.vstack's checks cost as much as
-        # the rest): the same values
+        # the rest): the same values; K(t) and the force's t-dependent part taken from the memo when t is the
+        # same array object (the collocation's meshes are never written to once made)
         out = np.empty((4, t.size))
-        th = y[0] + K(t)
+        for m in memo:
+            if m[0] is t:
+                kt, n2 = m[1], m[2]
+                break
+        else:
+            kt, n2 = K(t), N2t2 - g * (1.0 - t)
+            memo.insert(0, (t, kt, n2))
+            del memo[2:]
+        th = y[0] + kt
         c = np.cos(th, out=out[2])
         sn = np.sin(th, out=out[3])
         n1 = (p[0] if con else P.N1) + t1
-        n2 = N2t2 - g * (1.0 - t)
         np.divide(y[1], D, out=out[0])
         np.subtract(n1 * sn, n2 * c, out=out[1])
         return out
