@@ -204,7 +204,9 @@ class Newton:
         """Round-off floor of the contact force residual: ``K_c`` times the resolution of a distance."""
         if not self.normal_active:
             return 0.0
-        kc = float(self.kc[self.normal_active].max())
+        act = self.normal_active
+        # (one pair, a Grip I/II finger's: its K_c itself, without the fancy index and reduction)
+        kc = float(self.kc[act[0]]) if len(act) == 1 else float(self.kc[act].max())
         ph = self.scene.physical  # (the scene's length and force_scale, read through one property)
         return self.floor_ulps() * _EPS * kc * ph.length / ph.force_scale
 
