@@ -198,6 +198,8 @@ def _parameters(scene: Scene, st: dict) -> dict:
                    _hx=np.array([m.geom_size[g][0] / L for _, g in pairs]), _rad=np.array(out["radius"]),
                    _pidx=[np.flatnonzero(pf == f) for f in range(nf)],
                    _branch="face" if sph.all() else ("caps" if not sph.any() else "both"))
+        out["_face_at"] = [(float(gl[0]) + float(m.geom_size[g][0]) / L, float(gl[1]) + 0.0) if sp else None
+                           for gl, (_, g), (_, _, sp) in zip(out["_gl"], pairs, pair_link)]  # (pair_term's face points)
         if out["_branch"] == "face" and "ry" not in st["wnames"]:
             # tip spheres on a face that does not turn (alpha = 0): pair_distances' arithmetic on Python floats
             out["_face_rows"] = tuple((int(f), int(i) + 1, float(out["_gl"][j, 0]), float(out["_gl"][j, 1]),
@@ -238,8 +240,7 @@ class ChainModel:
         self.jq, self.jd = st["jq"], st["jd"]
         self._bodies = st["bodies"]
         self.mir = st["mir"]
-        self.first, self.last = st["first"], st["last"]
-        self._first_at, self._last_at = st["first_at"], st["last_at"]  # (their indices)
+        self.first, self.last, self._first_at, self._last_at = st["first"], st["last"], st["first_at"], st["last_at"]
         self.wnames = st["wnames"]
         self.nw = len(self.wnames)
         #: the workpiece turns (``ry``): else every ``dalpha`` is 0, a term's Hessian its diagonal (:meth:`dot_term`)
@@ -498,12 +499,11 @@ class ChainModel:
         f, i, sphere = self.pair_link[p]
         g1, g2 = self.pairs[p]
         R = self.radius[p]
-        c_loc = self._geom_local(f, g2)
-        if sphere:  # tip sphere on the box's outer face (turning with the workpiece)
-            face = (float(c_loc[0]) + float(self.m.geom_size[g2][0]) / self.L, float(c_loc[1]) + 0.0)
-            t = self.dot_term(phi, nodes, f, i, nodes[f, i + 1], face, y, (1.0, 0.0), "work")
+        if sphere:  # tip sphere on the box's outer face (turning with the workpiece): the face's point, _parameters'
+            t = self.dot_term(phi, nodes, f, i, nodes[f, i + 1], self._face_at[p], y, (1.0, 0.0), "work")
             t.value -= R
             return t
+        c_loc = self._geom_local(f, g2)
         O, alpha, _, _ = self.pose(f, y)  # corner capsule axis (along y)
         c = O + _rot(alpha) @ c_loc
         a, b = nodes[f, i], nodes[f, i + 1]
