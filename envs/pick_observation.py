@@ -142,6 +142,9 @@ class PickObservation:
         self._consts = (self._inv_l, palm_qpos, palm_dof, box_qpos, box_dof, force_unit, kappa_range[0],
                         kappa_range[1] - kappa_range[0], target_height, hold_time)
         self._low, self._high = self.low.tolist(), self.high.tolist()
+        # the shape samples' count (finger 0's, first in ``mid``) and bound [rad] (observe's second comparison-only case)
+        self._n_shape = shape_points
+        self._shape_lo, self._shape_hi = (float(x) for x in finger_bounds(kappa_range)["finger_shape"])
         # each finger's hinges in qpos: a slice where contiguous (the builder's case), else a list of addresses
         hq = hinge_qpos[0] if isinstance(hinge_qpos, tuple) and len(hinge_qpos) == 1 else hinge_qpos
         n = n_links
@@ -231,5 +234,13 @@ class PickObservation:
                 return np.array([p, 2.0 * (c0 - lo) / span - 1.0, 2.0 * (k0 - lo) / span - 1.0, *mid, f0, f1,
                                  hold_obs])
             vals = [p, 2.0 * (c0 - lo) / span - 1.0, 2.0 * (k0 - lo) / span - 1.0, *mid, f0, f1, hold_obs]
+            # next the curled fingers' case (the cradle's shape samples beyond -5 rad: a sixth of its random steps):
+            # the same test with the shape samples against their own bound, still identity inside the bounds
+            S = self._n_shape
+            shape, rest = mid[:S], mid[S:]
+            if (self._fast_clip and self._shape_lo <= min(shape) and max(shape) <= self._shape_hi
+                    and -5.0 <= min(rest) and max(rest) <= 5.0 and 0.0 <= p <= 10.0 and 0.0 <= f0 <= 20.0
+                    and 0.0 <= f1 <= 20.0):
+                return np.array(vals)
         return np.array([lo_ if x < lo_ else (hi_ if x > hi_ else x)
                          for x, lo_, hi_ in zip(vals, self._low, self._high)])

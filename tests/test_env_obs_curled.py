@@ -1,12 +1,12 @@
-"""The K-finger observation's second comparison-only case (curled fingers, issue 18 item 5) clips as the full clip.
+"""The observations' second comparison-only case (curled fingers, issue 18 item 5) clips as the full clip.
 
-``MultiObservation.observe`` returns its entries unclipped when every entry is inside its bound: first with every
+``MultiObservation.observe`` (and ``PickObservation.observe``, the two-finger one, alike) returns its entries unclipped when every entry is inside its bound: first with every
 shape, tip and workpiece entry within +-5 (the usual state), then, for a claw curled past 5 rad (the sphere task:
 a third of its steps), with the shape samples against their own bound (+-20 rad by default) and the rest as
 before.  Here, on states of that second kind (hinges curled so the samples reach beyond -5 rad, within -20) and
 on the same states pushed outside a bound (a tilt beyond 1, a velocity beyond 100, shapes beyond -20), the result
-equals the per-entry clip of every entry (``_fast_clip = False``) to the bit, and on the env's own rollout of the
-sphere task too.
+equals the per-entry clip of every entry (``_fast_clip = False``) to the bit, and on the env's own rollouts of the
+sphere task and of the cradle (two fingers, a sixth of its random steps curled past 5 rad) too.
 """
 
 from __future__ import annotations
@@ -90,4 +90,48 @@ def test_sphere_task_rollout_clips_as_the_full_clip():
         if term or trunc:
             env.reset(seed=7 + t)
     assert curled > 20  # the second case occurred (else this proves nothing about it)
+    env.close()
+
+
+def _pick_inputs(env, q=None, v=None):
+    """PickObservation.observe's arguments for the env's current state (what its step passes)."""
+    d = env.data
+    (k0, k1), (c0, c1) = env._kcmd, env._kact
+    forces = env._contact_forces(env.model, d)
+    q = d.qpos.tolist() if q is None else q
+    v = d.qvel.tolist() if v is None else v
+    return [q, v, env._tips[0], env._tips[1], k0, k1, c0, c1, forces, env._z0, env._hold]
+
+
+def test_cradle_rollout_clips_as_the_full_clip():
+    import gymnasium as gym
+
+    import simgrip.envs  # noqa: F401  (registers the ids)
+
+    env = gym.make("simgrip/PickCradleFragile-v4").unwrapped
+    rng = np.random.default_rng(0)
+    env.reset(seed=0)
+    shape = env.obs_slices["finger_shape"]
+    hinges = env.joint_qpos[0]
+    curled = 0
+    for t in range(300):
+        a = rng.uniform(-1.0, 1.0, env.action_space.shape)
+        a[0] = rng.uniform(-1.0, 0.2)  # the valve's rate, mostly curling
+        obs, _, term, trunc, _ = env.step(a.astype(np.float32))
+        args = _pick_inputs(env)
+        fast, full = _both_ways(env._observe, args)
+        assert fast == full == obs.tobytes(), t
+        if obs[shape].min() < -5.0:
+            curled += 1
+            # the same state pushed outside a bound: the shapes beyond -20 rad, the box's velocity beyond 100 l/s
+            q = list(args[0])
+            for a in hinges:
+                q[a] *= 6.0
+            fast, full = _both_ways(env._observe, _pick_inputs(env, q=q))
+            assert fast == full, t
+            fast, full = _both_ways(env._observe, _pick_inputs(env, v=[x - 1e4 for x in args[1]]))
+            assert fast == full, t
+        if term or trunc:
+            env.reset(seed=t)
+    assert curled > 20, curled  # the second case occurred (else this proves nothing about it)
     env.close()
