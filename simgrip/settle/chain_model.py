@@ -442,8 +442,8 @@ class ChainModel:
         diag = np.zeros(n)
         diag[g0:gi] = -ds * (tk @ v)
         diag[gi] = -v_rel
-        pv = np.array([-v1, v0])  # perp(v)
         pv_pc = v0 * pc1 - v1 * pc0  # perp(v) . (p - c)
+        pv = np.array([-v1, v0]) if kind == "link" or self._turns else None  # perp(v) (the low-rank parts')
         if kind == "link":
             grad[gi] += pv_pc
             diag[gi] += 2.0 * v_rel - v_pc

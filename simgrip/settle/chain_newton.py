@@ -234,7 +234,7 @@ class ChainNewton(Newton):
         pterms = [self._at(("pair", p), phi, w, cm.pair_term, p, phi, nodes, w) for p in act]
         sterms = [self._stick_at(i, phi, w, nodes) for i in range(len(self.sticks))] if self.sticks else []
         mu = {i: float(self.scene.model.pair_friction[self._pair_of(s)][0]) for i, s in enumerate(self.sticks)
-              if i in self.sliding}  # (only the sliding sticks' friction enters)
+              if i in self.sliding} if self.sliding else {}  # (only the sliding sticks' friction enters)
         coef = []  # (term, multiplier) pairs of the force
         for k, t in enumerate(pterms):
             coef.append((t, N[k]))

@@ -264,7 +264,7 @@ def read_state(scene: Scene, d, *, held: bool, method: str, residual: float, con
             fw = -(np.asarray(con.frame[i]).reshape(3, 3).T @ fc[:3])  # on the finger (geom1)
             Fw += fw
             applied.append((fw, np.asarray(con.pos[i])))
-            w = max(float(np.linalg.norm(fw)), 1e-300)
+            w = max(math.sqrt(float(fw.dot(fw))), 1e-300)  # (np.linalg.norm's sqrt(x . x) of a 1-D float vector)
             point += w * np.asarray(con.pos[i])
             wsum += w
             pen = max(pen, -float(con.dist[i]) / L)
