@@ -47,5 +47,7 @@ def test_spline_end_value_is_its_value_at_the_end():
     for sol in (walked._raw.sol, cold._raw.sol):
         lazy = isinstance(sol, _LazySpline)
         first = sol.end_value(1.0)  # a lazy spline's before its coefficients exist
+        each = [sol.end_component(1.0, j) for j in range(first.size)]
         assert np.array_equal(first, sol(np.array([1.0]))[:, 0]) and np.array_equal(first, sol.end_value(1.0))
+        assert each == [sol.end_component(1.0, j) for j in range(first.size)] == first.tolist()
         assert lazy is (sol is walked._raw.sol)

@@ -306,6 +306,19 @@ class Spline:
         same arithmetic on the last interval's coefficients alone (each value computed elementwise alike)."""
         return _cubic(self.c[:, -1, :], t - self.x[-2])
 
+    def end_component(self, t: float, j: int) -> float:
+        """``self(t)[j, 0]`` for one ``t`` in the last interval: :meth:`end_value`'s arithmetic on component
+        ``j`` alone, in Python floats (IEEE double operations, each rounded as numpy's elementwise ones)."""
+        c0, c1, c2, c3 = (float(v) for v in self.c[:, -1, j])
+        return _cubic_scalar(c0, c1, c2, c3, float(t - self.x[-2]))
+
+
+def _cubic_scalar(c0: float, c1: float, c2: float, c3: float, s: float) -> float:
+    """:func:`_cubic` of one cubic."""
+    s2 = s * s
+    out = ((0.0 + c3) + c2 * s) + c1 * s2
+    return out + c0 * (s2 * s)
+
 
 def _cubic(c: np.ndarray, s) -> np.ndarray:
     """:meth:`Spline.__call__`'s evaluation of the cubics ``c`` (``(4, n)``, highest power first) at ``s``."""
@@ -340,6 +353,15 @@ class _LazySpline(Spline):
             return super().end_value(t)
         c = _spline_coefficients(self._y[:, -2:], self._yp[:, -2:], self._h[-1:])[:, :, 0]  # elementwise alike
         return _cubic(c, t - self.x[-2])
+
+    def end_component(self, t: float, j: int) -> float:
+        if self._c is not None:
+            return super().end_component(t, j)
+        y0, y1 = float(self._y[j, -2]), float(self._y[j, -1])
+        p0, p1, h = float(self._yp[j, -2]), float(self._yp[j, -1]), float(self._h[-1])
+        slope = (y1 - y0) / h  # _spline_coefficients' operations on the last interval, in its order
+        u = (p0 + p1 - 2 * slope) / h
+        return _cubic_scalar(u / h, (slope - p0) / h - u, p0, y0, float(t - self.x[-2]))
 
 
 def _rms_residuals(fun, c, x, h, p, r_middle, f_middle):

@@ -144,13 +144,13 @@ class Reference:
     def __init__(self, grip: str, params, raw):
         self.grip, self.params, self._raw, self._full = grip, params, raw, None
         P = raw.prob
-        tip = _tip(raw)
+        tip_y = _tip_y(raw)
         N1 = N2 = n = f = req = 0.0
         feas = {}
         if grip != "free":
-            cs = raw.contact_state()
             N1, N2 = raw.N1, P.N2
             if grip == "III":
+                cs = raw.contact_state()
                 thg = cs[0]
                 f = N1 * math.cos(thg) + N2 * math.sin(thg)
                 n = -N1 * math.sin(thg) + N2 * math.cos(thg)
@@ -159,9 +159,9 @@ class Reference:
             req = abs(f) / n if n > 0 else math.inf
             feas = {"contact": bool(n > 0), "friction": bool(n > 0 and abs(f) <= params.mu_s * n)}
             if grip == "III":
-                feas["tip_clear"] = bool(tip[1] < cs[3])
+                feas["tip_clear"] = bool(tip_y < cs[3])
             else:
-                feas["grip_shape"] = bool((-1.0 if grip == "I" else 1.0) * tip[1] > 0.0)
+                feas["grip_shape"] = bool((-1.0 if grip == "I" else 1.0) * tip_y > 0.0)
         self.N1, self.normal_force, self.required_mu = float(N1), float(n), float(req)
         self.feasible = all(feas.values())
 
@@ -178,17 +178,16 @@ class Reference:
 _TIP = np.array([1.0])
 
 
-def _tip(raw) -> np.ndarray:
-    """``(X, Y)`` of the rod's end (``s = 1``) as ``raw.states`` reads it: its spline at ``t = 1`` (the last
-    interval's cubic, :meth:`~simgrip.reference.collocation.Spline.end_value`: the same value; Grip III's outer
-    segment maps ``s = 1`` to ``(1 - gamma) / (1 - gamma) = 1`` exactly); ``states`` itself for any other
-    ``sol``."""
+def _tip_y(raw) -> float:
+    """``Y`` of the rod's end (``s = 1``) as ``raw.states`` reads it: its spline's ``Y`` component at ``t = 1``
+    (the last interval's cubic, :meth:`~simgrip.reference.collocation.Spline.end_component`: the same value;
+    Grip III's outer segment maps ``s = 1`` to ``(1 - gamma) / (1 - gamma) = 1`` exactly); ``states`` itself
+    for any other ``sol``."""
     from simgrip.reference.collocation import Spline
 
     if isinstance(raw.sol, Spline):
-        v = raw.sol.end_value(1.0)
-        return v[6:8] if raw.prob.two_seg else v[2:4]
-    return raw.states(_TIP)[2:4, 0]
+        return raw.sol.end_component(1.0, 7 if raw.prob.two_seg else 3)
+    return float(raw.states(_TIP)[3, 0])
 
 
 def _predicted(x, guess, before, P):
