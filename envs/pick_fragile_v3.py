@@ -25,7 +25,8 @@ that reached 0 % on ``PickFragile-v2`` after 15 CPU-minutes (seeds 1 and 2 of
 and 40 % after 5 CPU-minutes with the rescaled forces.  The registered results are in the README's table
 (``docs/baselines/rl_pick_v3/``, ``rl_multi_v3/``).
 
-Everything else (the draw, the valve, v1's reward, the info keys) is the previous version's.
+Everything else (the draw, the valve, v1's reward, the info keys) is the previous version's.  ``PickFragile-v3`` and
+``PickMultiFragile-v3`` are retired: :mod:`simgrip.envs.pick_fragile_v4` starts them from a pre-grasp.
 
 Info keys (every ``step``, the same in all five; PlaceFragile adds four, below):
 
