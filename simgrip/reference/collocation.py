@@ -29,6 +29,7 @@ to rounding; the tests (``tests/test_collocation.py``) compare the two.
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass
 from functools import lru_cache
 
@@ -223,8 +224,8 @@ _cached_band = lru_cache(maxsize=_BANDS)(_new_band)
 class _Factor:
     """The banded LU of one Newton Jacobian on the mesh ``x``."""
 
-    def __init__(self, band: _Band, ab: np.ndarray, x: np.ndarray):
-        self.band, self.x = band, x
+    def __init__(self, band: _Band, ab: np.ndarray, x: np.ndarray, mesh: "_Mesh | None" = None):
+        self.band, self.x, self.mesh = band, x, mesh
         self.lu, self.piv, info = dgbtrf(ab, band.kl, band.ku, overwrite_ab=1)
         self.singular = info != 0
 
@@ -233,14 +234,32 @@ class _Factor:
         return self.band.split(x)
 
 
-def _collocation(fun, y, p, x, h, x_middle=None):
+def _collocation(fun, y, p, x, h, x_middle=None, mesh=None):
     """``solve_bvp``'s ``collocation_fun``: residuals at the interval midpoints, midpoint states, ``f``
-    (``x_middle``: ``x[:-1] + 0.5 h``, where the caller has it: the same array for every call on one mesh)."""
+    (``x_middle``: ``x[:-1] + 0.5 h``, where the caller has it: the same array for every call on one mesh;
+    ``mesh``: a :class:`_Mesh` of ``x``, its products of ``h`` computed once: the same values)."""
+    if mesh is not None:
+        x_middle, h8, h6 = mesh.x_middle, mesh.h8, mesh.h6
+    else:
+        h8, h6 = 0.125 * h, h / 6
     f = fun(x, y, p)
-    y_middle = 0.5 * (y[:, 1:] + y[:, :-1]) - 0.125 * h * (f[:, 1:] - f[:, :-1])
+    y_middle = 0.5 * (y[:, 1:] + y[:, :-1]) - h8 * (f[:, 1:] - f[:, :-1])
     f_middle = fun(x[:-1] + 0.5 * h if x_middle is None else x_middle, y_middle, p)
-    col_res = y[:, 1:] - y[:, :-1] - h / 6 * (f[:, :-1] + f[:, 1:] + 4 * f_middle)
+    col_res = y[:, 1:] - y[:, :-1] - h6 * (f[:, :-1] + f[:, 1:] + 4 * f_middle)
     return col_res, y_middle, f, f_middle
+
+
+class _Mesh:
+    """What a Newton run on the mesh ``x`` (spacing ``h``) computes from it alone: the midpoints, ``0.125 h``
+    and ``h / 6`` of the collocation residual (``solve_bvp``'s products, the same values) and ``solve_bvp``'s
+    Newton tolerance ``2/3 h 0.05 tol`` at ``tol``; kept with the factorisation made on it
+    (``_Factor.mesh``), so a walk's chord steps on one mesh compute them once."""
+
+    def __init__(self, x: np.ndarray, h: np.ndarray, tol: float):
+        self.x, self.tol = x, tol
+        self.x_middle = x[:-1] + 0.5 * h
+        self.h8, self.h6 = 0.125 * h, h / 6
+        self.tol_r = 2 / 3 * h * 5e-2 * tol
 
 
 def _jacobian_blocks(n, k, h, df_dy, df_dy_middle, df_dp, df_dp_middle):
@@ -383,10 +402,10 @@ def _rms_residuals(fun, c, x, h, p, r_middle, f_middle):
 def _newton(band, h, x, fun, fun_jac, bc, y, p, bvp_tol, bc_tol):
     """``solve_bvp``'s ``solve_newton`` (same constants, same tests), solved on the band."""
     n, k = band.n, band.k
-    tol_r = 2 / 3 * h * 5e-2 * bvp_tol
+    mesh = _Mesh(x, h, bvp_tol)
+    tol_r, x_middle = mesh.tol_r, mesh.x_middle
     max_njev, max_iter, sigma, tau, n_trial = 4, 8, 0.2, 0.5, 4
-    x_middle = x[:-1] + 0.5 * h
-    col_res, y_middle, f, f_middle = _collocation(fun, y, p, x, h, x_middle)
+    col_res, y_middle, f, f_middle = _collocation(fun, y, p, x, h, mesh=mesh)
     bc_res = bc(y[:, 0], y[:, -1])
     res = band.rhs(col_res, bc_res)
     njev, singular, recompute_jac, factor = 0, False, True, None
@@ -394,7 +413,7 @@ def _newton(band, h, x, fun, fun_jac, bc, y, p, bvp_tol, bc_tol):
         if recompute_jac:
             df_dy, df_dp = fun_jac(x, y, p)
             df_dy_m, df_dp_m = fun_jac(x_middle, y_middle, p)
-            factor = _Factor(band, band.matrix(*_jacobian_blocks(n, k, h, df_dy, df_dy_m, df_dp, df_dp_m)), x)
+            factor = _Factor(band, band.matrix(*_jacobian_blocks(n, k, h, df_dy, df_dy_m, df_dp, df_dp_m)), x, mesh)
             njev += 1
             if factor.singular:
                 singular = True
@@ -405,7 +424,7 @@ def _newton(band, h, x, fun, fun_jac, bc, y, p, bvp_tol, bc_tol):
         for trial in range(n_trial + 1):
             y_new = y - alpha * y_step
             p_new = p - alpha * p_step
-            col_res, y_middle, f, f_middle = _collocation(fun, y_new, p_new, x, h, x_middle)
+            col_res, y_middle, f, f_middle = _collocation(fun, y_new, p_new, x, h, mesh=mesh)
             bc_res = bc(y_new[:, 0], y_new[:, -1])
             res = band.rhs(col_res, bc_res)
             ys_new, ps_new = factor.solve(res)
@@ -538,21 +557,23 @@ def continue_collocation(fun, fun_jac, A, B, c, x, y, p=None, *, tol: float, fac
     """
     x, h, y, p, n, k, tol, bc_tol, jac, bc, key = _checked(fun_jac, A, B, c, x, y, p, tol, bc_tol=None)
     band = _band(key, x.size)
-    tol_r = 2 / 3 * h * 5e-2 * tol
     fresh = factor is None or factor.band is not band or not (factor.x is x or np.array_equal(factor.x, x))
-    x_middle = x[:-1] + 0.5 * h
+    mesh = None if fresh else factor.mesh
+    if mesh is None or mesh.x is not x or mesh.tol != tol:
+        mesh = _Mesh(x, h, tol)
+    tol_r, x_middle = mesh.tol_r, mesh.x_middle
 
     def refactor(y, p):
-        col_res, y_middle, f, f_middle = _collocation(fun, y, p, x, h, x_middle)
+        col_res, y_middle, f, f_middle = _collocation(fun, y, p, x, h, mesh=mesh)
         df_dy, df_dp = jac(x, y, p)
         df_dy_m, df_dp_m = jac(x_middle, y_middle, p)
-        return _Factor(band, band.matrix(*_jacobian_blocks(n, k, h, df_dy, df_dy_m, df_dp, df_dp_m)), x)
+        return _Factor(band, band.matrix(*_jacobian_blocks(n, k, h, df_dy, df_dy_m, df_dp, df_dp_m)), x, mesh)
 
     if fresh:
         factor = refactor(y, p)
     cost_before = None
     for step in range(max_steps + 1):
-        col_res, _, f, f_middle = _collocation(fun, y, p, x, h, x_middle)
+        col_res, _, f, f_middle = _collocation(fun, y, p, x, h, mesh=mesh)
         bc_res = bc(y[:, 0], y[:, -1])
         if (np.abs(col_res) < tol_r * (1 + np.abs(f_middle))).all() and (np.abs(bc_res) < bc_tol).all():
             break
@@ -569,7 +590,7 @@ def continue_collocation(fun, fun_jac, A, B, c, x, y, p=None, *, tol: float, fac
                 return None
             ys, ps = factor.solve(res)
             cost = np.dot(ys.ravel(), ys.ravel()) + np.dot(ps, ps)
-        if not np.isfinite(cost):
+        if not math.isfinite(cost):
             return None
         y, p, cost_before = y - ys, p - ps, cost
     if not refine:

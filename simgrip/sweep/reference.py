@@ -203,12 +203,21 @@ def _predicted(x, guess, before, P):
         if b is None or not _same_layout(b._raw.prob, P):
             break
         hist.append((on_x(b._raw), b._raw.p))
-    coef = {0: (1.0,), 1: (2.0, -1.0), 2: (3.0, -3.0, 1.0), 3: (4.0, -6.0, 4.0, -1.0)}[len(hist)]
-    if len(hist):
-        y = coef[0] * y + sum(c * h[0] for c, h in zip(coef[1:], hist))
+    if hist:
+        coef = _PREDICTOR[len(hist)]
+        sy = sp = 0  # summed as sum() sums: from 0, in order
+        for c, h in zip(coef[1:], hist):
+            sy = sy + c * h[0]
+            if P.constrained:
+                sp = sp + c * h[1]
+        y = coef[0] * y + sy
         if P.constrained:
-            p = coef[0] * p + sum(c * h[1] for c, h in zip(coef[1:], hist))
+            p = coef[0] * p + sp
     return x, y, p
+
+
+#: The predictor's coefficients by the number of solutions before the guess (:func:`warm`).
+_PREDICTOR = {1: (2.0, -1.0), 2: (3.0, -3.0, 1.0), 3: (4.0, -6.0, 4.0, -1.0)}
 
 
 def _thinned(x: np.ndarray, f: int) -> np.ndarray:
