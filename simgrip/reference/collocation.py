@@ -93,14 +93,11 @@ class _Band:
     the pivoting's fill), ``ab`` in Fortran order: the order LAPACK reads, so ``dgbtrf`` factors it in place
     (from C order its wrapper first transposes a copy: ~2/3 of the factorisation's time at 300 nodes)."""
 
-    def __init__(self, n: int, k: int, A: np.ndarray, B: np.ndarray, m: int, layout: "_Layout | None" = None):
-        L = _Layout(n, k, A, B) if layout is None else layout
-        self.n, self.k, self.q, self.m = n, k, L.q, m
-        self.na, self.left, self.right, self.both, self.nl, self.nr = L.na, L.left, L.right, L.both, L.nl, L.nr
-        self.kl, self.ku = L.kl, L.ku
-        rows = L.rows
-        self.N = N = L.na * m
-        self.shape = (rows, N)
+    def __init__(self, L: "_Layout", n: int, k: int, m: int):
+        self.n, self.k, self.q, self.m, self.na, self.kl, self.ku = n, k, L.q, m, L.na, L.kl, L.ku
+        self.left, self.right, self.both, self.nl, self.nr = L.left, L.right, L.both, L.nl, L.nr
+        rows, self.N = L.rows, L.na * m
+        N, self.shape = self.N, (L.rows, self.N)
         # interval i's entries sit where interval 0's do, shifted na columns per interval (r - c is the same)
         steps = L.na * rows * np.arange(m - 1)[:, None]
         self.i_d0 = (steps + L.o_d0).ravel()  # d Phi_i / d y_i
@@ -156,9 +153,8 @@ class _Layout:
         left = np.flatnonzero(~np.any(B != 0.0, axis=1))
         right = np.flatnonzero(~np.any(A != 0.0, axis=1) & np.any(B != 0.0, axis=1))
         both = np.setdiff1d(np.arange(A.shape[0]), np.concatenate((left, right)))
-        q = both.size
-        self.q, self.na = q, n + k + q
-        na = self.na
+        self.q = q = both.size
+        self.na = na = n + k + q
         self.left, self.right, self.both = left, right, both
         self.nl, self.nr = left.size + q, right.size + q
         if self.nl + self.nr != na:
@@ -178,23 +174,17 @@ class _Layout:
         self.o_copy0 = flat(self.nl + n + j, n + j).ravel()[None, :]
         self.o_copy1 = flat(self.nl + n + j, na + n + j).ravel()[None, :]
         cols = np.arange(n)
-        self.left_entries = []
-        for r, src in enumerate(left):
-            self.left_entries.append((flat(r, cols), A[src]))
+        self.left_entries = [(flat(r, cols), A[src]) for r, src in enumerate(left)]
         for s, src in enumerate(both):
             r = left.size + s
-            self.left_entries.append((flat(r, cols), A[src]))
-            self.left_entries.append((flat(r, n + k + s), -1.0))
+            self.left_entries += [(flat(r, cols), A[src]), (flat(r, n + k + s), -1.0)]
         # on m nodes the right rows are rows N - nr + r and columns na (m - 1) + c: flat() of those is that of
         # rows na - nr + r and columns c, plus na (m - 1) rows (r - c is the same)
         base = na - self.nr
-        self.right_entries = []
-        for r, src in enumerate(right):
-            self.right_entries.append((flat(base + r, cols), B[src]))
+        self.right_entries = [(flat(base + r, cols), B[src]) for r, src in enumerate(right)]
         for s, src in enumerate(both):
             r = base + right.size + s
-            self.right_entries.append((flat(r, cols), B[src]))
-            self.right_entries.append((flat(r, n + k + s), 1.0))
+            self.right_entries += [(flat(r, cols), B[src]), (flat(r, n + k + s), 1.0)]
 
 
 @lru_cache(maxsize=_BANDS)
@@ -215,7 +205,7 @@ def _band(key, m: int) -> _Band:
 
 def _new_band(key, m: int) -> _Band:
     n, k, a, b = key
-    return _Band(n, k, None, None, m, _layout(key))
+    return _Band(_layout(key), n, k, m)
 
 
 _cached_band = lru_cache(maxsize=_BANDS)(_new_band)
@@ -238,10 +228,7 @@ def _collocation(fun, y, p, x, h, x_middle=None, mesh=None):
     """``solve_bvp``'s ``collocation_fun``: residuals at the interval midpoints, midpoint states, ``f``
     (``x_middle``: ``x[:-1] + 0.5 h``, where the caller has it: the same array for every call on one mesh;
     ``mesh``: a :class:`_Mesh` of ``x``, its products of ``h`` computed once: the same values)."""
-    if mesh is not None:
-        x_middle, h8, h6 = mesh.x_middle, mesh.h8, mesh.h6
-    else:
-        h8, h6 = 0.125 * h, h / 6
+    x_middle, h8, h6 = (x_middle, 0.125 * h, h / 6) if mesh is None else (mesh.x_middle, mesh.h8, mesh.h6)
     f = fun(x, y, p)
     y_middle = 0.5 * (y[:, 1:] + y[:, :-1]) - h8 * (f[:, 1:] - f[:, :-1])
     f_middle = fun(x[:-1] + 0.5 * h if x_middle is None else x_middle, y_middle, p)
@@ -250,10 +237,9 @@ def _collocation(fun, y, p, x, h, x_middle=None, mesh=None):
 
 
 class _Mesh:
-    """What a Newton run on the mesh ``x`` (spacing ``h``) computes from it alone: the midpoints, ``0.125 h``
-    and ``h / 6`` of the collocation residual (``solve_bvp``'s products, the same values) and ``solve_bvp``'s
-    Newton tolerance ``2/3 h 0.05 tol`` at ``tol``; kept with the factorisation made on it
-    (``_Factor.mesh``), so a walk's chord steps on one mesh compute them once."""
+    """What a Newton run on the mesh ``x`` (spacing ``h``) computes from it alone: the midpoints, ``0.125 h`` and
+    ``h / 6`` (``solve_bvp``'s products, the same values) and its Newton tolerance ``2/3 h 0.05 tol``; kept with
+    the factorisation made on it (``_Factor.mesh``): a walk's chord steps on one mesh compute them once."""
 
     def __init__(self, x: np.ndarray, h: np.ndarray, tol: float):
         self.x, self.tol = x, tol
@@ -354,9 +340,8 @@ def _spline(c, x) -> Spline:
 
 class _LazySpline(Spline):
     """The :class:`Spline` of states ``y`` with slopes ``yp`` on the mesh ``x`` (spacing ``h``), its coefficients
-    (:func:`_spline_coefficients`, as :func:`_spline` lays them out) computed on first use: a walk's solutions
-    are read on a few points, most never (:func:`continue_collocation` with ``refine=False``).  The same
-    values as the eager spline; :meth:`end_value` reads the last interval alone."""
+    (:func:`_spline_coefficients`, laid out as :func:`_spline` does) computed on first use: a walk's solutions
+    are read on a few points, most never (``refine=False``); the same values, the last interval alone read alone."""
 
     def __init__(self, y, yp, h, x):
         self._y, self._yp, self._h, self.x, self._c = y, yp, h, np.ascontiguousarray(x, dtype=np.float64), None
@@ -376,8 +361,7 @@ class _LazySpline(Spline):
     def end_component(self, t: float, j: int) -> float:
         if self._c is not None:
             return super().end_component(t, j)
-        y0, y1 = float(self._y[j, -2]), float(self._y[j, -1])
-        p0, p1, h = float(self._yp[j, -2]), float(self._yp[j, -1]), float(self._h[-1])
+        y0, y1, p0, p1, h = map(float, (self._y[j, -2], self._y[j, -1], self._yp[j, -2], self._yp[j, -1], self._h[-1]))
         slope = (y1 - y0) / h  # _spline_coefficients' operations on the last interval, in its order
         u = (p0 + p1 - 2 * slope) / h
         return _cubic_scalar(u / h, (slope - p0) / h - u, p0, y0, float(t - self.x[-2]))
