@@ -53,6 +53,7 @@ the switches).
 from __future__ import annotations
 
 import math
+import threading
 import time
 
 import numpy as np
@@ -297,10 +298,11 @@ def sized_start(point):
     from simgrip.reference.bvp import TOL_MID
 
     key = problem_key(point)
-    if key in _AHEAD:  # this process solved it as the previous segment's check ahead: the same solve
-        if _AHEAD[key] is None:
+    kept = _AHEAD.get(key, _MISSING)  # one lookup: another thread may drop the entry meanwhile
+    if kept is not _MISSING:  # this process solved it as the previous segment's check ahead: the same solve
+        if kept is None:
             return None, None
-        mid = _repackaged(point, _AHEAD[key])
+        mid = _repackaged(point, kept)
     else:
         try:
             mid = cold(point, TOL_MID)
@@ -451,9 +453,8 @@ class _Segment:
             ext = warm(nxt, steps[-1], tuple(reversed(steps[-4:-1])), self.newton)
         except Exception:  # noqa: BLE001 - a warm step that cannot: the last point is checked instead
             ext = None
-        if key in _AHEAD:
-            raw = _AHEAD[key]
-        else:
+        raw = _AHEAD.get(key, _MISSING)
+        if raw is _MISSING:
             try:
                 raw = cold(nxt, TOL_MID)._raw
             except Exception:  # noqa: BLE001 - the next segment's cold solve decides (and records the failure)
@@ -544,14 +545,19 @@ class _Segment:
 _AHEAD: dict = {}
 #: Most checks kept (a sweep's segments run in line order; a few for interleaved callers), ~10-50 kB each.
 _AHEAD_KEPT = 4
+#: Guards :data:`_AHEAD`'s updates (a Dask worker with several threads runs segments side by side); reads are
+#: single ``dict.get`` calls, atomic under the interpreter's lock.
+_AHEAD_LOCK = threading.Lock()
+_MISSING = object()
 
 
 def _keep_ahead(key, raw) -> None:
     """Keep the check ahead ``raw`` of ``key`` in :data:`_AHEAD` (bounded: the oldest dropped)."""
-    _AHEAD.pop(key, None)
-    _AHEAD[key] = raw
-    while len(_AHEAD) > _AHEAD_KEPT:
-        _AHEAD.pop(next(iter(_AHEAD)))
+    with _AHEAD_LOCK:
+        _AHEAD.pop(key, None)
+        _AHEAD[key] = raw
+        while len(_AHEAD) > _AHEAD_KEPT:
+            _AHEAD.pop(next(iter(_AHEAD)))
 
 
 def segment_references(points) -> list[tuple]:
