@@ -30,6 +30,9 @@ def test_ratios_are_times_over_their_own_parts(tmp_path, monkeypatch):
     rec = bo.write_overhead_bench(tmp_path, quick=True)
     assert len(rec["rows"]) == 5 + 1 + 2
     met = rec["checks"]
-    assert sum(met.values()) == 6 and len(met) == 7  # the call's 4.0 > 3 is not met; the bvp sweep is not a target
+    # both sweeps are checked (the command runs the BVP by default): the call's 4.0 > 3 and the BVP
+    # sweep's 3.0 > 2 are not met
+    assert sum(met.values()) == 6 and len(met) == 8
+    assert met["sweep --reference bvp: point/settle <= 2.0"] is False
     assert json.loads((tmp_path / "overhead.json").read_text())["checks"] == met
     assert "| simulate free n=256 x2: call/settle <= 3.0 | NO |" in (tmp_path / "overhead.md").read_text()
