@@ -14,7 +14,9 @@ and answers valid when all of them clear, before the rows of single link pairs. 
 
 from __future__ import annotations
 
+import sys
 from collections import Counter
+from pathlib import Path
 
 import mujoco
 import numpy as np
@@ -23,20 +25,9 @@ import pytest
 from simgrip.envs.pick import PickEnv
 from simgrip.envs.pick_multi import PickMultiEnv
 from simgrip.envs.pick_validity import _coarse_spans
-from simgrip.validity import chain_violations
 
-
-def _reference(v, data) -> list:
-    """``chain_violations`` on every node, no screen (as ``tests/test_pick_validity.py``)."""
-    world = v.nodes(data)
-    planar = []
-    for f, w in enumerate(world):
-        rel = w - w[0]
-        planar.append(np.stack([rel @ v._dirs[f], rel[:, 2]], axis=1))
-    L = v._length
-    found = chain_violations([p / L for p in planar], [w / L for w in world], r_link=v._r / L, r_tip=None,
-                             solid=None, base_sines=v._sines)
-    return [m for _, m in found]
+sys.path.insert(0, str(Path(__file__).parent))
+from test_pick_validity import _reference  # noqa: E402  (chain_violations on every node, no screen)
 
 
 def _compared(v) -> set:
