@@ -11,21 +11,16 @@ sphere task and of the cradle (two fingers, a sixth of its random steps curled p
 
 from __future__ import annotations
 
+import sys
+from pathlib import Path
+
 import numpy as np
 import pytest
 
 from simgrip.envs.pick_multi import PickMultiEnv
 
-
-def _both_ways(obs_maker, args) -> tuple[bytes, bytes]:
-    fast = obs_maker.observe(*args)
-    obs_maker._fast_clip = False
-    try:
-        full = obs_maker.observe(*args)
-    finally:
-        del obs_maker._fast_clip
-    assert np.all(fast >= obs_maker.low) and np.all(fast <= obs_maker.high)
-    return fast.tobytes(), full.tobytes()
+sys.path.insert(0, str(Path(__file__).parent))
+from test_env_hot_path import _both_ways  # noqa: E402  (observe with and without the comparison-only case)
 
 
 @pytest.mark.parametrize("fingers", [3, 4])

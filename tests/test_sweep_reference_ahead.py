@@ -10,6 +10,9 @@ problem), equal to the cold solves, and a check ahead that fails falls back to t
 
 from __future__ import annotations
 
+import sys
+from pathlib import Path
+
 import pytest
 
 from simgrip.sweep import point as sweep_point
@@ -17,14 +20,13 @@ from simgrip.sweep import reference as sweep_reference
 from simgrip.sweep.grid import make_grid
 from simgrip.sweep.point import evaluate_point, evaluate_segment
 
-LINKS = 8
-#: As tests/test_sweep_stream.py's FORCE_RTOL: two 1e-8 solves of one equilibrium, 100x the tolerance.
-FORCE_RTOL = 1e-6
+sys.path.insert(0, str(Path(__file__).parent))
+# the grid size, the force tolerance (two 1e-8 solves of one equilibrium, 100x the tolerance), the simulation
+# left out, and the walk forced astray with what must follow it
+from test_sweep_stream import (FORCE_RTOL, LINKS, _no_simulation, assert_astray_solved_cold,  # noqa: E402
+                               walk_astray)
+
 BVP = ("bvp_normal_force", "bvp_feasible", "bvp_required_mu", "bvp_message", "bvp_warning")
-
-
-def _no_simulation(point):
-    return {**{c: None for c in sweep_point.SIM_COLUMNS}, "wall_time_s": None, "message": ""}
 
 
 @pytest.fixture
@@ -106,24 +108,8 @@ def test_a_walk_astray_is_solved_cold_and_says_so_with_a_check_ahead(counted, mo
     """A walk that leaves the cold branch inside a segment that ends before its line (points 4-6 forced onto
     the solution at kappa + 3): the check ahead fails, the last point's check fails, and the bisection solves
     the points cold and says so, as in a segment that ends its line (tests/test_sweep_stream.py)."""
-    real = sweep_reference.warm
-
-    def astray(point, guess, *walk):
-        if 4 <= point.index <= 6:
-            from dataclasses import replace
-
-            return sweep_reference.cold(replace(point, kappa=point.kappa + 3.0))
-        return real(point, guess, *walk)
-
-    monkeypatch.setattr(sweep_reference, "warm", astray)
+    walk_astray(monkeypatch)
     grid = make_grid("I", kappa=(-7, -5, 12), links=LINKS)
     points = [grid.point(i) for i in range(7)]  # segment 0..6 of a 12-point line: checked ahead at 7
     assert points[-1].after is not None
-    warm = evaluate_segment(points)
-    cold = [evaluate_point(p) for p in points]
-    for w, c in zip(warm, cold):
-        assert w["bvp_normal_force"] == pytest.approx(c["bvp_normal_force"], rel=FORCE_RTOL)
-        assert w["bvp_feasible"] is c["bvp_feasible"]
-    warned = [r["index"] for r in warm if r["bvp_warning"]]
-    assert warned and set(warned) <= {4, 5, 6}, warned
-    assert all("another branch" in warm[i]["bvp_warning"] and "solved cold" in warm[i]["bvp_warning"] for i in warned)
+    assert_astray_solved_cold(points)

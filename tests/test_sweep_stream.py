@@ -79,22 +79,23 @@ def test_warm_references_equal_the_cold_ones(monkeypatch, grip, kappa, D, crosse
         assert w["bvp_warning"] == ""
 
 
-def test_a_walk_on_another_branch_is_solved_cold_and_says_so(monkeypatch):
-    """A warm start that lands on another equilibrium (here: forced, the solution at kappa + 3) is found at the
-    next cold check, the interval bisected, and every reference is the cold one; the points checked say so."""
-    monkeypatch.setattr(sweep_point, "_simulation", _no_simulation)
+def walk_astray(monkeypatch) -> None:
+    """Force the warm walk of points 4-6 onto another equilibrium (the cold solution at kappa + 3)."""
     real = sweep_reference.warm
 
     def astray(point, guess, *walk):
-        if 4 <= point.index <= 6:  # the walk leaves the cold branch at point 4 and stays off until the end
+        if 4 <= point.index <= 6:  # the walk leaves the cold branch at point 4 and stays off until then
             from dataclasses import replace
 
             return sweep_reference.cold(replace(point, kappa=point.kappa + 3.0))
         return real(point, guess, *walk)
 
     monkeypatch.setattr(sweep_reference, "warm", astray)
-    grid = make_grid("I", kappa=(-7, -5, 9), links=LINKS)
-    points = [grid.point(i) for i in range(grid.size)]
+
+
+def assert_astray_solved_cold(points) -> None:
+    """Under :func:`walk_astray`: the segment ``points``' references are the cold ones, and only points 4-6
+    (some of them) say they reached another branch and were solved cold."""
     warm = evaluate_segment(points)
     cold = [evaluate_point(p) for p in points]
     for w, c in zip(warm, cold):
@@ -103,6 +104,15 @@ def test_a_walk_on_another_branch_is_solved_cold_and_says_so(monkeypatch):
     warned = [r["index"] for r in warm if r["bvp_warning"]]
     assert warned and set(warned) <= {4, 5, 6}, warned
     assert all("another branch" in warm[i]["bvp_warning"] and "solved cold" in warm[i]["bvp_warning"] for i in warned)
+
+
+def test_a_walk_on_another_branch_is_solved_cold_and_says_so(monkeypatch):
+    """A warm start that lands on another equilibrium (here: forced, the solution at kappa + 3) is found at the
+    next cold check, the interval bisected, and every reference is the cold one; the points checked say so."""
+    monkeypatch.setattr(sweep_point, "_simulation", _no_simulation)
+    walk_astray(monkeypatch)  # the walk leaves the cold branch at point 4 and stays off until the end
+    grid = make_grid("I", kappa=(-7, -5, 9), links=LINKS)
+    assert_astray_solved_cold([grid.point(i) for i in range(grid.size)])
 
 
 # determinism ------------------------------------------------------------------------------------
