@@ -13,17 +13,32 @@ block elimination gives ``X = T^{-1} [P | r1]`` (one tridiagonal solve with
 ``k + 1`` right-hand sides, LAPACK ``gtsv``), the Schur complement
 ``S = E - Q X_P`` (``k x k``), ``y = S^{-1} (r2 - Q X_r)`` and
 ``x = X_r - X_P y``.  ``T`` need not be definite (partial pivoting).
+The small system in ``S`` is solved by Gaussian elimination with partial
+pivoting (:func:`solve_small`: Python floats up to :data:`SMALL_K`, else
+LAPACK ``gesv``), and by the least-squares solution (``lstsq``, singular
+values below ``1e-14`` of the largest dropped) wherever that elimination finds
+``S`` singular or the answer so large that ``S`` may be (issue 19: ``lstsq``'s
+SVD and argument handling were ~20 us of a ~25 us solve at ``k = 3``).
 
 LAPACK is :mod:`simgrip.lapack`'s (SciPy's wrappers without ``scipy.linalg``'s import cost).
 """
 
 from __future__ import annotations
 
+import math
+
 import numpy as np
 
 from simgrip.lapack import dgtsv, dpttrf, dpttrs
 
-__all__ = ["dgtsv", "dpttrf", "dpttrs", "solve_bordered", "solve_tridiagonal"]
+__all__ = ["dgtsv", "dpttrf", "dpttrs", "solve_bordered", "solve_small", "solve_tridiagonal"]
+
+#: Border sizes up to this are eliminated on Python floats (numpy's per-call cost is most of a 3 x 3 solve).
+SMALL_K = 4
+#: :func:`solve_small` trusts an eliminated answer ``y`` only when ``max|y| max|S| <= SMALL_TRUST max|b|``
+#: (``|S|`` the largest row sum): a larger one means ``S`` is within ~1e-10 of singular, where the
+#: least-squares answer (rank cut at ``1e-14``) is the one the Newton step takes, as it always did.
+SMALL_TRUST = 1e10
 
 
 def solve_tridiagonal(diag, off, rhs) -> np.ndarray:
@@ -64,5 +79,63 @@ def solve_bordered(diag, off, P, Q, E, r1, r2) -> tuple[np.ndarray, np.ndarray]:
         return X[:, 0], np.zeros(0)
     S = E - Q @ X[:, :k]
     b = r2 - Q @ X[:, k]
-    y, *_ = np.linalg.lstsq(S, b, rcond=1e-14)
+    y = solve_small(S, b)
     return X[:, k] - X[:, :k] @ y, y
+
+
+def _eliminate(S, b):
+    """``S y = b`` by Gaussian elimination with partial pivoting on Python floats (``S`` a list of rows, ``b`` a
+    list; both consumed); None where a pivot is exactly zero or the answer is not finite."""
+    k = len(b)
+    for c in range(k):
+        p = max(range(c, k), key=lambda r: abs(S[r][c]))
+        piv = S[p][c]
+        if piv == 0.0:
+            return None
+        if p != c:
+            S[c], S[p] = S[p], S[c]
+            b[c], b[p] = b[p], b[c]
+        rc = S[c]
+        for r in range(c + 1, k):
+            row = S[r]
+            f = row[c] / piv
+            if f != 0.0:
+                for j in range(c + 1, k):
+                    row[j] -= f * rc[j]
+                b[r] -= f * b[c]
+    y = [0.0] * k
+    for c in range(k - 1, -1, -1):
+        rc = S[c]
+        acc = b[c]
+        for j in range(c + 1, k):
+            acc -= rc[j] * y[j]
+        y[c] = acc / rc[c]
+    return y if all(math.isfinite(v) for v in y) else None
+
+
+def solve_small(S, b, *, least_squares: bool = True) -> np.ndarray | None:
+    """``y`` with ``S y = b`` for a small square ``S`` (float64): elimination with partial pivoting, or, where ``S``
+    is singular or nearly so (:data:`SMALL_TRUST`), ``lstsq``'s least-squares answer with singular values below
+    ``1e-14`` of the largest cut, as the bordered solve always took (``least_squares=False``: None there).  Both
+    are the exact solution of a non-singular ``S`` up to round-off (``cond(S) eps``)."""
+    k = b.size
+    y = None
+    if k <= SMALL_K:
+        rows = S.tolist()
+        bl = b.tolist()
+        snorm = max(sum(abs(v) for v in r) for r in rows)
+        bnorm = max(abs(v) for v in bl)
+        got = _eliminate(rows, bl)
+        if got is not None and max(abs(v) for v in got) * snorm <= SMALL_TRUST * bnorm:
+            y = np.array(got)
+    else:
+        try:
+            got = np.linalg.solve(S, b)
+        except np.linalg.LinAlgError:
+            got = None
+        if got is not None and np.isfinite(got).all() and (
+                float(np.abs(got).max()) * float(np.abs(S).sum(axis=1).max()) <= SMALL_TRUST * float(np.abs(b).max())):
+            y = got
+    if y is None and least_squares:
+        y, *_ = np.linalg.lstsq(S, b, rcond=1e-14)
+    return y

@@ -32,7 +32,7 @@ import math
 import mujoco
 import numpy as np
 
-from simgrip.settle.banded import solve_bordered
+from simgrip.settle.banded import SMALL_K, solve_bordered, solve_small
 from simgrip.settle.chain_model import ChainModel, eligible
 from simgrip.settle.newton import FLOOR_ULPS, PEN_MAX, Newton
 from simgrip.settle.state import SettleError
@@ -90,6 +90,7 @@ class ChainNewton(Newton):
         """
         moved = super()._update_kc(q)  # MuJoCo's balance at q is now in the scratch data
         sd, cm = self.st.d, self.model
+        self._inverse_mark = (self.st.calls, sd.efc_force.tobytes())  # (full_residual's reuse of this evaluation)
         if at is not None:
             da = self._distances(*at)
         else:
@@ -131,6 +132,15 @@ class ChainNewton(Newton):
     def full_residual(self, q) -> np.ndarray:
         m = self.scene.model
         if self.pairs and not (int(m.opt.disableflags) & int(mujoco.mjtDisableBit.mjDSBL_CONTACT)):
+            if self._inverse_current(q):
+                # the solve's last K_c read (one mj_inverse) was at this very state and the data still holds it:
+                # the judge's mj_inverse would compute the same numbers (issue 19: not made twice)
+                d = self.st.d
+                r = d.qfrc_applied - d.qfrc_inverse
+                if self.sticks:
+                    _, G = self.st.stick_rows(self.sticks)
+                    r = r + G.T @ self.friction_forces()
+                return r / self.st.fscale
             return super().full_residual(q)
         judged, self._judged = self._judged, None
         if (judged is not None and judged[0] == self._positions_key() and np.array_equal(judged[1], q)
@@ -180,6 +190,21 @@ class ChainNewton(Newton):
         self._judged = (self._positions_key(), qq, r, self._balance_inputs())
         return True
 
+    def _inverse_current(self, q) -> bool:
+        """The scene's data holds the ``mj_inverse`` of the solve's last ``K_c`` read (:meth:`_update_kc`), made at
+        ``q`` with the model as it is now (:meth:`Newton._kc_current`), no MuJoCo evaluation since (the statics'
+        call count; its constraint forces, which ``mj_forward`` would rewrite, the same bits) and its positions
+        last computed at ``q`` (:meth:`_commit`, no kinematics since): :meth:`Statics.forces` at ``q`` would
+        compute the very same numbers."""
+        mark, done = getattr(self, "_inverse_mark", None), getattr(self, "_committed", None)
+        d = self.st.d
+        if mark is None or done is None or d is not self.scene.data or mark[0] != self.st.calls:
+            return False
+        q = np.asarray(q, dtype=float)
+        if done[0] != self.kinematics_calls or done[1] != q.tobytes() or d.qpos.tobytes() != done[1]:
+            return False
+        return self._kc_current(q) and mark[1] == d.efc_force.tobytes() and not d.qvel.any() and not d.qacc.any()
+
     def _balance_inputs(self) -> tuple:
         """What MuJoCo's balance at rest reads besides the positions: rest angles, stiffness, gravity and the
         applied forces (a judgement is reused only while they are unchanged)."""
@@ -202,6 +227,7 @@ class ChainNewton(Newton):
         m = self.scene.model
         mujoco.mj_kinematics(m, d)
         mujoco.mj_comPos(m, d)
+        self._committed = (self.kinematics_calls, d.qpos.tobytes())  # (positions at this q: _inverse_current)
         # a contact-free scene's sync is these two: remember where, so that the judge's balance and the settle's
         # last sync at the same state do not compute them again
         self._positions_at = self._positions_key() if self.st.d is d and _positions_only(m) else None
@@ -526,7 +552,8 @@ class ChainNewton(Newton):
         return out if all(np.isfinite(x).all() for x in out) else None
 
     def _estimate_multipliers(self, phi, w, N, lam, stick_act):
-        """Least-squares multipliers at a fixed state: ``min |F + G_n' N + G_s' lambda|`` (hinge rows in q).
+        """Least-squares multipliers at a fixed state: ``min |F + G_n' N + G_s' lambda|`` (hinge rows in q), by the
+        normal equations (:func:`~simgrip.settle.banded.solve_small`; ``lstsq`` where they are near singular).
 
         New contacts and sticks start at zero force; the first Newton step would
         otherwise spend itself on the whole load.  Normal forces are kept >= 0.
@@ -545,7 +572,12 @@ class ChainNewton(Newton):
         # every column's hinge rows at once: to_q's suffix sums run down each column in the same order
         A[:n] = G[:n].reshape(cm.fingers, cm.nl, -1)[:, ::-1].cumsum(axis=1)[:, ::-1].reshape(n, -1)
         A[n:] = G[n:][yf]
-        x, *_ = np.linalg.lstsq(A, -b, rcond=1e-12)
+        # the normal equations (a k x k solve, k the few columns): the least-squares answer up to cond(A)^2 eps,
+        # a start the Newton steps correct; lstsq (rank cut at 1e-12) where they are singular or nearly so
+        At = A.T
+        x = solve_small(At @ A, At @ -b, least_squares=False) if A.shape[1] <= SMALL_K else None
+        if x is None or not np.isfinite(x).all():
+            x, *_ = np.linalg.lstsq(A, -b, rcond=1e-12)
         nn = len(self.normal_active)
         if not np.isfinite(x).all() or (x[:nn] < 0.0).any():
             return N, lam

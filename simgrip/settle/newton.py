@@ -163,9 +163,10 @@ class Newton:
         if self.budget is not None:
             limit = min(limit, self.budget)
         if contacts:  # initial contact set: touching pairs and the sticks' pairs
-            dist = self._dists(q)
-            need = {p for p in range(len(self.pairs)) if dist[p] <= 0.0}
-            need |= {self._pair_of(s) for s in self.sticks}
+            need = {self._pair_of(s) for s in self.sticks}
+            if len(need | set(self.normal_active)) < len(self.pairs):  # (else every pair is in: no distance read)
+                dist = self._dists(q)
+                need |= {p for p in range(len(self.pairs)) if dist[p] <= 0.0}
             for p in sorted(need - set(self.normal_active)):
                 self.normal_active.append(p)
                 self.N = np.append(self.N, 0.0)
@@ -178,14 +179,15 @@ class Newton:
                 self._commit(q)
                 return True, "ok"
             # contact set and MuJoCo consistency
-            dist = self._dists(q)
             changed = False
             keep = [k for k, p in enumerate(self.normal_active) if self.N[k] >= 0.0]
             if len(keep) != len(self.normal_active):
                 self.normal_active = [self.normal_active[k] for k in keep]
                 self.N = self.N[keep]
                 changed = True
-            for p in range(len(self.pairs)):
+            # (the distances only where a pair is out of the set: one that penetrates joins it)
+            dist = self._dists(q) if len(self.normal_active) < len(self.pairs) else None
+            for p in range(len(self.pairs)) if dist is not None else ():
                 if p not in self.normal_active and dist[p] < 0.0:
                     self.normal_active.append(p)
                     self.N = np.append(self.N, 0.0)
