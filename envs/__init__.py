@@ -9,20 +9,21 @@ id                                what                                      max 
 ``simgrip/Pick-v1``               Grip I: palm-down tip pinch (50 Hz)       200 (4 s)
 ``simgrip/PickCradle-v1``         Grip III: cradle from a pedestal (50 Hz)  250 (5 s)
 ``simgrip/PickMulti-v0``          K fingers around a box, cylinder, sphere  200 (4 s)
-``simgrip/PickFragile-v4``        Grip I pinch of a fragile workpiece       300 (6 s)
-``simgrip/PickMultiFragile-v4``   K fingers around a fragile workpiece      300 (6 s)
+``simgrip/PickFragile-v5``        Grip I pinch of a fragile workpiece       300 (6 s)
+``simgrip/PickMultiFragile-v5``   K fingers around a fragile workpiece      300 (6 s)
 ``simgrip/PlaceFragile-v3``       pinch, carry to a target, set down        400 (8 s)
-``simgrip/PickCradleFragile-v4``  Grip III cradle, hand start height drawn  300 (6 s)
-``simgrip/PickSphereFragile-v4``  K fingers around a sphere, height drawn   300 (6 s)
+``simgrip/PickCradleFragile-v5``  Grip III cradle, hand start height drawn  300 (6 s)
+``simgrip/PickSphereFragile-v5``  K fingers around a sphere, height drawn   300 (6 s)
 ================================  ========================================  =========
 
 The five fragile tasks (a hidden crush limit per episode) command the curvature through a valve (the action
 is its rate, :mod:`simgrip.envs.pick_fragile_v2`) and observe the contact forces on a tactile sensor's scale
 (:mod:`simgrip.envs.pick_fragile_v3`); the pinch and the K fingers start from a pre-grasp
-(:mod:`simgrip.envs.pick_fragile_v4`).  Their older versions are retired, not registered:
-``PickFragile``, ``PickMultiFragile`` v0-v3, ``PlaceFragile`` v0-v2 and ``PickCradleFragile``,
-``PickSphereFragile`` v0-v3 (``RETIRED``); ``gym.make(retired_spec("simgrip/PickFragile-v2"))`` still builds
-one exactly, with its time limit.
+(:mod:`simgrip.envs.pick_fragile_v4`); the pinch, the K fingers and the claws pay no reward per touching step, the
+claws pay for approaching the grasp height (:mod:`simgrip.envs.pick_fragile_v5`, :mod:`simgrip.envs.pick_claw_v5`).
+Their older versions are retired, not registered: ``PickFragile``, ``PickMultiFragile``, ``PickCradleFragile``,
+``PickSphereFragile`` v0-v4 and ``PlaceFragile`` v0-v2 (``RETIRED``);
+``gym.make(retired_spec("simgrip/PickFragile-v2"))`` still builds one exactly, with its time limit.
 
 >>> import gymnasium as gym, simgrip.envs
 >>> env = gym.make("simgrip/Pick-v1")          # doctest: +SKIP
@@ -49,12 +50,14 @@ _ENVS = {
     "simgrip/PickCradle-v1": ("simgrip.envs.pick:PickEnv", {"grip": "III"}, 250),
     "simgrip/PickMulti-v0": ("simgrip.envs.pick_multi:PickMultiEnv", {}, 200),
     # the newest of each: the valve, the tactile forces on the sensor's scale (simgrip.envs.pick_fragile_v3)
-    # the pinch and the K fingers started from a pre-grasp, masses up to 0.25 kg (simgrip.envs.pick_fragile_v4)
-    "simgrip/PickFragile-v4": ("simgrip.envs.pick_fragile_v4:FragilePickEnvV4", {}, 300),
-    "simgrip/PickMultiFragile-v4": ("simgrip.envs.pick_fragile_v4:FragilePickMultiEnvV4", {}, 300),
+    # the pinch and the K fingers from a pre-grasp (simgrip.envs.pick_fragile_v4), without the per-step touch
+    # pay (simgrip.envs.pick_fragile_v5)
+    "simgrip/PickFragile-v5": ("simgrip.envs.pick_fragile_v5:FragilePickEnvV5", {}, 300),
+    "simgrip/PickMultiFragile-v5": ("simgrip.envs.pick_fragile_v5:FragilePickMultiEnvV5", {}, 300),
     "simgrip/PlaceFragile-v3": ("simgrip.envs.pick_fragile_v3:FragilePlaceEnvV3", {}, 400),
-    "simgrip/PickCradleFragile-v4": ("simgrip.envs.pick_fragile_v3:FragileCradleEnvV4", {}, 300),
-    "simgrip/PickSphereFragile-v4": ("simgrip.envs.pick_fragile_v3:FragileSphereEnvV4", {}, 300),
+    # the claws paid for approaching the grasp height, not per touching step (simgrip.envs.pick_claw_v5)
+    "simgrip/PickCradleFragile-v5": ("simgrip.envs.pick_claw_v5:FragileCradleEnvV5", {}, 300),
+    "simgrip/PickSphereFragile-v5": ("simgrip.envs.pick_claw_v5:FragileSphereEnvV5", {}, 300),
 }
 #: Retired ids (issue 18), not registered: id -> (entry point, kwargs, max_episode_steps), as they were
 #: registered.  Each task's newest version (in ``_ENVS``) subclasses its class; ``gym.make`` of a retired id
@@ -86,11 +89,18 @@ RETIRED = {
     # the tactile forces on the sensor's scale (simgrip.envs.pick_fragile_v3), started straight
     "simgrip/PickFragile-v3": ("simgrip.envs.pick_fragile_v3:FragilePickEnvV3", {}, 300),
     "simgrip/PickMultiFragile-v3": ("simgrip.envs.pick_fragile_v3:FragilePickMultiEnvV3", {}, 300),
+    # started from a pre-grasp, masses up to 0.25 kg (simgrip.envs.pick_fragile_v4), paying every touch step
+    "simgrip/PickFragile-v4": ("simgrip.envs.pick_fragile_v4:FragilePickEnvV4", {}, 300),
+    "simgrip/PickMultiFragile-v4": ("simgrip.envs.pick_fragile_v4:FragilePickMultiEnvV4", {}, 300),
+    # the hand started at an unknown height, the tactile scale (simgrip.envs.pick_fragile_v3), paying every touch step
+    "simgrip/PickCradleFragile-v4": ("simgrip.envs.pick_fragile_v3:FragileCradleEnvV4", {}, 300),
+    "simgrip/PickSphereFragile-v4": ("simgrip.envs.pick_fragile_v3:FragileSphereEnvV4", {}, 300),
 }
 ENV_IDS = tuple(k for k, v in _ENVS.items() if v[0] == "simgrip.envs.pick:PickEnv")
 MULTI_ENV_IDS = tuple(k for k, v in _ENVS.items() if v[0] == "simgrip.envs.pick_multi:PickMultiEnv")
 FRAGILE_ENV_IDS = tuple(k for k, v in _ENVS.items()
-                        if v[0].split(":")[0] in ("simgrip.envs.pick_fragile_v3", "simgrip.envs.pick_fragile_v4"))
+                        if v[0].split(":")[0] in ("simgrip.envs.pick_fragile_v3", "simgrip.envs.pick_fragile_v4",
+                                                  "simgrip.envs.pick_fragile_v5", "simgrip.envs.pick_claw_v5"))
 
 
 def retired_spec(env_id: str) -> EnvSpec:

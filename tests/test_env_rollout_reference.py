@@ -15,7 +15,9 @@ in order).  It was recorded (``python tests/test_env_rollout_reference.py``) by 
 item-5 pass of the env layer (commit 4640f23, run from a worktree of it); any change of a returned value by a
 single bit fails the test, naming the id, run and step.  Ids retired since (``simgrip.envs.RETIRED``) are
 replayed through ``retired_spec``; ids registered since were appended by the same command (PickFragile-v4 and
-PickMultiFragile-v4, recorded at 5aaecbb's successors, whose env layer gives the recorded ids' bytes).  The physics is MuJoCo's: the reference holds for the
+PickMultiFragile-v4, recorded at 5aaecbb's successors, whose env layer gives the recorded ids' bytes; PickFragile-v5,
+PickMultiFragile-v5, PickCradleFragile-v5 and PickSphereFragile-v5 at a9625e7 with v5 added, appended without
+re-recording the others).  The physics is MuJoCo's: the reference holds for the
 MuJoCo version it was recorded with (stored beside it; another version skips, saying so).  An intended change
 of an env's output regenerates the file with the command above.
 """

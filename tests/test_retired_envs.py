@@ -16,9 +16,10 @@ import pytest
 import simgrip.envs
 from simgrip.envs import FRAGILE_ENV_IDS, RETIRED, retired_spec
 
-#: each fragile task's newest registered version (the tactile scale, simgrip.envs.pick_fragile_v3; the pre-grasp, _v4)
-NEWEST = {"simgrip/PickFragile": "v4", "simgrip/PickMultiFragile": "v4", "simgrip/PlaceFragile": "v3",
-          "simgrip/PickCradleFragile": "v4", "simgrip/PickSphereFragile": "v4"}
+#: each fragile task's newest registered version (the tactile scale, simgrip.envs.pick_fragile_v3; the pre-grasp, _v4;
+#: no per-step touch pay, _v5; the claws' approach term, pick_claw_v5)
+NEWEST = {"simgrip/PickFragile": "v5", "simgrip/PickMultiFragile": "v5", "simgrip/PlaceFragile": "v3",
+          "simgrip/PickCradleFragile": "v5", "simgrip/PickSphereFragile": "v5"}
 RETIRED_IDS = [f"{name}-v{k}" for name, newest in NEWEST.items() for k in range(int(newest[1:]))]
 
 
@@ -80,7 +81,7 @@ def test_make_keyword_arguments_reach_the_retired_class():
         env.close()
 
 
-@pytest.mark.parametrize("bad, why", [("simgrip/PickFragile-v4", "registered"), ("simgrip/Pick-v0", "retired"),
+@pytest.mark.parametrize("bad, why", [("simgrip/PickFragile-v5", "registered"), ("simgrip/Pick-v0", "retired"),
                                       ("simgrip/NoSuch-v0", "retired"), (None, "retired")])
 def test_retired_spec_of_anything_else_is_a_value_error_naming_it(bad, why):
     with pytest.raises(ValueError, match=f"env_id: {bad!r}.*{why}"):
