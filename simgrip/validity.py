@@ -547,7 +547,27 @@ def check_valid(scene, state) -> None:
 
 
 def _contact_links(scene) -> list:
-    """Per finger: the indices of the links whose geoms have a contact pair with the workpiece (Grip III)."""
+    """Per finger: the indices of the links whose geoms have a contact pair with the workpiece (Grip III).
+
+    A function of the scene's contact geoms and link geoms alone: kept on the scene with the model and index
+    it was read from and the contact geoms' values (read only; computed again when any of them changed)."""
+    d = getattr(scene, "__dict__", None)
+    model, index = getattr(scene, "model", None), getattr(scene, "index", None)
+    if d is None or model is None or index is None:
+        return _contact_links_fresh(scene)
+    geoms = tuple(np.asarray(g).tobytes() for g in scene.contact_geoms)
+    memo = d.get("_validity_contact_links")
+    if memo is not None and memo[0] is model and memo[1] is index and memo[2] == geoms:
+        return memo[3]
+    out = _contact_links_fresh(scene)
+    for a in out:
+        a.setflags(write=False)
+    d["_validity_contact_links"] = (model, index, geoms, out)
+    return out
+
+
+def _contact_links_fresh(scene) -> list:
+    """:func:`_contact_links` computed from the scene (no memo)."""
     out = []
     for f in range(scene.fingers):
         pair = {int(g) for g in np.asarray(scene.contact_geoms[f]).ravel()}

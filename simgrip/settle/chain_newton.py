@@ -88,6 +88,8 @@ class ChainNewton(Newton):
         the contact rows evaluate (and its distances, :meth:`_distances`, are computed once).  Without it the
         analytic distance is evaluated at ``split(q)``.
         """
+        mark, self._stick_mark = getattr(self, "_stick_mark", None), None
+        self._forces_ready = mark is not None and self._stick_mark_holds(mark, q)
         moved = super()._update_kc(q)  # MuJoCo's balance at q is now in the scratch data
         sd, cm = self.st.d, self.model
         self._inverse_mark = (self.st.calls, sd.efc_force.tobytes())  # (full_residual's reuse of this evaluation)
@@ -104,6 +106,26 @@ class ChainNewton(Newton):
         # (the read's key, set by Newton._update_kc at this q, covers the distances' round-off too: nothing in
         # it changed since, so Newton.solve skips a second read at q)
         return moved
+
+    def stick_now(self) -> int:
+        """:meth:`Newton.stick_now`, remembering its MuJoCo evaluation (:meth:`_stick_mark_holds`)."""
+        out = super().stick_now()
+        d = self.st.d
+        self._stick_mark = (self.st.calls, self.kinematics_calls, d.qpos.tobytes(), d.efc_force.tobytes(),
+                            self._kc_key(d.qpos)[3:] if d is self.scene.data else None)  # (the model's part)
+        return out
+
+    def _stick_mark_holds(self, mark, q) -> bool:
+        """The data still holds :meth:`stick_now`'s ``mj_inverse`` and it was at ``q`` with today's model (contact
+        ``solref``/``solimp``/friction, body frames, flags): no MuJoCo evaluation or kinematics since (the counts),
+        the same state and the same constraint forces (bits), so :meth:`Statics.forces` at ``q`` would compute the
+        very same numbers (the contact set and ``K_c`` are the solve's own, not MuJoCo's inputs)."""
+        d = self.st.d
+        if d is not self.scene.data or mark[4] is None or mark[0] != self.st.calls or mark[1] != self.kinematics_calls:
+            return False
+        qb = np.asarray(q, dtype=float).tobytes()
+        return (qb == mark[2] and d.qpos.tobytes() == qb and d.efc_force.tobytes() == mark[3]
+                and not d.qvel.any() and not d.qacc.any() and self._kc_key(q)[3:] == mark[4])
 
     # -- MuJoCo's balance without the O(n^3) mass matrix when there is no contact ------------
     def _contacts_active(self) -> bool:
@@ -395,16 +417,19 @@ class ChainNewton(Newton):
         lam = self.lam[stick_act].copy() / W
         phi, w = cm.split(q)
         nf = cm.n + self.yf.size
-        def read_kc(ph, ww):  # MuJoCo's contact stiffness at an accepted state (one mj_inverse)
+        def read_kc(ph, ww, at_q=None):  # MuJoCo's contact stiffness at an accepted state (one mj_inverse)
             if contacts and self.normal_active:
-                self._update_kc(cm.join(q, ph, ww), at=(ph, ww))
+                self._update_kc(cm.join(q, ph, ww) if at_q is None else at_q, at=(ph, ww))
                 self.kc_dl = self.kc * L / W
 
         def stiffen(NN):  # a contact the forces would press deeper than PEN_STIFFEN: stiffer (Newton.stiffen)
             if contacts and self.stiffen(NN * W, grow_only=True):
                 self.kc_dl = self.kc * L / W
 
-        read_kc(phi, w)
+        # the start's K_c read at the solve's own start q (its link angles split(q) rejoin to q up to round-off,
+        # which the distances' shift takes up): where stick_now has just evaluated MuJoCo at q, that evaluation
+        # is this read's (_update_kc: no second mj_inverse at the same state)
+        read_kc(phi, w, at_q=q)
         anchored = False
         if (N.size and not N.all()) or (lam.size and not lam.all()):
             if self.sticks:  # (the first iteration's anchoring, done first: the estimate's stick terms are its)
@@ -437,8 +462,9 @@ class ChainNewton(Newton):
             rows = self._row_scale(len(N), len(stick_act))  # (contact rows in force units: this state's K_c)
             res_c = float(np.abs(R[nf:] * rows).max()) if R.size > nf else 0.0
             # (r < max(tol, floor), the floor evaluated only where tol alone does not decide)
-            if (res_f < tol or res_f < angle_floor(sc, state_q(phi, w))) and (
-                    res_c < tol or res_c < self.noise_floor()):
+            # (the contact rows' test first: where it fails, the angles' floor is not needed)
+            if (res_c < tol or res_c < self.noise_floor()) and (
+                    res_f < tol or res_f < angle_floor(sc, state_q(phi, w))):
                 # the analytic contact rows resolve ~1 ulp of K_c l, far below MuJoCo's distance
                 # round-off (the floor): one more step when they are above a few ulps and improving
                 if polished or res_c < tol or res_c < CHAIN_FLOOR_ULPS / FLOOR_ULPS * self.noise_floor():

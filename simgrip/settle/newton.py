@@ -316,33 +316,26 @@ class Newton:
 
     def _kc_key(self, q) -> tuple:
         """Everything a read of ``K_c`` at ``q`` (:meth:`_update_kc`) depends on: the state, the contact
-        set, the stiffness it leaves and the model's contact and workpiece parameters."""
+        set, the stiffness it leaves and the model's contact and workpiece parameters (arrays as their bytes:
+        equal bytes are equal values; a signed zero that differs only asks for one read more)."""
         m = self.scene.model
-        return (np.array(q), list(self.normal_active), self.kc.copy(), m.pair_solref.copy(), m.pair_solimp.copy(),
-                m.pair_friction.copy(), m.body_pos.copy(), int(m.opt.disableflags))
+        return (np.asarray(q, dtype=float).tobytes(), list(self.normal_active), self.kc.tobytes(),
+                m.pair_solref.tobytes(), m.pair_solimp.tobytes(), m.pair_friction.tobytes(), m.body_pos.tobytes(),
+                int(m.opt.disableflags))
 
     def _kc_current(self, q) -> bool:
         """``K_c`` was read at exactly this ``q`` and nothing it depends on changed since: a second read
         (one ``mj_inverse``) would find the same stiffness and report no move."""
         key = getattr(self, "_kc_at", None)
-        if key is None:
-            return False
-        m = self.scene.model
-        if key[1] != self.normal_active or key[7] != int(m.opt.disableflags):
-            return False
-        # (_kc_key's arrays compared where they live, without copying them first; the first difference decides)
-        for a, b in ((key[0], q), (key[2], self.kc), (key[3], m.pair_solref), (key[4], m.pair_solimp),
-                     (key[5], m.pair_friction), (key[6], m.body_pos)):
-            b = np.asarray(b)  # (np.array_equal's test on float arrays, without its argument handling)
-            if a.shape != b.shape or not bool((a == b).all()):
-                return False
-        return True
+        return key is not None and key == self._kc_key(q)
 
     def _update_kc(self, q) -> bool:
         """Read MuJoCo's contact stiffness at ``q``; True if it moved enough to matter."""
         m, sd = self.scene.model, self.st.d
         self._kc_at = None
-        self.st.forces(q)
+        ready, self._forces_ready = getattr(self, "_forces_ready", False), False
+        if not ready:  # (else the data holds MuJoCo's balance at q already: ChainNewton's stick_now mark)
+            self.st.forces(q)
         moved = False
         self._kc_cons = found = {}  # each pair's contacts in the data at q (ChainNewton reads their distances)
         dist = sd.contact.dist
