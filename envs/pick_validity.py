@@ -97,7 +97,7 @@ class FingerValidity:
 
     ``model``: the env's MuJoCo model (read once: the link radius); ``index``: its
     :class:`~simgrip.sim.fingers.FingerIndex`; ``q``: ``data.qpos.tolist()`` (the step already has it),
-    ``data`` the env's ``MjData``.  Lengths are the model's (m).  Holds no MuJoCo object (picklable).
+    ``data`` the env's ``MjData``.  Lengths are the model's (m).  Keeps views of the last ``data`` it read (dropped when pickled: picklable).
     ``every``: check on every ``every``-th call only (module docstring), a positive int; ``checked`` says
     whether the last call ran the check.
     """
@@ -206,6 +206,19 @@ class FingerValidity:
         self._hinge_slice = slice(h[0], h[-1] + 1) if h == list(range(h[0], h[0] + len(h))) else None
         self._d2 = np.empty(pi.size)
         self._ones = np.ones(3)
+        self._views = (None, None, None)  # (data, its xpos rows, its geom_xpos rows): _bind_views
+
+    def _bind_views(self, data) -> tuple:
+        """``(data, data.xpos[bodies], data.geom_xpos[tips])``: the views :meth:`_bound` copies the nodes from, kept
+        for the next call with the same ``data`` (issue 18: two attribute lookups and slices a step fewer)."""
+        (b0, b1), (t0, t1) = self._body_cols, self._tip_cols
+        self._views = views = (data, data.xpos[b0:b1], data.geom_xpos[t0:t1])
+        return views
+
+    def __getstate__(self):
+        state = self.__dict__.copy()
+        state["_views"] = (None, None, None)  # views of one MjData: bound again on the next call
+        return state
 
     def _rows(self, spans: list, half: np.ndarray, n: int) -> tuple:
         """The bound's rows for ``spans``, pairs of runs of links ``((f, a, b), (g, c, e))`` (links ``a .. b-1`` of
@@ -291,10 +304,12 @@ class FingerValidity:
                     return 0
         if not self._d2.size:  # no pair is ever compared (the exact path answers valid too)
             return 1
-        (b0, b1), (t0, t1) = self._body_cols, self._tip_cols
+        views = self._views
+        if views[0] is not data:  # the nodes' rows of data.xpos and data.geom_xpos, bound once per data
+            views = self._bind_views(data)
         P, nb = self._P, self._nb
-        P[:nb] = data.xpos[b0:b1]
-        P[nb:] = data.geom_xpos[t0:t1]
+        P[:nb] = views[1]
+        P[nb:] = views[2]
         # first the coarse rows (runs of links: a quarter of the rows for n = 12); all cleared clears every pair
         D = np.dot(P.T, self._QcT, out=self._DcT)
         np.multiply(D, D, out=D)
