@@ -72,10 +72,8 @@ class WorkpieceContactForces:
         normal forces, of their friction magnitudes, and of the normal forces' horizontal (squeezing) components."""
         K = self.K
         normal, friction, side = [0.0] * K, [0.0] * K, [0.0] * K
-        if data.ncon == 0:
-            return normal, friction, side
         fog, wg = self._fog, self.work_geom
-        con = data.contact
+        con = data.contact  # (no contact: no geom pair, the zeros above)
         ef = None
         for i, (g1, g2) in enumerate(con.geom.tolist()):
             f = fog[g2] if g1 == wg else (fog[g1] if g2 == wg else -1)
@@ -83,7 +81,7 @@ class WorkpieceContactForces:
                 continue
             if ef is None:  # the first workpiece-finger contact: the rest is read once, for all contacts
                 adrs = con.efc_address.tolist()
-                nx, ny = con.frame[:, 0].tolist(), con.frame[:, 1].tolist()  # the contact normals' x and y
+                frames = con.frame.tolist()  # each contact's frame, its normal (x, y, z) first: one read
                 ef = data.efc_force.tolist()
             adr = adrs[i]
             if adr < 0:
@@ -91,7 +89,8 @@ class WorkpieceContactForces:
             fn = ef[adr]
             normal[f] += fn
             friction[f] += math.hypot(ef[adr + 1], ef[adr + 2])
-            side[f] += fn * math.hypot(nx[i], ny[i])
+            frame = frames[i]
+            side[f] += fn * math.hypot(frame[0], frame[1])  # the normal's horizontal part
         return normal, friction, side
 
 
