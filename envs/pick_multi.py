@@ -40,6 +40,7 @@ __all__ = ["PickMultiEnv", "WorkpieceParams"]
 _COS_TILT = math.cos(math.radians(30.0))  # knocked over beyond this tilt (box, cylinder)
 _SHIFT = 0.03  # knocked away beyond this horizontal shift [m]
 _LIFTED = 0.005  # the workpiece counts as lifted once this high above its start [m]
+_array = np.array  # (the step's info arrays: one global lookup instead of two)
 
 
 class PickMultiEnv(CheckedStep, gym.Env):
@@ -434,13 +435,20 @@ class PickMultiEnv(CheckedStep, gym.Env):
         # multi_reward and MultiObservation (min / max written out as comparisons, the same values)
         lo, hi, alpha, palm_lo, palm_hi, palm_step, dt, fs, wq, pq, target, hold_time, drop = self._consts
         m, d, check, qpos, qvel, ctrl, warnings = self._hot
-        self._kcmd = cmd = [lo + 0.5 * (v + 1.0) * (hi - lo) for v in a[:-1]]
         # pneumatic lag: exact first-order response over one control step, rest angles held within it
-        self._kact = kap = [k + alpha * (c - k) for c, k in zip(cmd, self._kact)]
-        if len(kap) == 1:  # one shared command: one scalar times every finger's unit rest angles
-            np.multiply(self._unit_rest, kap[0], out=self._spring)
+        if len(a) == 2:  # one shared command (the default): the comprehensions below, written out
+            c = lo + 0.5 * (a[0] + 1.0) * (hi - lo)
+            k = self._kact[0]
+            k = k + alpha * (c - k)
+            self._kcmd, self._kact = cmd, kap = [c], [k]
+            np.multiply(self._unit_rest, k, out=self._spring)  # one scalar times every finger's unit rest angles
         else:
-            self._set_kappa(kap)
+            self._kcmd = cmd = [lo + 0.5 * (v + 1.0) * (hi - lo) for v in a[:-1]]
+            self._kact = kap = [k + alpha * (c - k) for c, k in zip(cmd, self._kact)]
+            if len(kap) == 1:
+                np.multiply(self._unit_rest, kap[0], out=self._spring)
+            else:
+                self._set_kappa(kap)
         palm = self._palm_target + a[-1] * palm_step * dt  # min(max(., palm_lo), palm_hi), written out
         self._palm_target = palm = palm_lo if palm_lo > palm else (palm_hi if palm_hi < palm else palm)
         ctrl[0] = palm
@@ -459,7 +467,10 @@ class PickMultiEnv(CheckedStep, gym.Env):
         x, y, z, qx, qy = q[wq], q[wq + 1], q[wq + 2], q[wq + 4], q[wq + 5]
         gain = z - self._z0
         rel = z - q[pq]
-        touching = sum([f > 0.0 for f in normal])
+        touching = 0  # the fingers touching (sum of f > 0.0, counted without a comprehension's frame)
+        for f in normal:
+            if f > 0.0:
+                touching += 1
         lifted_rel = self._lifted_rel
         if lifted_rel is None and gain > _LIFTED and touching >= 2:
             self._lifted_rel = lifted_rel = rel
@@ -478,8 +489,8 @@ class PickMultiEnv(CheckedStep, gym.Env):
         info = {
             "reward_lift": r_lift, "reward_success": r_success, "reward_squeeze": r_squeeze, "reward_drop": r_drop,
             "is_success": success, "dropped": dropped and not success, "knocked_over": knocked and not success,
-            "workpiece_lift": gain, "normal_force": np.array(normal), "friction_force": np.array(friction),
-            "side_force": np.array(side), "hold_time": hold, "fingers_touching": touching,
+            "workpiece_lift": gain, "normal_force": _array(normal), "friction_force": _array(friction),
+            "side_force": _array(side), "hold_time": hold, "fingers_touching": touching,
         }
         invalid = self._validity(q, d)  # a finger through itself or another (envs.pick_validity)
         info["valid"] = not invalid
