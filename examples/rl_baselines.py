@@ -204,7 +204,7 @@ def plot(summary: dict, results: list[dict], path: Path) -> None:
 
 def main(argv=None) -> int:
     p = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
-    p.add_argument("--env", required=True, help="registered env id, e.g. simgrip/PickFragile-v4, or a retired "
+    p.add_argument("--env", required=True, help="registered env id, e.g. simgrip/PickFragile-v5, or a retired "
                    "simgrip one (simgrip.envs.RETIRED: the runs of docs/baselines/ name them)")
     p.add_argument("--algo", nargs="+", choices=ALGOS, default=list(ALGOS), help="algorithms (default ppo sac)")
     p.add_argument("--seeds", nargs="+", type=_seed, default=[0, 1, 2], help="training seeds (default 0 1 2)")
