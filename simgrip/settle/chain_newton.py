@@ -98,7 +98,7 @@ class ChainNewton(Newton):
         else:
             phi, w = cm.split(q)
             da = cm.pair_distances(phi, cm.nodes(phi), w)
-        found, dist = self._kc_cons, sd.contact.dist  # (the contacts Newton._update_kc found in the data at q)
+        found, dist = self._kc_cons, self._kc_dist  # (the contacts and distances Newton._update_kc read at q)
         for p in self.normal_active:
             cons = found[p]
             if cons:

@@ -40,7 +40,7 @@ import numpy as np
 
 from simgrip.settle.state import SettledState, read_state
 from simgrip.settle.statics import CONTACT_STIFFNESS, Statics, Stick, centreline_point, sync_scene
-from simgrip.sim.contacts import normal_force, pair_contacts
+from simgrip.sim.contacts import normal_force
 from simgrip.sim.scene import Scene
 
 __all__ = ["FLOOR_ULPS", "Newton", "PEN_MAX", "PEN_STIFFEN", "SOLVE_ITERS", "STIFFEN_MAX", "STIFFEN_STEP", "read_newton"]
@@ -338,9 +338,13 @@ class Newton:
             self.st.forces(q)
         moved = False
         self._kc_cons = found = {}  # each pair's contacts in the data at q (ChainNewton reads their distances)
-        dist = sd.contact.dist
+        ncon = sd.ncon
+        con = sd.contact  # (one view of MuJoCo's contact arrays: each ``sd.contact`` builds a new one)
+        self._kc_dist = dist = con.dist
+        g1, g2 = con.geom1[:ncon].tolist(), con.geom2[:ncon].tolist()
         for k, p in enumerate(self.normal_active):
-            found[p] = cons = pair_contacts(sd, *self.pairs[p])
+            a, b = self.pairs[p]  # (pair_contacts' test, on the lists read once for every pair)
+            found[p] = cons = [i for i in range(ncon) if (g1[i] == a and g2[i] == b) or (g1[i] == b and g2[i] == a)]
             if not cons:
                 continue
             pen = -min(float(dist[c]) for c in cons)
