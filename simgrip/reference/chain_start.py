@@ -71,25 +71,31 @@ class _Fused:
         self.ctol = 0.0 if prob.w is None else 1e-15 * (float(np.sum(self.absw)) + abs(prob.c0) + prob.half_b)
 
     def restore(self, x):
-        """``(y, cos y)``: :func:`~simgrip.reference.minimiser._restore`'s move of ``x`` along ``grad c`` onto
-        ``c = 0`` (the same Newton in the step length, each iterate's ``cos`` computed once); None if it fails."""
+        """``(y, cos y, sin y or None)``: :func:`~simgrip.reference.minimiser._restore`'s move of ``x`` along ``grad c``
+        onto ``c = 0`` (the same Newton in the step length, each iterate's ``cos`` computed once); None if it fails.
+
+        The first iterate is ``x`` itself (``t = 0``: ``x + 0 d`` is ``x``), whose ``cos`` is computed and whose
+        slope ``grad c . d`` is the direction's own ``(-w sin x) . d`` (the same products, no second ``sin``);
+        ``sin y`` is returned where ``y`` is that first iterate (it was computed for ``d``), else None."""
         p = self.p
         if p.w is None:
-            return x, np.cos(x)
+            return x, np.cos(x), None
         w = p.w
-        d = -w * np.sin(x)
-        nd = math.sqrt(float(d.dot(d)))
+        sx = np.sin(x)
+        du = -w * sx
+        nd = math.sqrt(float(du.dot(du)))
         if nd == 0.0 or not math.isfinite(float(x.sum())):
             return None
-        d = d / nd
+        d = du / nd
         t = 0.0
-        for _ in range(40):
-            y = x + t * d
+        for it in range(40):
+            y = x + t * d if it else x
             cy = np.cos(y)
             cv = float(w.dot(cy)) + p.c0
             if abs(cv) <= self.ctol:
-                return y, cy
-            dc = -float((w * np.sin(y)).dot(d))
+                return y, cy, (sx if not it else None)
+            # (the first slope: -(w sin x) . d is du . d, du's elements the negated products, bit for bit)
+            dc = -float((w * np.sin(y)).dot(d)) if it else float(du.dot(d))
             if dc == 0.0:
                 return None
             t += -cv / dc
@@ -97,12 +103,13 @@ class _Fused:
                 return None
         y = x + t * d
         cy = np.cos(y)
-        return (y, cy) if abs(float(w.dot(cy)) + p.c0) <= 100 * self.ctol else None
+        return (y, cy, None) if abs(float(w.dot(cy)) + p.c0) <= 100 * self.ctol else None
 
-    def at(self, x, cx):
-        """``(energy, r, chi, gn, scale, sin x)`` at ``x`` (``cx = cos x``)."""
+    def at(self, x, cx, sx=None):
+        """``(energy, r, chi, gn, scale, sin x)`` at ``x`` (``cx = cos x``; ``sx = sin x`` where known)."""
         p = self.p
-        sx = np.sin(x)
+        if sx is None:
+            sx = np.sin(x)
         q = x.copy()
         q[1:] -= x[:-1]
         dq = q - p.rest
@@ -141,11 +148,11 @@ def fast_newton(prob: DiscreteEnergy, x0, *, tol: float = GRADIENT_TOL, max_iter
     got = f.restore(np.array(x0, dtype=float))
     if got is None:
         return None
-    x, cx = got
+    x, cx, sx0 = got
     con = prob.w is not None
     n = x.size
     rhs = np.empty((n, 2)) if con else None
-    v, r, chi, gn, scale, sx = f.at(x, cx)
+    v, r, chi, gn, scale, sx = f.at(x, cx, sx0)
     radius = 1.0
     for it in range(1, max_iter + 1):
         if gn <= tol:
@@ -192,8 +199,8 @@ def fast_newton(prob: DiscreteEnergy, x0, *, tol: float = GRADIENT_TOL, max_iter
         got = f.restore(x + p)
         if got is None:
             return None
-        xt, cxt = got
-        vt, rt, chit, gnt, scalet, sxt = f.at(xt, cxt)
+        xt, cxt, sxt0 = got
+        vt, rt, chit, gnt, scalet, sxt = f.at(xt, cxt, sxt0)
         rho = (vt - v) / pred if pred < 0 else -1.0
         close = gn < 1e-5 and gnt <= 0.5 * gn
         if not (math.isfinite(vt) and (rho > 1e-4 or close)):
