@@ -97,7 +97,8 @@ class FingerValidity:
 
     ``model``: the env's MuJoCo model (read once: the link radius); ``index``: its
     :class:`~simgrip.sim.fingers.FingerIndex`; ``q``: ``data.qpos.tolist()`` (the step already has it),
-    ``data`` the env's ``MjData``.  Lengths are the model's (m).  Keeps views of the last ``data`` it read (dropped when pickled: picklable).
+    ``data`` the env's ``MjData``.  Lengths are the model's (m).  Keeps views of the last ``data`` it read
+    (dropped when pickled: picklable).
     ``every``: check on every ``every``-th call only (module docstring), a positive int; ``checked`` says
     whether the last call ran the check.
     """
