@@ -48,8 +48,10 @@ class BoxContactForces:
         ``side_f`` is the horizontal (squeezing) component of finger ``f``'s normal forces; a finger pressing on
         the box's top adds to its normal force but not to its side force.
         """
+        if not data.ncon:  # (measured: the MuJoCo reads below cost less after this one, issue 18)
+            return [0.0, 0.0, 0.0, 0.0, 0.0, 0.0]
         fog, bg = self._fog_list, self.box_geom
-        con = data.contact  # (no contact: no geom pair, the zeros below)
+        con = data.contact
         elliptic = self._elliptic
         hypot = math.hypot
         n0 = t0 = s0 = n1 = t1 = s1 = 0.0
