@@ -17,7 +17,7 @@ from typing import Any, Callable
 
 import numpy as np
 
-__all__ = ["EpisodeResult", "add_episode_arguments", "check_env_id", "env_kwargs", "positive_int", "non_negative_int", "run_episodes", "summary"]
+__all__ = ["EpisodeResult", "add_episode_arguments", "check_env_id", "env_kwargs", "json_object", "positive_int", "non_negative_int", "run_episodes", "summary"]
 
 
 def _int_at_least(name: str, lo: int, expected: str, doc: str):
@@ -68,6 +68,19 @@ def env_kwargs(parser: argparse.ArgumentParser, args: argparse.Namespace) -> dic
     if args.fingers < 2:
         parser.error(f"--fingers: at least 2, got {args.fingers}")
     return {"fingers": args.fingers}
+
+
+def json_object(text: str) -> dict:
+    """An argparse type: a JSON object (``--env-kwargs '{"w_touch": 0}'``: ``gym.make``'s keyword arguments)."""
+    import json
+
+    try:
+        value = json.loads(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"expected a JSON object, got {text!r}") from None
+    if not isinstance(value, dict):
+        raise argparse.ArgumentTypeError(f"expected a JSON object, got {text!r}")
+    return value
 
 
 @dataclass(frozen=True)

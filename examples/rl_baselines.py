@@ -58,6 +58,12 @@ def _positive(kind):
     return parse
 
 
+def _json_object(text: str) -> dict:
+    from simgrip.envs.evaluation import json_object  # imported when used: --help stays light
+
+    return json_object(text)
+
+
 def _seed(text: str) -> int:
     try:
         v = int(text)
@@ -88,6 +94,8 @@ def run_command(algo: str, seed: int, args, folder: Path) -> list[str]:
            "--eval-seed", str(lo), "--eval-episodes", str(hi - lo + 1), "--out", str(folder)]
     if args.checkpoint_minutes:
         cmd += ["--checkpoint-minutes", repr(args.checkpoint_minutes)]
+    if args.env_kwargs:
+        cmd += ["--env-kwargs", json.dumps(args.env_kwargs)]
     return cmd
 
 
@@ -206,6 +214,9 @@ def main(argv=None) -> int:
     p = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     p.add_argument("--env", required=True, help="registered env id, e.g. simgrip/PickFragile-v5, or a retired "
                    "simgrip one (simgrip.envs.RETIRED: the runs of docs/baselines/ name them)")
+    p.add_argument("--env-kwargs", type=_json_object, default={}, metavar="JSON",
+                   help="keyword arguments of gym.make as a JSON object, e.g. '{\"w_touch\": 0}' (an ablation; "
+                        "default none)")
     p.add_argument("--algo", nargs="+", choices=ALGOS, default=list(ALGOS), help="algorithms (default ppo sac)")
     p.add_argument("--seeds", nargs="+", type=_seed, default=[0, 1, 2], help="training seeds (default 0 1 2)")
     p.add_argument("--minutes", type=_positive(float), default=15.0, help="CPU-minute budget per run (default 15)")
@@ -235,6 +246,12 @@ def main(argv=None) -> int:
 
     if args.env not in gym.registry and args.env not in simgrip.envs.RETIRED:  # train_sb3.py builds a retired one
         p.error(f"--env: unknown id {args.env!r}")
+    if args.env_kwargs:
+        spec = simgrip.envs.retired_spec(args.env) if args.env in simgrip.envs.RETIRED else args.env
+        try:  # refused before any run starts: an argument the env does not take, or a bad value
+            gym.make(spec, **args.env_kwargs).close()
+        except (TypeError, ValueError) as e:
+            p.error(f"--env-kwargs: {args.env} does not take {json.dumps(args.env_kwargs)}: {e}")
     algos = list(dict.fromkeys(args.algo))
     try:
         out = check_output_dir(args.out, "--out")
@@ -265,7 +282,7 @@ def main(argv=None) -> int:
     summary = aggregate(results)
     lo, hi = args.eval_seeds
     write_json(out / "aggregate.json", {
-        "env": args.env, "algos": algos, "seeds": args.seeds, "minutes": args.minutes,
+        "env": args.env, **({"env_kwargs": args.env_kwargs} if args.env_kwargs else {}), "algos": algos, "seeds": args.seeds, "minutes": args.minutes,
         "checkpoint_minutes": args.checkpoint_minutes, "clock": "cpu", "eval_seeds": [lo, hi],
         "hyperparameters": "Stable-Baselines3 defaults, one env, one torch thread", "summary": summary,
         "command": [Path(sys.argv[0]).name] + list(sys.argv[1:] if argv is None else argv)})

@@ -46,7 +46,7 @@ import gymnasium as gym
 import numpy as np
 
 import simgrip.envs  # noqa: F401  (registers the simgrip ids)
-from simgrip.envs.evaluation import non_negative_int, run_episodes, summary
+from simgrip.envs.evaluation import json_object, non_negative_int, run_episodes, summary
 from simgrip.io import atomic_write, check_output_dir, check_output_files_in, write_json
 
 ALGOS = ("ppo", "sac")
@@ -71,9 +71,10 @@ def _spec(env_id: str):
     return retired_spec(env_id) if env_id in RETIRED else env_id
 
 
-def evaluate(model, env_id: str, episodes: int, seed0: int) -> dict:
-    """Run the deterministic policy of ``model`` for ``episodes`` episodes on seeds ``seed0 + i``."""
-    env = gym.make(_spec(env_id))
+def evaluate(model, env_id: str, episodes: int, seed0: int, env_kwargs=None) -> dict:
+    """Run the deterministic policy of ``model`` for ``episodes`` episodes on seeds ``seed0 + i`` (the env made
+    with ``env_kwargs``, as it was trained)."""
+    env = gym.make(_spec(env_id), **(env_kwargs or {}))
     try:
         results = run_episodes(env, lambda obs: model.predict(obs, deterministic=True)[0], episodes, seed0)
     finally:
@@ -96,8 +97,11 @@ def _save(model, path: Path) -> None:
 
 
 def train(algo: str, env_id: str, *, steps: int, minutes: float, seed: int, out: Path,
-          eval_episodes: int, eval_seed: int, clock: str = "cpu", checkpoint_minutes: float | None = None) -> dict:
-    """Train ``algo`` with library defaults within the budget, write its curve, model and evaluation."""
+          eval_episodes: int, eval_seed: int, clock: str = "cpu", checkpoint_minutes: float | None = None,
+          env_kwargs: dict | None = None) -> dict:
+    """Train ``algo`` with library defaults within the budget, write its curve, model and evaluation
+    (``env_kwargs``: ``gym.make``'s keyword arguments, for training and evaluation alike)."""
+    env_kwargs = dict(env_kwargs or {})
     from stable_baselines3 import PPO, SAC
     from stable_baselines3.common.callbacks import BaseCallback
     from stable_baselines3.common.env_util import make_vec_env
@@ -130,7 +134,8 @@ def train(algo: str, env_id: str, *, steps: int, minutes: float, seed: int, out:
             return spent() < budget
 
     spec = _spec(env_id)  # make_vec_env calls a non-string: a retired id's spec goes through gym.make
-    env = make_vec_env(spec if isinstance(spec, str) else (lambda: gym.make(spec)), n_envs=1, seed=seed)
+    env = make_vec_env(spec, n_envs=1, seed=seed, env_kwargs=env_kwargs) if isinstance(spec, str) else \
+        make_vec_env(lambda: gym.make(spec, **env_kwargs), n_envs=1, seed=seed)
     model = cls("MlpPolicy", env, seed=seed, verbose=0)
     model.learn(total_timesteps=steps, callback=Budget())
     wall, cpu = time.perf_counter() - t_start, time.process_time() - c_start
@@ -141,10 +146,12 @@ def train(algo: str, env_id: str, *, steps: int, minutes: float, seed: int, out:
     result = {"algo": algo.upper(), "env": env_id, "timesteps": int(model.num_timesteps), "wall_s": round(wall, 1), "cpu_s": round(cpu, 1),
               "clock": clock, "budget_minutes": minutes,
               "train_episodes": len(rows), "seed": seed, "hyperparameters": "Stable-Baselines3 defaults"}
-    result.update(evaluate(model, env_id, eval_episodes, eval_seed))
+    if env_kwargs:
+        result["env_kwargs"] = env_kwargs
+    result.update(evaluate(model, env_id, eval_episodes, eval_seed, env_kwargs))
     for cp in checkpoints:  # the held-out success of each checkpoint: how soon the target was reached
         cp_model = cls.load(out / cp["file"])
-        cp.update({k: v for k, v in evaluate(cp_model, env_id, eval_episodes, eval_seed).items()
+        cp.update({k: v for k, v in evaluate(cp_model, env_id, eval_episodes, eval_seed, env_kwargs).items()
                    if k in ("success_rate", "mean_return")})
     if checkpoints:
         result["checkpoints"] = checkpoints
@@ -198,6 +205,8 @@ def main(argv=None) -> int:
     p.add_argument("--algo", nargs="+", choices=ALGOS, default=list(ALGOS), help="algorithms, trained one after the other")
     p.add_argument("--env", default="simgrip/Pick-v1",
                    help="registered env id, or a retired simgrip one (simgrip.envs.RETIRED; default simgrip/Pick-v1)")
+    p.add_argument("--env-kwargs", type=json_object, default={}, metavar="JSON",
+                   help="keyword arguments of gym.make as a JSON object, e.g. '{\"w_touch\": 0}' (default none)")
     p.add_argument("--minutes", type=_positive(float), default=15.0, help="time budget per algorithm (default 15)")
     p.add_argument("--clock", choices=("cpu", "wall"), default="cpu",
                    help="what --minutes counts: the process's CPU time (default) or wall-clock time")
@@ -218,6 +227,11 @@ def main(argv=None) -> int:
         p.error('needs Stable-Baselines3 and PyTorch: pip install "simgrip[rl]"')
     if args.env not in gym.registry and args.env not in simgrip.envs.RETIRED:
         p.error(f"--env: unknown id {args.env!r}")
+    if args.env_kwargs:
+        try:  # refused before any training: an argument the env does not take, or a bad value
+            gym.make(_spec(args.env), **args.env_kwargs).close()
+        except (TypeError, ValueError) as e:
+            p.error(f"--env-kwargs: {args.env} does not take {json.dumps(args.env_kwargs)}: {e}")
     try:  # simgrip.io's output-path policy: a folder, and no FIFO/device/folder where a result file goes
         out = check_output_dir(args.out, "--out")
         names = [f"{a}_{kind}" for a in args.algo for kind in ("curve.csv", "model.zip", "eval.json")]
@@ -228,7 +242,7 @@ def main(argv=None) -> int:
     for algo in args.algo:
         result = train(algo, args.env, steps=args.steps, minutes=args.minutes, seed=args.seed, out=out,
                        eval_episodes=args.eval_episodes, eval_seed=args.eval_seed, clock=args.clock,
-                       checkpoint_minutes=args.checkpoint_minutes)
+                       checkpoint_minutes=args.checkpoint_minutes, env_kwargs=args.env_kwargs)
         print(json.dumps(result), flush=True)
     plot_curves(out)
     return 0

@@ -42,6 +42,19 @@ def test_fingers_option_is_checked(argv, capsys):
     assert exc.value.code == 2 and "--fingers" in capsys.readouterr().err
 
 
+def test_train_sb3_evaluates_with_the_env_kwargs_it_was_given():
+    import numpy as np
+
+    class Closing:  # a policy: close through the valve, palm still (touches from the pre-grasp)
+        def predict(self, obs, deterministic=True):
+            return np.array([-0.3, 0.0], np.float32), None
+
+    evaluate = _example("train_sb3").evaluate
+    plain = evaluate(Closing(), "simgrip/PickFragile-v5", 1, 8000)
+    paid = evaluate(Closing(), "simgrip/PickFragile-v5", 1, 8000, {"w_touch": 0.5})
+    assert paid["mean_return"] > plain["mean_return"] + 0.5  # touch steps paid: the kwargs reached the env
+
+
 def test_train_sb3_smoke(tmp_path, capsys):
     pytest.importorskip("stable_baselines3")
     module = _example("train_sb3")

@@ -59,6 +59,8 @@ def test_aggregate_mean_min_max_per_checkpoint_and_failed_runs():
     (["--eval-seeds", "9-3"], "--eval-seeds"),
     (["--minutes", "0"], "--minutes"),
     (["--seeds", "1", "1"], "--seeds"),
+    (["--env-kwargs", "[1]"], "--env-kwargs"),
+    (["--env-kwargs", "{w_touch: 0}"], "--env-kwargs"),
 ])
 def test_bad_arguments_exit_2_with_one_line(extra, word, tmp_path, capsys):
     argv = ["--env", "simgrip/PickFragile-v0", "--out", str(tmp_path / "o"), *extra]
@@ -87,6 +89,17 @@ def test_smoke_two_seeds_aggregate_and_plot(tmp_path):
     assert agg["summary"]["sac"]["checkpoints"][0]["minutes"] == 0.01
     assert (out / "learning_curves.png").stat().st_size > 0
     assert (out / "sac_seed0" / "log.txt").exists()
+
+
+def test_env_kwargs_the_env_does_not_take_exit_2_before_any_run(tmp_path, capsys):
+    _needs_sb3()
+    argv = ["--env", "simgrip/PickFragile-v5", "--out", str(tmp_path / "o"), "--env-kwargs", '{"w_tuch": 0}']
+    with pytest.raises(SystemExit) as e:
+        _module().main(argv)
+    assert e.value.code == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert "--env-kwargs" in err[-1] and "w_tuch" in err[-1]
+    assert not (tmp_path / "o").exists()
 
 
 def _needs_sb3():
