@@ -32,7 +32,7 @@ import math
 import mujoco
 import numpy as np
 
-from simgrip.settle.banded import SMALL_K, solve_bordered, solve_small
+from simgrip.settle.banded import solve_bordered
 from simgrip.settle.chain_model import ChainModel, eligible
 from simgrip.settle.newton import FLOOR_ULPS, PEN_MAX, Newton
 from simgrip.settle.state import SettleError
@@ -578,8 +578,7 @@ class ChainNewton(Newton):
         return out if all(np.isfinite(x).all() for x in out) else None
 
     def _estimate_multipliers(self, phi, w, N, lam, stick_act):
-        """Least-squares multipliers at a fixed state: ``min |F + G_n' N + G_s' lambda|`` (hinge rows in q), by the
-        normal equations (:func:`~simgrip.settle.banded.solve_small`; ``lstsq`` where they are near singular).
+        """Least-squares multipliers at a fixed state: ``min |F + G_n' N + G_s' lambda|`` (hinge rows in q).
 
         New contacts and sticks start at zero force; the first Newton step would
         otherwise spend itself on the whole load.  Normal forces are kept >= 0.
@@ -598,12 +597,10 @@ class ChainNewton(Newton):
         # every column's hinge rows at once: to_q's suffix sums run down each column in the same order
         A[:n] = G[:n].reshape(cm.fingers, cm.nl, -1)[:, ::-1].cumsum(axis=1)[:, ::-1].reshape(n, -1)
         A[n:] = G[n:][yf]
-        # the normal equations (a k x k solve, k the few columns): the least-squares answer up to cond(A)^2 eps,
-        # a start the Newton steps correct; lstsq (rank cut at 1e-12) where they are singular or nearly so
-        At = A.T
-        x = solve_small(At @ A, At @ -b, least_squares=False) if A.shape[1] <= SMALL_K else None
-        if x is None or not np.isfinite(x).all():
-            x, *_ = np.linalg.lstsq(A, -b, rcond=1e-12)
+        # (lstsq, not the normal equations: a multiplier at zero is round-off either way, and its sign decides
+        # whether the estimate is taken; the normal equations' larger round-off (cond(A)^2 eps) flipped it and so
+        # the Newton path of hard Grip III stress cases, two of which then ran out of iterations)
+        x, *_ = np.linalg.lstsq(A, -b, rcond=1e-12)
         nn = len(self.normal_active)
         if not np.isfinite(x).all() or (x[:nn] < 0.0).any():
             return N, lam
