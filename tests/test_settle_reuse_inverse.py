@@ -1,8 +1,7 @@
 """Issue 19: the Grip I/II settle's cheaper arithmetic.
 
-* :func:`simgrip.settle.banded.solve_small` (the bordered Newton's Schur solve and the multiplier estimate's
-  normal equations) is the exact solution up to round-off, and ``lstsq``'s least-squares answer where the
-  matrix is singular or nearly so;
+* :func:`simgrip.settle.banded.solve_small` (the bordered Newton's Schur solve) is the exact solution up to
+  round-off, and ``lstsq``'s least-squares answer where the matrix is singular or nearly so;
 * the MuJoCo evaluations the settle reuses (the judge's ``mj_inverse`` at the solve's last ``K_c`` read, the
   release's first ``K_c`` read at ``stick_now``'s evaluation) give the very bits a fresh evaluation gives:
   a settle with the reuse switched off returns the same state, residual and contact forces bit for bit, and
