@@ -155,6 +155,17 @@ def touch(scene: Scene, run: Newton) -> None:
     # computed here (mj_kinematics, mj_comPos) would be overwritten unread
 
 
+def _inside(scene: Scene, p):
+    """``p`` with the face a hair nearer (``b - 2e-6``), so that MuJoCo reports the tip's contact: kept on the scene
+    with the parameters object it was made from (frozen: the same object is the same values)."""
+    memo = scene.__dict__.get("_chain_start_inside")
+    if memo is not None and memo[0] is p:
+        return memo[1]
+    out = p.replace(b=p.b - 2e-6)
+    scene.__dict__["_chain_start_inside"] = (p, out)
+    return out
+
+
 def start_on_chain(scene: Scene, run: Newton | None) -> bool | None:
     """Grips I/II: start from the hinge chain's grip equilibrium, the workpiece at the tip.
 
@@ -171,12 +182,16 @@ def start_on_chain(scene: Scene, run: Newton | None) -> bool | None:
     try:
         # the tip a hair inside the face so that MuJoCo reports the contact
         # only the angles, tip, N1 and the stability's sign are read (solve_chain's, by chain_start)
-        ch = chain_start.grip_start(scene.grip, p.replace(b=p.b - 2e-6), scene.profile, scene.n,
+        ch = chain_start.grip_start(scene.grip, _inside(scene, p), scene.profile, scene.n,
                                     gravity=gravity_factor(scene))
         # the free finger's equilibrium next to the grip's: Newton in link angles when the solve has the
-        # chain model (O(n), from the grip shape), else the chain solver
+        # chain model (O(n), from the grip shape), else the chain solver (free_equilibrium copies its start:
+        # one finger's angles are passed as they are)
         model = getattr(run, "model", None)
-        phi = model.free_equilibrium(np.tile(ch.link_angles, model.fingers)) if model is not None else None
+        if model is not None:
+            phi = model.free_equilibrium(ch.link_angles if model.fingers == 1 else np.tile(ch.link_angles, model.fingers))
+        else:
+            phi = None
         phi = phi[:scene.n] if phi is not None else None  # the fingers are mirror images
         if phi is None:
             phi = hinge_chain.chain_angles("free", p, scene.profile, scene.n, guess=ch.link_angles,
