@@ -88,7 +88,11 @@ def _eliminate(S, b):
     list; both consumed); None where a pivot is exactly zero or the answer is not finite."""
     k = len(b)
     for c in range(k):
-        p = max(range(c, k), key=lambda r: abs(S[r][c]))
+        p, big = c, abs(S[c][c])  # (the first row of the largest magnitude, as max() would pick it)
+        for r in range(c + 1, k):
+            v = abs(S[r][c])
+            if v > big:
+                p, big = r, v
         piv = S[p][c]
         if piv == 0.0:
             return None
@@ -109,8 +113,11 @@ def _eliminate(S, b):
         acc = b[c]
         for j in range(c + 1, k):
             acc -= rc[j] * y[j]
-        y[c] = acc / rc[c]
-    return y if all(math.isfinite(v) for v in y) else None
+        v = acc / rc[c]
+        if not math.isfinite(v):
+            return None
+        y[c] = v
+    return y
 
 
 def solve_small(S, b, *, least_squares: bool = True) -> np.ndarray | None:
@@ -123,11 +130,23 @@ def solve_small(S, b, *, least_squares: bool = True) -> np.ndarray | None:
     if k <= SMALL_K:
         rows = S.tolist()
         bl = b.tolist()
-        snorm = max(sum(abs(v) for v in r) for r in rows)
-        bnorm = max(abs(v) for v in bl)
+        snorm = bnorm = 0.0
+        for r, v in zip(rows, bl):  # (largest row sum of |S| and largest |b|, NaN kept: it fails the trust test)
+            t = 0.0
+            for x in r:
+                t += abs(x)
+            if not t <= snorm:
+                snorm = t
+            if not abs(v) <= bnorm:
+                bnorm = abs(v)
         got = _eliminate(rows, bl)
-        if got is not None and max(abs(v) for v in got) * snorm <= SMALL_TRUST * bnorm:
-            y = np.array(got)
+        if got is not None:
+            ymax = 0.0
+            for v in got:
+                if abs(v) > ymax:
+                    ymax = abs(v)
+            if ymax * snorm <= SMALL_TRUST * bnorm:
+                y = np.array(got)
     else:
         try:
             got = np.linalg.solve(S, b)
