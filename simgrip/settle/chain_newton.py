@@ -80,7 +80,7 @@ class ChainNewton(Newton):
         self._memo = {}  # the state's geometry within one inner solve (_at)
         self._judged = None  # (positions key, q, scaled MuJoCo residual) of a start :meth:`solve` found at rest
 
-    def _update_kc(self, q, at=None) -> bool:
+    def _update_kc(self, q, at=None, moved_wanted: bool = True) -> bool:
         """Read MuJoCo's contact stiffness and its contact distances' round-off at ``q``.
 
         ``at``: the inner solve's state ``(phi, w)`` whose :meth:`ChainModel.join` is ``q``; the round-off
@@ -90,7 +90,7 @@ class ChainNewton(Newton):
         """
         mark, self._stick_mark = getattr(self, "_stick_mark", None), None
         self._forces_ready = mark is not None and self._stick_mark_holds(mark, q)
-        moved = super()._update_kc(q)  # MuJoCo's balance at q is now in the scratch data
+        moved = super()._update_kc(q, moved_wanted)  # MuJoCo's balance at q is now in the scratch data
         sd, cm = self.st.d, self.model
         self._inverse_mark = (self.st.calls, sd.efc_force.tobytes())  # (full_residual's reuse of this evaluation)
         if at is not None:
@@ -419,7 +419,8 @@ class ChainNewton(Newton):
         nf = cm.n + self.yf.size
         def read_kc(ph, ww, at_q=None):  # MuJoCo's contact stiffness at an accepted state (one mj_inverse)
             if contacts and self.normal_active:
-                self._update_kc(cm.join(q, ph, ww) if at_q is None else at_q, at=(ph, ww))
+                # (whether K_c moved is not asked here: the chord and the next test read K_c itself)
+                self._update_kc(cm.join(q, ph, ww) if at_q is None else at_q, at=(ph, ww), moved_wanted=False)
                 self.kc_dl = self.kc * L / W
 
         def stiffen(NN):  # a contact the forces would press deeper than PEN_STIFFEN: stiffer (Newton.stiffen)

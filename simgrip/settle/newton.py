@@ -329,8 +329,10 @@ class Newton:
         key = getattr(self, "_kc_at", None)
         return key is not None and key == self._kc_key(q)
 
-    def _update_kc(self, q) -> bool:
-        """Read MuJoCo's contact stiffness at ``q``; True if it moved enough to matter."""
+    def _update_kc(self, q, moved_wanted: bool = True) -> bool:
+        """Read MuJoCo's contact stiffness at ``q``; True if it moved enough to matter (``moved_wanted`` False:
+        a caller that ignores the answer, the inner solve's reads at each accepted state; it is then False and
+        the noise floor the test compares with is not evaluated; ``K_c`` is read and kept all the same)."""
         m, sd = self.scene.model, self.st.d
         self._kc_at = None
         ready, self._forces_ready = getattr(self, "_forces_ready", False), False
@@ -347,12 +349,19 @@ class Newton:
             found[p] = cons = [i for i in range(ncon) if (g1[i] == a and g2[i] == b) or (g1[i] == b and g2[i] == a)]
             if not cons:
                 continue
-            pen = -min(float(dist[c]) for c in cons)
-            fn = sum(normal_force(m, sd, c) for c in cons)
+            low = fn = None  # (min() and sum() of the contacts' distances and normal forces, as loops)
+            for c in cons:
+                v = float(dist[c])
+                if low is None or v < low:
+                    low = v
+                f = normal_force(m, sd, c)
+                fn = f if fn is None else fn + f
+            pen = -low
             if pen > 0 and fn > 0:
                 kc = fn / pen
                 if abs(kc - self.kc[p]) > KC_RTOL * kc:
-                    moved = moved or abs(kc - self.kc[p]) * pen > 0.1 * self.noise_floor() * self.scene.force_scale
+                    moved = moved or (moved_wanted and abs(kc - self.kc[p]) * pen
+                                      > 0.1 * self.noise_floor() * self.scene.force_scale)
                     self.kc[p] = kc
         self._kc_at = self._kc_key(q)
         return moved
