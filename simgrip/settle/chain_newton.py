@@ -116,10 +116,8 @@ class ChainNewton(Newton):
         return out
 
     def _stick_mark_holds(self, mark, q) -> bool:
-        """The data still holds :meth:`stick_now`'s ``mj_inverse`` and it was at ``q`` with today's model (contact
-        ``solref``/``solimp``/friction, body frames, flags): no MuJoCo evaluation or kinematics since (the counts),
-        the same state and the same constraint forces (bits), so :meth:`Statics.forces` at ``q`` would compute the
-        very same numbers (the contact set and ``K_c`` are the solve's own, not MuJoCo's inputs)."""
+        """The data holds :meth:`stick_now`'s ``mj_inverse``, made at ``q`` with today's model, untouched since (counts
+        of evaluations and kinematics, state and constraint forces the same bits): ``forces(q)`` would repeat it."""
         d = self.st.d
         if d is not self.scene.data or mark[4] is None or mark[0] != self.st.calls or mark[1] != self.kinematics_calls:
             return False
@@ -155,8 +153,7 @@ class ChainNewton(Newton):
         m = self.scene.model
         if self.pairs and not (int(m.opt.disableflags) & int(mujoco.mjtDisableBit.mjDSBL_CONTACT)):
             if self._inverse_current(q):
-                # the solve's last K_c read (one mj_inverse) was at this very state and the data still holds it:
-                # the judge's mj_inverse would compute the same numbers (issue 19: not made twice)
+                # the solve's last K_c read (mj_inverse) at this very state, still in the data: not made twice
                 d = self.st.d
                 r = d.qfrc_applied - d.qfrc_inverse
                 if self.sticks:
@@ -213,11 +210,8 @@ class ChainNewton(Newton):
         return True
 
     def _inverse_current(self, q) -> bool:
-        """The scene's data holds the ``mj_inverse`` of the solve's last ``K_c`` read (:meth:`_update_kc`), made at
-        ``q`` with the model as it is now (:meth:`Newton._kc_current`), no MuJoCo evaluation since (the statics'
-        call count; its constraint forces, which ``mj_forward`` would rewrite, the same bits) and its positions
-        last computed at ``q`` (:meth:`_commit`, no kinematics since): :meth:`Statics.forces` at ``q`` would
-        compute the very same numbers."""
+        """The data holds the last ``K_c`` read's ``mj_inverse`` at ``q``, today's model (:meth:`_kc_current`), no
+        evaluation since (count; constraint forces the same bits), positions computed at ``q`` (:meth:`_commit`)."""
         mark, done = getattr(self, "_inverse_mark", None), getattr(self, "_committed", None)
         d = self.st.d
         if mark is None or done is None or d is not self.scene.data or mark[0] != self.st.calls:
@@ -417,9 +411,8 @@ class ChainNewton(Newton):
         lam = self.lam[stick_act].copy() / W
         phi, w = cm.split(q)
         nf = cm.n + self.yf.size
-        def read_kc(ph, ww, at_q=None):  # MuJoCo's contact stiffness at an accepted state (one mj_inverse)
+        def read_kc(ph, ww, at_q=None):  # MuJoCo's K_c at an accepted state (one mj_inverse; 'moved' not asked)
             if contacts and self.normal_active:
-                # (whether K_c moved is not asked here: the chord and the next test read K_c itself)
                 self._update_kc(cm.join(q, ph, ww) if at_q is None else at_q, at=(ph, ww), moved_wanted=False)
                 self.kc_dl = self.kc * L / W
 
@@ -427,10 +420,7 @@ class ChainNewton(Newton):
             if contacts and self.stiffen(NN * W, grow_only=True):
                 self.kc_dl = self.kc * L / W
 
-        # the start's K_c read at the solve's own start q (its link angles split(q) rejoin to q up to round-off,
-        # which the distances' shift takes up): where stick_now has just evaluated MuJoCo at q, that evaluation
-        # is this read's (_update_kc: no second mj_inverse at the same state)
-        read_kc(phi, w, at_q=q)
+        read_kc(phi, w, at_q=q)  # (at q itself, = join(split(q)) to round-off: stick_now's evaluation if current)
         anchored = False
         if (N.size and not N.all()) or (lam.size and not lam.all()):
             if self.sticks:  # (the first iteration's anchoring, done first: the estimate's stick terms are its)
@@ -462,8 +452,7 @@ class ChainNewton(Newton):
             res_f = float(np.abs(R[:nf]).max())
             rows = self._row_scale(len(N), len(stick_act))  # (contact rows in force units: this state's K_c)
             res_c = float(np.abs(R[nf:] * rows).max()) if R.size > nf else 0.0
-            # (r < max(tol, floor), the floor evaluated only where tol alone does not decide)
-            # (the contact rows' test first: where it fails, the angles' floor is not needed)
+            # (r < max(tol, floor), a floor evaluated only where tol does not decide; contact rows first)
             if (res_c < tol or res_c < self.noise_floor()) and (
                     res_f < tol or res_f < angle_floor(sc, state_q(phi, w))):
                 # the analytic contact rows resolve ~1 ulp of K_c l, far below MuJoCo's distance
@@ -598,9 +587,7 @@ class ChainNewton(Newton):
         # every column's hinge rows at once: to_q's suffix sums run down each column in the same order
         A[:n] = G[:n].reshape(cm.fingers, cm.nl, -1)[:, ::-1].cumsum(axis=1)[:, ::-1].reshape(n, -1)
         A[n:] = G[n:][yf]
-        # (lstsq, not the normal equations: a multiplier at zero is round-off either way, and its sign decides
-        # whether the estimate is taken; the normal equations' larger round-off (cond(A)^2 eps) flipped it and so
-        # the Newton path of hard Grip III stress cases, two of which then ran out of iterations)
+        # (lstsq, not the normal equations: their round-off flips the sign test of a zero multiplier, issue 19)
         x, *_ = np.linalg.lstsq(A, -b, rcond=1e-12)
         nn = len(self.normal_active)
         if not np.isfinite(x).all() or (x[:nn] < 0.0).any():

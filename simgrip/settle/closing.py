@@ -189,7 +189,8 @@ def start_on_chain(scene: Scene, run: Newton | None) -> bool | None:
         # one finger's angles are passed as they are)
         model = getattr(run, "model", None)
         if model is not None:
-            phi = model.free_equilibrium(ch.link_angles if model.fingers == 1 else np.tile(ch.link_angles, model.fingers))
+            start = ch.link_angles if model.fingers == 1 else np.tile(ch.link_angles, model.fingers)
+            phi = model.free_equilibrium(start)
         else:
             phi = None
         phi = phi[:scene.n] if phi is not None else None  # the fingers are mirror images
