@@ -549,10 +549,10 @@ class ChainNewton(Newton):
         if len(act) != gn.size:
             return None
         ka = self.kc_dl[act]
-        if not float(np.max(np.abs(ka / kc_was[act] - 1.0))) <= CHORD_KC_RTOL:
+        if not float(np.abs(ka / kc_was[act] - 1.0).max()) <= CHORD_KC_RTOL:
             return None
         moved = (self.dist_shift[act] - shift_was[act]) + N * (1.0 / ka - 1.0 / kc_was[act])
-        if float(np.max(np.abs(moved * ka))) < CHAIN_FLOOR_ULPS / FLOOR_ULPS * self.noise_floor():
+        if float(np.abs(moved * ka).max()) < CHAIN_FLOOR_ULPS / FLOOR_ULPS * self.noise_floor():
             return None  # (a move below the contact rows' polishing floor: the next test decides without it)
         diag, off, P, Q, E, _, _, nz = jac
         nw, nn = self.yf.size, len(act)
