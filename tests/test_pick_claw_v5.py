@@ -8,6 +8,9 @@ potential computed afresh from the simulation's bodies, not from the observation
 
 from __future__ import annotations
 
+import sys
+from pathlib import Path
+
 import gymnasium as gym
 import numpy as np
 import pytest
@@ -18,6 +21,9 @@ from simgrip.envs.baselines import _scripted, _through_valve
 from simgrip.envs.pick_claw_v5 import APPROACH_SCALE, FragileCradleEnvV5, FragileSphereEnvV5
 from simgrip.envs.pick_fragile_v3 import FragileCradleEnvV4, FragileSphereEnvV4
 from simgrip.envs.scripted_fragile import CLAW_POLICIES
+
+sys.path.insert(0, str(Path(__file__).parent))
+from test_pick_fragile_v5 import SAME_KEYS, episode_return  # noqa: E402  (the shared checks of v5's reward)
 
 CASES = {"simgrip/PickCradleFragile-v5": (FragileCradleEnvV5, FragileCradleEnvV4, "cradle"),
          "simgrip/PickSphereFragile-v5": (FragileSphereEnvV5, FragileSphereEnvV4, "sphere")}
@@ -57,8 +63,7 @@ def test_v5_is_v4_less_the_touch_pay_plus_the_approach(env_id):
                 touch_steps += i4["reward_touch"] > 0.0
                 approach_steps += i5["reward_approach"] != 0.0
                 assert r5 == pytest.approx(r4 - i4["reward_touch"] + i5["reward_approach"], abs=1e-12)
-                for k in ("is_success", "crushed", "dropped", "knocked_over", "workpiece_lift", "reward_lift",
-                          "reward_contact", "reward_crush", "reward_drop", "reward_success"):
+                for k in SAME_KEYS:
                     assert i5[k] == i4[k], k
                 if t5 or tr5:
                     break
@@ -119,15 +124,9 @@ def test_an_unsuccessful_episode_returns_at_most_contact_lift_and_approach(env_i
     rng = np.random.default_rng(8220)
     try:
         for seed in (8220, 8221, 8222):
-            env.reset(seed=seed)
-            total, success = 0.0, False
-            for t in range(300):
-                a = np.clip(np.array([0.3, -0.6]) + 0.5 * rng.standard_normal(2), -1, 1).astype(np.float32)
-                _, r, term, trunc, info = env.step(a)
-                total += r
-                success |= info["is_success"]
-                if term or trunc:
-                    break
+            total, success = episode_return(
+                env, seed, lambda t: np.clip(np.array([0.3, -0.6]) + 0.5 * rng.standard_normal(2), -1, 1).astype(
+                    np.float32))
             if not success:
                 assert total <= bound + 1e-9
     finally:
