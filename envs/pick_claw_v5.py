@@ -67,6 +67,7 @@ class _Approach:
     """v5's claw reward (a mixin before a v4 claw env): the approach potential, ``w_touch = 0``."""
 
     _psi = 0.0
+    _z_g = 0.0  # the episode's grasp offset [m] (set at reset: read once, not every step)
 
     def __init__(self, *, w_approach: float = W_APPROACH, w_touch: float = 0.0, **kwargs):
         self.w_approach = _num("w_approach", w_approach, positive=False)
@@ -78,11 +79,12 @@ class _Approach:
         raise NotImplementedError
 
     def _potential(self, obs) -> float:
-        x = abs(float(obs[self._i_z]) * self.length - self._grasp_offset()) / APPROACH_SCALE
+        x = abs(float(obs[self._i_z]) * self.length - self._z_g) / APPROACH_SCALE
         return -(1.0 if x > 1.0 else x)
 
     def reset(self, *, seed=None, options=None):
         obs, info = super().reset(seed=seed, options=options)
+        self._z_g = self._grasp_offset()
         self._psi = self._potential(obs)
         return obs, info
 
