@@ -28,11 +28,18 @@ from __future__ import annotations
 import math
 
 import numpy as np
+from numpy.linalg import _umath_linalg
 
 from simgrip.lapack import dgtsv, dpttrf, dpttrs
 
-__all__ = ["dgtsv", "dpttrf", "dpttrs", "solve_bordered", "solve_small", "solve_tridiagonal"]
+__all__ = ["dgtsv", "dpttrf", "dpttrs", "lstsq_vector", "solve_bordered", "solve_small", "solve_tridiagonal"]
 
+#: ``ndarray.max``, ``.all`` and ``.any`` as the reductions they call, without their Python wrappers (the same
+#: answers, NaN included; ``axis=None`` for more than 1-D), numpy's float64 dtype (one object, told by identity)
+#: and a read-only row of ones (the chain Newton's stick rows' scale)
+_MAX, _ALL, _ANY, _F64 = np.maximum.reduce, np.logical_and.reduce, np.logical_or.reduce, np.dtype(float)
+_ONES = np.ones(4)
+_ONES.setflags(write=False)
 #: Border sizes up to this are eliminated on Python floats (numpy's per-call cost is most of a 3 x 3 solve).
 SMALL_K = 4
 #: :func:`solve_small` trusts an eliminated answer ``y`` only when ``max|y| max|S| <= SMALL_TRUST max|b|``
@@ -120,6 +127,17 @@ def _eliminate(S, b):
     return y
 
 
+def lstsq_vector(A, b, rcond: float) -> np.ndarray:
+    """``np.linalg.lstsq(A, b, rcond=rcond)[0]`` of a float64 2-D ``A`` and 1-D ``b``: the same gufunc
+    (``numpy.linalg._umath_linalg.lstsq``, LAPACK ``gelsd``) on the same arrays, so the same bits, without
+    ``lstsq``'s argument handling and ``errstate`` (~9 of its ~16 us at ``33 x 2``).  Where an input is not
+    finite, ``lstsq`` itself (its ``LinAlgError``; the bare gufunc would only warn).  One difference is left:
+    an SVD that fails to converge on finite input (LAPACK's ``info > 0``) warns here instead of raising."""
+    if _ALL(np.isfinite(A), axis=None) and _ALL(np.isfinite(b)):
+        return _umath_linalg.lstsq(A, b[:, None], rcond, signature="ddd->ddid")[0][:, 0]
+    return np.linalg.lstsq(A, b, rcond=rcond)[0]
+
+
 def solve_small(S, b, *, least_squares: bool = True) -> np.ndarray | None:
     """``y`` with ``S y = b`` for a small square ``S`` (float64): elimination with partial pivoting, or, where ``S``
     is singular or nearly so (:data:`SMALL_TRUST`), ``lstsq``'s least-squares answer with singular values below
@@ -156,5 +174,5 @@ def solve_small(S, b, *, least_squares: bool = True) -> np.ndarray | None:
                 float(np.abs(got).max()) * float(np.abs(S).sum(axis=1).max()) <= SMALL_TRUST * float(np.abs(b).max())):
             y = got
     if y is None and least_squares:
-        y, *_ = np.linalg.lstsq(S, b, rcond=1e-14)
+        y = lstsq_vector(S, b, 1e-14)
     return y

@@ -58,7 +58,7 @@ from dataclasses import dataclass
 import mujoco
 import numpy as np
 
-from simgrip.settle.banded import solve_tridiagonal
+from simgrip.settle.banded import _F64, _MAX, solve_tridiagonal
 from simgrip.sim.scene import Scene
 
 __all__ = ["ChainModel", "Term", "eligible", "gravity_factor", "model_gravity"]
@@ -176,8 +176,7 @@ def _parameters(scene: Scene, st: dict) -> dict:
     k_next[nl - 1::nl] = 0.0
     out["_k_next"] = k_next
     out["_k_diag"] = -(k + k_next)
-    # the true weight (the model's body_mass may be a floored inertia whose extra weight gravity
-    # compensation relieves: simgrip.sim.workpiece.inertial_mass)
+    # the true weight (body_mass may be a floored inertia, its extra weight relieved: sim.workpiece.inertial_mass)
     out["weight"] = float(scene.workpiece_mass) * g / W if scene.has_workpiece else 0.0
     #: the workpiece dofs' scale: slides over l, the hinge in radians
     out["wscale"] = np.array([1.0 if nm == "ry" else L for nm in st["wnames"]])
@@ -249,8 +248,7 @@ class ChainModel:
         self.wq, self.wd = st["wq"], st["wd"]
         #: the contact pairs (geom1, geom2) and, for each, (finger, link index of geom1, is the tip sphere)
         self.pairs, self.pair_link = st["pairs"], st["pair_link"]
-        # the model's parameters in the chain's units (stiffness, gravity moments, radii, ...): read again only
-        # when a value they come from changed (_parameters)
+        # the model's parameters in the chain's units (stiffness, gravity, radii, ...): read again on a change
         self.__dict__.update(_parameters(scene, st))
         #: one-entry memos of :meth:`pose` and :meth:`_link` (keyed on their arguments' values; read-only results)
         self._pose_memo = self._link_memo = None
@@ -273,8 +271,8 @@ class ChainModel:
         dq = ph.copy()  # np.diff(ph, prepend=0) without its concatenation: phi_0 - 0 is phi_0
         dq[:, 1:] -= ph[:, :-1]
         qq[self.jq] = dq.reshape(-1)
-        if self.nw:
-            qq[self.wq] = np.atleast_1d(y) * self.wscale
+        if self.nw:  # (split's y, a 1-D array, as it is: np.atleast_1d would hand it back unchanged)
+            qq[self.wq] = (y if type(y) is np.ndarray and y.ndim == 1 else np.atleast_1d(y)) * self.wscale
         return qq
 
     def nodes(self, phi) -> np.ndarray:
@@ -296,7 +294,8 @@ class ChainModel:
             return memo[1]  # (the array asked for last, its value unchanged: no conversion needed to tell)
         y_in = y
         mf = self.mir[f]
-        y = np.atleast_1d(np.asarray(y, float))
+        if not (type(y) is np.ndarray and y.ndim == 1 and y.dtype is _F64):  # (else it is that array itself)
+            y = np.atleast_1d(np.asarray(y, float))
         key = (f, y.tobytes())
         if memo is not None and memo[0] == key:
             self._pose_memo = (key, memo[1], y_in if y_in is y else None)
@@ -353,7 +352,7 @@ class ChainModel:
         rest, off = self.m.qpos_spring[self.jq], self._k_next[:-1].copy()  # (internal's: fixed through this solve)
         phi = np.array(phi0, dtype=float)
         F, diag = self._force_diag(phi, rest)
-        res = float(np.abs(self.to_q(F)).max())
+        res = float(_MAX(np.abs(self.to_q(F))))  # (ndarray.max's reduction, without its wrapper)
         for _ in range(max_iter):
             if res < tol:
                 return phi
@@ -365,7 +364,7 @@ class ChainModel:
             for _ls in range(30):
                 trial = phi + step * d
                 Fn, dn = self._force_diag(trial, rest)
-                rn = float(np.abs(self.to_q(Fn)).max())
+                rn = float(_MAX(np.abs(self.to_q(Fn))))
                 if rn < res or rn < tol:
                     break
                 step *= 0.5
@@ -386,6 +385,8 @@ class ChainModel:
 
     def to_q(self, F) -> np.ndarray:
         """Link-angle force -> hinge force (suffix sums within each finger)."""
+        if self.fingers == 1 and type(F) is np.ndarray and F.ndim == 1:
+            return F[::-1].cumsum()[::-1]  # (the same sequential sums along one axis)
         return np.asarray(F).reshape(self.fingers, self.nl)[:, ::-1].cumsum(axis=1)[:, ::-1].reshape(-1)
 
     # -- terms ------------------------------------------------------------------
@@ -571,11 +572,11 @@ class ChainModel:
         ca, sa = 1.0, 0.0  # cos and sin of alpha = 0.0
         out = []
         for f, k, gl0, gl1, hx, rad in self._face_rows:
-            O = self.pose(f, y)[0]
+            o0, o1 = self.pose(f, y)[0].tolist()
             rgl0 = ca * gl0 - sa * gl1
             rgl1 = sa * gl0 + ca * gl1
-            bo0 = nodes.item(f, k, 0) - O.item(0)
-            bo1 = nodes.item(f, k, 1) - O.item(1)
+            nd0, nd1 = nodes[f, k].tolist()
+            bo0, bo1 = nd0 - o0, nd1 - o1
             out.append(((0.0 + ca * bo0) + sa * bo1) - (((0.0 + ca * rgl0) + sa * rgl1) + hx) - rad)
         return np.array(out)
 

@@ -32,7 +32,7 @@ import math
 import mujoco
 import numpy as np
 
-from simgrip.settle.banded import solve_bordered
+from simgrip.settle.banded import _ALL, _ANY, _MAX, _ONES, lstsq_vector, solve_bordered
 from simgrip.settle.chain_model import ChainModel, eligible
 from simgrip.settle.newton import FLOOR_ULPS, PEN_MAX, Newton
 from simgrip.settle.state import SettleError
@@ -98,13 +98,11 @@ class ChainNewton(Newton):
         else:
             phi, w = cm.split(q)
             da = cm.pair_distances(phi, cm.nodes(phi), w)
-        found, dist = self._kc_cons, self._kc_dist  # (the contacts and distances Newton._update_kc read at q)
+        lows = self._kc_low  # (each pair's least contact distance at q, as Newton._update_kc read it)
         for p in self.normal_active:
-            cons = found[p]
-            if cons:
-                self.dist_shift[p] = min(float(dist[c]) for c in cons) / self.scene.length - da[p]
-        # (the read's key, set by Newton._update_kc at this q, covers the distances' round-off too: nothing in
-        # it changed since, so Newton.solve skips a second read at q)
+            if p in lows:
+                self.dist_shift[p] = lows[p] / self.scene.length - da[p]
+        # (Newton._update_kc's key at this q covers the distances' round-off too: Newton.solve reads q once)
         return moved
 
     def stick_now(self) -> int:
@@ -123,7 +121,7 @@ class ChainNewton(Newton):
             return False
         qb = np.asarray(q, dtype=float).tobytes()
         return (qb == mark[2] and d.qpos.tobytes() == qb and d.efc_force.tobytes() == mark[3]
-                and not d.qvel.any() and not d.qacc.any() and self._kc_key(q)[3:] == mark[4])
+                and not _ANY(d.qvel) and not _ANY(d.qacc) and self._kc_key(q)[3:] == mark[4])
 
     # -- MuJoCo's balance without the O(n^3) mass matrix when there is no contact ------------
     def _contacts_active(self) -> bool:
@@ -219,7 +217,7 @@ class ChainNewton(Newton):
         q = np.asarray(q, dtype=float)
         if done[0] != self.kinematics_calls or done[1] != q.tobytes() or d.qpos.tobytes() != done[1]:
             return False
-        return self._kc_current(q) and mark[1] == d.efc_force.tobytes() and not d.qvel.any() and not d.qacc.any()
+        return self._kc_current(q) and mark[1] == d.efc_force.tobytes() and not _ANY(d.qvel) and not _ANY(d.qacc)
 
     def _balance_inputs(self) -> tuple:
         """What MuJoCo's balance at rest reads besides the positions: rest angles, stiffness, gravity and the
@@ -382,8 +380,8 @@ class ChainNewton(Newton):
         s = self.sticks[i]
         anchors, values = (s.local_f, s.local_w, s.t_local), (s.offset, s.body_f, s.t_body)
         hit = self._memo.get(("stick", i))
-        if (hit is not None and hit[0] is phi and hit[1] is w and all(a is b for a, b in zip(hit[2], anchors))
-                and hit[3] == values):
+        if (hit is not None and hit[0] is phi and hit[1] is w and hit[2][0] is anchors[0] and hit[2][1] is anchors[1]
+                and hit[2][2] is anchors[2] and hit[3] == values):
             return hit[4]
         out = self.model.stick_term(s, phi, nodes, w)
         self._memo[("stick", i)] = (phi, w, anchors, values, out)
@@ -422,7 +420,7 @@ class ChainNewton(Newton):
 
         read_kc(phi, w, at_q=q)  # (at q itself, = join(split(q)) to round-off: stick_now's evaluation if current)
         anchored = False
-        if (N.size and not N.all()) or (lam.size and not lam.all()):
+        if (N.size and not _ALL(N)) or (lam.size and not _ALL(lam)):
             if self.sticks:  # (the first iteration's anchoring, done first: the estimate's stick terms are its)
                 self._reanchor(cm.join(q, phi, w))
                 anchored = True
@@ -446,12 +444,12 @@ class ChainNewton(Newton):
                 self._reanchor(state_q(phi, w))
             anchored = False
             R, jacobian = self._system(phi, w, N, lam, stick_act, True)
-            if not np.isfinite(R).all():
+            if not _ALL(np.isfinite(R)):
                 self._memo = {}
                 raise SettleError("settle diverged (non-finite residual)")
-            res_f = float(np.abs(R[:nf]).max())
+            res_f = float(_MAX(np.abs(R[:nf])))
             rows = self._row_scale(len(N), len(stick_act))  # (contact rows in force units: this state's K_c)
-            res_c = float(np.abs(R[nf:] * rows).max()) if R.size > nf else 0.0
+            res_c = float(_MAX(np.abs(R[nf:] * rows))) if R.size > nf else 0.0
             # (r < max(tol, floor), a floor evaluated only where tol does not decide; contact rows first)
             if (res_c < tol or res_c < self.noise_floor()) and (
                     res_f < tol or res_f < angle_floor(sc, state_q(phi, w))):
@@ -469,7 +467,7 @@ class ChainNewton(Newton):
                 return finish(False, "max_iter", state_q(phi, w), N, lam)
             # (the acceptance's scaled residual: only a step needs it)
             scale = np.concatenate([np.ones(nf), rows])  # rows in force units
-            res = float(np.abs(R * scale).max()) if R.size else 0.0
+            res = float(_MAX(np.abs(R * scale))) if R.size else 0.0
             self.iterations += 1
             try:
                 jac = jacobian()
@@ -489,14 +487,14 @@ class ChainNewton(Newton):
                 ph, ww = phi + step * dphi, w + step * dw
                 Nn, ln = N + step * dN, lam + step * dl
                 Rn, _ = self._system(ph, ww, Nn, ln, stick_act, False)
-                ok = bool(np.isfinite(Rn).all())
+                ok = bool(_ALL(np.isfinite(Rn)))
                 if ok and inact:  # pairs not yet touching: no tunnelling (move at most half their gap)
                     dn = self._distances(ph, ww)
                     ok = all(dn[p] > -PEN_MAX or d0[p] <= 0 for p in inact) and all(
                         d0[p] - dn[p] <= max(0.5 * d0[p], 0.0) + PEN_MAX for p in inact if d0[p] > 0)
                 mn = _norm(Rn) if ok else math.inf
                 if ok and (mn < (1.0 - 1e-4 * step) * merit or (
-                        float(np.abs(Rn * scale).max()) < 0.5 * res and mn < max(2.0 * merit, 1e-3 * tol ** 0.5))):
+                        float(_MAX(np.abs(Rn * scale))) < 0.5 * res and mn < max(2.0 * merit, 1e-3 * tol ** 0.5))):
                     accepted = True
                     break
                 step *= 0.5
@@ -509,7 +507,7 @@ class ChainNewton(Newton):
             read_kc(phi, w)
             stiffen(N)
             chord = (contacts and step == 1.0 and not inact and self.friction_at == "centreline"
-                     and self.iterations < max_iter and float(np.abs(Rn * scale).max()) <= CHORD_GAIN * res)
+                     and self.iterations < max_iter and float(_MAX(np.abs(Rn * scale))) <= CHORD_GAIN * res)
             for last in (False, True):  # the step's state, then (at most once) the chord step's
                 if contacts:  # a pair that starts touching joins the set at once
                     dn = self._distances(phi, w)
@@ -549,10 +547,10 @@ class ChainNewton(Newton):
         if len(act) != gn.size:
             return None
         ka = self.kc_dl[act]
-        if not float(np.abs(ka / kc_was[act] - 1.0).max()) <= CHORD_KC_RTOL:
+        if not float(_MAX(np.abs(ka / kc_was[act] - 1.0))) <= CHORD_KC_RTOL:
             return None
         moved = (self.dist_shift[act] - shift_was[act]) + N * (1.0 / ka - 1.0 / kc_was[act])
-        if float(np.abs(moved * ka).max()) < CHAIN_FLOOR_ULPS / FLOOR_ULPS * self.noise_floor():
+        if float(_MAX(np.abs(moved * ka))) < CHAIN_FLOOR_ULPS / FLOOR_ULPS * self.noise_floor():
             return None  # (a move below the contact rows' polishing floor: the next test decides without it)
         diag, off, P, Q, E, _, _, nz = jac
         nw, nn = self.yf.size, len(act)
@@ -565,7 +563,7 @@ class ChainNewton(Newton):
             out = self._step((diag, off, P, Q, E, -F, rb, nz))
         except (np.linalg.LinAlgError, ValueError):
             return None
-        return out if all(np.isfinite(x).all() for x in out) else None
+        return out if _ALL(np.isfinite(np.concatenate(out))) else None  # (every piece finite)
 
     def _estimate_multipliers(self, phi, w, N, lam, stick_act):
         """Least-squares multipliers at a fixed state: ``min |F + G_n' N + G_s' lambda|`` (hinge rows in q).
@@ -582,19 +580,21 @@ class ChainNewton(Newton):
         cols += [self._stick_at(i, phi, w, nodes).grad for i in stick_act]
         if not cols:
             return N, lam
-        G = np.stack(cols, 1)  # (n + nw, columns)
+        G = np.empty((cols[0].size, len(cols)))  # (n + nw, columns): np.stack(cols, 1)'s values, written in
+        for j, col in enumerate(cols):
+            G[:, j] = col
         A = np.empty((n + yf.size, G.shape[1]))
         # every column's hinge rows at once: to_q's suffix sums run down each column in the same order
         A[:n] = G[:n].reshape(cm.fingers, cm.nl, -1)[:, ::-1].cumsum(axis=1)[:, ::-1].reshape(n, -1)
         A[n:] = G[n:][yf]
         # (lstsq, not the normal equations: their round-off flips the sign test of a zero multiplier, issue 19)
-        x, *_ = np.linalg.lstsq(A, -b, rcond=1e-12)
+        x = lstsq_vector(A, -b, 1e-12)
         nn = len(self.normal_active)
-        if not np.isfinite(x).all() or (x[:nn] < 0.0).any():
+        if not _ALL(np.isfinite(x)) or _ANY(x[:nn] < 0.0):
             return N, lam
         return x[:nn], x[nn:]
 
     def _row_scale(self, nn, ns) -> np.ndarray:
         """Contact rows (length units) -> force units ``K_c`` (the acceptance of :class:`Newton`)."""
-        return np.concatenate([self.kc_dl[self.normal_active][:nn], np.ones(ns)])
+        return np.concatenate((self.kc_dl[self.normal_active][:nn], _ONES[:ns] if ns <= 4 else np.ones(ns)))
 

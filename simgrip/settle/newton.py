@@ -38,6 +38,7 @@ import time
 import mujoco
 import numpy as np
 
+from simgrip.settle.banded import _F64, _MAX
 from simgrip.settle.state import SettledState, read_state
 from simgrip.settle.statics import CONTACT_STIFFNESS, Statics, Stick, centreline_point, sync_scene
 from simgrip.sim.contacts import normal_force
@@ -63,6 +64,7 @@ PEN_STIFFEN = 1e-5
 STIFFEN_STEP = 10.0
 #: Machine epsilon (``np.finfo(float).eps``, looked up once: the floors are evaluated every iteration).
 _EPS = float(np.finfo(float).eps)
+_ZERO = (0.0,)
 #: Largest stiffness factor (a weightless workpiece needs ~1e14: MuJoCo weighs its contact by the workpiece's
 #: inverse mass; a contact needing more is flagged by :func:`simgrip.validity.check_contact_depth`).
 STIFFEN_MAX = 1e16
@@ -93,6 +95,10 @@ class Newton:
     :class:`~simgrip.settle.chain_newton.ChainNewton`'s; this class holds the
     MuJoCo side: the contact set (``mj_geomDistance``), ``K_c`` and the reported residual.
     """
+
+    #: a contact's force (mj_contactForce's output buffer of :meth:`_update_kc`) and the hinges' qpos addresses
+    #: (fingers, n; :meth:`floor_ulps`): made on first use, per solve
+    _f6 = _jq = None
 
     def __init__(self, scene: Scene, data=None):
         self.scene = scene
@@ -155,7 +161,7 @@ class Newton:
         contacts = self._contacts_on()
         free = np.ones(m.nv, bool)
         free[list(frozen)] = False
-        idx = np.flatnonzero(free)
+        idx = free.nonzero()[0]  # (np.flatnonzero's answer for a 1-D mask, without its wrappers)
         q = d.qpos.copy()
         if not contacts:
             self.normal_active, self.N = [], np.zeros(0)
@@ -169,7 +175,7 @@ class Newton:
                 need |= {p for p in range(len(self.pairs)) if dist[p] <= 0.0}
             for p in sorted(need - set(self.normal_active)):
                 self.normal_active.append(p)
-                self.N = np.append(self.N, 0.0)
+                self.N = np.concatenate((self.N, _ZERO))  # (np.append's values: a 0.0 after N)
         for _outer in range(8):
             conv, why, q = self._newton(q, idx, tol, limit, contacts)
             if not conv:
@@ -225,8 +231,11 @@ class Newton:
         memo = self._floor_memo  # the last state's (qpos bytes, value): a solve asks ~8 times, mostly at one state
         if memo is not None and memo[0] == q.tobytes():
             return memo[1]
-        phi = q[np.asarray(sc.joint_qpos)].cumsum(axis=-1)
-        big = float(np.abs(phi).max()) if phi.size else 0.0
+        jq = self._jq
+        if jq is None:
+            jq = self._jq = np.asarray(sc.joint_qpos)
+        phi = q[jq].cumsum(axis=-1)
+        big = float(_MAX(np.abs(phi), axis=None)) if phi.size else 0.0
         out = max(FLOOR_ULPS, sc.n * (1.0 + 0.5 * big))
         self._floor_memo = (q.tobytes(), out)
         return out
@@ -319,7 +328,8 @@ class Newton:
         set, the stiffness it leaves and the model's contact and workpiece parameters (arrays as their bytes:
         equal bytes are equal values; a signed zero that differs only asks for one read more)."""
         m = self.scene.model
-        return (np.asarray(q, dtype=float).tobytes(), list(self.normal_active), self.kc.tobytes(),
+        qb = q.tobytes() if type(q) is np.ndarray and q.dtype is _F64 else np.asarray(q, dtype=float).tobytes()
+        return (qb, list(self.normal_active), self.kc.tobytes(),
                 m.pair_solref.tobytes(), m.pair_solimp.tobytes(), m.pair_friction.tobytes(), m.body_pos.tobytes(),
                 int(m.opt.disableflags))
 
@@ -339,14 +349,17 @@ class Newton:
         if not ready:  # (else the data holds MuJoCo's balance at q already: ChainNewton's stick_now mark)
             self.st.forces(q)
         moved = False
-        self._kc_cons = found = {}  # each pair's contacts in the data at q (ChainNewton reads their distances)
+        self._kc_low = lows = {}  # each touching pair's least contact distance [m] at q (ChainNewton's round-off)
         ncon = sd.ncon
         con = sd.contact  # (one view of MuJoCo's contact arrays: each ``sd.contact`` builds a new one)
-        self._kc_dist = dist = con.dist
+        dist = con.dist
         g1, g2 = con.geom1[:ncon].tolist(), con.geom2[:ncon].tolist()
+        f6 = self._f6
+        if f6 is None:  # (made at the first read: a settle without contacts never needs it)
+            f6 = self._f6 = np.zeros(6)
         for k, p in enumerate(self.normal_active):
             a, b = self.pairs[p]  # (pair_contacts' test, on the lists read once for every pair)
-            found[p] = cons = [i for i in range(ncon) if (g1[i] == a and g2[i] == b) or (g1[i] == b and g2[i] == a)]
+            cons = [i for i in range(ncon) if (g1[i] == a and g2[i] == b) or (g1[i] == b and g2[i] == a)]
             if not cons:
                 continue
             low = fn = None  # (min() and sum() of the contacts' distances and normal forces, as loops)
@@ -354,8 +367,10 @@ class Newton:
                 v = float(dist[c])
                 if low is None or v < low:
                     low = v
-                f = normal_force(m, sd, c)
+                mujoco.mj_contactForce(m, sd, c, f6)  # (normal_force's read, into one buffer)
+                f = float(f6[0])
                 fn = f if fn is None else fn + f
+            lows[p] = low
             pen = -low
             if pen > 0 and fn > 0:
                 kc = fn / pen
@@ -399,11 +414,11 @@ class Newton:
         m, sd = sc.model, self.st.d
         self.st.forces(sc.data.qpos)
         self.sticks, self.sliding = [], {}
-        wg = set(int(g) for g in sc.workpiece_geoms)
+        wg = set(map(int, sc.workpiece_geoms))
         con = sd.contact  # (one view of the contact arrays)
         geom1, geom2 = con.geom1[:sd.ncon].tolist(), con.geom2[:sd.ncon].tolist()
         for f in range(sc.fingers):
-            mine = set(int(g) for g in sc.contact_geoms[f])
+            mine = set(map(int, sc.contact_geoms[f]))
             best = None
             for i in range(sd.ncon):
                 g1, g2 = geom1[i], geom2[i]
@@ -416,12 +431,13 @@ class Newton:
             _, i, g1, g2 = best
             p = self._anchor(sd, g1, np.array(con.pos[i]))
             bf, bw = int(m.geom_bodyid[g1]), int(m.geom_bodyid[g2])
-            n0, n1, n2 = (float(v) for v in con.frame[i][:3])
+            n0, n1, n2 = con.frame[i][:3].tolist()
             # in-plane tangent: np.cross((0, 1, 0), normal) term by term (the same products and differences)
             t = np.array([1.0 * n2 - 0.0 * n1, 0.0 * n0 - 0.0 * n2, 0.0 * n1 - 1.0 * n0])
-            if np.linalg.norm(t) < 1e-6:  # out-of-plane normal (tip deep in the box): no planar stick
+            tn = math.sqrt(float(t.dot(t)))  # (np.linalg.norm's own sqrt(t . t) of a 1-D float vector)
+            if tn < 1e-6:  # out-of-plane normal (tip deep in the box): no planar stick
                 continue
-            t /= np.linalg.norm(t)
+            t /= tn
             tb = bw if sc.grip in ("I", "II") else bf
             self.sticks.append(
                 Stick(
