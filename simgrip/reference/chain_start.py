@@ -216,9 +216,9 @@ def fast_newton(prob: DiscreteEnergy, x0, *, tol: float = GRADIENT_TOL, max_iter
 def _arc_start(prob: DiscreteEnergy, unit_rest, sign: float):
     """A uniform-curvature shape ``x = kappa cumsum(unit_rest)`` on the constraint (the minimiser's arc start:
     its first sign change of ``c`` along ``kappa = sign t``, scanned in steps of 0.25, then the root), or None."""
-    us = np.cumsum(unit_rest)
+    us = np.asarray(unit_rest, dtype=float).cumsum()  # (np.cumsum's and np.sum's reductions, without their wrappers)
     w, c0 = prob.w, prob.c0
-    if float(np.sum(w)) + c0 <= 0:
+    if float(np.add.reduce(w)) + c0 <= 0:
         return None  # the straight finger is already inside (the minimiser says so)
     t_prev = 0.0
     for block in range(50):  # t = 0.25 ... 200 in blocks of 16 steps (the minimiser's scan, vectorised)
@@ -226,8 +226,8 @@ def _arc_start(prob: DiscreteEnergy, unit_rest, sign: float):
         ts = ts[ts < 200.0]
         if ts.size == 0:
             return None
-        cs = np.cos(np.outer(sign * ts, us)) @ w + c0
-        hit = np.flatnonzero(cs <= 0)
+        cs = np.cos(np.multiply.outer(sign * ts, us)) @ w + c0  # (np.outer's products)
+        hit = (cs <= 0).nonzero()[0]
         if hit.size:
             j = int(hit[0])
             lo = ts[j - 1] if j > 0 else t_prev
@@ -238,7 +238,7 @@ def _arc_start(prob: DiscreteEnergy, unit_rest, sign: float):
         return None
     # safeguarded Newton on c(sign t) in [lo, hi] (c(lo) > 0 >= c(hi))
     t = 0.5 * (lo + hi)
-    tol = 1e-15 * (float(np.sum(np.abs(w))) + abs(c0) + prob.half_b)
+    tol = 1e-15 * (float(np.add.reduce(np.abs(w))) + abs(c0) + prob.half_b)
     for _ in range(100):
         ang = sign * t * us
         c = float(w.dot(np.cos(ang))) + c0
@@ -317,7 +317,7 @@ def grip_start(grip, params, profile, n, *, gravity=1.0) -> GripStart:
         res = minimise(prob, unit_rest, sign, None)
     x = res.x
     ds = 1.0 / n
-    tip = np.array([ds * float(np.sum(np.cos(x))), ds * float(np.sum(np.sin(x)))])
+    tip = np.array([ds * float(np.add.reduce(np.cos(x))), ds * float(np.add.reduce(np.sin(x)))])  # (np.sum's)
     q = x.copy()
     q[1:] -= x[:-1]
     diag, off = prob.lagrange_tridiag(x, res.chi)
