@@ -458,13 +458,13 @@ def chain_violations(planar, world, *, r_link: float, r_tip: float | None, solid
         a, b = W[:-1].copy(), W[1:].copy()
         if r_tip is not None:  # the last link up to the tip sphere's surface
             step = b[-1] - a[-1]
-            h = float(np.linalg.norm(step))
+            h = math.sqrt(float(step.dot(step)))  # (np.linalg.norm's sqrt(x . x) of a 1-D float vector)
             b[-1] = a[-1] + step * max(0.0, 1.0 - float(r_tip) / h) if h > 0 else a[-1]
         v = solid.segment_sdf(a, b, below=SOLID_LIMIT_FACTOR * float(r_link))
         lim = np.full(len(a), SOLID_LIMIT_FACTOR * float(r_link))
         if contact_links is not None and len(contact_links[f]):
             lim[np.asarray(contact_links[f], dtype=int)] = 0.0
-        bad = np.nonzero(v < lim)[0]
+        bad = (v < lim).nonzero()[0]  # (np.nonzero's answer, without its wrapper)
         if bad.size:
             k = int(bad[np.argmin(v[bad])])
             add("workpiece", f"{who} {f}: link(s) {_ranges(bad)} inside the workpiece (deepest: link {k}, its centreline "
@@ -510,7 +510,9 @@ def planar_solid(scene, state, finger: int = 0) -> Solid | None:
         tips = full.local(np.asarray(state.tip, dtype=float).reshape(-1, 2))[:, 1]
         # the face carries the tip sphere at its equator: the contact point is at the tip centre's height,
         # so the face need reach no further (a rod that comes down over the box onto its top edge is legal)
-        return full.clipped(hi=float(np.max(tips))) if scene.grip == "I" else full.clipped(lo=float(np.min(tips)))
+        # (np.max's and np.min's reductions, without their wrappers)
+        return (full.clipped(hi=float(np.maximum.reduce(tips))) if scene.grip == "I" else
+                full.clipped(lo=float(np.minimum.reduce(tips))))
     corners = np.array([[half[0], -half[1]], [-half[0], -half[1]]])
     band = 2.0 * float(scene.r_link)
     return Solid("box", centre, rot, half, corners, float(scene.r_corner)).clipped(hi=-half[1] + band)
