@@ -35,6 +35,7 @@ import numpy as np
 from simgrip.settle.banded import _ALL, _ANY, _MAX, _ONES, lstsq_vector, solve_bordered
 from simgrip.settle.chain_model import ChainModel, eligible
 from simgrip.settle.newton import FLOOR_ULPS, PEN_MAX, Newton
+from simgrip.settle.pinch import evaluators
 from simgrip.settle.state import SettleError
 from simgrip.settle.statics import angle_floor
 from simgrip.sim.scene import Scene
@@ -75,6 +76,7 @@ class ChainNewton(Newton):
                              f"with finger 0 along +x; got joints {tuple(scene.workpiece_joints)}")
         super().__init__(scene, scene.data)  # the scene's own MjData as scratch (the solve owns its state)
         self.model = ChainModel(scene)
+        self._ev = evaluators(self.model)  # (nodes, internal, pair_term, stick_term: pinch.py's for one finger)
         #: MuJoCo's contact distance minus the analytic one (round-off, over l), per pair
         self.dist_shift = np.zeros(len(self.pairs))
         self._memo = {}  # the state's geometry within one inner solve (_at)
@@ -102,8 +104,7 @@ class ChainNewton(Newton):
         for p in self.normal_active:
             if p in lows:
                 self.dist_shift[p] = lows[p] / self.scene.length - da[p]
-        # (Newton._update_kc's key at this q covers the distances' round-off too: Newton.solve reads q once)
-        return moved
+        return moved  # (Newton._update_kc's key at q covers the round-off too: Newton.solve reads q once)
 
     def stick_now(self) -> int:
         """:meth:`Newton.stick_now`, remembering its MuJoCo evaluation (:meth:`_stick_mark_holds`)."""
@@ -242,8 +243,7 @@ class ChainNewton(Newton):
         mujoco.mj_kinematics(m, d)
         mujoco.mj_comPos(m, d)
         self._committed = (self.kinematics_calls, d.qpos.tobytes())  # (positions at this q: _inverse_current)
-        # a contact-free scene's sync is these two: remember where, so that the judge's balance and the settle's
-        # last sync at the same state do not compute them again
+        # a contact-free scene's sync is these two: remembered, for the judge's balance and the settle's last sync
         self._positions_at = self._positions_key() if self.st.d is d and _positions_only(m) else None
 
     def _positions_key(self) -> tuple:
@@ -267,11 +267,11 @@ class ChainNewton(Newton):
         cm = self.model
         n, yf = cm.n, self.yf
         nw = yf.size
-        nodes = self._at("nodes", phi, w, cm.nodes, phi) if (self.normal_active or self.sticks) else None
-        F, diag, off = self._at("internal", phi, w, cm.internal, phi)
+        nodes = self._at("nodes", phi, w, self._ev[0], phi) if (self.normal_active or self.sticks) else None
+        F, diag, off = self._at("internal", phi, w, self._ev[1], phi)
         Fw = self._fw  # (the workpiece's weight and applied force on its free dofs: fixed through a solve)
         act = self.normal_active
-        pterms = [self._at(("pair", p), phi, w, cm.pair_term, p, phi, nodes, w) for p in act]
+        pterms = [self._at(("pair", p), phi, w, self._ev[2], p, phi, nodes, w) for p in act]
         sterms = [self._stick_at(i, phi, w, nodes) for i in range(len(self.sticks))] if self.sticks else []
         mu = {i: float(self.scene.model.pair_friction[self._pair_of(s)][0]) for i, s in enumerate(self.sticks)
               if i in self.sliding} if self.sliding else {}  # (only the sliding sticks' friction enters)
@@ -383,14 +383,14 @@ class ChainNewton(Newton):
         if (hit is not None and hit[0] is phi and hit[1] is w and hit[2][0] is anchors[0] and hit[2][1] is anchors[1]
                 and hit[2][2] is anchors[2] and hit[3] == values):
             return hit[4]
-        out = self.model.stick_term(s, phi, nodes, w)
+        out = self._ev[3](s, phi, nodes, w)
         self._memo[("stick", i)] = (phi, w, anchors, values, out)
         return out
 
     def _distances(self, phi, w) -> np.ndarray:
         """Every pair's analytic signed distance at the state ``(phi, w)`` (:meth:`_at`)."""
         cm = self.model
-        return self._at("dist", phi, w, cm.pair_distances, phi, self._at("nodes", phi, w, cm.nodes, phi), w)
+        return self._at("dist", phi, w, cm.pair_distances, phi, self._at("nodes", phi, w, self._ev[0], phi), w)
 
     # -- Newton -------------------------------------------------------------------------
     def _newton(self, q, idx, tol, max_iter, contacts):
@@ -573,10 +573,10 @@ class ChainNewton(Newton):
         """
         cm = self.model
         n, yf = cm.n, self.yf
-        nodes = self._at("nodes", phi, w, cm.nodes, phi)
-        F, _, _ = self._at("internal", phi, w, cm.internal, phi)
+        nodes = self._at("nodes", phi, w, self._ev[0], phi)
+        F, _, _ = self._at("internal", phi, w, self._ev[1], phi)
         b = np.concatenate([cm.to_q(F), self._fw])  # (self._fw: workpiece_force()[yf], read at the solve's start)
-        cols = [self._at(("pair", p), phi, w, cm.pair_term, p, phi, nodes, w).grad for p in self.normal_active]
+        cols = [self._at(("pair", p), phi, w, self._ev[2], p, phi, nodes, w).grad for p in self.normal_active]
         cols += [self._stick_at(i, phi, w, nodes).grad for i in stick_act]
         if not cols:
             return N, lam
