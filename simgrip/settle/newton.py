@@ -65,6 +65,7 @@ STIFFEN_STEP = 10.0
 #: Machine epsilon (``np.finfo(float).eps``, looked up once: the floors are evaluated every iteration).
 _EPS = float(np.finfo(float).eps)
 _ZERO = (0.0,)
+_SPHERE = int(mujoco.mjtGeom.mjGEOM_SPHERE)
 #: Largest stiffness factor (a weightless workpiece needs ~1e14: MuJoCo weighs its contact by the workpiece's
 #: inverse mass; a contact needing more is flagged by :func:`simgrip.validity.check_contact_depth`).
 STIFFEN_MAX = 1e16
@@ -391,10 +392,16 @@ class Newton:
         sd.qpos[:] = q
         mujoco.mj_kinematics(m, sd)
         self.kinematics_calls += 1
-        ft = np.zeros(6)
+        ft = None
         for s in self.sticks:
-            mujoco.mj_geomDistance(m, sd, s.geoms[0], s.geoms[1], self.scene.length, ft)
-            s.reanchor(sd, self._anchor(sd, s.geoms[0], 0.5 * (ft[:3] + ft[3:])))
+            g = s.geoms[0]
+            if self.friction_at == "centreline" and int(m.geom_type[g]) == _SPHERE:
+                # (a sphere's centreline point is its centre, whatever the contact point: centreline_point's answer)
+                s.reanchor(sd, np.array(sd.geom_xpos[g]))
+                continue
+            ft = np.zeros(6) if ft is None else ft
+            mujoco.mj_geomDistance(m, sd, g, s.geoms[1], self.scene.length, ft)
+            s.reanchor(sd, self._anchor(sd, g, 0.5 * (ft[:3] + ft[3:])))
 
     def _anchor(self, d, geom, point) -> np.ndarray:
         """Where the sticking friction acts: the contact ``point``, or (point contact) the finger's centreline there."""
