@@ -268,8 +268,9 @@ def _far_pairs_clear(P, d, d_k: int, need: float) -> bool:
 def box_sdf(points, half) -> np.ndarray:
     """Signed distance of ``points`` ``(..., d)`` to the box ``|x_k| <= half_k`` (its own frame; negative inside)."""
     q = np.abs(np.asarray(points, dtype=float)) - np.asarray(half, dtype=float)
-    outside = np.linalg.norm(np.maximum(q, 0.0), axis=-1)
-    return outside + np.minimum(np.max(q, axis=-1), 0.0)
+    m = np.maximum(q, 0.0)  # (np.linalg.norm's axis sum sqrt(sum m * m) and np.max's reduction, without their wrappers)
+    outside = np.sqrt(np.add.reduce(m * m, axis=-1))
+    return outside + np.minimum(np.maximum.reduce(q, axis=-1), 0.0)
 
 
 def cylinder_sdf(points, radius: float, half_height: float) -> np.ndarray:

@@ -349,9 +349,9 @@ class Solid:
             if self.corners is not None:
                 ext = ext + self.corner_radius
             lo, hi = np.minimum(la, lb), np.maximum(la, lb)
-            gap = np.max(np.maximum(np.maximum(lo - ext, -ext - hi), 0.0), axis=1)  # <= the true distance
+            gap = np.maximum.reduce(np.maximum(np.maximum(lo - ext, -ext - hi), 0.0), axis=1)  # <= the true distance
             v = gap.copy()
-            todo = np.nonzero(gap < below)[0]
+            todo = (gap < below).nonzero()[0]
             if todo.size == 0:
                 return v
         la, lb = la[todo], lb[todo]
