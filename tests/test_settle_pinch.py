@@ -6,9 +6,7 @@
 * a tangent with an ``x`` part, a stick that turns with its link and a capsule pair (Grip III) are handed to
   :class:`ChainModel` itself;
 * whole settles (Grips I-III, point and surface contact, warm sweeps) with the pinch functions and with
-  :class:`ChainModel`'s give the same state, residual, forces and counts;
-* the one-finger free equilibrium (the Grip I/II start's reach test) is :meth:`ChainModel.free_equilibrium`'s,
-  bit for bit, from grip shapes and far-off starts (line searches, failures), and hands two fingers to it.
+  :class:`ChainModel`'s give the same state, residual, forces and counts.
 """
 
 from __future__ import annotations
@@ -23,8 +21,7 @@ from simgrip.settle import chain_newton, settle, settle_sweep
 from simgrip.settle.chain_model import ChainModel
 from simgrip.settle.chain_newton import ChainNewton
 from simgrip.settle.closing import start_on_chain, touch
-from simgrip.settle import closing
-from simgrip.settle.pinch import Pinch, evaluators, free_equilibrium
+from simgrip.settle.pinch import Pinch, evaluators
 from simgrip.settle.statics import Stick
 
 
@@ -118,51 +115,4 @@ def test_warm_sweep_with_and_without_the_pinch_functions_agree(monkeypatch):
 
     pinched = run()
     monkeypatch.setattr(chain_newton, "evaluators", lambda cm: (cm.nodes, cm.internal, cm.pair_term, cm.stick_term))
-    assert run() == pinched
-
-
-def test_free_equilibrium_is_the_chain_models(monkeypatch):
-    from simgrip.settle import pinch
-
-    counts = {"solves": 0, "residuals": 0}
-
-    def counted(key, fn):
-        return lambda *a: counts.__setitem__(key, counts[key] + 1) or fn(*a)
-
-    monkeypatch.setattr(pinch, "dgtsv", counted("solves", pinch.dgtsv))
-    monkeypatch.setattr(pinch, "_MAX", counted("residuals", pinch._MAX))
-    found, searched = [], 0
-    for grip, kappa, n, D in [("I", -6.0, 32, 1.0), ("I", -3.0, 2, 1.0), ("II", 5.0, 16, 0.1), ("I", -6.0, 16, 0.02),
-                              ("I", -11.0, 64, 3.0)]:
-        cm = ChainModel(build_scene(grip, STANDARD.replace(D=D), Uniform(kappa), n))
-        rng = np.random.default_rng(n)
-        starts = [np.cumsum(np.full(n, kappa / n))] + [
-            rng.uniform(-5.0, 5.0) * np.linspace(0.0, 1.0, n) + rng.normal(0.0, 0.5 * j, n) for j in range(12)]
-        for start in starts:
-            counts.update(solves=0, residuals=0)
-            want, got = cm.free_equilibrium(start), free_equilibrium(cm, start)
-            assert (want is None) == (got is None)
-            if want is not None:
-                assert want.tobytes() == got.tobytes()
-            found.append(want is not None)
-            searched += counts["residuals"] > counts["solves"] + 1  # (a trial step halved at least once)
-    assert any(found) and not all(found) and searched  # (converged, failed and line-searched starts among them)
-
-
-def test_free_equilibrium_of_two_fingers_is_the_chain_models_own(monkeypatch):
-    cm = ChainModel(build_scene("I", STANDARD, Uniform(-6.0), 8, fingers=2))
-    asked = []
-    real = ChainModel.free_equilibrium
-    monkeypatch.setattr(ChainModel, "free_equilibrium", lambda self, *a: asked.append(a) or real(self, *a))
-    start = np.tile(np.cumsum(np.full(8, -0.75)), 2)
-    assert free_equilibrium(cm, start).tobytes() == real(cm, start).tobytes() and len(asked) == 1
-
-
-@pytest.mark.parametrize("grip,kappa,n", [("I", -6.0, 32), ("I", -1.5, 8), ("II", 5.0, 16), ("I", -9.0, 64)])
-def test_settles_with_either_free_equilibrium_agree(monkeypatch, grip, kappa, n):
-    def run():
-        return _record(settle(build_scene(grip, STANDARD, Uniform(kappa), n), allow_unconverged=True))
-
-    pinched = run()
-    monkeypatch.setattr(closing, "free_equilibrium", lambda cm, start: cm.free_equilibrium(start))
     assert run() == pinched

@@ -30,7 +30,6 @@ import numpy as np
 from simgrip.reference import DiscreteError, chain_start, hinge_chain
 from simgrip.settle.chain_model import gravity_factor
 from simgrip.settle.newton import Newton
-from simgrip.settle.pinch import free_equilibrium
 from simgrip.settle.state import SettleError, finger_tip
 from simgrip.sim.scene import BOX_HEIGHT, Scene, set_curvature
 from simgrip.sim.workpiece_motion import hold_workpiece, place_workpiece
@@ -191,7 +190,7 @@ def start_on_chain(scene: Scene, run: Newton | None) -> bool | None:
         model = getattr(run, "model", None)
         if model is not None:
             start = ch.link_angles if model.fingers == 1 else np.tile(ch.link_angles, model.fingers)
-            phi = free_equilibrium(model, start)  # (pinch.py's Newton for one finger, the same iterates)
+            phi = model.free_equilibrium(start)
         else:
             phi = None
         phi = phi[:scene.n] if phi is not None else None  # the fingers are mirror images

@@ -29,11 +29,9 @@ import math
 
 import numpy as np
 
-from simgrip.lapack import dgtsv
-from simgrip.settle.banded import _MAX
 from simgrip.settle.chain_model import ChainModel, Term
 
-__all__ = ["Pinch", "evaluators", "free_equilibrium"]
+__all__ = ["Pinch", "evaluators"]
 
 
 def evaluators(cm: ChainModel) -> tuple:
@@ -43,54 +41,6 @@ def evaluators(cm: ChainModel) -> tuple:
         return cm.nodes, cm.internal, cm.pair_term, cm.stick_term
     p = Pinch(cm)
     return p.nodes, p.internal, p.pair_term, p.stick_term
-
-
-def free_equilibrium(cm: ChainModel, phi0, tol: float = 1e-12, max_iter: int = 50):
-    """:meth:`ChainModel.free_equilibrium` (link angles [rad] of the fingers alone at equilibrium, or None), its
-    Newton on one finger's angles without the per-iterate glue; any other model is handed to it.
-
-    The same iterates bit for bit: :meth:`ChainModel._force_diag`'s arithmetic with one finger's first joint
-    angle ``phi_0`` (already the copy's) and last next-hinge moment (the array's last) written once, the residual
-    ``max |to_q(F)|`` as the largest ``|.|`` of the suffix sums before :meth:`ChainModel.to_q` reverses them back
-    (the same numbers), the tridiagonal solve as :func:`~simgrip.settle.banded.solve_tridiagonal`'s own
-    ``dgtsv`` call (a failure, ``info != 0``, is its error and so None) and a full step ``phi + d`` (``1.0 * d``
-    is ``d``).  ``tests/test_settle_pinch.py`` holds it to :meth:`ChainModel.free_equilibrium`.
-    """
-    if cm.fingers != 1 or cm.nl < 2:
-        return cm.free_equilibrium(phi0, tol, max_iter)
-    rest, off = cm.m.qpos_spring[cm.jq], cm._k_next[:-1].copy()  # (as free_equilibrium reads them)
-    k, c, kd = cm.k, cm.c, cm._k_diag
-
-    def force_diag(phi):
-        q = phi.copy()
-        q[1:] -= phi[:-1]
-        sp = k * (q - rest)
-        sn = np.empty_like(sp)
-        sn[:-1] = sp[1:]
-        sn[-1] = 0.0
-        return sn - sp - c * np.cos(phi), kd + c * np.sin(phi)
-
-    phi = np.array(phi0, dtype=float)
-    F, diag = force_diag(phi)
-    res = float(_MAX(np.abs(F[::-1].cumsum())))
-    for _ in range(max_iter):
-        if res < tol:
-            return phi
-        _, _, _, d, info = dgtsv(off, diag, off, -F)
-        if info != 0:
-            return None
-        step = 1.0
-        for _ls in range(30):
-            trial = phi + d if step == 1.0 else phi + step * d
-            Fn, dn = force_diag(trial)
-            rn = float(_MAX(np.abs(Fn[::-1].cumsum())))
-            if rn < res or rn < tol:
-                break
-            step *= 0.5
-        else:
-            return None
-        phi, F, diag, res = trial, Fn, dn, rn
-    return phi if res < tol else None
 
 
 class Pinch:
