@@ -27,6 +27,10 @@ Writes into ``--out``:
 * ``learning_curves.png``: held-out success against CPU minutes, each algorithm's mean with the min-max band
   over the seeds and each seed's curve.
 
+``--normalize`` passes ``train_sb3.py``'s option of that name to every run: training behind SB3's
+``VecNormalize`` (observation and return, the library's defaults), evaluated with its frozen observation
+statistics; ``aggregate.json`` then names the wrapper.
+
 Ctrl-C stops every running child (SIGTERM, then SIGKILL after 5 s) and exits 130 with one line.  Exit 2 (one
 line) on a bad argument, 1 when a run failed (its log names why; the others are still aggregated).
 """
@@ -96,6 +100,8 @@ def run_command(algo: str, seed: int, args, folder: Path) -> list[str]:
         cmd += ["--checkpoint-minutes", repr(args.checkpoint_minutes)]
     if args.env_kwargs:
         cmd += ["--env-kwargs", json.dumps(args.env_kwargs)]
+    if args.normalize:
+        cmd += ["--normalize"]
     return cmd
 
 
@@ -226,6 +232,8 @@ def main(argv=None) -> int:
     p.add_argument("--eval-seeds", type=_seed_range, default=(8000, 8049),
                    help="held-out evaluation seeds A-B, inclusive (default 8000-8049)")
     p.add_argument("--jobs", type=_positive(int), default=1, help="runs at once (default 1, at most the cores)")
+    p.add_argument("--normalize", action="store_true",
+                   help="train behind SB3's VecNormalize (observation and return, library defaults; default off)")
     p.add_argument("--out", required=True, help="output folder")
     args = p.parse_args(argv)
     cores = os.cpu_count() or 1
@@ -285,6 +293,7 @@ def main(argv=None) -> int:
         "env": args.env, **({"env_kwargs": args.env_kwargs} if args.env_kwargs else {}), "algos": algos, "seeds": args.seeds, "minutes": args.minutes,
         "checkpoint_minutes": args.checkpoint_minutes, "clock": "cpu", "eval_seeds": [lo, hi],
         "hyperparameters": "Stable-Baselines3 defaults, one env, one torch thread", "summary": summary,
+        **({"wrapper": "VecNormalize (SB3 defaults: observation and return)"} if args.normalize else {}),
         "command": [Path(sys.argv[0]).name] + list(sys.argv[1:] if argv is None else argv)})
     plot(summary, results, out / "learning_curves.png")
     for algo, entry in summary.items():

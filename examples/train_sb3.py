@@ -28,6 +28,13 @@ Writes into ``--out`` (created if needed, files written whole):
   100 episodes) against environment steps and against CPU minutes, for
   every ``*_curve.csv`` in ``--out`` (so two runs into one folder share a plot).
 
+``--normalize`` wraps the training env in Stable-Baselines3's ``VecNormalize`` (running mean and variance of
+the observation and of the discounted return, the library's defaults: clipped at 10, ``gamma = 0.99``, the
+algorithms' default), the documented wrapper of SB3's own MuJoCo recipes; its statistics are saved with each
+model (``<algo>_vecnormalize.pkl``, ``<algo>_vecnormalize_<k M>min.pkl``) and the held-out evaluation feeds the
+policy the observation normalised with the statistics frozen at that point (returns and success are the
+env's own, unnormalised).
+
 ``--threads`` sets PyTorch's intra-op threads (default 1: one core per
 training; run two trainings side by side to use two cores).
 """
@@ -38,6 +45,7 @@ import argparse
 import csv
 import io
 import json
+import pickle
 import sys
 import time
 from pathlib import Path
@@ -71,12 +79,14 @@ def _spec(env_id: str):
     return retired_spec(env_id) if env_id in RETIRED else env_id
 
 
-def evaluate(model, env_id: str, episodes: int, seed0: int, env_kwargs=None) -> dict:
+def evaluate(model, env_id: str, episodes: int, seed0: int, env_kwargs=None, normalizer=None) -> dict:
     """Run the deterministic policy of ``model`` for ``episodes`` episodes on seeds ``seed0 + i`` (the env made
-    with ``env_kwargs``, as it was trained)."""
+    with ``env_kwargs``, as it was trained; ``normalizer``: the ``VecNormalize`` it was trained behind, whose
+    frozen observation statistics then normalise what the policy sees)."""
     env = gym.make(_spec(env_id), **(env_kwargs or {}))
+    see = (lambda obs: obs) if normalizer is None else normalizer.normalize_obs
     try:
-        results = run_episodes(env, lambda obs: model.predict(obs, deterministic=True)[0], episodes, seed0)
+        results = run_episodes(env, lambda obs: model.predict(see(obs), deterministic=True)[0], episodes, seed0)
     finally:
         env.close()
     return {**summary(results), "eval_seeds": [seed0, seed0 + episodes - 1]}
@@ -96,11 +106,23 @@ def _save(model, path: Path) -> None:
         model.save(fh)
 
 
+def _save_normalizer(vec_normalize, path: Path) -> None:
+    """The ``VecNormalize``'s statistics (pickled as ``VecNormalize.save`` does: without its env), whole."""
+    with atomic_write(path, "wb") as fh:
+        pickle.dump(vec_normalize, fh)
+
+
+def _load_normalizer(path: Path):
+    with open(path, "rb") as fh:
+        return pickle.load(fh)
+
+
 def train(algo: str, env_id: str, *, steps: int, minutes: float, seed: int, out: Path,
           eval_episodes: int, eval_seed: int, clock: str = "cpu", checkpoint_minutes: float | None = None,
-          env_kwargs: dict | None = None) -> dict:
+          env_kwargs: dict | None = None, normalize: bool = False) -> dict:
     """Train ``algo`` with library defaults within the budget, write its curve, model and evaluation
-    (``env_kwargs``: ``gym.make``'s keyword arguments, for training and evaluation alike)."""
+    (``env_kwargs``: ``gym.make``'s keyword arguments, for training and evaluation alike; ``normalize``: train
+    behind SB3's ``VecNormalize`` with its defaults, see the module's docstring)."""
     env_kwargs = dict(env_kwargs or {})
     from stable_baselines3 import PPO, SAC
     from stable_baselines3.common.callbacks import BaseCallback
@@ -122,6 +144,8 @@ def train(algo: str, env_id: str, *, steps: int, minutes: float, seed: int, out:
                 # the curve so far and the policy, so that a run stopped early can still be evaluated
                 path = out / f"{algo}_model_{checkpoint_minutes * (len(checkpoints) + 1):g}min.zip"
                 _save(self.model, path)
+                if normalize:
+                    _save_normalizer(env, out / f"{algo}_vecnormalize_{checkpoint_minutes * (len(checkpoints) + 1):g}min.pkl")
                 _write_curve(out / f"{algo}_curve.csv", rows)
                 checkpoints.append({"minutes": round(checkpoint_minutes * (len(checkpoints) + 1), 6),
                                     "timesteps": int(self.num_timesteps), "file": path.name})
@@ -136,6 +160,10 @@ def train(algo: str, env_id: str, *, steps: int, minutes: float, seed: int, out:
     spec = _spec(env_id)  # make_vec_env calls a non-string: a retired id's spec goes through gym.make
     env = make_vec_env(spec, n_envs=1, seed=seed, env_kwargs=env_kwargs) if isinstance(spec, str) else \
         make_vec_env(lambda: gym.make(spec, **env_kwargs), n_envs=1, seed=seed)
+    if normalize:
+        from stable_baselines3.common.vec_env import VecNormalize
+
+        env = VecNormalize(env)  # SB3's defaults; the Monitor inside still records the env's own returns
     model = cls("MlpPolicy", env, seed=seed, verbose=0)
     model.learn(total_timesteps=steps, callback=Budget())
     wall, cpu = time.perf_counter() - t_start, time.process_time() - c_start
@@ -143,15 +171,23 @@ def train(algo: str, env_id: str, *, steps: int, minutes: float, seed: int, out:
 
     _write_curve(out / f"{algo}_curve.csv", rows)
     _save(model, out / f"{algo}_model.zip")
+    normalizer = None
+    if normalize:
+        _save_normalizer(env, out / f"{algo}_vecnormalize.pkl")
+        normalizer = _load_normalizer(out / f"{algo}_vecnormalize.pkl")
     result = {"algo": algo.upper(), "env": env_id, "timesteps": int(model.num_timesteps), "wall_s": round(wall, 1), "cpu_s": round(cpu, 1),
               "clock": clock, "budget_minutes": minutes,
               "train_episodes": len(rows), "seed": seed, "hyperparameters": "Stable-Baselines3 defaults"}
     if env_kwargs:
         result["env_kwargs"] = env_kwargs
-    result.update(evaluate(model, env_id, eval_episodes, eval_seed, env_kwargs))
+    if normalize:
+        result["wrapper"] = "VecNormalize (SB3 defaults: observation and return)"
+    result.update(evaluate(model, env_id, eval_episodes, eval_seed, env_kwargs, normalizer))
     for cp in checkpoints:  # the held-out success of each checkpoint: how soon the target was reached
         cp_model = cls.load(out / cp["file"])
-        cp.update({k: v for k, v in evaluate(cp_model, env_id, eval_episodes, eval_seed, env_kwargs).items()
+        cp_norm = _load_normalizer(out / cp["file"].replace("_model_", "_vecnormalize_").replace(".zip", ".pkl")) \
+            if normalize else None
+        cp.update({k: v for k, v in evaluate(cp_model, env_id, eval_episodes, eval_seed, env_kwargs, cp_norm).items()
                    if k in ("success_rate", "mean_return")})
     if checkpoints:
         result["checkpoints"] = checkpoints
@@ -218,6 +254,8 @@ def main(argv=None) -> int:
     p.add_argument("--eval-episodes", type=_positive(int), default=50, help="held-out evaluation episodes (default 50)")
     p.add_argument("--eval-seed", type=non_negative_int, default=1_000_000, help="first evaluation seed (default 1000000)")
     p.add_argument("--threads", type=_positive(int), default=1, help="PyTorch threads (default 1)")
+    p.add_argument("--normalize", action="store_true",
+                   help="train behind SB3's VecNormalize (observation and return, library defaults)")
     p.add_argument("--out", required=True, help="output folder")
     args = p.parse_args(argv)
     try:
@@ -234,7 +272,8 @@ def main(argv=None) -> int:
             p.error(f"--env-kwargs: {args.env} does not take {json.dumps(args.env_kwargs)}: {e}")
     try:  # simgrip.io's output-path policy: a folder, and no FIFO/device/folder where a result file goes
         out = check_output_dir(args.out, "--out")
-        names = [f"{a}_{kind}" for a in args.algo for kind in ("curve.csv", "model.zip", "eval.json")]
+        kinds = ("curve.csv", "model.zip", "eval.json") + (("vecnormalize.pkl",) if args.normalize else ())
+        names = [f"{a}_{kind}" for a in args.algo for kind in kinds]
         check_output_files_in(out, names + ["curves.png"], "--out")
     except ValueError as e:
         p.error(str(e))
@@ -242,7 +281,8 @@ def main(argv=None) -> int:
     for algo in args.algo:
         result = train(algo, args.env, steps=args.steps, minutes=args.minutes, seed=args.seed, out=out,
                        eval_episodes=args.eval_episodes, eval_seed=args.eval_seed, clock=args.clock,
-                       checkpoint_minutes=args.checkpoint_minutes, env_kwargs=args.env_kwargs)
+                       checkpoint_minutes=args.checkpoint_minutes, env_kwargs=args.env_kwargs,
+                       normalize=args.normalize)
         print(json.dumps(result), flush=True)
     plot_curves(out)
     return 0

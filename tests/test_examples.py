@@ -63,3 +63,40 @@ def test_train_sb3_smoke(tmp_path, capsys):
     assert res["algo"] == "SAC" and res["timesteps"] >= 120 and res["episodes"] == 1
     assert sorted(p.name for p in tmp_path.iterdir()) == ["curves.png", "sac_curve.csv", "sac_eval.json",
                                                            "sac_model.zip"]
+
+
+def test_train_sb3_evaluates_through_the_frozen_normalizer():
+    import numpy as np
+
+    class Shift:  # a stand-in for VecNormalize: what the policy must see instead of the raw observation
+        def normalize_obs(self, obs):
+            return obs - 1000.0
+
+    seen = []
+
+    class Recorder:
+        def predict(self, obs, deterministic=True):
+            seen.append(np.array(obs))
+            return np.zeros(2, np.float32), None
+
+    evaluate = _example("train_sb3").evaluate
+    evaluate(Recorder(), "simgrip/PickFragile-v5", 1, 8000, None, Shift())
+    assert seen and all(np.all(o < -500.0) for o in seen)  # the env's observations are bounded by 100
+    seen.clear()
+    evaluate(Recorder(), "simgrip/PickFragile-v5", 1, 8000)
+    assert seen and all(np.all(o > -500.0) for o in seen)
+
+
+def test_train_sb3_normalize_saves_the_statistics_with_every_model(tmp_path, capsys):
+    pytest.importorskip("stable_baselines3")
+    module = _example("train_sb3")
+    module.main(["--algo", "ppo", "--env", "simgrip/PickFragile-v5", "--minutes", "0.06", "--checkpoint-minutes",
+                 "0.03", "--eval-episodes", "1", "--normalize", "--out", str(tmp_path)])
+    res = json.loads(capsys.readouterr().out.strip().splitlines()[-1])
+    assert "VecNormalize" in res["wrapper"] and res["episodes"] == 1
+    names = {p.name for p in tmp_path.iterdir()}
+    assert {"ppo_vecnormalize.pkl", "ppo_vecnormalize_0.03min.pkl"} <= names
+    final = module._load_normalizer(tmp_path / "ppo_vecnormalize.pkl")
+    first = module._load_normalizer(tmp_path / "ppo_vecnormalize_0.03min.pkl")
+    # statistics of the observations seen so far: the checkpoint's froze earlier than the final one's
+    assert 0 < first.obs_rms.count < final.obs_rms.count and getattr(final, "venv", None) is None

@@ -140,3 +140,12 @@ def test_ctrl_c_stops_every_child_with_one_line(tmp_path):
     for k in kids:  # gone (or a zombie nobody waits for: not running)
         state = Path(f"/proc/{k}/stat").read_text().split()[2] if Path(f"/proc/{k}/stat").exists() else "gone"
         assert state in ("gone", "Z", "X")
+
+
+def test_normalize_reaches_every_run_command(tmp_path):
+    mod = _module()
+    args = mod.argparse.Namespace(env="simgrip/PickFragile-v5", minutes=1.0, steps=10, eval_seeds=(8000, 8001),
+                                  checkpoint_minutes=None, env_kwargs={}, normalize=True)
+    assert "--normalize" in mod.run_command("ppo", 0, args, tmp_path)
+    args.normalize = False
+    assert "--normalize" not in mod.run_command("ppo", 0, args, tmp_path)
