@@ -11,18 +11,18 @@ id                                what                                      max 
 ``simgrip/PickMulti-v0``          K fingers around a box, cylinder, sphere  200 (4 s)
 ``simgrip/PickFragile-v5``        Grip I pinch of a fragile workpiece       300 (6 s)
 ``simgrip/PickMultiFragile-v5``   K fingers around a fragile workpiece      300 (6 s)
-``simgrip/PlaceFragile-v3``       pinch, carry to a target, set down        400 (8 s)
+``simgrip/PlaceFragile-v4``       pinch, carry to a target, set down        400 (8 s)
 ``simgrip/PickCradleFragile-v5``  Grip III cradle, hand start height drawn  300 (6 s)
 ``simgrip/PickSphereFragile-v5``  K fingers around a sphere, height drawn   300 (6 s)
 ================================  ========================================  =========
 
 The five fragile tasks (a hidden crush limit per episode) command the curvature through a valve (the action
 is its rate, :mod:`simgrip.envs.pick_fragile_v2`) and observe the contact forces on a tactile sensor's scale
-(:mod:`simgrip.envs.pick_fragile_v3`); the pinch and the K fingers start from a pre-grasp
-(:mod:`simgrip.envs.pick_fragile_v4`); the pinch, the K fingers and the claws pay no reward per touching step, the
+(:mod:`simgrip.envs.pick_fragile_v3`); the pinch, the K fingers and the pick-and-place start from a pre-grasp
+(:mod:`simgrip.envs.pick_fragile_v4`, :mod:`simgrip.envs.pick_place_v4`); none pays reward per touching step, the
 claws pay for approaching the grasp height (:mod:`simgrip.envs.pick_fragile_v5`, :mod:`simgrip.envs.pick_claw_v5`).
 Their older versions are retired, not registered: ``PickFragile``, ``PickMultiFragile``, ``PickCradleFragile``,
-``PickSphereFragile`` v0-v4 and ``PlaceFragile`` v0-v2 (``RETIRED``);
+``PickSphereFragile`` v0-v4 and ``PlaceFragile`` v0-v3 (``RETIRED``);
 ``gym.make(retired_spec("simgrip/PickFragile-v2"))`` still builds one exactly, with its time limit.
 
 >>> import gymnasium as gym, simgrip.envs
@@ -54,7 +54,8 @@ _ENVS = {
     # pay (simgrip.envs.pick_fragile_v5)
     "simgrip/PickFragile-v5": ("simgrip.envs.pick_fragile_v5:FragilePickEnvV5", {}, 300),
     "simgrip/PickMultiFragile-v5": ("simgrip.envs.pick_fragile_v5:FragilePickMultiEnvV5", {}, 300),
-    "simgrip/PlaceFragile-v3": ("simgrip.envs.pick_fragile_v3:FragilePlaceEnvV3", {}, 400),
+    # pick-and-place from a pre-grasp, no touch pay (simgrip.envs.pick_place_v4)
+    "simgrip/PlaceFragile-v4": ("simgrip.envs.pick_place_v4:FragilePlaceEnvV4", {}, 400),
     # the claws paid for approaching the grasp height, not per touching step (simgrip.envs.pick_claw_v5)
     "simgrip/PickCradleFragile-v5": ("simgrip.envs.pick_claw_v5:FragileCradleEnvV5", {}, 300),
     "simgrip/PickSphereFragile-v5": ("simgrip.envs.pick_claw_v5:FragileSphereEnvV5", {}, 300),
@@ -89,6 +90,7 @@ RETIRED = {
     # the tactile forces on the sensor's scale (simgrip.envs.pick_fragile_v3), started straight
     "simgrip/PickFragile-v3": ("simgrip.envs.pick_fragile_v3:FragilePickEnvV3", {}, 300),
     "simgrip/PickMultiFragile-v3": ("simgrip.envs.pick_fragile_v3:FragilePickMultiEnvV3", {}, 300),
+    "simgrip/PlaceFragile-v3": ("simgrip.envs.pick_fragile_v3:FragilePlaceEnvV3", {}, 400),
     # started from a pre-grasp, masses up to 0.25 kg (simgrip.envs.pick_fragile_v4), paying every touch step
     "simgrip/PickFragile-v4": ("simgrip.envs.pick_fragile_v4:FragilePickEnvV4", {}, 300),
     "simgrip/PickMultiFragile-v4": ("simgrip.envs.pick_fragile_v4:FragilePickMultiEnvV4", {}, 300),
@@ -100,7 +102,8 @@ ENV_IDS = tuple(k for k, v in _ENVS.items() if v[0] == "simgrip.envs.pick:PickEn
 MULTI_ENV_IDS = tuple(k for k, v in _ENVS.items() if v[0] == "simgrip.envs.pick_multi:PickMultiEnv")
 FRAGILE_ENV_IDS = tuple(k for k, v in _ENVS.items()
                         if v[0].split(":")[0] in ("simgrip.envs.pick_fragile_v3", "simgrip.envs.pick_fragile_v4",
-                                                  "simgrip.envs.pick_fragile_v5", "simgrip.envs.pick_claw_v5"))
+                                                  "simgrip.envs.pick_fragile_v5", "simgrip.envs.pick_claw_v5",
+                                                  "simgrip.envs.pick_place_v4"))
 
 
 def retired_spec(env_id: str) -> EnvSpec:

@@ -18,7 +18,7 @@ Policies (actions ``(curvature command, palm speed)`` in ``[-1, 1]``; ``PlaceFra
                 over ``R`` steps, hold it; palm still until ``R + 10`` steps, then up at ``a_p``", over the
                 grid ``a_k`` x ``RAMP_GRID`` x ``PALM_GRID`` (best of the grid on the evaluated seeds)
 ``constant``    (``PlaceFragile-v0``: ``a_k`` x palm ``x`` command ``a_x`` in ``(-0.5, 0.5)``, palm ``z`` 0.5)
-``openloop``    (``PlaceFragile-v0``: ramp to ``a_k`` over 25 steps, lift 20 steps, carry at full speed to
+``openloop``    (``PlaceFragile-v0``: ramp (from straight, or a valve env's pre-grasp) to ``a_k`` over 25 steps, lift 20 steps, carry at full speed to
                 ``-x`` or ``+x`` over ``PLACE_DISTANCES``, lower 20 steps; grid ``a_k`` x side x distance)
 ``openloop``    (``PickCradleFragile-v0``, ``PickSphereFragile-v0``: claw open while the palm moves for a
                 fixed time to the scripted controller's grasp height for the mid-range workpiece, then ramp
@@ -116,8 +116,10 @@ def _place_openloop(a_k, side, distance):
     n_move = int(round(distance / 0.1 / 0.02))  # palm_speed 0.1 m/s, control step 0.02 s
 
     def make(env, info, seed):
+        start = getattr(env.unwrapped, "valve_command", 1.0)  # straight (+1), or a valve env's pre-grasp
+
         def act(obs, t):
-            k = 1.0 + (a_k - 1.0) * min(1.0, (t + 1) / ramp)
+            k = start + (a_k - start) * min(1.0, (t + 1) / ramp)
             x = side if t_move <= t < t_move + n_move else 0.0
             z = 1.0 if ramp + _WAIT <= t < t_move else -1.0 if t_move + n_move <= t < t_move + n_move + up else 0.0
             return np.array([k, x, z], dtype=np.float32)

@@ -17,7 +17,7 @@ that holds (``N_hold``).  They differ in how they stop the curvature:
   curvature once the force reaches the window's geometric middle
   ``sqrt(N_hold N_crush)``, then lifts.
 
-The pick-and-place task (valve ``PlaceFragile-v2``, ``-v3``): :class:`PlacePolicy` grips with
+The pick-and-place task (valve ``PlaceFragile-v2``-``v4``): :class:`PlacePolicy` grips with
 :class:`PlaceGripPolicy` (the same recipe paced for the pneumatic lag: slow near contact, closing by a fraction of
 what is closed, a slower probe), carries and sets down, and follows the observed finger forces while carrying
 (closes when the workpiece creeps down in the grip, eases above 1.4 times the force at the freeze).
@@ -282,7 +282,7 @@ class _PlaceCarry:
 
 
 class PlacePolicy(_PlaceCarry):
-    """Pick-and-place on a valve env (``PlaceFragile-v2``, ``-v3``): grip and lift with ``grip`` (a
+    """Pick-and-place on a valve env (``PlaceFragile-v2``-``v4``): grip and lift with ``grip`` (a
     :class:`PlaceGripPolicy` by default, or an :class:`OracleFragilePolicy`) up to the carry height, carry the workpiece over the target (palm ``x``
     speed proportional to the observed ``target_x - workpiece_x``, saturating ``ramp`` [m] away, changing that
     speed by at most ``x_step`` per step, from the freeze on: while lifting too), lower it until it stops sinking
@@ -323,7 +323,7 @@ class PlacePolicy(_PlaceCarry):
         from simgrip.envs.valve import ValveCommand
 
         if not isinstance(u, ValveCommand):
-            raise TypeError(f"PlacePolicy drives a valve env (PlaceFragile-v2, -v3), not {type(u).__name__}: "
+            raise TypeError(f"PlacePolicy drives a valve env (PlaceFragile-v2-v4), not {type(u).__name__}: "
                             "use AbsolutePlacePolicy for the absolute-command PlaceFragile-v0/-v1")
 
 

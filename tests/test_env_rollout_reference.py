@@ -17,7 +17,7 @@ single bit fails the test, naming the id, run and step.  Ids retired since (``si
 replayed through ``retired_spec``; ids registered since were appended by the same command (PickFragile-v4 and
 PickMultiFragile-v4, recorded at 5aaecbb's successors, whose env layer gives the recorded ids' bytes; PickFragile-v5,
 PickMultiFragile-v5, PickCradleFragile-v5 and PickSphereFragile-v5 at a9625e7 with v5 added, appended without
-re-recording the others).  The physics is MuJoCo's: the reference holds for the
+re-recording the others; PlaceFragile-v4 likewise).  The physics is MuJoCo's: the reference holds for the
 MuJoCo version it was recorded with (stored beside it; another version skips, saying so).  An intended change
 of an env's output regenerates the file with the command above.
 """

@@ -17,8 +17,8 @@ import simgrip.envs
 from simgrip.envs import FRAGILE_ENV_IDS, RETIRED, retired_spec
 
 #: each fragile task's newest registered version (the tactile scale, simgrip.envs.pick_fragile_v3; the pre-grasp, _v4;
-#: no per-step touch pay, _v5; the claws' approach term, pick_claw_v5)
-NEWEST = {"simgrip/PickFragile": "v5", "simgrip/PickMultiFragile": "v5", "simgrip/PlaceFragile": "v3",
+#: no per-step touch pay, _v5; the claws' approach term, pick_claw_v5; the place's pre-grasp, pick_place_v4)
+NEWEST = {"simgrip/PickFragile": "v5", "simgrip/PickMultiFragile": "v5", "simgrip/PlaceFragile": "v4",
           "simgrip/PickCradleFragile": "v5", "simgrip/PickSphereFragile": "v5"}
 RETIRED_IDS = [f"{name}-v{k}" for name, newest in NEWEST.items() for k in range(int(newest[1:]))]
 

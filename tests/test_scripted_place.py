@@ -6,6 +6,7 @@ import numpy as np
 import pytest
 
 import simgrip.envs  # noqa: F401  (registers the ids)
+from simgrip.envs import retired_spec
 from simgrip.envs.scripted_fragile import ObservationFragilePolicy, PlaceGripPolicy, PlacePolicy
 from simgrip.envs.valve import absolute_to_valve
 
@@ -15,7 +16,7 @@ LIGHT = {"friction": 1.1, "box_width": 0.05, "target_x": 0.06, "crush_ratio": 2.
 
 
 def _run(grip, options):
-    env = gym.make("simgrip/PlaceFragile-v3")
+    env = gym.make(retired_spec("simgrip/PlaceFragile-v3"))  # started straight: the grip's whole closing
     u = env.unwrapped
     obs, info = env.reset(seed=0, options={k: v for k, v in options.items() if k != "crush_ratio"})
     obs, info = env.reset(seed=0, options={**{k: v for k, v in options.items() if k != "crush_ratio"},
@@ -55,7 +56,7 @@ def test_place_policy_grip_by_env_and_feedback_only_with_an_observation_grip():
     # refuses the other kind of env, naming the one to use
     from simgrip.envs import RETIRED, retired_spec
     from simgrip.envs.scripted_fragile import AbsolutePlacePolicy
-    for env_id, policy, grip, other in (("simgrip/PlaceFragile-v3", PlacePolicy, PlaceGripPolicy, AbsolutePlacePolicy),
+    for env_id, policy, grip, other in (("simgrip/PlaceFragile-v4", PlacePolicy, PlaceGripPolicy, AbsolutePlacePolicy),
                                         ("simgrip/PlaceFragile-v0", AbsolutePlacePolicy, ObservationFragilePolicy,
                                          PlacePolicy)):
         env = gym.make(retired_spec(env_id) if env_id in RETIRED else env_id)
