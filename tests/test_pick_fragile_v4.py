@@ -19,9 +19,12 @@ import simgrip.envs  # noqa: F401  registers the environments
 from simgrip.envs import FRAGILE_ENV_IDS, RETIRED, retired_spec
 from simgrip.envs.pick_fragile_v4 import (_BISECTIONS, _SCAN, GAP_RANGE, V4_MASS, FragilePickEnvV4,
                                           FragilePickMultiEnvV4, pre_grasp_curvature)
+from simgrip.envs.pick_place_v4 import FragilePlaceEnvV4
 
 V4_IDS = ("simgrip/PickFragile-v4", "simgrip/PickMultiFragile-v4")
 V3 = {"simgrip/PickFragile-v4": "simgrip/PickFragile-v3", "simgrip/PickMultiFragile-v4": "simgrip/PickMultiFragile-v3"}
+#: every id started from the pre-grasp (PlaceFragile-v4: simgrip.envs.pick_place_v4, the same start)
+PRE_GRASP_IDS = V4_IDS + ("simgrip/PlaceFragile-v4",)
 
 
 def _clearance(model, data, pairs, hinges, unit, k):
@@ -46,7 +49,7 @@ def test_both_are_retired_by_v5():
         assert old not in FRAGILE_ENV_IDS
 
 
-@pytest.mark.parametrize("cls", [FragilePickEnvV4, FragilePickMultiEnvV4])
+@pytest.mark.parametrize("cls", [FragilePickEnvV4, FragilePickMultiEnvV4, FragilePlaceEnvV4])
 def test_the_start_shape_clears_the_workpiece_by_the_drawn_gap(cls):
     env = cls()
     try:
@@ -70,7 +73,7 @@ def test_the_start_shape_clears_the_workpiece_by_the_drawn_gap(cls):
         env.close()
 
 
-@pytest.mark.parametrize("env_id", V4_IDS)
+@pytest.mark.parametrize("env_id", PRE_GRASP_IDS)
 def test_an_episode_starts_near_the_workpiece_and_not_touching_it(env_id):
     env = _make(env_id)
     u = env.unwrapped
