@@ -18,8 +18,9 @@ Policies (actions ``(curvature command, palm speed)`` in ``[-1, 1]``; ``PlaceFra
                 over ``R`` steps, hold it; palm still until ``R + 10`` steps, then up at ``a_p``", over the
                 grid ``a_k`` x ``RAMP_GRID`` x ``PALM_GRID`` (best of the grid on the evaluated seeds)
 ``constant``    (``PlaceFragile-v0``: ``a_k`` x palm ``x`` command ``a_x`` in ``(-0.5, 0.5)``, palm ``z`` 0.5)
-``openloop``    (``PlaceFragile-v0``: ramp (from straight, or a valve env's pre-grasp) to ``a_k`` over 25 steps, lift 20 steps, carry at full speed to
-                ``-x`` or ``+x`` over ``PLACE_DISTANCES``, lower 20 steps; grid ``a_k`` x side x distance)
+``openloop``    (``PlaceFragile-v0``: ramp (from straight, or a valve env's pre-grasp) to ``a_k`` over 25
+                steps, lift 20 steps, carry at full speed to ``-x`` or ``+x`` over ``PLACE_DISTANCES``, lower
+                20 steps; grid ``a_k`` x side x distance)
 ``openloop``    (``PickCradleFragile-v0``, ``PickSphereFragile-v0``: claw open while the palm moves for a
                 fixed time to the scripted controller's grasp height for the mid-range workpiece, then ramp
                 from the claw to ``a_k`` over ``R`` steps, wait 10, lift at ``a_p``; a constant action cannot

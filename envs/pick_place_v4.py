@@ -52,7 +52,7 @@ key                    meaning
 from __future__ import annotations
 
 from simgrip.envs.pick_fragile_v3 import FragilePlaceEnvV3
-from simgrip.envs.pick_fragile_v4 import _PreGrasp
+from simgrip.envs.pick_fragile_v4 import FragilePickEnvV4, _PreGrasp
 from simgrip.envs.pick_fragile_v5 import V5_W_TOUCH
 
 __all__ = ["FragilePlaceEnvV4"]
@@ -68,10 +68,7 @@ class FragilePlaceEnvV4(_PreGrasp, FragilePlaceEnvV3):
     def __init__(self, *, w_touch: float = V5_W_TOUCH, **kwargs):
         super().__init__(w_touch=w_touch, **kwargs)
 
-    def _pre_grasp_handles(self):
-        # the place env's own hinge addresses (its model adds the palm's x slide before the fingers)
-        return self._finger_pair_ids, self._spring_idx, self._unit_rest2.ravel()
-
-    def _start_kappa(self, k: float):
-        self._kcmd = self._kact = (k, k)
-        self._set_rest(k, k)
+    # the pinch's own (both read the env's attributes: here the place model's hinge addresses, which its palm x
+    # slide shifts from the pick model's)
+    _pre_grasp_handles = FragilePickEnvV4._pre_grasp_handles
+    _start_kappa = FragilePickEnvV4._start_kappa

@@ -135,6 +135,7 @@ def train(algo: str, env_id: str, *, steps: int, minutes: float, seed: int, out:
     spent = (lambda: time.process_time() - c_start) if clock == "cpu" else (lambda: time.perf_counter() - t_start)
 
     checkpoints = []
+    normalizers = {}  # a checkpoint's model file -> its VecNormalize statistics (with --normalize)
 
     class Budget(BaseCallback):
         """Record every finished training episode; checkpoint; stop when the budget is spent."""
@@ -142,10 +143,12 @@ def train(algo: str, env_id: str, *, steps: int, minutes: float, seed: int, out:
         def _on_step(self) -> bool:
             if checkpoint_minutes and spent() >= 60.0 * checkpoint_minutes * (len(checkpoints) + 1):
                 # the curve so far and the policy, so that a run stopped early can still be evaluated
-                path = out / f"{algo}_model_{checkpoint_minutes * (len(checkpoints) + 1):g}min.zip"
+                tag = f"{checkpoint_minutes * (len(checkpoints) + 1):g}min"
+                path = out / f"{algo}_model_{tag}.zip"
                 _save(self.model, path)
                 if normalize:
-                    _save_normalizer(env, out / f"{algo}_vecnormalize_{checkpoint_minutes * (len(checkpoints) + 1):g}min.pkl")
+                    normalizers[path.name] = out / f"{algo}_vecnormalize_{tag}.pkl"
+                    _save_normalizer(env, normalizers[path.name])
                 _write_curve(out / f"{algo}_curve.csv", rows)
                 checkpoints.append({"minutes": round(checkpoint_minutes * (len(checkpoints) + 1), 6),
                                     "timesteps": int(self.num_timesteps), "file": path.name})
@@ -185,8 +188,7 @@ def train(algo: str, env_id: str, *, steps: int, minutes: float, seed: int, out:
     result.update(evaluate(model, env_id, eval_episodes, eval_seed, env_kwargs, normalizer))
     for cp in checkpoints:  # the held-out success of each checkpoint: how soon the target was reached
         cp_model = cls.load(out / cp["file"])
-        cp_norm = _load_normalizer(out / cp["file"].replace("_model_", "_vecnormalize_").replace(".zip", ".pkl")) \
-            if normalize else None
+        cp_norm = _load_normalizer(normalizers[cp["file"]]) if normalize else None
         cp.update({k: v for k, v in evaluate(cp_model, env_id, eval_episodes, eval_seed, env_kwargs, cp_norm).items()
                    if k in ("success_rate", "mean_return")})
     if checkpoints:
