@@ -19,7 +19,8 @@ the training seed's stream, not from these).
 Writes into ``--out``:
 
 * ``<algo>_seed<S>/``: that run's folder (``train_sb3.py``'s files: ``<algo>_eval.json`` with the held-out
-  success of every checkpoint, ``<algo>_curve.csv``, the models, and ``log.txt``, the run's output);
+  success of every checkpoint, ``<algo>_curve.csv``, ``<algo>_policy.csv`` (the exploration noise per rollout),
+  the models, and ``log.txt``, the run's output);
 * ``<algo>_seed<S>.json``: the run's result (a copy of its ``<algo>_eval.json``, plus ``returncode``);
 * ``aggregate.json``: per algorithm and checkpoint (CPU minutes): ``n`` runs, ``mean``, ``min``, ``max`` and
   every run's held-out ``success_rates`` (fractions in [0, 1]), and the same for the final policies; the

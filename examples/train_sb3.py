@@ -19,6 +19,12 @@ Writes into ``--out`` (created if needed, files written whole):
 
 * ``<algo>_curve.csv``: one row per training episode: ``episode, timesteps,
   wall_s, cpu_s, episode_return, length, success``;
+* ``<algo>_policy.csv``: one row per ``POLICY_WINDOW`` (2048, PPO's rollout) training steps: ``timesteps,
+  cpu_s``, then per action ``i`` the mean and standard deviation of the actions the algorithm sampled in that
+  window (``action_mean_i``, ``action_std_i``: PPO's Gaussian samples before they are clipped to the action
+  bounds, SAC's squashed samples) and PPO's state-independent log standard deviation at the window's end
+  (``log_std_i``; empty for SAC, whose standard deviation depends on the state).  It shows how exploration
+  evolves: a run whose action means stay near 0 while ``log_std`` falls has stopped exploring;
 * ``<algo>_eval.json``: ``{"algo", "env", "timesteps", "wall_s", "episodes",
   "success_rate", "mean_return", ...}`` (also printed on one line);
 * ``<algo>_model.zip``: the trained policy (with ``--checkpoint-minutes M`` also
@@ -58,6 +64,8 @@ from simgrip.envs.evaluation import json_object, non_negative_int, run_episodes,
 from simgrip.io import atomic_write, check_output_dir, check_output_files_in, write_json
 
 ALGOS = ("ppo", "sac")
+#: training steps per row of ``<algo>_policy.csv`` (PPO's default rollout length)
+POLICY_WINDOW = 2048
 
 
 def _positive(kind):
@@ -101,6 +109,45 @@ def _write_curve(path: Path, rows) -> None:
         fh.write(buf.getvalue())
 
 
+class _ActionWindow:
+    """Running sums of the sampled actions over one window of training steps (one ``<algo>_policy.csv`` row)."""
+
+    def __init__(self):
+        self.n, self.s, self.ss = 0, 0.0, 0.0
+
+    def add(self, actions) -> None:
+        a = np.asarray(actions, dtype=float).reshape(-1, np.shape(actions)[-1])
+        self.n += a.shape[0]
+        self.s = self.s + a.sum(axis=0)
+        self.ss = self.ss + (a * a).sum(axis=0)
+
+    def row(self, timesteps: int, cpu_s: float, log_std) -> tuple:
+        """``(timesteps, cpu_s, means..., stds..., log_stds...)``; the window restarts."""
+        mean = self.s / self.n
+        std = np.sqrt(np.maximum(self.ss / self.n - mean * mean, 0.0))
+        log_std = [""] * mean.size if log_std is None else [round(float(x), 6) for x in log_std]
+        self.n, self.s, self.ss = 0, 0.0, 0.0
+        return (timesteps, round(cpu_s, 3), *[round(float(x), 6) for x in mean], *[round(float(x), 6) for x in std],
+                *log_std)
+
+
+def _write_policy(path: Path, rows) -> None:
+    buf = io.StringIO()
+    w = csv.writer(buf)
+    dims = (len(rows[0]) - 2) // 3 if rows else 0
+    w.writerow(["timesteps", "cpu_s", *[f"action_mean_{i}" for i in range(dims)],
+                *[f"action_std_{i}" for i in range(dims)], *[f"log_std_{i}" for i in range(dims)]])
+    w.writerows(rows)
+    with atomic_write(path) as fh:
+        fh.write(buf.getvalue())
+
+
+def _log_std(model):
+    """PPO's state-independent log standard deviation (a NumPy array), or None (SAC)."""
+    p = getattr(model.policy, "log_std", None)
+    return None if p is None or not hasattr(p, "detach") else p.detach().cpu().numpy().ravel()
+
+
 def _save(model, path: Path) -> None:
     with atomic_write(path, "wb") as fh:
         model.save(fh)
@@ -130,6 +177,7 @@ def train(algo: str, env_id: str, *, steps: int, minutes: float, seed: int, out:
 
     cls = {"ppo": PPO, "sac": SAC}[algo]
     rows = []
+    policy_rows, window = [], _ActionWindow()
     t_start, c_start = time.perf_counter(), time.process_time()
     budget = 60.0 * minutes
     spent = (lambda: time.process_time() - c_start) if clock == "cpu" else (lambda: time.perf_counter() - t_start)
@@ -150,8 +198,13 @@ def train(algo: str, env_id: str, *, steps: int, minutes: float, seed: int, out:
                     normalizers[path.name] = out / f"{algo}_vecnormalize_{tag}.pkl"
                     _save_normalizer(env, normalizers[path.name])
                 _write_curve(out / f"{algo}_curve.csv", rows)
+                _write_policy(out / f"{algo}_policy.csv", policy_rows)
                 checkpoints.append({"minutes": round(checkpoint_minutes * (len(checkpoints) + 1), 6),
                                     "timesteps": int(self.num_timesteps), "file": path.name})
+            window.add(self.locals["actions"])
+            if window.n >= POLICY_WINDOW:
+                policy_rows.append(window.row(int(self.num_timesteps), time.process_time() - c_start,
+                                              _log_std(self.model)))
             for info in self.locals.get("infos", ()):
                 ep = info.get("episode")
                 if ep is not None:
@@ -173,6 +226,9 @@ def train(algo: str, env_id: str, *, steps: int, minutes: float, seed: int, out:
     env.close()
 
     _write_curve(out / f"{algo}_curve.csv", rows)
+    if window.n:  # the last, partial window
+        policy_rows.append(window.row(int(model.num_timesteps), cpu, _log_std(model)))
+    _write_policy(out / f"{algo}_policy.csv", policy_rows)
     _save(model, out / f"{algo}_model.zip")
     normalizer = None
     if normalize:
@@ -274,7 +330,7 @@ def main(argv=None) -> int:
             p.error(f"--env-kwargs: {args.env} does not take {json.dumps(args.env_kwargs)}: {e}")
     try:  # simgrip.io's output-path policy: a folder, and no FIFO/device/folder where a result file goes
         out = check_output_dir(args.out, "--out")
-        kinds = ("curve.csv", "model.zip", "eval.json") + (("vecnormalize.pkl",) if args.normalize else ())
+        kinds = ("curve.csv", "policy.csv", "model.zip", "eval.json") + (("vecnormalize.pkl",) if args.normalize else ())
         names = [f"{a}_{kind}" for a in args.algo for kind in kinds]
         check_output_files_in(out, names + ["curves.png"], "--out")
     except ValueError as e:

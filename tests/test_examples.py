@@ -1,5 +1,6 @@
 """The examples: scripted and random baselines print JSON summaries; train_sb3 runs (when SB3 is installed)."""
 
+import csv
 import json
 
 import pytest
@@ -62,7 +63,30 @@ def test_train_sb3_smoke(tmp_path, capsys):
     res = json.loads(capsys.readouterr().out.strip().splitlines()[-1])
     assert res["algo"] == "SAC" and res["timesteps"] >= 120 and res["episodes"] == 1
     assert sorted(p.name for p in tmp_path.iterdir()) == ["curves.png", "sac_curve.csv", "sac_eval.json",
-                                                           "sac_model.zip"]
+                                                           "sac_model.zip", "sac_policy.csv"]
+    with open(tmp_path / "sac_policy.csv") as fh:
+        (row,) = list(csv.DictReader(fh))  # 120 steps: one partial window
+    assert int(row["timesteps"]) == res["timesteps"] and row["log_std_0"] == ""  # SAC: no state-free std
+    assert all(-1.0 <= float(row[f"action_mean_{i}"]) <= 1.0 for i in range(2))  # squashed into the bounds
+
+
+def test_train_sb3_policy_log_starts_at_ppo_initial_gaussian(tmp_path, capsys):
+    # SB3's PPO starts with log_std = 0 (std 1) and a near-zero mean (last layer initialised with gain 0.01):
+    # the first window's 2048 samples must show exactly that; the second, after one update, a changed log_std
+    pytest.importorskip("stable_baselines3")
+    module = _example("train_sb3")
+    module.main(["--algo", "ppo", "--env", "simgrip/PickFragile-v5", "--steps", "4096", "--eval-episodes", "1",
+                 "--out", str(tmp_path)])
+    capsys.readouterr()
+    with open(tmp_path / "ppo_policy.csv") as fh:
+        rows = list(csv.DictReader(fh))
+    assert [int(r["timesteps"]) for r in rows] == [2048, 4096]
+    first, second = rows
+    for i in range(2):
+        assert float(first[f"log_std_{i}"]) == 0.0
+        assert abs(float(first[f"action_mean_{i}"])) < 0.1  # 2048 draws of std 1: the mean's error ~0.02
+        assert 0.93 < float(first[f"action_std_{i}"]) < 1.07  # unclipped samples (clipped ones: std ~0.8)
+        assert float(second[f"log_std_{i}"]) != 0.0
 
 
 def test_train_sb3_evaluates_through_the_frozen_normalizer():
