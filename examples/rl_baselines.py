@@ -30,7 +30,9 @@ Writes into ``--out``:
 
 ``--normalize`` passes ``train_sb3.py``'s option of that name to every run: training behind SB3's
 ``VecNormalize`` (observation and return, the library's defaults), evaluated with its frozen observation
-statistics; ``aggregate.json`` then names the wrapper.
+statistics; ``aggregate.json`` then names the wrapper.  ``--action-offset A0 A1 ...`` likewise passes that
+option (:class:`simgrip.envs.action_offset.ActionOffset`: the env performs ``clip(action + offset)``, so that
+PPO's zero-mean start performs the offset's motion) and ``aggregate.json`` records ``action_offset``.
 
 Ctrl-C stops every running child (SIGTERM, then SIGKILL after 5 s) and exits 130 with one line.  Exit 2 (one
 line) on a bad argument, 1 when a run failed (its log names why; the others are still aggregated).
@@ -103,6 +105,8 @@ def run_command(algo: str, seed: int, args, folder: Path) -> list[str]:
         cmd += ["--env-kwargs", json.dumps(args.env_kwargs)]
     if args.normalize:
         cmd += ["--normalize"]
+    if args.action_offset is not None:
+        cmd += ["--action-offset", *[repr(float(x)) for x in args.action_offset]]
     return cmd
 
 
@@ -235,6 +239,9 @@ def main(argv=None) -> int:
     p.add_argument("--jobs", type=_positive(int), default=1, help="runs at once (default 1, at most the cores)")
     p.add_argument("--normalize", action="store_true",
                    help="train behind SB3's VecNormalize (observation and return, library defaults; default off)")
+    p.add_argument("--action-offset", type=float, nargs="+", default=None, metavar="A",
+                   help="train and evaluate behind simgrip.envs.action_offset.ActionOffset (one number per action; "
+                        "the valve tasks' probe: -0.4 0.2; default none)")
     p.add_argument("--out", required=True, help="output folder")
     args = p.parse_args(argv)
     cores = os.cpu_count() or 1
@@ -261,6 +268,14 @@ def main(argv=None) -> int:
             gym.make(spec, **args.env_kwargs).close()
         except (TypeError, ValueError) as e:
             p.error(f"--env-kwargs: {args.env} does not take {json.dumps(args.env_kwargs)}: {e}")
+    if args.action_offset is not None:
+        from simgrip.envs.action_offset import ActionOffset
+
+        spec = simgrip.envs.retired_spec(args.env) if args.env in simgrip.envs.RETIRED else args.env
+        try:  # refused before any run starts: the wrong number of actions, or outside the bounds
+            ActionOffset(gym.make(spec, **args.env_kwargs), args.action_offset).close()
+        except ValueError as e:
+            p.error(f"--action-offset: {e}")
     algos = list(dict.fromkeys(args.algo))
     try:
         out = check_output_dir(args.out, "--out")
@@ -294,6 +309,7 @@ def main(argv=None) -> int:
         "env": args.env, **({"env_kwargs": args.env_kwargs} if args.env_kwargs else {}), "algos": algos, "seeds": args.seeds, "minutes": args.minutes,
         "checkpoint_minutes": args.checkpoint_minutes, "clock": "cpu", "eval_seeds": [lo, hi],
         "hyperparameters": "Stable-Baselines3 defaults, one env, one torch thread", "summary": summary,
+        **({"action_offset": [float(x) for x in args.action_offset]} if args.action_offset is not None else {}),
         **({"wrapper": "VecNormalize (SB3 defaults: observation and return)"} if args.normalize else {}),
         "command": [Path(sys.argv[0]).name] + list(sys.argv[1:] if argv is None else argv)})
     plot(summary, results, out / "learning_curves.png")

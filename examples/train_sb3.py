@@ -19,6 +19,10 @@ Writes into ``--out`` (created if needed, files written whole):
 
 * ``<algo>_curve.csv``: one row per training episode: ``episode, timesteps,
   wall_s, cpu_s, episode_return, length, success``;
+``--action-offset A0 A1 ...`` trains and evaluates behind :class:`simgrip.envs.action_offset.ActionOffset`:
+the env performs ``clip(action + offset)``, so PPO's zero-mean start performs the offset's motion (on the
+valve tasks ``-0.4 0.2``, the slow close-and-lift probe); ``<algo>_eval.json`` records ``action_offset``.
+
 * ``<algo>_policy.csv``: one row per ``POLICY_WINDOW`` (2048, PPO's rollout) training steps: ``timesteps,
   cpu_s``, then per action ``i`` the mean and standard deviation of the actions the algorithm sampled in that
   window (``action_mean_i``, ``action_std_i``: PPO's Gaussian samples before they are clipped to the action
@@ -87,11 +91,22 @@ def _spec(env_id: str):
     return retired_spec(env_id) if env_id in RETIRED else env_id
 
 
-def evaluate(model, env_id: str, episodes: int, seed0: int, env_kwargs=None, normalizer=None) -> dict:
-    """Run the deterministic policy of ``model`` for ``episodes`` episodes on seeds ``seed0 + i`` (the env made
-    with ``env_kwargs``, as it was trained; ``normalizer``: the ``VecNormalize`` it was trained behind, whose
-    frozen observation statistics then normalise what the policy sees)."""
+def _make(env_id: str, env_kwargs=None, action_offset=None):
+    """The env of ``env_id`` made with ``env_kwargs``, behind ``ActionOffset(action_offset)`` when given."""
     env = gym.make(_spec(env_id), **(env_kwargs or {}))
+    if action_offset is not None:
+        from simgrip.envs.action_offset import ActionOffset
+
+        env = ActionOffset(env, action_offset)
+    return env
+
+
+def evaluate(model, env_id: str, episodes: int, seed0: int, env_kwargs=None, normalizer=None,
+             action_offset=None) -> dict:
+    """Run the deterministic policy of ``model`` for ``episodes`` episodes on seeds ``seed0 + i`` (the env made
+    with ``env_kwargs`` and behind ``action_offset``, as it was trained; ``normalizer``: the ``VecNormalize``
+    it was trained behind, whose frozen observation statistics then normalise what the policy sees)."""
+    env = _make(env_id, env_kwargs, action_offset)
     see = (lambda obs: obs) if normalizer is None else normalizer.normalize_obs
     try:
         results = run_episodes(env, lambda obs: model.predict(see(obs), deterministic=True)[0], episodes, seed0)
@@ -166,10 +181,11 @@ def _load_normalizer(path: Path):
 
 def train(algo: str, env_id: str, *, steps: int, minutes: float, seed: int, out: Path,
           eval_episodes: int, eval_seed: int, clock: str = "cpu", checkpoint_minutes: float | None = None,
-          env_kwargs: dict | None = None, normalize: bool = False) -> dict:
+          env_kwargs: dict | None = None, normalize: bool = False, action_offset=None) -> dict:
     """Train ``algo`` with library defaults within the budget, write its curve, model and evaluation
     (``env_kwargs``: ``gym.make``'s keyword arguments, for training and evaluation alike; ``normalize``: train
-    behind SB3's ``VecNormalize`` with its defaults, see the module's docstring)."""
+    behind SB3's ``VecNormalize`` with its defaults; ``action_offset``: train and evaluate behind
+    :class:`simgrip.envs.action_offset.ActionOffset`, see the module's docstring)."""
     env_kwargs = dict(env_kwargs or {})
     from stable_baselines3 import PPO, SAC
     from stable_baselines3.common.callbacks import BaseCallback
@@ -214,8 +230,12 @@ def train(algo: str, env_id: str, *, steps: int, minutes: float, seed: int, out:
             return spent() < budget
 
     spec = _spec(env_id)  # make_vec_env calls a non-string: a retired id's spec goes through gym.make
-    env = make_vec_env(spec, n_envs=1, seed=seed, env_kwargs=env_kwargs) if isinstance(spec, str) else \
-        make_vec_env(lambda: gym.make(spec, **env_kwargs), n_envs=1, seed=seed)
+    if action_offset is not None:
+        env = make_vec_env(lambda: _make(env_id, env_kwargs, action_offset), n_envs=1, seed=seed)
+    elif isinstance(spec, str):
+        env = make_vec_env(spec, n_envs=1, seed=seed, env_kwargs=env_kwargs)
+    else:
+        env = make_vec_env(lambda: gym.make(spec, **env_kwargs), n_envs=1, seed=seed)
     if normalize:
         from stable_baselines3.common.vec_env import VecNormalize
 
@@ -239,13 +259,20 @@ def train(algo: str, env_id: str, *, steps: int, minutes: float, seed: int, out:
               "train_episodes": len(rows), "seed": seed, "hyperparameters": "Stable-Baselines3 defaults"}
     if env_kwargs:
         result["env_kwargs"] = env_kwargs
+    wrappers = []
+    if action_offset is not None:
+        result["action_offset"] = [float(x) for x in action_offset]
+        wrappers.append(f"ActionOffset({result['action_offset']})")
     if normalize:
-        result["wrapper"] = "VecNormalize (SB3 defaults: observation and return)"
-    result.update(evaluate(model, env_id, eval_episodes, eval_seed, env_kwargs, normalizer))
+        wrappers.append("VecNormalize (SB3 defaults: observation and return)")
+    if wrappers:
+        result["wrapper"] = ", ".join(wrappers)
+    result.update(evaluate(model, env_id, eval_episodes, eval_seed, env_kwargs, normalizer, action_offset))
     for cp in checkpoints:  # the held-out success of each checkpoint: how soon the target was reached
         cp_model = cls.load(out / cp["file"])
         cp_norm = _load_normalizer(normalizers[cp["file"]]) if normalize else None
-        cp.update({k: v for k, v in evaluate(cp_model, env_id, eval_episodes, eval_seed, env_kwargs, cp_norm).items()
+        cp.update({k: v for k, v in evaluate(cp_model, env_id, eval_episodes, eval_seed, env_kwargs, cp_norm,
+                                             action_offset).items()
                    if k in ("success_rate", "mean_return")})
     if checkpoints:
         result["checkpoints"] = checkpoints
@@ -314,6 +341,9 @@ def main(argv=None) -> int:
     p.add_argument("--threads", type=_positive(int), default=1, help="PyTorch threads (default 1)")
     p.add_argument("--normalize", action="store_true",
                    help="train behind SB3's VecNormalize (observation and return, library defaults)")
+    p.add_argument("--action-offset", type=float, nargs="+", default=None, metavar="A",
+                   help="train and evaluate behind simgrip.envs.action_offset.ActionOffset: the env performs "
+                        "clip(action + offset); one number per action (the valve tasks' probe: -0.4 0.2)")
     p.add_argument("--out", required=True, help="output folder")
     args = p.parse_args(argv)
     try:
@@ -328,6 +358,11 @@ def main(argv=None) -> int:
             gym.make(_spec(args.env), **args.env_kwargs).close()
         except (TypeError, ValueError) as e:
             p.error(f"--env-kwargs: {args.env} does not take {json.dumps(args.env_kwargs)}: {e}")
+    if args.action_offset is not None:
+        try:
+            _make(args.env, args.env_kwargs, args.action_offset).close()
+        except ValueError as e:
+            p.error(f"--action-offset: {e}")
     try:  # simgrip.io's output-path policy: a folder, and no FIFO/device/folder where a result file goes
         out = check_output_dir(args.out, "--out")
         kinds = ("curve.csv", "policy.csv", "model.zip", "eval.json") + (("vecnormalize.pkl",) if args.normalize else ())
@@ -340,7 +375,7 @@ def main(argv=None) -> int:
         result = train(algo, args.env, steps=args.steps, minutes=args.minutes, seed=args.seed, out=out,
                        eval_episodes=args.eval_episodes, eval_seed=args.eval_seed, clock=args.clock,
                        checkpoint_minutes=args.checkpoint_minutes, env_kwargs=args.env_kwargs,
-                       normalize=args.normalize)
+                       normalize=args.normalize, action_offset=args.action_offset)
         print(json.dumps(result), flush=True)
     plot_curves(out)
     return 0

@@ -3,6 +3,7 @@
 import csv
 import json
 
+import gymnasium as gym
 import pytest
 
 
@@ -54,6 +55,34 @@ def test_train_sb3_evaluates_with_the_env_kwargs_it_was_given():
     plain = evaluate(Closing(), "simgrip/PickFragile-v5", 1, 8000)
     paid = evaluate(Closing(), "simgrip/PickFragile-v5", 1, 8000, {"w_touch": 0.5})
     assert paid["mean_return"] > plain["mean_return"] + 0.5  # touch steps paid: the kwargs reached the env
+
+
+def test_train_sb3_evaluates_behind_the_action_offset_it_was_given():
+    import numpy as np
+
+    from simgrip.envs.action_offset import ActionOffset
+
+    class Zero:  # PPO's start: the mean action 0
+        def predict(self, obs, deterministic=True):
+            return np.zeros(2, np.float32), None
+
+    evaluate = _example("train_sb3").evaluate
+    held = evaluate(Zero(), "simgrip/PickFragile-v5", 2, 8000)
+    probed = evaluate(Zero(), "simgrip/PickFragile-v5", 2, 8000, None, None, [-0.4, 0.2])
+    # the same episodes run by hand behind the wrapper: the evaluation went through it
+    env = ActionOffset(gym.make("simgrip/PickFragile-v5"), [-0.4, 0.2])
+    returns = []
+    for seed in (8000, 8001):
+        env.reset(seed=seed)
+        total, done = 0.0, False
+        while not done:
+            _, r, terminated, truncated, _ = env.step(np.zeros(2, np.float32))
+            total += r
+            done = terminated or truncated
+        returns.append(total)
+    env.close()
+    assert probed["mean_return"] == pytest.approx(np.mean(returns), abs=1e-9)
+    assert held["mean_return"] != pytest.approx(probed["mean_return"], abs=1e-6)
 
 
 def test_train_sb3_smoke(tmp_path, capsys):

@@ -145,7 +145,18 @@ def test_ctrl_c_stops_every_child_with_one_line(tmp_path):
 def test_normalize_reaches_every_run_command(tmp_path):
     mod = _module()
     args = mod.argparse.Namespace(env="simgrip/PickFragile-v5", minutes=1.0, steps=10, eval_seeds=(8000, 8001),
-                                  checkpoint_minutes=None, env_kwargs={}, normalize=True)
+                                  checkpoint_minutes=None, env_kwargs={}, normalize=True, action_offset=None)
     assert "--normalize" in mod.run_command("ppo", 0, args, tmp_path)
     args.normalize = False
     assert "--normalize" not in mod.run_command("ppo", 0, args, tmp_path)
+
+
+def test_action_offset_reaches_every_run_command(tmp_path):
+    mod = _module()
+    args = mod.argparse.Namespace(env="simgrip/PickFragile-v5", minutes=1.0, steps=10, eval_seeds=(8000, 8001),
+                                  checkpoint_minutes=None, env_kwargs={}, normalize=False, action_offset=[-0.4, 0.2])
+    cmd = mod.run_command("ppo", 0, args, tmp_path)
+    i = cmd.index("--action-offset")
+    assert [float(x) for x in cmd[i + 1:i + 3]] == [-0.4, 0.2]
+    args.action_offset = None
+    assert "--action-offset" not in mod.run_command("ppo", 0, args, tmp_path)

@@ -1,0 +1,57 @@
+"""ActionOffset: the env performs clip(action + offset); bad offsets are named."""
+
+import gymnasium as gym
+import numpy as np
+import pytest
+
+import simgrip.envs  # noqa: F401  (registers the ids)
+from simgrip.envs.action_offset import PROBE_OFFSET, ActionOffset
+
+ENV = "simgrip/PickFragile-v5"
+
+
+def _rollout(env, actions, seed=8000):
+    obs, _ = env.reset(seed=seed)
+    out = [obs]
+    for a in actions:
+        obs, _, terminated, truncated, _ = env.step(np.asarray(a, np.float32))
+        out.append(obs)
+        if terminated or truncated:
+            break
+    env.close()
+    return np.array(out)
+
+
+@pytest.mark.parametrize("action, performed", [((0.0, 0.0), PROBE_OFFSET), ((1.0, 1.0), (0.6, 1.0)),
+                                               ((-1.0, -1.0), (-1.0, -0.8))])
+def test_the_env_performs_the_clipped_sum(action, performed):
+    # the wrapped env stepped with `action` and the bare env stepped with the sum clipped by hand: same states
+    wrapped = _rollout(ActionOffset(gym.make(ENV), PROBE_OFFSET), [action] * 20)
+    bare = _rollout(gym.make(ENV), [performed] * 20)
+    assert np.array_equal(wrapped, bare)
+
+
+def test_a_zero_action_is_not_the_bare_envs_hold():
+    held = _rollout(gym.make(ENV), [(0.0, 0.0)] * 20)
+    probed = _rollout(ActionOffset(gym.make(ENV), PROBE_OFFSET), [(0.0, 0.0)] * 20)
+    assert held.shape != probed.shape or not np.array_equal(held, probed)
+
+
+def test_the_action_space_is_the_envs():
+    env = ActionOffset(gym.make(ENV), PROBE_OFFSET)
+    assert env.action_space == env.unwrapped.action_space
+    env.close()
+
+
+@pytest.mark.parametrize("offset, words", [((0.1,), "2 finite numbers"), ((0.0, float("nan")), "2 finite"),
+                                           ((-1.5, 0.0), "within the action bounds"), ("ab", "2 numbers"),
+                                           ((0.0, 0.0, 0.0), "2 finite numbers")])
+def test_a_bad_offset_is_named(offset, words):
+    with pytest.raises(ValueError, match="offset") as exc:
+        ActionOffset(gym.make(ENV), offset)
+    assert words in str(exc.value)
+
+
+def test_a_discrete_action_space_is_refused():
+    with pytest.raises(ValueError, match="Box"):
+        ActionOffset(gym.make("CartPole-v1"), (0.0,))
