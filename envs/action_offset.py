@@ -5,15 +5,17 @@ same box (``low``, ``high``: the env's action bounds).  A policy that outputs 0 
 corrections are residuals on that fixed motion (residual policy learning).  Every action the env takes stays
 reachable on the side towards which ``offset`` leans; on the other side the range shrinks by ``|offset|``.
 
-Why (measured on ``PickFragile-v5``; the Gymnasium environments page, "When is a seed's fate decided?"): Stable-Baselines3's PPO starts with a mean action
-of 0, which on the valve tasks holds the curvature and the palm.  From there the valve's random walk touches
-and sometimes crushes, the palm's seldom lifts a gripped piece, and in three of six seeds both means stayed
-within 0.1 of 0 until the noise shrank, with no success ever found.  The seeds that learned had, within
-their first ten updates, moved the means to about ``(-0.4, +0.2)``: close through the valve at 0.4 of its
-rate while raising the palm at 0.2 of its speed, the slow close-and-lift probe of the scripted
-observation-only controller.  :data:`PROBE_OFFSET` starts there.  As a fixed schedule it is one member of the
-constant-action family, which succeeds on none of the held-out seeds: every bit of feedback (when to stop
-closing, when to lift faster) is still the learner's.
+Why (measured on ``PickFragile-v5``; the Gymnasium environments page, "When is a seed's fate decided?"):
+Stable-Baselines3's PPO starts with a mean action of 0, which on the valve tasks holds the curvature and the
+palm. From there the valve's random walk touches and sometimes crushes, the palm's seldom lifts a gripped
+piece, and in three of six seeds both means stayed within 0.1 of 0 until the noise shrank, with no success
+ever found. The seeds that learned had, within their first ten updates, moved the means to about ``(-0.4,
++0.2)``: close through the valve at 0.4 of its rate while raising the palm at 0.2 of its speed, a slow
+close-and-lift probe like the scripted observation-only controller's. :data:`PROBE_OFFSET` starts there.
+Held as a constant action it is a fixed schedule inside the constant-action grid of
+:mod:`simgrip.envs.baselines`, whose every member scores 0 % on the pinch's and the K fingers' held-out seeds
+(``tests/test_action_offset.py`` checks the probe itself on seeds 6200-6209: no success): when to stop
+closing and when to lift faster, the feedback, is still the learner's.
 """
 
 from __future__ import annotations

@@ -55,3 +55,19 @@ def test_a_bad_offset_is_named(offset, words):
 def test_a_discrete_action_space_is_refused():
     with pytest.raises(ValueError, match="Box"):
         ActionOffset(gym.make("CartPole-v1"), (0.0,))
+
+
+@pytest.mark.parametrize("env_id", ["simgrip/PickFragile-v5", "simgrip/PickMultiFragile-v5"])
+def test_the_probe_alone_is_no_solution(env_id):
+    # the zero action behind PROBE_OFFSET is a constant schedule: it must not pick the workpieces up by itself
+    env = ActionOffset(gym.make(env_id), PROBE_OFFSET)
+    successes = 0
+    for seed in range(6200, 6210):
+        env.reset(seed=seed)
+        done = False
+        while not done:
+            _, _, terminated, truncated, info = env.step(np.zeros(2, np.float32))
+            done = terminated or truncated
+        successes += bool(info["is_success"])
+    env.close()
+    assert successes == 0
