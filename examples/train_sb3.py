@@ -19,10 +19,6 @@ Writes into ``--out`` (created if needed, files written whole):
 
 * ``<algo>_curve.csv``: one row per training episode: ``episode, timesteps,
   wall_s, cpu_s, episode_return, length, success``;
-``--action-offset A0 A1 ...`` trains and evaluates behind :class:`simgrip.envs.action_offset.ActionOffset`:
-the env performs ``clip(action + offset)``, so PPO's zero-mean start performs the offset's motion (on the
-valve tasks ``-0.4 0.2``, the slow close-and-lift probe); ``<algo>_eval.json`` records ``action_offset``.
-
 * ``<algo>_policy.csv``: one row per ``POLICY_WINDOW`` (2048, PPO's rollout) training steps: ``timesteps,
   cpu_s``, then per action ``i`` the mean and standard deviation of the actions the algorithm sampled in that
   window (``action_mean_i``, ``action_std_i``: PPO's Gaussian samples before they are clipped to the action
@@ -44,6 +40,10 @@ algorithms' default), the documented wrapper of SB3's own MuJoCo recipes; its st
 model (``<algo>_vecnormalize.pkl``, ``<algo>_vecnormalize_<k M>min.pkl``) and the held-out evaluation feeds the
 policy the observation normalised with the statistics frozen at that point (returns and success are the
 env's own, unnormalised).
+
+``--action-offset A0 A1 ...`` trains and evaluates behind :class:`simgrip.envs.action_offset.ActionOffset`:
+the env performs ``clip(action + offset)``, so PPO's zero-mean start performs the offset's motion (on the
+valve tasks ``-0.4 0.2``, the slow close-and-lift probe); ``<algo>_eval.json`` records ``action_offset``.
 
 ``--threads`` sets PyTorch's intra-op threads (default 1: one core per
 training; run two trainings side by side to use two cores).
