@@ -83,7 +83,10 @@ def _record() -> None:  # pragma: no cover - regenerates the reference
     from simgrip.envs import _ENVS
 
     # the recorded ids in their order (an id's k seeds its actions; retired ones stay), newly registered ones after
-    ids = np.load(DATA)["ids"].tolist() if DATA.exists() else []
+    ids = []
+    if DATA.exists():
+        with np.load(DATA) as old:
+            ids = old["ids"].tolist()
     ids += [i for i in _ENVS if i not in ids]
     arrays = {"mujoco_version": np.array(mujoco.__version__), "ids": np.array(ids)}
     for k, env_id in enumerate(ids):
@@ -103,25 +106,25 @@ def test_long_rollouts_match_the_reference():
 
     import simgrip.envs  # noqa: F401  (registers the ids)
 
-    ref = np.load(DATA)
-    if str(ref["mujoco_version"]) != mujoco.__version__:
-        pytest.skip(f"reference recorded with MuJoCo {ref['mujoco_version']}, this is {mujoco.__version__}")
-    resets = 0
-    for k, env_id in enumerate(ref["ids"].tolist()):
-        env = _make(env_id)
-        try:
-            for run in RUNS:
-                actions = ref[f"a{k}_{run}"]  # (stored: a change of numpy's random streams changes nothing here)
-                got = np.frombuffer(b"".join(_rollout(env, SEED + k, actions)), dtype=np.uint64)
-                want = ref[f"d{k}_{run}"]
-                bad = np.flatnonzero(got[:want.size] != want[:got.size])
-                assert not bad.size and got.size == want.size, (
-                    f"{env_id}, {run} run: output differs from the reference at digest "
-                    f"{int(bad[0]) if bad.size else min(got.size, want.size)} ({got.size} replayed, {want.size} recorded)")
-                resets += want.size - STEPS - 1
-        finally:
-            env.close()
-    assert resets > 10, "the runs should reach terminations (and the resets after them)"
+    with np.load(DATA) as ref:  # closed at the end (an open NpzFile warns when collected)
+        if str(ref["mujoco_version"]) != mujoco.__version__:
+            pytest.skip(f"reference recorded with MuJoCo {ref['mujoco_version']}, this is {mujoco.__version__}")
+        resets = 0
+        for k, env_id in enumerate(ref["ids"].tolist()):
+            env = _make(env_id)
+            try:
+                for run in RUNS:
+                    actions = ref[f"a{k}_{run}"]  # (stored: a change of numpy's random streams changes nothing here)
+                    got = np.frombuffer(b"".join(_rollout(env, SEED + k, actions)), dtype=np.uint64)
+                    want = ref[f"d{k}_{run}"]
+                    bad = np.flatnonzero(got[:want.size] != want[:got.size])
+                    assert not bad.size and got.size == want.size, (
+                        f"{env_id}, {run} run: output differs from the reference at digest "
+                        f"{int(bad[0]) if bad.size else min(got.size, want.size)} ({got.size} replayed, {want.size} recorded)")
+                    resets += want.size - STEPS - 1
+            finally:
+                env.close()
+        assert resets > 10, "the runs should reach terminations (and the resets after them)"
 
 
 if __name__ == "__main__":  # pragma: no cover

@@ -113,22 +113,22 @@ def test_env_steps_match_the_reference():
 
     import simgrip.envs  # noqa: F401  (registers the ids)
 
-    ref = np.load(DATA)
-    if str(ref["mujoco_version"]) != mujoco.__version__:
-        pytest.skip(f"reference recorded with MuJoCo {ref['mujoco_version']}, this is {mujoco.__version__}")
-    for k, env_id in enumerate(ref["ids"].tolist()):
-        env = _make(env_id)  # a retired id through retired_spec (no deprecation notice)
-        try:
-            for e in (0, 1):
-                got = np.frombuffer(b"".join(_replay(env, SEED + e, ref[f"a{k}_{e}"])), dtype=np.uint64)
-                want = ref[f"d{k}_{e}"]
-                bad = [i for i in range(min(got.size, want.size)) if got[i] != want[i]]
-                assert not bad and got.size == want.size, (
-                    f"{env_id}, episode {e}: output differs from the reference at "
-                    f"{'reset' if bad and bad[0] == 0 else 'step %d' % (bad[0] if bad else min(got.size, want.size))}"
-                    f" ({got.size - 1} steps replayed, {want.size - 1} recorded)")
-        finally:
-            env.close()
+    with np.load(DATA) as ref:  # closed at the end (an open NpzFile warns when collected)
+        if str(ref["mujoco_version"]) != mujoco.__version__:
+            pytest.skip(f"reference recorded with MuJoCo {ref['mujoco_version']}, this is {mujoco.__version__}")
+        for k, env_id in enumerate(ref["ids"].tolist()):
+            env = _make(env_id)  # a retired id through retired_spec (no deprecation notice)
+            try:
+                for e in (0, 1):
+                    got = np.frombuffer(b"".join(_replay(env, SEED + e, ref[f"a{k}_{e}"])), dtype=np.uint64)
+                    want = ref[f"d{k}_{e}"]
+                    bad = [i for i in range(min(got.size, want.size)) if got[i] != want[i]]
+                    assert not bad and got.size == want.size, (
+                        f"{env_id}, episode {e}: output differs from the reference at "
+                        f"{'reset' if bad and bad[0] == 0 else 'step %d' % (bad[0] if bad else min(got.size, want.size))}"
+                        f" ({got.size - 1} steps replayed, {want.size - 1} recorded)")
+            finally:
+                env.close()
 
 
 if __name__ == "__main__":  # pragma: no cover
