@@ -229,13 +229,8 @@ def train(algo: str, env_id: str, *, steps: int, minutes: float, seed: int, out:
                                  int(bool(info.get("is_success", False)))))
             return spent() < budget
 
-    spec = _spec(env_id)  # make_vec_env calls a non-string: a retired id's spec goes through gym.make
-    if action_offset is not None:
-        env = make_vec_env(lambda: _make(env_id, env_kwargs, action_offset), n_envs=1, seed=seed)
-    elif isinstance(spec, str):
-        env = make_vec_env(spec, n_envs=1, seed=seed, env_kwargs=env_kwargs)
-    else:
-        env = make_vec_env(lambda: gym.make(spec, **env_kwargs), n_envs=1, seed=seed)
+    # make_vec_env calls the maker (gym.make of the id, or of a retired id's spec), then seeds and wraps in Monitor
+    env = make_vec_env(lambda: _make(env_id, env_kwargs, action_offset), n_envs=1, seed=seed)
     if normalize:
         from stable_baselines3.common.vec_env import VecNormalize
 
@@ -353,16 +348,20 @@ def main(argv=None) -> int:
         p.error('needs Stable-Baselines3 and PyTorch: pip install "simgrip[rl]"')
     if args.env not in gym.registry and args.env not in simgrip.envs.RETIRED:
         p.error(f"--env: unknown id {args.env!r}")
-    if args.env_kwargs:
-        try:  # refused before any training: an argument the env does not take, or a bad value
-            gym.make(_spec(args.env), **args.env_kwargs).close()
+    if args.env_kwargs or args.action_offset is not None:  # refused before any training, the env built once
+        try:  # an argument the env does not take, or a bad value
+            env = _make(args.env, args.env_kwargs)
         except (TypeError, ValueError) as e:
             p.error(f"--env-kwargs: {args.env} does not take {json.dumps(args.env_kwargs)}: {e}")
-    if args.action_offset is not None:
-        try:
-            _make(args.env, args.env_kwargs, args.action_offset).close()
+        try:  # the wrong number of actions, or outside the bounds
+            if args.action_offset is not None:
+                from simgrip.envs.action_offset import ActionOffset
+
+                ActionOffset(env, args.action_offset)
         except ValueError as e:
             p.error(f"--action-offset: {e}")
+        finally:
+            env.close()
     try:  # simgrip.io's output-path policy: a folder, and no FIFO/device/folder where a result file goes
         out = check_output_dir(args.out, "--out")
         kinds = ("curve.csv", "policy.csv", "model.zip", "eval.json") + (("vecnormalize.pkl",) if args.normalize else ())
