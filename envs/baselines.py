@@ -58,7 +58,10 @@ from collections import Counter
 import gymnasium as gym
 import numpy as np
 
-__all__ = ["KAPPA_GRID", "PALM_GRID", "PLACE_DISTANCES", "RAMP_GRID", "VALVE_GRID", "run_policy", "evaluate", "main"]
+from simgrip.envs.evaluation import outcome
+
+__all__ = ["KAPPA_GRID", "PALM_GRID", "PLACE_DISTANCES", "RAMP_GRID", "VALVE_GRID", "evaluate", "main", "policy_maker",
+           "run_policy"]
 
 KAPPA_GRID = tuple(round(float(a), 2) for a in np.linspace(-1.0, 0.6, 17))  # 0.1 apart: force steps of ~0.3 N
 PALM_GRID = (0.25, 0.5, 1.0)
@@ -68,13 +71,6 @@ _WAIT = 10  # steps between the end of the ramp and the lift
 #: a valve env's constant curvature actions (rates, :mod:`simgrip.envs.valve`): from full rate to the slowest
 #: that still reaches first contact within the episode (0.07 x 0.02 x 300 steps = 0.42 of the ~0.5 travelled)
 VALVE_GRID = (-1.0, -0.5, -0.3, -0.2, -0.15, -0.1, -0.07, 0.0)
-
-
-def _outcome(info: dict, truncated: bool) -> str:
-    for key in ("is_success", "crushed", "dropped", "knocked_over"):
-        if info.get(key):
-            return "success" if key == "is_success" else key
-    return "timeout"
 
 
 def run_policy(env, make_act, seeds) -> Counter:
@@ -89,7 +85,7 @@ def run_policy(env, make_act, seeds) -> Counter:
             t += 1
             if terminated or truncated:
                 break
-        counts[_outcome(info, truncated)] += 1
+        counts[outcome(info)] += 1
     return counts
 
 
@@ -234,6 +230,30 @@ def _members(policy: str, grid: str, place: bool, claw: str | None = None, famil
     return [({}, make)]
 
 
+def _task(env) -> tuple:
+    """``(place, claw, openloop_grid, valve)`` of a fragile env, as :func:`_members` takes them."""
+    from simgrip.envs.valve import ValveCommand
+
+    u = env.unwrapped
+    place = env.action_space.shape[0] == 3
+    claw = "cradle" if getattr(u, "grip", None) == "III" else "sphere" if getattr(u, "shapes", ()) == (
+        "sphere",) else None
+    return place, claw, getattr(u, "openloop_grid", None), isinstance(u, ValveCommand)
+
+
+def policy_maker(env, policy: str):
+    """``make(env, info, seed) -> act(obs, t)`` of the fragile task's scripted controller ``policy``
+    (``"observation"`` or ``"oracle"``; through the valve where ``env`` has one), as :func:`evaluate` runs it.
+    ValueError naming ``policy`` when it is not one of them, or ``env`` is not a fragile task."""
+    if policy not in ("observation", "oracle"):
+        raise ValueError(f"policy must be 'observation' or 'oracle', got {policy!r}")
+    if not hasattr(env.unwrapped, "crush_ratio_range"):
+        raise ValueError(f"policy: the scripted controllers are the fragile tasks' ({env.unwrapped.__class__.__name__} "
+                         "is not one)")
+    ((_, make),) = _members(policy, "full", *_task(env))
+    return make
+
+
 def evaluate(env_id: str, policy: str, seeds, grid: str = "full") -> dict:
     """Run ``policy`` on ``env_id`` (``gym.make``, its registered time limit; a retired id of
     ``simgrip.envs.RETIRED`` through :func:`~simgrip.envs.retired_spec`, its time limit as it was registered)
@@ -243,13 +263,7 @@ def evaluate(env_id: str, policy: str, seeds, grid: str = "full") -> dict:
     env = gym.make(retired_spec(env_id) if env_id in RETIRED else env_id)
     try:
         rows = []
-        place = env.action_space.shape[0] == 3
-        u = env.unwrapped
-        claw = "cradle" if getattr(u, "grip", None) == "III" else "sphere" if getattr(u, "shapes", ()) == (
-            "sphere",) else None
-        from simgrip.envs.valve import ValveCommand
-        valve = isinstance(u, ValveCommand)
-        for params, make in _members(policy, grid, place, claw, getattr(u, "openloop_grid", None), valve):
+        for params, make in _members(policy, grid, *_task(env)):
             counts = run_policy(env, make, seeds)
             rows.append({**params, "success_rate": counts["success"] / len(seeds), "outcomes": dict(counts)})
     finally:

@@ -17,7 +17,12 @@ from typing import Any, Callable
 
 import numpy as np
 
-__all__ = ["EpisodeResult", "add_episode_arguments", "check_env_id", "env_kwargs", "json_object", "positive_int", "non_negative_int", "run_episodes", "summary"]
+__all__ = ["EpisodeResult", "GAMMA", "add_episode_arguments", "check_env_id", "discount", "env_kwargs", "json_object",
+           "outcome",
+           "outcomes", "positive_int", "non_negative_int", "run_episodes", "summary"]
+
+#: the discount of the returns :func:`run_episodes` also reports: Stable-Baselines3's default ``gamma`` (PPO, SAC)
+GAMMA = 0.99
 
 
 def _int_at_least(name: str, lo: int, expected: str, doc: str):
@@ -37,6 +42,17 @@ def _int_at_least(name: str, lo: int, expected: str, doc: str):
 
 positive_int = _int_at_least("positive_int", 1, "a positive integer", "argparse type: an integer >= 1.")
 non_negative_int = _int_at_least("non_negative_int", 0, "an integer >= 0", "argparse type: an integer >= 0 (seeds).")
+
+
+def discount(text: str) -> float:
+    """argparse type: a discount ``gamma`` in (0, 1]."""
+    try:
+        g = float(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"expected a number in (0, 1], got {text!r}") from None
+    if not (0.0 < g <= 1.0):  # NaN fails too
+        raise argparse.ArgumentTypeError(f"expected a number in (0, 1], got {text!r}")
+    return g
 
 
 def add_episode_arguments(parser: argparse.ArgumentParser, *, episodes: int = 20) -> None:
@@ -85,23 +101,28 @@ def json_object(text: str) -> dict:
 
 @dataclass(frozen=True)
 class EpisodeResult:
-    """One finished episode: its index, seed, undiscounted return, length in env steps and last ``info``."""
+    """One finished episode: its index, seed, undiscounted return, length in env steps, last ``info`` and its
+    return discounted by ``gamma`` per step (``sum_t gamma^t r_t``, ``t`` from 0: what a learner with that
+    discount maximises from the reset)."""
 
     index: int
     seed: int
     ret: float
     length: int
     info: dict
+    discounted: float = float("nan")
 
 
 def run_episodes(env, act: Callable[[Any], Any], episodes: int, seed0: int, *,
                  on_reset: Callable[[Any, dict, int], None] | None = None,
-                 on_episode: Callable[[EpisodeResult], None] | None = None) -> list[EpisodeResult]:
+                 on_episode: Callable[[EpisodeResult], None] | None = None,
+                 gamma: float = GAMMA) -> list[EpisodeResult]:
     """Run ``episodes`` episodes of ``env``, episode ``i`` reset with seed ``seed0 + i``.
 
     ``act(obs)`` returns the action; ``on_reset(env, info, seed)``, if given, is
     called after each reset (a policy's own reset, seeding an action space);
-    ``on_episode(result)`` after each episode (printing a line).
+    ``on_episode(result)`` after each episode (printing a line); ``gamma`` the discount of
+    :attr:`EpisodeResult.discounted`.
     """
     results = []
     for i in range(episodes):
@@ -109,14 +130,16 @@ def run_episodes(env, act: Callable[[Any], Any], episodes: int, seed0: int, *,
         obs, info = env.reset(seed=seed)
         if on_reset is not None:
             on_reset(env, info, seed)
-        ret, n = 0.0, 0
+        ret, disc, weight, n = 0.0, 0.0, 1.0, 0
         while True:
             obs, reward, terminated, truncated, info = env.step(act(obs))
             ret += float(reward)
+            disc += weight * float(reward)
+            weight *= gamma
             n += 1
             if terminated or truncated:
                 break
-        result = EpisodeResult(i, seed, ret, n, info)
+        result = EpisodeResult(i, seed, ret, n, info, disc)
         results.append(result)
         if on_episode is not None:
             on_episode(result)
@@ -129,3 +152,27 @@ def summary(results: list[EpisodeResult]) -> dict:
     return {"episodes": n, "success_rate": sum(bool(r.info["is_success"]) for r in results) / n,
             "mean_return": float(np.mean([r.ret for r in results])),
             "mean_length": float(np.mean([r.length for r in results]))}
+
+
+def outcome(info: dict) -> str:
+    """How an episode ended, from its last ``info``: ``"success"`` (``is_success``), ``"crushed"``,
+    ``"dropped"``, ``"knocked_over"`` (the first of these keys that is true), else ``"timeout"``."""
+    for key in ("is_success", "crushed", "dropped", "knocked_over"):
+        if info.get(key):
+            return "success" if key == "is_success" else key
+    return "timeout"
+
+
+def outcomes(results: list[EpisodeResult], gamma: float = GAMMA) -> dict:
+    """How finished episodes ended and what they were worth to a learner discounting by ``gamma`` (the
+    ``gamma`` :func:`run_episodes` was given): ``{"outcomes": {outcome: count}`` (:func:`outcome`),
+    ``"mean_success_length"`` (env steps of the successful episodes; ``None`` without one),
+    ``"mean_discounted_return"``, ``"gamma"}``."""
+    counts: dict[str, int] = {}
+    for r in results:
+        key = outcome(r.info)
+        counts[key] = counts.get(key, 0) + 1
+    lengths = [r.length for r in results if r.info.get("is_success")]
+    return {"outcomes": dict(sorted(counts.items())),
+            "mean_success_length": float(np.mean(lengths)) if lengths else None,
+            "mean_discounted_return": float(np.mean([r.discounted for r in results])), "gamma": float(gamma)}

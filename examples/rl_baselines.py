@@ -71,6 +71,12 @@ def _json_object(text: str) -> dict:
     return json_object(text)
 
 
+def _discount(text: str) -> float:
+    from simgrip.envs.evaluation import discount  # imported when used, as _json_object
+
+    return discount(text)
+
+
 def _seed(text: str) -> int:
     try:
         v = int(text)
@@ -107,6 +113,8 @@ def run_command(algo: str, seed: int, args, folder: Path) -> list[str]:
         cmd += ["--normalize"]
     if args.action_offset is not None:
         cmd += ["--action-offset", *[repr(float(x)) for x in args.action_offset]]
+    if args.gamma is not None:
+        cmd += ["--gamma", repr(args.gamma)]
     return cmd
 
 
@@ -242,6 +250,8 @@ def main(argv=None) -> int:
     p.add_argument("--action-offset", type=float, nargs="+", default=None, metavar="A",
                    help="train and evaluate behind simgrip.envs.action_offset.ActionOffset (one number per action; "
                         "the valve tasks' probe: -0.4 0.2; default none)")
+    p.add_argument("--gamma", type=_discount, default=None,
+                   help="the discount, in (0, 1], instead of the library default 0.99 (recorded in the JSON)")
     p.add_argument("--out", required=True, help="output folder")
     args = p.parse_args(argv)
     cores = os.cpu_count() or 1
@@ -309,7 +319,8 @@ def main(argv=None) -> int:
     write_json(out / "aggregate.json", {
         "env": args.env, **({"env_kwargs": args.env_kwargs} if args.env_kwargs else {}), "algos": algos, "seeds": args.seeds, "minutes": args.minutes,
         "checkpoint_minutes": args.checkpoint_minutes, "clock": "cpu", "eval_seeds": [lo, hi],
-        "hyperparameters": "Stable-Baselines3 defaults, one env, one torch thread", "summary": summary,
+        "hyperparameters": "Stable-Baselines3 defaults, one env, one torch thread"
+        + ("" if args.gamma is None else f"; but gamma = {args.gamma!r}"), "summary": summary,
         **({"action_offset": [float(x) for x in args.action_offset]} if args.action_offset is not None else {}),
         **({"wrapper": "VecNormalize (SB3 defaults: observation and return)"} if args.normalize else {}),
         "command": [Path(sys.argv[0]).name] + list(sys.argv[1:] if argv is None else argv)})

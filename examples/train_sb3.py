@@ -26,7 +26,10 @@ Writes into ``--out`` (created if needed, files written whole):
   (``log_std_i``; empty for SAC, whose standard deviation depends on the state).  It shows how exploration
   evolves: a run whose action means stay near 0 while ``log_std`` falls has stopped exploring;
 * ``<algo>_eval.json``: ``{"algo", "env", "timesteps", "wall_s", "episodes",
-  "success_rate", "mean_return", ...}`` (also printed on one line);
+  "success_rate", "mean_return", "outcomes", "mean_success_length", "mean_discounted_return", ...}`` (also
+  printed on one line; ``outcomes`` counts how the held-out episodes ended, ``mean_discounted_return`` is their
+  return discounted by the model's ``gamma`` (0.99 by default), what the learner maximises:
+  :func:`simgrip.envs.evaluation.outcomes`);
 * ``<algo>_model.zip``: the trained policy (with ``--checkpoint-minutes M`` also
   ``<algo>_model_<k M>min.zip`` every ``M`` budget minutes, and the curve so far;
   their held-out results go into ``<algo>_eval.json``);
@@ -64,7 +67,7 @@ import gymnasium as gym
 import numpy as np
 
 import simgrip.envs  # noqa: F401  (registers the simgrip ids)
-from simgrip.envs.evaluation import json_object, non_negative_int, run_episodes, summary
+from simgrip.envs.evaluation import discount, json_object, non_negative_int, outcomes, run_episodes, summary
 from simgrip.io import atomic_write, check_output_dir, check_output_files_in, write_json
 
 ALGOS = ("ppo", "sac")
@@ -109,10 +112,11 @@ def evaluate(model, env_id: str, episodes: int, seed0: int, env_kwargs=None, nor
     env = _make(env_id, env_kwargs, action_offset)
     see = (lambda obs: obs) if normalizer is None else normalizer.normalize_obs
     try:
-        results = run_episodes(env, lambda obs: model.predict(see(obs), deterministic=True)[0], episodes, seed0)
+        results = run_episodes(env, lambda obs: model.predict(see(obs), deterministic=True)[0], episodes, seed0,
+                               gamma=model.gamma)
     finally:
         env.close()
-    return {**summary(results), "eval_seeds": [seed0, seed0 + episodes - 1]}
+    return {**summary(results), **outcomes(results, model.gamma), "eval_seeds": [seed0, seed0 + episodes - 1]}
 
 
 def _write_curve(path: Path, rows) -> None:
@@ -181,11 +185,12 @@ def _load_normalizer(path: Path):
 
 def train(algo: str, env_id: str, *, steps: int, minutes: float, seed: int, out: Path,
           eval_episodes: int, eval_seed: int, clock: str = "cpu", checkpoint_minutes: float | None = None,
-          env_kwargs: dict | None = None, normalize: bool = False, action_offset=None) -> dict:
+          env_kwargs: dict | None = None, normalize: bool = False, action_offset=None, gamma: float | None = None) -> dict:
     """Train ``algo`` with library defaults within the budget, write its curve, model and evaluation
     (``env_kwargs``: ``gym.make``'s keyword arguments, for training and evaluation alike; ``normalize``: train
     behind SB3's ``VecNormalize`` with its defaults; ``action_offset``: train and evaluate behind
-    :class:`simgrip.envs.action_offset.ActionOffset`, see the module's docstring)."""
+    :class:`simgrip.envs.action_offset.ActionOffset`, see the module's docstring; ``gamma``: the algorithm's
+    discount instead of its default 0.99, the one hyperparameter changed)."""
     env_kwargs = dict(env_kwargs or {})
     from stable_baselines3 import PPO, SAC
     from stable_baselines3.common.callbacks import BaseCallback
@@ -235,7 +240,7 @@ def train(algo: str, env_id: str, *, steps: int, minutes: float, seed: int, out:
         from stable_baselines3.common.vec_env import VecNormalize
 
         env = VecNormalize(env)  # SB3's defaults; the Monitor inside still records the env's own returns
-    model = cls("MlpPolicy", env, seed=seed, verbose=0)
+    model = cls("MlpPolicy", env, seed=seed, verbose=0, **({} if gamma is None else {"gamma": gamma}))
     model.learn(total_timesteps=steps, callback=Budget())
     wall, cpu = time.perf_counter() - t_start, time.process_time() - c_start
     env.close()
@@ -251,7 +256,9 @@ def train(algo: str, env_id: str, *, steps: int, minutes: float, seed: int, out:
         normalizer = _load_normalizer(out / f"{algo}_vecnormalize.pkl")
     result = {"algo": algo.upper(), "env": env_id, "timesteps": int(model.num_timesteps), "wall_s": round(wall, 1), "cpu_s": round(cpu, 1),
               "clock": clock, "budget_minutes": minutes,
-              "train_episodes": len(rows), "seed": seed, "hyperparameters": "Stable-Baselines3 defaults"}
+              "train_episodes": len(rows), "seed": seed,
+              "hyperparameters": "Stable-Baselines3 defaults" if gamma is None else
+              f"Stable-Baselines3 defaults but gamma = {gamma!r}"}
     if env_kwargs:
         result["env_kwargs"] = env_kwargs
     wrappers = []
@@ -339,6 +346,8 @@ def main(argv=None) -> int:
     p.add_argument("--action-offset", type=float, nargs="+", default=None, metavar="A",
                    help="train and evaluate behind simgrip.envs.action_offset.ActionOffset: the env performs "
                         "clip(action + offset); one number per action (the valve tasks' probe: -0.4 0.2)")
+    p.add_argument("--gamma", type=discount, default=None,
+                   help="the discount, in (0, 1], instead of the library default 0.99 (recorded in the JSON)")
     p.add_argument("--out", required=True, help="output folder")
     args = p.parse_args(argv)
     try:
@@ -374,7 +383,7 @@ def main(argv=None) -> int:
         result = train(algo, args.env, steps=args.steps, minutes=args.minutes, seed=args.seed, out=out,
                        eval_episodes=args.eval_episodes, eval_seed=args.eval_seed, clock=args.clock,
                        checkpoint_minutes=args.checkpoint_minutes, env_kwargs=args.env_kwargs,
-                       normalize=args.normalize, action_offset=args.action_offset)
+                       normalize=args.normalize, action_offset=args.action_offset, gamma=args.gamma)
         print(json.dumps(result), flush=True)
     plot_curves(out)
     return 0

@@ -6,7 +6,7 @@ import gymnasium as gym
 import pytest
 
 import simgrip.envs  # noqa: F401
-from simgrip.envs.evaluation import add_episode_arguments, check_env_id, run_episodes, summary
+from simgrip.envs.evaluation import GAMMA, add_episode_arguments, check_env_id, outcomes, run_episodes, summary
 
 
 def test_episodes_are_seeded_and_summarised():
@@ -37,3 +37,43 @@ def test_unknown_env_id_exits_2():
     with pytest.raises(SystemExit) as info:
         check_env_id(p, "simgrip/Nope-v9")
     assert info.value.code == 2
+
+
+class _Counting(gym.Env):
+    """Reward ``t + 1`` on step ``t``; ends after ``seed % 4 + 1`` steps, in the outcome ``ENDS[seed % 4]``."""
+
+    ENDS = ({"is_success": True}, {"crushed": True}, {"dropped": True}, {})
+    observation_space = gym.spaces.Box(-1.0, 1.0, (1,))
+    action_space = gym.spaces.Box(-1.0, 1.0, (1,))
+
+    def reset(self, *, seed=None, options=None):
+        self.n, self.t = seed % 4 + 1, 0
+        self.end = self.ENDS[seed % 4]
+        return self.observation_space.low, {}
+
+    def step(self, action):
+        self.t += 1
+        done = self.t == self.n
+        info = dict(self.end) if done else {}
+        return self.observation_space.low, float(self.t), done and bool(self.end), done and not self.end, info
+
+
+def test_discounted_return_and_outcomes():
+    gamma = 0.9
+    res = run_episodes(_Counting(), lambda obs: [0.0], 4, 0, gamma=gamma)
+    # seed s: rewards 1..n, n = s % 4 + 1; discounted sum_t gamma^t (t + 1)
+    for r in res:
+        assert r.length == r.seed % 4 + 1
+        assert r.ret == sum(range(1, r.length + 1))
+        assert r.discounted == pytest.approx(sum(gamma ** t * (t + 1) for t in range(r.length)), abs=1e-12)
+    o = outcomes(res, gamma)
+    assert o["outcomes"] == {"success": 1, "crushed": 1, "dropped": 1, "timeout": 1}
+    assert o["mean_success_length"] == 1  # seed 0
+    assert o["mean_discounted_return"] == pytest.approx(sum(r.discounted for r in res) / 4, abs=1e-12)
+    assert o["gamma"] == gamma
+    assert outcomes(res[1:])["mean_success_length"] is None  # no success: None, which JSON can write
+
+
+def test_default_discount_is_sb3s():
+    res = run_episodes(_Counting(), lambda obs: [0.0], 1, 1)  # two steps: 1 + 0.99 * 2
+    assert res[0].discounted == pytest.approx(1.0 + GAMMA * 2.0, abs=1e-12) and GAMMA == 0.99

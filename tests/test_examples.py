@@ -153,3 +153,63 @@ def test_train_sb3_normalize_saves_the_statistics_with_every_model(tmp_path, cap
     first = module._load_normalizer(tmp_path / "ppo_vecnormalize_0.03min.pkl")
     # statistics of the observations seen so far: the checkpoint's froze earlier than the final one's
     assert 0 < first.obs_rms.count < final.obs_rms.count and getattr(final, "venv", None) is None
+
+
+def test_evaluate_policy_scripted_matches_the_baselines_harness(capsys):
+    """The scripted controller through evaluate_policy ends its episodes as simgrip.envs.baselines runs it."""
+    from simgrip.envs.baselines import evaluate
+
+    out = _example("evaluate_policy").main(["--env", "simgrip/PickFragile-v5", "--policy", "observation",
+                                            "--episodes", "3", "--seed", "8300", "--json"])
+    assert json.loads(capsys.readouterr().out.strip()) == out
+    ref = evaluate("simgrip/PickFragile-v5", "observation", list(range(8300, 8303)))
+    assert out["outcomes"] == ref["outcomes"] and out["success_rate"] == ref["success_rate"]
+    assert out["gamma"] == 0.99 and out["eval_seeds"] == [8300, 8302]
+    assert out["mean_discounted_return"] < out["mean_return"]  # rewards are paid late in an episode
+
+
+@pytest.mark.parametrize("argv, word", [
+    (["--policy", "observation", "--gamma", "0"], "--gamma"),
+    (["--policy", "observation", "--gamma", "x"], "--gamma"),
+    (["--policy", "observation", "--action-offset", "-0.4", "0.2"], "--action-offset"),
+    (["--policy", "psychic"], "--policy"),
+    (["--model", "no/such/model.zip"], "--model"),
+    ([], "--model"),
+    (["--policy", "observation", "--episodes", "0"], "--episodes"),
+    (["--policy", "observation", "--env-kwargs", "{\"w_nope\": 1}"], "--env-kwargs"),
+])
+def test_evaluate_policy_bad_options_exit_2_naming_them(argv, word, capsys):
+    with pytest.raises(SystemExit) as e:
+        _example("evaluate_policy").main(["--env", "simgrip/PickFragile-v5", *argv])
+    assert e.value.code == 2
+    assert word in capsys.readouterr().err
+
+
+@pytest.mark.parametrize("env_id, word", [("simgrip/Nope-v9", "--env"), ("simgrip/Pick-v1", "--policy")])
+def test_evaluate_policy_refuses_an_env_without_that_controller(env_id, word, capsys):
+    with pytest.raises(SystemExit) as e:
+        _example("evaluate_policy").main(["--env", env_id, "--policy", "observation"])
+    assert e.value.code == 2
+    assert word in capsys.readouterr().err
+
+
+def test_evaluate_policy_model_reproduces_train_sb3s_evaluation(tmp_path, capsys):
+    """A model evaluated again by evaluate_policy: the held-out figures train_sb3 wrote, digit for digit, at
+    the discount it was trained with."""
+    pytest.importorskip("stable_baselines3")
+    _example("train_sb3").main(["--algo", "sac", "--env", "simgrip/PickFragile-v5", "--steps", "150",
+                                "--action-offset", "-0.4", "0.2", "--gamma", "0.95", "--eval-episodes", "2",
+                                "--eval-seed", "8310", "--out", str(tmp_path)])
+    trained = json.loads((tmp_path / "sac_eval.json").read_text())
+    assert trained["hyperparameters"] == "Stable-Baselines3 defaults but gamma = 0.95" and trained["gamma"] == 0.95
+    capsys.readouterr()
+    again = _example("evaluate_policy").main([
+        "--env", "simgrip/PickFragile-v5", "--model", str(tmp_path / "sac_model.zip"), "--algo", "sac",
+        "--action-offset", "-0.4", "0.2", "--episodes", "2", "--seed", "8310", "--gamma", "0.95", "--json"])
+    for key in ("success_rate", "mean_return", "mean_length", "outcomes", "mean_success_length",
+                "mean_discounted_return", "gamma", "eval_seeds"):
+        assert again[key] == trained[key], key
+    with pytest.raises(SystemExit) as e:  # the model's spaces against another env's
+        _example("evaluate_policy").main(["--env", "simgrip/PlaceFragile-v4", "--model",
+                                          str(tmp_path / "sac_model.zip"), "--algo", "sac"])
+    assert e.value.code == 2 and "--model" in capsys.readouterr().err

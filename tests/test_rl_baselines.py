@@ -61,6 +61,9 @@ def test_aggregate_mean_min_max_per_checkpoint_and_failed_runs():
     (["--seeds", "1", "1"], "--seeds"),
     (["--env-kwargs", "[1]"], "--env-kwargs"),
     (["--env-kwargs", "{w_touch: 0}"], "--env-kwargs"),
+    (["--gamma", "0"], "--gamma"),
+    (["--gamma", "1.5"], "--gamma"),
+    (["--gamma", "nan"], "--gamma"),
 ])
 def test_bad_arguments_exit_2_with_one_line(extra, word, tmp_path, capsys):
     argv = ["--env", "simgrip/PickFragile-v0", "--out", str(tmp_path / "o"), *extra]
@@ -145,7 +148,8 @@ def test_ctrl_c_stops_every_child_with_one_line(tmp_path):
 def test_normalize_reaches_every_run_command(tmp_path):
     mod = _module()
     args = mod.argparse.Namespace(env="simgrip/PickFragile-v5", minutes=1.0, steps=10, eval_seeds=(8000, 8001),
-                                  checkpoint_minutes=None, env_kwargs={}, normalize=True, action_offset=None)
+                                  checkpoint_minutes=None, env_kwargs={}, normalize=True, action_offset=None,
+                                  gamma=None)
     assert "--normalize" in mod.run_command("ppo", 0, args, tmp_path)
     args.normalize = False
     assert "--normalize" not in mod.run_command("ppo", 0, args, tmp_path)
@@ -154,9 +158,21 @@ def test_normalize_reaches_every_run_command(tmp_path):
 def test_action_offset_reaches_every_run_command(tmp_path):
     mod = _module()
     args = mod.argparse.Namespace(env="simgrip/PickFragile-v5", minutes=1.0, steps=10, eval_seeds=(8000, 8001),
-                                  checkpoint_minutes=None, env_kwargs={}, normalize=False, action_offset=[-0.4, 0.2])
+                                  checkpoint_minutes=None, env_kwargs={}, normalize=False, action_offset=[-0.4, 0.2],
+                                  gamma=None)
     cmd = mod.run_command("ppo", 0, args, tmp_path)
     i = cmd.index("--action-offset")
     assert [float(x) for x in cmd[i + 1:i + 3]] == [-0.4, 0.2]
     args.action_offset = None
     assert "--action-offset" not in mod.run_command("ppo", 0, args, tmp_path)
+
+
+def test_gamma_reaches_every_run_command(tmp_path):
+    mod = _module()
+    args = mod.argparse.Namespace(env="simgrip/PickFragile-v5", minutes=1.0, steps=10, eval_seeds=(8000, 8001),
+                                  checkpoint_minutes=None, env_kwargs={}, normalize=False, action_offset=None,
+                                  gamma=0.995)
+    cmd = mod.run_command("ppo", 0, args, tmp_path)
+    assert float(cmd[cmd.index("--gamma") + 1]) == 0.995
+    args.gamma = None
+    assert "--gamma" not in mod.run_command("ppo", 0, args, tmp_path)  # the library's default, not written

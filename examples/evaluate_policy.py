@@ -1,0 +1,132 @@
+"""How a policy's episodes end, and what they are worth to a learner that discounts.
+
+Runs a trained Stable-Baselines3 model (``--model ppo_model.zip``, deterministic, as ``train_sb3.py``'s
+held-out evaluation runs it) or one of the fragile tasks' scripted controllers (``--policy observation`` or
+``oracle``, :mod:`simgrip.envs.baselines`) on episodes seeded ``--seed``, ``--seed + 1``, ... and prints how they
+ended (success, crushed, dropped, knocked over, timeout), how long the successes took, and the mean return
+discounted by ``--gamma`` (default 0.99, SB3's default): the quantity PPO and SAC maximise.  A learner that
+settles below a controller's success rate while its discounted return is above the controller's is not failing
+to optimise: under that discount, its faster and riskier policy is worth more.
+
+    python examples/evaluate_policy.py --env simgrip/PickFragile-v5 (--model ZIP [--algo ppo|sac] |
+        --policy observation|oracle) [--action-offset A0 A1] [--env-kwargs JSON] [--episodes 50] [--seed 8000]
+        [--gamma 0.99] [--json]
+
+``--action-offset`` must be the one the model was trained behind (``train_sb3.py``'s option of that name);
+a model trained behind ``VecNormalize`` is not supported here.  Prints one line, or with ``--json`` one JSON
+object: ``{"env", "policy", "episodes", "success_rate", "mean_return", "mean_length", "outcomes",
+"mean_success_length", "mean_discounted_return", "gamma", "eval_seeds"}``.  Exit 2 naming the option on bad
+input.
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import sys
+
+import gymnasium as gym
+
+import simgrip.envs  # noqa: F401  (registers the simgrip ids)
+from simgrip.envs.evaluation import (check_env_id, discount, json_object, non_negative_int, outcomes, positive_int,
+                                     run_episodes, summary)
+
+SCRIPTED = ("observation", "oracle")
+
+
+def _scripted(env, name: str):
+    """``(act, on_reset)`` of the fragile task's scripted controller ``name`` (through the valve where the env
+    has one), as :mod:`simgrip.envs.baselines` runs it."""
+    from simgrip.envs.baselines import policy_maker
+
+    make = policy_maker(env, name)
+    state = {}
+
+    def on_reset(env_, info, seed):
+        state["act"], state["t"] = make(env_, info, seed), 0
+
+    def act(obs):
+        a = state["act"](obs, state["t"])
+        state["t"] += 1
+        return a
+    return act, on_reset
+
+
+def main(argv=None) -> dict:
+    p = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
+    p.add_argument("--env", required=True, help="registered env id, e.g. simgrip/PickFragile-v5")
+    p.add_argument("--env-kwargs", type=json_object, default={}, metavar="JSON",
+                   help="keyword arguments of gym.make, as the model was trained with")
+    what = p.add_mutually_exclusive_group(required=True)
+    what.add_argument("--model", help="a Stable-Baselines3 model file (train_sb3.py's <algo>_model*.zip)")
+    what.add_argument("--policy", choices=SCRIPTED, help="a fragile task's scripted controller")
+    p.add_argument("--algo", choices=("ppo", "sac"), default="ppo", help="the model's algorithm (default ppo)")
+    p.add_argument("--action-offset", type=float, nargs="+", default=None, metavar="A",
+                   help="the ActionOffset the model was trained behind")
+    p.add_argument("--episodes", type=positive_int, default=50, help="episodes (default 50)")
+    p.add_argument("--seed", type=non_negative_int, default=8000, help="seed of the first episode (default 8000)")
+    p.add_argument("--gamma", type=discount, default=0.99, help="discount of the reported return (default 0.99)")
+    p.add_argument("--json", action="store_true", help="print only a JSON object")
+    args = p.parse_args(argv)
+    check_env_id(p, args.env)
+    if args.policy is not None and args.action_offset is not None:
+        p.error("--action-offset: only with --model (the scripted controllers command the env directly)")
+    if args.model is not None:
+        import os
+
+        if not os.path.isfile(args.model):
+            p.error(f"--model: {args.model!r} is not a file")
+    try:
+        env = gym.make(args.env, **args.env_kwargs)
+    except (TypeError, ValueError) as exc:
+        p.error(f"--env-kwargs: {exc}")
+    try:
+        if args.action_offset is not None:
+            from simgrip.envs.action_offset import ActionOffset
+
+            try:
+                env = ActionOffset(env, args.action_offset)
+            except ValueError as exc:
+                p.error(f"--action-offset: {exc}")
+        on_reset = None
+        if args.model is not None:
+            try:
+                from stable_baselines3 import PPO, SAC
+            except ImportError:
+                p.error("--model: needs Stable-Baselines3 (pip install 'simgrip[rl]')")
+            try:
+                model = {"ppo": PPO, "sac": SAC}[args.algo].load(args.model, device="cpu")
+            except Exception as exc:  # noqa: BLE001 - any unreadable model is a bad --model
+                p.error(f"--model: cannot load {args.model!r} as {args.algo}: {exc}")
+            if model.observation_space.shape != env.observation_space.shape or (
+                    model.action_space.shape != env.action_space.shape):
+                p.error(f"--model: its spaces do not match {args.env}'s")
+            act = lambda obs: model.predict(obs, deterministic=True)[0]  # noqa: E731
+            policy = f"{args.algo} {args.model}"
+        else:
+            try:
+                act, on_reset = _scripted(env, args.policy)
+            except ValueError as exc:
+                p.error(f"--policy: {exc}")
+            policy = args.policy
+        results = run_episodes(env, act, args.episodes, args.seed, on_reset=on_reset, gamma=args.gamma)
+    finally:
+        env.close()
+    out = {"env": args.env, "policy": policy, **summary(results), **outcomes(results, args.gamma),
+           "eval_seeds": [args.seed, args.seed + args.episodes - 1]}
+    if args.json:
+        print(json.dumps(out))
+    else:
+        length = out["mean_success_length"]
+        print(f"{policy}: success {out['success_rate']:.0%} of {out['episodes']} ({out['outcomes']}), successes end at "
+              f"step {'-' if length is None else f'{length:.0f}'} on average, mean return {out['mean_return']:.2f}, "
+              f"discounted (gamma {args.gamma:g}) {out['mean_discounted_return']:.2f}")
+    return out
+
+
+if __name__ == "__main__":
+    try:
+        main()
+    except KeyboardInterrupt:
+        print("interrupted", file=sys.stderr)
+        sys.exit(130)
