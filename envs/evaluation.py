@@ -18,8 +18,7 @@ from typing import Any, Callable
 import numpy as np
 
 __all__ = ["EpisodeResult", "GAMMA", "add_episode_arguments", "check_env_id", "discount", "env_kwargs", "json_object",
-           "outcome",
-           "outcomes", "positive_int", "non_negative_int", "run_episodes", "summary"]
+           "outcome", "outcomes", "positive_int", "non_negative_int", "run_episodes", "summary"]
 
 #: the discount of the returns :func:`run_episodes` also reports: Stable-Baselines3's default ``gamma`` (PPO, SAC)
 GAMMA = 0.99
