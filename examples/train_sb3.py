@@ -67,7 +67,7 @@ import gymnasium as gym
 import numpy as np
 
 import simgrip.envs  # noqa: F401  (registers the simgrip ids)
-from simgrip.envs.evaluation import discount, json_object, non_negative_int, outcomes, run_episodes, summary
+from simgrip.envs.evaluation import GAMMA, discount, json_object, non_negative_int, outcomes, run_episodes, summary
 from simgrip.io import atomic_write, check_output_dir, check_output_files_in, write_json
 
 ALGOS = ("ppo", "sac")
@@ -112,11 +112,12 @@ def evaluate(model, env_id: str, episodes: int, seed0: int, env_kwargs=None, nor
     env = _make(env_id, env_kwargs, action_offset)
     see = (lambda obs: obs) if normalizer is None else normalizer.normalize_obs
     try:
+        gamma = getattr(model, "gamma", GAMMA)  # an SB3 model's own; anything else with predict(): SB3's default
         results = run_episodes(env, lambda obs: model.predict(see(obs), deterministic=True)[0], episodes, seed0,
-                               gamma=model.gamma)
+                               gamma=gamma)
     finally:
         env.close()
-    return {**summary(results), **outcomes(results, model.gamma), "eval_seeds": [seed0, seed0 + episodes - 1]}
+    return {**summary(results), **outcomes(results, gamma), "eval_seeds": [seed0, seed0 + episodes - 1]}
 
 
 def _write_curve(path: Path, rows) -> None:
