@@ -32,7 +32,8 @@ Writes into ``--out``:
 ``VecNormalize`` (observation and return, the library's defaults), evaluated with its frozen observation
 statistics; ``aggregate.json`` then names the wrapper.  ``--action-offset A0 A1 ...`` likewise passes that
 option (:class:`simgrip.envs.action_offset.ActionOffset`: the env performs ``clip(action + offset)``, so that
-PPO's zero-mean start performs the offset's motion) and ``aggregate.json`` records ``action_offset``.
+PPO's zero-mean start performs the offset's motion) and ``aggregate.json`` records ``action_offset``;
+``--gamma G`` passes the discount instead of the default 0.99, named in every JSON's ``hyperparameters``.
 
 Ctrl-C stops every running child (SIGTERM, then SIGKILL after 5 s) and exits 130 with one line.  Exit 2 (one
 line) on a bad argument, 1 when a run failed (its log names why; the others are still aggregated).

@@ -48,6 +48,10 @@ env's own, unnormalised).
 the env performs ``clip(action + offset)``, so PPO's zero-mean start performs the offset's motion (on the
 valve tasks ``-0.4 0.2``, the slow close-and-lift probe); ``<algo>_eval.json`` records ``action_offset``.
 
+``--gamma G`` changes one hyperparameter, the discount (default 0.99), and the JSON's ``hyperparameters``
+says so; the held-out ``mean_discounted_return`` is then at ``G``.  ``examples/evaluate_policy.py``
+re-evaluates a saved model, or a scripted controller, the same way.
+
 ``--threads`` sets PyTorch's intra-op threads (default 1: one core per
 training; run two trainings side by side to use two cores).
 """
