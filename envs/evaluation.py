@@ -18,7 +18,7 @@ from typing import Any, Callable
 import numpy as np
 
 __all__ = ["EpisodeResult", "GAMMA", "add_episode_arguments", "check_env_id", "discount", "env_kwargs", "json_object",
-           "outcome", "outcomes", "positive_int", "non_negative_int", "run_episodes", "summary"]
+           "make_env", "outcome", "outcomes", "positive_int", "non_negative_int", "run_episodes", "summary"]
 
 #: the discount of the returns :func:`run_episodes` also reports: Stable-Baselines3's default ``gamma`` (PPO, SAC)
 GAMMA = 0.99
@@ -70,6 +70,36 @@ def check_env_id(parser: argparse.ArgumentParser, env_id: str) -> None:
 
     if env_id not in gym.registry:
         parser.error(f"--env: unknown id {env_id!r}")
+
+
+def make_env(env_id: str, env_kwargs: dict | None = None, action_offset=None):
+    """The env of ``env_id`` (a registered id, or a retired one of ``simgrip.envs.RETIRED`` through its spec) made
+    with ``env_kwargs`` (``gym.make``'s keyword arguments), behind
+    :class:`~simgrip.envs.action_offset.ActionOffset` ``(action_offset)`` when that is given: what the training
+    and evaluation scripts build and check their options with.
+
+    Raises ValueError naming the option: ``--env-kwargs`` when the env does not take ``env_kwargs`` or refuses a
+    value, ``--action-offset`` when the offset does not fit its action space (the env is closed first)."""
+    import json
+
+    import gymnasium as gym
+
+    from simgrip.envs import RETIRED, retired_spec
+
+    kwargs = dict(env_kwargs or {})
+    try:
+        env = gym.make(retired_spec(env_id) if env_id in RETIRED else env_id, **kwargs)
+    except (TypeError, ValueError) as e:
+        raise ValueError(f"--env-kwargs: {env_id} does not take {json.dumps(kwargs)}: {e}") from None
+    if action_offset is None:
+        return env
+    from simgrip.envs.action_offset import ActionOffset
+
+    try:
+        return ActionOffset(env, action_offset)
+    except ValueError as e:
+        env.close()
+        raise ValueError(f"--action-offset: {e}") from None
 
 
 def env_kwargs(parser: argparse.ArgumentParser, args: argparse.Namespace) -> dict:

@@ -25,11 +25,9 @@ import argparse
 import json
 import sys
 
-import gymnasium as gym
-
 import simgrip.envs  # noqa: F401  (registers the simgrip ids)
-from simgrip.envs.evaluation import (check_env_id, discount, json_object, non_negative_int, outcomes, positive_int,
-                                     run_episodes, summary)
+from simgrip.envs.evaluation import (check_env_id, discount, json_object, make_env, non_negative_int, outcomes,
+                                     positive_int, run_episodes, summary)
 
 SCRIPTED = ("observation", "oracle")
 
@@ -77,17 +75,10 @@ def main(argv=None) -> dict:
         if not os.path.isfile(args.model):
             p.error(f"--model: {args.model!r} is not a file")
     try:
-        env = gym.make(args.env, **args.env_kwargs)
-    except (TypeError, ValueError) as exc:
-        p.error(f"--env-kwargs: {exc}")
+        env = make_env(args.env, args.env_kwargs, args.action_offset)
+    except ValueError as exc:
+        p.error(str(exc))
     try:
-        if args.action_offset is not None:
-            from simgrip.envs.action_offset import ActionOffset
-
-            try:
-                env = ActionOffset(env, args.action_offset)
-            except ValueError as exc:
-                p.error(f"--action-offset: {exc}")
         on_reset = None
         if args.model is not None:
             try:

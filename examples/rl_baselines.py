@@ -274,20 +274,12 @@ def main(argv=None) -> int:
     if args.env not in gym.registry and args.env not in simgrip.envs.RETIRED:  # train_sb3.py builds a retired one
         p.error(f"--env: unknown id {args.env!r}")
     if args.env_kwargs or args.action_offset is not None:  # refused before any run starts, the env built once
-        spec = simgrip.envs.retired_spec(args.env) if args.env in simgrip.envs.RETIRED else args.env
-        try:  # an argument the env does not take, or a bad value
-            env = gym.make(spec, **args.env_kwargs)
-        except (TypeError, ValueError) as e:
-            p.error(f"--env-kwargs: {args.env} does not take {json.dumps(args.env_kwargs)}: {e}")
-        try:  # the wrong number of actions, or outside the bounds
-            if args.action_offset is not None:
-                from simgrip.envs.action_offset import ActionOffset
+        from simgrip.envs.evaluation import make_env
 
-                ActionOffset(env, args.action_offset)
+        try:
+            make_env(args.env, args.env_kwargs, args.action_offset).close()
         except ValueError as e:
-            p.error(f"--action-offset: {e}")
-        finally:
-            env.close()
+            p.error(str(e))
     algos = list(dict.fromkeys(args.algo))
     try:
         out = check_output_dir(args.out, "--out")

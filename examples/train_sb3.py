@@ -71,7 +71,8 @@ import gymnasium as gym
 import numpy as np
 
 import simgrip.envs  # noqa: F401  (registers the simgrip ids)
-from simgrip.envs.evaluation import GAMMA, discount, json_object, non_negative_int, outcomes, run_episodes, summary
+from simgrip.envs.evaluation import (GAMMA, discount, json_object, make_env, non_negative_int, outcomes, run_episodes,
+                                     summary)
 from simgrip.io import atomic_write, check_output_dir, check_output_files_in, write_json
 
 ALGOS = ("ppo", "sac")
@@ -91,29 +92,12 @@ def _positive(kind):
     return parse
 
 
-def _spec(env_id: str):
-    """What ``gym.make`` takes for ``env_id``: the id, or a retired simgrip id's spec (``simgrip.envs.RETIRED``)."""
-    from simgrip.envs import RETIRED, retired_spec
-
-    return retired_spec(env_id) if env_id in RETIRED else env_id
-
-
-def _make(env_id: str, env_kwargs=None, action_offset=None):
-    """The env of ``env_id`` made with ``env_kwargs``, behind ``ActionOffset(action_offset)`` when given."""
-    env = gym.make(_spec(env_id), **(env_kwargs or {}))
-    if action_offset is not None:
-        from simgrip.envs.action_offset import ActionOffset
-
-        env = ActionOffset(env, action_offset)
-    return env
-
-
 def evaluate(model, env_id: str, episodes: int, seed0: int, env_kwargs=None, normalizer=None,
              action_offset=None) -> dict:
     """Run the deterministic policy of ``model`` for ``episodes`` episodes on seeds ``seed0 + i`` (the env made
     with ``env_kwargs`` and behind ``action_offset``, as it was trained; ``normalizer``: the ``VecNormalize``
     it was trained behind, whose frozen observation statistics then normalise what the policy sees)."""
-    env = _make(env_id, env_kwargs, action_offset)
+    env = make_env(env_id, env_kwargs, action_offset)
     see = (lambda obs: obs) if normalizer is None else normalizer.normalize_obs
     try:
         gamma = getattr(model, "gamma", GAMMA)  # an SB3 model's own; anything else with predict(): SB3's default
@@ -240,7 +224,7 @@ def train(algo: str, env_id: str, *, steps: int, minutes: float, seed: int, out:
             return spent() < budget
 
     # make_vec_env calls the maker (gym.make of the id, or of a retired id's spec), then seeds and wraps in Monitor
-    env = make_vec_env(lambda: _make(env_id, env_kwargs, action_offset), n_envs=1, seed=seed)
+    env = make_vec_env(lambda: make_env(env_id, env_kwargs, action_offset), n_envs=1, seed=seed)
     if normalize:
         from stable_baselines3.common.vec_env import VecNormalize
 
@@ -363,19 +347,10 @@ def main(argv=None) -> int:
     if args.env not in gym.registry and args.env not in simgrip.envs.RETIRED:
         p.error(f"--env: unknown id {args.env!r}")
     if args.env_kwargs or args.action_offset is not None:  # refused before any training, the env built once
-        try:  # an argument the env does not take, or a bad value
-            env = _make(args.env, args.env_kwargs)
-        except (TypeError, ValueError) as e:
-            p.error(f"--env-kwargs: {args.env} does not take {json.dumps(args.env_kwargs)}: {e}")
-        try:  # the wrong number of actions, or outside the bounds
-            if args.action_offset is not None:
-                from simgrip.envs.action_offset import ActionOffset
-
-                ActionOffset(env, args.action_offset)
+        try:
+            make_env(args.env, args.env_kwargs, args.action_offset).close()
         except ValueError as e:
-            p.error(f"--action-offset: {e}")
-        finally:
-            env.close()
+            p.error(str(e))
     try:  # simgrip.io's output-path policy: a folder, and no FIFO/device/folder where a result file goes
         out = check_output_dir(args.out, "--out")
         kinds = ("curve.csv", "policy.csv", "model.zip", "eval.json") + (("vecnormalize.pkl",) if args.normalize else ())

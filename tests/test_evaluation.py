@@ -6,7 +6,8 @@ import gymnasium as gym
 import pytest
 
 import simgrip.envs  # noqa: F401
-from simgrip.envs.evaluation import GAMMA, add_episode_arguments, check_env_id, outcomes, run_episodes, summary
+from simgrip.envs.evaluation import (GAMMA, add_episode_arguments, check_env_id, make_env, outcomes, run_episodes,
+                                     summary)
 
 
 def test_episodes_are_seeded_and_summarised():
@@ -77,3 +78,15 @@ def test_discounted_return_and_outcomes():
 def test_default_discount_is_sb3s():
     res = run_episodes(_Counting(), lambda obs: [0.0], 1, 1)  # two steps: 1 + 0.99 * 2
     assert res[0].discounted == pytest.approx(1.0 + GAMMA * 2.0, abs=1e-12) and GAMMA == 0.99
+
+
+def test_make_env_names_the_option_it_refuses():
+    from simgrip.envs.action_offset import ActionOffset
+
+    env = make_env("simgrip/PickFragile-v2", {"w_touch": 0.0}, (-0.4, 0.2))  # a retired id, through its spec
+    assert isinstance(env, ActionOffset) and env.spec.id == "simgrip/PickFragile-v2" and env.unwrapped.w_touch == 0.0
+    env.close()
+    with pytest.raises(ValueError, match="^--env-kwargs: simgrip/PickFragile-v5 does not take"):
+        make_env("simgrip/PickFragile-v5", {"w_nope": 1})
+    with pytest.raises(ValueError, match="^--action-offset: offset must be 2 finite numbers"):
+        make_env("simgrip/PickFragile-v5", None, (0.1,))
