@@ -64,11 +64,14 @@ def add_episode_arguments(parser: argparse.ArgumentParser, *, episodes: int = 20
     parser.add_argument("--json", action="store_true", help="print only a JSON summary")
 
 
-def check_env_id(parser: argparse.ArgumentParser, env_id: str) -> None:
-    """Exit 2 naming ``--env`` when ``env_id`` is not registered."""
+def check_env_id(parser: argparse.ArgumentParser, env_id: str, *, retired: bool = False) -> None:
+    """Exit 2 naming ``--env`` when ``env_id`` is not registered (with ``retired=True``: nor a retired simgrip id
+    of ``simgrip.envs.RETIRED``, which :func:`make_env` builds)."""
     import gymnasium as gym
 
-    if env_id not in gym.registry:
+    from simgrip.envs import RETIRED
+
+    if env_id not in gym.registry and not (retired and env_id in RETIRED):
         parser.error(f"--env: unknown id {env_id!r}")
 
 

@@ -266,13 +266,11 @@ def main(argv=None) -> int:
 
     if any(importlib.util.find_spec(m) is None for m in ("stable_baselines3", "torch")):  # found, not imported:
         p.error('needs Stable-Baselines3 and PyTorch: pip install "simgrip[rl]"')  # the children import them
-    import gymnasium as gym
-
     import simgrip.envs  # noqa: F401  (registers the ids)
+    from simgrip.envs.evaluation import check_env_id
     from simgrip.io import check_output_dir, check_output_files_in, write_json
 
-    if args.env not in gym.registry and args.env not in simgrip.envs.RETIRED:  # train_sb3.py builds a retired one
-        p.error(f"--env: unknown id {args.env!r}")
+    check_env_id(p, args.env, retired=True)  # train_sb3.py builds a retired one
     if args.env_kwargs or args.action_offset is not None:  # refused before any run starts, the env built once
         from simgrip.envs.evaluation import make_env
 

@@ -67,12 +67,11 @@ import sys
 import time
 from pathlib import Path
 
-import gymnasium as gym
 import numpy as np
 
 import simgrip.envs  # noqa: F401  (registers the simgrip ids)
-from simgrip.envs.evaluation import (GAMMA, discount, json_object, make_env, non_negative_int, outcomes, run_episodes,
-                                     summary)
+from simgrip.envs.evaluation import (GAMMA, check_env_id, discount, json_object, make_env, non_negative_int, outcomes,
+                                     run_episodes, summary)
 from simgrip.io import atomic_write, check_output_dir, check_output_files_in, write_json
 
 ALGOS = ("ppo", "sac")
@@ -344,8 +343,7 @@ def main(argv=None) -> int:
         import torch
     except ImportError:
         p.error('needs Stable-Baselines3 and PyTorch: pip install "simgrip[rl]"')
-    if args.env not in gym.registry and args.env not in simgrip.envs.RETIRED:
-        p.error(f"--env: unknown id {args.env!r}")
+    check_env_id(p, args.env, retired=True)
     if args.env_kwargs or args.action_offset is not None:  # refused before any training, the env built once
         try:
             make_env(args.env, args.env_kwargs, args.action_offset).close()

@@ -40,6 +40,17 @@ def test_unknown_env_id_exits_2():
     assert info.value.code == 2
 
 
+def test_retired_ids_pass_only_where_asked(capsys):
+    p = argparse.ArgumentParser()
+    check_env_id(p, "simgrip/PickFragile-v2", retired=True)  # make_env builds it through its spec
+    check_env_id(p, "simgrip/Pick-v1", retired=True)
+    for env_id, retired in (("simgrip/PickFragile-v2", False), ("simgrip/Nope-v9", True)):
+        with pytest.raises(SystemExit) as info:
+            check_env_id(p, env_id, retired=retired)
+        assert info.value.code == 2
+        assert f"--env: unknown id {env_id!r}" in capsys.readouterr().err
+
+
 class _Counting(gym.Env):
     """Reward ``t + 1`` on step ``t``; ends after ``seed % 4 + 1`` steps, in the outcome ``ENDS[seed % 4]``."""
 
