@@ -9,8 +9,8 @@ id                                what                                      max 
 ``simgrip/Pick-v1``               Grip I: palm-down tip pinch (50 Hz)       200 (4 s)
 ``simgrip/PickCradle-v1``         Grip III: cradle from a pedestal (50 Hz)  250 (5 s)
 ``simgrip/PickMulti-v0``          K fingers around a box, cylinder, sphere  200 (4 s)
-``simgrip/PickFragile-v5``        Grip I pinch of a fragile workpiece       300 (6 s)
-``simgrip/PickMultiFragile-v5``   K fingers around a fragile workpiece      300 (6 s)
+``simgrip/PickFragile-v6``        Grip I pinch of a fragile workpiece       300 (6 s)
+``simgrip/PickMultiFragile-v6``   K fingers around a fragile workpiece      300 (6 s)
 ``simgrip/PlaceFragile-v4``       pinch, carry to a target, set down        400 (8 s)
 ``simgrip/PickCradleFragile-v5``  Grip III cradle, hand start height drawn  300 (6 s)
 ``simgrip/PickSphereFragile-v5``  K fingers around a sphere, height drawn   300 (6 s)
@@ -20,9 +20,11 @@ The five fragile tasks (a hidden crush limit per episode) command the curvature 
 is its rate, :mod:`simgrip.envs.pick_fragile_v2`) and observe the contact forces on a tactile sensor's scale
 (:mod:`simgrip.envs.pick_fragile_v3`); the pinch, the K fingers and the pick-and-place start from a pre-grasp
 (:mod:`simgrip.envs.pick_fragile_v4`, :mod:`simgrip.envs.pick_place_v4`); none pays reward per touching step, the
-claws pay for approaching the grasp height (:mod:`simgrip.envs.pick_fragile_v5`, :mod:`simgrip.envs.pick_claw_v5`).
-Their older versions are retired, not registered: ``PickFragile``, ``PickMultiFragile``, ``PickCradleFragile``,
-``PickSphereFragile`` v0-v4 and ``PlaceFragile`` v0-v3 (``RETIRED``);
+claws pay for approaching the grasp height (:mod:`simgrip.envs.pick_fragile_v5`, :mod:`simgrip.envs.pick_claw_v5`);
+the pinch and the K fingers charge no drop penalty, so a crush is never cheaper than a drop
+(:mod:`simgrip.envs.pick_fragile_v6`).
+Their older versions are retired, not registered: ``PickFragile`` and ``PickMultiFragile`` v0-v5,
+``PickCradleFragile`` and ``PickSphereFragile`` v0-v4 and ``PlaceFragile`` v0-v3 (``RETIRED``);
 ``gym.make(retired_spec("simgrip/PickFragile-v2"))`` still builds one exactly, with its time limit.
 
 >>> import gymnasium as gym, simgrip.envs
@@ -51,9 +53,9 @@ _ENVS = {
     "simgrip/PickMulti-v0": ("simgrip.envs.pick_multi:PickMultiEnv", {}, 200),
     # the newest of each: the valve, the tactile forces on the sensor's scale (simgrip.envs.pick_fragile_v3)
     # the pinch and the K fingers from a pre-grasp (simgrip.envs.pick_fragile_v4), without the per-step touch
-    # pay (simgrip.envs.pick_fragile_v5)
-    "simgrip/PickFragile-v5": ("simgrip.envs.pick_fragile_v5:FragilePickEnvV5", {}, 300),
-    "simgrip/PickMultiFragile-v5": ("simgrip.envs.pick_fragile_v5:FragilePickMultiEnvV5", {}, 300),
+    # pay (simgrip.envs.pick_fragile_v5), without the drop penalty (simgrip.envs.pick_fragile_v6)
+    "simgrip/PickFragile-v6": ("simgrip.envs.pick_fragile_v6:FragilePickEnvV6", {}, 300),
+    "simgrip/PickMultiFragile-v6": ("simgrip.envs.pick_fragile_v6:FragilePickMultiEnvV6", {}, 300),
     # pick-and-place from a pre-grasp, no touch pay (simgrip.envs.pick_place_v4)
     "simgrip/PlaceFragile-v4": ("simgrip.envs.pick_place_v4:FragilePlaceEnvV4", {}, 400),
     # the claws paid for approaching the grasp height, not per touching step (simgrip.envs.pick_claw_v5)
@@ -97,12 +99,16 @@ RETIRED = {
     # the hand started at an unknown height, the tactile scale (simgrip.envs.pick_fragile_v3), paying every touch step
     "simgrip/PickCradleFragile-v4": ("simgrip.envs.pick_fragile_v3:FragileCradleEnvV4", {}, 300),
     "simgrip/PickSphereFragile-v4": ("simgrip.envs.pick_fragile_v3:FragileSphereEnvV4", {}, 300),
+    # the pre-grasp without the per-step touch pay (simgrip.envs.pick_fragile_v5), charging a drop 5
+    "simgrip/PickFragile-v5": ("simgrip.envs.pick_fragile_v5:FragilePickEnvV5", {}, 300),
+    "simgrip/PickMultiFragile-v5": ("simgrip.envs.pick_fragile_v5:FragilePickMultiEnvV5", {}, 300),
 }
 ENV_IDS = tuple(k for k, v in _ENVS.items() if v[0] == "simgrip.envs.pick:PickEnv")
 MULTI_ENV_IDS = tuple(k for k, v in _ENVS.items() if v[0] == "simgrip.envs.pick_multi:PickMultiEnv")
 FRAGILE_ENV_IDS = tuple(k for k, v in _ENVS.items()
                         if v[0].split(":")[0] in ("simgrip.envs.pick_fragile_v3", "simgrip.envs.pick_fragile_v4",
-                                                  "simgrip.envs.pick_fragile_v5", "simgrip.envs.pick_claw_v5",
+                                                  "simgrip.envs.pick_fragile_v5", "simgrip.envs.pick_fragile_v6",
+                                                  "simgrip.envs.pick_claw_v5",
                                                   "simgrip.envs.pick_place_v4"))
 
 

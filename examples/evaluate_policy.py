@@ -8,7 +8,7 @@ discounted by ``--gamma`` (default 0.99, SB3's default): the quantity PPO and SA
 settles below a controller's success rate while its discounted return is above the controller's is not failing
 to optimise: under that discount, its faster and riskier policy is worth more.
 
-    python examples/evaluate_policy.py --env simgrip/PickFragile-v5 (--model ZIP [--algo ppo|sac] |
+    python examples/evaluate_policy.py --env simgrip/PickFragile-v6 (--model ZIP [--algo ppo|sac] |
         --policy observation|oracle) [--action-offset A0 A1] [--env-kwargs JSON] [--episodes 50] [--seed 8000]
         [--gamma 0.99] [--json]
 
@@ -52,7 +52,7 @@ def _scripted(env, name: str):
 
 def main(argv=None) -> dict:
     p = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
-    p.add_argument("--env", required=True, help="registered env id, e.g. simgrip/PickFragile-v5")
+    p.add_argument("--env", required=True, help="registered env id, e.g. simgrip/PickFragile-v6")
     p.add_argument("--env-kwargs", type=json_object, default={}, metavar="JSON",
                    help="keyword arguments of gym.make, as the model was trained with")
     what = p.add_mutually_exclusive_group(required=True)

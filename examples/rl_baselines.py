@@ -232,7 +232,7 @@ def plot(summary: dict, results: list[dict], path: Path) -> None:
 
 def main(argv=None) -> int:
     p = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
-    p.add_argument("--env", required=True, help="registered env id, e.g. simgrip/PickFragile-v5, or a retired "
+    p.add_argument("--env", required=True, help="registered env id, e.g. simgrip/PickFragile-v6, or a retired "
                    "simgrip one (simgrip.envs.RETIRED: the runs of docs/baselines/ name them)")
     p.add_argument("--env-kwargs", type=_json_object, default={}, metavar="JSON",
                    help="keyword arguments of gym.make as a JSON object, e.g. '{\"w_touch\": 0}' (an ablation; "

@@ -5,11 +5,11 @@ import pytest
 import simgrip  # noqa: F401  registers the environments
 from env_checks import make
 
-# the retired fragile ids (v0, v1; built through retired_spec) keep their documented keys too
+# the retired fragile ids (v0, v1, v4, v5, ...; built through retired_spec) keep their documented keys too
 IDS = ["simgrip/Pick-v1", "simgrip/PickMulti-v0", "simgrip/PickFragile-v0", "simgrip/PickMultiFragile-v0",
        "simgrip/PlaceFragile-v0", "simgrip/PickFragile-v1", "simgrip/PickMultiFragile-v1", "simgrip/PlaceFragile-v1",
        "simgrip/PickFragile-v4", "simgrip/PickMultiFragile-v4", "simgrip/PickFragile-v5",
-       "simgrip/PickMultiFragile-v5", "simgrip/PlaceFragile-v3", "simgrip/PlaceFragile-v4",
+       "simgrip/PickMultiFragile-v5", "simgrip/PickFragile-v6", "simgrip/PickMultiFragile-v6", "simgrip/PlaceFragile-v3", "simgrip/PlaceFragile-v4",
        "simgrip/PickCradleFragile-v4", "simgrip/PickSphereFragile-v4", "simgrip/PickCradleFragile-v5",
        "simgrip/PickSphereFragile-v5"]
 

@@ -17,8 +17,10 @@ single bit fails the test, naming the id, run and step.  Ids retired since (``si
 replayed through ``retired_spec``; ids registered since were appended by the same command (PickFragile-v4 and
 PickMultiFragile-v4, recorded at 5aaecbb's successors, whose env layer gives the recorded ids' bytes; PickFragile-v5,
 PickMultiFragile-v5, PickCradleFragile-v5 and PickSphereFragile-v5 at a9625e7 with v5 added, appended without
-re-recording the others; PlaceFragile-v4 likewise).  The physics is MuJoCo's: the reference holds for the
-MuJoCo version it was recorded with (stored beside it; another version skips, saying so).  An intended change
+re-recording the others; PlaceFragile-v4 likewise; PickFragile-v6 and PickMultiFragile-v6 with v6 added, the
+others' digests reproduced unchanged).  The physics is MuJoCo's: the reference holds for the MuJoCo versions
+stored beside it (the one it was recorded with and each later one whose replay gave every digest,
+``--add-version``: ``tests/reference_versions.py``); another version skips, saying so.  An intended change
 of an env's output regenerates the file with the command above.
 """
 
@@ -28,9 +30,9 @@ import sys
 from pathlib import Path
 
 import numpy as np
-import pytest
 
 sys.path.insert(0, str(Path(__file__).parent))
+from reference_versions import add_installed_version, recorded_versions, skip_unless_recorded  # noqa: E402
 from test_env_step_reference import _digest  # noqa: E402  (the canonical digest of a step's output)
 
 DATA = Path(__file__).parent / "data" / "env_rollout_reference.npz"
@@ -83,12 +85,15 @@ def _record() -> None:  # pragma: no cover - regenerates the reference
     from simgrip.envs import _ENVS
 
     # the recorded ids in their order (an id's k seeds its actions; retired ones stay), newly registered ones after
-    ids = []
+    # (the MuJoCo versions the old file holds for stay, where this one reproduces it: only ids are appended)
+    ids, versions = [], [mujoco.__version__]
     if DATA.exists():
         with np.load(DATA) as old:
             ids = old["ids"].tolist()
+            if not _mismatches(old)[0]:
+                versions = list(dict.fromkeys(recorded_versions(old) + versions))
     ids += [i for i in _ENVS if i not in ids]
-    arrays = {"mujoco_version": np.array(mujoco.__version__), "ids": np.array(ids)}
+    arrays = {"mujoco_version": np.array(versions), "ids": np.array(ids)}
     for k, env_id in enumerate(ids):
         env = _make(env_id)
         for run in RUNS:
@@ -101,33 +106,44 @@ def _record() -> None:  # pragma: no cover - regenerates the reference
     np.savez_compressed(DATA, **arrays)
 
 
-def test_long_rollouts_match_the_reference():
-    import mujoco
-
+def _mismatches(ref) -> tuple[list[str], int]:
+    """Where the replay of every recorded id under the installed MuJoCo differs from ``ref`` (empty: nowhere),
+    and how many resets the recorded runs hold."""
     import simgrip.envs  # noqa: F401  (registers the ids)
 
+    out, resets = [], 0
+    for k, env_id in enumerate(ref["ids"].tolist()):
+        env = _make(env_id)
+        try:
+            for run in RUNS:
+                actions = ref[f"a{k}_{run}"]  # (stored: a change of numpy's random streams changes nothing here)
+                got = np.frombuffer(b"".join(_rollout(env, SEED + k, actions)), dtype=np.uint64)
+                want = ref[f"d{k}_{run}"]
+                bad = np.flatnonzero(got[:want.size] != want[:got.size])
+                if bad.size or got.size != want.size:
+                    out.append(f"{env_id}, {run} run: output differs from the reference at digest "
+                               f"{int(bad[0]) if bad.size else min(got.size, want.size)} ({got.size} replayed, "
+                               f"{want.size} recorded)")
+                resets += want.size - STEPS - 1
+        finally:
+            env.close()
+    return out, resets
+
+
+def test_long_rollouts_match_the_reference():
     with np.load(DATA) as ref:  # closed at the end (an open NpzFile warns when collected)
-        if str(ref["mujoco_version"]) != mujoco.__version__:
-            pytest.skip(f"reference recorded with MuJoCo {ref['mujoco_version']}, this is {mujoco.__version__}")
-        resets = 0
-        for k, env_id in enumerate(ref["ids"].tolist()):
-            env = _make(env_id)
-            try:
-                for run in RUNS:
-                    actions = ref[f"a{k}_{run}"]  # (stored: a change of numpy's random streams changes nothing here)
-                    got = np.frombuffer(b"".join(_rollout(env, SEED + k, actions)), dtype=np.uint64)
-                    want = ref[f"d{k}_{run}"]
-                    bad = np.flatnonzero(got[:want.size] != want[:got.size])
-                    assert not bad.size and got.size == want.size, (
-                        f"{env_id}, {run} run: output differs from the reference at digest "
-                        f"{int(bad[0]) if bad.size else min(got.size, want.size)} ({got.size} replayed, {want.size} recorded)")
-                    resets += want.size - STEPS - 1
-            finally:
-                env.close()
-        assert resets > 10, "the runs should reach terminations (and the resets after them)"
+        skip_unless_recorded(ref)
+        bad, resets = _mismatches(ref)
+    assert not bad, bad[0]
+    assert resets > 10, "the runs should reach terminations (and the resets after them)"
 
 
 if __name__ == "__main__":  # pragma: no cover
-    if sys.argv[1:] not in ([], ["--regenerate"]):
-        raise SystemExit("usage: python tests/test_env_rollout_reference.py [--regenerate]")
-    _record()
+    if sys.argv[1:] not in ([], ["--regenerate"], ["--add-version"]):
+        raise SystemExit("usage: python tests/test_env_rollout_reference.py [--regenerate | --add-version]")
+    if sys.argv[1:] == ["--add-version"]:
+        with np.load(DATA) as ref:
+            found, _ = _mismatches(ref)
+        add_installed_version(DATA, found)
+    else:
+        _record()

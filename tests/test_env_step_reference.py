@@ -7,7 +7,8 @@ one episode of the scripted controller (up to 200 steps) and of one of uniform r
 returns (observation bytes, reward, flags, every ``info`` key and value, in order).  The test replays the
 stored actions and compares the digests: any change of an observation, reward, termination or info entry, by
 a single bit, fails it, naming the env, episode and step.  The physics is MuJoCo's, so the reference holds
-for the MuJoCo version it was recorded with (stored beside it; another version skips, saying so).  An
+for the MuJoCo version it was recorded with (stored beside it with each later one whose replay gave every
+digest, ``--add-version``: ``tests/reference_versions.py``; another version skips, saying so).  An
 intended change of an env's output regenerates the file with the command above.  Ids retired since they were
 recorded (``simgrip.envs.RETIRED``) are replayed through ``retired_spec``: every recorded id stays checked.
 """
@@ -20,7 +21,9 @@ import sys
 from pathlib import Path
 
 import numpy as np
-import pytest
+
+sys.path.insert(0, str(Path(__file__).parent))
+from reference_versions import add_installed_version, skip_unless_recorded  # noqa: E402
 
 DATA = Path(__file__).parent / "data" / "env_step_reference.npz"
 SEED = 4321  # episode seeds SEED, SEED + 1 (the scripted and the random episode)
@@ -108,30 +111,40 @@ def _record() -> None:  # pragma: no cover - regenerates the reference
     np.savez_compressed(DATA, **arrays)
 
 
-def test_env_steps_match_the_reference():
-    import mujoco
-
+def _mismatches(ref) -> list[str]:
+    """Where the replay of every recorded id under the installed MuJoCo differs from ``ref`` (empty: nowhere)."""
     import simgrip.envs  # noqa: F401  (registers the ids)
 
+    out = []
+    for k, env_id in enumerate(ref["ids"].tolist()):
+        env = _make(env_id)  # a retired id through retired_spec (no deprecation notice)
+        try:
+            for e in (0, 1):
+                got = np.frombuffer(b"".join(_replay(env, SEED + e, ref[f"a{k}_{e}"])), dtype=np.uint64)
+                want = ref[f"d{k}_{e}"]
+                bad = [i for i in range(min(got.size, want.size)) if got[i] != want[i]]
+                if bad or got.size != want.size:
+                    out.append(f"{env_id}, episode {e}: output differs from the reference at "
+                               f"{'reset' if bad and bad[0] == 0 else 'step %d' % (bad[0] if bad else min(got.size, want.size))}"
+                               f" ({got.size - 1} steps replayed, {want.size - 1} recorded)")
+        finally:
+            env.close()
+    return out
+
+
+def test_env_steps_match_the_reference():
     with np.load(DATA) as ref:  # closed at the end (an open NpzFile warns when collected)
-        if str(ref["mujoco_version"]) != mujoco.__version__:
-            pytest.skip(f"reference recorded with MuJoCo {ref['mujoco_version']}, this is {mujoco.__version__}")
-        for k, env_id in enumerate(ref["ids"].tolist()):
-            env = _make(env_id)  # a retired id through retired_spec (no deprecation notice)
-            try:
-                for e in (0, 1):
-                    got = np.frombuffer(b"".join(_replay(env, SEED + e, ref[f"a{k}_{e}"])), dtype=np.uint64)
-                    want = ref[f"d{k}_{e}"]
-                    bad = [i for i in range(min(got.size, want.size)) if got[i] != want[i]]
-                    assert not bad and got.size == want.size, (
-                        f"{env_id}, episode {e}: output differs from the reference at "
-                        f"{'reset' if bad and bad[0] == 0 else 'step %d' % (bad[0] if bad else min(got.size, want.size))}"
-                        f" ({got.size - 1} steps replayed, {want.size - 1} recorded)")
-            finally:
-                env.close()
+        skip_unless_recorded(ref)
+        bad = _mismatches(ref)
+    assert not bad, bad[0]
 
 
 if __name__ == "__main__":  # pragma: no cover
-    if sys.argv[1:] not in ([], ["--regenerate"]):
-        raise SystemExit("usage: python tests/test_env_step_reference.py [--regenerate]")
-    _record()
+    if sys.argv[1:] not in ([], ["--regenerate"], ["--add-version"]):
+        raise SystemExit("usage: python tests/test_env_step_reference.py [--regenerate | --add-version]")
+    if sys.argv[1:] == ["--add-version"]:
+        with np.load(DATA) as ref:
+            found = _mismatches(ref)
+        add_installed_version(DATA, found)
+    else:
+        _record()

@@ -97,7 +97,7 @@ def test_make_env_names_the_option_it_refuses():
     env = make_env("simgrip/PickFragile-v2", {"w_touch": 0.0}, (-0.4, 0.2))  # a retired id, through its spec
     assert isinstance(env, ActionOffset) and env.spec.id == "simgrip/PickFragile-v2" and env.unwrapped.w_touch == 0.0
     env.close()
-    with pytest.raises(ValueError, match="^--env-kwargs: simgrip/PickFragile-v5 does not take"):
-        make_env("simgrip/PickFragile-v5", {"w_nope": 1})
+    with pytest.raises(ValueError, match="^--env-kwargs: simgrip/PickFragile-v6 does not take"):
+        make_env("simgrip/PickFragile-v6", {"w_nope": 1})
     with pytest.raises(ValueError, match="^--action-offset: offset must be 2 finite numbers"):
-        make_env("simgrip/PickFragile-v5", None, (0.1,))
+        make_env("simgrip/PickFragile-v6", None, (0.1,))

@@ -52,8 +52,8 @@ def test_train_sb3_evaluates_with_the_env_kwargs_it_was_given():
             return np.array([-0.3, 0.0], np.float32), None
 
     evaluate = _example("train_sb3").evaluate
-    plain = evaluate(Closing(), "simgrip/PickFragile-v5", 1, 8000)
-    paid = evaluate(Closing(), "simgrip/PickFragile-v5", 1, 8000, {"w_touch": 0.5})
+    plain = evaluate(Closing(), "simgrip/PickFragile-v6", 1, 8000)
+    paid = evaluate(Closing(), "simgrip/PickFragile-v6", 1, 8000, {"w_touch": 0.5})
     assert paid["mean_return"] > plain["mean_return"] + 0.5  # touch steps paid: the kwargs reached the env
 
 
@@ -67,10 +67,10 @@ def test_train_sb3_evaluates_behind_the_action_offset_it_was_given():
             return np.zeros(2, np.float32), None
 
     evaluate = _example("train_sb3").evaluate
-    held = evaluate(Zero(), "simgrip/PickFragile-v5", 2, 8000)
-    probed = evaluate(Zero(), "simgrip/PickFragile-v5", 2, 8000, None, None, [-0.4, 0.2])
+    held = evaluate(Zero(), "simgrip/PickFragile-v6", 2, 8000)
+    probed = evaluate(Zero(), "simgrip/PickFragile-v6", 2, 8000, None, None, [-0.4, 0.2])
     # the same episodes run by hand behind the wrapper: the evaluation went through it
-    env = ActionOffset(gym.make("simgrip/PickFragile-v5"), [-0.4, 0.2])
+    env = ActionOffset(gym.make("simgrip/PickFragile-v6"), [-0.4, 0.2])
     returns = []
     for seed in (8000, 8001):
         env.reset(seed=seed)
@@ -104,7 +104,7 @@ def test_train_sb3_policy_log_starts_at_ppo_initial_gaussian(tmp_path, capsys):
     # the first window's 2048 samples must show exactly that; the second, after one update, a changed log_std
     pytest.importorskip("stable_baselines3")
     module = _example("train_sb3")
-    module.main(["--algo", "ppo", "--env", "simgrip/PickFragile-v5", "--steps", "4096", "--eval-episodes", "1",
+    module.main(["--algo", "ppo", "--env", "simgrip/PickFragile-v6", "--steps", "4096", "--eval-episodes", "1",
                  "--out", str(tmp_path)])
     capsys.readouterr()
     with open(tmp_path / "ppo_policy.csv") as fh:
@@ -133,17 +133,17 @@ def test_train_sb3_evaluates_through_the_frozen_normalizer():
             return np.zeros(2, np.float32), None
 
     evaluate = _example("train_sb3").evaluate
-    evaluate(Recorder(), "simgrip/PickFragile-v5", 1, 8000, None, Shift())
+    evaluate(Recorder(), "simgrip/PickFragile-v6", 1, 8000, None, Shift())
     assert seen and all(np.all(o < -500.0) for o in seen)  # the env's observations are bounded by 100
     seen.clear()
-    evaluate(Recorder(), "simgrip/PickFragile-v5", 1, 8000)
+    evaluate(Recorder(), "simgrip/PickFragile-v6", 1, 8000)
     assert seen and all(np.all(o > -500.0) for o in seen)
 
 
 def test_train_sb3_normalize_saves_the_statistics_with_every_model(tmp_path, capsys):
     pytest.importorskip("stable_baselines3")
     module = _example("train_sb3")
-    module.main(["--algo", "ppo", "--env", "simgrip/PickFragile-v5", "--minutes", "0.06", "--checkpoint-minutes",
+    module.main(["--algo", "ppo", "--env", "simgrip/PickFragile-v6", "--minutes", "0.06", "--checkpoint-minutes",
                  "0.03", "--eval-episodes", "1", "--normalize", "--out", str(tmp_path)])
     res = json.loads(capsys.readouterr().out.strip().splitlines()[-1])
     assert "VecNormalize" in res["wrapper"] and res["episodes"] == 1
@@ -159,10 +159,10 @@ def test_evaluate_policy_scripted_matches_the_baselines_harness(capsys):
     """The scripted controller through evaluate_policy ends its episodes as simgrip.envs.baselines runs it."""
     from simgrip.envs.baselines import evaluate
 
-    out = _example("evaluate_policy").main(["--env", "simgrip/PickFragile-v5", "--policy", "observation",
+    out = _example("evaluate_policy").main(["--env", "simgrip/PickFragile-v6", "--policy", "observation",
                                             "--episodes", "3", "--seed", "8300", "--json"])
     assert json.loads(capsys.readouterr().out.strip()) == out
-    ref = evaluate("simgrip/PickFragile-v5", "observation", list(range(8300, 8303)))
+    ref = evaluate("simgrip/PickFragile-v6", "observation", list(range(8300, 8303)))
     assert out["outcomes"] == ref["outcomes"] and out["success_rate"] == ref["success_rate"]
     assert out["gamma"] == 0.99 and out["eval_seeds"] == [8300, 8302]
     assert out["mean_discounted_return"] < out["mean_return"]  # rewards are paid late in an episode
@@ -180,7 +180,7 @@ def test_evaluate_policy_scripted_matches_the_baselines_harness(capsys):
 ])
 def test_evaluate_policy_bad_options_exit_2_naming_them(argv, word, capsys):
     with pytest.raises(SystemExit) as e:
-        _example("evaluate_policy").main(["--env", "simgrip/PickFragile-v5", *argv])
+        _example("evaluate_policy").main(["--env", "simgrip/PickFragile-v6", *argv])
     assert e.value.code == 2
     assert word in capsys.readouterr().err
 
@@ -197,14 +197,14 @@ def test_evaluate_policy_model_reproduces_train_sb3s_evaluation(tmp_path, capsys
     """A model evaluated again by evaluate_policy: the held-out figures train_sb3 wrote, digit for digit, at
     the discount it was trained with."""
     pytest.importorskip("stable_baselines3")
-    _example("train_sb3").main(["--algo", "sac", "--env", "simgrip/PickFragile-v5", "--steps", "150",
+    _example("train_sb3").main(["--algo", "sac", "--env", "simgrip/PickFragile-v6", "--steps", "150",
                                 "--action-offset", "-0.4", "0.2", "--gamma", "0.95", "--eval-episodes", "2",
                                 "--eval-seed", "8310", "--out", str(tmp_path)])
     trained = json.loads((tmp_path / "sac_eval.json").read_text())
     assert trained["hyperparameters"] == "Stable-Baselines3 defaults but gamma = 0.95" and trained["gamma"] == 0.95
     capsys.readouterr()
     again = _example("evaluate_policy").main([
-        "--env", "simgrip/PickFragile-v5", "--model", str(tmp_path / "sac_model.zip"), "--algo", "sac",
+        "--env", "simgrip/PickFragile-v6", "--model", str(tmp_path / "sac_model.zip"), "--algo", "sac",
         "--action-offset", "-0.4", "0.2", "--episodes", "2", "--seed", "8310", "--gamma", "0.95", "--json"])
     for key in ("success_rate", "mean_return", "mean_length", "outcomes", "mean_success_length",
                 "mean_discounted_return", "gamma", "eval_seeds"):

@@ -1,4 +1,5 @@
-"""The pinch's and the K fingers' v5 (simgrip.envs.pick_fragile_v5): v4 without the per-step touch pay.
+"""The pinch's and the K fingers' v5 (simgrip.envs.pick_fragile_v5, retired by v6): v4 without the per-step touch
+pay.
 
 Checked against v4 itself, stepped with the same seed and actions beside it: the same observations, events
 and info; the reward differs by exactly v4's ``reward_touch``; v5's ``reward_touch`` is 0 on every step.
@@ -12,7 +13,7 @@ import numpy as np
 import pytest
 
 import simgrip.envs  # noqa: F401  registers the environments
-from simgrip.envs import FRAGILE_ENV_IDS
+from simgrip.envs import RETIRED, retired_spec
 from simgrip.envs.pick_fragile_v4 import FragilePickEnvV4, FragilePickMultiEnvV4
 from simgrip.envs.pick_fragile_v5 import FragilePickEnvV5, FragilePickMultiEnvV5
 
@@ -20,9 +21,9 @@ from simgrip.envs.pick_fragile_v5 import FragilePickEnvV5, FragilePickMultiEnvV5
 V4_OF = {"simgrip/PickFragile-v5": FragilePickEnvV4, "simgrip/PickMultiFragile-v5": FragilePickMultiEnvV4}
 
 
-def test_both_are_registered():
-    assert set(V4_OF) <= set(FRAGILE_ENV_IDS)
-    assert gym.spec("simgrip/PickFragile-v5").entry_point.endswith(FragilePickEnvV5.__name__)
+def test_both_are_retired():
+    assert set(V4_OF) <= set(RETIRED)
+    assert retired_spec("simgrip/PickFragile-v5").entry_point.endswith(FragilePickEnvV5.__name__)
 
 
 def _actions(n, seed):
@@ -54,7 +55,7 @@ def episode_return(env, seed, act) -> tuple[float, bool]:
 
 @pytest.mark.parametrize("env_id", sorted(V4_OF))
 def test_v5_is_v4_less_the_touch_pay(env_id):
-    new, old = gym.make(env_id).unwrapped, V4_OF[env_id]()
+    new, old = gym.make(retired_spec(env_id)).unwrapped, V4_OF[env_id]()
     touch_steps = 0
     try:
         for seed in (8100, 8101, 8102):
@@ -82,7 +83,7 @@ def test_v5_is_v4_less_the_touch_pay(env_id):
 
 @pytest.mark.parametrize("env_id", sorted(V4_OF))
 def test_an_unsuccessful_episode_returns_at_most_contact_plus_lift(env_id):
-    env = gym.make(env_id)
+    env = gym.make(retired_spec(env_id))
     u = env.unwrapped
     bound = u.w_contact + u.w_lift
     try:

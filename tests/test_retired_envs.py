@@ -17,8 +17,9 @@ import simgrip.envs
 from simgrip.envs import FRAGILE_ENV_IDS, RETIRED, retired_spec
 
 #: each fragile task's newest registered version (the tactile scale, simgrip.envs.pick_fragile_v3; the pre-grasp, _v4;
-#: no per-step touch pay, _v5; the claws' approach term, pick_claw_v5; the place's pre-grasp, pick_place_v4)
-NEWEST = {"simgrip/PickFragile": "v5", "simgrip/PickMultiFragile": "v5", "simgrip/PlaceFragile": "v4",
+#: no per-step touch pay, _v5; no drop penalty, _v6; the claws' approach term, pick_claw_v5; the place's pre-grasp,
+#: pick_place_v4)
+NEWEST = {"simgrip/PickFragile": "v6", "simgrip/PickMultiFragile": "v6", "simgrip/PlaceFragile": "v4",
           "simgrip/PickCradleFragile": "v5", "simgrip/PickSphereFragile": "v5"}
 RETIRED_IDS = [f"{name}-v{k}" for name, newest in NEWEST.items() for k in range(int(newest[1:]))]
 
@@ -81,7 +82,7 @@ def test_make_keyword_arguments_reach_the_retired_class():
         env.close()
 
 
-@pytest.mark.parametrize("bad, why", [("simgrip/PickFragile-v5", "registered"), ("simgrip/Pick-v0", "retired"),
+@pytest.mark.parametrize("bad, why", [("simgrip/PickFragile-v6", "registered"), ("simgrip/Pick-v0", "retired"),
                                       ("simgrip/NoSuch-v0", "retired"), (None, "retired")])
 def test_retired_spec_of_anything_else_is_a_value_error_naming_it(bad, why):
     with pytest.raises(ValueError, match=f"env_id: {bad!r}.*{why}"):

@@ -96,7 +96,7 @@ def test_smoke_two_seeds_aggregate_and_plot(tmp_path):
 
 def test_env_kwargs_the_env_does_not_take_exit_2_before_any_run(tmp_path, capsys):
     _needs_sb3()
-    argv = ["--env", "simgrip/PickFragile-v5", "--out", str(tmp_path / "o"), "--env-kwargs", '{"w_tuch": 0}']
+    argv = ["--env", "simgrip/PickFragile-v6", "--out", str(tmp_path / "o"), "--env-kwargs", '{"w_tuch": 0}']
     with pytest.raises(SystemExit) as e:
         _module().main(argv)
     assert e.value.code == 2
@@ -147,7 +147,7 @@ def test_ctrl_c_stops_every_child_with_one_line(tmp_path):
 
 def test_normalize_reaches_every_run_command(tmp_path):
     mod = _module()
-    args = mod.argparse.Namespace(env="simgrip/PickFragile-v5", minutes=1.0, steps=10, eval_seeds=(8000, 8001),
+    args = mod.argparse.Namespace(env="simgrip/PickFragile-v6", minutes=1.0, steps=10, eval_seeds=(8000, 8001),
                                   checkpoint_minutes=None, env_kwargs={}, normalize=True, action_offset=None,
                                   gamma=None)
     assert "--normalize" in mod.run_command("ppo", 0, args, tmp_path)
@@ -157,7 +157,7 @@ def test_normalize_reaches_every_run_command(tmp_path):
 
 def test_action_offset_reaches_every_run_command(tmp_path):
     mod = _module()
-    args = mod.argparse.Namespace(env="simgrip/PickFragile-v5", minutes=1.0, steps=10, eval_seeds=(8000, 8001),
+    args = mod.argparse.Namespace(env="simgrip/PickFragile-v6", minutes=1.0, steps=10, eval_seeds=(8000, 8001),
                                   checkpoint_minutes=None, env_kwargs={}, normalize=False, action_offset=[-0.4, 0.2],
                                   gamma=None)
     cmd = mod.run_command("ppo", 0, args, tmp_path)
@@ -169,7 +169,7 @@ def test_action_offset_reaches_every_run_command(tmp_path):
 
 def test_gamma_reaches_every_run_command(tmp_path):
     mod = _module()
-    args = mod.argparse.Namespace(env="simgrip/PickFragile-v5", minutes=1.0, steps=10, eval_seeds=(8000, 8001),
+    args = mod.argparse.Namespace(env="simgrip/PickFragile-v6", minutes=1.0, steps=10, eval_seeds=(8000, 8001),
                                   checkpoint_minutes=None, env_kwargs={}, normalize=False, action_offset=None,
                                   gamma=0.995)
     cmd = mod.run_command("ppo", 0, args, tmp_path)
