@@ -75,34 +75,42 @@ def check_env_id(parser: argparse.ArgumentParser, env_id: str, *, retired: bool 
         parser.error(f"--env: unknown id {env_id!r}")
 
 
-def make_env(env_id: str, env_kwargs: dict | None = None, action_offset=None):
+def make_env(env_id: str, env_kwargs: dict | None = None, action_offset=None, frame_stack: int | None = None):
     """The env of ``env_id`` (a registered id, or a retired one of ``simgrip.envs.RETIRED`` through its spec) made
     with ``env_kwargs`` (``gym.make``'s keyword arguments), behind
-    :class:`~simgrip.envs.action_offset.ActionOffset` ``(action_offset)`` when that is given: what the training
-    and evaluation scripts build and check their options with.
+    :class:`~simgrip.envs.action_offset.ActionOffset` ``(action_offset)`` when that is given, and behind
+    Gymnasium's ``FrameStackObservation(env, frame_stack)`` when ``frame_stack`` is 2 or more (the observation
+    becomes the last ``frame_stack`` observations, oldest first, shape ``(frame_stack, n)``; after ``reset`` the
+    first one repeated): what the training and evaluation scripts build and check their options with.
 
     Raises ValueError naming the option: ``--env-kwargs`` when the env does not take ``env_kwargs`` or refuses a
-    value, ``--action-offset`` when the offset does not fit its action space (the env is closed first)."""
+    value, ``--action-offset`` when the offset does not fit its action space, ``--frame-stack`` when it is not a
+    whole number >= 1 (the env is closed first)."""
     import json
 
     import gymnasium as gym
 
     from simgrip.envs import RETIRED, retired_spec
 
+    if frame_stack is not None and (isinstance(frame_stack, bool) or not isinstance(frame_stack, int)
+                                    or frame_stack < 1):
+        raise ValueError(f"--frame-stack: a whole number >= 1, got {frame_stack!r}")
     kwargs = dict(env_kwargs or {})
     try:
         env = gym.make(retired_spec(env_id) if env_id in RETIRED else env_id, **kwargs)
     except (TypeError, ValueError) as e:
         raise ValueError(f"--env-kwargs: {env_id} does not take {json.dumps(kwargs)}: {e}") from None
-    if action_offset is None:
-        return env
-    from simgrip.envs.action_offset import ActionOffset
+    if action_offset is not None:
+        from simgrip.envs.action_offset import ActionOffset
 
-    try:
-        return ActionOffset(env, action_offset)
-    except ValueError as e:
-        env.close()
-        raise ValueError(f"--action-offset: {e}") from None
+        try:
+            env = ActionOffset(env, action_offset)
+        except ValueError as e:
+            env.close()
+            raise ValueError(f"--action-offset: {e}") from None
+    if frame_stack is not None and frame_stack > 1:
+        env = gym.wrappers.FrameStackObservation(env, frame_stack)
+    return env
 
 
 def env_kwargs(parser: argparse.ArgumentParser, args: argparse.Namespace) -> dict:

@@ -9,10 +9,11 @@ settles below a controller's success rate while its discounted return is above t
 to optimise: under that discount, its faster and riskier policy is worth more.
 
     python examples/evaluate_policy.py --env simgrip/PickFragile-v6 (--model ZIP [--algo ppo|sac] |
-        --policy observation|oracle) [--action-offset A0 A1] [--env-kwargs JSON] [--episodes 50] [--seed 8000]
-        [--gamma 0.99] [--json]
+        --policy observation|oracle) [--action-offset A0 A1] [--frame-stack N] [--env-kwargs JSON] [--episodes 50]
+        [--seed 8000] [--gamma 0.99] [--json]
 
-``--action-offset`` must be the one the model was trained behind (``train_sb3.py``'s option of that name);
+``--action-offset`` and ``--frame-stack`` must be the ones the model was trained with (``train_sb3.py``'s
+options of those names);
 a model trained behind ``VecNormalize`` is not supported here.  Prints one line, or with ``--json`` one JSON
 object: ``{"env", "policy", "episodes", "success_rate", "mean_return", "mean_length", "outcomes",
 "mean_success_length", "mean_discounted_return", "gamma", "eval_seeds"}``.  Exit 2 naming the option on bad
@@ -61,6 +62,8 @@ def main(argv=None) -> dict:
     p.add_argument("--algo", choices=("ppo", "sac"), default="ppo", help="the model's algorithm (default ppo)")
     p.add_argument("--action-offset", type=float, nargs="+", default=None, metavar="A",
                    help="the ActionOffset the model was trained behind")
+    p.add_argument("--frame-stack", type=positive_int, default=None, metavar="N",
+                   help="the observations stacked when the model was trained (train_sb3.py's --frame-stack)")
     p.add_argument("--episodes", type=positive_int, default=50, help="episodes (default 50)")
     p.add_argument("--seed", type=non_negative_int, default=8000, help="seed of the first episode (default 8000)")
     p.add_argument("--gamma", type=discount, default=0.99, help="discount of the reported return (default 0.99)")
@@ -69,13 +72,15 @@ def main(argv=None) -> dict:
     check_env_id(p, args.env)
     if args.policy is not None and args.action_offset is not None:
         p.error("--action-offset: only with --model (the scripted controllers command the env directly)")
+    if args.policy is not None and args.frame_stack is not None:
+        p.error("--frame-stack: only with --model (the scripted controllers read the env's own observation)")
     if args.model is not None:
         import os
 
         if not os.path.isfile(args.model):
             p.error(f"--model: {args.model!r} is not a file")
     try:
-        env = make_env(args.env, args.env_kwargs, args.action_offset)
+        env = make_env(args.env, args.env_kwargs, args.action_offset, args.frame_stack)
     except ValueError as exc:
         p.error(str(exc))
     try:
@@ -91,7 +96,7 @@ def main(argv=None) -> dict:
                 p.error(f"--model: cannot load {args.model!r} as {args.algo}: {exc}")
             if model.observation_space.shape != env.observation_space.shape or (
                     model.action_space.shape != env.action_space.shape):
-                p.error(f"--model: its spaces do not match {args.env}'s")
+                p.error(f"--model: its spaces do not match {args.env}'s (trained with another --frame-stack?)")
             act = lambda obs: model.predict(obs, deterministic=True)[0]  # noqa: E731
             policy = f"{args.algo} {args.model}"
         else:

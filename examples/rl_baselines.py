@@ -33,7 +33,9 @@ Writes into ``--out``:
 statistics; ``aggregate.json`` then names the wrapper.  ``--action-offset A0 A1 ...`` likewise passes that
 option (:class:`simgrip.envs.action_offset.ActionOffset`: the env performs ``clip(action + offset)``, so that
 PPO's zero-mean start performs the offset's motion) and ``aggregate.json`` records ``action_offset``;
-``--gamma G`` passes the discount instead of the default 0.99, named in every JSON's ``hyperparameters``.
+``--frame-stack N`` passes that option too (the last ``N`` observations, Gymnasium's ``FrameStackObservation``),
+recorded as ``frame_stack``; ``--gamma G`` passes the discount instead of the default 0.99, named in every JSON's
+``hyperparameters``.
 
 Ctrl-C stops every running child (SIGTERM, then SIGKILL after 5 s) and exits 130 with one line.  Exit 2 (one
 line) on a bad argument, 1 when a run failed (its log names why; the others are still aggregated).
@@ -114,6 +116,8 @@ def run_command(algo: str, seed: int, args, folder: Path) -> list[str]:
         cmd += ["--normalize"]
     if args.action_offset is not None:
         cmd += ["--action-offset", *[repr(float(x)) for x in args.action_offset]]
+    if args.frame_stack is not None:
+        cmd += ["--frame-stack", str(args.frame_stack)]
     if args.gamma is not None:
         cmd += ["--gamma", repr(args.gamma)]
     return cmd
@@ -251,6 +255,9 @@ def main(argv=None) -> int:
     p.add_argument("--action-offset", type=float, nargs="+", default=None, metavar="A",
                    help="train and evaluate behind simgrip.envs.action_offset.ActionOffset (one number per action; "
                         "the valve tasks' probe: -0.4 0.2; default none)")
+    p.add_argument("--frame-stack", type=_positive(int), default=None, metavar="N",
+                   help="train and evaluate on the last N observations (Gymnasium's FrameStackObservation; "
+                        "default 1: the env's own)")
     p.add_argument("--gamma", type=_discount, default=None,
                    help="the discount, in (0, 1], instead of the library default 0.99 (recorded in the JSON)")
     p.add_argument("--out", required=True, help="output folder")
@@ -313,6 +320,7 @@ def main(argv=None) -> int:
         "hyperparameters": "Stable-Baselines3 defaults, one env, one torch thread"
         + ("" if args.gamma is None else f"; but gamma = {args.gamma!r}"), "summary": summary,
         **({"action_offset": [float(x) for x in args.action_offset]} if args.action_offset is not None else {}),
+        **({"frame_stack": args.frame_stack} if args.frame_stack is not None else {}),
         **({"wrapper": "VecNormalize (SB3 defaults: observation and return)"} if args.normalize else {}),
         "command": [Path(sys.argv[0]).name] + list(sys.argv[1:] if argv is None else argv)})
     plot(summary, results, out / "learning_curves.png")

@@ -48,6 +48,10 @@ env's own, unnormalised).
 the env performs ``clip(action + offset)``, so PPO's zero-mean start performs the offset's motion (on the
 valve tasks ``-0.4 0.2``, the slow close-and-lift probe); ``<algo>_eval.json`` records ``action_offset``.
 
+``--frame-stack N`` trains and evaluates on the last ``N`` observations (Gymnasium's ``FrameStackObservation``,
+the issue's "frame stacking": the policy then sees how the forces and the shapes change from step to step;
+:func:`simgrip.envs.evaluation.make_env`); ``<algo>_eval.json`` records ``frame_stack``.
+
 ``--gamma G`` changes one hyperparameter, the discount (default 0.99), and the JSON's ``hyperparameters``
 says so; the held-out ``mean_discounted_return`` is then at ``G``.  ``examples/evaluate_policy.py``
 re-evaluates a saved model, or a scripted controller, the same way.
@@ -92,11 +96,12 @@ def _positive(kind):
 
 
 def evaluate(model, env_id: str, episodes: int, seed0: int, env_kwargs=None, normalizer=None,
-             action_offset=None) -> dict:
+             action_offset=None, frame_stack=None) -> dict:
     """Run the deterministic policy of ``model`` for ``episodes`` episodes on seeds ``seed0 + i`` (the env made
-    with ``env_kwargs`` and behind ``action_offset``, as it was trained; ``normalizer``: the ``VecNormalize``
-    it was trained behind, whose frozen observation statistics then normalise what the policy sees)."""
-    env = make_env(env_id, env_kwargs, action_offset)
+    with ``env_kwargs`` and behind ``action_offset`` and ``frame_stack``, as it was trained; ``normalizer``: the
+    ``VecNormalize`` it was trained behind, whose frozen observation statistics then normalise what the policy
+    sees)."""
+    env = make_env(env_id, env_kwargs, action_offset, frame_stack)
     see = (lambda obs: obs) if normalizer is None else normalizer.normalize_obs
     try:
         gamma = getattr(model, "gamma", GAMMA)  # an SB3 model's own; anything else with predict(): SB3's default
@@ -173,12 +178,14 @@ def _load_normalizer(path: Path):
 
 def train(algo: str, env_id: str, *, steps: int, minutes: float, seed: int, out: Path,
           eval_episodes: int, eval_seed: int, clock: str = "cpu", checkpoint_minutes: float | None = None,
-          env_kwargs: dict | None = None, normalize: bool = False, action_offset=None, gamma: float | None = None) -> dict:
+          env_kwargs: dict | None = None, normalize: bool = False, action_offset=None, gamma: float | None = None,
+          frame_stack: int | None = None) -> dict:
     """Train ``algo`` with library defaults within the budget, write its curve, model and evaluation
     (``env_kwargs``: ``gym.make``'s keyword arguments, for training and evaluation alike; ``normalize``: train
     behind SB3's ``VecNormalize`` with its defaults; ``action_offset``: train and evaluate behind
-    :class:`simgrip.envs.action_offset.ActionOffset`, see the module's docstring; ``gamma``: the algorithm's
-    discount instead of its default 0.99, the one hyperparameter changed)."""
+    :class:`simgrip.envs.action_offset.ActionOffset`, see the module's docstring; ``frame_stack``: train and
+    evaluate on the last ``frame_stack`` observations, :func:`simgrip.envs.evaluation.make_env`; ``gamma``: the
+    algorithm's discount instead of its default 0.99, the one hyperparameter changed)."""
     env_kwargs = dict(env_kwargs or {})
     from stable_baselines3 import PPO, SAC
     from stable_baselines3.common.callbacks import BaseCallback
@@ -223,7 +230,7 @@ def train(algo: str, env_id: str, *, steps: int, minutes: float, seed: int, out:
             return spent() < budget
 
     # make_vec_env calls the maker (gym.make of the id, or of a retired id's spec), then seeds and wraps in Monitor
-    env = make_vec_env(lambda: make_env(env_id, env_kwargs, action_offset), n_envs=1, seed=seed)
+    env = make_vec_env(lambda: make_env(env_id, env_kwargs, action_offset, frame_stack), n_envs=1, seed=seed)
     if normalize:
         from stable_baselines3.common.vec_env import VecNormalize
 
@@ -253,16 +260,20 @@ def train(algo: str, env_id: str, *, steps: int, minutes: float, seed: int, out:
     if action_offset is not None:
         result["action_offset"] = [float(x) for x in action_offset]
         wrappers.append(f"ActionOffset({result['action_offset']})")
+    if frame_stack is not None and frame_stack > 1:
+        result["frame_stack"] = int(frame_stack)
+        wrappers.append(f"FrameStackObservation({int(frame_stack)})")
     if normalize:
         wrappers.append("VecNormalize (SB3 defaults: observation and return)")
     if wrappers:
         result["wrapper"] = ", ".join(wrappers)
-    result.update(evaluate(model, env_id, eval_episodes, eval_seed, env_kwargs, normalizer, action_offset))
+    result.update(evaluate(model, env_id, eval_episodes, eval_seed, env_kwargs, normalizer, action_offset,
+                           frame_stack))
     for cp in checkpoints:  # the held-out success of each checkpoint: how soon the target was reached
         cp_model = cls.load(out / cp["file"])
         cp_norm = _load_normalizer(normalizers[cp["file"]]) if normalize else None
         cp.update({k: v for k, v in evaluate(cp_model, env_id, eval_episodes, eval_seed, env_kwargs, cp_norm,
-                                             action_offset).items()
+                                             action_offset, frame_stack).items()
                    if k in ("success_rate", "mean_return")})
     if checkpoints:
         result["checkpoints"] = checkpoints
@@ -334,6 +345,9 @@ def main(argv=None) -> int:
     p.add_argument("--action-offset", type=float, nargs="+", default=None, metavar="A",
                    help="train and evaluate behind simgrip.envs.action_offset.ActionOffset: the env performs "
                         "clip(action + offset); one number per action (the valve tasks' probe: -0.4 0.2)")
+    p.add_argument("--frame-stack", type=_positive(int), default=None, metavar="N",
+                   help="train and evaluate on the last N observations (Gymnasium's FrameStackObservation; "
+                        "default 1: the env's own)")
     p.add_argument("--gamma", type=discount, default=None,
                    help="the discount, in (0, 1], instead of the library default 0.99 (recorded in the JSON)")
     p.add_argument("--out", required=True, help="output folder")
@@ -346,7 +360,7 @@ def main(argv=None) -> int:
     check_env_id(p, args.env, retired=True)
     if args.env_kwargs or args.action_offset is not None:  # refused before any training, the env built once
         try:
-            make_env(args.env, args.env_kwargs, args.action_offset).close()
+            make_env(args.env, args.env_kwargs, args.action_offset, args.frame_stack).close()
         except ValueError as e:
             p.error(str(e))
     try:  # simgrip.io's output-path policy: a folder, and no FIFO/device/folder where a result file goes
@@ -361,7 +375,8 @@ def main(argv=None) -> int:
         result = train(algo, args.env, steps=args.steps, minutes=args.minutes, seed=args.seed, out=out,
                        eval_episodes=args.eval_episodes, eval_seed=args.eval_seed, clock=args.clock,
                        checkpoint_minutes=args.checkpoint_minutes, env_kwargs=args.env_kwargs,
-                       normalize=args.normalize, action_offset=args.action_offset, gamma=args.gamma)
+                       normalize=args.normalize, action_offset=args.action_offset, gamma=args.gamma,
+                       frame_stack=args.frame_stack)
         print(json.dumps(result), flush=True)
     plot_curves(out)
     return 0

@@ -3,6 +3,7 @@
 import argparse
 
 import gymnasium as gym
+import numpy as np
 import pytest
 
 import simgrip.envs  # noqa: F401
@@ -101,3 +102,30 @@ def test_make_env_names_the_option_it_refuses():
         make_env("simgrip/PickFragile-v6", {"w_nope": 1})
     with pytest.raises(ValueError, match="^--action-offset: offset must be 2 finite numbers"):
         make_env("simgrip/PickFragile-v6", None, (0.1,))
+    for bad in (0, -1, 2.0, True, "3"):
+        with pytest.raises(ValueError, match="^--frame-stack: a whole number >= 1"):
+            make_env("simgrip/PickFragile-v6", None, None, bad)
+
+
+def test_make_env_stacks_the_last_observations():
+    plain = make_env("simgrip/PickFragile-v6")
+    one = make_env("simgrip/PickFragile-v6", None, None, 1)  # 1: the env's own observation, no wrapper
+    stacked = make_env("simgrip/PickFragile-v6", None, (-0.4, 0.2), 3)
+    try:
+        assert type(one) is type(plain) and one.observation_space == plain.observation_space
+        n = plain.observation_space.shape[0]
+        assert stacked.observation_space.shape == (3, n)
+        o, _ = stacked.reset(seed=8400)
+        p, _ = plain.reset(seed=8400)
+        assert o.shape == (3, n) and all(np.array_equal(o[k], p) for k in range(3))  # the reset repeated
+        history = [p]
+        for t in range(4):
+            a = np.array([0.3 * (-1) ** t, 0.5], np.float32)
+            o, *_ = stacked.step(a)
+            p, *_ = plain.step(np.clip(a + np.array([-0.4, 0.2], np.float32), -1, 1))
+            history.append(p)
+            want = [history[max(0, len(history) - 3 + k)] for k in range(3)]  # oldest first
+            assert all(np.array_equal(o[k], want[k]) for k in range(3)), t
+    finally:
+        for e in (plain, one, stacked):
+            e.close()

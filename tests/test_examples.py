@@ -172,6 +172,8 @@ def test_evaluate_policy_scripted_matches_the_baselines_harness(capsys):
     (["--policy", "observation", "--gamma", "0"], "--gamma"),
     (["--policy", "observation", "--gamma", "x"], "--gamma"),
     (["--policy", "observation", "--action-offset", "-0.4", "0.2"], "--action-offset"),
+    (["--policy", "observation", "--frame-stack", "2"], "--frame-stack"),
+    (["--policy", "observation", "--frame-stack", "0"], "--frame-stack"),
     (["--policy", "psychic"], "--policy"),
     (["--model", "no/such/model.zip"], "--model"),
     ([], "--model"),
@@ -199,16 +201,23 @@ def test_evaluate_policy_model_reproduces_train_sb3s_evaluation(tmp_path, capsys
     pytest.importorskip("stable_baselines3")
     _example("train_sb3").main(["--algo", "sac", "--env", "simgrip/PickFragile-v6", "--steps", "150",
                                 "--action-offset", "-0.4", "0.2", "--gamma", "0.95", "--eval-episodes", "2",
-                                "--eval-seed", "8310", "--out", str(tmp_path)])
+                                "--frame-stack", "2", "--eval-seed", "8310", "--out", str(tmp_path)])
     trained = json.loads((tmp_path / "sac_eval.json").read_text())
     assert trained["hyperparameters"] == "Stable-Baselines3 defaults but gamma = 0.95" and trained["gamma"] == 0.95
+    assert trained["frame_stack"] == 2 and "FrameStackObservation(2)" in trained["wrapper"]
     capsys.readouterr()
     again = _example("evaluate_policy").main([
         "--env", "simgrip/PickFragile-v6", "--model", str(tmp_path / "sac_model.zip"), "--algo", "sac",
-        "--action-offset", "-0.4", "0.2", "--episodes", "2", "--seed", "8310", "--gamma", "0.95", "--json"])
+        "--action-offset", "-0.4", "0.2", "--frame-stack", "2", "--episodes", "2", "--seed", "8310",
+        "--gamma", "0.95", "--json"])
     for key in ("success_rate", "mean_return", "mean_length", "outcomes", "mean_success_length",
                 "mean_discounted_return", "gamma", "eval_seeds"):
         assert again[key] == trained[key], key
+    with pytest.raises(SystemExit) as e:  # without the stack it was trained on, the spaces differ
+        _example("evaluate_policy").main(["--env", "simgrip/PickFragile-v6", "--model",
+                                          str(tmp_path / "sac_model.zip"), "--algo", "sac",
+                                          "--action-offset", "-0.4", "0.2"])
+    assert e.value.code == 2 and "--frame-stack" in capsys.readouterr().err
     with pytest.raises(SystemExit) as e:  # the model's spaces against another env's
         _example("evaluate_policy").main(["--env", "simgrip/PlaceFragile-v4", "--model",
                                           str(tmp_path / "sac_model.zip"), "--algo", "sac"])

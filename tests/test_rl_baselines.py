@@ -149,7 +149,7 @@ def test_normalize_reaches_every_run_command(tmp_path):
     mod = _module()
     args = mod.argparse.Namespace(env="simgrip/PickFragile-v6", minutes=1.0, steps=10, eval_seeds=(8000, 8001),
                                   checkpoint_minutes=None, env_kwargs={}, normalize=True, action_offset=None,
-                                  gamma=None)
+                                  gamma=None, frame_stack=None)
     assert "--normalize" in mod.run_command("ppo", 0, args, tmp_path)
     args.normalize = False
     assert "--normalize" not in mod.run_command("ppo", 0, args, tmp_path)
@@ -159,7 +159,7 @@ def test_action_offset_reaches_every_run_command(tmp_path):
     mod = _module()
     args = mod.argparse.Namespace(env="simgrip/PickFragile-v6", minutes=1.0, steps=10, eval_seeds=(8000, 8001),
                                   checkpoint_minutes=None, env_kwargs={}, normalize=False, action_offset=[-0.4, 0.2],
-                                  gamma=None)
+                                  gamma=None, frame_stack=None)
     cmd = mod.run_command("ppo", 0, args, tmp_path)
     i = cmd.index("--action-offset")
     assert [float(x) for x in cmd[i + 1:i + 3]] == [-0.4, 0.2]
@@ -171,8 +171,27 @@ def test_gamma_reaches_every_run_command(tmp_path):
     mod = _module()
     args = mod.argparse.Namespace(env="simgrip/PickFragile-v6", minutes=1.0, steps=10, eval_seeds=(8000, 8001),
                                   checkpoint_minutes=None, env_kwargs={}, normalize=False, action_offset=None,
-                                  gamma=0.995)
+                                  gamma=0.995, frame_stack=None)
     cmd = mod.run_command("ppo", 0, args, tmp_path)
     assert float(cmd[cmd.index("--gamma") + 1]) == 0.995
     args.gamma = None
     assert "--gamma" not in mod.run_command("ppo", 0, args, tmp_path)  # the library's default, not written
+
+
+def test_frame_stack_reaches_every_run_command(tmp_path):
+    mod = _module()
+    args = mod.argparse.Namespace(env="simgrip/PickFragile-v6", minutes=1.0, steps=10, eval_seeds=(8000, 8001),
+                                  checkpoint_minutes=None, env_kwargs={}, normalize=False, action_offset=None,
+                                  gamma=None, frame_stack=3)
+    cmd = mod.run_command("ppo", 0, args, tmp_path)
+    assert cmd[cmd.index("--frame-stack") + 1] == "3"
+    args.frame_stack = None
+    assert "--frame-stack" not in mod.run_command("ppo", 0, args, tmp_path)
+
+
+@pytest.mark.parametrize("value", ["0", "-2", "1.5", "x"])
+def test_a_bad_frame_stack_exits_2_naming_it(value, tmp_path, capsys):
+    with pytest.raises(SystemExit) as e:
+        _module().main(["--env", "simgrip/PickFragile-v6", "--out", str(tmp_path / "o"), "--frame-stack", value])
+    assert e.value.code == 2 and "--frame-stack" in capsys.readouterr().err
+    assert not (tmp_path / "o").exists()
