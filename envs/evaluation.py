@@ -84,8 +84,8 @@ def make_env(env_id: str, env_kwargs: dict | None = None, action_offset=None, fr
     first one repeated): what the training and evaluation scripts build and check their options with.
 
     Raises ValueError naming the option: ``--env-kwargs`` when the env does not take ``env_kwargs`` or refuses a
-    value, ``--action-offset`` when the offset does not fit its action space, ``--frame-stack`` when it is not a
-    whole number >= 1 (the env is closed first)."""
+    value, ``--action-offset`` when the offset does not fit its action space (the env is closed first),
+    ``--frame-stack`` when it is not a whole number >= 1 (checked before any env is made)."""
     import json
 
     import gymnasium as gym
