@@ -53,7 +53,8 @@ def _scripted(env, name: str):
 
 def main(argv=None) -> dict:
     p = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
-    p.add_argument("--env", required=True, help="registered env id, e.g. simgrip/PickFragile-v6")
+    p.add_argument("--env", required=True, help="registered env id, e.g. simgrip/PickFragile-v6, or a retired "
+                   "simgrip one (simgrip.envs.RETIRED: the models of docs/baselines/ were trained on them)")
     p.add_argument("--env-kwargs", type=json_object, default={}, metavar="JSON",
                    help="keyword arguments of gym.make, as the model was trained with")
     what = p.add_mutually_exclusive_group(required=True)
@@ -69,7 +70,7 @@ def main(argv=None) -> dict:
     p.add_argument("--gamma", type=discount, default=0.99, help="discount of the reported return (default 0.99)")
     p.add_argument("--json", action="store_true", help="print only a JSON object")
     args = p.parse_args(argv)
-    check_env_id(p, args.env)
+    check_env_id(p, args.env, retired=True)  # make_env builds a retired one through its spec
     if args.policy is not None and args.action_offset is not None:
         p.error("--action-offset: only with --model (the scripted controllers command the env directly)")
     if args.policy is not None and args.frame_stack is not None:

@@ -187,6 +187,16 @@ def test_evaluate_policy_bad_options_exit_2_naming_them(argv, word, capsys):
     assert word in capsys.readouterr().err
 
 
+def test_evaluate_policy_runs_a_retired_id_as_it_was_registered(capsys):
+    # the stored runs of docs/baselines/ were trained on ids retired since (v5: w_drop 5)
+    from simgrip.envs.baselines import evaluate
+
+    out = _example("evaluate_policy").main(["--env", "simgrip/PickFragile-v5", "--policy", "observation",
+                                            "--episodes", "2", "--seed", "8300", "--json"])
+    ref = evaluate("simgrip/PickFragile-v5", "observation", [8300, 8301])
+    assert out["env"] == "simgrip/PickFragile-v5" and out["outcomes"] == ref["outcomes"]
+
+
 @pytest.mark.parametrize("env_id, word", [("simgrip/Nope-v9", "--env"), ("simgrip/Pick-v1", "--policy")])
 def test_evaluate_policy_refuses_an_env_without_that_controller(env_id, word, capsys):
     with pytest.raises(SystemExit) as e:
