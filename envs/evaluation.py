@@ -18,7 +18,7 @@ from typing import Any, Callable
 import numpy as np
 
 __all__ = ["EpisodeResult", "GAMMA", "add_episode_arguments", "check_env_id", "discount", "env_kwargs", "json_object",
-           "make_env", "outcome", "outcomes", "positive_int", "non_negative_int", "run_episodes", "summary"]
+           "make_env", "outcome", "outcomes", "positive_int", "non_negative_int", "probability", "run_episodes", "summary"]
 
 #: the discount of the returns :func:`run_episodes` also reports: Stable-Baselines3's default ``gamma`` (PPO, SAC)
 GAMMA = 0.99
@@ -54,6 +54,17 @@ def discount(text: str) -> float:
     return g
 
 
+def probability(text: str) -> float:
+    """argparse type: a probability in [0, 1]."""
+    try:
+        p = float(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"expected a number in [0, 1], got {text!r}") from None
+    if not (0.0 <= p <= 1.0):  # NaN fails too
+        raise argparse.ArgumentTypeError(f"expected a number in [0, 1], got {text!r}")
+    return p
+
+
 def add_episode_arguments(parser: argparse.ArgumentParser, *, episodes: int = 20) -> None:
     """Add ``--episodes N``, ``--seed S`` (first episode's seed), ``--env ID`` and ``--json``."""
     parser.add_argument("--episodes", type=positive_int, default=episodes, help=f"number of episodes (default {episodes})")
@@ -75,17 +86,22 @@ def check_env_id(parser: argparse.ArgumentParser, env_id: str, *, retired: bool 
         parser.error(f"--env: unknown id {env_id!r}")
 
 
-def make_env(env_id: str, env_kwargs: dict | None = None, action_offset=None, frame_stack: int | None = None):
+def make_env(env_id: str, env_kwargs: dict | None = None, action_offset=None, frame_stack: int | None = None,
+             scripted_start: float | None = None):
     """The env of ``env_id`` (a registered id, or a retired one of ``simgrip.envs.RETIRED`` through its spec) made
     with ``env_kwargs`` (``gym.make``'s keyword arguments), behind
     :class:`~simgrip.envs.action_offset.ActionOffset` ``(action_offset)`` when that is given, and behind
     Gymnasium's ``FrameStackObservation(env, frame_stack)`` when ``frame_stack`` is 2 or more (the observation
     becomes the last ``frame_stack`` observations, oldest first, shape ``(frame_stack, n)``; after ``reset`` the
     first one repeated): what the training and evaluation scripts build and check their options with.
+    ``scripted_start`` (training envs only): with that probability a reset starts part-way through the task's
+    scripted observation-only controller's episode (:class:`~simgrip.envs.scripted_start.ScriptedStart`, next
+    to the env, inside the offset and the frame stack).
 
     Raises ValueError naming the option: ``--env-kwargs`` when the env does not take ``env_kwargs`` or refuses a
     value, ``--action-offset`` when the offset does not fit its action space (the env is closed first),
-    ``--frame-stack`` when it is not a whole number >= 1 (checked before any env is made)."""
+    ``--frame-stack`` when it is not a whole number >= 1 (checked before any env is made), ``--scripted-start``
+    when it is not a probability or the env has no scripted controller (the env is closed first)."""
     import json
 
     import gymnasium as gym
@@ -100,6 +116,14 @@ def make_env(env_id: str, env_kwargs: dict | None = None, action_offset=None, fr
         env = gym.make(retired_spec(env_id) if env_id in RETIRED else env_id, **kwargs)
     except (TypeError, ValueError) as e:
         raise ValueError(f"--env-kwargs: {env_id} does not take {json.dumps(kwargs)}: {e}") from None
+    if scripted_start is not None:
+        from simgrip.envs.scripted_start import ScriptedStart
+
+        try:
+            env = ScriptedStart(env, scripted_start)
+        except ValueError as e:
+            env.close()
+            raise ValueError(f"--scripted-start: {e}") from None
     if action_offset is not None:
         from simgrip.envs.action_offset import ActionOffset
 

@@ -34,7 +34,10 @@ statistics; ``aggregate.json`` then names the wrapper.  ``--action-offset A0 A1 
 option (:class:`simgrip.envs.action_offset.ActionOffset`: the env performs ``clip(action + offset)``, so that
 PPO's zero-mean start performs the offset's motion) and ``aggregate.json`` records ``action_offset``;
 ``--frame-stack N`` passes that option too (the last ``N`` observations, Gymnasium's ``FrameStackObservation``),
-recorded as ``frame_stack``; ``--gamma G`` passes the discount instead of the default 0.99, named in every JSON's
+recorded as ``frame_stack``; ``--scripted-start P`` passes that option (that share of the training episodes
+starts part-way through the scripted observation-only controller's episode,
+:class:`simgrip.envs.scripted_start.ScriptedStart`; evaluation starts plainly), recorded as ``scripted_start``;
+``--gamma G`` passes the discount instead of the default 0.99, named in every JSON's
 ``hyperparameters``.
 
 Ctrl-C stops every running child (SIGTERM, then SIGKILL after 5 s) and exits 130 with one line.  Exit 2 (one
@@ -80,6 +83,12 @@ def _discount(text: str) -> float:
     return discount(text)
 
 
+def _probability(text: str) -> float:
+    from simgrip.envs.evaluation import probability  # imported when used, as _json_object
+
+    return probability(text)
+
+
 def _seed(text: str) -> int:
     try:
         v = int(text)
@@ -120,6 +129,8 @@ def run_command(algo: str, seed: int, args, folder: Path) -> list[str]:
         cmd += ["--frame-stack", str(args.frame_stack)]
     if args.gamma is not None:
         cmd += ["--gamma", repr(args.gamma)]
+    if getattr(args, "scripted_start", None) is not None:
+        cmd += ["--scripted-start", repr(args.scripted_start)]
     return cmd
 
 
@@ -260,6 +271,9 @@ def main(argv=None) -> int:
                         "default 1: the env's own)")
     p.add_argument("--gamma", type=_discount, default=None,
                    help="the discount, in (0, 1], instead of the library default 0.99 (recorded in the JSON)")
+    p.add_argument("--scripted-start", type=_probability, default=None, metavar="P",
+                   help="start that share of the training episodes part-way through the scripted observation-only "
+                        "controller's episode (simgrip.envs.scripted_start; evaluation starts plainly; default none)")
     p.add_argument("--out", required=True, help="output folder")
     args = p.parse_args(argv)
     cores = os.cpu_count() or 1
@@ -278,11 +292,11 @@ def main(argv=None) -> int:
     from simgrip.io import check_output_dir, check_output_files_in, write_json
 
     check_env_id(p, args.env, retired=True)  # train_sb3.py builds a retired one
-    if args.env_kwargs or args.action_offset is not None:  # refused before any run starts, the env built once
-        from simgrip.envs.evaluation import make_env
+    if args.env_kwargs or args.action_offset is not None or args.scripted_start is not None:
+        from simgrip.envs.evaluation import make_env  # refused before any run starts, the env built once
 
         try:
-            make_env(args.env, args.env_kwargs, args.action_offset).close()
+            make_env(args.env, args.env_kwargs, args.action_offset, None, args.scripted_start).close()
         except ValueError as e:
             p.error(str(e))
     algos = list(dict.fromkeys(args.algo))
@@ -321,6 +335,7 @@ def main(argv=None) -> int:
         + ("" if args.gamma is None else f"; but gamma = {args.gamma!r}"), "summary": summary,
         **({"action_offset": [float(x) for x in args.action_offset]} if args.action_offset is not None else {}),
         **({"frame_stack": args.frame_stack} if args.frame_stack is not None else {}),
+        **({"scripted_start": args.scripted_start} if args.scripted_start is not None else {}),
         **({"wrapper": "VecNormalize (SB3 defaults: observation and return)"} if args.normalize else {}),
         "command": [Path(sys.argv[0]).name] + list(sys.argv[1:] if argv is None else argv)})
     plot(summary, results, out / "learning_curves.png")

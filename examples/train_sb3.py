@@ -75,7 +75,7 @@ import numpy as np
 
 import simgrip.envs  # noqa: F401  (registers the simgrip ids)
 from simgrip.envs.evaluation import (GAMMA, check_env_id, discount, json_object, make_env, non_negative_int, outcomes,
-                                     run_episodes, summary)
+                                     probability, run_episodes, summary)
 from simgrip.io import atomic_write, check_output_dir, check_output_files_in, write_json
 
 ALGOS = ("ppo", "sac")
@@ -179,13 +179,15 @@ def _load_normalizer(path: Path):
 def train(algo: str, env_id: str, *, steps: int, minutes: float, seed: int, out: Path,
           eval_episodes: int, eval_seed: int, clock: str = "cpu", checkpoint_minutes: float | None = None,
           env_kwargs: dict | None = None, normalize: bool = False, action_offset=None, gamma: float | None = None,
-          frame_stack: int | None = None) -> dict:
+          frame_stack: int | None = None, scripted_start: float | None = None) -> dict:
     """Train ``algo`` with library defaults within the budget, write its curve, model and evaluation
     (``env_kwargs``: ``gym.make``'s keyword arguments, for training and evaluation alike; ``normalize``: train
     behind SB3's ``VecNormalize`` with its defaults; ``action_offset``: train and evaluate behind
     :class:`simgrip.envs.action_offset.ActionOffset`, see the module's docstring; ``frame_stack``: train and
     evaluate on the last ``frame_stack`` observations, :func:`simgrip.envs.evaluation.make_env`; ``gamma``: the
-    algorithm's discount instead of its default 0.99, the one hyperparameter changed)."""
+    algorithm's discount instead of its default 0.99, the one hyperparameter changed; ``scripted_start``: that
+    share of the training episodes starts part-way through the scripted controller's episode,
+    :class:`simgrip.envs.scripted_start.ScriptedStart`; evaluation starts plainly)."""
     env_kwargs = dict(env_kwargs or {})
     from stable_baselines3 import PPO, SAC
     from stable_baselines3.common.callbacks import BaseCallback
@@ -230,7 +232,8 @@ def train(algo: str, env_id: str, *, steps: int, minutes: float, seed: int, out:
             return spent() < budget
 
     # make_vec_env calls the maker (gym.make of the id, or of a retired id's spec), then seeds and wraps in Monitor
-    env = make_vec_env(lambda: make_env(env_id, env_kwargs, action_offset, frame_stack), n_envs=1, seed=seed)
+    env = make_vec_env(lambda: make_env(env_id, env_kwargs, action_offset, frame_stack, scripted_start), n_envs=1,
+                       seed=seed)
     if normalize:
         from stable_baselines3.common.vec_env import VecNormalize
 
@@ -263,6 +266,9 @@ def train(algo: str, env_id: str, *, steps: int, minutes: float, seed: int, out:
     if frame_stack is not None and frame_stack > 1:
         result["frame_stack"] = int(frame_stack)
         wrappers.append(f"FrameStackObservation({int(frame_stack)})")
+    if scripted_start is not None:
+        result["scripted_start"] = float(scripted_start)
+        wrappers.append(f"ScriptedStart({float(scripted_start)!r}) in training")
     if normalize:
         wrappers.append("VecNormalize (SB3 defaults: observation and return)")
     if wrappers:
@@ -350,6 +356,9 @@ def main(argv=None) -> int:
                         "default 1: the env's own)")
     p.add_argument("--gamma", type=discount, default=None,
                    help="the discount, in (0, 1], instead of the library default 0.99 (recorded in the JSON)")
+    p.add_argument("--scripted-start", type=probability, default=None, metavar="P",
+                   help="start that share of the training episodes part-way through the scripted observation-only "
+                        "controller's episode (simgrip.envs.scripted_start; evaluation starts plainly)")
     p.add_argument("--out", required=True, help="output folder")
     args = p.parse_args(argv)
     try:
@@ -358,9 +367,9 @@ def main(argv=None) -> int:
     except ImportError:
         p.error('needs Stable-Baselines3 and PyTorch: pip install "simgrip[rl]"')
     check_env_id(p, args.env, retired=True)
-    if args.env_kwargs or args.action_offset is not None:  # refused before any training, the env built once
-        try:
-            make_env(args.env, args.env_kwargs, args.action_offset, args.frame_stack).close()
+    if args.env_kwargs or args.action_offset is not None or args.scripted_start is not None:
+        try:  # refused before any training, the env built once
+            make_env(args.env, args.env_kwargs, args.action_offset, args.frame_stack, args.scripted_start).close()
         except ValueError as e:
             p.error(str(e))
     try:  # simgrip.io's output-path policy: a folder, and no FIFO/device/folder where a result file goes
@@ -376,7 +385,7 @@ def main(argv=None) -> int:
                        eval_episodes=args.eval_episodes, eval_seed=args.eval_seed, clock=args.clock,
                        checkpoint_minutes=args.checkpoint_minutes, env_kwargs=args.env_kwargs,
                        normalize=args.normalize, action_offset=args.action_offset, gamma=args.gamma,
-                       frame_stack=args.frame_stack)
+                       frame_stack=args.frame_stack, scripted_start=args.scripted_start)
         print(json.dumps(result), flush=True)
     plot_curves(out)
     return 0

@@ -232,3 +232,24 @@ def test_evaluate_policy_model_reproduces_train_sb3s_evaluation(tmp_path, capsys
         _example("evaluate_policy").main(["--env", "simgrip/PlaceFragile-v4", "--model",
                                           str(tmp_path / "sac_model.zip"), "--algo", "sac"])
     assert e.value.code == 2 and "--model" in capsys.readouterr().err
+
+
+def test_train_sb3_scripted_start_trains_from_scripted_states_and_evaluates_plainly(tmp_path, capsys):
+    pytest.importorskip("stable_baselines3")
+    from stable_baselines3 import SAC
+
+    module = _example("train_sb3")
+    module.main(["--algo", "sac", "--env", "simgrip/PlaceFragile-v4", "--steps", "800", "--scripted-start", "1",
+                 "--eval-episodes", "2", "--eval-seed", "8320", "--out", str(tmp_path)])
+    trained = json.loads((tmp_path / "sac_eval.json").read_text())
+    assert trained["scripted_start"] == 1.0 and trained["wrapper"] == "ScriptedStart(1.0) in training"
+    with open(tmp_path / "sac_curve.csv") as fh:
+        lengths = [int(row["length"]) for row in csv.DictReader(fh)]
+    assert lengths and max(lengths) < 400  # every training episode started part-way (its limit: 400 steps)
+    again = module.evaluate(SAC.load(tmp_path / "sac_model.zip"), "simgrip/PlaceFragile-v4", 2, 8320)
+    for key in ("success_rate", "mean_return", "mean_length", "outcomes"):  # the held-out episodes: plain starts
+        assert again[key] == trained[key], key
+    with pytest.raises(SystemExit) as e:
+        module.main(["--algo", "sac", "--env", "simgrip/PlaceFragile-v4", "--scripted-start", "-0.1",
+                     "--out", str(tmp_path / "o")])
+    assert e.value.code == 2 and "--scripted-start" in capsys.readouterr().err
