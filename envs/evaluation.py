@@ -43,26 +43,24 @@ positive_int = _int_at_least("positive_int", 1, "a positive integer", "argparse 
 non_negative_int = _int_at_least("non_negative_int", 0, "an integer >= 0", "argparse type: an integer >= 0 (seeds).")
 
 
+def _number_in(text: str, ok, interval: str) -> float:
+    try:
+        x = float(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"expected a number in {interval}, got {text!r}") from None
+    if not ok(x):  # NaN fails too
+        raise argparse.ArgumentTypeError(f"expected a number in {interval}, got {text!r}")
+    return x
+
+
 def discount(text: str) -> float:
     """argparse type: a discount ``gamma`` in (0, 1]."""
-    try:
-        g = float(text)
-    except ValueError:
-        raise argparse.ArgumentTypeError(f"expected a number in (0, 1], got {text!r}") from None
-    if not (0.0 < g <= 1.0):  # NaN fails too
-        raise argparse.ArgumentTypeError(f"expected a number in (0, 1], got {text!r}")
-    return g
+    return _number_in(text, lambda g: 0.0 < g <= 1.0, "(0, 1]")
 
 
 def probability(text: str) -> float:
     """argparse type: a probability in [0, 1]."""
-    try:
-        p = float(text)
-    except ValueError:
-        raise argparse.ArgumentTypeError(f"expected a number in [0, 1], got {text!r}") from None
-    if not (0.0 <= p <= 1.0):  # NaN fails too
-        raise argparse.ArgumentTypeError(f"expected a number in [0, 1], got {text!r}")
-    return p
+    return _number_in(text, lambda p: 0.0 <= p <= 1.0, "[0, 1]")
 
 
 def add_episode_arguments(parser: argparse.ArgumentParser, *, episodes: int = 20) -> None:
@@ -119,22 +117,23 @@ def make_env(env_id: str, env_kwargs: dict | None = None, action_offset=None, fr
     if scripted_start is not None:
         from simgrip.envs.scripted_start import ScriptedStart
 
-        try:
-            env = ScriptedStart(env, scripted_start)
-        except ValueError as e:
-            env.close()
-            raise ValueError(f"--scripted-start: {e}") from None
+        env = _wrap_or_close(env, ScriptedStart, scripted_start, "--scripted-start")
     if action_offset is not None:
         from simgrip.envs.action_offset import ActionOffset
 
-        try:
-            env = ActionOffset(env, action_offset)
-        except ValueError as e:
-            env.close()
-            raise ValueError(f"--action-offset: {e}") from None
+        env = _wrap_or_close(env, ActionOffset, action_offset, "--action-offset")
     if frame_stack is not None and frame_stack > 1:
         env = gym.wrappers.FrameStackObservation(env, frame_stack)
     return env
+
+
+def _wrap_or_close(env, wrapper, value, option: str):
+    """``wrapper(env, value)``; on its ValueError ``env`` is closed and the error re-raised naming ``option``."""
+    try:
+        return wrapper(env, value)
+    except ValueError as e:
+        env.close()
+        raise ValueError(f"{option}: {e}") from None
 
 
 def env_kwargs(parser: argparse.ArgumentParser, args: argparse.Namespace) -> dict:
