@@ -58,7 +58,7 @@ from collections import Counter
 import gymnasium as gym
 import numpy as np
 
-from simgrip.envs.evaluation import outcome
+from simgrip.envs.outcome import outcome
 
 __all__ = ["KAPPA_GRID", "PALM_GRID", "PLACE_DISTANCES", "RAMP_GRID", "VALVE_GRID", "evaluate", "main", "policy_maker",
            "run_policy"]

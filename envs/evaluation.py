@@ -17,6 +17,8 @@ from typing import Any, Callable
 
 import numpy as np
 
+from simgrip.envs.outcome import outcome  # noqa: F401  (also this module's: the learners' scripts import it here)
+
 __all__ = ["EpisodeResult", "GAMMA", "add_episode_arguments", "check_env_id", "discount", "env_kwargs", "json_object",
            "make_env", "outcome", "outcomes", "positive_int", "non_negative_int", "probability", "run_episodes", "summary"]
 
@@ -215,15 +217,6 @@ def summary(results: list[EpisodeResult]) -> dict:
     return {"episodes": n, "success_rate": sum(bool(r.info["is_success"]) for r in results) / n,
             "mean_return": float(np.mean([r.ret for r in results])),
             "mean_length": float(np.mean([r.length for r in results]))}
-
-
-def outcome(info: dict) -> str:
-    """How an episode ended, from its last ``info``: ``"success"`` (``is_success``), ``"crushed"``,
-    ``"dropped"``, ``"knocked_over"`` (the first of these keys that is true), else ``"timeout"``."""
-    for key in ("is_success", "crushed", "dropped", "knocked_over"):
-        if info.get(key):
-            return "success" if key == "is_success" else key
-    return "timeout"
 
 
 def outcomes(results: list[EpisodeResult], gamma: float = GAMMA) -> dict:
