@@ -9,8 +9,8 @@ settles below a controller's success rate while its discounted return is above t
 to optimise: under that discount, its faster and riskier policy is worth more.
 
     python examples/evaluate_policy.py --env simgrip/PickFragile-v6 (--model ZIP [--algo ppo|sac] |
-        --policy observation|oracle) [--action-offset A0 A1] [--frame-stack N] [--env-kwargs JSON] [--episodes 50]
-        [--seed 8000] [--gamma 0.99] [--json]
+        --policy observation|oracle) [--action-offset A0 A1] [--frame-stack N] [--scripted-start P]
+        [--env-kwargs JSON] [--episodes 50] [--seed 8000] [--gamma 0.99] [--json]
 
 ``--action-offset`` and ``--frame-stack`` must be the ones the model was trained with (``train_sb3.py``'s
 options of those names);
@@ -18,6 +18,12 @@ a model trained behind ``VecNormalize`` is not supported here.  Prints one line,
 object: ``{"env", "policy", "episodes", "success_rate", "mean_return", "mean_length", "outcomes",
 "mean_success_length", "mean_discounted_return", "gamma", "eval_seeds"}``.  Exit 2 naming the option on bad
 input.
+
+``--scripted-start P`` (with ``--model``) starts that share of the episodes part-way through the scripted
+observation-only controller's episode (:class:`simgrip.envs.scripted_start.ScriptedStart`, as
+``train_sb3.py --scripted-start`` trains): where a policy trained so has got to.  The JSON then adds
+``by_handover``: the outcomes counted per 50 steps of the handover step (``"0-49"``: the plain starts and the
+early handovers, ``"50-99"``, ...).
 """
 
 from __future__ import annotations
@@ -28,9 +34,10 @@ import sys
 
 import simgrip.envs  # noqa: F401  (registers the simgrip ids)
 from simgrip.envs.evaluation import (check_env_id, discount, json_object, make_env, non_negative_int, outcomes,
-                                     positive_int, run_episodes, summary)
+                                     positive_int, probability, run_episodes, summary)
 
 SCRIPTED = ("observation", "oracle")
+HANDOVER_BIN = 50  # env steps per bin of by_handover (1 s at the fragile tasks' 50 Hz)
 
 
 def _scripted(env, name: str):
@@ -51,6 +58,18 @@ def _scripted(env, name: str):
     return act, on_reset
 
 
+def by_handover(results, handovers, width: int = HANDOVER_BIN) -> dict:
+    """Outcome counts per ``width`` steps of the handover step (``handovers[i]``: episode ``i``'s
+    ``scripted_steps``), keyed ``"lo-hi"`` in increasing order."""
+    from simgrip.envs.outcome import outcome
+
+    bins: dict[int, dict[str, int]] = {}
+    for r, k in zip(results, handovers):
+        counts = bins.setdefault(int(k) // width, {})
+        counts[outcome(r.info)] = counts.get(outcome(r.info), 0) + 1
+    return {f"{b * width}-{b * width + width - 1}": dict(sorted(c.items())) for b, c in sorted(bins.items())}
+
+
 def main(argv=None) -> dict:
     p = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     p.add_argument("--env", required=True, help="registered env id, e.g. simgrip/PickFragile-v6, or a retired "
@@ -65,6 +84,9 @@ def main(argv=None) -> dict:
                    help="the ActionOffset the model was trained behind")
     p.add_argument("--frame-stack", type=positive_int, default=None, metavar="N",
                    help="the observations stacked when the model was trained (train_sb3.py's --frame-stack)")
+    p.add_argument("--scripted-start", type=probability, default=None, metavar="P",
+                   help="with --model: start that share of the episodes part-way through the scripted "
+                        "observation-only controller's (simgrip.envs.scripted_start); adds by_handover")
     p.add_argument("--episodes", type=positive_int, default=50, help="episodes (default 50)")
     p.add_argument("--seed", type=non_negative_int, default=8000, help="seed of the first episode (default 8000)")
     p.add_argument("--gamma", type=discount, default=0.99, help="discount of the reported return (default 0.99)")
@@ -73,6 +95,8 @@ def main(argv=None) -> dict:
     check_env_id(p, args.env, retired=True)  # make_env builds a retired one through its spec
     if args.policy is not None and args.action_offset is not None:
         p.error("--action-offset: only with --model (the scripted controllers command the env directly)")
+    if args.policy is not None and args.scripted_start is not None:
+        p.error("--scripted-start: only with --model (a scripted controller started part-way is not itself)")
     if args.policy is not None and args.frame_stack is not None:
         p.error("--frame-stack: only with --model (the scripted controllers read the env's own observation)")
     if args.model is not None:
@@ -81,9 +105,10 @@ def main(argv=None) -> dict:
         if not os.path.isfile(args.model):
             p.error(f"--model: {args.model!r} is not a file")
     try:
-        env = make_env(args.env, args.env_kwargs, args.action_offset, args.frame_stack)
+        env = make_env(args.env, args.env_kwargs, args.action_offset, args.frame_stack, args.scripted_start)
     except ValueError as exc:
         p.error(str(exc))
+    handovers: list[int] = []
     try:
         on_reset = None
         if args.model is not None:
@@ -100,6 +125,8 @@ def main(argv=None) -> dict:
                 p.error(f"--model: its spaces do not match {args.env}'s (trained with another --frame-stack?)")
             act = lambda obs: model.predict(obs, deterministic=True)[0]  # noqa: E731
             policy = f"{args.algo} {args.model}"
+            if args.scripted_start is not None:
+                on_reset = lambda env_, info, seed: handovers.append(info["scripted_steps"])  # noqa: E731
         else:
             try:
                 act, on_reset = _scripted(env, args.policy)
@@ -111,6 +138,9 @@ def main(argv=None) -> dict:
         env.close()
     out = {"env": args.env, "policy": policy, **summary(results), **outcomes(results, args.gamma),
            "eval_seeds": [args.seed, args.seed + args.episodes - 1]}
+    if args.scripted_start is not None:
+        out["scripted_start"] = args.scripted_start
+        out["by_handover"] = by_handover(results, handovers)
     if args.json:
         print(json.dumps(out))
     else:

@@ -253,3 +253,23 @@ def test_train_sb3_scripted_start_trains_from_scripted_states_and_evaluates_plai
         module.main(["--algo", "sac", "--env", "simgrip/PlaceFragile-v4", "--scripted-start", "-0.1",
                      "--out", str(tmp_path / "o")])
     assert e.value.code == 2 and "--scripted-start" in capsys.readouterr().err
+    capsys.readouterr()
+    # where it has got to: evaluated from scripted starts, the outcomes per handover bin
+    ev = _example("evaluate_policy")
+    out = ev.main(["--env", "simgrip/PlaceFragile-v4", "--model", str(tmp_path / "sac_model.zip"), "--algo", "sac",
+                   "--scripted-start", "1", "--episodes", "3", "--seed", "8320", "--json"])
+    assert out["scripted_start"] == 1.0
+    assert sum(sum(c.values()) for c in out["by_handover"].values()) == 3
+    assert all(int(k.split("-")[1]) - int(k.split("-")[0]) == 49 for k in out["by_handover"])
+    with pytest.raises(SystemExit) as e:
+        ev.main(["--env", "simgrip/PlaceFragile-v4", "--policy", "observation", "--scripted-start", "1"])
+    assert e.value.code == 2 and "--scripted-start" in capsys.readouterr().err
+
+
+def test_by_handover_counts_outcomes_per_50_steps():
+    from simgrip.envs.evaluation import EpisodeResult
+
+    infos = [{"is_success": True}, {"crushed": True}, {"is_success": True}, {}]
+    results = [EpisodeResult(i, i, 0.0, 1, info) for i, info in enumerate(infos)]
+    assert _example("evaluate_policy").by_handover(results, [0, 49, 50, 120]) == {
+        "0-49": {"crushed": 1, "success": 1}, "50-99": {"success": 1}, "100-149": {"timeout": 1}}
