@@ -129,7 +129,7 @@ def run_command(algo: str, seed: int, args, folder: Path) -> list[str]:
         cmd += ["--frame-stack", str(args.frame_stack)]
     if args.gamma is not None:
         cmd += ["--gamma", repr(args.gamma)]
-    if getattr(args, "scripted_start", None) is not None:
+    if args.scripted_start is not None:
         cmd += ["--scripted-start", repr(args.scripted_start)]
     return cmd
 

@@ -149,7 +149,7 @@ def test_normalize_reaches_every_run_command(tmp_path):
     mod = _module()
     args = mod.argparse.Namespace(env="simgrip/PickFragile-v6", minutes=1.0, steps=10, eval_seeds=(8000, 8001),
                                   checkpoint_minutes=None, env_kwargs={}, normalize=True, action_offset=None,
-                                  gamma=None, frame_stack=None)
+                                  gamma=None, frame_stack=None, scripted_start=None)
     assert "--normalize" in mod.run_command("ppo", 0, args, tmp_path)
     args.normalize = False
     assert "--normalize" not in mod.run_command("ppo", 0, args, tmp_path)
@@ -159,7 +159,7 @@ def test_action_offset_reaches_every_run_command(tmp_path):
     mod = _module()
     args = mod.argparse.Namespace(env="simgrip/PickFragile-v6", minutes=1.0, steps=10, eval_seeds=(8000, 8001),
                                   checkpoint_minutes=None, env_kwargs={}, normalize=False, action_offset=[-0.4, 0.2],
-                                  gamma=None, frame_stack=None)
+                                  gamma=None, frame_stack=None, scripted_start=None)
     cmd = mod.run_command("ppo", 0, args, tmp_path)
     i = cmd.index("--action-offset")
     assert [float(x) for x in cmd[i + 1:i + 3]] == [-0.4, 0.2]
@@ -171,7 +171,7 @@ def test_gamma_reaches_every_run_command(tmp_path):
     mod = _module()
     args = mod.argparse.Namespace(env="simgrip/PickFragile-v6", minutes=1.0, steps=10, eval_seeds=(8000, 8001),
                                   checkpoint_minutes=None, env_kwargs={}, normalize=False, action_offset=None,
-                                  gamma=0.995, frame_stack=None)
+                                  gamma=0.995, frame_stack=None, scripted_start=None)
     cmd = mod.run_command("ppo", 0, args, tmp_path)
     assert float(cmd[cmd.index("--gamma") + 1]) == 0.995
     args.gamma = None
@@ -182,7 +182,7 @@ def test_frame_stack_reaches_every_run_command(tmp_path):
     mod = _module()
     args = mod.argparse.Namespace(env="simgrip/PickFragile-v6", minutes=1.0, steps=10, eval_seeds=(8000, 8001),
                                   checkpoint_minutes=None, env_kwargs={}, normalize=False, action_offset=None,
-                                  gamma=None, frame_stack=3)
+                                  gamma=None, frame_stack=3, scripted_start=None)
     cmd = mod.run_command("ppo", 0, args, tmp_path)
     assert cmd[cmd.index("--frame-stack") + 1] == "3"
     args.frame_stack = None
