@@ -239,30 +239,30 @@ def test_train_sb3_scripted_start_trains_from_scripted_states_and_evaluates_plai
     from stable_baselines3 import SAC
 
     module = _example("train_sb3")
-    module.main(["--algo", "sac", "--env", "simgrip/PlaceFragile-v4", "--steps", "800", "--scripted-start", "1",
+    module.main(["--algo", "sac", "--env", "simgrip/PlaceFragile-v5", "--steps", "800", "--scripted-start", "1",
                  "--eval-episodes", "2", "--eval-seed", "8320", "--out", str(tmp_path)])
     trained = json.loads((tmp_path / "sac_eval.json").read_text())
     assert trained["scripted_start"] == 1.0 and trained["wrapper"] == "ScriptedStart(1.0) in training"
     with open(tmp_path / "sac_curve.csv") as fh:
         lengths = [int(row["length"]) for row in csv.DictReader(fh)]
     assert lengths and max(lengths) < 400  # every training episode started part-way (its limit: 400 steps)
-    again = module.evaluate(SAC.load(tmp_path / "sac_model.zip"), "simgrip/PlaceFragile-v4", 2, 8320)
+    again = module.evaluate(SAC.load(tmp_path / "sac_model.zip"), "simgrip/PlaceFragile-v5", 2, 8320)
     for key in ("success_rate", "mean_return", "mean_length", "outcomes"):  # the held-out episodes: plain starts
         assert again[key] == trained[key], key
     with pytest.raises(SystemExit) as e:
-        module.main(["--algo", "sac", "--env", "simgrip/PlaceFragile-v4", "--scripted-start", "-0.1",
+        module.main(["--algo", "sac", "--env", "simgrip/PlaceFragile-v5", "--scripted-start", "-0.1",
                      "--out", str(tmp_path / "o")])
     assert e.value.code == 2 and "--scripted-start" in capsys.readouterr().err
     capsys.readouterr()
     # where it has got to: evaluated from scripted starts, the outcomes per handover bin
     ev = _example("evaluate_policy")
-    out = ev.main(["--env", "simgrip/PlaceFragile-v4", "--model", str(tmp_path / "sac_model.zip"), "--algo", "sac",
+    out = ev.main(["--env", "simgrip/PlaceFragile-v5", "--model", str(tmp_path / "sac_model.zip"), "--algo", "sac",
                    "--scripted-start", "1", "--episodes", "3", "--seed", "8320", "--json"])
     assert out["scripted_start"] == 1.0
     assert sum(sum(c.values()) for c in out["by_handover"].values()) == 3
     assert all(int(k.split("-")[1]) - int(k.split("-")[0]) == 49 for k in out["by_handover"])
     with pytest.raises(SystemExit) as e:
-        ev.main(["--env", "simgrip/PlaceFragile-v4", "--policy", "observation", "--scripted-start", "1"])
+        ev.main(["--env", "simgrip/PlaceFragile-v5", "--policy", "observation", "--scripted-start", "1"])
     assert e.value.code == 2 and "--scripted-start" in capsys.readouterr().err
 
 

@@ -199,7 +199,7 @@ def test_a_bad_frame_stack_exits_2_naming_it(value, tmp_path, capsys):
 
 def test_scripted_start_reaches_every_run_command(tmp_path):
     mod = _module()
-    args = mod.argparse.Namespace(env="simgrip/PlaceFragile-v4", minutes=1.0, steps=10, eval_seeds=(8000, 8001),
+    args = mod.argparse.Namespace(env="simgrip/PlaceFragile-v5", minutes=1.0, steps=10, eval_seeds=(8000, 8001),
                                   checkpoint_minutes=None, env_kwargs={}, normalize=False, action_offset=None,
                                   gamma=None, frame_stack=None, scripted_start=0.5)
     cmd = mod.run_command("ppo", 0, args, tmp_path)
@@ -208,8 +208,8 @@ def test_scripted_start_reaches_every_run_command(tmp_path):
     assert "--scripted-start" not in mod.run_command("ppo", 0, args, tmp_path)
 
 
-@pytest.mark.parametrize("env_id, value", [("simgrip/PlaceFragile-v4", "1.5"), ("simgrip/PlaceFragile-v4", "nan"),
-                                           ("simgrip/PlaceFragile-v4", "x"), ("simgrip/Pick-v1", "0.5")])
+@pytest.mark.parametrize("env_id, value", [("simgrip/PlaceFragile-v5", "1.5"), ("simgrip/PlaceFragile-v5", "nan"),
+                                           ("simgrip/PlaceFragile-v5", "x"), ("simgrip/Pick-v1", "0.5")])
 def test_a_bad_scripted_start_exits_2_naming_it(env_id, value, tmp_path, capsys):
     with pytest.raises(SystemExit) as e:
         _module().main(["--env", env_id, "--out", str(tmp_path / "o"), "--scripted-start", value])
