@@ -7,6 +7,7 @@ import numpy as np
 import pytest
 
 import simgrip.envs  # noqa: F401  (registers the ids)
+from simgrip.envs import FRAGILE_ENV_IDS
 from simgrip.envs.baselines import policy_maker
 from simgrip.envs.evaluation import make_env
 from simgrip.envs.scripted_start import ScriptedStart
@@ -27,7 +28,7 @@ def _scripted_prefix(env_id, seed, k, **make_kwargs):
     return obs, elapsed
 
 
-@pytest.mark.parametrize("env_id", [PLACE, "simgrip/PickFragile-v6"])
+@pytest.mark.parametrize("env_id", FRAGILE_ENV_IDS)
 def test_a_scripted_start_is_the_controllers_state_after_k_steps(env_id):
     env = ScriptedStart(gym.make(env_id), probability=1.0, max_steps=60)
     seen = set()
