@@ -38,3 +38,91 @@ def assert_headless_frame(env_id) -> None:
     finally:
         env.close()
     assert frame.shape == (72, 96, 3) and frame.dtype == np.uint8 and frame.std() > 0
+
+
+def spoiled_controller(env, seed: int):
+    """The fragile task's observation-only controller, spoiled by ``seed % 3``: 0 as it is, 1 its valve opened at
+    full rate once the workpiece is 4 mm up (a drop), 2 its valve closed at full rate from step 5 (a crush).
+    Returns ``(start(info), act(obs, t, info))``."""
+    from simgrip.envs.baselines import policy_maker
+
+    make_act = policy_maker(env, "observation")
+    mode, state = seed % 3, {}
+
+    def start(info):
+        state["act"] = make_act(env, info, seed)
+
+    def act(obs, t, info):
+        a = np.array(state["act"](obs, t), dtype=np.float32)
+        if mode == 1 and info.get("workpiece_lift", 0.0) > 0.004:
+            a[0] = 1.0
+        elif mode == 2 and t >= 5:
+            a[0] = -1.0
+        return a
+    return start, act
+
+
+def assert_the_same_less_the_drop_penalty(new, old, seeds, steps: int, same_keys) -> tuple:
+    """Step ``new`` (no drop penalty) beside ``old`` (its previous version) with :func:`spoiled_controller`'s
+    actions over ``seeds``: the same observations, flags and ``same_keys``; ``new``'s ``reward_drop`` always 0
+    and its reward ``old``'s less ``old``'s ``reward_drop``.  Returns ``(ends, drop_charged)``: the outcome
+    counts (``simgrip.envs.outcome``) and how many steps ``old`` charged a drop."""
+    from collections import Counter
+
+    from simgrip.envs.outcome import outcome
+
+    ends, drop_charged = Counter(), 0
+    for seed in seeds:
+        o_new, i_new = new.reset(seed=seed)
+        o_old, i_old = old.reset(seed=seed)
+        np.testing.assert_array_equal(o_new, o_old)
+        start, act = spoiled_controller(new, seed)
+        start(i_new)
+        for t in range(steps):
+            a = act(o_new, t, i_new)
+            o_new, r_new, te_new, tr_new, i_new = new.step(a)
+            o_old, r_old, te_old, tr_old, i_old = old.step(a)
+            np.testing.assert_array_equal(o_new, o_old)
+            assert (te_new, tr_new) == (te_old, tr_old)
+            assert i_new["reward_drop"] == 0.0
+            drop_charged += i_old["reward_drop"] < 0.0
+            assert r_new == pytest.approx(r_old - i_old["reward_drop"], abs=1e-12)
+            for k in same_keys:
+                if k in i_old:
+                    assert np.array_equal(i_new[k], i_old[k]), k
+            if te_new or tr_new:
+                break
+        ends[outcome(i_new)] += 1
+    return ends, drop_charged
+
+
+def assert_step_for_step_equal(a, b, seeds, steps: int, rng_seed: int = 3) -> None:
+    """``a`` and ``b`` stepped beside each other with the same uniform random actions from ``reset(seed)`` for
+    each of ``seeds`` (at most ``steps`` steps each): the same observations, rewards and flags."""
+    rng = np.random.default_rng(rng_seed)
+    for seed in seeds:
+        a.reset(seed=seed)
+        b.reset(seed=seed)
+        for _ in range(steps):
+            act = rng.uniform(-1, 1, a.action_space.shape).astype(np.float32)
+            oa, ra, ta, tra, _ = a.step(act)
+            ob, rb, tb, trb, _ = b.step(act)
+            np.testing.assert_array_equal(oa, ob)
+            assert (ra, ta, tra) == (rb, tb, trb)
+            if ta or tra:
+                break
+
+
+def spoiled_episode(env, seed: int, steps: int) -> tuple[float, dict]:
+    """One episode of :func:`spoiled_controller` from ``reset(seed)``, at most ``steps`` steps: ``(its return, the
+    last info)``."""
+    obs, info = env.reset(seed=seed)
+    start, act = spoiled_controller(env, seed)
+    start(info)
+    total = 0.0
+    for t in range(steps):
+        obs, r, term, trunc, info = env.step(act(obs, t, info))
+        total += r
+        if term or trunc:
+            break
+    return total, info
