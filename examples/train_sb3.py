@@ -52,6 +52,11 @@ valve tasks ``-0.4 0.2``, the slow close-and-lift probe); ``<algo>_eval.json`` r
 the issue's "frame stacking": the policy then sees how the forces and the shapes change from step to step;
 :func:`simgrip.envs.evaluation.make_env`); ``<algo>_eval.json`` records ``frame_stack``.
 
+``--scripted-start P`` starts that share of the training episodes part-way through the task's scripted
+observation-only controller's episode (:class:`simgrip.envs.scripted_start.ScriptedStart`, reference-state
+initialisation; the pick-and-place's first successes come from it); the held-out evaluation starts every
+episode plainly; ``<algo>_eval.json`` records ``scripted_start``.
+
 ``--gamma G`` changes one hyperparameter, the discount (default 0.99), and the JSON's ``hyperparameters``
 says so; the held-out ``mean_discounted_return`` is then at ``G``.  ``examples/evaluate_policy.py``
 re-evaluates a saved model, or a scripted controller, the same way.
