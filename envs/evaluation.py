@@ -17,7 +17,7 @@ from typing import Any, Callable
 
 import numpy as np
 
-from simgrip.envs.outcome import outcome  # noqa: F401  (also this module's: the learners' scripts import it here)
+from simgrip.envs.outcome import outcome  # outcomes() counts with it; also importable from here
 
 __all__ = ["EpisodeResult", "GAMMA", "add_episode_arguments", "check_env_id", "discount", "env_kwargs", "json_object",
            "make_env", "outcome", "outcomes", "positive_int", "non_negative_int", "probability", "run_episodes", "summary"]

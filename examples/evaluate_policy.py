@@ -60,14 +60,11 @@ def _scripted(env, name: str):
 
 def by_handover(results, handovers, width: int = HANDOVER_BIN) -> dict:
     """Outcome counts per ``width`` steps of the handover step (``handovers[i]``: episode ``i``'s
-    ``scripted_steps``), keyed ``"lo-hi"`` in increasing order."""
-    from simgrip.envs.outcome import outcome
-
-    bins: dict[int, dict[str, int]] = {}
+    ``scripted_steps``), keyed ``"lo-hi"`` in increasing order (each bin counted by :func:`outcomes`)."""
+    bins: dict[int, list] = {}
     for r, k in zip(results, handovers):
-        counts = bins.setdefault(int(k) // width, {})
-        counts[outcome(r.info)] = counts.get(outcome(r.info), 0) + 1
-    return {f"{b * width}-{b * width + width - 1}": dict(sorted(c.items())) for b, c in sorted(bins.items())}
+        bins.setdefault(int(k) // width, []).append(r)
+    return {f"{b * width}-{b * width + width - 1}": outcomes(rs)["outcomes"] for b, rs in sorted(bins.items())}
 
 
 def main(argv=None) -> dict:
