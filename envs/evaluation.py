@@ -87,7 +87,7 @@ def check_env_id(parser: argparse.ArgumentParser, env_id: str, *, retired: bool 
 
 
 def make_env(env_id: str, env_kwargs: dict | None = None, action_offset=None, frame_stack: int | None = None,
-             scripted_start: float | None = None):
+             scripted_start: float | None = None, light_bias: float | None = None):
     """The env of ``env_id`` (a registered id, or a retired one of ``simgrip.envs.RETIRED`` through its spec) made
     with ``env_kwargs`` (``gym.make``'s keyword arguments), behind
     :class:`~simgrip.envs.action_offset.ActionOffset` ``(action_offset)`` when that is given, and behind
@@ -96,12 +96,15 @@ def make_env(env_id: str, env_kwargs: dict | None = None, action_offset=None, fr
     first one repeated): what the training and evaluation scripts build and check their options with.
     ``scripted_start`` (training envs only): with that probability a reset starts part-way through the task's
     scripted observation-only controller's episode (:class:`~simgrip.envs.scripted_start.ScriptedStart`, next
-    to the env, inside the offset and the frame stack).
+    to the env, inside the offset and the frame stack).  ``light_bias`` (training envs only): with that probability
+    a reset draws the workpiece's mass from the light end of the task's range
+    (:class:`~simgrip.envs.light_bias.LightBias`, innermost).
 
     Raises ValueError naming the option: ``--env-kwargs`` when the env does not take ``env_kwargs`` or refuses a
     value, ``--action-offset`` when the offset does not fit its action space (the env is closed first),
     ``--frame-stack`` when it is not a whole number >= 1 (checked before any env is made), ``--scripted-start``
-    when it is not a probability or the env has no scripted controller (the env is closed first)."""
+    when it is not a probability or the env has no scripted controller, ``--light-bias`` when it is not a
+    probability or the env is not a fragile task (the env is closed first)."""
     import json
 
     import gymnasium as gym
@@ -116,6 +119,10 @@ def make_env(env_id: str, env_kwargs: dict | None = None, action_offset=None, fr
         env = gym.make(retired_spec(env_id) if env_id in RETIRED else env_id, **kwargs)
     except (TypeError, ValueError) as e:
         raise ValueError(f"--env-kwargs: {env_id} does not take {json.dumps(kwargs)}: {e}") from None
+    if light_bias is not None:
+        from simgrip.envs.light_bias import LightBias
+
+        env = _wrap_or_close(env, LightBias, light_bias, "--light-bias")
     if scripted_start is not None:
         from simgrip.envs.scripted_start import ScriptedStart
 

@@ -37,6 +37,9 @@ PPO's zero-mean start performs the offset's motion) and ``aggregate.json`` recor
 recorded as ``frame_stack``; ``--scripted-start P`` passes that option (that share of the training episodes
 starts part-way through the scripted observation-only controller's episode,
 :class:`simgrip.envs.scripted_start.ScriptedStart`; evaluation starts plainly), recorded as ``scripted_start``;
+``--light-bias P`` passes that option (that share of the training episodes' workpieces drawn from the light end
+of the mass range, :class:`simgrip.envs.light_bias.LightBias`; evaluation draws the task's own), recorded as
+``light_bias``;
 ``--gamma G`` passes the discount instead of the default 0.99, named in every JSON's
 ``hyperparameters``.
 
@@ -131,6 +134,8 @@ def run_command(algo: str, seed: int, args, folder: Path) -> list[str]:
         cmd += ["--gamma", repr(args.gamma)]
     if args.scripted_start is not None:
         cmd += ["--scripted-start", repr(args.scripted_start)]
+    if args.light_bias is not None:
+        cmd += ["--light-bias", repr(args.light_bias)]
     return cmd
 
 
@@ -274,6 +279,9 @@ def main(argv=None) -> int:
     p.add_argument("--scripted-start", type=_probability, default=None, metavar="P",
                    help="start that share of the training episodes part-way through the scripted observation-only "
                         "controller's episode (simgrip.envs.scripted_start; evaluation starts plainly; default none)")
+    p.add_argument("--light-bias", type=_probability, default=None, metavar="P",
+                   help="draw that share of the training episodes' workpieces from the lightest third of the mass "
+                        "range (simgrip.envs.light_bias; evaluation draws the task's own; default none)")
     p.add_argument("--out", required=True, help="output folder")
     args = p.parse_args(argv)
     cores = os.cpu_count() or 1
@@ -292,11 +300,13 @@ def main(argv=None) -> int:
     from simgrip.io import check_output_dir, check_output_files_in, write_json
 
     check_env_id(p, args.env, retired=True)  # train_sb3.py builds a retired one
-    if args.env_kwargs or args.action_offset is not None or args.scripted_start is not None:
+    if args.env_kwargs or args.action_offset is not None or args.scripted_start is not None \
+            or args.light_bias is not None:
         from simgrip.envs.evaluation import make_env  # refused before any run starts, the env built once
 
         try:
-            make_env(args.env, args.env_kwargs, args.action_offset, None, args.scripted_start).close()
+            make_env(args.env, args.env_kwargs, args.action_offset, None, args.scripted_start,
+                     args.light_bias).close()
         except ValueError as e:
             p.error(str(e))
     algos = list(dict.fromkeys(args.algo))
@@ -336,6 +346,7 @@ def main(argv=None) -> int:
         **({"action_offset": [float(x) for x in args.action_offset]} if args.action_offset is not None else {}),
         **({"frame_stack": args.frame_stack} if args.frame_stack is not None else {}),
         **({"scripted_start": args.scripted_start} if args.scripted_start is not None else {}),
+        **({"light_bias": args.light_bias} if args.light_bias is not None else {}),
         **({"wrapper": "VecNormalize (SB3 defaults: observation and return)"} if args.normalize else {}),
         "command": [Path(sys.argv[0]).name] + list(sys.argv[1:] if argv is None else argv)})
     plot(summary, results, out / "learning_curves.png")

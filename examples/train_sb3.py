@@ -57,6 +57,10 @@ observation-only controller's episode (:class:`simgrip.envs.scripted_start.Scrip
 initialisation; the pick-and-place's first successes come from it); the held-out evaluation starts every
 episode plainly; ``<algo>_eval.json`` records ``scripted_start``.
 
+``--light-bias P`` draws that share of the training episodes' workpieces from the lightest third of the task's
+log mass range (:class:`simgrip.envs.light_bias.LightBias`: the pieces a fast closing crushes); the held-out
+evaluation runs the task's own draw; ``<algo>_eval.json`` records ``light_bias``.
+
 ``--gamma G`` changes one hyperparameter, the discount (default 0.99), and the JSON's ``hyperparameters``
 says so; the held-out ``mean_discounted_return`` is then at ``G``.  ``examples/evaluate_policy.py``
 re-evaluates a saved model, or a scripted controller, the same way.
@@ -184,7 +188,8 @@ def _load_normalizer(path: Path):
 def train(algo: str, env_id: str, *, steps: int, minutes: float, seed: int, out: Path,
           eval_episodes: int, eval_seed: int, clock: str = "cpu", checkpoint_minutes: float | None = None,
           env_kwargs: dict | None = None, normalize: bool = False, action_offset=None, gamma: float | None = None,
-          frame_stack: int | None = None, scripted_start: float | None = None) -> dict:
+          frame_stack: int | None = None, scripted_start: float | None = None,
+          light_bias: float | None = None) -> dict:
     """Train ``algo`` with library defaults within the budget, write its curve, model and evaluation
     (``env_kwargs``: ``gym.make``'s keyword arguments, for training and evaluation alike; ``normalize``: train
     behind SB3's ``VecNormalize`` with its defaults; ``action_offset``: train and evaluate behind
@@ -192,7 +197,9 @@ def train(algo: str, env_id: str, *, steps: int, minutes: float, seed: int, out:
     evaluate on the last ``frame_stack`` observations, :func:`simgrip.envs.evaluation.make_env`; ``gamma``: the
     algorithm's discount instead of its default 0.99, the one hyperparameter changed; ``scripted_start``: that
     share of the training episodes starts part-way through the scripted controller's episode,
-    :class:`simgrip.envs.scripted_start.ScriptedStart`; evaluation starts plainly)."""
+    :class:`simgrip.envs.scripted_start.ScriptedStart`; evaluation starts plainly; ``light_bias``: that share of the
+    training episodes' masses drawn from the light end, :class:`simgrip.envs.light_bias.LightBias`; evaluation
+    draws the task's own)."""
     env_kwargs = dict(env_kwargs or {})
     from stable_baselines3 import PPO, SAC
     from stable_baselines3.common.callbacks import BaseCallback
@@ -237,7 +244,8 @@ def train(algo: str, env_id: str, *, steps: int, minutes: float, seed: int, out:
             return spent() < budget
 
     # make_vec_env calls the maker (gym.make of the id, or of a retired id's spec), then seeds and wraps in Monitor
-    env = make_vec_env(lambda: make_env(env_id, env_kwargs, action_offset, frame_stack, scripted_start), n_envs=1,
+    env = make_vec_env(lambda: make_env(env_id, env_kwargs, action_offset, frame_stack, scripted_start,
+                                                light_bias), n_envs=1,
                        seed=seed)
     if normalize:
         from stable_baselines3.common.vec_env import VecNormalize
@@ -274,6 +282,9 @@ def train(algo: str, env_id: str, *, steps: int, minutes: float, seed: int, out:
     if scripted_start is not None:
         result["scripted_start"] = float(scripted_start)
         wrappers.append(f"ScriptedStart({float(scripted_start)!r}) in training")
+    if light_bias is not None:
+        result["light_bias"] = float(light_bias)
+        wrappers.append(f"LightBias({float(light_bias)!r}) in training")
     if normalize:
         wrappers.append("VecNormalize (SB3 defaults: observation and return)")
     if wrappers:
@@ -364,6 +375,9 @@ def main(argv=None) -> int:
     p.add_argument("--scripted-start", type=probability, default=None, metavar="P",
                    help="start that share of the training episodes part-way through the scripted observation-only "
                         "controller's episode (simgrip.envs.scripted_start; evaluation starts plainly)")
+    p.add_argument("--light-bias", type=probability, default=None, metavar="P",
+                   help="draw that share of the training episodes' workpieces from the lightest third of the mass "
+                        "range (simgrip.envs.light_bias; evaluation draws the task's own)")
     p.add_argument("--out", required=True, help="output folder")
     args = p.parse_args(argv)
     try:
@@ -372,9 +386,11 @@ def main(argv=None) -> int:
     except ImportError:
         p.error('needs Stable-Baselines3 and PyTorch: pip install "simgrip[rl]"')
     check_env_id(p, args.env, retired=True)
-    if args.env_kwargs or args.action_offset is not None or args.scripted_start is not None:
+    if args.env_kwargs or args.action_offset is not None or args.scripted_start is not None \
+            or args.light_bias is not None:
         try:  # refused before any training, the env built once
-            make_env(args.env, args.env_kwargs, args.action_offset, args.frame_stack, args.scripted_start).close()
+            make_env(args.env, args.env_kwargs, args.action_offset, args.frame_stack, args.scripted_start,
+                     args.light_bias).close()
         except ValueError as e:
             p.error(str(e))
     try:  # simgrip.io's output-path policy: a folder, and no FIFO/device/folder where a result file goes
@@ -390,7 +406,8 @@ def main(argv=None) -> int:
                        eval_episodes=args.eval_episodes, eval_seed=args.eval_seed, clock=args.clock,
                        checkpoint_minutes=args.checkpoint_minutes, env_kwargs=args.env_kwargs,
                        normalize=args.normalize, action_offset=args.action_offset, gamma=args.gamma,
-                       frame_stack=args.frame_stack, scripted_start=args.scripted_start)
+                       frame_stack=args.frame_stack, scripted_start=args.scripted_start,
+                       light_bias=args.light_bias)
         print(json.dumps(result), flush=True)
     plot_curves(out)
     return 0
