@@ -33,10 +33,30 @@ import math
 import gymnasium as gym
 import numpy as np
 
-__all__ = ["LightBias", "LIGHT_SHARE"]
+__all__ = ["LightBias", "LIGHT_SHARE", "episode_mass", "mass_bins"]
 
 #: default ``share``: the lightest third of the log mass range (5-18 g of the pinch's and K fingers' 5-250 g)
 LIGHT_SHARE = 1.0 / 3.0
+
+
+def episode_mass(env) -> float | None:
+    """The workpiece mass [kg] of ``env``'s current episode (a fragile task's hidden draw), ``None`` when ``env``
+    is not a fragile task."""
+    u = env.unwrapped
+    if not hasattr(u, "_mass_range"):
+        return None
+    return float(u._episode()[0])
+
+
+def mass_bins(env, bins: int = 3) -> list[float] | None:
+    """The edges [kg] of ``bins`` equal parts of ``env``'s log mass range (``bins + 1`` increasing masses: the
+    first part is :class:`LightBias`'s light end at ``share = 1 / bins``), ``None`` when ``env`` is not a
+    fragile task."""
+    u = env.unwrapped
+    if not hasattr(u, "_mass_range"):
+        return None
+    lo, hi = (float(m) for m in u._mass_range)
+    return [lo * (hi / lo) ** (i / bins) for i in range(bins)] + [hi]
 
 
 class LightBias(gym.Wrapper):

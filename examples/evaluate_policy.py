@@ -24,6 +24,10 @@ observation-only controller's episode (:class:`simgrip.envs.scripted_start.Scrip
 ``train_sb3.py --scripted-start`` trains): where a policy trained so has got to.  The JSON then adds
 ``by_handover``: the outcomes counted per 50 steps of the handover step (``"0-49"``: the plain starts and the
 early handovers, ``"50-99"``, ...).
+
+On a fragile task the JSON also has ``by_mass``: the outcomes counted per third of the task's log mass range
+(the hidden mass of each episode; keys ``"5-18 g"``, ...; :func:`simgrip.envs.light_bias.mass_bins`): which
+workpieces a policy loses (a fast closing crushes the lightest).
 """
 
 from __future__ import annotations
@@ -35,6 +39,7 @@ import sys
 import simgrip.envs  # noqa: F401  (registers the simgrip ids)
 from simgrip.envs.evaluation import (check_env_id, discount, json_object, make_env, non_negative_int, outcomes,
                                      positive_int, probability, run_episodes, summary)
+from simgrip.envs.light_bias import episode_mass, mass_bins
 
 SCRIPTED = ("observation", "oracle")
 HANDOVER_BIN = 50  # env steps per bin of by_handover (1 s at the fragile tasks' 50 Hz)
@@ -65,6 +70,18 @@ def by_handover(results, handovers, width: int = HANDOVER_BIN) -> dict:
     for r, k in zip(results, handovers):
         bins.setdefault(int(k) // width, []).append(r)
     return {f"{b * width}-{b * width + width - 1}": outcomes(rs)["outcomes"] for b, rs in sorted(bins.items())}
+
+
+def by_mass(results, masses, edges) -> dict:
+    """Outcome counts per mass bin (``masses[i]``: episode ``i``'s mass [kg]; ``edges``: increasing bin edges
+    [kg], the last bin closed), keyed ``"lo-hi g"`` in increasing order (each bin counted by :func:`outcomes`;
+    empty bins kept, as ``{}``)."""
+    bins: list[list] = [[] for _ in edges[:-1]]
+    for r, m in zip(results, masses):
+        i = next((j for j in range(len(edges) - 2) if m < edges[j + 1]), len(edges) - 2)
+        bins[i].append(r)
+    return {f"{edges[i] * 1e3:.0f}-{edges[i + 1] * 1e3:.0f} g": outcomes(rs)["outcomes"] if rs else {}
+            for i, rs in enumerate(bins)}
 
 
 def main(argv=None) -> dict:
@@ -106,6 +123,8 @@ def main(argv=None) -> dict:
     except ValueError as exc:
         p.error(str(exc))
     handovers: list[int] = []
+    masses: list[float] = []
+    edges = mass_bins(env)
     try:
         on_reset = None
         if args.model is not None:
@@ -130,7 +149,12 @@ def main(argv=None) -> dict:
             except ValueError as exc:
                 p.error(f"--policy: {exc}")
             policy = args.policy
-        results = run_episodes(env, act, args.episodes, args.seed, on_reset=on_reset, gamma=args.gamma)
+        def on_reset_and_mass(env_, info, seed, then=on_reset):
+            masses.append(episode_mass(env_))
+            if then is not None:
+                then(env_, info, seed)
+
+        results = run_episodes(env, act, args.episodes, args.seed, on_reset=on_reset_and_mass, gamma=args.gamma)
     finally:
         env.close()
     out = {"env": args.env, "policy": policy, **summary(results), **outcomes(results, args.gamma),
@@ -138,6 +162,8 @@ def main(argv=None) -> dict:
     if args.scripted_start is not None:
         out["scripted_start"] = args.scripted_start
         out["by_handover"] = by_handover(results, handovers)
+    if edges is not None:
+        out["by_mass"] = by_mass(results, masses, edges)
     if args.json:
         print(json.dumps(out))
     else:

@@ -273,3 +273,52 @@ def test_by_handover_counts_outcomes_per_50_steps():
     results = [EpisodeResult(i, i, 0.0, 1, info) for i, info in enumerate(infos)]
     assert _example("evaluate_policy").by_handover(results, [0, 49, 50, 120]) == {
         "0-49": {"crushed": 1, "success": 1}, "50-99": {"success": 1}, "100-149": {"timeout": 1}}
+
+
+def test_by_mass_counts_outcomes_per_mass_bin():
+    from simgrip.envs.evaluation import EpisodeResult
+
+    infos = [{"is_success": True}, {"crushed": True}, {"is_success": True}, {}]
+    results = [EpisodeResult(i, i, 0.0, 1, info) for i, info in enumerate(infos)]
+    edges = [0.005, 0.02, 0.1, 0.25]
+    assert _example("evaluate_policy").by_mass(results, [0.005, 0.0199, 0.02, 0.25], edges) == {
+        "5-20 g": {"crushed": 1, "success": 1}, "20-100 g": {"success": 1}, "100-250 g": {"timeout": 1}}
+
+
+def test_evaluate_policy_counts_a_fragile_tasks_outcomes_by_hidden_mass(capsys):
+    import gymnasium as gym
+
+    from simgrip.envs.light_bias import episode_mass, mass_bins
+
+    out = _example("evaluate_policy").main(["--env", "simgrip/PickMultiFragile-v6", "--policy", "observation",
+                                            "--episodes", "3", "--seed", "8330", "--json"])
+    env = gym.make("simgrip/PickMultiFragile-v6")
+    edges = mass_bins(env)
+    masses = []
+    for seed in (8330, 8331, 8332):
+        env.reset(seed=seed)
+        masses.append(episode_mass(env))
+    env.close()
+    assert edges[0] == 0.005 and edges[-1] == 0.25 and len(out["by_mass"]) == 3
+    expected = [sum(lo <= m < hi or (i == 2 and m == hi) for m in masses)
+                for i, (lo, hi) in enumerate(zip(edges[:-1], edges[1:]))]
+    assert [sum(c.values()) for c in out["by_mass"].values()] == expected
+
+
+def test_train_sb3_light_bias_trains_on_light_pieces_and_evaluates_on_the_task(tmp_path, capsys):
+    pytest.importorskip("stable_baselines3")
+    from stable_baselines3 import SAC
+
+    module = _example("train_sb3")
+    module.main(["--algo", "sac", "--env", "simgrip/PickMultiFragile-v6", "--steps", "300", "--light-bias", "1",
+                 "--eval-episodes", "2", "--eval-seed", "8340", "--out", str(tmp_path)])
+    trained = json.loads((tmp_path / "sac_eval.json").read_text())
+    assert trained["light_bias"] == 1.0 and trained["wrapper"] == "LightBias(1.0) in training"
+    again = module.evaluate(SAC.load(tmp_path / "sac_model.zip"), "simgrip/PickMultiFragile-v6", 2, 8340)
+    for key in ("success_rate", "mean_return", "mean_length", "outcomes"):  # the held-out episodes: the task's draw
+        assert again[key] == trained[key], key
+    with pytest.raises(SystemExit) as e:
+        module.main(["--algo", "sac", "--env", "simgrip/PickMultiFragile-v6", "--light-bias", "1.5",
+                     "--out", str(tmp_path / "o")])
+    assert e.value.code == 2 and "--light-bias" in capsys.readouterr().err
+    assert not (tmp_path / "o").exists()
