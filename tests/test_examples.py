@@ -234,21 +234,31 @@ def test_evaluate_policy_model_reproduces_train_sb3s_evaluation(tmp_path, capsys
     assert e.value.code == 2 and "--model" in capsys.readouterr().err
 
 
-def test_train_sb3_scripted_start_trains_from_scripted_states_and_evaluates_plainly(tmp_path, capsys):
-    pytest.importorskip("stable_baselines3")
+def _trained_with_a_training_aid(module, tmp_path, env_id: str, steps: int, eval_seed: int, option: str,
+                                 wrapper: str) -> dict:
+    """Train SAC a few ``steps`` with the training-only ``option`` at 1 and check that its JSON records it and
+    that its held-out evaluation is the plain task's (the saved model re-evaluated without the aid gives the
+    same figures); returns the training's JSON."""
     from stable_baselines3 import SAC
 
-    module = _example("train_sb3")
-    module.main(["--algo", "sac", "--env", "simgrip/PlaceFragile-v5", "--steps", "800", "--scripted-start", "1",
-                 "--eval-episodes", "2", "--eval-seed", "8320", "--out", str(tmp_path)])
+    module.main(["--algo", "sac", "--env", env_id, "--steps", str(steps), option, "1", "--eval-episodes", "2",
+                 "--eval-seed", str(eval_seed), "--out", str(tmp_path)])
     trained = json.loads((tmp_path / "sac_eval.json").read_text())
-    assert trained["scripted_start"] == 1.0 and trained["wrapper"] == "ScriptedStart(1.0) in training"
+    assert trained[option[2:].replace("-", "_")] == 1.0 and trained["wrapper"] == f"{wrapper}(1.0) in training"
+    again = module.evaluate(SAC.load(tmp_path / "sac_model.zip"), env_id, 2, eval_seed)
+    for key in ("success_rate", "mean_return", "mean_length", "outcomes"):  # the held-out episodes: the plain task
+        assert again[key] == trained[key], key
+    return trained
+
+
+def test_train_sb3_scripted_start_trains_from_scripted_states_and_evaluates_plainly(tmp_path, capsys):
+    pytest.importorskip("stable_baselines3")
+    module = _example("train_sb3")
+    _trained_with_a_training_aid(module, tmp_path, "simgrip/PlaceFragile-v5", 800, 8320, "--scripted-start",
+                                 "ScriptedStart")
     with open(tmp_path / "sac_curve.csv") as fh:
         lengths = [int(row["length"]) for row in csv.DictReader(fh)]
     assert lengths and max(lengths) < 400  # every training episode started part-way (its limit: 400 steps)
-    again = module.evaluate(SAC.load(tmp_path / "sac_model.zip"), "simgrip/PlaceFragile-v5", 2, 8320)
-    for key in ("success_rate", "mean_return", "mean_length", "outcomes"):  # the held-out episodes: plain starts
-        assert again[key] == trained[key], key
     with pytest.raises(SystemExit) as e:
         module.main(["--algo", "sac", "--env", "simgrip/PlaceFragile-v5", "--scripted-start", "-0.1",
                      "--out", str(tmp_path / "o")])
@@ -307,16 +317,10 @@ def test_evaluate_policy_counts_a_fragile_tasks_outcomes_by_hidden_mass(capsys):
 
 def test_train_sb3_light_bias_trains_on_light_pieces_and_evaluates_on_the_task(tmp_path, capsys):
     pytest.importorskip("stable_baselines3")
-    from stable_baselines3 import SAC
 
     module = _example("train_sb3")
-    module.main(["--algo", "sac", "--env", "simgrip/PickMultiFragile-v6", "--steps", "300", "--light-bias", "1",
-                 "--eval-episodes", "2", "--eval-seed", "8340", "--out", str(tmp_path)])
-    trained = json.loads((tmp_path / "sac_eval.json").read_text())
-    assert trained["light_bias"] == 1.0 and trained["wrapper"] == "LightBias(1.0) in training"
-    again = module.evaluate(SAC.load(tmp_path / "sac_model.zip"), "simgrip/PickMultiFragile-v6", 2, 8340)
-    for key in ("success_rate", "mean_return", "mean_length", "outcomes"):  # the held-out episodes: the task's draw
-        assert again[key] == trained[key], key
+    _trained_with_a_training_aid(module, tmp_path, "simgrip/PickMultiFragile-v6", 300, 8340, "--light-bias",
+                                 "LightBias")
     with pytest.raises(SystemExit) as e:
         module.main(["--algo", "sac", "--env", "simgrip/PickMultiFragile-v6", "--light-bias", "1.5",
                      "--out", str(tmp_path / "o")])
