@@ -157,11 +157,18 @@ def test_ctrl_c_stops_every_child_with_one_line(tmp_path):
         assert now is None or now[0] in ("Z", "X") or started[k] is None or now[1] != started[k][1], (k, now)
 
 
+def _args(mod, **overrides):
+    """``rl_baselines``' parsed options as ``main`` would pass them to ``run_command``, none of the optional ones
+    given but ``overrides``."""
+    options = dict(env="simgrip/PickFragile-v6", minutes=1.0, steps=10, eval_seeds=(8000, 8001),
+                   checkpoint_minutes=None, env_kwargs={}, normalize=False, action_offset=None, gamma=None,
+                   frame_stack=None, scripted_start=None, light_bias=None)
+    return mod.argparse.Namespace(**{**options, **overrides})
+
+
 def test_normalize_reaches_every_run_command(tmp_path):
     mod = _module()
-    args = mod.argparse.Namespace(env="simgrip/PickFragile-v6", minutes=1.0, steps=10, eval_seeds=(8000, 8001),
-                                  checkpoint_minutes=None, env_kwargs={}, normalize=True, action_offset=None,
-                                  gamma=None, frame_stack=None, scripted_start=None)
+    args = _args(mod, normalize=True)
     assert "--normalize" in mod.run_command("ppo", 0, args, tmp_path)
     args.normalize = False
     assert "--normalize" not in mod.run_command("ppo", 0, args, tmp_path)
@@ -169,9 +176,7 @@ def test_normalize_reaches_every_run_command(tmp_path):
 
 def test_action_offset_reaches_every_run_command(tmp_path):
     mod = _module()
-    args = mod.argparse.Namespace(env="simgrip/PickFragile-v6", minutes=1.0, steps=10, eval_seeds=(8000, 8001),
-                                  checkpoint_minutes=None, env_kwargs={}, normalize=False, action_offset=[-0.4, 0.2],
-                                  gamma=None, frame_stack=None, scripted_start=None)
+    args = _args(mod, action_offset=[-0.4, 0.2])
     cmd = mod.run_command("ppo", 0, args, tmp_path)
     i = cmd.index("--action-offset")
     assert [float(x) for x in cmd[i + 1:i + 3]] == [-0.4, 0.2]
@@ -181,9 +186,7 @@ def test_action_offset_reaches_every_run_command(tmp_path):
 
 def test_gamma_reaches_every_run_command(tmp_path):
     mod = _module()
-    args = mod.argparse.Namespace(env="simgrip/PickFragile-v6", minutes=1.0, steps=10, eval_seeds=(8000, 8001),
-                                  checkpoint_minutes=None, env_kwargs={}, normalize=False, action_offset=None,
-                                  gamma=0.995, frame_stack=None, scripted_start=None)
+    args = _args(mod, gamma=0.995)
     cmd = mod.run_command("ppo", 0, args, tmp_path)
     assert float(cmd[cmd.index("--gamma") + 1]) == 0.995
     args.gamma = None
@@ -192,9 +195,7 @@ def test_gamma_reaches_every_run_command(tmp_path):
 
 def test_frame_stack_reaches_every_run_command(tmp_path):
     mod = _module()
-    args = mod.argparse.Namespace(env="simgrip/PickFragile-v6", minutes=1.0, steps=10, eval_seeds=(8000, 8001),
-                                  checkpoint_minutes=None, env_kwargs={}, normalize=False, action_offset=None,
-                                  gamma=None, frame_stack=3, scripted_start=None)
+    args = _args(mod, frame_stack=3)
     cmd = mod.run_command("ppo", 0, args, tmp_path)
     assert cmd[cmd.index("--frame-stack") + 1] == "3"
     args.frame_stack = None
@@ -211,9 +212,7 @@ def test_a_bad_frame_stack_exits_2_naming_it(value, tmp_path, capsys):
 
 def test_scripted_start_reaches_every_run_command(tmp_path):
     mod = _module()
-    args = mod.argparse.Namespace(env="simgrip/PlaceFragile-v5", minutes=1.0, steps=10, eval_seeds=(8000, 8001),
-                                  checkpoint_minutes=None, env_kwargs={}, normalize=False, action_offset=None,
-                                  gamma=None, frame_stack=None, scripted_start=0.5)
+    args = _args(mod, env="simgrip/PlaceFragile-v5", scripted_start=0.5)
     cmd = mod.run_command("ppo", 0, args, tmp_path)
     assert float(cmd[cmd.index("--scripted-start") + 1]) == 0.5
     args.scripted_start = None
@@ -226,4 +225,22 @@ def test_a_bad_scripted_start_exits_2_naming_it(env_id, value, tmp_path, capsys)
     with pytest.raises(SystemExit) as e:
         _module().main(["--env", env_id, "--out", str(tmp_path / "o"), "--scripted-start", value])
     assert e.value.code == 2 and "--scripted-start" in capsys.readouterr().err
+    assert not (tmp_path / "o").exists()
+
+
+def test_light_bias_reaches_every_run_command(tmp_path):
+    mod = _module()
+    args = _args(mod, env="simgrip/PickMultiFragile-v6", light_bias=0.5)
+    cmd = mod.run_command("ppo", 0, args, tmp_path)
+    assert float(cmd[cmd.index("--light-bias") + 1]) == 0.5
+    args.light_bias = None
+    assert "--light-bias" not in mod.run_command("ppo", 0, args, tmp_path)
+
+
+@pytest.mark.parametrize("env_id, value", [("simgrip/PickMultiFragile-v6", "1.5"),
+                                           ("simgrip/PickMultiFragile-v6", "nan"), ("simgrip/Pick-v1", "0.5")])
+def test_a_bad_light_bias_exits_2_naming_it(env_id, value, tmp_path, capsys):
+    with pytest.raises(SystemExit) as e:
+        _module().main(["--env", env_id, "--out", str(tmp_path / "o"), "--light-bias", value])
+    assert e.value.code == 2 and "--light-bias" in capsys.readouterr().err
     assert not (tmp_path / "o").exists()
