@@ -14,15 +14,15 @@ without it), whose draw it leaves unchanged.  ``reset``'s info gains ``light_bia
 the mass).
 
 Why (measured on ``PickMultiFragile-v6``; the Gymnasium environments page, "Which workpieces the K fingers lose"
-and "Light pieces more often in training"): PPO's K-finger policies plateau at 46-72 % held-out success (one
-seed of six at 88 %), and what they lose is the lightest third of the pieces (5-18 g: 5 of 21 held, against
-20 of 21 for the careful scripted controller), crushed within 3-20 steps of the pre-grasp by a closing too fast
-for a piece that holds at 15-120 mN, while the heavier ones are finished ~30 steps sooner than the controller
-does.  Under the task's draw a third of the pieces are that light, and a policy careless with them is worth
-nearly as much in the learner's discounted return as the controller: little gradient towards care.  Drawn at
-``probability = 0.5`` (two thirds of the training pieces light), PPO with SB3 defaults behind the probe offset
-reached 72 / 90 / 80 % at 15 CPU-minutes (seeds 0-2) and SEEDS_345 (seeds 3-5), every policy worth more than
-the controller in its own discounted return.
+and "Light pieces more often in training"): PPO's K-finger policies plateau at 46-72 % held-out success (one seed
+of six at 88 %), and what they lose is the lightest third of the pieces (5-18 g: 5 of 21 held by each of two
+policies measured, against 20 of 21 for the careful scripted controller), crushed within 3-20 steps of the pre-
+grasp by a closing too fast for a piece that holds at 15-120 mN, while the heavier ones are finished ~30 steps
+sooner than the controller does. Under the task's draw a third of the pieces are that light, and a policy careless
+with them is worth nearly as much in the learner's discounted return as the controller: little gradient towards
+care. Drawn at ``probability = 0.5`` (two thirds of the training pieces light), PPO with SB3 defaults behind the
+probe offset reached 72 / 90 / 80 % at 15 CPU-minutes (seeds 0-2) and 80 / 82 / 84 % (seeds 3-5), against 66 / 68 /
+88 % and 72 / 64 / 46 % without it; every policy is worth more than the controller in its own discounted return.
 
 The draws use the wrapper's own generator, seeded from ``reset``'s ``seed`` (the same seeds give the same
 episodes); the env's generator draws exactly what it draws unwrapped (its own mass draw is made and replaced).

@@ -27,6 +27,10 @@ pinch             80 / 0 / 84 % (seed 1 never closes)          86 / 84 / 74 / 80
 K fingers         0 / 78 / 72 %                                66 / 68 / 88 / 72 / 64 / 46 %
 ================  ===========================================  ============================================
 
+The K fingers behind the offset with :class:`~simgrip.envs.light_bias.LightBias` ``(0.5)`` in training (half the
+training pieces drawn from the lightest third of the mass range; evaluation is the task's own draw, ``--light-bias
+0.5``): 72 / 90 / 80 / 80 / 82 / 84 %, seeds 0-5 (the environments page, "Light pieces more often in training").
+
 Rewards: v1's table (:mod:`simgrip.envs.pick_fragile_v1`) with ``reward_touch`` and ``reward_drop`` always 0.
 Ordering: any success returns at least ``w_lift + w_success = 30``; no unsuccessful episode returns more than
 ``w_contact + w_lift = 11``, and one that ends in a drop, a knock-over or a crush no more than ``w_contact = 1``
