@@ -16,8 +16,8 @@ the mass).
 Why (measured on ``PickMultiFragile-v6``; the Gymnasium environments page, "Which workpieces the K fingers lose"
 and "Light pieces more often in training"): PPO's K-finger policies plateau at 46-72 % held-out success (one seed
 of six at 88 %), and what they lose is the lightest third of the pieces (5-18 g: 5 of 21 held by each of two
-policies measured, against 20 of 21 for the careful scripted controller), crushed within 3-20 steps of the pre-
-grasp by a closing too fast for a piece that holds at 15-120 mN, while the heavier ones are finished ~30 steps
+policies measured, against 20 of 21 for the careful scripted controller), crushed within 3-20 steps of the
+pre-grasp by a closing too fast for a piece that holds at 15-120 mN, while the heavier ones are finished ~30 steps
 sooner than the controller does. Under the task's draw a third of the pieces are that light, and a policy careless
 with them is worth nearly as much in the learner's discounted return as the controller: little gradient towards
 care. Drawn at ``probability = 0.5`` (two thirds of the training pieces light), PPO with SB3 defaults behind the
