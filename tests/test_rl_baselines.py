@@ -210,37 +210,25 @@ def test_a_bad_frame_stack_exits_2_naming_it(value, tmp_path, capsys):
     assert not (tmp_path / "o").exists()
 
 
-def test_scripted_start_reaches_every_run_command(tmp_path):
+@pytest.mark.parametrize("option, env_id", [("--scripted-start", "simgrip/PlaceFragile-v5"),
+                                            ("--light-bias", "simgrip/PickMultiFragile-v6")])
+def test_a_training_aid_reaches_every_run_command(option, env_id, tmp_path):
     mod = _module()
-    args = _args(mod, env="simgrip/PlaceFragile-v5", scripted_start=0.5)
+    name = option[2:].replace("-", "_")
+    args = _args(mod, env=env_id, **{name: 0.5})
     cmd = mod.run_command("ppo", 0, args, tmp_path)
-    assert float(cmd[cmd.index("--scripted-start") + 1]) == 0.5
-    args.scripted_start = None
-    assert "--scripted-start" not in mod.run_command("ppo", 0, args, tmp_path)
+    assert float(cmd[cmd.index(option) + 1]) == 0.5
+    setattr(args, name, None)
+    assert option not in mod.run_command("ppo", 0, args, tmp_path)
 
 
-@pytest.mark.parametrize("env_id, value", [("simgrip/PlaceFragile-v5", "1.5"), ("simgrip/PlaceFragile-v5", "nan"),
-                                           ("simgrip/PlaceFragile-v5", "x"), ("simgrip/Pick-v1", "0.5")])
-def test_a_bad_scripted_start_exits_2_naming_it(env_id, value, tmp_path, capsys):
+@pytest.mark.parametrize("option, env_id, value", [
+    ("--scripted-start", "simgrip/PlaceFragile-v5", "1.5"), ("--scripted-start", "simgrip/PlaceFragile-v5", "nan"),
+    ("--scripted-start", "simgrip/PlaceFragile-v5", "x"), ("--scripted-start", "simgrip/Pick-v1", "0.5"),
+    ("--light-bias", "simgrip/PickMultiFragile-v6", "1.5"), ("--light-bias", "simgrip/PickMultiFragile-v6", "nan"),
+    ("--light-bias", "simgrip/Pick-v1", "0.5")])
+def test_a_bad_training_aid_exits_2_naming_it(option, env_id, value, tmp_path, capsys):
     with pytest.raises(SystemExit) as e:
-        _module().main(["--env", env_id, "--out", str(tmp_path / "o"), "--scripted-start", value])
-    assert e.value.code == 2 and "--scripted-start" in capsys.readouterr().err
-    assert not (tmp_path / "o").exists()
-
-
-def test_light_bias_reaches_every_run_command(tmp_path):
-    mod = _module()
-    args = _args(mod, env="simgrip/PickMultiFragile-v6", light_bias=0.5)
-    cmd = mod.run_command("ppo", 0, args, tmp_path)
-    assert float(cmd[cmd.index("--light-bias") + 1]) == 0.5
-    args.light_bias = None
-    assert "--light-bias" not in mod.run_command("ppo", 0, args, tmp_path)
-
-
-@pytest.mark.parametrize("env_id, value", [("simgrip/PickMultiFragile-v6", "1.5"),
-                                           ("simgrip/PickMultiFragile-v6", "nan"), ("simgrip/Pick-v1", "0.5")])
-def test_a_bad_light_bias_exits_2_naming_it(env_id, value, tmp_path, capsys):
-    with pytest.raises(SystemExit) as e:
-        _module().main(["--env", env_id, "--out", str(tmp_path / "o"), "--light-bias", value])
-    assert e.value.code == 2 and "--light-bias" in capsys.readouterr().err
+        _module().main(["--env", env_id, "--out", str(tmp_path / "o"), option, value])
+    assert e.value.code == 2 and option in capsys.readouterr().err
     assert not (tmp_path / "o").exists()
