@@ -21,7 +21,8 @@ ID, V3 = "simgrip/PlaceFragile-v4", "simgrip/PlaceFragile-v3"
 
 
 def test_v4_and_v3_are_retired():
-    # v4 retired by v5 (simgrip.envs.pick_place_v5: the reward without the drop penalty), which subclasses it
+    # v4 retired by v5 (simgrip.envs.pick_place_v5: the reward without the drop penalty), which subclasses it (and
+    # v5 by v6)
     for old in (ID, V3):
         assert old in RETIRED and old not in FRAGILE_ENV_IDS
     spec = retired_spec(ID)

@@ -210,7 +210,7 @@ def test_a_bad_frame_stack_exits_2_naming_it(value, tmp_path, capsys):
     assert not (tmp_path / "o").exists()
 
 
-@pytest.mark.parametrize("option, env_id", [("--scripted-start", "simgrip/PlaceFragile-v5"),
+@pytest.mark.parametrize("option, env_id", [("--scripted-start", "simgrip/PlaceFragile-v6"),
                                             ("--light-bias", "simgrip/PickMultiFragile-v6")])
 def test_a_training_aid_reaches_every_run_command(option, env_id, tmp_path):
     mod = _module()
@@ -223,8 +223,8 @@ def test_a_training_aid_reaches_every_run_command(option, env_id, tmp_path):
 
 
 @pytest.mark.parametrize("option, env_id, value", [
-    ("--scripted-start", "simgrip/PlaceFragile-v5", "1.5"), ("--scripted-start", "simgrip/PlaceFragile-v5", "nan"),
-    ("--scripted-start", "simgrip/PlaceFragile-v5", "x"), ("--scripted-start", "simgrip/Pick-v1", "0.5"),
+    ("--scripted-start", "simgrip/PlaceFragile-v6", "1.5"), ("--scripted-start", "simgrip/PlaceFragile-v6", "nan"),
+    ("--scripted-start", "simgrip/PlaceFragile-v6", "x"), ("--scripted-start", "simgrip/Pick-v1", "0.5"),
     ("--light-bias", "simgrip/PickMultiFragile-v6", "1.5"), ("--light-bias", "simgrip/PickMultiFragile-v6", "nan"),
     ("--light-bias", "simgrip/Pick-v1", "0.5")])
 def test_a_bad_training_aid_exits_2_naming_it(option, env_id, value, tmp_path, capsys):
