@@ -126,3 +126,22 @@ def spoiled_episode(env, seed: int, steps: int) -> tuple[float, dict]:
         if term or trunc:
             break
     return total, info
+
+
+def spoiled_returns(env_id: str, seeds, steps: int) -> tuple[list[tuple[int, str, float]], dict, object]:
+    """:func:`spoiled_episode` of ``env_id`` (registered or retired) for each of ``seeds``: ``(rows, ends, env)``
+    with ``rows`` the ``(seed, outcome, return)`` of each episode, ``ends`` the outcome counts and ``env`` the
+    (closed) env's unwrapped instance, whose reward weights the caller's ordering checks read."""
+    from collections import Counter
+
+    from simgrip.envs.outcome import outcome
+
+    env = make(env_id)
+    rows = []
+    try:
+        for seed in seeds:
+            total, info = spoiled_episode(env, seed, steps)
+            rows.append((seed, outcome(info), total))
+    finally:
+        env.close()
+    return rows, Counter(end for _, end, _ in rows), env.unwrapped

@@ -10,8 +10,6 @@ the carry height), spoiled once the grip has held: its valve opened at full rate
 
 from __future__ import annotations
 
-from collections import Counter
-
 import gymnasium as gym
 import numpy as np
 import pytest
@@ -22,7 +20,7 @@ from simgrip.envs.baselines import policy_maker
 from simgrip.envs.outcome import outcome
 from simgrip.envs.pick_place_v5 import FragilePlaceEnvV5
 from simgrip.envs.pick_place_v6 import V6_GRIP_TIME, V6_W_HOLD, FragilePlaceEnvV6
-from env_checks import spoiled_episode
+from env_checks import spoiled_returns
 
 ID, V5 = "simgrip/PlaceFragile-v6", "simgrip/PlaceFragile-v5"
 SAME_KEYS = ("is_success", "crushed", "dropped", "knocked_over", "workpiece_lift", "place_error", "carried",
@@ -129,23 +127,15 @@ def test_the_controller_that_holds_before_the_carry_is_paid_once(seed):
 
 
 def test_a_failure_returns_at_most_the_contact_lift_hold_and_carry_pay():
-    # spoiled_episode's drops come before the hold pay; the held-then-spoiled ones above return their hold pay
-    env = gym.make(ID)
-    u = env.unwrapped
-    ends = Counter()
-    try:
-        for seed in range(8220, 8226):
-            total, info = spoiled_episode(env, seed, 400)
-            end = outcome(info)
-            ends[end] += 1
-            if end == "success":
-                assert total >= u.w_place + u.w_success - 1e-9
-            elif end in ("crushed", "dropped", "knocked_over"):
-                assert total <= u.w_contact + u.w_hold + 1e-9, (seed, end, total)
-            else:
-                assert total <= u.w_contact + u.w_lift + u.w_hold + u.w_place + 1e-9, (seed, end, total)
-    finally:
-        env.close()
+    # spoiled_returns' drops come before the hold pay; the held-then-spoiled ones above return their hold pay
+    rows, ends, u = spoiled_returns(ID, range(8220, 8226), 400)
+    for seed, end, total in rows:
+        if end == "success":
+            assert total >= u.w_place + u.w_success - 1e-9
+        elif end in ("crushed", "dropped", "knocked_over"):
+            assert total <= u.w_contact + u.w_hold + 1e-9, (seed, end, total)
+        else:
+            assert total <= u.w_contact + u.w_lift + u.w_hold + u.w_place + 1e-9, (seed, end, total)
     assert ends["crushed"] >= 1 and ends["dropped"] >= 1 and ends["success"] >= 1, ends
 
 
