@@ -4,7 +4,9 @@ r"""Pick-and-place paid for a grip that holds: ``PlaceFragile-v6``, issue 18.
 start, no touch pay, no drop penalty; carry to a target drawn per episode, set down there) with **only the reward
 changed**: a grip that has held the workpiece ``carry_height`` up, both fingers on it, for ``grip_time`` (0.5 s,
 the pinch's ``hold_time``) is paid ``w_hold = 10`` once, and keeps that pay whatever happens next (as the contact
-pay is kept).  The draw, the observation, the action, and what success, a crush, a drop and a knock-over are (and
+pay is kept).  The state it is paid in is checked for fingers through themselves or each other on that step
+(``info["valid"]``, fresh there whatever the every-25-steps schedule says); a grip in an impossible state is not
+paid until a valid step.  The draw, the observation, the action, and what success, a crush, a drop and a knock-over are (and
 when an episode terminates) are v4's, so every fixed-schedule and scripted baseline of v4 holds for v6 with the
 same seeds (``docs/baselines/PlaceFragile-v4-*.json``).
 
@@ -90,9 +92,21 @@ class FragilePlaceEnvV6(FragilePlaceEnvV5):
         obs, reward, terminated, truncated, info = super()._step_checked(a)
         r_hold = 0.0
         lost = info["crushed"] or info["dropped"] or info["knocked_over"]
-        if not self._gripped and not lost and info["hold_time"] >= self.grip_time - 1e-9:
+        if not self._gripped and not lost and info["hold_time"] >= self.grip_time - 1e-9 and self._valid_now(info):
             r_hold = self.w_hold
             self._gripped = True
         info["gripped"] = self._gripped
         info["reward_hold"] = r_hold
         return obs, reward + r_hold, terminated, truncated, info
+
+    def _valid_now(self, info) -> bool:
+        """Whether this step's state is valid, checked now where the every-k schedule did not (a grip through a
+        finger is not paid; ``info["valid"]`` / ``info["invalid"]`` then hold the fresh check)."""
+        if self._validity.checked:
+            return info["valid"]
+        invalid = self._validity.check_now(self.data.qpos.tolist(), self.data)
+        info["valid"] = not invalid
+        info.pop("invalid", None)
+        if invalid:
+            info["invalid"] = invalid
+        return not invalid

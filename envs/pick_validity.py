@@ -277,6 +277,15 @@ class FingerValidity:
             last = self._last
         return list(last) if last else []  # a new list either way (the caller's to keep)
 
+    def check_now(self, q: list, data) -> list:
+        """Check this state now, whatever the every-k schedule says, without moving the schedule: the messages
+        (empty: valid), also kept as the last check's result.  For a reward paid mid-episode on the strength of
+        a state (:mod:`simgrip.envs.pick_place_v6`'s grip), which a between-checks step would otherwise judge
+        by an older check."""
+        self.checked = True
+        self._last = last = self._check(q, data)
+        return list(last) if last else []
+
     def _bound_clear(self, q: list, data) -> bool:
         """:meth:`_bound` proves the state valid."""
         return self._bound(q, data) > 0

@@ -146,3 +146,40 @@ def test_the_arguments():
     for name, bad in (("w_hold", -1.0), ("w_hold", float("nan")), ("grip_time", 0.0), ("grip_time", "x")):
         with pytest.raises(ValueError, match=name):
             FragilePlaceEnvV6(**{name: bad})
+
+
+def test_a_grip_in_an_impossible_state_is_not_paid_until_a_valid_step():
+    # the validity probe made to report a finger through itself from 0.4 s of hold until 4 steps after the hold
+    # clock has passed grip_time: v6 checks the state afresh on the steps the grip would be paid (between the
+    # every-25-steps checks too), pays nothing there, and pays w_hold on the first valid step
+    env = gym.make(ID)
+    u = env.unwrapped
+    probe, check = u._validity, u._validity._check
+    state = {"bad": False}
+    probe._check = lambda q, data: ["finger 0 through itself (test)"] if state["bad"] else check(q, data)
+    try:
+        obs, info = env.reset(seed=8302)
+        start, act = _held_then_spoiled(env, 8302)
+        start(info)
+        late, paid_at, calls = 0, None, []
+        for t in range(400):
+            obs, r, te, tr, info = env.step(act(obs, t, info, None))
+            calls.append(probe._calls)
+            hold = info["hold_time"]
+            if hold >= V6_GRIP_TIME - 1e-9 and state["bad"]:
+                assert info["reward_hold"] == 0.0 and not info["gripped"], t
+                assert info["valid"] is False and info["invalid"] == ["finger 0 through itself (test)"], t
+                late += 1
+                if late == 4:
+                    state["bad"] = False
+            elif info["reward_hold"]:
+                paid_at = t
+                break
+            state["bad"] = state["bad"] or (hold >= 0.4 and late == 0)
+            if te or tr:
+                break
+    finally:
+        env.close()
+    assert late == 4 and paid_at is not None and info["valid"] and info["gripped"]
+    assert info["hold_time"] > V6_GRIP_TIME
+    assert calls == list(range(1, len(calls) + 1))  # the fresh checks did not move the every-25 schedule
