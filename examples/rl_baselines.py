@@ -43,6 +43,16 @@ of the mass range, :class:`simgrip.envs.light_bias.LightBias`; evaluation draws 
 ``--gamma G`` passes the discount instead of the default 0.99, named in every JSON's
 ``hyperparameters``.
 
+Batches of one experiment run apart (some seeds here, others there or later, each with this command but for
+``--seeds``, ``--jobs`` and ``--out``) are combined into one folder, as if run at once, by
+
+    python examples/rl_baselines.py --combine BATCH [BATCH ...] --out OUT
+
+which checks that the batches are the same experiment (every field of their ``aggregate.json`` but the seeds,
+the summary and the command is equal) over different seeds, copies their ``<algo>_seed<S>.json``, and writes
+``aggregate.json`` (the seeds merged, the summary recomputed, ``combined_from``: each batch's command) and
+``learning_curves.png``; the runs' folders (models, logs) stay in the batches.
+
 Ctrl-C stops every running child (SIGTERM, then SIGKILL after 5 s) and exits 130 with one line.  Exit 2 (one
 line) on a bad argument, 1 when a run failed (its log names why; the others are still aggregated).
 """
@@ -250,7 +260,100 @@ def plot(summary: dict, results: list[dict], path: Path) -> None:
     plt.close(fig)
 
 
+#: the fields of a batch's aggregate.json that may differ between batches of one experiment
+_PER_BATCH = ("seeds", "summary", "command", "combined_from", "note")
+
+
+def _read_json(path: Path, what: str) -> dict:
+    try:
+        value = json.loads(path.read_text())
+    except (OSError, ValueError) as e:
+        raise ValueError(f"--combine: cannot read {what} {path}: {e}") from None
+    if not isinstance(value, dict):
+        raise ValueError(f"--combine: {path} is not a JSON object")
+    return value
+
+
+def combine(batches: list[Path]) -> tuple[dict, list[dict]]:
+    """``(aggregate, results)`` of batches of one experiment, as :func:`main` would have written them had it run
+    every seed at once: the first batch's fields, the seeds merged (sorted), the summary recomputed with
+    :func:`aggregate`, ``combined_from`` the batches' commands.  ``results``: every run's ``<algo>_seed<S>.json``.
+
+    Raises ValueError naming ``--combine`` when a batch lacks a file, the batches differ in a field other than
+    ``_PER_BATCH`` (the field named), or a seed is in two batches."""
+    if len(batches) < 2:
+        raise ValueError(f"--combine: at least two batch folders, got {len(batches)}")
+    if len(set(b.resolve() for b in batches)) != len(batches):
+        raise ValueError("--combine: a batch folder is named twice")
+    heads = [_read_json(b / "aggregate.json", "the batch's aggregate") for b in batches]
+    first = heads[0]
+    for b, head in zip(batches[1:], heads[1:]):
+        for key in sorted(set(first) | set(head)):
+            if key not in _PER_BATCH and first.get(key) != head.get(key):
+                raise ValueError(f"--combine: {b} is not the experiment of {batches[0]}: {key!r} differs "
+                                 f"({head.get(key)!r}, not {first.get(key)!r})")
+    seeds: list[int] = []
+    for b, head in zip(batches, heads):
+        got = head.get("seeds")
+        if not isinstance(got, list) or not got:
+            raise ValueError(f"--combine: {b / 'aggregate.json'} names no seeds")
+        again = sorted(set(got) & set(seeds))
+        if again:
+            raise ValueError(f"--combine: seed {again[0]} is in two batches ({b} and an earlier one)")
+        seeds += got
+    results = []
+    for b, head in zip(batches, heads):
+        for algo in first.get("algos", ()):
+            for seed in head["seeds"]:
+                results.append(_read_json(b / f"{algo}_seed{seed}.json", "the run's result"))
+    combined = {k: v for k, v in first.items() if k not in _PER_BATCH}
+    combined.update(seeds=sorted(seeds), summary=aggregate(results),
+                    combined_from=[head.get("command") for head in heads])
+    return combined, results
+
+
+def _print_summary(summary: dict) -> None:
+    for algo, entry in summary.items():
+        final = entry.get("final")
+        text = (f"held-out success mean {final['mean']:.2f} (min {final['min']:.2f}, max {final['max']:.2f})"
+                if final else "no run finished")
+        print(f"{algo.upper()}: {entry['runs']} runs, {text}", flush=True)
+
+
+def _main_combine(argv: list[str]) -> int:
+    p = argparse.ArgumentParser(prog="rl_baselines.py --combine",
+                                description="Combine batches of one experiment (see the module docstring).")
+    p.add_argument("--combine", nargs="+", required=True, metavar="BATCH", help="the batches' --out folders")
+    p.add_argument("--out", required=True, help="output folder (not one of the batches)")
+    args = p.parse_args(argv)
+    from simgrip.io import check_output_dir, check_output_files_in, write_json
+
+    batches = [Path(b) for b in args.combine]
+    try:
+        for b in batches:
+            if not b.is_dir():
+                raise ValueError(f"--combine: {b} is not a folder")
+        combined, results = combine(batches)
+        out = check_output_dir(args.out, "--out")
+        if any(out.resolve() == b.resolve() for b in batches):
+            raise ValueError(f"--out: {out} is one of the batches (write the combination elsewhere)")
+        names = [f"{r['algo'].lower()}_seed{r['seed']}.json" for r in results]
+        check_output_files_in(out, names + ["aggregate.json", "learning_curves.png"], "--out")
+    except ValueError as e:
+        p.error(str(e))
+    for r in results:
+        write_json(out / f"{r['algo'].lower()}_seed{r['seed']}.json", r)
+    combined["command"] = [Path(sys.argv[0]).name] + argv
+    write_json(out / "aggregate.json", combined)
+    plot(combined["summary"], results, out / "learning_curves.png")
+    _print_summary(combined["summary"])
+    return 0
+
+
 def main(argv=None) -> int:
+    args_in = sys.argv[1:] if argv is None else list(argv)
+    if "--combine" in args_in:
+        return _main_combine(args_in)
     p = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     p.add_argument("--env", required=True, help="registered env id, e.g. simgrip/PickFragile-v6, or a retired "
                    "simgrip one (simgrip.envs.RETIRED: the runs of docs/baselines/ name them)")
@@ -350,11 +453,7 @@ def main(argv=None) -> int:
         **({"wrapper": "VecNormalize (SB3 defaults: observation and return)"} if args.normalize else {}),
         "command": [Path(sys.argv[0]).name] + list(sys.argv[1:] if argv is None else argv)})
     plot(summary, results, out / "learning_curves.png")
-    for algo, entry in summary.items():
-        final = entry.get("final")
-        text = (f"held-out success mean {final['mean']:.2f} (min {final['min']:.2f}, max {final['max']:.2f})"
-                if final else "no run finished")
-        print(f"{algo.upper()}: {entry['runs']} runs, {text}", flush=True)
+    _print_summary(summary)
     failed = [f"{a}_seed{s}" for (a, s), c in codes.items() if c != 0]
     if failed or any(r["returncode"] != 0 for r in results):
         bad = failed or [f"{r['algo'].lower()}_seed{r['seed']}" for r in results if r["returncode"] != 0]

@@ -210,7 +210,7 @@ def test_a_bad_frame_stack_exits_2_naming_it(value, tmp_path, capsys):
     assert not (tmp_path / "o").exists()
 
 
-@pytest.mark.parametrize("option, env_id", [("--scripted-start", "simgrip/PlaceFragile-v6"),
+@pytest.mark.parametrize("option, env_id", [("--scripted-start", "simgrip/PlaceFragile-v7"),
                                             ("--light-bias", "simgrip/PickMultiFragile-v6")])
 def test_a_training_aid_reaches_every_run_command(option, env_id, tmp_path):
     mod = _module()
@@ -223,8 +223,8 @@ def test_a_training_aid_reaches_every_run_command(option, env_id, tmp_path):
 
 
 @pytest.mark.parametrize("option, env_id, value", [
-    ("--scripted-start", "simgrip/PlaceFragile-v6", "1.5"), ("--scripted-start", "simgrip/PlaceFragile-v6", "nan"),
-    ("--scripted-start", "simgrip/PlaceFragile-v6", "x"), ("--scripted-start", "simgrip/Pick-v1", "0.5"),
+    ("--scripted-start", "simgrip/PlaceFragile-v7", "1.5"), ("--scripted-start", "simgrip/PlaceFragile-v7", "nan"),
+    ("--scripted-start", "simgrip/PlaceFragile-v7", "x"), ("--scripted-start", "simgrip/Pick-v1", "0.5"),
     ("--light-bias", "simgrip/PickMultiFragile-v6", "1.5"), ("--light-bias", "simgrip/PickMultiFragile-v6", "nan"),
     ("--light-bias", "simgrip/Pick-v1", "0.5")])
 def test_a_bad_training_aid_exits_2_naming_it(option, env_id, value, tmp_path, capsys):
@@ -232,3 +232,63 @@ def test_a_bad_training_aid_exits_2_naming_it(option, env_id, value, tmp_path, c
         _module().main(["--env", env_id, "--out", str(tmp_path / "o"), option, value])
     assert e.value.code == 2 and option in capsys.readouterr().err
     assert not (tmp_path / "o").exists()
+
+
+def _batch(folder: Path, seeds, rates, **fields) -> Path:
+    """A batch folder as ``main`` writes it (no training): ``aggregate.json`` and one ``ppo_seed<S>.json`` a
+    seed, each run's held-out success ``rates[i]`` at 5 and 10 CPU-minutes and at the end."""
+    folder.mkdir(parents=True)
+    results = []
+    for s, rate in zip(seeds, rates):
+        r = {"algo": "PPO", "seed": s, "returncode": 0, "success_rate": rate, "timesteps": 100 + s,
+             "checkpoints": [{"minutes": 5.0, "success_rate": rate / 2}, {"minutes": 10.0, "success_rate": rate}]}
+        (folder / f"ppo_seed{s}.json").write_text(json.dumps(r))
+        results.append(r)
+    head = {"env": "simgrip/PickFragile-v6", "algos": ["ppo"], "seeds": list(seeds), "minutes": 10.0,
+            "checkpoint_minutes": 5.0, "clock": "cpu", "eval_seeds": [8000, 8049],
+            "hyperparameters": "Stable-Baselines3 defaults, one env, one torch thread",
+            "summary": _module().aggregate(results), "command": ["rl_baselines.py", "--seeds", *map(str, seeds)],
+            **fields}
+    (folder / "aggregate.json").write_text(json.dumps(head))
+    return folder
+
+
+def test_combine_merges_batches_as_one_run_would(tmp_path):
+    mod = _module()
+    a = _batch(tmp_path / "a", [0, 1], [0.2, 0.8], action_offset=[-0.4, 0.2])
+    b = _batch(tmp_path / "b", [2], [0.5], action_offset=[-0.4, 0.2])
+    out = tmp_path / "out"
+    assert mod.main(["--combine", str(a), str(b), "--out", str(out)]) == 0
+    agg = json.loads((out / "aggregate.json").read_text())
+    one = _batch(tmp_path / "one", [0, 1, 2], [0.2, 0.8, 0.5], action_offset=[-0.4, 0.2])  # all seeds at once
+    assert agg["summary"] == json.loads((one / "aggregate.json").read_text())["summary"]
+    assert agg["seeds"] == [0, 1, 2] and agg["action_offset"] == [-0.4, 0.2]
+    assert agg["combined_from"] == [["rl_baselines.py", "--seeds", "0", "1"], ["rl_baselines.py", "--seeds", "2"]]
+    assert agg["command"][1:] == ["--combine", str(a), str(b), "--out", str(out)]
+    final = agg["summary"]["ppo"]["final"]
+    assert final["success_rates"] == [0.2, 0.8, 0.5] and final["mean"] == pytest.approx(0.5, abs=1e-12)
+    for s in (0, 1, 2):
+        assert json.loads((out / f"ppo_seed{s}.json").read_text())["seed"] == s
+    assert (out / "learning_curves.png").stat().st_size > 0
+
+
+@pytest.mark.parametrize("case, word", [
+    ("other_minutes", "'minutes' differs"), ("other_aid", "'action_offset' differs"), ("seed_twice", "seed 1"),
+    ("one_batch", "at least two"), ("missing_run", "ppo_seed2.json"), ("out_is_a_batch", "--out"),
+    ("not_a_folder", "not a folder"),
+])
+def test_combine_refuses_what_is_not_one_experiment(case, word, tmp_path, capsys):
+    a = _batch(tmp_path / "a", [0, 1], [0.2, 0.8], action_offset=[-0.4, 0.2])
+    other = {"other_minutes": dict(minutes=15.0, action_offset=[-0.4, 0.2]), "other_aid": {}}.get(
+        case, dict(action_offset=[-0.4, 0.2]))
+    b = _batch(tmp_path / "b", [1] if case == "seed_twice" else [2], [0.5], **other)
+    if case == "missing_run":
+        (b / "ppo_seed2.json").unlink()
+    batches = {"one_batch": [a], "not_a_folder": [a, tmp_path / "nothing"]}.get(case, [a, b])
+    out = a if case == "out_is_a_batch" else tmp_path / "out"
+    with pytest.raises(SystemExit) as e:
+        _module().main(["--combine", *map(str, batches), "--out", str(out)])
+    assert e.value.code == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert word in err[-1] and "Traceback" not in "\n".join(err)
+    assert not (tmp_path / "out").exists() or not any((tmp_path / "out").iterdir())
