@@ -11,7 +11,7 @@ id                                what                                      max 
 ``simgrip/PickMulti-v0``          K fingers around a box, cylinder, sphere  200 (4 s)
 ``simgrip/PickFragile-v6``        Grip I pinch of a fragile workpiece       300 (6 s)
 ``simgrip/PickMultiFragile-v6``   K fingers around a fragile workpiece      300 (6 s)
-``simgrip/PlaceFragile-v6``       pinch, carry to a target, set down        400 (8 s)
+``simgrip/PlaceFragile-v7``       pinch, carry to a target, set down        400 (8 s)
 ``simgrip/PickCradleFragile-v5``  Grip III cradle, hand start height drawn  300 (6 s)
 ``simgrip/PickSphereFragile-v5``  K fingers around a sphere, height drawn   300 (6 s)
 ================================  ========================================  =========
@@ -23,9 +23,11 @@ is its rate, :mod:`simgrip.envs.pick_fragile_v2`) and observe the contact forces
 claws pay for approaching the grasp height (:mod:`simgrip.envs.pick_fragile_v5`, :mod:`simgrip.envs.pick_claw_v5`);
 the pinch, the K fingers and the pick-and-place charge no drop penalty, so a crush is never cheaper than a drop
 (:mod:`simgrip.envs.pick_fragile_v6`, :mod:`simgrip.envs.pick_place_v5`); the pick-and-place pays a grip that
-holds the workpiece up 0.5 s, the pinch's success, as a milestone (:mod:`simgrip.envs.pick_place_v6`).
+holds the workpiece up 0.5 s, the pinch's success, as a milestone (:mod:`simgrip.envs.pick_place_v6`), and
+keeps the lift pay of a carried workpiece as it is lowered, paying its set-down over the target
+(:mod:`simgrip.envs.pick_place_v7`).
 Their older versions are retired, not registered: ``PickFragile`` and ``PickMultiFragile`` v0-v5,
-``PickCradleFragile`` and ``PickSphereFragile`` v0-v4 and ``PlaceFragile`` v0-v5 (``RETIRED``);
+``PickCradleFragile`` and ``PickSphereFragile`` v0-v4 and ``PlaceFragile`` v0-v6 (``RETIRED``);
 ``gym.make(retired_spec("simgrip/PickFragile-v2"))`` still builds one exactly, with its time limit.
 
 >>> import gymnasium as gym, simgrip.envs
@@ -58,8 +60,9 @@ _ENVS = {
     "simgrip/PickFragile-v6": ("simgrip.envs.pick_fragile_v6:FragilePickEnvV6", {}, 300),
     "simgrip/PickMultiFragile-v6": ("simgrip.envs.pick_fragile_v6:FragilePickMultiEnvV6", {}, 300),
     # pick-and-place from a pre-grasp, no touch pay (simgrip.envs.pick_place_v4), no drop penalty
-    # (simgrip.envs.pick_place_v5), paying a grip that holds (simgrip.envs.pick_place_v6)
-    "simgrip/PlaceFragile-v6": ("simgrip.envs.pick_place_v6:FragilePlaceEnvV6", {}, 400),
+    # (simgrip.envs.pick_place_v5), paying a grip that holds (simgrip.envs.pick_place_v6) and the set-down
+    # (simgrip.envs.pick_place_v7)
+    "simgrip/PlaceFragile-v7": ("simgrip.envs.pick_place_v7:FragilePlaceEnvV7", {}, 400),
     # the claws paid for approaching the grasp height, not per touching step (simgrip.envs.pick_claw_v5)
     "simgrip/PickCradleFragile-v5": ("simgrip.envs.pick_claw_v5:FragileCradleEnvV5", {}, 300),
     "simgrip/PickSphereFragile-v5": ("simgrip.envs.pick_claw_v5:FragileSphereEnvV5", {}, 300),
@@ -108,6 +111,8 @@ RETIRED = {
     "simgrip/PlaceFragile-v4": ("simgrip.envs.pick_place_v4:FragilePlaceEnvV4", {}, 400),
     # pick-and-place without the drop penalty (simgrip.envs.pick_place_v5), not paying a grip that holds
     "simgrip/PlaceFragile-v5": ("simgrip.envs.pick_place_v5:FragilePlaceEnvV5", {}, 400),
+    # pick-and-place paying a grip that holds (simgrip.envs.pick_place_v6); lowering takes the lift pay back
+    "simgrip/PlaceFragile-v6": ("simgrip.envs.pick_place_v6:FragilePlaceEnvV6", {}, 400),
 }
 ENV_IDS = tuple(k for k, v in _ENVS.items() if v[0] == "simgrip.envs.pick:PickEnv")
 MULTI_ENV_IDS = tuple(k for k, v in _ENVS.items() if v[0] == "simgrip.envs.pick_multi:PickMultiEnv")
@@ -115,7 +120,7 @@ FRAGILE_ENV_IDS = tuple(k for k, v in _ENVS.items()
                         if v[0].split(":")[0] in ("simgrip.envs.pick_fragile_v3", "simgrip.envs.pick_fragile_v4",
                                                   "simgrip.envs.pick_fragile_v5", "simgrip.envs.pick_fragile_v6",
                                                   "simgrip.envs.pick_claw_v5",
-                                                  "simgrip.envs.pick_place_v6"))
+                                                  "simgrip.envs.pick_place_v7"))
 
 
 def retired_spec(env_id: str) -> EnvSpec:

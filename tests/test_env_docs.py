@@ -9,7 +9,7 @@ from env_checks import make
 IDS = ["simgrip/Pick-v1", "simgrip/PickMulti-v0", "simgrip/PickFragile-v0", "simgrip/PickMultiFragile-v0",
        "simgrip/PlaceFragile-v0", "simgrip/PickFragile-v1", "simgrip/PickMultiFragile-v1", "simgrip/PlaceFragile-v1",
        "simgrip/PickFragile-v4", "simgrip/PickMultiFragile-v4", "simgrip/PickFragile-v5",
-       "simgrip/PickMultiFragile-v5", "simgrip/PickFragile-v6", "simgrip/PickMultiFragile-v6", "simgrip/PlaceFragile-v3", "simgrip/PlaceFragile-v4", "simgrip/PlaceFragile-v5", "simgrip/PlaceFragile-v6",
+       "simgrip/PickMultiFragile-v5", "simgrip/PickFragile-v6", "simgrip/PickMultiFragile-v6", "simgrip/PlaceFragile-v3", "simgrip/PlaceFragile-v4", "simgrip/PlaceFragile-v5", "simgrip/PlaceFragile-v6", "simgrip/PlaceFragile-v7",
        "simgrip/PickCradleFragile-v4", "simgrip/PickSphereFragile-v4", "simgrip/PickCradleFragile-v5",
        "simgrip/PickSphereFragile-v5"]
 

@@ -254,25 +254,25 @@ def _trained_with_a_training_aid(module, tmp_path, env_id: str, steps: int, eval
 def test_train_sb3_scripted_start_trains_from_scripted_states_and_evaluates_plainly(tmp_path, capsys):
     pytest.importorskip("stable_baselines3")
     module = _example("train_sb3")
-    _trained_with_a_training_aid(module, tmp_path, "simgrip/PlaceFragile-v6", 800, 8320, "--scripted-start",
+    _trained_with_a_training_aid(module, tmp_path, "simgrip/PlaceFragile-v7", 800, 8320, "--scripted-start",
                                  "ScriptedStart")
     with open(tmp_path / "sac_curve.csv") as fh:
         lengths = [int(row["length"]) for row in csv.DictReader(fh)]
     assert lengths and max(lengths) < 400  # every training episode started part-way (its limit: 400 steps)
     with pytest.raises(SystemExit) as e:
-        module.main(["--algo", "sac", "--env", "simgrip/PlaceFragile-v6", "--scripted-start", "-0.1",
+        module.main(["--algo", "sac", "--env", "simgrip/PlaceFragile-v7", "--scripted-start", "-0.1",
                      "--out", str(tmp_path / "o")])
     assert e.value.code == 2 and "--scripted-start" in capsys.readouterr().err
     capsys.readouterr()
     # where it has got to: evaluated from scripted starts, the outcomes per handover bin
     ev = _example("evaluate_policy")
-    out = ev.main(["--env", "simgrip/PlaceFragile-v6", "--model", str(tmp_path / "sac_model.zip"), "--algo", "sac",
+    out = ev.main(["--env", "simgrip/PlaceFragile-v7", "--model", str(tmp_path / "sac_model.zip"), "--algo", "sac",
                    "--scripted-start", "1", "--episodes", "3", "--seed", "8320", "--json"])
     assert out["scripted_start"] == 1.0
     assert sum(sum(c.values()) for c in out["by_handover"].values()) == 3
     assert all(int(k.split("-")[1]) - int(k.split("-")[0]) == 49 for k in out["by_handover"])
     with pytest.raises(SystemExit) as e:
-        ev.main(["--env", "simgrip/PlaceFragile-v6", "--policy", "observation", "--scripted-start", "1"])
+        ev.main(["--env", "simgrip/PlaceFragile-v7", "--policy", "observation", "--scripted-start", "1"])
     assert e.value.code == 2 and "--scripted-start" in capsys.readouterr().err
 
 

@@ -18,8 +18,8 @@ from simgrip.envs import FRAGILE_ENV_IDS, RETIRED, retired_spec
 
 #: each fragile task's newest registered version (the tactile scale, simgrip.envs.pick_fragile_v3; the pre-grasp, _v4;
 #: no per-step touch pay, _v5; no drop penalty, _v6; the claws' approach term, pick_claw_v5; the place's pre-grasp,
-#: pick_place_v4, no drop penalty, pick_place_v5, and the grip's pay, pick_place_v6)
-NEWEST = {"simgrip/PickFragile": "v6", "simgrip/PickMultiFragile": "v6", "simgrip/PlaceFragile": "v6",
+#: pick_place_v4, no drop penalty, pick_place_v5, the grip's pay, pick_place_v6, and the set-down's, pick_place_v7)
+NEWEST = {"simgrip/PickFragile": "v6", "simgrip/PickMultiFragile": "v6", "simgrip/PlaceFragile": "v7",
           "simgrip/PickCradleFragile": "v5", "simgrip/PickSphereFragile": "v5"}
 RETIRED_IDS = [f"{name}-v{k}" for name, newest in NEWEST.items() for k in range(int(newest[1:]))]
 

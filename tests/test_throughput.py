@@ -24,7 +24,7 @@ def test_bad_arguments_are_named(kwargs, name):
         measure_throughput(**kwargs)
 
 
-@pytest.mark.parametrize("env_id", ["simgrip/PickMulti-v0", "simgrip/PlaceFragile-v6"])
+@pytest.mark.parametrize("env_id", ["simgrip/PickMulti-v0", "simgrip/PlaceFragile-v7"])
 def test_replay_covers_the_same_physics(env_id):
     """The raw replay ends every chunk in the environment's state, bit for bit: K fingers (a new model per
     shape after a reset) and the second palm servo (all of ctrl replayed)."""

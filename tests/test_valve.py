@@ -17,7 +17,7 @@ from simgrip.envs.pick_fragile_v2 import V2_CRUSH_RATIO, V2_MASS, FragilePickEnv
 from simgrip.envs.valve import KAPPA_RATE, absolute_to_valve
 from env_checks import assert_sb3_check_env_clean
 
-VALVE_IDS = ("simgrip/PickFragile-v6", "simgrip/PickMultiFragile-v6", "simgrip/PlaceFragile-v6",
+VALVE_IDS = ("simgrip/PickFragile-v6", "simgrip/PickMultiFragile-v6", "simgrip/PlaceFragile-v7",
              "simgrip/PickCradleFragile-v5", "simgrip/PickSphereFragile-v5")
 
 
