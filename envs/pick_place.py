@@ -52,7 +52,8 @@ from simgrip.sim.fingers import index_fingers
 
 __all__ = ["FragilePlaceEnv"]
 
-_ON_TABLE = 0.003  # [m] resting: less than this above its start
+#: [m] resting on the table: less than this above its start
+ON_TABLE = 0.003
 _EXTRA = (("workpiece_x", 1), ("target_x", 1))
 
 
@@ -171,7 +172,7 @@ class FragilePlaceEnv(FragilePickEnv):
         if gain >= self.carry_height and both:
             self._carried = True
         err = abs(bx - self.target_x)
-        placed = self._carried and err <= self.place_tolerance and gain < _ON_TABLE and not lost
+        placed = self._carried and err <= self.place_tolerance and gain < ON_TABLE and not lost
         self._place_hold = self._place_hold + self.dt if placed else 0.0
         success = self._place_hold >= self.place_time - 1e-9
         psi = 0.0 if lost or not self._carried else 1.0 - min(1.0, err / max(abs(self.target_x - self._x0), 1e-9))

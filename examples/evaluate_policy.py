@@ -25,6 +25,10 @@ observation-only controller's episode (:class:`simgrip.envs.scripted_start.Scrip
 ``by_handover``: the outcomes counted per 50 steps of the handover step (``"0-49"``: the plain starts and the
 early handovers, ``"50-99"``, ...).
 
+On the pick-and-place the JSON also has ``place_timeouts``: ``{"held_up", "over_target"}``, how many episodes
+ran out of time with the workpiece carried and still up (more than 3 mm above its start), and how many of those
+held it within the place tolerance of the target: a learner that carries and never sets down.
+
 On a fragile task the JSON also has ``by_mass``: the outcomes counted per third of the task's log mass range
 (the hidden mass of each episode; keys ``"5-18 g"``, ...; :func:`simgrip.envs.light_bias.mass_bins`): which
 workpieces a policy loses (a fast closing crushes the lightest).
@@ -40,6 +44,7 @@ import simgrip.envs  # noqa: F401  (registers the simgrip ids)
 from simgrip.envs.evaluation import (check_env_id, discount, json_object, make_env, non_negative_int, outcomes,
                                      positive_int, probability, run_episodes, summary)
 from simgrip.envs.light_bias import episode_mass, mass_bins
+from simgrip.envs.outcome import outcome
 
 SCRIPTED = ("observation", "oracle")
 HANDOVER_BIN = 50  # env steps per bin of by_handover (1 s at the fragile tasks' 50 Hz)
@@ -82,6 +87,15 @@ def by_mass(results, masses, edges) -> dict:
         bins[i].append(r)
     return {f"{edges[i] * 1e3:.0f}-{edges[i + 1] * 1e3:.0f} g": outcomes(rs)["outcomes"] if rs else {}
             for i, rs in enumerate(bins)}
+
+
+def place_timeouts(results, place_tolerance: float, on_table: float) -> dict:
+    """The pick-and-place's timed-out episodes that carried the workpiece and never set it down:
+    ``{"held_up": n, "over_target": m}``, ``n`` those that end with it carried and more than ``on_table`` [m]
+    above its start (not lost: a timeout), ``m`` of them within ``place_tolerance`` [m] of the target."""
+    up = [r for r in results if outcome(r.info) == "timeout" and r.info.get("carried")
+          and r.info["workpiece_lift"] > on_table]
+    return {"held_up": len(up), "over_target": sum(r.info["place_error"] <= place_tolerance for r in up)}
 
 
 def main(argv=None) -> dict:
@@ -164,6 +178,10 @@ def main(argv=None) -> dict:
         out["by_handover"] = by_handover(results, handovers)
     if edges is not None:
         out["by_mass"] = by_mass(results, masses, edges)
+    if hasattr(env.unwrapped, "place_tolerance"):  # the pick-and-place: carried, then held up to the end?
+        from simgrip.envs.pick_place import ON_TABLE
+
+        out["place_timeouts"] = place_timeouts(results, env.unwrapped.place_tolerance, ON_TABLE)
     if args.json:
         print(json.dumps(out))
     else:

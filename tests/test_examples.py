@@ -295,6 +295,30 @@ def test_by_mass_counts_outcomes_per_mass_bin():
         "5-20 g": {"crushed": 1, "success": 1}, "20-100 g": {"success": 1}, "100-250 g": {"timeout": 1}}
 
 
+def test_place_timeouts_count_the_carried_pieces_never_set_down():
+    from simgrip.envs.evaluation import EpisodeResult
+
+    up, tol = 0.03, 0.01
+    infos = [{"carried": True, "workpiece_lift": up, "place_error": 0.004},  # hovering over the target
+             {"carried": True, "workpiece_lift": up, "place_error": 0.02},  # hovering short of it
+             {"carried": True, "workpiece_lift": 0.002, "place_error": 0.004},  # down on it, timed out placing
+             {"carried": False, "workpiece_lift": up, "place_error": 0.004},  # lifted, never carried
+             {"carried": True, "workpiece_lift": up, "place_error": 0.004, "crushed": True},  # lost
+             {"carried": True, "workpiece_lift": 0.001, "place_error": 0.0, "is_success": True}]
+    results = [EpisodeResult(i, i, 0.0, 1, info) for i, info in enumerate(infos)]
+    assert _example("evaluate_policy").place_timeouts(results, tol, 0.003) == {"held_up": 2, "over_target": 1}
+
+
+def test_evaluate_policy_counts_the_places_hovering_timeouts(capsys):
+    # the observation-only controller sets every piece of these seeds down: none held up at the end
+    out = _example("evaluate_policy").main(["--env", "simgrip/PlaceFragile-v7", "--policy", "observation",
+                                            "--episodes", "2", "--seed", "8004", "--json"])
+    assert out["place_timeouts"] == {"held_up": 0, "over_target": 0} and out["success_rate"] == 1.0
+    pinch = _example("evaluate_policy").main(["--env", "simgrip/PickFragile-v6", "--policy", "observation",
+                                              "--episodes", "1", "--seed", "8004", "--json"])
+    assert "place_timeouts" not in pinch
+
+
 def test_evaluate_policy_counts_a_fragile_tasks_outcomes_by_hidden_mass(capsys):
     import gymnasium as gym
 
