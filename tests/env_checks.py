@@ -62,6 +62,20 @@ def spoiled_controller(env, seed: int):
     return start, act
 
 
+def step_beside(new, old, a, same_keys) -> tuple:
+    """One step of ``new`` and of ``old`` (its previous version) with the action ``a``: the same observation,
+    flags and ``same_keys`` (those ``old``'s info has) asserted.  Returns ``(obs, r_new, r_old, done, i_new,
+    i_old)``."""
+    o_new, r_new, te_new, tr_new, i_new = new.step(a)
+    o_old, r_old, te_old, tr_old, i_old = old.step(a)
+    np.testing.assert_array_equal(o_new, o_old)
+    assert (te_new, tr_new) == (te_old, tr_old)
+    for k in same_keys:
+        if k in i_old:
+            assert np.array_equal(i_new[k], i_old[k]), k
+    return o_new, r_new, r_old, te_new or tr_new, i_new, i_old
+
+
 def assert_the_same_less_the_drop_penalty(new, old, seeds, steps: int, same_keys) -> tuple:
     """Step ``new`` (no drop penalty) beside ``old`` (its previous version) with :func:`spoiled_controller`'s
     actions over ``seeds``: the same observations, flags and ``same_keys``; ``new``'s ``reward_drop`` always 0
@@ -79,18 +93,11 @@ def assert_the_same_less_the_drop_penalty(new, old, seeds, steps: int, same_keys
         start, act = spoiled_controller(new, seed)
         start(i_new)
         for t in range(steps):
-            a = act(o_new, t, i_new)
-            o_new, r_new, te_new, tr_new, i_new = new.step(a)
-            o_old, r_old, te_old, tr_old, i_old = old.step(a)
-            np.testing.assert_array_equal(o_new, o_old)
-            assert (te_new, tr_new) == (te_old, tr_old)
+            o_new, r_new, r_old, done, i_new, i_old = step_beside(new, old, act(o_new, t, i_new), same_keys)
             assert i_new["reward_drop"] == 0.0
             drop_charged += i_old["reward_drop"] < 0.0
             assert r_new == pytest.approx(r_old - i_old["reward_drop"], abs=1e-12)
-            for k in same_keys:
-                if k in i_old:
-                    assert np.array_equal(i_new[k], i_old[k]), k
-            if te_new or tr_new:
+            if done:
                 break
         ends[outcome(i_new)] += 1
     return ends, drop_charged
