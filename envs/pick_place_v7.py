@@ -24,6 +24,12 @@ a valley the learner has to cross at random, with nothing paying the way down.  
 differences over any path is its end value less its start (Ng, Harada and Russell, 1999), so ``Psi`` cannot
 make a policy that never sets down beat one that does; it says which way the set-down is.
 
+An option for a learner, not part of the task's definition: ``sideways_after_carry = True`` (default
+``False``; ``gym.make(..., sideways_after_carry=True)``, ``--env-kwargs '{"sideways_after_carry": true}'`` in
+the example scripts) ignores the palm's sideways command until the workpiece has been carried (``carried``),
+so the palm cannot drag a piece it has not lifted: a pick-then-place interface.  With it the env is v7 given
+``action[1] = 0`` on every step before the carry (``tests/test_pick_place_v7.py``).
+
 Rewards: v6's plus ``reward_set_down = Psi_t - Psi_{t-1}``.  Ordering: a success returns at least ``w_success +
 w_lift + 0.9 w_down = 49`` (the workpiece rests less than 3 mm, a tenth of ``carry_height``, above its start);
 no unsuccessful episode more than ``w_contact + w_lift + w_hold + w_place + w_down = 41``, and one that ends in
@@ -59,6 +65,7 @@ key                    meaning
 
 from __future__ import annotations
 
+from simgrip.envs.arguments import check_bool
 from simgrip.envs.arguments import check_number as _num
 from simgrip.envs.pick_place_v6 import FragilePlaceEnvV6
 
@@ -81,10 +88,12 @@ class FragilePlaceEnvV7(FragilePlaceEnvV6):
     target, set down) whose carried workpiece keeps its lift pay when lowered and is paid ``w_down`` for being
     lowered over the target (:mod:`simgrip.envs.pick_place_v7`; info ``is_success``, ``workpiece_lift``,
     ``crushed``, ``dropped``, ``place_error``, ``carried``, ``gripped``, ``target_x``, ``reward_set_down``;
-    ``reset``'s info ``start_gap``).  Arguments: v6's plus ``w_down = 10``."""
+    ``reset``'s info ``start_gap``).  Arguments: v6's plus ``w_down = 10`` and ``sideways_after_carry = False``
+    (the palm's sideways command ignored until carried: a learner's option, see the module docstring)."""
 
-    def __init__(self, *, w_down: float = V7_W_DOWN, **kwargs):
+    def __init__(self, *, w_down: float = V7_W_DOWN, sideways_after_carry: bool = False, **kwargs):
         self.w_down = _num("w_down", w_down, positive=False)
+        self.sideways_after_carry = check_bool("sideways_after_carry", sideways_after_carry)
         self._psi_down = 0.0
         super().__init__(**kwargs)
 
@@ -93,6 +102,8 @@ class FragilePlaceEnvV7(FragilePlaceEnvV6):
         return super().reset(seed=seed, options=options)
 
     def _step_checked(self, a: list):
+        if self.sideways_after_carry and not self._carried:
+            a = [a[0], 0.0, *a[2:]]
         obs, reward, terminated, truncated, info = super()._step_checked(a)
         lost = info["crushed"] or info["dropped"] or info["knocked_over"]
         psi = 0.0

@@ -126,3 +126,43 @@ def test_the_arguments():
     for bad in (-1.0, float("nan"), "x", None):
         with pytest.raises(ValueError, match="w_down"):
             FragilePlaceEnvV7(w_down=bad)
+
+
+@pytest.mark.parametrize("seed", [8004, 8300])
+def test_sideways_after_carry_is_v7_given_no_sideways_command_before_the_carry(seed):
+    # random sideways commands on top of the observation-only controller: with the option, the palm ignores
+    # them until info["carried"] (step for step v7 given action[1] = 0 there), and follows them after
+    gated, plain = gym.make(ID, sideways_after_carry=True), gym.make(ID)
+    rng = np.random.default_rng(seed)
+    try:
+        o_g, i_g = gated.reset(seed=seed)
+        plain.reset(seed=seed)
+        start, act = _controller(gated, seed, None)
+        start(i_g)
+        carried_at, moved_after = None, False
+        for t in range(400):
+            a = act(o_g, t, i_g)
+            a[1] = rng.uniform(-1.0, 1.0)
+            b = a.copy()
+            if not i_g.get("carried"):
+                b[1] = 0.0
+            o_g, r_g, te_g, tr_g, i_g = gated.step(a)
+            o_p, r_p, te_p, tr_p, i_p = plain.step(b)
+            np.testing.assert_array_equal(o_g, o_p)
+            assert (r_g, te_g, tr_g) == (r_p, te_p, tr_p)
+            if i_g["carried"] and carried_at is None:
+                carried_at = t
+            moved_after = moved_after or (carried_at is not None and t > carried_at and b[1] != 0.0)
+            if te_g or tr_g:
+                break
+    finally:
+        gated.close()
+        plain.close()
+    assert carried_at is not None and moved_after
+
+
+def test_sideways_after_carry_must_be_a_bool():
+    assert FragilePlaceEnvV7().sideways_after_carry is False
+    for bad in (1, "yes", None):
+        with pytest.raises(ValueError, match="sideways_after_carry"):
+            FragilePlaceEnvV7(sideways_after_carry=bad)
