@@ -1,14 +1,14 @@
 r"""Pick-and-place paid for a grip that holds: ``PlaceFragile-v6``, issue 18.
 
-``simgrip/PlaceFragile-v6`` is ``PlaceFragile-v5`` (:mod:`simgrip.envs.pick_place_v5`: the pinch's pre-grasp
-start, no touch pay, no drop penalty; carry to a target drawn per episode, set down there) with **only the reward
+``simgrip/PlaceFragile-v6`` is ``PlaceFragile-v5`` (:mod:`simgrip.envs.pick_place_v5`: the pinch's pre-grasp start,
+no touch pay, no drop penalty; carry to a target drawn per episode, set down there) with **only the reward
 changed**: a grip that has held the workpiece ``carry_height`` up, both fingers on it, for ``grip_time`` (0.5 s,
 the pinch's ``hold_time``) is paid ``w_hold = 10`` once, and keeps that pay whatever happens next (as the contact
 pay is kept).  The state it is paid in is checked for fingers through themselves or each other on that step
 (``info["valid"]``, fresh there whatever the every-25-steps schedule says); a grip in an impossible state is not
-paid until a valid step.  The draw, the observation, the action, and what success, a crush, a drop and a knock-over are (and
-when an episode terminates) are v4's, so every fixed-schedule and scripted baseline of v4 holds for v6 with the
-same seeds (``docs/baselines/PlaceFragile-v4-*.json``).
+paid until a valid step.  The draw, the observation, the action, and what success, a crush, a drop and a knock-over
+are (and when an episode terminates) are v4's, so every fixed-schedule and scripted baseline of v4 holds for v6
+with the same seeds (``docs/baselines/PlaceFragile-v4-*.json``).
 
 Why: the pinch (``PickFragile-v6``) ends its episode with a success when the grip has held its workpiece up
 0.5 s, and its pay is banked there; PPO learns that behind the probe offset (:mod:`simgrip.envs.action_offset`;
