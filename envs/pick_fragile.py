@@ -103,7 +103,7 @@ from simgrip.envs.arguments import check_range as _range
 from simgrip.envs.arguments import check_reset
 from simgrip.envs.pick import PickEnv
 from simgrip.envs.pick_multi import PickMultiEnv
-from simgrip.envs.pick_validity import FRAGILE_VALIDITY_EVERY
+from simgrip.envs.pick_validity import FRAGILE_VALIDITY_EVERY, record_validity
 
 __all__ = ["FragilePickEnv", "FragilePickMultiEnv", "FRAGILE_DEFAULTS"]
 
@@ -138,12 +138,8 @@ class _Fragile:
         change (``-w_success`` where a success was taken back, else 0)."""
         if not terminated or self._validity.checked:
             return 0.0
-        invalid = self._validity(self.data.qpos.tolist(), self.data, force=True)
-        info["valid"] = not invalid
-        info.pop("invalid", None)
-        if not invalid:
+        if record_validity(info, self._validity(self.data.qpos.tolist(), self.data, force=True)):
             return 0.0
-        info["invalid"] = invalid
         if info["is_success"]:
             info["is_success"] = False
             info["reward_success"] = 0.0

@@ -62,6 +62,7 @@ from __future__ import annotations
 from simgrip.envs.arguments import check_number as _num
 from simgrip.envs.arguments import check_positive as _pos
 from simgrip.envs.pick_place_v5 import FragilePlaceEnvV5
+from simgrip.envs.pick_validity import record_validity
 
 __all__ = ["FragilePlaceEnvV6", "V6_W_HOLD", "V6_GRIP_TIME"]
 
@@ -104,9 +105,4 @@ class FragilePlaceEnvV6(FragilePlaceEnvV5):
         finger is not paid; ``info["valid"]`` / ``info["invalid"]`` then hold the fresh check)."""
         if self._validity.checked:
             return info["valid"]
-        invalid = self._validity.check_now(self.data.qpos.tolist(), self.data)
-        info["valid"] = not invalid
-        info.pop("invalid", None)
-        if invalid:
-            info["invalid"] = invalid
-        return not invalid
+        return record_validity(info, self._validity.check_now(self.data.qpos.tolist(), self.data))

@@ -75,6 +75,7 @@ from __future__ import annotations
 from simgrip.envs.arguments import check_bool
 from simgrip.envs.arguments import check_number as _num
 from simgrip.envs.pick_place_v6 import FragilePlaceEnvV6
+from simgrip.envs.pick_reward import progress
 
 __all__ = ["FragilePlaceEnvV7", "V7_W_DOWN", "set_down_potential"]
 
@@ -86,7 +87,7 @@ def set_down_potential(lift: float, carry_height: float, over_target: bool, w_li
     """``Psi = (1 - phi) (w_lift + w_down [over_target])``, ``phi = clip(lift / carry_height, 0, 1)``: v7's
     potential for a carried workpiece not lost (:mod:`simgrip.envs.pick_place_v7`; 0 otherwise, the caller's
     case).  ``lift``, ``carry_height`` [m]; ``w_lift``, ``w_down`` reward units."""
-    phi = min(max(lift / carry_height, 0.0), 1.0)
+    phi = progress(lift, carry_height, False)  # the lift pay's own progress
     return (1.0 - phi) * (w_lift + (w_down if over_target else 0.0))
 
 

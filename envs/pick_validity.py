@@ -58,7 +58,7 @@ import numpy as np
 from simgrip.intersection import CLEAR_MARGIN, segment_distances
 from simgrip.validity import SELF_LIMIT_FACTOR, chain_violations
 
-__all__ = ["FingerValidity", "FRAGILE_VALIDITY_EVERY"]
+__all__ = ["FingerValidity", "FRAGILE_VALIDITY_EVERY", "record_validity"]
 
 #: the fragile envs' check period [control steps]: 25 steps = 0.5 s at 50 Hz (a violation is a configuration the
 #: fingers hold for a while; every terminating step, a success included, is checked regardless)
@@ -90,6 +90,16 @@ def _coarse_spans(keep: np.ndarray, K: int, n: int) -> list:
                     else:
                         spans += [((f, a + i, a + i + 1), (g, c0 + j, c0 + j + 1)) for i, j in zip(*np.nonzero(block))]
     return spans
+
+
+def record_validity(info: dict, invalid: list) -> bool:
+    """Write a fresh check's result into a step's ``info``: ``info["valid"]``, and ``info["invalid"]`` (the
+    messages) only when there are any, an older one dropped.  Returns whether the state is valid."""
+    info["valid"] = not invalid
+    info.pop("invalid", None)
+    if invalid:
+        info["invalid"] = invalid
+    return not invalid
 
 
 class FingerValidity:
