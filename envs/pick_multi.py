@@ -270,6 +270,8 @@ class PickMultiEnv(CheckedStep, gym.Env):
         nk = 1 if self.shared_curvature else self.K
         self.action_space = spaces.Box(-1.0, 1.0, (nk + 1,), dtype=np.float32)
         self._action_shape = (nk + 1,)
+        #: the actions' names in order (:mod:`simgrip.envs.warm_start` matches policies by them)
+        self.action_names = (("curvature",) if nk == 1 else tuple(f"curvature_{k}" for k in range(nk))) + ("palm_z",)
         self.observation_space = spaces.Box(self._observe.low, self._observe.high, dtype=np.float64)
         self.obs_layout, self.obs_slices = self._observe.layout, self._observe.slices
         self._renderers = {}

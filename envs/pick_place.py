@@ -81,6 +81,7 @@ class FragilePlaceEnv(FragilePickEnv):
         super().__init__(grip="I", target_height=self.carry_height, hold_time=1e9, w_success=w_success, **kwargs)
         self.action_space = spaces.Box(-1.0, 1.0, (3,), dtype=np.float32)
         self._action_shape = (3,)
+        self.action_names = ("curvature", "palm_x", "palm_z")
         n0 = self.observation_space.shape[0]
         low = np.concatenate([self.observation_space.low, [-10.0, -10.0]])
         high = np.concatenate([self.observation_space.high, [10.0, 10.0]])

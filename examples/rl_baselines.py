@@ -40,6 +40,10 @@ starts part-way through the scripted observation-only controller's episode,
 ``--light-bias P`` passes that option (that share of the training episodes' workpieces drawn from the light end
 of the mass range, :class:`simgrip.envs.light_bias.LightBias`; evaluation draws the task's own), recorded as
 ``light_bias``;
+``--init-from DIR`` (PPO only) starts each seed ``S`` from ``DIR/ppo_seed<S>/ppo_model.zip``, the policy of an
+earlier ``rl_baselines.py`` run of the same seed on another task (a curriculum: the pinch's policies for the
+pick-and-place; :mod:`simgrip.envs.warm_start`), recorded as ``init_from`` with that run's command
+(``init_command``); checkpoints count this run's own CPU minutes, to which the source's budget adds;
 ``--gamma G`` passes the discount instead of the default 0.99, named in every JSON's
 ``hyperparameters``.
 
@@ -146,7 +150,43 @@ def run_command(algo: str, seed: int, args, folder: Path) -> list[str]:
         cmd += ["--scripted-start", repr(args.scripted_start)]
     if args.light_bias is not None:
         cmd += ["--light-bias", repr(args.light_bias)]
+    if args.init_from is not None:
+        cmd += ["--init-from", str(init_model(args.init_from, algo, seed))]
     return cmd
+
+
+def init_model(folder, algo: str, seed: int) -> Path:
+    """The model a run of ``--init-from folder`` starts from: that folder's run of the same algorithm and seed."""
+    return Path(folder) / f"{algo}_seed{seed}" / f"{algo}_model.zip"
+
+
+def _check_init(p: argparse.ArgumentParser, args, algos: list[str]) -> str | None:
+    """Refuse an ``--init-from`` that cannot start every run (exit 2 naming it); returns the source's command."""
+    from simgrip.envs.evaluation import make_env
+    from simgrip.envs.warm_start import action_names, check_source, source_record
+
+    if algos != ["ppo"]:
+        p.error("--init-from: PPO only (--algo ppo)")
+    dst = make_env(args.env, args.env_kwargs)
+    try:
+        for seed in args.seeds:
+            try:
+                rec = source_record(init_model(args.init_from, "ppo", seed))
+                src = make_env(rec["env"], rec.get("env_kwargs") or {})
+                try:
+                    check_source(rec, action_names(src), action_names(dst), action_offset=args.action_offset,
+                                 normalize=args.normalize, frame_stack=args.frame_stack)
+                finally:
+                    src.close()
+            except ValueError as e:
+                p.error(f"{e} (seed {seed})")
+    finally:
+        dst.close()
+    try:
+        command = json.loads((Path(args.init_from) / "aggregate.json").read_text()).get("command")
+    except (OSError, ValueError, AttributeError):
+        command = None
+    return command
 
 
 def _child_env() -> dict:
@@ -385,6 +425,9 @@ def main(argv=None) -> int:
     p.add_argument("--light-bias", type=_probability, default=None, metavar="P",
                    help="draw that share of the training episodes' workpieces from the lightest third of the mass "
                         "range (simgrip.envs.light_bias; evaluation draws the task's own; default none)")
+    p.add_argument("--init-from", default=None, metavar="DIR",
+                   help="PPO only: start each seed S from DIR/ppo_seed<S>/ppo_model.zip, an earlier run's policy "
+                        "on another task (simgrip.envs.warm_start; default: fresh policies)")
     p.add_argument("--out", required=True, help="output folder")
     args = p.parse_args(argv)
     cores = os.cpu_count() or 1
@@ -413,6 +456,7 @@ def main(argv=None) -> int:
         except ValueError as e:
             p.error(str(e))
     algos = list(dict.fromkeys(args.algo))
+    init_command = _check_init(p, args, algos) if args.init_from is not None else None
     try:
         out = check_output_dir(args.out, "--out")
         names = [f"{a}_seed{s}.json" for a in algos for s in args.seeds] + ["aggregate.json", "learning_curves.png"]
@@ -450,6 +494,7 @@ def main(argv=None) -> int:
         **({"frame_stack": args.frame_stack} if args.frame_stack is not None else {}),
         **({"scripted_start": args.scripted_start} if args.scripted_start is not None else {}),
         **({"light_bias": args.light_bias} if args.light_bias is not None else {}),
+        **({"init_from": str(args.init_from), "init_command": init_command} if args.init_from is not None else {}),
         **({"wrapper": "VecNormalize (SB3 defaults: observation and return)"} if args.normalize else {}),
         "command": [Path(sys.argv[0]).name] + list(sys.argv[1:] if argv is None else argv)})
     plot(summary, results, out / "learning_curves.png")

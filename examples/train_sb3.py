@@ -61,6 +61,12 @@ episode plainly; ``<algo>_eval.json`` records ``scripted_start``.
 log mass range (:class:`simgrip.envs.light_bias.LightBias`: the pieces a fast closing crushes); the held-out
 evaluation runs the task's own draw; ``<algo>_eval.json`` records ``light_bias``.
 
+``--init-from MODEL`` (PPO only) starts the training from a PPO policy trained on another task (a curriculum:
+the pinch's policy for the pick-and-place), copied by :func:`simgrip.envs.warm_start.transfer_ppo` (observation
+entries and actions matched by name; the target's new ones start at weight 0); ``MODEL``'s folder must hold that
+run's ``ppo_eval.json``.  ``<algo>_eval.json`` records ``init_from`` (the model, its env, seed, steps and CPU
+time) and ``cpu_s_with_init``, the CPU time of both trainings.
+
 ``--gamma G`` changes one hyperparameter, the discount (default 0.99), and the JSON's ``hyperparameters``
 says so; the held-out ``mean_discounted_return`` is then at ``G``.  ``examples/evaluate_policy.py``
 re-evaluates a saved model, or a scripted controller, the same way.
@@ -185,11 +191,50 @@ def _load_normalizer(path: Path):
         return pickle.load(fh)
 
 
+def _init_source(init_from: str, env_id: str, env_kwargs, action_offset, normalize: bool, frame_stack):
+    """The source run of ``--init-from``: its record and env, checked against this training's options
+    (``ValueError`` naming the option)."""
+    from simgrip.envs.warm_start import action_names, check_source, source_record
+
+    rec = source_record(init_from)
+    src_env = make_env(rec["env"], rec.get("env_kwargs") or {})
+    dst_env = make_env(env_id, env_kwargs or {})
+    try:
+        check_source(rec, action_names(src_env), action_names(dst_env), action_offset=action_offset,
+                     normalize=normalize, frame_stack=frame_stack)
+    finally:
+        src_env.close()
+        dst_env.close()
+    return rec
+
+
+def _warm_start(model, train_env, init_from: str) -> dict:
+    """Copy the PPO policy saved at ``init_from`` into ``model`` (:mod:`simgrip.envs.warm_start`); returns what
+    ``<algo>_eval.json`` records of it."""
+    from stable_baselines3 import PPO
+
+    from simgrip.envs.warm_start import plan_transfer, source_record, transfer_ppo
+
+    rec = source_record(init_from)
+    source = PPO.load(init_from, device="cpu")
+    src_env = make_env(rec["env"], rec.get("env_kwargs") or {})
+    try:
+        plan = plan_transfer(src_env, train_env)
+    finally:
+        src_env.close()
+    transfer_ppo(source, model, plan)
+    return {"model": str(init_from), "algo": "PPO", "env": rec["env"], "seed": rec.get("seed"),
+            "timesteps": rec.get("timesteps"), "cpu_s": rec.get("cpu_s"),
+            **({"action_offset": rec["action_offset"]} if rec.get("action_offset") is not None else {}),
+            **({"env_kwargs": rec["env_kwargs"]} if rec.get("env_kwargs") else {}),
+            "new_observation": list(plan.new_obs), "new_actions": list(plan.new_actions)}
+
+
 def train(algo: str, env_id: str, *, steps: int, minutes: float, seed: int, out: Path,
           eval_episodes: int, eval_seed: int, clock: str = "cpu", checkpoint_minutes: float | None = None,
           env_kwargs: dict | None = None, normalize: bool = False, action_offset=None, gamma: float | None = None,
           frame_stack: int | None = None, scripted_start: float | None = None,
-          light_bias: float | None = None) -> dict:
+          light_bias: float | None = None, init_from: str | None = None) -> dict:
     """Train ``algo`` with library defaults within the budget, write its curve, model and evaluation
     (``env_kwargs``: ``gym.make``'s keyword arguments, for training and evaluation alike; ``normalize``: train
     behind SB3's ``VecNormalize`` with its defaults; ``action_offset``: train and evaluate behind
@@ -199,7 +244,8 @@ def train(algo: str, env_id: str, *, steps: int, minutes: float, seed: int, out:
     share of the training episodes starts part-way through the scripted controller's episode,
     :class:`simgrip.envs.scripted_start.ScriptedStart`; evaluation starts plainly; ``light_bias``: that share of the
     training episodes' masses drawn from the light end, :class:`simgrip.envs.light_bias.LightBias`; evaluation
-    draws the task's own)."""
+    draws the task's own; ``init_from``: a saved PPO model of another run to start from,
+    :mod:`simgrip.envs.warm_start`)."""
     env_kwargs = dict(env_kwargs or {})
     from stable_baselines3 import PPO, SAC
     from stable_baselines3.common.callbacks import BaseCallback
@@ -252,6 +298,9 @@ def train(algo: str, env_id: str, *, steps: int, minutes: float, seed: int, out:
 
         env = VecNormalize(env)  # SB3's defaults; the Monitor inside still records the env's own returns
     model = cls("MlpPolicy", env, seed=seed, verbose=0, **({} if gamma is None else {"gamma": gamma}))
+    init = None
+    if init_from is not None:
+        init = _warm_start(model, env.envs[0] if hasattr(env, "envs") else env.venv.envs[0], init_from)
     model.learn(total_timesteps=steps, callback=Budget())
     wall, cpu = time.perf_counter() - t_start, time.process_time() - c_start
     env.close()
@@ -287,6 +336,10 @@ def train(algo: str, env_id: str, *, steps: int, minutes: float, seed: int, out:
         wrappers.append(f"LightBias({float(light_bias)!r}) in training")
     if normalize:
         wrappers.append("VecNormalize (SB3 defaults: observation and return)")
+    if init is not None:
+        result["init_from"] = init
+        result["cpu_s_with_init"] = round(cpu + float(init.get("cpu_s") or 0.0), 1)
+        wrappers.append(f"started from {init['algo']} on {init['env']} (warm start)")
     if wrappers:
         result["wrapper"] = ", ".join(wrappers)
     result.update(evaluate(model, env_id, eval_episodes, eval_seed, env_kwargs, normalizer, action_offset,
@@ -378,6 +431,9 @@ def main(argv=None) -> int:
     p.add_argument("--light-bias", type=probability, default=None, metavar="P",
                    help="draw that share of the training episodes' workpieces from the lightest third of the mass "
                         "range (simgrip.envs.light_bias; evaluation draws the task's own)")
+    p.add_argument("--init-from", default=None, metavar="MODEL",
+                   help="PPO only: start from this saved PPO model of another run (its folder holds its "
+                        "ppo_eval.json), copied by simgrip.envs.warm_start (default: a fresh policy)")
     p.add_argument("--out", required=True, help="output folder")
     args = p.parse_args(argv)
     try:
@@ -391,6 +447,14 @@ def main(argv=None) -> int:
         try:  # refused before any training, the env built once
             make_env(args.env, args.env_kwargs, args.action_offset, args.frame_stack, args.scripted_start,
                      args.light_bias).close()
+        except ValueError as e:
+            p.error(str(e))
+    if args.init_from is not None:
+        if args.algo != ["ppo"]:
+            p.error("--init-from: PPO only (--algo ppo)")
+        try:
+            _init_source(args.init_from, args.env, args.env_kwargs, args.action_offset, args.normalize,
+                         args.frame_stack)
         except ValueError as e:
             p.error(str(e))
     try:  # simgrip.io's output-path policy: a folder, and no FIFO/device/folder where a result file goes
@@ -407,7 +471,7 @@ def main(argv=None) -> int:
                        checkpoint_minutes=args.checkpoint_minutes, env_kwargs=args.env_kwargs,
                        normalize=args.normalize, action_offset=args.action_offset, gamma=args.gamma,
                        frame_stack=args.frame_stack, scripted_start=args.scripted_start,
-                       light_bias=args.light_bias)
+                       light_bias=args.light_bias, init_from=args.init_from)
         print(json.dumps(result), flush=True)
     plot_curves(out)
     return 0

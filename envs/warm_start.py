@@ -1,0 +1,175 @@
+r"""A policy learned on one task as the starting point of another: a pick-first curriculum (issue 18).
+
+The pick-and-place (:mod:`simgrip.envs.pick_place`) asks for the pinch's grip and then a carry and a set-down.
+Learned from scratch within 15 CPU-minutes it fails at the grip (the Gymnasium environments page, "Where the
+learning target stands"), while the pinch alone is learned (``PickFragile-v6``). A curriculum hands the place's
+learner the pinch's policy: :func:`transfer_ppo` copies a trained Stable-Baselines3 PPO policy into a fresh PPO
+model of another env, matching the observation entries and the actions **by name**:
+
+* the observation: each env's ``obs_layout`` (``(name, size)`` pairs, the entries' order); an entry of the
+  target env whose name and size the source has gets the source's input weights (the first layer of the policy
+  and of the value network), every other entry (the place's ``workpiece_x`` and ``target_x``) weight 0, so that
+  it does not change the copied policy until training gives it a weight.  Entries are copied as they are, in
+  each task's own units (``box_lift`` is in units of each task's own lift height: the pinch's 6 cm, the place's
+  carry height 3 cm);
+* the action: each env's ``action_names`` (the pinch ``("curvature", "palm_z")``, the place ``("curvature",
+  "palm_x", "palm_z")``); a target action the source has gets the source's output row and log standard
+  deviation, a new one (the place's ``palm_x``) a zero row and bias (mean action 0, the action offset's
+  motion) and log standard deviation 0 (PPO's initial one);
+* every hidden layer and the value head as they are; the optimiser starts afresh.
+
+So the copied policy's mean actions and value on a target observation equal the source's on the same named
+entries (``tests/test_warm_start.py``), and training goes on from there with the library's defaults.
+"""
+
+from __future__ import annotations
+
+import json
+from dataclasses import dataclass
+from pathlib import Path
+
+import numpy as np
+
+__all__ = ["Transfer", "action_names", "check_source", "plan_transfer", "source_record", "transfer_ppo"]
+
+
+def action_names(env) -> tuple[str, ...]:
+    """The names of ``env``'s actions in order (the unwrapped env's ``action_names``); ``ValueError`` if it
+    has none or their number differs from the action space's."""
+    names = getattr(env.unwrapped, "action_names", None)
+    n = int(np.prod(env.action_space.shape))
+    if names is None or len(names) != n:
+        raise ValueError(f"env {env.unwrapped.__class__.__name__} names no actions (action_names), "
+                         "so no policy can be transferred to or from it")
+    return tuple(names)
+
+
+def _obs_columns(env) -> dict[str, tuple[int, int]]:
+    layout = getattr(env.unwrapped, "obs_layout", None)
+    if layout is None:
+        raise ValueError(f"env {env.unwrapped.__class__.__name__} names no observation entries (obs_layout)")
+    if env.observation_space.shape is None or len(env.observation_space.shape) != 1:
+        raise ValueError(f"env {env.unwrapped.__class__.__name__}: its observation is not flat (a frame stack "
+                         "cannot be transferred)")
+    cols, start = {}, 0
+    for name, size in layout:
+        cols[name] = (start, int(size))
+        start += int(size)
+    if start != env.observation_space.shape[0]:
+        raise ValueError(f"env {env.unwrapped.__class__.__name__}: its obs_layout covers {start} entries of the "
+                         f"observation's {env.observation_space.shape[0]} (a frame stack cannot be transferred)")
+    return cols
+
+
+@dataclass(frozen=True)
+class Transfer:
+    """Which target entries take which source entries (:func:`plan_transfer`).
+
+    ``obs_pairs``: ``(target column, source column)``; ``act_pairs``: ``(target action, source action)``;
+    ``new_obs`` and ``new_actions``: the target's names the source lacks (started at weight 0)."""
+
+    obs_pairs: tuple[tuple[int, int], ...]
+    act_pairs: tuple[tuple[int, int], ...]
+    new_obs: tuple[str, ...]
+    new_actions: tuple[str, ...]
+    n_obs: int
+    n_actions: int
+
+
+def plan_transfer(source_env, target_env) -> Transfer:
+    """Match ``target_env``'s observation entries and actions to ``source_env``'s by name (see the module).
+
+    ``ValueError`` when either env lacks the names, or when no action or no observation entry is shared."""
+    src_cols, dst_cols = _obs_columns(source_env), _obs_columns(target_env)
+    obs_pairs, new_obs = [], []
+    for name, (start, size) in dst_cols.items():
+        if name in src_cols and src_cols[name][1] == size:
+            obs_pairs += [(start + k, src_cols[name][0] + k) for k in range(size)]
+        else:
+            new_obs.append(name)
+    src_act, dst_act = action_names(source_env), action_names(target_env)
+    act_pairs = [(i, src_act.index(name)) for i, name in enumerate(dst_act) if name in src_act]
+    if not obs_pairs or not act_pairs:
+        raise ValueError(f"the source env shares no {'observation entry' if not obs_pairs else 'action'} with "
+                         "the target env")
+    return Transfer(tuple(obs_pairs), tuple(act_pairs), tuple(new_obs),
+                    tuple(n for n in dst_act if n not in src_act), sum(s for _, s in dst_cols.values()),
+                    len(dst_act))
+
+
+def transfer_ppo(source, target, plan: Transfer) -> None:
+    """Copy the PPO policy ``source`` (an SB3 ``PPO`` with the default ``MlpPolicy``) into ``target`` (a PPO of
+    the target env, same architecture), in place, as ``plan`` says (see the module)."""
+    import torch
+
+    sp, tp = source.policy, target.policy
+    for model, who in ((source, "source"), (target, "target")):
+        if type(model).__name__ != "PPO" or not hasattr(model.policy, "log_std"):
+            raise ValueError(f"{who}: a PPO model with a Gaussian MlpPolicy is needed, got {type(model).__name__}")
+    if tp.observation_space.shape != (plan.n_obs,) or tp.action_space.shape != (plan.n_actions,):
+        raise ValueError("target: its spaces are not the planned env's")
+    src_state, dst_state = sp.state_dict(), tp.state_dict()
+    if set(src_state) != set(dst_state):
+        raise ValueError("source and target policies differ in architecture")
+    dst_obs = torch.tensor([d for d, _ in plan.obs_pairs])
+    src_obs = torch.tensor([s for _, s in plan.obs_pairs])
+    dst_act = torch.tensor([d for d, _ in plan.act_pairs])
+    src_act = torch.tensor([s for _, s in plan.act_pairs])
+    first = {n for n, p in src_state.items() if n.endswith(".0.weight") and "mlp_extractor" in n}
+    new = {}
+    with torch.no_grad():
+        for name, value in src_state.items():
+            out = dst_state[name].clone()
+            if name in first:  # the first layer of the policy and the value networks: input columns
+                out.zero_()
+                out[:, dst_obs] = value[:, src_obs]
+            elif name == "action_net.weight":
+                out.zero_()
+                out[dst_act] = value[src_act]
+            elif name in ("action_net.bias", "log_std"):
+                out.zero_()
+                out[dst_act] = value[src_act]
+            else:
+                if value.shape != out.shape:
+                    raise ValueError(f"source and target policies differ in {name}: {tuple(value.shape)} against "
+                                     f"{tuple(out.shape)}")
+                out = value.clone()
+            new[name] = out
+    tp.load_state_dict(new)
+
+
+def source_record(model_path) -> dict:
+    """The training record of a saved PPO model: ``<folder>/ppo_eval.json`` beside ``model_path`` (what
+    ``examples/train_sb3.py`` writes: the env, its keyword arguments, wrappers, seed and CPU time).
+    ``ValueError`` naming the file when the model or its record is missing or unreadable."""
+    path = Path(model_path)
+    if not path.is_file():
+        raise ValueError(f"--init-from: no model file {str(path)!r}")
+    rec_path = path.with_name("ppo_eval.json")
+    try:
+        rec = json.loads(rec_path.read_text())
+    except (OSError, ValueError) as e:
+        raise ValueError(f"--init-from: needs the run's record {str(rec_path)!r} beside the model ({e})") from None
+    if not isinstance(rec, dict) or rec.get("algo") != "PPO" or not isinstance(rec.get("env"), str):
+        raise ValueError(f"--init-from: {str(rec_path)!r} is not a PPO run's record")
+    return rec
+
+
+def check_source(rec: dict, source_names, target_names, *, action_offset=None, normalize: bool = False,
+                 frame_stack: int | None = None) -> None:
+    """Refuse a source run that cannot start the target's training (``ValueError`` naming the option):
+    trained behind ``VecNormalize`` or a frame stack, or behind an action offset that differs from the target's
+    on a shared action (the copied policy would then perform another motion).  ``rec``: the source's record
+    (:func:`source_record`); ``source_names``, ``target_names``: the envs' :func:`action_names`;
+    ``action_offset``: the target's (``None``: none); ``normalize``, ``frame_stack``: the target's options."""
+    if normalize or rec.get("wrapper", "").find("VecNormalize") >= 0:
+        raise ValueError("--init-from: a run with VecNormalize cannot be transferred (--normalize)")
+    if (frame_stack or 1) > 1 or (rec.get("frame_stack") or 1) > 1:
+        raise ValueError("--init-from: a frame-stacked policy cannot be transferred (--frame-stack)")
+    src_offset = rec.get("action_offset")
+    src_off = dict(zip(source_names, src_offset or [0.0] * len(source_names)))
+    dst_off = dict(zip(target_names, action_offset if action_offset is not None else [0.0] * len(target_names)))
+    for name in (n for n in target_names if n in src_off):  # the target's order: one message, always the same
+        if float(src_off[name]) != float(dst_off[name]):
+            raise ValueError(f"--action-offset: {name} is {dst_off[name]!r} here but {src_off[name]!r} in the "
+                             "source run (--init-from): the copied policy would perform another motion")
