@@ -65,7 +65,8 @@ evaluation runs the task's own draw; ``<algo>_eval.json`` records ``light_bias``
 the pinch's policy for the pick-and-place), copied by :func:`simgrip.envs.warm_start.transfer_ppo` (observation
 entries and actions matched by name; the target's new ones start at weight 0); ``MODEL``'s folder must hold that
 run's ``ppo_eval.json``.  ``<algo>_eval.json`` records ``init_from`` (the model, its env, seed, steps and CPU
-time) and ``cpu_s_with_init``, the CPU time of both trainings.
+time, and ``eval``: the copied policy's held-out success, return and outcomes before any update) and
+``cpu_s_with_init``, the CPU time of both trainings (the budget counts this training's alone).
 
 ``--gamma G`` changes one hyperparameter, the discount (default 0.99), and the JSON's ``hyperparameters``
 says so; the held-out ``mean_discounted_return`` is then at ``G``.  ``examples/evaluate_policy.py``
@@ -301,6 +302,11 @@ def train(algo: str, env_id: str, *, steps: int, minutes: float, seed: int, out:
     init = None
     if init_from is not None:
         init = _warm_start(model, env.envs[0] if hasattr(env, "envs") else env.venv.envs[0], init_from)
+        # what the curriculum hands over: the copied policy on the held-out seeds, before any update
+        init["eval"] = {k: v for k, v in evaluate(model, env_id, eval_episodes, eval_seed, env_kwargs, None,
+                                                  action_offset, frame_stack).items()
+                        if k in ("success_rate", "mean_return", "outcomes")}
+        t_start, c_start = time.perf_counter(), time.process_time()  # the budget is the training's alone
     model.learn(total_timesteps=steps, callback=Budget())
     wall, cpu = time.perf_counter() - t_start, time.process_time() - c_start
     env.close()

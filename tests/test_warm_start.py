@@ -126,6 +126,8 @@ def test_train_sb3_starts_the_place_from_the_pinch(tmp_path, capsys):
     rec = json.loads((dst_dir / "ppo_eval.json").read_text())
     src_rec = json.loads((src_dir / "ppo_eval.json").read_text())
     assert rec["init_from"]["env"] == PINCH and rec["init_from"]["new_actions"] == ["palm_x"]
+    # the copy before any update, on the same held-out episode as the trained policy: here the same policy
+    assert rec["init_from"]["eval"] == {k: rec[k] for k in ("success_rate", "mean_return", "outcomes")}
     assert rec["cpu_s_with_init"] == pytest.approx(rec["cpu_s"] + src_rec["cpu_s"], abs=0.11)
     assert "warm start" in rec["wrapper"]
     src, dst = sb3.PPO.load(src_dir / "ppo_model.zip"), sb3.PPO.load(dst_dir / "ppo_model.zip")
