@@ -15,7 +15,10 @@ model of another env, matching the observation entries and the actions **by name
 * the action: each env's ``action_names`` (the pinch ``("curvature", "palm_z")``, the place ``("curvature",
   "palm_x", "palm_z")``); a target action the source has gets the source's output row and log standard
   deviation, a new one (the place's ``palm_x``) a zero row and bias (mean action 0, the action offset's
-  motion) and log standard deviation 0 (PPO's initial one);
+  motion) and log standard deviation 0 (PPO's initial one).  Where the two runs train behind different action
+  offsets (:mod:`simgrip.envs.action_offset`: the env performs ``clip(a + offset)``), a shared action's bias
+  is shifted by ``offset_source - offset_target``, so that the env performs the same motion: exactly, wherever
+  both runs' actions lie within the bounds (SB3 clips an action to them before the offset is added);
 * every hidden layer and the value head as they are; the optimiser starts afresh.
 
 So the copied policy's mean actions and value on a target observation equal the source's on the same named
@@ -66,7 +69,8 @@ class Transfer:
     """Which target entries take which source entries (:func:`plan_transfer`).
 
     ``obs_pairs``: ``(target column, source column)``; ``act_pairs``: ``(target action, source action)``;
-    ``new_obs`` and ``new_actions``: the target's names the source lacks (started at weight 0)."""
+    ``new_obs`` and ``new_actions``: the target's names the source lacks (started at weight 0); ``bias_shift``:
+    per target action, ``offset_source - offset_target`` (0 for a new one)."""
 
     obs_pairs: tuple[tuple[int, int], ...]
     act_pairs: tuple[tuple[int, int], ...]
@@ -74,10 +78,12 @@ class Transfer:
     new_actions: tuple[str, ...]
     n_obs: int
     n_actions: int
+    bias_shift: tuple[float, ...] = ()
 
 
-def plan_transfer(source_env, target_env) -> Transfer:
-    """Match ``target_env``'s observation entries and actions to ``source_env``'s by name (see the module).
+def plan_transfer(source_env, target_env, source_offset=None, target_offset=None) -> Transfer:
+    """Match ``target_env``'s observation entries and actions to ``source_env``'s by name (see the module);
+    ``source_offset``, ``target_offset``: the action offsets each run trains behind (``None``: none).
 
     ``ValueError`` when either env lacks the names, or when no action or no observation entry is shared."""
     src_cols, dst_cols = _obs_columns(source_env), _obs_columns(target_env)
@@ -92,9 +98,16 @@ def plan_transfer(source_env, target_env) -> Transfer:
     if not obs_pairs or not act_pairs:
         raise ValueError(f"the source env shares no {'observation entry' if not obs_pairs else 'action'} with "
                          "the target env")
+    src_off = np.zeros(len(src_act)) if source_offset is None else np.asarray(source_offset, dtype=float)
+    dst_off = np.zeros(len(dst_act)) if target_offset is None else np.asarray(target_offset, dtype=float)
+    if src_off.shape != (len(src_act),) or dst_off.shape != (len(dst_act),):
+        raise ValueError("--action-offset: one number per action of each env is needed")
+    shift = [0.0] * len(dst_act)
+    for i, j in act_pairs:
+        shift[i] = float(src_off[j] - dst_off[i])
     return Transfer(tuple(obs_pairs), tuple(act_pairs), tuple(new_obs),
                     tuple(n for n in dst_act if n not in src_act), sum(s for _, s in dst_cols.values()),
-                    len(dst_act))
+                    len(dst_act), tuple(shift))
 
 
 def transfer_ppo(source, target, plan: Transfer) -> None:
@@ -129,6 +142,8 @@ def transfer_ppo(source, target, plan: Transfer) -> None:
             elif name in ("action_net.bias", "log_std"):
                 out.zero_()
                 out[dst_act] = value[src_act]
+                if name == "action_net.bias" and plan.bias_shift:
+                    out += torch.tensor(plan.bias_shift, dtype=out.dtype)
             else:
                 if value.shape != out.shape:
                     raise ValueError(f"source and target policies differ in {name}: {tuple(value.shape)} against "
@@ -155,21 +170,11 @@ def source_record(model_path) -> dict:
     return rec
 
 
-def check_source(rec: dict, source_names, target_names, *, action_offset=None, normalize: bool = False,
-                 frame_stack: int | None = None) -> None:
-    """Refuse a source run that cannot start the target's training (``ValueError`` naming the option):
-    trained behind ``VecNormalize`` or a frame stack, or behind an action offset that differs from the target's
-    on a shared action (the copied policy would then perform another motion).  ``rec``: the source's record
-    (:func:`source_record`); ``source_names``, ``target_names``: the envs' :func:`action_names`;
-    ``action_offset``: the target's (``None``: none); ``normalize``, ``frame_stack``: the target's options."""
+def check_source(rec: dict, *, normalize: bool = False, frame_stack: int | None = None) -> None:
+    """Refuse a source run that cannot start the target's training (``ValueError`` naming the option): trained
+    behind ``VecNormalize`` or a frame stack, or a target that would train behind one.  ``rec``: the source's
+    record (:func:`source_record`); ``normalize``, ``frame_stack``: the target's options."""
     if normalize or rec.get("wrapper", "").find("VecNormalize") >= 0:
         raise ValueError("--init-from: a run with VecNormalize cannot be transferred (--normalize)")
     if (frame_stack or 1) > 1 or (rec.get("frame_stack") or 1) > 1:
         raise ValueError("--init-from: a frame-stacked policy cannot be transferred (--frame-stack)")
-    src_offset = rec.get("action_offset")
-    src_off = dict(zip(source_names, src_offset or [0.0] * len(source_names)))
-    dst_off = dict(zip(target_names, action_offset if action_offset is not None else [0.0] * len(target_names)))
-    for name in (n for n in target_names if n in src_off):  # the target's order: one message, always the same
-        if float(src_off[name]) != float(dst_off[name]):
-            raise ValueError(f"--action-offset: {name} is {dst_off[name]!r} here but {src_off[name]!r} in the "
-                             "source run (--init-from): the copied policy would perform another motion")

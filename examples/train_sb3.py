@@ -63,7 +63,8 @@ evaluation runs the task's own draw; ``<algo>_eval.json`` records ``light_bias``
 
 ``--init-from MODEL`` (PPO only) starts the training from a PPO policy trained on another task (a curriculum:
 the pinch's policy for the pick-and-place), copied by :func:`simgrip.envs.warm_start.transfer_ppo` (observation
-entries and actions matched by name; the target's new ones start at weight 0); ``MODEL``'s folder must hold that
+entries and actions matched by name; the target's new ones start at weight 0; a difference between the two runs'
+``--action-offset`` absorbed into the output bias); ``MODEL``'s folder must hold that
 run's ``ppo_eval.json``.  ``<algo>_eval.json`` records ``init_from`` (the model, its env, seed, steps and CPU
 time, and ``eval``: the copied policy's held-out success, return and outcomes before any update) and
 ``cpu_s_with_init``, the CPU time of both trainings (the budget counts this training's alone).
@@ -192,38 +193,40 @@ def _load_normalizer(path: Path):
         return pickle.load(fh)
 
 
-def _init_source(init_from: str, env_id: str, env_kwargs, action_offset, normalize: bool, frame_stack):
-    """The source run of ``--init-from``: its record and env, checked against this training's options
-    (``ValueError`` naming the option)."""
-    from simgrip.envs.warm_start import action_names, check_source, source_record
+def _init_plan(init_from: str, train_env, action_offset):
+    """The source run of ``--init-from`` (its record) and how its policy maps onto ``train_env``
+    (:func:`simgrip.envs.warm_start.plan_transfer`, the two runs' action offsets absorbed)."""
+    from simgrip.envs.warm_start import plan_transfer, source_record
 
     rec = source_record(init_from)
     src_env = make_env(rec["env"], rec.get("env_kwargs") or {})
-    dst_env = make_env(env_id, env_kwargs or {})
     try:
-        check_source(rec, action_names(src_env), action_names(dst_env), action_offset=action_offset,
-                     normalize=normalize, frame_stack=frame_stack)
+        return rec, plan_transfer(src_env, train_env, rec.get("action_offset"), action_offset)
     finally:
         src_env.close()
+
+
+def _init_source(init_from: str, env_id: str, env_kwargs, action_offset, normalize: bool, frame_stack):
+    """Refuse an ``--init-from`` this training cannot start from (``ValueError`` naming the option)."""
+    from simgrip.envs.warm_start import check_source, source_record
+
+    check_source(source_record(init_from), normalize=normalize, frame_stack=frame_stack)
+    dst_env = make_env(env_id, env_kwargs or {})
+    try:
+        _init_plan(init_from, dst_env, action_offset)
+    finally:
         dst_env.close()
-    return rec
 
 
-def _warm_start(model, train_env, init_from: str) -> dict:
+def _warm_start(model, train_env, init_from: str, action_offset) -> dict:
     """Copy the PPO policy saved at ``init_from`` into ``model`` (:mod:`simgrip.envs.warm_start`); returns what
     ``<algo>_eval.json`` records of it."""
     from stable_baselines3 import PPO
 
-    from simgrip.envs.warm_start import plan_transfer, source_record, transfer_ppo
+    from simgrip.envs.warm_start import transfer_ppo
 
-    rec = source_record(init_from)
-    source = PPO.load(init_from, device="cpu")
-    src_env = make_env(rec["env"], rec.get("env_kwargs") or {})
-    try:
-        plan = plan_transfer(src_env, train_env)
-    finally:
-        src_env.close()
-    transfer_ppo(source, model, plan)
+    rec, plan = _init_plan(init_from, train_env, action_offset)
+    transfer_ppo(PPO.load(init_from, device="cpu"), model, plan)
     return {"model": str(init_from), "algo": "PPO", "env": rec["env"], "seed": rec.get("seed"),
             "timesteps": rec.get("timesteps"), "cpu_s": rec.get("cpu_s"),
             **({"action_offset": rec["action_offset"]} if rec.get("action_offset") is not None else {}),
@@ -301,7 +304,8 @@ def train(algo: str, env_id: str, *, steps: int, minutes: float, seed: int, out:
     model = cls("MlpPolicy", env, seed=seed, verbose=0, **({} if gamma is None else {"gamma": gamma}))
     init = None
     if init_from is not None:
-        init = _warm_start(model, env.envs[0] if hasattr(env, "envs") else env.venv.envs[0], init_from)
+        init = _warm_start(model, env.envs[0] if hasattr(env, "envs") else env.venv.envs[0], init_from,
+                           action_offset)
         # what the curriculum hands over: the copied policy on the held-out seeds, before any update
         init["eval"] = {k: v for k, v in evaluate(model, env_id, eval_episodes, eval_seed, env_kwargs, None,
                                                   action_offset, frame_stack).items()

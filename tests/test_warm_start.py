@@ -92,16 +92,41 @@ def test_what_cannot_be_transferred_is_refused():
 
 def test_check_source_names_the_option():
     rec = {"algo": "PPO", "env": PINCH, "action_offset": [-0.4, 0.2]}
-    names, target = ("curvature", "palm_z"), ("curvature", "palm_x", "palm_z")
-    check_source(rec, names, target, action_offset=[-0.4, 0.0, 0.2])  # the same motion on the shared actions
-    with pytest.raises(ValueError, match="--action-offset: palm_z"):
-        check_source(rec, names, target, action_offset=[-0.4, 0.0, 0.3])
-    with pytest.raises(ValueError, match="--action-offset: curvature"):
-        check_source(rec, names, target)  # none here: the zero action would perform another motion
+    check_source(rec)
     with pytest.raises(ValueError, match="--normalize"):
-        check_source(rec, names, target, action_offset=[-0.4, 0.0, 0.2], normalize=True)
+        check_source(rec, normalize=True)
+    with pytest.raises(ValueError, match="--normalize"):
+        check_source({**rec, "wrapper": "VecNormalize (SB3 defaults: observation and return)"})
     with pytest.raises(ValueError, match="--frame-stack"):
-        check_source({**rec, "frame_stack": 2}, names, target, action_offset=[-0.4, 0.0, 0.2])
+        check_source({**rec, "frame_stack": 2})
+    with pytest.raises(ValueError, match="--frame-stack"):
+        check_source(rec, frame_stack=3)
+
+
+def test_a_different_action_offset_is_absorbed_into_the_bias():
+    """The pinch trained behind the probe offset, the place behind none or another: the env performs the same
+    motion, ``clip(mean + offset)``, wherever both runs' means lie within the bounds (SB3 clips there first)."""
+    pinch, place = gym.make(PINCH), gym.make(PLACE)
+    src = _ppo(pinch, 0, jitter=0.05)
+    obs = _place_obs(seed=2)
+    m_src = _mean_std_value(src, obs[:, :19])[0]
+    inside = np.all(np.abs(m_src) <= 1.0, axis=1)
+    assert inside.sum() >= 16  # the comparison covers most of the sample
+    for src_off, dst_off in (([-0.4, 0.2], None), ([-0.4, 0.2], [0.3, 0.5, -0.1]), (None, [-0.4, 0.0, 0.2])):
+        dst = _ppo(place, 1)
+        plan = plan_transfer(pinch, place, src_off, dst_off)
+        transfer_ppo(src, dst, plan)
+        m_dst = _mean_std_value(dst, obs)[0]
+        so = np.zeros(2) if src_off is None else np.asarray(src_off)
+        do = np.zeros(3) if dst_off is None else np.asarray(dst_off)
+        env_src = np.clip(np.clip(m_src, -1, 1) + so, -1, 1)
+        env_dst = np.clip(np.clip(m_dst, -1, 1) + do, -1, 1)
+        both = inside & np.all(np.abs(m_dst) <= 1.0, axis=1)
+        assert both.sum() >= 8
+        assert np.max(np.abs(env_dst[both][:, [0, 2]] - env_src[both])) < TOL
+        assert np.all(m_dst[:, 1] == 0.0)  # the new action: the target's own offset's motion
+    with pytest.raises(ValueError, match="--action-offset"):
+        plan_transfer(pinch, place, [-0.4], None)
 
 
 def test_source_record_needs_the_model_and_its_record(tmp_path):
@@ -141,8 +166,8 @@ def test_train_sb3_starts_the_place_from_the_pinch(tmp_path, capsys):
 
 @pytest.mark.parametrize("extra, word", [
     (["--algo", "sac"], "PPO only"),
-    (["--action-offset", "-0.4", "0", "0.3"], "--action-offset: palm_z"),
     (["--action-offset", "-0.4", "0", "0.2", "--frame-stack", "2"], "--frame-stack"),
+    (["--normalize"], "--normalize"),
 ])
 def test_train_sb3_refuses_a_source_it_cannot_start_from(extra, word, tmp_path, capsys):
     train = load_example("train_sb3", "_ws2")
