@@ -33,7 +33,8 @@ from pathlib import Path
 
 import numpy as np
 
-__all__ = ["Transfer", "action_names", "check_source", "plan_transfer", "source_record", "transfer_ppo"]
+__all__ = ["Transfer", "action_names", "check_source", "load_source", "plan_transfer", "prepare_transfer",
+           "source_record", "transfer_ppo"]
 
 
 def action_names(env) -> tuple[str, ...]:
@@ -79,6 +80,7 @@ class Transfer:
     n_obs: int
     n_actions: int
     bias_shift: tuple[float, ...] = ()
+    source_shape: tuple[int, int] = (0, 0)  # the source env's (observation, action) sizes
 
 
 def plan_transfer(source_env, target_env, source_offset=None, target_offset=None) -> Transfer:
@@ -107,7 +109,16 @@ def plan_transfer(source_env, target_env, source_offset=None, target_offset=None
         shift[i] = float(src_off[j] - dst_off[i])
     return Transfer(tuple(obs_pairs), tuple(act_pairs), tuple(new_obs),
                     tuple(n for n in dst_act if n not in src_act), sum(s for _, s in dst_cols.values()),
-                    len(dst_act), tuple(shift))
+                    len(dst_act), tuple(shift), (sum(s for _, s in src_cols.values()), len(src_act)))
+
+
+def _check_source_model(source, plan: Transfer) -> None:
+    sp = source.policy
+    if plan.source_shape != (0, 0) and (sp.observation_space.shape != (plan.source_shape[0],)
+                                        or sp.action_space.shape != (plan.source_shape[1],)):
+        raise ValueError(f"--init-from: a model of {sp.observation_space.shape[0]} observations and "
+                         f"{sp.action_space.shape[0]} actions, not of the env its record names "
+                         f"({plan.source_shape[0]} and {plan.source_shape[1]})")
 
 
 def transfer_ppo(source, target, plan: Transfer) -> None:
@@ -121,6 +132,7 @@ def transfer_ppo(source, target, plan: Transfer) -> None:
             raise ValueError(f"{who}: a PPO model with a Gaussian MlpPolicy is needed, got {type(model).__name__}")
     if tp.observation_space.shape != (plan.n_obs,) or tp.action_space.shape != (plan.n_actions,):
         raise ValueError("target: its spaces are not the planned env's")
+    _check_source_model(source, plan)
     src_state, dst_state = sp.state_dict(), tp.state_dict()
     if set(src_state) != set(dst_state):
         raise ValueError("source and target policies differ in architecture")
@@ -170,6 +182,17 @@ def source_record(model_path) -> dict:
     return rec
 
 
+def load_source(model_path):
+    """The saved PPO model at ``model_path`` (on the CPU); ``ValueError`` naming ``--init-from`` when it cannot be
+    loaded as one."""
+    from stable_baselines3 import PPO
+
+    try:
+        return PPO.load(model_path, device="cpu")
+    except Exception as e:  # a zip of something else, a truncated file, another library's format
+        raise ValueError(f"--init-from: cannot load {str(model_path)!r} as a PPO model ({type(e).__name__})") from None
+
+
 def check_source(rec: dict, *, normalize: bool = False, frame_stack: int | None = None) -> None:
     """Refuse a source run that cannot start the target's training (``ValueError`` naming the option): trained
     behind ``VecNormalize`` or a frame stack, or a target that would train behind one.  ``rec``: the source's
@@ -178,3 +201,24 @@ def check_source(rec: dict, *, normalize: bool = False, frame_stack: int | None 
         raise ValueError("--init-from: a run with VecNormalize cannot be transferred (--normalize)")
     if (frame_stack or 1) > 1 or (rec.get("frame_stack") or 1) > 1:
         raise ValueError("--init-from: a frame-stacked policy cannot be transferred (--frame-stack)")
+
+
+def prepare_transfer(model_path, target_env, target_offset=None, *, normalize: bool = False,
+                     frame_stack: int | None = None):
+    """Everything ``--init-from model_path`` needs, checked before any training: the source run's record
+    (:func:`source_record`, :func:`check_source` against the target's ``normalize`` and ``frame_stack``), the plan
+    onto ``target_env`` (:func:`plan_transfer`, the source env built from its record; ``target_offset``: the
+    target's action offset) and the loaded source model, checked to be of the env its record names.  Returns
+    ``(record, plan, model)``; ``ValueError`` naming the option otherwise."""
+    from simgrip.envs.evaluation import make_env
+
+    rec = source_record(model_path)
+    check_source(rec, normalize=normalize, frame_stack=frame_stack)
+    src_env = make_env(rec["env"], rec.get("env_kwargs") or {})
+    try:
+        plan = plan_transfer(src_env, target_env, rec.get("action_offset"), target_offset)
+    finally:
+        src_env.close()
+    source = load_source(model_path)
+    _check_source_model(source, plan)
+    return rec, plan, source

@@ -163,7 +163,7 @@ def init_model(folder, algo: str, seed: int) -> Path:
 def _check_init(p: argparse.ArgumentParser, args, algos: list[str]) -> str | None:
     """Refuse an ``--init-from`` that cannot start every run (exit 2 naming it); returns the source's command."""
     from simgrip.envs.evaluation import make_env
-    from simgrip.envs.warm_start import check_source, plan_transfer, source_record
+    from simgrip.envs.warm_start import prepare_transfer
 
     if algos != ["ppo"]:
         p.error("--init-from: PPO only (--algo ppo)")
@@ -171,13 +171,8 @@ def _check_init(p: argparse.ArgumentParser, args, algos: list[str]) -> str | Non
     try:
         for seed in args.seeds:
             try:
-                rec = source_record(init_model(args.init_from, "ppo", seed))
-                check_source(rec, normalize=args.normalize, frame_stack=args.frame_stack)
-                src = make_env(rec["env"], rec.get("env_kwargs") or {})
-                try:
-                    plan_transfer(src, dst, rec.get("action_offset"), args.action_offset)
-                finally:
-                    src.close()
+                prepare_transfer(init_model(args.init_from, "ppo", seed), dst, args.action_offset,
+                                 normalize=args.normalize, frame_stack=args.frame_stack)
             except ValueError as e:
                 p.error(f"{e} (seed {seed})")
     finally:

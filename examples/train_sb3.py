@@ -193,27 +193,13 @@ def _load_normalizer(path: Path):
         return pickle.load(fh)
 
 
-def _init_plan(init_from: str, train_env, action_offset):
-    """The source run of ``--init-from`` (its record) and how its policy maps onto ``train_env``
-    (:func:`simgrip.envs.warm_start.plan_transfer`, the two runs' action offsets absorbed)."""
-    from simgrip.envs.warm_start import plan_transfer, source_record
-
-    rec = source_record(init_from)
-    src_env = make_env(rec["env"], rec.get("env_kwargs") or {})
-    try:
-        return rec, plan_transfer(src_env, train_env, rec.get("action_offset"), action_offset)
-    finally:
-        src_env.close()
-
-
 def _init_source(init_from: str, env_id: str, env_kwargs, action_offset, normalize: bool, frame_stack):
     """Refuse an ``--init-from`` this training cannot start from (``ValueError`` naming the option)."""
-    from simgrip.envs.warm_start import check_source, source_record
+    from simgrip.envs.warm_start import prepare_transfer
 
-    check_source(source_record(init_from), normalize=normalize, frame_stack=frame_stack)
     dst_env = make_env(env_id, env_kwargs or {})
     try:
-        _init_plan(init_from, dst_env, action_offset)
+        prepare_transfer(init_from, dst_env, action_offset, normalize=normalize, frame_stack=frame_stack)
     finally:
         dst_env.close()
 
@@ -221,12 +207,10 @@ def _init_source(init_from: str, env_id: str, env_kwargs, action_offset, normali
 def _warm_start(model, train_env, init_from: str, action_offset) -> dict:
     """Copy the PPO policy saved at ``init_from`` into ``model`` (:mod:`simgrip.envs.warm_start`); returns what
     ``<algo>_eval.json`` records of it."""
-    from stable_baselines3 import PPO
+    from simgrip.envs.warm_start import prepare_transfer, transfer_ppo
 
-    from simgrip.envs.warm_start import transfer_ppo
-
-    rec, plan = _init_plan(init_from, train_env, action_offset)
-    transfer_ppo(PPO.load(init_from, device="cpu"), model, plan)
+    rec, plan, source = prepare_transfer(init_from, train_env, action_offset)
+    transfer_ppo(source, model, plan)
     return {"model": str(init_from), "algo": "PPO", "env": rec["env"], "seed": rec.get("seed"),
             "timesteps": rec.get("timesteps"), "cpu_s": rec.get("cpu_s"),
             **({"action_offset": rec["action_offset"]} if rec.get("action_offset") is not None else {}),

@@ -18,8 +18,12 @@ import simgrip.envs  # noqa: F401  (registers the ids)
 from helpers import load_example
 from simgrip.envs.warm_start import action_names, check_source, plan_transfer, source_record, transfer_ppo
 
-sb3 = pytest.importorskip("stable_baselines3")
-torch = pytest.importorskip("torch")
+try:  # the plan and the checks need neither; the copies need the rl extra
+    import stable_baselines3 as sb3
+    import torch
+except ImportError:
+    sb3 = torch = None
+needs_sb3 = pytest.mark.skipif(sb3 is None, reason='needs the rl extra: pip install ".[rl]"')
 
 PINCH, PLACE = "simgrip/PickFragile-v6", "simgrip/PlaceFragile-v7"
 TOL = 1e-5
@@ -47,6 +51,7 @@ def _place_obs(n=32, seed=0):
     return np.random.default_rng(seed).normal(size=(n, 21))
 
 
+@needs_sb3
 def test_the_pinch_policy_acts_in_the_place_as_on_the_pinch():
     pinch, place = gym.make(PINCH), gym.make(PLACE)
     src, dst = _ppo(pinch, 0, jitter=0.3), _ppo(place, 1)
@@ -66,6 +71,7 @@ def test_the_pinch_policy_acts_in_the_place_as_on_the_pinch():
     assert np.max(np.abs(_mean_std_value(dst, moved)[0] - m_dst)) == 0.0
 
 
+@needs_sb3
 def test_a_task_to_itself_copies_every_weight():
     pinch = gym.make(PINCH)
     src, dst = _ppo(pinch, 0, jitter=0.3), _ppo(pinch, 1)
@@ -76,6 +82,7 @@ def test_a_task_to_itself_copies_every_weight():
         assert torch.equal(a, b), k
 
 
+@needs_sb3
 def test_what_cannot_be_transferred_is_refused():
     pinch, place = gym.make(PINCH), gym.make(PLACE)
     stacked = gym.wrappers.FrameStackObservation(gym.make(PINCH), 2)
@@ -88,6 +95,24 @@ def test_what_cannot_be_transferred_is_refused():
         transfer_ppo(sb3.SAC("MlpPolicy", pinch, device="cpu"), _ppo(place, 0), plan_transfer(pinch, place))
     with pytest.raises(ValueError, match="spaces"):
         transfer_ppo(_ppo(pinch, 0), _ppo(pinch, 1), plan_transfer(pinch, place))
+
+
+def test_the_plan_matches_entries_and_actions_by_name():
+    pinch, place = gym.make(PINCH), gym.make(PLACE)
+    plan = plan_transfer(pinch, place, [-0.4, 0.2], [0.0, 0.0, 0.1])
+    slices = place.unwrapped.obs_slices
+    assert plan.obs_pairs == tuple((k, k) for k in range(19)) and slices["target_x"].start == 20
+    assert plan.act_pairs == ((0, 0), (2, 1)) and plan.bias_shift == (-0.4, 0.0, 0.1)
+    assert plan.new_obs == ("workpiece_x", "target_x") and plan.new_actions == ("palm_x",)
+    assert (plan.n_obs, plan.n_actions, plan.source_shape) == (21, 3, (19, 2))
+    back = plan_transfer(place, pinch)  # the other way: the place's extra entries and action dropped
+    assert back.new_obs == () and back.act_pairs == ((0, 0), (1, 2)) and back.n_obs == 19
+    with pytest.raises(ValueError, match="frame stack"):
+        plan_transfer(gym.wrappers.FrameStackObservation(gym.make(PINCH), 2), pinch)
+    with pytest.raises(ValueError, match="obs_layout"):
+        plan_transfer(gym.make("CartPole-v1"), pinch)
+    with pytest.raises(ValueError, match="--action-offset"):
+        plan_transfer(pinch, place, [-0.4], None)
 
 
 def test_check_source_names_the_option():
@@ -103,6 +128,7 @@ def test_check_source_names_the_option():
         check_source(rec, frame_stack=3)
 
 
+@needs_sb3
 def test_a_different_action_offset_is_absorbed_into_the_bias():
     """The pinch trained behind the probe offset, the place behind none or another: the env performs the same
     motion, ``clip(mean + offset)``, wherever both runs' means lie within the bounds (SB3 clips there first)."""
@@ -140,6 +166,7 @@ def test_source_record_needs_the_model_and_its_record(tmp_path):
         source_record(tmp_path / "ppo_model.zip")
 
 
+@needs_sb3
 def test_train_sb3_starts_the_place_from_the_pinch(tmp_path, capsys):
     """End to end: a budget too small for one PPO update, so the saved place model is the copy itself."""
     train = load_example("train_sb3", "_ws")
@@ -164,6 +191,7 @@ def test_train_sb3_starts_the_place_from_the_pinch(tmp_path, capsys):
     capsys.readouterr()
 
 
+@needs_sb3
 @pytest.mark.parametrize("extra, word", [
     (["--algo", "sac"], "PPO only"),
     (["--action-offset", "-0.4", "0", "0.2", "--frame-stack", "2"], "--frame-stack"),
@@ -185,12 +213,32 @@ def test_train_sb3_refuses_a_source_it_cannot_start_from(extra, word, tmp_path, 
     assert not (tmp_path / "o").exists()
 
 
+@needs_sb3
+def test_a_model_that_is_not_its_records_is_refused(tmp_path, capsys):
+    """A file that is no PPO model, and a PPO model of another env than its record names: exit 2, no training."""
+    train = load_example("train_sb3", "_ws3")
+    src_dir = tmp_path / "pinch"
+    src_dir.mkdir()
+    (src_dir / "ppo_eval.json").write_text(json.dumps({"algo": "PPO", "env": PINCH}))
+    argv = ["--algo", "ppo", "--env", PLACE, "--init-from", str(src_dir / "ppo_model.zip"), "--out", str(tmp_path / "o")]
+    (src_dir / "ppo_model.zip").write_bytes(b"PK not a model")
+    with pytest.raises(SystemExit) as e:
+        train.main(argv)
+    assert e.value.code == 2 and "cannot load" in capsys.readouterr().err
+    _ppo(gym.make(PLACE), 0).save(src_dir / "ppo_model.zip")  # the place's own model under the pinch's record
+    with pytest.raises(SystemExit) as e:
+        train.main(argv)
+    assert e.value.code == 2 and "not of the env its record names" in capsys.readouterr().err
+    assert not (tmp_path / "o").exists()
+
+
+@needs_sb3
 def test_rl_baselines_starts_each_seed_from_its_own_source(tmp_path, capsys):
     mod = load_example("rl_baselines", "_ws")
     src = tmp_path / "pinch"
     for seed in (0, 1):
         (src / f"ppo_seed{seed}").mkdir(parents=True)
-        (src / f"ppo_seed{seed}" / "ppo_model.zip").write_bytes(b"")
+        _ppo(gym.make(PINCH), seed).save(src / f"ppo_seed{seed}" / "ppo_model.zip")
         (src / f"ppo_seed{seed}" / "ppo_eval.json").write_text(
             json.dumps({"algo": "PPO", "env": PINCH, "action_offset": [-0.4, 0.2], "seed": seed}))
     args = mod.argparse.Namespace(env=PLACE, minutes=1.0, steps=10, eval_seeds=(8000, 8001), checkpoint_minutes=None,
