@@ -117,7 +117,7 @@ class PickEnv(CheckedStep, gym.Env):
 
     ``Box(-1, 1, (2,), float32)`` (``per_finger=False``) or ``(3,)``
     (``per_finger=True``).  Values outside ``[-1, 1]`` are clipped; NaN, inf or
-    a wrong shape raise ``ValueError``.
+    a wrong shape raise ``ValueError``.  ``action_names`` names them in order.
 
     | index | action | maps to |
     |-------|--------|---------|
@@ -329,7 +329,6 @@ class PickEnv(CheckedStep, gym.Env):
         na = 3 if self.per_finger else 2
         self.action_space = spaces.Box(-1.0, 1.0, (na,), dtype=np.float32)
         self._action_shape = (na,)
-        #: the actions' names in order (:mod:`simgrip.envs.warm_start` matches policies by them)
         self.action_names = ("curvature_0", "curvature_1", "palm_z") if self.per_finger else ("curvature", "palm_z")
         # W of the tactile observation log(1 + F/W) [N]: the mean weight, or a subclass's sensor scale
         self._force_unit = self._tactile_unit or self.g * float(np.mean(self.box_mass_range))
