@@ -23,6 +23,11 @@ model of another env, matching the observation entries and the actions **by name
 
 So the copied policy's mean actions and value on a target observation equal the source's on the same named
 entries (``tests/test_warm_start.py``), and training goes on from there with the library's defaults.
+
+Measured (the Gymnasium environments page, "Pick first, then place"): it has not yet helped.  The pinch's
+policies (88 / 86 / 86 % on their task) carry 44 of 50 place pieces and then crush or drop them, before and
+after 10 CPU-minutes of fine-tuning (0 %); the cradle started from them reaches 14 / 50 / 6 % at 15 CPU-minutes,
+against 60 / 0 / 46 % from scratch.
 """
 
 from __future__ import annotations
