@@ -30,8 +30,8 @@ Measured (that page): PPO with SB3 defaults, 0 % held-out success (seeds 8000-80
 in each of 3 training seeds; behind the probe offset with scripted starts, the same.  At 15 CPU-minutes the
 learners still crush or drop most pieces they grip, before any carry; a two-seed screen at 45 CPU-minutes with
 the same aids, 0 % at 15, 30 and 45, none of its timed-out episodes over the target.  Started from the pinch's
-PPO policies (:mod:`simgrip.envs.warm_start`, ``--init-from``), the learners carry most pieces and then crush
-or drop them: 0 % after 10 CPU-minutes, also with targets 0.5-2 cm away.
+PPO policies (:mod:`simgrip.envs.warm_start`, ``--init-from``), the learners crush or drop nearly every piece:
+0 % after 10 CPU-minutes, also with targets 0.5-2 cm away.
 
 An option for a learner, not part of the task's definition: ``sideways_after_carry = True`` (default
 ``False``; ``gym.make(..., sideways_after_carry=True)``, ``--env-kwargs '{"sideways_after_carry": true}'`` in
