@@ -38,8 +38,8 @@ from pathlib import Path
 
 import numpy as np
 
-__all__ = ["Transfer", "action_names", "check_source", "load_source", "plan_transfer", "prepare_transfer",
-           "source_record", "transfer_ppo"]
+__all__ = ["Transfer", "action_names", "check_init_from", "check_source", "load_source", "plan_transfer",
+           "prepare_transfer", "source_record", "transfer_ppo"]
 
 
 def action_names(env) -> tuple[str, ...]:
@@ -84,8 +84,8 @@ class Transfer:
     new_actions: tuple[str, ...]
     n_obs: int
     n_actions: int
-    bias_shift: tuple[float, ...] = ()
-    source_shape: tuple[int, int] = (0, 0)  # the source env's (observation, action) sizes
+    bias_shift: tuple[float, ...]
+    source_shape: tuple[int, int]  # the source env's (observation, action) sizes
 
 
 def plan_transfer(source_env, target_env, source_offset=None, target_offset=None) -> Transfer:
@@ -119,8 +119,7 @@ def plan_transfer(source_env, target_env, source_offset=None, target_offset=None
 
 def _check_source_model(source, plan: Transfer) -> None:
     sp = source.policy
-    if plan.source_shape != (0, 0) and (sp.observation_space.shape != (plan.source_shape[0],)
-                                        or sp.action_space.shape != (plan.source_shape[1],)):
+    if sp.observation_space.shape != (plan.source_shape[0],) or sp.action_space.shape != (plan.source_shape[1],):
         raise ValueError(f"--init-from: a model of {sp.observation_space.shape[0]} observations and "
                          f"{sp.action_space.shape[0]} actions, not of the env its record names "
                          f"({plan.source_shape[0]} and {plan.source_shape[1]})")
@@ -159,7 +158,7 @@ def transfer_ppo(source, target, plan: Transfer) -> None:
             elif name in ("action_net.bias", "log_std"):
                 out.zero_()
                 out[dst_act] = value[src_act]
-                if name == "action_net.bias" and plan.bias_shift:
+                if name == "action_net.bias":
                     out += torch.tensor(plan.bias_shift, dtype=out.dtype)
             else:
                 if value.shape != out.shape:
@@ -202,7 +201,7 @@ def check_source(rec: dict, *, normalize: bool = False, frame_stack: int | None 
     """Refuse a source run that cannot start the target's training (``ValueError`` naming the option): trained
     behind ``VecNormalize`` or a frame stack, or a target that would train behind one.  ``rec``: the source's
     record (:func:`source_record`); ``normalize``, ``frame_stack``: the target's options."""
-    if normalize or rec.get("wrapper", "").find("VecNormalize") >= 0:
+    if normalize or "VecNormalize" in rec.get("wrapper", ""):
         raise ValueError("--init-from: a run with VecNormalize cannot be transferred (--normalize)")
     if (frame_stack or 1) > 1 or (rec.get("frame_stack") or 1) > 1:
         raise ValueError("--init-from: a frame-stacked policy cannot be transferred (--frame-stack)")
@@ -227,3 +226,16 @@ def prepare_transfer(model_path, target_env, target_offset=None, *, normalize: b
     source = load_source(model_path)
     _check_source_model(source, plan)
     return rec, plan, source
+
+
+def check_init_from(model_path, env_id: str, env_kwargs=None, target_offset=None, *, normalize: bool = False,
+                    frame_stack: int | None = None) -> None:
+    """:func:`prepare_transfer` onto a fresh ``env_id`` (made with ``env_kwargs``, closed after): the example
+    scripts' check of ``--init-from`` before any training (``ValueError`` naming the option)."""
+    from simgrip.envs.evaluation import make_env
+
+    env = make_env(env_id, env_kwargs or {})
+    try:
+        prepare_transfer(model_path, env, target_offset, normalize=normalize, frame_stack=frame_stack)
+    finally:
+        env.close()

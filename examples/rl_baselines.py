@@ -162,21 +162,16 @@ def init_model(folder, algo: str, seed: int) -> Path:
 
 def _check_init(p: argparse.ArgumentParser, args, algos: list[str]) -> str | None:
     """Refuse an ``--init-from`` that cannot start every run (exit 2 naming it); returns the source's command."""
-    from simgrip.envs.evaluation import make_env
-    from simgrip.envs.warm_start import prepare_transfer
+    from simgrip.envs.warm_start import check_init_from
 
     if algos != ["ppo"]:
         p.error("--init-from: PPO only (--algo ppo)")
-    dst = make_env(args.env, args.env_kwargs)
-    try:
-        for seed in args.seeds:
-            try:
-                prepare_transfer(init_model(args.init_from, "ppo", seed), dst, args.action_offset,
-                                 normalize=args.normalize, frame_stack=args.frame_stack)
-            except ValueError as e:
-                p.error(f"{e} (seed {seed})")
-    finally:
-        dst.close()
+    for seed in args.seeds:
+        try:
+            check_init_from(init_model(args.init_from, "ppo", seed), args.env, args.env_kwargs, args.action_offset,
+                            normalize=args.normalize, frame_stack=args.frame_stack)
+        except ValueError as e:
+            p.error(f"{e} (seed {seed})")
     try:
         command = json.loads((Path(args.init_from) / "aggregate.json").read_text()).get("command")
     except (OSError, ValueError, AttributeError):

@@ -193,17 +193,6 @@ def _load_normalizer(path: Path):
         return pickle.load(fh)
 
 
-def _init_source(init_from: str, env_id: str, env_kwargs, action_offset, normalize: bool, frame_stack):
-    """Refuse an ``--init-from`` this training cannot start from (``ValueError`` naming the option)."""
-    from simgrip.envs.warm_start import prepare_transfer
-
-    dst_env = make_env(env_id, env_kwargs or {})
-    try:
-        prepare_transfer(init_from, dst_env, action_offset, normalize=normalize, frame_stack=frame_stack)
-    finally:
-        dst_env.close()
-
-
 def _warm_start(model, train_env, init_from: str, action_offset) -> dict:
     """Copy the PPO policy saved at ``init_from`` into ``model`` (:mod:`simgrip.envs.warm_start`); returns what
     ``<algo>_eval.json`` records of it."""
@@ -446,9 +435,11 @@ def main(argv=None) -> int:
     if args.init_from is not None:
         if args.algo != ["ppo"]:
             p.error("--init-from: PPO only (--algo ppo)")
+        from simgrip.envs.warm_start import check_init_from
+
         try:
-            _init_source(args.init_from, args.env, args.env_kwargs, args.action_offset, args.normalize,
-                         args.frame_stack)
+            check_init_from(args.init_from, args.env, args.env_kwargs, args.action_offset, normalize=args.normalize,
+                            frame_stack=args.frame_stack)
         except ValueError as e:
             p.error(str(e))
     try:  # simgrip.io's output-path policy: a folder, and no FIFO/device/folder where a result file goes
