@@ -26,8 +26,8 @@ entries (``tests/test_warm_start.py``), and training goes on from there with the
 
 Measured (the Gymnasium environments page, "Pick first, then place"): it has not yet helped.  The pinch's
 policies (88 / 86 / 86 % on their task) crush or drop nearly every place piece (39 + 9 and 20 + 28 of 50),
-before and after 10 CPU-minutes of fine-tuning (0 %); the cradle started from them reaches 14 / 50 / 6 % at 15 CPU-minutes,
-against 60 / 0 / 46 % from scratch.
+before and after 10 CPU-minutes of fine-tuning (0 %); the cradle started from them reaches 14 / 50 / 6 % at 15
+CPU-minutes, against 60 / 0 / 46 % from scratch.
 """
 
 from __future__ import annotations

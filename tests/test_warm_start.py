@@ -220,7 +220,8 @@ def test_a_model_that_is_not_its_records_is_refused(tmp_path, capsys):
     src_dir = tmp_path / "pinch"
     src_dir.mkdir()
     (src_dir / "ppo_eval.json").write_text(json.dumps({"algo": "PPO", "env": PINCH}))
-    argv = ["--algo", "ppo", "--env", PLACE, "--init-from", str(src_dir / "ppo_model.zip"), "--out", str(tmp_path / "o")]
+    argv = ["--algo", "ppo", "--env", PLACE, "--init-from", str(src_dir / "ppo_model.zip"),
+            "--out", str(tmp_path / "o")]
     (src_dir / "ppo_model.zip").write_bytes(b"PK not a model")
     with pytest.raises(SystemExit) as e:
         train.main(argv)
