@@ -87,7 +87,7 @@ def check_env_id(parser: argparse.ArgumentParser, env_id: str, *, retired: bool 
 
 
 def make_env(env_id: str, env_kwargs: dict | None = None, action_offset=None, frame_stack: int | None = None,
-             scripted_start: float | None = None, light_bias: float | None = None):
+             scripted_start: float | None = None, light_bias: float | None = None, residual=None):
     """The env of ``env_id`` (a registered id, or a retired one of ``simgrip.envs.RETIRED`` through its spec) made
     with ``env_kwargs`` (``gym.make``'s keyword arguments), behind
     :class:`~simgrip.envs.action_offset.ActionOffset` ``(action_offset)`` when that is given, and behind
@@ -98,13 +98,17 @@ def make_env(env_id: str, env_kwargs: dict | None = None, action_offset=None, fr
     scripted observation-only controller's episode (:class:`~simgrip.envs.scripted_start.ScriptedStart`, next
     to the env, inside the offset and the frame stack).  ``light_bias`` (training envs only): with that probability
     a reset draws the workpiece's mass from the light end of the task's range
-    (:class:`~simgrip.envs.light_bias.LightBias`, innermost).
+    (:class:`~simgrip.envs.light_bias.LightBias`, innermost).  ``residual`` (action names; training and evaluation
+    alike: it is part of the policy): the task's scripted observation-only controller drives those channels and
+    the action is added to it (:class:`~simgrip.envs.scripted_residual.ScriptedResidual`, inside the offset and
+    the frame stack; not with ``scripted_start``).
 
     Raises ValueError naming the option: ``--env-kwargs`` when the env does not take ``env_kwargs`` or refuses a
     value, ``--action-offset`` when the offset does not fit its action space (the env is closed first),
     ``--frame-stack`` when it is not a whole number >= 1 (checked before any env is made), ``--scripted-start``
     when it is not a probability or the env has no scripted controller, ``--light-bias`` when it is not a
-    probability or the env is not a fragile task (the env is closed first)."""
+    probability or the env is not a fragile task (the env is closed first), ``--residual`` when a name is not one
+    of the env's actions, the env has no scripted controller, or ``scripted_start`` is given too."""
     import json
 
     import gymnasium as gym
@@ -114,6 +118,8 @@ def make_env(env_id: str, env_kwargs: dict | None = None, action_offset=None, fr
     if frame_stack is not None and (isinstance(frame_stack, bool) or not isinstance(frame_stack, int)
                                     or frame_stack < 1):
         raise ValueError(f"--frame-stack: a whole number >= 1, got {frame_stack!r}")
+    if residual is not None and scripted_start is not None:
+        raise ValueError("--residual: not with --scripted-start (the controller would start mid-episode)")
     kwargs = dict(env_kwargs or {})
     try:
         env = gym.make(retired_spec(env_id) if env_id in RETIRED else env_id, **kwargs)
@@ -127,6 +133,10 @@ def make_env(env_id: str, env_kwargs: dict | None = None, action_offset=None, fr
         from simgrip.envs.scripted_start import ScriptedStart
 
         env = _wrap_or_close(env, ScriptedStart, scripted_start, "--scripted-start")
+    if residual is not None:
+        from simgrip.envs.scripted_residual import ScriptedResidual
+
+        env = _wrap_or_close(env, ScriptedResidual, residual, "--residual")
     if action_offset is not None:
         from simgrip.envs.action_offset import ActionOffset
 

@@ -9,11 +9,11 @@ settles below a controller's success rate while its discounted return is above t
 to optimise: under that discount, its faster and riskier policy is worth more.
 
     python examples/evaluate_policy.py --env simgrip/PickFragile-v6 (--model ZIP [--algo ppo|sac] |
-        --policy observation|oracle) [--action-offset A0 A1] [--frame-stack N] [--scripted-start P]
+        --policy observation|oracle) [--action-offset A0 A1] [--frame-stack N] [--residual NAME ...] [--scripted-start P]
         [--env-kwargs JSON] [--episodes 50] [--seed 8000] [--gamma 0.99] [--json]
 
-``--action-offset`` and ``--frame-stack`` must be the ones the model was trained with (``train_sb3.py``'s
-options of those names);
+``--action-offset``, ``--frame-stack`` and ``--residual`` must be the ones the model was trained with
+(``train_sb3.py``'s options of those names);
 a model trained behind ``VecNormalize`` is not supported here.  Prints one line, or with ``--json`` one JSON
 object: ``{"env", "policy", "episodes", "success_rate", "mean_return", "mean_length", "outcomes",
 "mean_success_length", "mean_discounted_return", "gamma", "eval_seeds"}``.  Exit 2 naming the option on bad
@@ -27,7 +27,10 @@ early handovers, ``"50-99"``, ...).
 
 On the pick-and-place the JSON also has ``place_timeouts``: ``{"held_up", "over_target"}``, how many episodes
 ran out of time with the workpiece carried and still up (more than 3 mm above its start), and how many of those
-held it within the place tolerance of the target: a learner that carries and never sets down.
+held it within the place tolerance of the target: a learner that carries and never sets down.  And
+``carried``: ``{"episodes", "outcomes"}``, the episodes that carried the workpiece at some step (lifted the carry
+height with both fingers on it: ``info["carried"]`` at the episode's end) and how each of them ended: a grip that
+lifts and then fails in the carry (crushed or dropped after the carry began) against one that never lifts.
 
 On a fragile task the JSON also has ``by_mass``: the outcomes counted per third of the task's log mass range
 (the hidden mass of each episode; keys ``"5-18 g"``, ...; :func:`simgrip.envs.light_bias.mass_bins`): which
@@ -98,6 +101,14 @@ def place_timeouts(results, place_tolerance: float, on_table: float) -> dict:
     return {"held_up": len(up), "over_target": sum(r.info["place_error"] <= place_tolerance for r in up)}
 
 
+def carried(results) -> dict:
+    """The pick-and-place's episodes that carried the workpiece at some step (``info["carried"]`` at the end:
+    it stays set once the workpiece was lifted the carry height with both fingers on it): ``{"episodes": n,
+    "outcomes": {outcome: count}}`` over them."""
+    rs = [r for r in results if r.info.get("carried")]
+    return {"episodes": len(rs), "outcomes": outcomes(rs)["outcomes"] if rs else {}}
+
+
 def main(argv=None) -> dict:
     p = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     p.add_argument("--env", required=True, help="registered env id, e.g. simgrip/PickFragile-v6, or a retired "
@@ -112,6 +123,8 @@ def main(argv=None) -> dict:
                    help="the ActionOffset the model was trained behind")
     p.add_argument("--frame-stack", type=positive_int, default=None, metavar="N",
                    help="the observations stacked when the model was trained (train_sb3.py's --frame-stack)")
+    p.add_argument("--residual", nargs="+", default=None, metavar="NAME",
+                   help="with --model: the ScriptedResidual the model was trained behind (train_sb3.py's --residual)")
     p.add_argument("--scripted-start", type=probability, default=None, metavar="P",
                    help="with --model: start that share of the episodes part-way through the scripted "
                         "observation-only controller's (simgrip.envs.scripted_start); adds by_handover")
@@ -125,6 +138,8 @@ def main(argv=None) -> dict:
         p.error("--action-offset: only with --model (the scripted controllers command the env directly)")
     if args.policy is not None and args.scripted_start is not None:
         p.error("--scripted-start: only with --model (a scripted controller started part-way is not itself)")
+    if args.policy is not None and args.residual is not None:
+        p.error("--residual: only with --model (the scripted controller alone is --policy observation)")
     if args.policy is not None and args.frame_stack is not None:
         p.error("--frame-stack: only with --model (the scripted controllers read the env's own observation)")
     if args.model is not None:
@@ -133,7 +148,8 @@ def main(argv=None) -> dict:
         if not os.path.isfile(args.model):
             p.error(f"--model: {args.model!r} is not a file")
     try:
-        env = make_env(args.env, args.env_kwargs, args.action_offset, args.frame_stack, args.scripted_start)
+        env = make_env(args.env, args.env_kwargs, args.action_offset, args.frame_stack, args.scripted_start,
+                       residual=args.residual)
     except ValueError as exc:
         p.error(str(exc))
     handovers: list[int] = []
@@ -152,7 +168,8 @@ def main(argv=None) -> dict:
                 p.error(f"--model: cannot load {args.model!r} as {args.algo}: {exc}")
             if model.observation_space.shape != env.observation_space.shape or (
                     model.action_space.shape != env.action_space.shape):
-                p.error(f"--model: its spaces do not match {args.env}'s (trained with another --frame-stack?)")
+                p.error(f"--model: its spaces do not match {args.env}'s "
+                        "(trained with another --frame-stack or --residual?)")
             act = lambda obs: model.predict(obs, deterministic=True)[0]  # noqa: E731
             policy = f"{args.algo} {args.model}"
             if args.scripted_start is not None:
@@ -173,6 +190,8 @@ def main(argv=None) -> dict:
         env.close()
     out = {"env": args.env, "policy": policy, **summary(results), **outcomes(results, args.gamma),
            "eval_seeds": [args.seed, args.seed + args.episodes - 1]}
+    if args.residual is not None:
+        out["residual"] = list(args.residual)
     if args.scripted_start is not None:
         out["scripted_start"] = args.scripted_start
         out["by_handover"] = by_handover(results, handovers)
@@ -182,6 +201,7 @@ def main(argv=None) -> dict:
         from simgrip.envs.pick_place import ON_TABLE
 
         out["place_timeouts"] = place_timeouts(results, env.unwrapped.place_tolerance, ON_TABLE)
+        out["carried"] = carried(results)
     if args.json:
         print(json.dumps(out))
     else:

@@ -39,7 +39,9 @@ starts part-way through the scripted observation-only controller's episode,
 :class:`simgrip.envs.scripted_start.ScriptedStart`; evaluation starts plainly), recorded as ``scripted_start``;
 ``--light-bias P`` passes that option (that share of the training episodes' workpieces drawn from the light end
 of the mass range, :class:`simgrip.envs.light_bias.LightBias`; evaluation draws the task's own), recorded as
-``light_bias``;
+``light_bias``; ``--residual NAME ...`` passes that option (the task's scripted observation-only controller
+drives the named actions and the policy's action is added to it, in training and evaluation alike,
+:class:`simgrip.envs.scripted_residual.ScriptedResidual`), recorded as ``residual``;
 ``--init-from DIR`` (PPO only) starts each seed ``S`` from ``DIR/ppo_seed<S>/ppo_model.zip``, the policy of an
 earlier ``rl_baselines.py`` run of the same seed on another task (a curriculum: the pinch's policies for the
 pick-and-place; :mod:`simgrip.envs.warm_start`), recorded as ``init_from`` with that run's command
@@ -150,6 +152,8 @@ def run_command(algo: str, seed: int, args, folder: Path) -> list[str]:
         cmd += ["--scripted-start", repr(args.scripted_start)]
     if args.light_bias is not None:
         cmd += ["--light-bias", repr(args.light_bias)]
+    if args.residual is not None:
+        cmd += ["--residual", *args.residual]
     if args.init_from is not None:
         cmd += ["--init-from", str(init_model(args.init_from, algo, seed))]
     return cmd
@@ -166,6 +170,8 @@ def _check_init(p: argparse.ArgumentParser, args, algos: list[str]) -> str | Non
 
     if algos != ["ppo"]:
         p.error("--init-from: PPO only (--algo ppo)")
+    if args.residual is not None:
+        p.error("--init-from: not with --residual (the observation has the controller's action appended)")
     for seed in args.seeds:
         try:
             check_init_from(init_model(args.init_from, "ppo", seed), args.env, args.env_kwargs, args.action_offset,
@@ -415,6 +421,10 @@ def main(argv=None) -> int:
     p.add_argument("--light-bias", type=_probability, default=None, metavar="P",
                    help="draw that share of the training episodes' workpieces from the lightest third of the mass "
                         "range (simgrip.envs.light_bias; evaluation draws the task's own; default none)")
+    p.add_argument("--residual", nargs="+", default=None, metavar="NAME",
+                   help="train and evaluate behind simgrip.envs.scripted_residual.ScriptedResidual: the scripted "
+                        "observation-only controller drives these actions (the place's palm: palm_x palm_z), the "
+                        "policy's action added (default none)")
     p.add_argument("--init-from", default=None, metavar="DIR",
                    help="PPO only: start each seed S from DIR/ppo_seed<S>/ppo_model.zip, an earlier run's policy "
                         "on another task (simgrip.envs.warm_start; default: fresh policies)")
@@ -437,12 +447,12 @@ def main(argv=None) -> int:
 
     check_env_id(p, args.env, retired=True)  # train_sb3.py builds a retired one
     if args.env_kwargs or args.action_offset is not None or args.scripted_start is not None \
-            or args.light_bias is not None:
+            or args.light_bias is not None or args.residual is not None:
         from simgrip.envs.evaluation import make_env  # refused before any run starts, the env built once
 
         try:
             make_env(args.env, args.env_kwargs, args.action_offset, None, args.scripted_start,
-                     args.light_bias).close()
+                     args.light_bias, args.residual).close()
         except ValueError as e:
             p.error(str(e))
     algos = list(dict.fromkeys(args.algo))
@@ -484,6 +494,7 @@ def main(argv=None) -> int:
         **({"frame_stack": args.frame_stack} if args.frame_stack is not None else {}),
         **({"scripted_start": args.scripted_start} if args.scripted_start is not None else {}),
         **({"light_bias": args.light_bias} if args.light_bias is not None else {}),
+        **({"residual": list(args.residual)} if args.residual is not None else {}),
         **({"init_from": str(args.init_from), "init_command": init_command} if args.init_from is not None else {}),
         **({"wrapper": "VecNormalize (SB3 defaults: observation and return)"} if args.normalize else {}),
         "command": [Path(sys.argv[0]).name] + list(sys.argv[1:] if argv is None else argv)})

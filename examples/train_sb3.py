@@ -61,6 +61,12 @@ episode plainly; ``<algo>_eval.json`` records ``scripted_start``.
 log mass range (:class:`simgrip.envs.light_bias.LightBias`: the pieces a fast closing crushes); the held-out
 evaluation runs the task's own draw; ``<algo>_eval.json`` records ``light_bias``.
 
+``--residual NAME ...`` trains and evaluates behind :class:`simgrip.envs.scripted_residual.ScriptedResidual`:
+the task's scripted observation-only controller drives the named actions (``palm_x palm_z``: the palm's path)
+and the policy's action is added to its action there; the observation gets the controller's action appended.
+Residual policy learning: the wrapper is part of the policy (the held-out evaluation runs behind it too);
+``<algo>_eval.json`` records ``residual``.  Not with ``--scripted-start`` or ``--init-from``.
+
 ``--init-from MODEL`` (PPO only) starts the training from a PPO policy trained on another task (a curriculum:
 the pinch's policy for the pick-and-place), copied by :func:`simgrip.envs.warm_start.transfer_ppo` (observation
 entries and actions matched by name; the target's new ones start at weight 0; a difference between the two runs'
@@ -113,12 +119,12 @@ def _positive(kind):
 
 
 def evaluate(model, env_id: str, episodes: int, seed0: int, env_kwargs=None, normalizer=None,
-             action_offset=None, frame_stack=None) -> dict:
+             action_offset=None, frame_stack=None, residual=None) -> dict:
     """Run the deterministic policy of ``model`` for ``episodes`` episodes on seeds ``seed0 + i`` (the env made
-    with ``env_kwargs`` and behind ``action_offset`` and ``frame_stack``, as it was trained; ``normalizer``: the
+    with ``env_kwargs`` and behind ``action_offset``, ``frame_stack`` and ``residual``, as it was trained; ``normalizer``: the
     ``VecNormalize`` it was trained behind, whose frozen observation statistics then normalise what the policy
     sees)."""
-    env = make_env(env_id, env_kwargs, action_offset, frame_stack)
+    env = make_env(env_id, env_kwargs, action_offset, frame_stack, residual=residual)
     see = (lambda obs: obs) if normalizer is None else normalizer.normalize_obs
     try:
         gamma = getattr(model, "gamma", GAMMA)  # an SB3 model's own; anything else with predict(): SB3's default
@@ -211,7 +217,7 @@ def train(algo: str, env_id: str, *, steps: int, minutes: float, seed: int, out:
           eval_episodes: int, eval_seed: int, clock: str = "cpu", checkpoint_minutes: float | None = None,
           env_kwargs: dict | None = None, normalize: bool = False, action_offset=None, gamma: float | None = None,
           frame_stack: int | None = None, scripted_start: float | None = None,
-          light_bias: float | None = None, init_from: str | None = None) -> dict:
+          light_bias: float | None = None, init_from: str | None = None, residual=None) -> dict:
     """Train ``algo`` with library defaults within the budget, write its curve, model and evaluation
     (``env_kwargs``: ``gym.make``'s keyword arguments, for training and evaluation alike; ``normalize``: train
     behind SB3's ``VecNormalize`` with its defaults; ``action_offset``: train and evaluate behind
@@ -222,7 +228,8 @@ def train(algo: str, env_id: str, *, steps: int, minutes: float, seed: int, out:
     :class:`simgrip.envs.scripted_start.ScriptedStart`; evaluation starts plainly; ``light_bias``: that share of the
     training episodes' masses drawn from the light end, :class:`simgrip.envs.light_bias.LightBias`; evaluation
     draws the task's own; ``init_from``: a saved PPO model of another run to start from,
-    :mod:`simgrip.envs.warm_start`)."""
+    :mod:`simgrip.envs.warm_start`; ``residual``: action names the scripted controller drives, the policy's action
+    added, :class:`simgrip.envs.scripted_residual.ScriptedResidual`, for training and evaluation alike)."""
     env_kwargs = dict(env_kwargs or {})
     from stable_baselines3 import PPO, SAC
     from stable_baselines3.common.callbacks import BaseCallback
@@ -268,7 +275,7 @@ def train(algo: str, env_id: str, *, steps: int, minutes: float, seed: int, out:
 
     # make_vec_env calls the maker (gym.make of the id, or of a retired id's spec), then seeds and wraps in Monitor
     env = make_vec_env(lambda: make_env(env_id, env_kwargs, action_offset, frame_stack, scripted_start,
-                                                light_bias), n_envs=1,
+                                        light_bias, residual), n_envs=1,
                        seed=seed)
     if normalize:
         from stable_baselines3.common.vec_env import VecNormalize
@@ -281,7 +288,7 @@ def train(algo: str, env_id: str, *, steps: int, minutes: float, seed: int, out:
                            action_offset)
         # what the curriculum hands over: the copied policy on the held-out seeds, before any update
         init["eval"] = {k: v for k, v in evaluate(model, env_id, eval_episodes, eval_seed, env_kwargs, None,
-                                                  action_offset, frame_stack).items()
+                                                  action_offset, frame_stack, residual).items()
                         if k in ("success_rate", "mean_return", "outcomes")}
         t_start, c_start = time.perf_counter(), time.process_time()  # the budget is the training's alone
     model.learn(total_timesteps=steps, callback=Budget())
@@ -308,6 +315,9 @@ def train(algo: str, env_id: str, *, steps: int, minutes: float, seed: int, out:
     if action_offset is not None:
         result["action_offset"] = [float(x) for x in action_offset]
         wrappers.append(f"ActionOffset({result['action_offset']})")
+    if residual is not None:
+        result["residual"] = list(residual)
+        wrappers.append(f"ScriptedResidual({list(residual)})")
     if frame_stack is not None and frame_stack > 1:
         result["frame_stack"] = int(frame_stack)
         wrappers.append(f"FrameStackObservation({int(frame_stack)})")
@@ -326,12 +336,12 @@ def train(algo: str, env_id: str, *, steps: int, minutes: float, seed: int, out:
     if wrappers:
         result["wrapper"] = ", ".join(wrappers)
     result.update(evaluate(model, env_id, eval_episodes, eval_seed, env_kwargs, normalizer, action_offset,
-                           frame_stack))
+                           frame_stack, residual))
     for cp in checkpoints:  # the held-out success of each checkpoint: how soon the target was reached
         cp_model = cls.load(out / cp["file"])
         cp_norm = _load_normalizer(normalizers[cp["file"]]) if normalize else None
         cp.update({k: v for k, v in evaluate(cp_model, env_id, eval_episodes, eval_seed, env_kwargs, cp_norm,
-                                             action_offset, frame_stack).items()
+                                             action_offset, frame_stack, residual).items()
                    if k in ("success_rate", "mean_return")})
     if checkpoints:
         result["checkpoints"] = checkpoints
@@ -414,6 +424,10 @@ def main(argv=None) -> int:
     p.add_argument("--light-bias", type=probability, default=None, metavar="P",
                    help="draw that share of the training episodes' workpieces from the lightest third of the mass "
                         "range (simgrip.envs.light_bias; evaluation draws the task's own)")
+    p.add_argument("--residual", nargs="+", default=None, metavar="NAME",
+                   help="train and evaluate behind simgrip.envs.scripted_residual.ScriptedResidual: the task's "
+                        "scripted observation-only controller drives these actions (the place's palm: palm_x "
+                        "palm_z) and the policy's action is added to it")
     p.add_argument("--init-from", default=None, metavar="MODEL",
                    help="PPO only: start from this saved PPO model of another run (its folder holds its "
                         "ppo_eval.json), copied by simgrip.envs.warm_start (default: a fresh policy)")
@@ -426,15 +440,17 @@ def main(argv=None) -> int:
         p.error('needs Stable-Baselines3 and PyTorch: pip install "simgrip[rl]"')
     check_env_id(p, args.env, retired=True)
     if args.env_kwargs or args.action_offset is not None or args.scripted_start is not None \
-            or args.light_bias is not None:
+            or args.light_bias is not None or args.residual is not None:
         try:  # refused before any training, the env built once
             make_env(args.env, args.env_kwargs, args.action_offset, args.frame_stack, args.scripted_start,
-                     args.light_bias).close()
+                     args.light_bias, args.residual).close()
         except ValueError as e:
             p.error(str(e))
     if args.init_from is not None:
         if args.algo != ["ppo"]:
             p.error("--init-from: PPO only (--algo ppo)")
+        if args.residual is not None:
+            p.error("--init-from: not with --residual (the observation has the controller's action appended)")
         from simgrip.envs.warm_start import check_init_from
 
         try:
@@ -456,7 +472,7 @@ def main(argv=None) -> int:
                        checkpoint_minutes=args.checkpoint_minutes, env_kwargs=args.env_kwargs,
                        normalize=args.normalize, action_offset=args.action_offset, gamma=args.gamma,
                        frame_stack=args.frame_stack, scripted_start=args.scripted_start,
-                       light_bias=args.light_bias, init_from=args.init_from)
+                       light_bias=args.light_bias, init_from=args.init_from, residual=args.residual)
         print(json.dumps(result), flush=True)
     plot_curves(out)
     return 0

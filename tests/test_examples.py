@@ -307,6 +307,10 @@ def test_place_timeouts_count_the_carried_pieces_never_set_down():
              {"carried": True, "workpiece_lift": 0.001, "place_error": 0.0, "is_success": True}]
     results = [EpisodeResult(i, i, 0.0, 1, info) for i, info in enumerate(infos)]
     assert _example("evaluate_policy").place_timeouts(results, tol, 0.003) == {"held_up": 2, "over_target": 1}
+    # carried at some step, and how each of those ended (the fourth never was)
+    assert _example("evaluate_policy").carried(results) == {
+        "episodes": 5, "outcomes": {"crushed": 1, "success": 1, "timeout": 3}}
+    assert _example("evaluate_policy").carried(results[3:4]) == {"episodes": 0, "outcomes": {}}
 
 
 def test_evaluate_policy_counts_the_places_hovering_timeouts(capsys):
@@ -314,9 +318,10 @@ def test_evaluate_policy_counts_the_places_hovering_timeouts(capsys):
     out = _example("evaluate_policy").main(["--env", "simgrip/PlaceFragile-v7", "--policy", "observation",
                                             "--episodes", "2", "--seed", "8004", "--json"])
     assert out["place_timeouts"] == {"held_up": 0, "over_target": 0} and out["success_rate"] == 1.0
+    assert out["carried"] == {"episodes": 2, "outcomes": {"success": 2}}  # a place is carried first
     pinch = _example("evaluate_policy").main(["--env", "simgrip/PickFragile-v6", "--policy", "observation",
                                               "--episodes", "1", "--seed", "8004", "--json"])
-    assert "place_timeouts" not in pinch
+    assert "place_timeouts" not in pinch and "carried" not in pinch
 
 
 def test_evaluate_policy_counts_a_fragile_tasks_outcomes_by_hidden_mass(capsys):
