@@ -244,7 +244,8 @@ def test_rl_baselines_starts_each_seed_from_its_own_source(tmp_path, capsys):
             json.dumps({"algo": "PPO", "env": PINCH, "action_offset": [-0.4, 0.2], "seed": seed}))
     args = mod.argparse.Namespace(env=PLACE, minutes=1.0, steps=10, eval_seeds=(8000, 8001), checkpoint_minutes=None,
                                   env_kwargs={}, normalize=False, action_offset=[-0.4, 0.0, 0.2], gamma=None,
-                                  frame_stack=None, scripted_start=None, light_bias=None, init_from=str(src))
+                                  frame_stack=None, scripted_start=None, light_bias=None, init_from=str(src),
+                                  residual=None)
     cmd = mod.run_command("ppo", 1, args, tmp_path / "run")
     assert cmd[cmd.index("--init-from") + 1] == str(src / "ppo_seed1" / "ppo_model.zip")
     base = ["--env", PLACE, "--algo", "ppo", "--action-offset", "-0.4", "0", "0.2", "--init-from", str(src),
