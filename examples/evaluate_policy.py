@@ -9,8 +9,8 @@ settles below a controller's success rate while its discounted return is above t
 to optimise: under that discount, its faster and riskier policy is worth more.
 
     python examples/evaluate_policy.py --env simgrip/PickFragile-v6 (--model ZIP [--algo ppo|sac] |
-        --policy observation|oracle) [--action-offset A0 A1] [--frame-stack N] [--residual NAME ...] [--scripted-start P]
-        [--env-kwargs JSON] [--episodes 50] [--seed 8000] [--gamma 0.99] [--json]
+        --policy observation|oracle) [--action-offset A0 A1] [--frame-stack N] [--residual NAME ...]
+        [--scripted-start P] [--env-kwargs JSON] [--episodes 50] [--seed 8000] [--gamma 0.99] [--json]
 
 ``--action-offset``, ``--frame-stack`` and ``--residual`` must be the ones the model was trained with
 (``train_sb3.py``'s options of those names);

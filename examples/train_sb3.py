@@ -121,9 +121,9 @@ def _positive(kind):
 def evaluate(model, env_id: str, episodes: int, seed0: int, env_kwargs=None, normalizer=None,
              action_offset=None, frame_stack=None, residual=None) -> dict:
     """Run the deterministic policy of ``model`` for ``episodes`` episodes on seeds ``seed0 + i`` (the env made
-    with ``env_kwargs`` and behind ``action_offset``, ``frame_stack`` and ``residual``, as it was trained; ``normalizer``: the
-    ``VecNormalize`` it was trained behind, whose frozen observation statistics then normalise what the policy
-    sees)."""
+    with ``env_kwargs`` and behind ``action_offset``, ``frame_stack`` and ``residual``, as it was trained;
+    ``normalizer``: the ``VecNormalize`` it was trained behind, whose frozen observation statistics then normalise
+    what the policy sees)."""
     env = make_env(env_id, env_kwargs, action_offset, frame_stack, residual=residual)
     see = (lambda obs: obs) if normalizer is None else normalizer.normalize_obs
     try:
