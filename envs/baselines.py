@@ -42,6 +42,13 @@ Policies (actions ``(curvature command, palm speed)`` in ``[-1, 1]``; ``PlaceFra
 ``observation``
 =============== ==============================================================================================
 
+``--residual NAME ...`` (``constant`` and ``openloop`` only; the names: every action of the env but its curvature,
+e.g. ``palm_x palm_z``) evaluates the grids behind :class:`~simgrip.envs.scripted_residual.ScriptedResidual`: the
+scripted observation-only controller moves the palm, and the member commands the curvature alone, the palm's
+residual 0 (what ``train_sb3.py --residual`` learns from, without the feedback): ``constant`` a valve rate of
+``VALVE_GRID`` held (an absolute-command env: ``a_k`` of ``KAPPA_GRID``), ``openloop`` the command driven to
+``a_k`` of ``KAPPA_GRID`` as fast as the valve allows and held.  The record adds ``residual``.
+
 ``--grid coarse`` uses every other curvature and one ramp/palm value (for tests).  Output: ``env``,
 ``policy``, ``seeds``, ``success_rate`` (the best member's for the grids), ``outcomes`` (counts of
 success / crushed / dropped / knocked_over / timeout) and, for the grids, every member's success rate.
@@ -230,6 +237,51 @@ def _members(policy: str, grid: str, place: bool, claw: str | None = None, famil
     return [({}, make)]
 
 
+def _curvature_only(value):
+    """``make`` of a policy that commands every curvature channel ``value(unwrapped_env)`` and the rest 0."""
+    def make(env, info, seed):
+        u = env.unwrapped
+        curv = np.array([not n.startswith("palm") for n in u.action_names])
+        a = np.zeros(env.action_space.shape, dtype=np.float32)
+
+        def act(obs, t):
+            a[curv] = value(u)
+            return a.copy()
+        return act
+    return make
+
+
+def _residual_members(policy: str, grid: str, valve: bool) -> list:
+    """The curvature-only members behind ``--residual`` (module docstring)."""
+    from simgrip.envs.valve import absolute_to_valve
+
+    kappas = KAPPA_GRID if grid == "full" else KAPPA_GRID[::2]
+    if policy == "constant" and valve:
+        rates = VALVE_GRID if grid == "full" else VALVE_GRID[::3]
+        return [({"kappa_rate_action": k}, _curvature_only(lambda u, k=k: k)) for k in rates]
+    if policy == "constant" or not valve:
+        return [({"kappa": k}, _curvature_only(lambda u, k=k: k)) for k in kappas]
+    return [({"kappa": k}, _curvature_only(lambda u, k=k: absolute_to_valve(k, u.valve_command, u.kappa_rate)))
+            for k in kappas]
+
+
+def _behind_residual(env, policy: str, residual):
+    """``env`` behind ``ScriptedResidual(env, residual)``; ValueError naming ``--residual`` when ``policy`` is not
+    ``constant``/``openloop`` or ``residual`` does not name every action but the curvature."""
+    from simgrip.envs.scripted_residual import ScriptedResidual
+
+    if policy not in ("constant", "openloop"):
+        raise ValueError(f"--residual: constant and openloop only, not {policy!r} (the controller alone is "
+                         "--policy observation)")
+    palm = [n for n in getattr(env.unwrapped, "action_names", ()) if n.startswith("palm")]
+    if sorted(residual) != sorted(palm):
+        raise ValueError(f"--residual: every palm action of the env ({' '.join(palm)}), got {' '.join(residual)}")
+    try:
+        return ScriptedResidual(env, residual)
+    except ValueError as e:
+        raise ValueError(f"--residual: {e}") from None
+
+
 def _task(env) -> tuple:
     """``(place, claw, openloop_grid, valve)`` of a fragile env, as :func:`_members` takes them."""
     from simgrip.envs.valve import ValveCommand
@@ -254,16 +306,22 @@ def policy_maker(env, policy: str):
     return make
 
 
-def evaluate(env_id: str, policy: str, seeds, grid: str = "full") -> dict:
+def evaluate(env_id: str, policy: str, seeds, grid: str = "full", residual=None) -> dict:
     """Run ``policy`` on ``env_id`` (``gym.make``, its registered time limit; a retired id of
     ``simgrip.envs.RETIRED`` through :func:`~simgrip.envs.retired_spec`, its time limit as it was registered)
-    over ``seeds``; the JSON record."""
+    over ``seeds``, behind the scripted palm where ``residual`` names its actions (module docstring); the JSON
+    record.  ValueError naming ``--residual`` (the env closed first)."""
     from simgrip.envs import RETIRED, retired_spec
 
     env = gym.make(retired_spec(env_id) if env_id in RETIRED else env_id)
     try:
+        if residual is not None:
+            members = _residual_members(policy, grid, _task(env)[3])
+            env = _behind_residual(env, policy, residual)
+        else:
+            members = _members(policy, grid, *_task(env))
         rows = []
-        for params, make in _members(policy, grid, *_task(env)):
+        for params, make in members:
             counts = run_policy(env, make, seeds)
             rows.append({**params, "success_rate": counts["success"] / len(seeds), "outcomes": dict(counts)})
     finally:
@@ -271,6 +329,8 @@ def evaluate(env_id: str, policy: str, seeds, grid: str = "full") -> dict:
     best = max(rows, key=lambda r: r["success_rate"])
     out = {"env": env_id, "policy": policy, "seeds": [int(seeds[0]), int(seeds[-1])], "episodes": len(seeds),
            "success_rate": best["success_rate"], "outcomes": best["outcomes"]}
+    if residual is not None:
+        out["residual"] = list(residual)
     if len(rows) > 1:
         out.update({"grid": grid, "best": {k: v for k, v in best.items() if k != "outcomes"}, "members": rows})
     return out
@@ -299,6 +359,9 @@ def main(argv=None) -> int:
     p.add_argument("--policy", required=True, choices=("random", "constant", "openloop", "oracle", "observation"))
     p.add_argument("--seeds", type=_seeds, default=_seeds("5000-5049"), help="A-B, inclusive (default 5000-5049)")
     p.add_argument("--grid", choices=("full", "coarse"), default="full")
+    p.add_argument("--residual", nargs="+", default=None, metavar="NAME",
+                   help="constant/openloop: the palm actions the scripted controller drives, the member the "
+                        "curvature alone (simgrip.envs.scripted_residual)")
     p.add_argument("--out", help="JSON file (default: stdout)")
     args = p.parse_args(argv)
     if args.out:
@@ -306,7 +369,12 @@ def main(argv=None) -> int:
             check_output_file(args.out, "--out")
         except (ValueError, OSError) as e:
             p.error(str(e))
-    record = evaluate(args.env, args.policy, args.seeds, args.grid)
+    try:
+        record = evaluate(args.env, args.policy, args.seeds, args.grid, args.residual)
+    except ValueError as e:
+        if not str(e).startswith("--residual"):
+            raise
+        p.error(str(e))
     text = json.dumps(record, indent=1) + "\n"
     if args.out:
         with atomic_write(args.out, "w", option="--out") as f:

@@ -165,3 +165,28 @@ def test_rl_baselines_passes_the_residual_to_every_run(tmp_path, capsys):
         mod.main(["--env", PLACE, "--residual", "palm_y", "--out", str(tmp_path / "o")])
     assert e.value.code == 2 and "--residual" in capsys.readouterr().err
     assert not (tmp_path / "o").exists()
+
+
+def test_the_baselines_behind_the_scripted_palm_vary_the_curvature_alone(tmp_path, capsys):
+    """``python -m simgrip.envs.baselines --residual``: the grids' members command the curvature, the script the
+    palm.  A valve held (rate 0) keeps the pre-grasp: the palm probes and waits for a grip that never comes, so
+    the piece is never lifted and every episode times out; closing at the full rate crushes every piece."""
+    from simgrip.envs import baselines
+
+    out = tmp_path / "c.json"
+    assert baselines.main(["--env", PLACE, "--policy", "constant", "--residual", "palm_x", "palm_z",
+                           "--seeds", "8000-8001", "--out", str(out)]) == 0
+    rec = json.loads(out.read_text())
+    assert rec["residual"] == ["palm_x", "palm_z"]
+    members = {m["kappa_rate_action"]: m["outcomes"] for m in rec["members"]}
+    assert list(members) == list(baselines.VALVE_GRID)
+    assert members[0.0] == {"timeout": 2} and members[-1.0] == {"crushed": 2}
+    rec = baselines.evaluate(PLACE, "openloop", [8000], "coarse", ["palm_z", "palm_x"])
+    assert [m["kappa"] for m in rec["members"]] == list(baselines.KAPPA_GRID[::2])
+    for argv, word in ((["--policy", "observation", "--residual", "palm_x", "palm_z"], "constant and openloop"),
+                       (["--policy", "constant", "--residual", "palm_x"], "every palm action"),
+                       (["--policy", "constant", "--residual", "palm_x", "palm_z", "curvature"], "every palm")):
+        with pytest.raises(SystemExit) as e:
+            baselines.main(["--env", PLACE, *argv, "--out", str(tmp_path / "o.json")])
+        assert e.value.code == 2 and word in capsys.readouterr().err
+    assert not (tmp_path / "o.json").exists()
