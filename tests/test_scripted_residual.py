@@ -11,7 +11,7 @@ import simgrip.envs  # noqa: F401  (registers the ids)
 from simgrip.envs.baselines import policy_maker
 from simgrip.envs.evaluation import make_env
 from simgrip.envs.scripted_residual import PALM_CHANNELS, ScriptedResidual
-from tests.helpers import load_example
+from helpers import load_example
 
 PLACE, PINCH = "simgrip/PlaceFragile-v7", "simgrip/PickFragile-v6"
 
