@@ -66,6 +66,9 @@ import gymnasium as gym
 import numpy as np
 
 from simgrip.envs.outcome import outcome
+from simgrip.envs.scripted_policies import controller, policy_maker
+from simgrip.envs.scripted_policies import task as _task
+from simgrip.envs.scripted_policies import through_valve as _through_valve
 
 __all__ = ["KAPPA_GRID", "PALM_GRID", "PLACE_DISTANCES", "RAMP_GRID", "VALVE_GRID", "evaluate", "main", "policy_maker",
            "run_policy"]
@@ -159,31 +162,6 @@ def _claw_openloop(a_k, ramp, a_p, claw=0.68, depth=0.5, shift=0):
     return make
 
 
-def _scripted(cls):
-    def make(env, info, seed):
-        pol = cls()
-        pol.reset(env, info)
-        return lambda obs, t: pol(obs)
-    return make
-
-
-def _through_valve(make):
-    """Run an absolute-command policy (``make``'s ``act``) on a valve env: each step's curvature command becomes
-    the valve action that moves towards it as fast as the valve allows (:func:`~simgrip.envs.valve.absolute_to_valve`;
-    a one-step ramp becomes a full-rate ramp)."""
-    from simgrip.envs.valve import absolute_to_valve
-
-    def make_valve(env, info, seed):
-        act, u = make(env, info, seed), env.unwrapped
-
-        def valve_act(obs, t):
-            a = np.array(act(obs, t), dtype=np.float32)
-            a[0] = absolute_to_valve(a[0], u.valve_command, u.kappa_rate)
-            return a
-        return valve_act
-    return make_valve
-
-
 def _random(env, info, seed):
     space = env.action_space
     space.seed(seed)
@@ -223,18 +201,9 @@ def _members(policy: str, grid: str, place: bool, claw: str | None = None, famil
         family = _claw_openloop if claw else _openloop
         return [({"kappa": k, "ramp_steps": r, "palm": p}, family(k, r, p))
                 for k in kappas for r in ramps for p in palms]
-    from simgrip.envs.scripted_fragile import (AbsolutePlacePolicy, ObservationFragilePolicy, OracleFragilePolicy,
-                                               PlacePolicy)
-    if claw:
-        from simgrip.envs.scripted_fragile import CLAW_POLICIES
-        oracle, observation = CLAW_POLICIES[claw]
-    elif place:
-        cls = PlacePolicy if through_valve else AbsolutePlacePolicy  # a valve env, or the retired v0/v1
-        oracle, observation = (lambda: cls(OracleFragilePolicy())), cls
-    else:
-        oracle, observation = OracleFragilePolicy, ObservationFragilePolicy
-    make = {"random": _random, "oracle": _scripted(oracle), "observation": _scripted(observation)}[policy]
-    return [({}, make)]
+    if policy == "random":
+        return [({}, _random)]
+    return [({}, controller(policy, place, claw, through_valve))]
 
 
 def _curvature_only(value):
@@ -280,30 +249,6 @@ def _behind_residual(env, policy: str, residual):
         return ScriptedResidual(env, residual)
     except ValueError as e:
         raise ValueError(f"--residual: {e}") from None
-
-
-def _task(env) -> tuple:
-    """``(place, claw, openloop_grid, valve)`` of a fragile env, as :func:`_members` takes them."""
-    from simgrip.envs.valve import ValveCommand
-
-    u = env.unwrapped
-    place = env.action_space.shape[0] == 3
-    claw = "cradle" if getattr(u, "grip", None) == "III" else "sphere" if getattr(u, "shapes", ()) == (
-        "sphere",) else None
-    return place, claw, getattr(u, "openloop_grid", None), isinstance(u, ValveCommand)
-
-
-def policy_maker(env, policy: str):
-    """``make(env, info, seed) -> act(obs, t)`` of the fragile task's scripted controller ``policy``
-    (``"observation"`` or ``"oracle"``; through the valve where ``env`` has one), as :func:`evaluate` runs it.
-    ValueError naming ``policy`` when it is not one of them, or ``env`` is not a fragile task."""
-    if policy not in ("observation", "oracle"):
-        raise ValueError(f"policy must be 'observation' or 'oracle', got {policy!r}")
-    if not hasattr(env.unwrapped, "crush_ratio_range"):
-        raise ValueError(f"policy: the scripted controllers are the fragile tasks' ({env.unwrapped.__class__.__name__} "
-                         "is not one)")
-    ((_, make),) = _members(policy, "full", *_task(env))
-    return make
 
 
 def evaluate(env_id: str, policy: str, seeds, grid: str = "full", residual=None) -> dict:

@@ -1,7 +1,7 @@
 r"""The learner's action added to the scripted controller's on chosen channels (issue 18, the pick-and-place).
 
 ``ScriptedResidual(env, channels)`` wraps a fragile task (:mod:`simgrip.envs.scripted_fragile`).  Each step it
-runs the task's scripted **observation-only** controller (:func:`simgrip.envs.baselines.policy_maker`: it reads
+runs the task's scripted **observation-only** controller (:func:`simgrip.envs.scripted_policies.policy_maker`: it reads
 only what the agent reads) on the env's observation and passes ``clip(b + a, low, high)`` to the env, ``a`` the
 learner's action and ``b`` the controller's action on the named ``channels`` (names of the env's
 ``action_names``; 0 on the others).  The observation is the env's with ``b`` appended (the entries
@@ -63,7 +63,7 @@ class ScriptedResidual(gym.Wrapper):
         if unknown or len(set(channels)) != len(channels):
             raise ValueError(f"channels must be distinct action names of {u.__class__.__name__} {names}, "
                              f"got {list(channels)}")
-        from simgrip.envs.baselines import policy_maker
+        from simgrip.envs.scripted_policies import policy_maker
 
         try:
             self._make = policy_maker(env, "observation")

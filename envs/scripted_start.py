@@ -2,7 +2,7 @@ r"""Training starts part-way through the scripted controller's episode (issue 18
 
 ``ScriptedStart(env, probability, max_steps)`` wraps a fragile task (:mod:`simgrip.envs.scripted_fragile`).
 On each ``reset``, with probability ``probability``, it draws ``k`` uniform in ``0 .. max_steps - 1`` and steps
-the task's scripted **observation-only** controller (:func:`simgrip.envs.baselines.policy_maker`: it reads only
+the task's scripted **observation-only** controller (:func:`simgrip.envs.scripted_policies.policy_maker`: it reads only
 what the agent reads) for ``k`` steps; the learner starts from the state reached, with the time left of the
 episode's limit (the wrapper sits outside ``gym.make``'s ``TimeLimit``, so the scripted steps count).  Where the
 scripted episode ends first, at its step ``j <= k`` (a success, a crush, a drop), the same episode (the same
@@ -71,7 +71,7 @@ class ScriptedStart(gym.Wrapper):
         if isinstance(max_steps, bool) or not isinstance(max_steps, (int, np.integer)) or max_steps < 1:
             raise ValueError(f"max_steps must be a whole number >= 1, got {max_steps!r}")
         super().__init__(env)
-        from simgrip.envs.baselines import policy_maker
+        from simgrip.envs.scripted_policies import policy_maker
 
         try:
             self._make = policy_maker(env, "observation")

@@ -17,9 +17,9 @@ import pytest
 
 import simgrip.envs  # noqa: F401  registers the environments
 from simgrip.envs import FRAGILE_ENV_IDS
-from simgrip.envs.baselines import _scripted, _through_valve
 from simgrip.envs.pick_claw_v5 import APPROACH_SCALE, FragileCradleEnvV5, FragileSphereEnvV5
 from simgrip.envs.pick_fragile_v3 import FragileCradleEnvV4, FragileSphereEnvV4
+from simgrip.envs.scripted_policies import scripted, through_valve
 from simgrip.envs.scripted_fragile import CLAW_POLICIES
 
 sys.path.insert(0, str(Path(__file__).parent))
@@ -34,7 +34,7 @@ def test_both_are_registered():
 
 
 def _observation_policy(env, info, seed, kind):
-    return _through_valve(_scripted(CLAW_POLICIES[kind][1]))(env, info, seed)
+    return through_valve(scripted(CLAW_POLICIES[kind][1]))(env, info, seed)
 
 
 def _noisy(act, seed):

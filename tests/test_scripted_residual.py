@@ -8,7 +8,7 @@ import numpy as np
 import pytest
 
 import simgrip.envs  # noqa: F401  (registers the ids)
-from simgrip.envs.baselines import policy_maker
+from simgrip.envs.scripted_policies import policy_maker
 from simgrip.envs.evaluation import make_env
 from simgrip.envs.scripted_residual import PALM_CHANNELS, ScriptedResidual
 from helpers import load_example
