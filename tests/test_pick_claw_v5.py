@@ -19,8 +19,8 @@ import simgrip.envs  # noqa: F401  registers the environments
 from simgrip.envs import FRAGILE_ENV_IDS
 from simgrip.envs.pick_claw_v5 import APPROACH_SCALE, FragileCradleEnvV5, FragileSphereEnvV5
 from simgrip.envs.pick_fragile_v3 import FragileCradleEnvV4, FragileSphereEnvV4
-from simgrip.envs.scripted_policies import scripted, through_valve
 from simgrip.envs.scripted_fragile import CLAW_POLICIES
+from simgrip.envs.scripted_policies import scripted, through_valve
 
 sys.path.insert(0, str(Path(__file__).parent))
 from test_pick_fragile_v5 import SAME_KEYS, episode_return  # noqa: E402  (the shared checks of v5's reward)
