@@ -1,8 +1,8 @@
 r"""The learner's action added to the scripted controller's on chosen channels (issue 18, the pick-and-place).
 
 ``ScriptedResidual(env, channels)`` wraps a fragile task (:mod:`simgrip.envs.scripted_fragile`).  Each step it
-runs the task's scripted **observation-only** controller (:func:`simgrip.envs.scripted_policies.policy_maker`: it reads
-only what the agent reads) on the env's observation and passes ``clip(b + a, low, high)`` to the env, ``a`` the
+runs the task's scripted **observation-only** controller (:func:`simgrip.envs.scripted_policies.policy_maker`: it
+reads only what the agent reads) on the env's observation and passes ``clip(b + a, low, high)`` to the env, ``a`` the
 learner's action and ``b`` the controller's action on the named ``channels`` (names of the env's
 ``action_names``; 0 on the others).  The observation is the env's with ``b`` appended (the entries
 ``base_<name>`` of :attr:`ScriptedResidual.obs_layout`, every action's, 0 where not scripted): the learner sees
@@ -13,9 +13,10 @@ The controller restarts with every ``reset`` (its state is the episode's) and fo
 played: it reads each observation, whatever was done before it, so its phases (grip, carry, lower) follow the
 workpiece, not the clock.  On the pick-and-place with ``channels = ("palm_x", "palm_z")`` the palm's path is
 the script's (up when the workpiece is lifted by the grip, over the observed target, down) and the curvature
-is the learner's alone: the grip, the part no learner has found (the Gymnasium environments page,
-"Pick-and-place").  Unlike :class:`~simgrip.envs.scripted_start.ScriptedStart` (a training aid) the wrapper is
-part of the policy: it is trained and evaluated behind it, and ``train_sb3.py --residual`` records it.
+is the learner's alone: the grip, which no learner that also had to move the palm has found, and PPO learns
+behind it (the Gymnasium environments page, "The palm scripted, the grip learned").  Unlike
+:class:`~simgrip.envs.scripted_start.ScriptedStart` (a training aid) the wrapper is part of the policy: it is
+trained and evaluated behind it, and ``train_sb3.py --residual`` records it.
 
 Raises ValueError naming ``channels`` when a name is not one of the env's actions or names one twice, ``env``
 when the task has no scripted controller.
