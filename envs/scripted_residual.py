@@ -86,7 +86,7 @@ class ScriptedResidual(gym.Wrapper):
         """The controller's next action on the scripted channels, kept for ``step``; ``obs`` with it appended."""
         b = np.asarray(self._act(obs, self._t), dtype=np.float32) * self.mask
         self._base = np.clip(b, self._low, self._high)
-        return np.concatenate([obs, self._base]).astype(self.observation_space.dtype)
+        return np.concatenate([obs, self._base]).astype(self.observation_space.dtype, copy=False)
 
     def reset(self, *, seed: int | None = None, options: dict | None = None):
         obs, info = self.env.reset(seed=seed, options=options)

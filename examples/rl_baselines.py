@@ -170,12 +170,10 @@ def _check_init(p: argparse.ArgumentParser, args, algos: list[str]) -> str | Non
 
     if algos != ["ppo"]:
         p.error("--init-from: PPO only (--algo ppo)")
-    if args.residual is not None:
-        p.error("--init-from: not with --residual (the observation has the controller's action appended)")
     for seed in args.seeds:
         try:
             check_init_from(init_model(args.init_from, "ppo", seed), args.env, args.env_kwargs, args.action_offset,
-                            normalize=args.normalize, frame_stack=args.frame_stack)
+                            normalize=args.normalize, frame_stack=args.frame_stack, residual=args.residual)
         except ValueError as e:
             p.error(f"{e} (seed {seed})")
     try:

@@ -449,13 +449,11 @@ def main(argv=None) -> int:
     if args.init_from is not None:
         if args.algo != ["ppo"]:
             p.error("--init-from: PPO only (--algo ppo)")
-        if args.residual is not None:
-            p.error("--init-from: not with --residual (the observation has the controller's action appended)")
         from simgrip.envs.warm_start import check_init_from
 
         try:
             check_init_from(args.init_from, args.env, args.env_kwargs, args.action_offset, normalize=args.normalize,
-                            frame_stack=args.frame_stack)
+                            frame_stack=args.frame_stack, residual=args.residual)
         except ValueError as e:
             p.error(str(e))
     try:  # simgrip.io's output-path policy: a folder, and no FIFO/device/folder where a result file goes
