@@ -34,7 +34,10 @@ lifts and then fails in the carry (crushed or dropped after the carry began) aga
 
 On a fragile task the JSON also has ``by_mass``: the outcomes counted per third of the task's log mass range
 (the hidden mass of each episode; keys ``"5-18 g"``, ...; :func:`simgrip.envs.light_bias.mass_bins`): which
-workpieces a policy loses (a fast closing crushes the lightest).
+workpieces a policy loses (a fast closing crushes the lightest).  And ``crushed_after_touch``: the crushed episodes
+counted by the control steps from the first step any finger pressed on the workpiece (``info["normal_force"]``
+above 0) to the crush (keys ``"0"``: crushed within the step of the first touch, before the policy could answer
+it; ``"1-4"``, ``"5-24"``, ``"25+"``): a crush on touch is the approach's speed, a later one the squeeze.
 """
 
 from __future__ import annotations
@@ -51,6 +54,7 @@ from simgrip.envs.outcome import outcome
 
 SCRIPTED = ("observation", "oracle")
 HANDOVER_BIN = 50  # env steps per bin of by_handover (1 s at the fragile tasks' 50 Hz)
+TOUCH_BINS = ((0, 0), (1, 4), (5, 24), (25, None))  # crushed_after_touch's bins [control steps]
 
 
 def _scripted(env, name: str):
@@ -90,6 +94,21 @@ def by_mass(results, masses, edges) -> dict:
         bins[i].append(r)
     return {f"{edges[i] * 1e3:.0f}-{edges[i + 1] * 1e3:.0f} g": outcomes(rs)["outcomes"] if rs else {}
             for i, rs in enumerate(bins)}
+
+
+def crushed_after_touch(results, touch_steps) -> dict:
+    """The crushed episodes counted per :data:`TOUCH_BINS` bin of the control steps from the first touch to the
+    crush (``touch_steps[i]``: the 1-based step of episode ``i`` whose ``info["normal_force"]`` was first above 0,
+    ``None`` if none; the crush is the episode's last step), keyed ``"0"``, ``"1-4"``, ``"5-24"``, ``"25+"`` (every
+    bin kept, 0 where empty)."""
+    counts = {(f"{lo}" if hi == lo else f"{lo}-{hi}" if hi is not None else f"{lo}+"): 0 for lo, hi in TOUCH_BINS}
+    for r, touch in zip(results, touch_steps):
+        if outcome(r.info) != "crushed":
+            continue
+        gap = r.length - (touch if touch is not None else r.length)  # (a crush is a touch: None cannot occur)
+        key = next(k for k, (lo, hi) in zip(counts, TOUCH_BINS) if gap >= lo and (hi is None or gap <= hi))
+        counts[key] += 1
+    return counts
 
 
 def place_timeouts(results, place_tolerance: float, on_table: float) -> dict:
@@ -154,6 +173,8 @@ def main(argv=None) -> dict:
         p.error(str(exc))
     handovers: list[int] = []
     masses: list[float] = []
+    touches: list[int | None] = []  # per episode: the first step with a finger force (crushed_after_touch)
+    steps = [0]
     edges = mass_bins(env)
     try:
         on_reset = None
@@ -182,10 +203,18 @@ def main(argv=None) -> dict:
             policy = args.policy
         def on_reset_and_mass(env_, info, seed, then=on_reset):
             masses.append(episode_mass(env_))
+            touches.append(None)
+            steps[0] = 0
             if then is not None:
                 then(env_, info, seed)
 
-        results = run_episodes(env, act, args.episodes, args.seed, on_reset=on_reset_and_mass, gamma=args.gamma)
+        def on_step(info):
+            steps[0] += 1
+            if touches[-1] is None and "normal_force" in info and max(info["normal_force"]) > 0.0:
+                touches[-1] = steps[0]
+
+        results = run_episodes(env, act, args.episodes, args.seed, on_reset=on_reset_and_mass, on_step=on_step,
+                               gamma=args.gamma)
     finally:
         env.close()
     out = {"env": args.env, "policy": policy, **summary(results), **outcomes(results, args.gamma),
@@ -197,6 +226,7 @@ def main(argv=None) -> dict:
         out["by_handover"] = by_handover(results, handovers)
     if edges is not None:
         out["by_mass"] = by_mass(results, masses, edges)
+        out["crushed_after_touch"] = crushed_after_touch(results, touches)
     if hasattr(env.unwrapped, "place_tolerance"):  # the pick-and-place: carried, then held up to the end?
         from simgrip.envs.pick_place import ON_TABLE
 

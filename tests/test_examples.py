@@ -295,6 +295,46 @@ def test_by_mass_counts_outcomes_per_mass_bin():
         "5-20 g": {"crushed": 1, "success": 1}, "20-100 g": {"success": 1}, "100-250 g": {"timeout": 1}}
 
 
+def test_crushed_after_touch_bins_the_steps_from_first_touch_to_the_crush():
+    from simgrip.envs.evaluation import EpisodeResult
+
+    # (length, first touch step, info): crushed 0, 1, 4, 5, 24, 25 steps after the touch; a success and a
+    # timeout are not counted
+    eps = [(10, 10, {"crushed": True}), (10, 9, {"crushed": True}), (30, 26, {"crushed": True}),
+           (30, 25, {"crushed": True}), (40, 16, {"crushed": True}), (40, 15, {"crushed": True}),
+           (50, 3, {"is_success": True}), (300, None, {})]
+    results = [EpisodeResult(i, i, 0.0, n, info) for i, (n, _, info) in enumerate(eps)]
+    assert _example("evaluate_policy").crushed_after_touch(results, [touch for _, touch, _ in eps]) == {
+        "0": 1, "1-4": 2, "5-24": 2, "25+": 1}
+
+
+def test_evaluate_policy_times_a_crush_from_the_first_touch(capsys):
+    import gymnasium as gym
+
+    module = _example("evaluate_policy")
+    # the cradle controller crushes seed 8006's piece (and holds 8005's): counted once, in the bin of the steps
+    # between the first step with a finger force and the crush, counted here by stepping the same controller
+    out = module.main(["--env", "simgrip/PickCradleFragile-v5", "--policy", "observation", "--episodes", "2",
+                       "--seed", "8005", "--json"])
+    assert out["outcomes"] == {"crushed": 1, "success": 1}
+    env = gym.make("simgrip/PickCradleFragile-v5")
+    act, on_reset = module._scripted(env, "observation")
+    obs, info = env.reset(seed=8006)
+    on_reset(env, info, 8006)
+    step, touch, done = 0, None, False
+    while not done:
+        obs, _, terminated, truncated, info = env.step(act(obs))
+        step += 1
+        if touch is None and max(info["normal_force"]) > 0.0:
+            touch = step
+        done = terminated or truncated
+    env.close()
+    assert info["crushed"] and touch is not None
+    gap = step - touch
+    expected = {"0": gap == 0, "1-4": 1 <= gap <= 4, "5-24": 5 <= gap <= 24, "25+": gap >= 25}
+    assert out["crushed_after_touch"] == {k: int(v) for k, v in expected.items()}
+
+
 def test_place_timeouts_count_the_carried_pieces_never_set_down():
     from simgrip.envs.evaluation import EpisodeResult
 
