@@ -129,3 +129,22 @@ def test_learned_cells_are_their_aggregates(row):
         as_row = EQUIVALENT.get((measured, json.dumps(agg.get("env_kwargs", {}), sort_keys=True)))
         assert (measured == row or as_row == row
                 or cells[column].endswith(" " + measured.rsplit("-", 1)[1])), (column, measured)
+
+
+def test_the_stated_mass_ranges_are_the_envs():
+    import gymnasium as gym
+
+    import simgrip.envs  # noqa: F401
+
+    text = " ".join((ROOT / "README.md").read_text(encoding="utf-8").split())
+    m = re.search(r"mass \((\d+)–(\d+) g; cradle and sphere (\d+)–(\d+) g\)", text)
+    assert m, "the README's fragile-suite mass ranges"
+    stated = {"pinch": m.group(1, 2), "claws": m.group(3, 4)}
+    for ids, key in ((("PickFragile-v6", "PickMultiFragile-v6", "PlaceFragile-v7"), "pinch"),
+                     (("PickCradleFragile-v5", "PickSphereFragile-v5"), "claws")):
+        for env_id in ids:
+            env = gym.make("simgrip/" + env_id)
+            u = env.unwrapped
+            lo, hi = getattr(u, "box_mass_range", None) or u.mass_range
+            env.close()
+            assert (f"{lo * 1e3:g}", f"{hi * 1e3:g}") == stated[key], env_id
