@@ -22,17 +22,26 @@ from scipy.stats import beta
 ROOT = Path(__file__).resolve().parents[1]
 BASELINES = ROOT / "docs" / "baselines"
 
+AIDED = "PPO behind its aid, 3 seeds"
+
 #: README row -> (the id whose non-learned records it shows, {learned column header: aggregate folder}).
 ROWS = {
-    "PickFragile-v6": ("PickFragile-v4", {"PPO, 3 seeds": "rl_pick_v5_wdrop0", "SAC, 3 seeds": "rl_pick_v5_sac"}),
+    "PickFragile-v6": ("PickFragile-v4", {"PPO, 3 seeds": "rl_pick_v5_wdrop0", "SAC, 3 seeds": "rl_pick_v5_sac",
+                                          AIDED: "rl_pick_v6_offset"}),
     "PickMultiFragile-v6": ("PickMultiFragile-v4", {"PPO, 3 seeds": "rl_multi_v5_wdrop0",
-                                                    "SAC, 3 seeds": "rl_multi_v5_sac"}),
-    "PlaceFragile-v7": ("PlaceFragile-v4", {"PPO, 3 seeds": "rl_place_v7", "SAC, 3 seeds": "rl_place_v4_sac"}),
+                                                    "SAC, 3 seeds": "rl_multi_v5_sac", AIDED: "rl_multi_v6_light"}),
+    "PlaceFragile-v7": ("PlaceFragile-v4", {"PPO, 3 seeds": "rl_place_v7", "SAC, 3 seeds": "rl_place_v4_sac",
+                                            AIDED: "rl_place_v7_residual_palm"}),
     "PickCradleFragile-v5": ("PickCradleFragile-v4", {"PPO, 3 seeds": "rl_cradle_v5",
-                                                      "SAC, 3 seeds": "rl_cradle_v5_sac"}),
+                                                      "SAC, 3 seeds": "rl_cradle_v5_sac",
+                                                      AIDED: "rl_cradle_v5_residual_palm"}),
     "PickSphereFragile-v5": ("PickSphereFragile-v4", {"PPO, 3 seeds": "rl_sphere_v5",
-                                                      "SAC, 3 seeds": "rl_sphere_v5_sac"}),
+                                                      "SAC, 3 seeds": "rl_sphere_v5_sac",
+                                                      AIDED: "rl_sphere_v5_residual_palm"}),
 }
+
+#: the aids an aided cell names -> the rl_baselines.py option that applies each
+AIDS = {"offset": "--action-offset", "light bias": "--light-bias", "scripted palm": "--residual"}
 
 #: (id, its keyword arguments as JSON) -> the id that env is, step for step (simgrip.envs.pick_fragile_v6).
 EQUIVALENT = {("PickFragile-v5", '{"w_drop": 0.0}'): "PickFragile-v6",
@@ -113,7 +122,7 @@ def test_learned_cells_are_their_aggregates(row):
     for column, folder in learned.items():
         agg = json.loads((BASELINES / folder / "aggregate.json").read_text(encoding="utf-8"))
         assert agg["eval_seeds"] == [8000, 8049] and agg["minutes"] == 15.0 and len(agg["seeds"]) == 3
-        algo = column.split(",")[0].lower()
+        algo = column.split()[0].rstrip(",").lower()
         assert agg["algos"] == [algo]
         summary = agg["summary"][algo]
         assert summary["runs"] == 3 and summary["failed"] == 0
@@ -129,6 +138,15 @@ def test_learned_cells_are_their_aggregates(row):
         as_row = EQUIVALENT.get((measured, json.dumps(agg.get("env_kwargs", {}), sort_keys=True)))
         assert (measured == row or as_row == row
                 or cells[column].endswith(" " + measured.rsplit("-", 1)[1])), (column, measured)
+        # the learner's options: SB3's defaults, and in the aided column exactly the aids the cell names
+        options = {a for a in agg["command"] if a.startswith("--")}
+        assert "--gamma" not in options and "--normalize" not in options and "--init-from" not in options
+        named = {name for name in AIDS if name in cells[column]} if column == AIDED else set()
+        assert {AIDS[name] for name in named} == options & set(AIDS.values()), (column, options)
+        if column == AIDED and "scripted palm" in named:  # every palm action scripted, the curvature learned
+            residual = agg["command"][agg["command"].index("--residual") + 1:]
+            residual = residual[:next((i for i, a in enumerate(residual) if a.startswith("--")), len(residual))]
+            assert sorted(residual) == sorted(a for a in ("palm_x", "palm_z") if a in residual) and "palm_z" in residual
 
 
 def test_the_stated_mass_ranges_are_the_envs():
