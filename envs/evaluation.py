@@ -198,14 +198,14 @@ class EpisodeResult:
 def run_episodes(env, act: Callable[[Any], Any], episodes: int, seed0: int, *,
                  on_reset: Callable[[Any, dict, int], None] | None = None,
                  on_episode: Callable[[EpisodeResult], None] | None = None,
-                 on_step: Callable[[dict], None] | None = None,
+                 on_step: Callable[[dict, int], None] | None = None,
                  gamma: float = GAMMA) -> list[EpisodeResult]:
     """Run ``episodes`` episodes of ``env``, episode ``i`` reset with seed ``seed0 + i``.
 
     ``act(obs)`` returns the action; ``on_reset(env, info, seed)``, if given, is
     called after each reset (a policy's own reset, seeding an action space);
-    ``on_episode(result)`` after each episode (printing a line); ``on_step(info)`` after each step, with that
-    step's ``info``; ``gamma`` the discount of :attr:`EpisodeResult.discounted`.
+    ``on_episode(result)`` after each episode (printing a line); ``on_step(info, n)`` after each step, with that
+    step's ``info`` and its number ``n`` in the episode (1 for the first); ``gamma`` the discount of :attr:`EpisodeResult.discounted`.
     """
     results = []
     for i in range(episodes):
@@ -221,7 +221,7 @@ def run_episodes(env, act: Callable[[Any], Any], episodes: int, seed0: int, *,
             weight *= gamma
             n += 1
             if on_step is not None:
-                on_step(info)
+                on_step(info, n)
             if terminated or truncated:
                 break
         result = EpisodeResult(i, seed, ret, n, info, disc)

@@ -44,6 +44,7 @@ from __future__ import annotations
 
 import argparse
 import json
+import math
 import sys
 
 import simgrip.envs  # noqa: F401  (registers the simgrip ids)
@@ -54,7 +55,8 @@ from simgrip.envs.outcome import outcome
 
 SCRIPTED = ("observation", "oracle")
 HANDOVER_BIN = 50  # env steps per bin of by_handover (1 s at the fragile tasks' 50 Hz)
-TOUCH_BINS = ((0, 0), (1, 4), (5, 24), (25, None))  # crushed_after_touch's bins [control steps]
+#: crushed_after_touch's bins: (key, least, most) control steps from the first touch to the crush
+TOUCH_BINS = (("0", 0, 0), ("1-4", 1, 4), ("5-24", 5, 24), ("25+", 25, math.inf))
 
 
 def _scripted(env, name: str):
@@ -101,13 +103,11 @@ def crushed_after_touch(results, touch_steps) -> dict:
     crush (``touch_steps[i]``: the 1-based step of episode ``i`` whose ``info["normal_force"]`` was first above 0,
     ``None`` if none; the crush is the episode's last step), keyed ``"0"``, ``"1-4"``, ``"5-24"``, ``"25+"`` (every
     bin kept, 0 where empty)."""
-    counts = {(f"{lo}" if hi == lo else f"{lo}-{hi}" if hi is not None else f"{lo}+"): 0 for lo, hi in TOUCH_BINS}
+    counts = dict.fromkeys((key for key, _, _ in TOUCH_BINS), 0)
     for r, touch in zip(results, touch_steps):
-        if outcome(r.info) != "crushed":
-            continue
-        gap = r.length - (touch if touch is not None else r.length)  # (a crush is a touch: None cannot occur)
-        key = next(k for k, (lo, hi) in zip(counts, TOUCH_BINS) if gap >= lo and (hi is None or gap <= hi))
-        counts[key] += 1
+        if outcome(r.info) == "crushed":
+            gap = r.length - touch if touch is not None else 0  # (a crush is a touch: None cannot occur)
+            counts[next(key for key, lo, hi in TOUCH_BINS if lo <= gap <= hi)] += 1
     return counts
 
 
@@ -174,7 +174,6 @@ def main(argv=None) -> dict:
     handovers: list[int] = []
     masses: list[float] = []
     touches: list[int | None] = []  # per episode: the first step with a finger force (crushed_after_touch)
-    steps = [0]
     edges = mass_bins(env)
     try:
         on_reset = None
@@ -204,14 +203,12 @@ def main(argv=None) -> dict:
         def on_reset_and_mass(env_, info, seed, then=on_reset):
             masses.append(episode_mass(env_))
             touches.append(None)
-            steps[0] = 0
             if then is not None:
                 then(env_, info, seed)
 
-        def on_step(info):
-            steps[0] += 1
+        def on_step(info, n):
             if touches[-1] is None and "normal_force" in info and max(info["normal_force"]) > 0.0:
-                touches[-1] = steps[0]
+                touches[-1] = n
 
         results = run_episodes(env, act, args.episodes, args.seed, on_reset=on_reset_and_mass, on_step=on_step,
                                gamma=args.gamma)
