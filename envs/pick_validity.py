@@ -387,8 +387,9 @@ class FingerValidity:
             return []
         return self._violations(W)
 
-    def _violations(self, W: np.ndarray) -> list:
-        """:func:`~simgrip.validity.chain_violations`' messages for the nodes ``W`` ``(K, n+1, 3)`` [m]."""
+    def _violations(self, W: np.ndarray, batch: bool | None = None) -> list:
+        """:func:`~simgrip.validity.chain_violations`' messages for the nodes ``W`` ``(K, n+1, 3)`` [m] (``batch``: its
+        own)."""
         K = W.shape[0]
         world = [W[f] for f in range(K)]
         planar = []
@@ -398,7 +399,7 @@ class FingerValidity:
         L = self._length
         # chain_violations works over l: scale the nodes to the finger's length
         found = chain_violations([p / L for p in planar], [w / L for w in world], r_link=self._r / L,
-                                 r_tip=None, solid=None, base_sines=self._sines)
+                                 r_tip=None, solid=None, base_sines=self._sines, batch=batch)
         return [m for _, m in found]
 
     def _world(self, d) -> np.ndarray:

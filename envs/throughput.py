@@ -31,7 +31,7 @@ import time
 import mujoco
 import numpy as np
 
-__all__ = ["measure_throughput"]
+__all__ = ["measure_throughput", "violation_check_times"]
 
 
 def measure_throughput(steps: int = 2000, *, grip: str = "I", seed: int = 0, repeats: int = 3,
@@ -187,3 +187,49 @@ def _bind(env, kind, chunk: int, seed: int) -> tuple:
     m, d = env.model, env.data
     size = mujoco.mj_stateSize(m, kind)
     return m, d, m.qpos_spring, np.empty(size), np.empty(size), np.empty((chunk, m.nu)), d.ctrl
+
+
+def violation_check_times(env_id: str, *, steps: int = 4000, seed: int = 0, repeats: int = 7) -> dict:
+    """What a validity check costs in the states that reach :func:`~simgrip.validity.chain_violations`, both ways.
+
+    Steps the registered pick env ``env_id`` with uniform random actions (``numpy.random.default_rng(seed)``,
+    episodes reset with seeds ``seed, seed + 1, ...``), keeps the fingers' nodes at every checked step whose state is
+    invalid (``info["valid"]`` False: the check went to ``chain_violations``), then times the env's own
+    ``_violations`` on them with ``batch=True`` (every pair of links at once, :mod:`simgrip.link_pairs`) and
+    ``batch=False`` (pruned, a finger and a pair of fingers at a time): the least of ``repeats`` passes over all of
+    them, each way, interleaved.  Returns ``states``, ``checks``, ``steps``, ``batched_us`` and ``pruned_us`` (per
+    state) and ``same`` (both ways gave the same messages on every state).
+    """
+    import gymnasium as gym
+
+    import simgrip.envs  # noqa: F401  (registers the ids)
+
+    if not isinstance(env_id, str) or env_id not in gym.registry:
+        raise ValueError(f"env_id must be a registered id, got {env_id!r}")
+    env = gym.make(env_id).unwrapped
+    try:
+        probe = env._validity
+        rng = np.random.default_rng(seed)
+        env.reset(seed=seed)
+        episode, states, checks = seed, [], 0
+        for _ in range(int(steps)):
+            _, _, term, trunc, info = env.step(rng.uniform(-1, 1, env.action_space.shape).astype(np.float32))
+            checks += probe.checked
+            if probe.checked and not info["valid"]:
+                states.append(probe._world(env.data))
+            if term or trunc:
+                episode += 1
+                env.reset(seed=episode)
+        best = {True: np.inf, False: np.inf}
+        for _ in range(int(repeats)):
+            for batch in (True, False):
+                t0 = time.perf_counter()
+                for W in states:
+                    probe._violations(W, batch=batch)
+                best[batch] = min(best[batch], time.perf_counter() - t0)
+        same = all(probe._violations(W, batch=True) == probe._violations(W, batch=False) for W in states)
+    finally:
+        env.close()
+    k = max(len(states), 1)
+    return {"steps": int(steps), "checks": checks, "states": len(states), "batched_us": 1e6 * best[True] / k,
+            "pruned_us": 1e6 * best[False] / k, "same": same}

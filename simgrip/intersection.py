@@ -35,6 +35,7 @@ __all__ = ["CLEAR_MARGIN", "FAR_PAIR_LINKS", "box_sdf", "candidate_pairs", "clos
            "segment_box_sdf_2d", "segment_distances", "segment_min_sdf", "self_clear", "self_clear_below", "sphere_sdf"]
 
 _EPS = 1e-300
+_einsum, _where, _min, _max = np.einsum, np.where, np.minimum, np.maximum
 
 
 def segment_distances(p0, p1, q0, q1) -> np.ndarray:
@@ -47,27 +48,32 @@ def segment_distances(p0, p1, q0, q1) -> np.ndarray:
     """
     p0, p1, q0, q1 = (np.asarray(v, dtype=float) for v in (p0, p1, q0, q1))
     d1, d2, r = p1 - p0, q1 - q0, p0 - q0
-    a = np.einsum("...i,...i->...", d1, d1)
-    e = np.einsum("...i,...i->...", d2, d2)
-    f = np.einsum("...i,...i->...", d2, r)
-    c = np.einsum("...i,...i->...", d1, r)
-    b = np.einsum("...i,...i->...", d1, d2)
-    denom = a * e - b * b
+    a = _einsum("...i,...i->...", d1, d1)
+    e = _einsum("...i,...i->...", d2, d2)
+    f = _einsum("...i,...i->...", d2, r)
+    c = _einsum("...i,...i->...", d1, r)
+    b = _einsum("...i,...i->...", d1, d2)
+    # each quantity once, clipped to [0, 1] as min(max(x, 0), 1) (np.clip's values, NaN kept, without its wrapper):
+    # the segment's parameters of Ericson's cases (issue 18, item 5: the same arithmetic in ~25 NumPy calls, not ~50)
+    a_ok, e_ok = a > _EPS, e > _EPS
     with np.errstate(divide="ignore", invalid="ignore"):
-        s = np.where(denom > 1e-14 * np.maximum(a * e, _EPS), np.clip((b * f - c * e) / np.where(denom > 0, denom, 1.0),
-                                                                       0.0, 1.0), 0.0)
-        t = np.where(e > _EPS, (b * s + f) / np.where(e > _EPS, e, 1.0), 0.0)
-        s = np.where(t < 0.0, np.where(a > _EPS, np.clip(-c / np.where(a > _EPS, a, 1.0), 0.0, 1.0), 0.0), s)
-        s = np.where(t > 1.0, np.where(a > _EPS, np.clip((b - c) / np.where(a > _EPS, a, 1.0), 0.0, 1.0), 0.0), s)
-    t = np.clip(t, 0.0, 1.0)
-    with np.errstate(divide="ignore", invalid="ignore"):
+        denom = a * e - b * b
+        s = _min(_max((b * f - c * e) / _where(denom > 0, denom, 1.0), 0.0), 1.0)
+        s = _where(denom > 1e-14 * _max(a * e, _EPS), s, 0.0)
+        t = _where(e_ok, (b * s + f) / _where(e_ok, e, 1.0), 0.0)
+        a_div = _where(a_ok, a, 1.0)
+        s_start = _where(a_ok, _min(_max(-c / a_div, 0.0), 1.0), 0.0)  # p's point nearest q0 (t clamped to 0)
+        s = _where(t < 0.0, s_start, s)
+        s = _where(t > 1.0, _where(a_ok, _min(_max((b - c) / a_div, 0.0), 1.0), 0.0), s)
+        t = _min(_max(t, 0.0), 1.0)
         # degenerate segments (Ericson's first cases): q a point -> s from p's projection; p a point -> t from q's
-        s = np.where(e <= _EPS, np.where(a > _EPS, np.clip(-c / np.where(a > _EPS, a, 1.0), 0.0, 1.0), 0.0), s)
-        t = np.where(e <= _EPS, 0.0, t)
-        t = np.where((a <= _EPS) & (e > _EPS), np.clip(f / np.where(e > _EPS, e, 1.0), 0.0, 1.0), t)
-        s = np.where(a <= _EPS, 0.0, s)
+        e_pt = ~e_ok
+        s = _where(e_pt, s_start, s)
+        t = _where(e_pt, 0.0, t)
+        t = _where(~a_ok & e_ok, _min(_max(f / _where(e_ok, e, 1.0), 0.0), 1.0), t)
+        s = _where(a_ok, s, 0.0)
     diff = (p0 + s[..., None] * d1) - (q0 + t[..., None] * d2)
-    return np.sqrt(np.einsum("...i,...i->...", diff, diff))
+    return np.sqrt(_einsum("...i,...i->...", diff, diff))
 
 
 #: Links per block of :func:`candidate_pairs`' first pass.

@@ -52,6 +52,8 @@ from dataclasses import dataclass
 import numpy as np
 
 from simgrip import intersection as isect
+from simgrip.link_pairs import (BATCH_FINGERS, BATCH_LINKS, all_finger_pairs, all_self_pairs, finger_pair_contacts,
+                                finger_self_pairs)
 from simgrip.intersection import self_clear, self_clear_below  # noqa: F401  (re-exported: the proof's home)
 
 __all__ = ["DEPTH_FRACTION", "SELF_LIMIT_FACTOR", "SOLID_LIMIT_FACTOR", "Solid", "chain_violations", "check_condition_23",
@@ -389,7 +391,8 @@ class Solid:
 
 
 def chain_violations(planar, world, *, r_link: float, r_tip: float | None, solid: Solid | None,
-                     base_sines=None, contact_links=None, who: str = "finger") -> list[tuple[str, str]]:
+                     base_sines=None, contact_links=None, who: str = "finger", batch: bool | None = None
+                     ) -> list[tuple[str, str]]:
     """Every way a set of fingers passes through itself, another or the workpiece: ``(kind, message)`` pairs.
 
     ``kind`` is one of :data:`VIOLATION_KINDS`; empty: a valid state.
@@ -406,6 +409,11 @@ def chain_violations(planar, world, *, r_link: float, r_tip: float | None, solid
     :func:`check_contact_depth`'s verdict (``contact_ok``, deeper than :data:`DEPTH_FRACTION` of the
     radius); they are an impossible state here only once their centre (line) is inside the solid.  The
     last link's piece inside the tip sphere is the tip's (it ends at the sphere's centre).
+
+    ``batch``: measure every pair of links of all the fingers at once (:mod:`simgrip.link_pairs`; the same answer);
+    None (default) where that is the faster way (at least :data:`~simgrip.link_pairs.BATCH_FINGERS` fingers of at most
+    :data:`~simgrip.link_pairs.BATCH_LINKS` links each, all alike), False never (a finger and a pair of fingers at a
+    time, pruned), True wherever the fingers are alike.
     """
     out: list[tuple[str, str]] = []
 
@@ -414,24 +422,26 @@ def chain_violations(planar, world, *, r_link: float, r_tip: float | None, solid
 
     K = len(planar)
     limit = SELF_LIMIT_FACTOR * float(r_link)
+    nodes = [np.asarray(w, dtype=float) for w in world]
+    n = len(nodes[0]) - 1 if K else 0
+    planes = [np.asarray(p, dtype=float) for p in planar]
+    selfs = batched = None  # a few short fingers: every pair of links measured at once (simgrip.link_pairs)
+    if batch is None:
+        batch = K >= BATCH_FINGERS and n <= BATCH_LINKS
+    if (batch and n > 0 and all(p.shape == (n + 1, 2) for p in planes)
+            and all(w.ndim == 2 and w.shape == nodes[0].shape for w in nodes)):
+        selfs = all_self_pairs(planes, limit, self_gap_links(n, r_link))
+        batched = all_finger_pairs(nodes, limit, base_sines)
     for f in range(K):
-        P = np.asarray(planar[f], dtype=float)
-        n = len(P) - 1
-        gap = self_gap_links(n, r_link)
-        # pairs j - i < low are proved clear by the tangents' range (O(n log n); the exact tests' verdict on them)
-        low = self_clear_below(P, limit, gap)
-        if low >= n:
+        P = planes[f]
+        found = selfs[f] if selfs is not None else finger_self_pairs(P, limit, self_gap_links(len(P) - 1, r_link))
+        if found is None:
             continue
-        cand = isect.candidate_pairs(P, limit=limit, min_gap=low)  # one pass for both tests
-        ci, cj = isect.crossing_pairs(P, pairs=cand)
+        ci, cj, i, j, dist = found
         if ci.size:
             pairs = ", ".join(f"{int(i)}/{int(j)}" for i, j in list(zip(ci, cj))[:4]) + (" ..." if ci.size > 4 else "")
             add("self_crossing", f"{who} {f}: the centreline crosses itself ({ci.size} crossing(s), links {pairs}): a self-crossing "
                        f"the chain has no contact to prevent; not a physical state")
-        far = cand[1] - cand[0] >= gap
-        i, j = cand[0][far], cand[1][far]
-        dist = isect.segment_distances(P[i], P[i + 1], P[j], P[j + 1]) if i.size else np.zeros(0)
-        i, j, dist = i[dist < limit], j[dist < limit], dist[dist < limit]
         if i.size and not ci.size:
             k = int(np.argmin(dist))
             add("self_overlap", f"{who} {f}: {i.size} pair(s) of links closer than their capsules allow (links {int(i[k])} and "
@@ -439,14 +449,11 @@ def chain_violations(planar, world, *, r_link: float, r_tip: float | None, solid
                        f"{limit:.3g} l): the finger passes through itself")
     for f in range(K):
         for g in range(f + 1, K):
-            A, B = np.asarray(world[f], dtype=float), np.asarray(world[g], dtype=float)
-            n = len(A) - 1
-            i, j, dist = isect.close_link_pairs(A, limit, other=B)
-            sine = 1.0 if base_sines is None else float(base_sines[f][g])
-            # two straight fingers from the common base: near ends at arcs s_i, s_j are >= (s_i + s_j) sin(da/2)
-            # apart; pairs that close to the base are within the limit by construction (the palm's joint)
-            far = (i + j) / n * sine >= limit
-            i, j, dist = i[far], j[far], dist[far]
+            if batched is not None:
+                i, j, dist = batched[(f, g)]
+            else:
+                sine = 1.0 if base_sines is None else float(base_sines[f][g])
+                i, j, dist = finger_pair_contacts(nodes[f], nodes[g], limit, sine)
             if i.size:
                 k = int(np.argmin(dist))
                 add("fingers", f"{who}s {f} and {g} pass through each other ({i.size} pair(s) of links closer than "

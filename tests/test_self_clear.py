@@ -67,7 +67,7 @@ def test_chain_violations_unchanged_by_the_proof(monkeypatch):
     rng = np.random.default_rng(11)
     chains = list(_chains(rng))
     fast = [V.chain_violations([P], [P], r_link=0.02, r_tip=None, solid=None) for P in chains]
-    monkeypatch.setattr(V, "self_clear_below", lambda nodes, limit, gap: 2)
+    monkeypatch.setattr(isect, "self_clear_below", lambda nodes, limit, gap: 2)  # the proof off (simgrip.link_pairs)
     exact = [V.chain_violations([P], [P], r_link=0.02, r_tip=None, solid=None) for P in chains]
     assert fast == exact
     assert any(fast) and not all(fast)

@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import pytest
 
-from simgrip.envs.throughput import measure_throughput
+from simgrip.envs.throughput import measure_throughput, violation_check_times
 
 
 @pytest.mark.parametrize("clock", ["wall", "cpu"])
@@ -37,3 +37,13 @@ def test_env_id_must_be_a_registered_pick_env():
         measure_throughput(steps=10, env_id="simgrip/NoSuch-v0")
     with pytest.raises(ValueError, match="env_id"):
         measure_throughput(steps=10, env_id="CartPole-v1")
+
+
+def test_violation_check_times_both_ways_on_the_claws_invalid_states():
+    """Random actions curl the sphere claws through each other: the states reach chain_violations, timed both ways,
+    and both ways give the same messages on each."""
+    r = violation_check_times("simgrip/PickSphereFragile-v5", steps=1500, repeats=1)
+    assert r["checks"] == 60 and r["states"] > 0 and r["same"] is True  # FRAGILE_VALIDITY_EVERY = 25 steps
+    assert r["batched_us"] > 0 and r["pruned_us"] > 0
+    with pytest.raises(ValueError, match="env_id"):
+        violation_check_times("simgrip/NoSuch-v0", steps=10)
