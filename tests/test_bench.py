@@ -132,7 +132,7 @@ def test_errors_do_not_depend_on_jobs(tmp_path, bench, monkeypatch):
     # other sections take no jobs and run in this process either way (settle targets, K-finger, modes, cable,
     # overhead, full contact, env throughput: ~60 % of this run's time), so here they are replaced by the jobs = 1
     # run's own records: the jobs = 2 rows below are computed exactly as before.
-    import simgrip.envs.throughput as throughput
+    import simgrip.harness.bench_envs as bench_envs
     import simgrip.harness.bench_cable as bench_cable
     import simgrip.harness.bench_full as bench_full
     import simgrip.harness.bench_gripper as bench_gripper
@@ -147,7 +147,7 @@ def test_errors_do_not_depend_on_jobs(tmp_path, bench, monkeypatch):
                                  (bench_overhead, "write_overhead_bench", res.overhead),
                                  (bench_full, "write_full_bench", res.full)):
         monkeypatch.setattr(module, name, lambda out, _record=record, **kw: _record)
-    monkeypatch.setattr(throughput, "measure_throughput", lambda *, grip, **kw: res.env[grip])
+    monkeypatch.setattr(bench_envs, "env_speed", lambda **kw: res.env)
     other = run_bench(tmp_path, quick=True, jobs=2, progress=False, grips=("free", "I"), skips=False, sweep=False)
     for r in other.rows:
         same = [x for x in res.rows if (x["grip"], x["n"], x["method"], x["tol"]) == (r["grip"], r["n"], r["method"], r["tol"])]
@@ -156,14 +156,24 @@ def test_errors_do_not_depend_on_jobs(tmp_path, bench, monkeypatch):
             assert same[0][key] == r[key], (r["grip"], r["n"], r["method"], key)
 
 
-def test_env_throughput_is_measured(bench):
+def test_env_speed_is_measured_for_every_registered_env(bench):
+    """Issue 18, item 5: each registered id's overhead over bare mj_step, in bench.json and summary.md against the
+    target, and the claws' validity check both ways (the same messages)."""
+    from simgrip.envs import ENV_IDS, FRAGILE_ENV_IDS, MULTI_ENV_IDS
+    from simgrip.harness.bench_envs import CLAW_IDS, ENV_OVERHEAD_TARGET
+
     res, out = bench
     data = json.loads((out / "bench.json").read_text())
-    for grip in ("I", "III"):
-        e = data["env"][grip]
-        assert e["env_steps_per_s"] > 0 and e["raw_physics_steps_per_s"] > 0
-        assert math.isfinite(e["overhead_percent"])
-    assert "Gymnasium pick environment throughput" in (out / "summary.md").read_text()
+    summary = (out / "summary.md").read_text()
+    assert set(data["env"]["throughput"]) == set(ENV_IDS + MULTI_ENV_IDS + FRAGILE_ENV_IDS)
+    for env_id, e in data["env"]["throughput"].items():
+        assert e["env_steps_per_s"] > 0 and e["raw_physics_steps_per_s"] > 0 and e["clock"] == "cpu"
+        assert math.isfinite(e["overhead_percent"]) and e["replay_max_abs_diff"] == 0.0
+        met = "yes" if e["overhead_percent"] <= ENV_OVERHEAD_TARGET else "no"
+        assert f"| {env_id} | " in summary and f"{e['overhead_percent']:.1f} % | {met} |" in summary
+    assert set(data["env"]["validity"]) == set(CLAW_IDS)
+    for v in data["env"]["validity"].values():
+        assert v["states"] > 0 and v["same"] is True and v["batched_us"] > 0 and v["pruned_us"] > 0
 
 
 def test_far_extrapolations_are_only_lower_bounds(bench):

@@ -87,7 +87,8 @@ class BenchResult:
     sweep : dict
         The Fig. 7 sweep timing (simulation warm, cold, BVP).
     env : dict
-        Gymnasium env throughput per grip (:func:`simgrip.envs.throughput.measure_throughput`).
+        The Gymnasium envs' speed: every registered id's overhead over bare ``mj_step`` and the claws' validity check
+        (:func:`simgrip.harness.bench_envs.env_speed`).
     settle_targets : dict
         The settle's speed and accuracy targets, name -> met (:mod:`simgrip.harness.bench_settle`).
     files : dict
@@ -179,7 +180,7 @@ def run_bench(
     options : simgrip.parallel.runner.RunnerOptions, optional
         How to run (e.g. on an existing Dask cluster); replaces ``jobs`` and ``progress``.
     """
-    from simgrip.envs.throughput import measure_throughput
+    from simgrip.harness.bench_envs import env_speed
     from simgrip.parallel.runner import RunnerOptions, run_tasks
 
     _check_positive("repeats", repeats)
@@ -213,8 +214,7 @@ def run_bench(
             r.setdefault(c, None)
     if sweep_rec and "error" not in sweep_rec:
         skip_rows.append(warm_start_row(sweep_rec))
-    env = {grip: measure_throughput(steps=300 if quick else 2000, grip=grip, repeats=1 if quick else 3)
-           for grip in ("I", "III")}
+    env = env_speed(quick=quick)  # issue 18, item 5: every registered env against bare mj_step
     workers = 1 if options.in_process else (None if options.remote else options.local_workers)
     result = BenchResult(rows=rows, ratios=ratios(rows), skips=skip_rows, sweep=sweep_rec, env=env,
                          jobs=workers, quick=bool(quick), elapsed_s=time.perf_counter() - t_start)

@@ -18,6 +18,8 @@ from __future__ import annotations
 import math
 import os
 
+from simgrip.harness.bench_envs import envs_md
+
 __all__ = ["ratios", "summary_md", "skips_md", "fmt", "checks_md", "ratio_lines", "write_record"]
 
 GRIP_ORDER = ("free", "I", "II", "III")
@@ -172,18 +174,6 @@ def _sweep_text(s) -> list[str]:
             f"couple; discretisation error at this n), max |N_sim − N_chain| {fmt(s.get('max_dN_sim_vs_chain'), '.2e')}."]
 
 
-def _env_table(env) -> list[str]:
-    if not env:
-        return []
-    L = ["", "## Gymnasium pick environment throughput", "",
-         "| env | env steps/s | physics steps/s (env) | raw mj_step steps/s | overhead |", "|---|---|---|---|---|"]
-    for grip, e in env.items():
-        L.append(f"| {'Pick-v1' if grip == 'I' else 'PickCradle-v1'} | {fmt(e['env_steps_per_s'])} | "
-                 f"{fmt(e['env_physics_steps_per_s'])} | {fmt(e['raw_physics_steps_per_s'])} | "
-                 f"{e['overhead_percent']:.1f} % |")
-    return L
-
-
 def summary_md(res, load_avg) -> str:
     """``summary.md``: ratios, every row, the sweep, the env throughput and the skipping table."""
     where = f"jobs = {res.jobs}" if res.jobs is not None else "on an existing Dask cluster"
@@ -193,7 +183,7 @@ def summary_md(res, load_avg) -> str:
     L += _ratio_tables(res)
     L += [""] + _rows_table(res)
     L += _sweep_text(res.sweep)
-    L += _env_table(res.env)
+    L += envs_md(res.env)
     L += ["", "## What skipping buys", "", skips_md(res.skips)]
     jobs = f" --jobs {res.jobs}" if res.jobs is not None else " --scheduler ADDRESS"
     L += ["Reproduce: `simgrip bench" + (" --quick" if res.quick else "") + f"{jobs}` "
