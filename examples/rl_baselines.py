@@ -59,7 +59,8 @@ the summary and the command is equal) over different seeds, copies their ``<algo
 ``aggregate.json`` (the seeds merged, the summary recomputed, ``combined_from``: each batch's command) and
 ``learning_curves.png``; the runs' folders (models, logs) stay in the batches.
 
-Ctrl-C stops every running child (SIGTERM, then SIGKILL after 5 s) and exits 130 with one line.  Exit 2 (one
+Ctrl-C, or SIGTERM (``kill``, ``timeout``, a batch scheduler), stops every running child (SIGTERM, then SIGKILL
+after 5 s) and exits 130 with one line.  Exit 2 (one
 line) on a bad argument, 1 when a run failed (its log names why; the others are still aggregated).
 """
 
@@ -463,8 +464,11 @@ def main(argv=None) -> int:
         p.error(str(e))
     jobs = [(a, s, run_command(a, s, args, out / f"{a}_seed{s}"), out / f"{a}_seed{s}") for a in algos
             for s in args.seeds]
+    from simgrip.interrupt import signals_as_interrupt
+
     try:
-        codes = run_all(jobs, args.jobs)
+        with signals_as_interrupt():  # SIGTERM too: the children run in their own sessions, only we can stop them
+            codes = run_all(jobs, args.jobs)
     except KeyboardInterrupt:
         print(f"rl_baselines: interrupted; stopped the running trainings (finished results stay in {out})",
               file=sys.stderr, flush=True)

@@ -130,7 +130,10 @@ def _children(pid: int) -> list[int]:
 
 
 @pytest.mark.skipif(not Path("/proc/self/task").exists(), reason="reads the child list from /proc")
-def test_ctrl_c_stops_every_child_with_one_line(tmp_path):
+@pytest.mark.parametrize("signum", [signal.SIGINT, signal.SIGTERM])
+def test_ctrl_c_or_sigterm_stops_every_child_with_one_line(tmp_path, signum):
+    """Ctrl-C, and SIGTERM (a `kill`, `timeout`, a batch scheduler), stop the trainings too: each runs in its own
+    session, so only the driver can stop it (before SIGTERM was handled it left them running to their budget)."""
     _needs_sb3()
     cmd = [sys.executable, str(SCRIPT), "--env", "simgrip/PickFragile-v0", "--algo", "ppo", "--seeds", "0",
            "--minutes", "10", "--eval-seeds", "8000-8001", "--out", str(tmp_path / "runs")]
@@ -143,18 +146,22 @@ def test_ctrl_c_stops_every_child_with_one_line(tmp_path):
             kids = _children(p.pid)
         assert kids, "the driver started no training process"
         started = {k: _state_and_start(k) for k in kids}
-        p.send_signal(signal.SIGINT)
+        p.send_signal(signum)
         _, err = p.communicate(timeout=30)
     finally:
         if p.poll() is None:
             p.kill()
             p.wait()
+    alive = []
+    for k in kids:  # gone (or a zombie nobody waits for: not running), or its pid now another process's
+        now = _state_and_start(k)
+        if not (now is None or now[0] in ("Z", "X") or started[k] is None or now[1] != started[k][1]):
+            alive.append(k)
+            os.kill(k, signal.SIGKILL)  # a failing run leaves no training behind
     assert p.returncode == 130
     lines = err.strip().splitlines()
     assert len(lines) == 1 and "interrupted" in lines[0]
-    for k in kids:  # gone (or a zombie nobody waits for: not running), or its pid now another process's
-        now = _state_and_start(k)
-        assert now is None or now[0] in ("Z", "X") or started[k] is None or now[1] != started[k][1], (k, now)
+    assert not alive, alive
 
 
 def _args(mod, **overrides):
