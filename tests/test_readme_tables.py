@@ -27,11 +27,11 @@ AIDED = "PPO behind its aid, 3 seeds"
 
 #: README row -> (the id whose non-learned records it shows, {learned column header: aggregate folder}).
 ROWS = {
-    "PickFragile-v6": ("PickFragile-v4", {"PPO, 3 seeds": "rl_pick_v5_wdrop0", "SAC, 3 seeds": "rl_pick_v5_sac",
+    "PickFragile-v6": ("PickFragile-v4", {"PPO, 3 seeds": "rl_pick_v5_wdrop0", "SAC, 3 seeds": "rl_pick_v6_sac",
                                           AIDED: "rl_pick_v6_offset"}),
     "PickMultiFragile-v6": ("PickMultiFragile-v4", {"PPO, 3 seeds": "rl_multi_v5_wdrop0",
-                                                    "SAC, 3 seeds": "rl_multi_v5_sac", AIDED: "rl_multi_v6_light"}),
-    "PlaceFragile-v7": ("PlaceFragile-v4", {"PPO, 3 seeds": "rl_place_v7", "SAC, 3 seeds": "rl_place_v4_sac",
+                                                    "SAC, 3 seeds": "rl_multi_v6_sac", AIDED: "rl_multi_v6_light"}),
+    "PlaceFragile-v7": ("PlaceFragile-v4", {"PPO, 3 seeds": "rl_place_v7", "SAC, 3 seeds": "rl_place_v7_sac",
                                             AIDED: "rl_place_v7_residual_palm"}),
     "PickCradleFragile-v5": ("PickCradleFragile-v4", {"PPO, 3 seeds": "rl_cradle_v5",
                                                       "SAC, 3 seeds": "rl_cradle_v5_sac",
