@@ -1,7 +1,7 @@
 """The Gymnasium environments' speed for ``simgrip bench`` (issue 18, item 5), measured in the bench's run.
 
-* every registered id (:data:`simgrip.envs.ENV_IDS`, ``MULTI_ENV_IDS``, ``FRAGILE_ENV_IDS``): env steps per second and the env's overhead over bare
-  ``mj_step`` on the same states (:func:`simgrip.envs.throughput.measure_throughput`, this thread's CPU time, the
+* every registered id (:data:`simgrip.envs.ENV_IDS`, ``MULTI_ENV_IDS``, ``FRAGILE_ENV_IDS``): env steps per second
+  and the env's overhead over bare ``mj_step`` on the same states (:func:`simgrip.envs.throughput.measure_throughput`, this thread's CPU time, the
   median over chunks of each chunk's ratio), against the issue's target :data:`ENV_OVERHEAD_TARGET`;
 * the validity check of an invalid claw state, every pair of links at once against pruned
   (:func:`simgrip.envs.throughput.violation_check_times` on :data:`CLAW_IDS`: the states random actions curl
@@ -51,6 +51,6 @@ def envs_md(speed: dict) -> list[str]:
               "finger and a pair of fingers at a time):", "",
               "| env | invalid states | every pair at once | pruned | same messages |", "|---|---|---|---|---|"]
         for env_id, v in speed["validity"].items():
-            L.append(f"| {env_id} | {v['states']} | {v['batched_us']:.0f} µs | {v['pruned_us']:.0f} µs | "
-                     f"{'yes' if v['same'] else 'NO'} |")
+            times = (f"{v['batched_us']:.0f} µs | {v['pruned_us']:.0f} µs" if v["states"] else "— | —")
+            L.append(f"| {env_id} | {v['states']} | {times} | {'yes' if v['same'] else 'NO'} |")
     return L
