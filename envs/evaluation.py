@@ -20,7 +20,7 @@ import numpy as np
 from simgrip.envs.outcome import outcome  # outcomes() counts with it; also importable from here
 
 __all__ = ["EpisodeResult", "GAMMA", "add_episode_arguments", "check_env_id", "discount", "env_kwargs", "json_object",
-           "make_env", "outcome", "outcomes", "positive_int", "non_negative_int", "probability", "run_episodes", "summary"]
+           "log_std", "make_env", "outcome", "outcomes", "positive_int", "non_negative_int", "probability", "run_episodes", "summary"]
 
 #: the discount of the returns :func:`run_episodes` also reports: Stable-Baselines3's default ``gamma`` (PPO, SAC)
 GAMMA = 0.99
@@ -58,6 +58,11 @@ def _number_in(text: str, ok, interval: str) -> float:
 def discount(text: str) -> float:
     """argparse type: a discount ``gamma`` in (0, 1]."""
     return _number_in(text, lambda g: 0.0 < g <= 1.0, "(0, 1]")
+
+
+def log_std(text: str) -> float:
+    """argparse type: a PPO policy's initial log standard deviation, in [-5, 1] (natural log; SB3's default 0)."""
+    return _number_in(text, lambda x: -5.0 <= x <= 1.0, "[-5, 1]")
 
 
 def probability(text: str) -> float:

@@ -46,8 +46,8 @@ drives the named actions and the policy's action is added to it, in training and
 earlier ``rl_baselines.py`` run of the same seed on another task (a curriculum: the pinch's policies for the
 pick-and-place; :mod:`simgrip.envs.warm_start`), recorded as ``init_from`` with that run's command
 (``init_command``); checkpoints count this run's own CPU minutes, to which the source's budget adds;
-``--gamma G`` passes the discount instead of the default 0.99, named in every JSON's
-``hyperparameters``.
+``--gamma G`` passes the discount instead of the default 0.99, and ``--log-std-init X`` (PPO only) the policy's
+initial log standard deviation instead of 0, each named in every JSON's ``hyperparameters``.
 
 Batches of one experiment run apart (some seeds here, others there or later, each with this command but for
 ``--seeds``, ``--jobs`` and ``--out``) are combined into one folder, as if run at once, by
@@ -103,6 +103,12 @@ def _discount(text: str) -> float:
     return discount(text)
 
 
+def _log_std(text: str) -> float:
+    from simgrip.envs.evaluation import log_std  # imported when used, as _json_object
+
+    return log_std(text)
+
+
 def _probability(text: str) -> float:
     from simgrip.envs.evaluation import probability  # imported when used, as _json_object
 
@@ -149,6 +155,8 @@ def run_command(algo: str, seed: int, args, folder: Path) -> list[str]:
         cmd += ["--frame-stack", str(args.frame_stack)]
     if args.gamma is not None:
         cmd += ["--gamma", repr(args.gamma)]
+    if args.log_std_init is not None:
+        cmd += ["--log-std-init", repr(args.log_std_init)]
     if args.scripted_start is not None:
         cmd += ["--scripted-start", repr(args.scripted_start)]
     if args.light_bias is not None:
@@ -414,6 +422,9 @@ def main(argv=None) -> int:
                         "default 1: the env's own)")
     p.add_argument("--gamma", type=_discount, default=None,
                    help="the discount, in (0, 1], instead of the library default 0.99 (recorded in the JSON)")
+    p.add_argument("--log-std-init", type=_log_std, default=None, metavar="X",
+                   help="PPO only: the policy's initial log standard deviation, in [-5, 1], instead of the library "
+                        "default 0 (recorded in the JSON)")
     p.add_argument("--scripted-start", type=_probability, default=None, metavar="P",
                    help="start that share of the training episodes part-way through the scripted observation-only "
                         "controller's episode (simgrip.envs.scripted_start; evaluation starts plainly; default none)")
@@ -455,6 +466,10 @@ def main(argv=None) -> int:
         except ValueError as e:
             p.error(str(e))
     algos = list(dict.fromkeys(args.algo))
+    if args.log_std_init is not None and algos != ["ppo"]:
+        p.error("--log-std-init: PPO only (--algo ppo)")
+    if args.log_std_init is not None and args.init_from is not None:
+        p.error("--log-std-init: not with --init-from (the copied policies bring their own log standard deviation)")
     init_command = _check_init(p, args, algos) if args.init_from is not None else None
     try:
         out = check_output_dir(args.out, "--out")
@@ -490,8 +505,9 @@ def main(argv=None) -> int:
     write_json(out / "aggregate.json", {
         "env": args.env, **({"env_kwargs": args.env_kwargs} if args.env_kwargs else {}), "algos": algos, "seeds": args.seeds, "minutes": args.minutes,
         "checkpoint_minutes": args.checkpoint_minutes, "clock": "cpu", "eval_seeds": [lo, hi],
-        "hyperparameters": "Stable-Baselines3 defaults, one env, one torch thread"
-        + ("" if args.gamma is None else f"; but gamma = {args.gamma!r}"), "summary": summary,
+        "hyperparameters": "Stable-Baselines3 defaults, one env, one torch thread" + "".join(
+            f"; but {k} = {v!r}" for k, v in (("gamma", args.gamma), ("log_std_init", args.log_std_init))
+            if v is not None), "summary": summary,
         **({"action_offset": [float(x) for x in args.action_offset]} if args.action_offset is not None else {}),
         **({"frame_stack": args.frame_stack} if args.frame_stack is not None else {}),
         **({"scripted_start": args.scripted_start} if args.scripted_start is not None else {}),

@@ -76,7 +76,9 @@ time, and ``eval``: the copied policy's held-out success, return and outcomes be
 ``cpu_s_with_init``, the CPU time of both trainings (the budget counts this training's alone).
 
 ``--gamma G`` changes one hyperparameter, the discount (default 0.99), and the JSON's ``hyperparameters``
-says so; the held-out ``mean_discounted_return`` is then at ``G``.  ``examples/evaluate_policy.py``
+says so; the held-out ``mean_discounted_return`` is then at ``G``.  ``--log-std-init X`` (PPO only) changes another, the policy's
+initial log standard deviation (``policy_kwargs={"log_std_init": X}``; default 0, a standard deviation of 1 in
+every action), also named in ``hyperparameters``.  ``examples/evaluate_policy.py``
 re-evaluates a saved model, or a scripted controller, the same way.
 
 ``--threads`` sets PyTorch's intra-op threads (default 1: one core per
@@ -97,8 +99,8 @@ from pathlib import Path
 import numpy as np
 
 import simgrip.envs  # noqa: F401  (registers the simgrip ids)
-from simgrip.envs.evaluation import (GAMMA, check_env_id, discount, json_object, make_env, non_negative_int, outcomes,
-                                     probability, run_episodes, summary)
+from simgrip.envs.evaluation import (GAMMA, check_env_id, discount, json_object, log_std, make_env, non_negative_int,
+                                     outcomes, probability, run_episodes, summary)
 from simgrip.io import atomic_write, check_output_dir, check_output_files_in, write_json
 
 ALGOS = ("ppo", "sac")
@@ -213,11 +215,30 @@ def _warm_start(model, train_env, init_from: str, action_offset) -> dict:
             "new_observation": list(plan.new_obs), "new_actions": list(plan.new_actions)}
 
 
+def model_kwargs(algo: str, gamma: float | None, log_std_init: float | None) -> dict:
+    """The keyword arguments that change the library's defaults: ``gamma``; ``log_std_init`` (PPO only: SAC's
+    standard deviation is an output of its network, not a parameter)."""
+    kwargs = {} if gamma is None else {"gamma": gamma}
+    if log_std_init is not None:
+        if algo != "ppo":
+            raise ValueError(f"log_std_init: PPO only, got algo {algo!r}")
+        kwargs["policy_kwargs"] = {"log_std_init": float(log_std_init)}
+    return kwargs
+
+
+def hyperparameters(gamma: float | None, log_std_init: float | None) -> str:
+    """The JSON's ``hyperparameters``: the library's defaults, and which ones this run changed."""
+    changed = ([] if gamma is None else [f"gamma = {gamma!r}"]) + \
+        ([] if log_std_init is None else [f"log_std_init = {log_std_init!r}"])
+    return "Stable-Baselines3 defaults" + (" but " + ", ".join(changed) if changed else "")
+
+
 def train(algo: str, env_id: str, *, steps: int, minutes: float, seed: int, out: Path,
           eval_episodes: int, eval_seed: int, clock: str = "cpu", checkpoint_minutes: float | None = None,
           env_kwargs: dict | None = None, normalize: bool = False, action_offset=None, gamma: float | None = None,
           frame_stack: int | None = None, scripted_start: float | None = None,
-          light_bias: float | None = None, init_from: str | None = None, residual=None) -> dict:
+          light_bias: float | None = None, init_from: str | None = None, residual=None,
+          log_std_init: float | None = None) -> dict:
     """Train ``algo`` with library defaults within the budget, write its curve, model and evaluation
     (``env_kwargs``: ``gym.make``'s keyword arguments, for training and evaluation alike; ``normalize``: train
     behind SB3's ``VecNormalize`` with its defaults; ``action_offset``: train and evaluate behind
@@ -229,7 +250,8 @@ def train(algo: str, env_id: str, *, steps: int, minutes: float, seed: int, out:
     training episodes' masses drawn from the light end, :class:`simgrip.envs.light_bias.LightBias`; evaluation
     draws the task's own; ``init_from``: a saved PPO model of another run to start from,
     :mod:`simgrip.envs.warm_start`; ``residual``: action names the scripted controller drives, the policy's action
-    added, :class:`simgrip.envs.scripted_residual.ScriptedResidual`, for training and evaluation alike)."""
+    added, :class:`simgrip.envs.scripted_residual.ScriptedResidual`, for training and evaluation alike;
+    ``log_std_init``: PPO's initial log standard deviation instead of 0)."""
     env_kwargs = dict(env_kwargs or {})
     from stable_baselines3 import PPO, SAC
     from stable_baselines3.common.callbacks import BaseCallback
@@ -281,7 +303,7 @@ def train(algo: str, env_id: str, *, steps: int, minutes: float, seed: int, out:
         from stable_baselines3.common.vec_env import VecNormalize
 
         env = VecNormalize(env)  # SB3's defaults; the Monitor inside still records the env's own returns
-    model = cls("MlpPolicy", env, seed=seed, verbose=0, **({} if gamma is None else {"gamma": gamma}))
+    model = cls("MlpPolicy", env, seed=seed, verbose=0, **model_kwargs(algo, gamma, log_std_init))
     init = None
     if init_from is not None:
         init = _warm_start(model, env.envs[0] if hasattr(env, "envs") else env.venv.envs[0], init_from,
@@ -307,8 +329,7 @@ def train(algo: str, env_id: str, *, steps: int, minutes: float, seed: int, out:
     result = {"algo": algo.upper(), "env": env_id, "timesteps": int(model.num_timesteps), "wall_s": round(wall, 1), "cpu_s": round(cpu, 1),
               "clock": clock, "budget_minutes": minutes,
               "train_episodes": len(rows), "seed": seed,
-              "hyperparameters": "Stable-Baselines3 defaults" if gamma is None else
-              f"Stable-Baselines3 defaults but gamma = {gamma!r}"}
+              "hyperparameters": hyperparameters(gamma, log_std_init)}
     if env_kwargs:
         result["env_kwargs"] = env_kwargs
     wrappers = []
@@ -418,6 +439,9 @@ def main(argv=None) -> int:
                         "default 1: the env's own)")
     p.add_argument("--gamma", type=discount, default=None,
                    help="the discount, in (0, 1], instead of the library default 0.99 (recorded in the JSON)")
+    p.add_argument("--log-std-init", type=log_std, default=None, metavar="X",
+                   help="PPO only: the policy's initial log standard deviation, in [-5, 1], instead of the library "
+                        "default 0 (recorded in the JSON)")
     p.add_argument("--scripted-start", type=probability, default=None, metavar="P",
                    help="start that share of the training episodes part-way through the scripted observation-only "
                         "controller's episode (simgrip.envs.scripted_start; evaluation starts plainly)")
@@ -446,6 +470,11 @@ def main(argv=None) -> int:
                      args.light_bias, args.residual).close()
         except ValueError as e:
             p.error(str(e))
+    if args.log_std_init is not None:
+        if args.algo != ["ppo"]:
+            p.error("--log-std-init: PPO only (--algo ppo)")
+        if args.init_from is not None:
+            p.error("--log-std-init: not with --init-from (the copied policy brings its own log standard deviation)")
     if args.init_from is not None:
         if args.algo != ["ppo"]:
             p.error("--init-from: PPO only (--algo ppo)")
@@ -470,7 +499,8 @@ def main(argv=None) -> int:
                        checkpoint_minutes=args.checkpoint_minutes, env_kwargs=args.env_kwargs,
                        normalize=args.normalize, action_offset=args.action_offset, gamma=args.gamma,
                        frame_stack=args.frame_stack, scripted_start=args.scripted_start,
-                       light_bias=args.light_bias, init_from=args.init_from, residual=args.residual)
+                       light_bias=args.light_bias, init_from=args.init_from, residual=args.residual,
+                       log_std_init=args.log_std_init)
         print(json.dumps(result), flush=True)
     plot_curves(out)
     return 0

@@ -205,6 +205,32 @@ def test_evaluate_policy_refuses_an_env_without_that_controller(env_id, word, ca
     assert word in capsys.readouterr().err
 
 
+def test_train_sb3_log_std_init_sets_ppos_start_and_says_so(tmp_path):
+    """``--log-std-init -1``: the saved PPO policy's log standard deviations started at -1, and the JSON names the
+    changed hyperparameter beside the discount's.  The run is one rollout (2048 steps) and one update: 10 epochs of
+    32 minibatches, each an Adam step of at most about the learning rate 3e-4 per parameter, so the log standard
+    deviations lie within 320 * 3e-4 = 0.096 of their start (the default start, 0, does not)."""
+    pytest.importorskip("stable_baselines3")
+    from stable_baselines3 import PPO
+
+    _example("train_sb3").main(["--algo", "ppo", "--env", "simgrip/PickFragile-v6", "--steps", "64",
+                                "--log-std-init", "-1", "--gamma", "0.95", "--eval-episodes", "1",
+                                "--eval-seed", "8310", "--out", str(tmp_path)])
+    trained = json.loads((tmp_path / "ppo_eval.json").read_text())
+    assert trained["hyperparameters"] == "Stable-Baselines3 defaults but gamma = 0.95, log_std_init = -1.0"
+    log_std = PPO.load(tmp_path / "ppo_model.zip", device="cpu").policy.log_std.detach().numpy()
+    assert trained["timesteps"] == 2048 and abs(log_std + 1.0).max() < 0.096, log_std
+
+
+@pytest.mark.parametrize("extra", [["--algo", "sac"], ["--algo", "ppo", "--init-from", "x.zip"],
+                                   ["--algo", "ppo", "--log-std-init", "inf"]])
+def test_train_sb3_log_std_init_refusals_exit_2(extra, tmp_path, capsys):
+    with pytest.raises(SystemExit) as e:
+        _example("train_sb3").main(["--env", "simgrip/PickFragile-v6", "--log-std-init", "-1", *extra,
+                                    "--out", str(tmp_path / "o")])
+    assert e.value.code == 2 and "--log-std-init" in capsys.readouterr().err.strip().splitlines()[-1]
+
+
 def test_evaluate_policy_model_reproduces_train_sb3s_evaluation(tmp_path, capsys):
     """A model evaluated again by evaluate_policy: the held-out figures train_sb3 wrote, digit for digit, at
     the discount it was trained with."""

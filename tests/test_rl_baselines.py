@@ -64,6 +64,10 @@ def test_aggregate_mean_min_max_per_checkpoint_and_failed_runs():
     (["--gamma", "0"], "--gamma"),
     (["--gamma", "1.5"], "--gamma"),
     (["--gamma", "nan"], "--gamma"),
+    (["--log-std-init", "nan"], "--log-std-init"),
+    (["--log-std-init", "-6"], "--log-std-init"),
+    (["--log-std-init", "-1", "--algo", "sac"], "--log-std-init"),
+    (["--log-std-init", "-1", "--algo", "ppo", "sac"], "--log-std-init"),
 ])
 def test_bad_arguments_exit_2_with_one_line(extra, word, tmp_path, capsys):
     argv = ["--env", "simgrip/PickFragile-v0", "--out", str(tmp_path / "o"), *extra]
@@ -169,7 +173,7 @@ def _args(mod, **overrides):
     given but ``overrides``."""
     options = dict(env="simgrip/PickFragile-v6", minutes=1.0, steps=10, eval_seeds=(8000, 8001),
                    checkpoint_minutes=None, env_kwargs={}, normalize=False, action_offset=None, gamma=None,
-                   frame_stack=None, scripted_start=None, light_bias=None, init_from=None, residual=None)
+                   log_std_init=None, frame_stack=None, scripted_start=None, light_bias=None, init_from=None, residual=None)
     return mod.argparse.Namespace(**{**options, **overrides})
 
 
@@ -198,6 +202,15 @@ def test_gamma_reaches_every_run_command(tmp_path):
     assert float(cmd[cmd.index("--gamma") + 1]) == 0.995
     args.gamma = None
     assert "--gamma" not in mod.run_command("ppo", 0, args, tmp_path)  # the library's default, not written
+
+
+def test_log_std_init_reaches_every_run_command(tmp_path):
+    mod = _module()
+    args = _args(mod, log_std_init=-1.0)
+    cmd = mod.run_command("ppo", 0, args, tmp_path)
+    assert float(cmd[cmd.index("--log-std-init") + 1]) == -1.0
+    args.log_std_init = None
+    assert "--log-std-init" not in mod.run_command("ppo", 0, args, tmp_path)  # the library's default, not written
 
 
 def test_frame_stack_reaches_every_run_command(tmp_path):
