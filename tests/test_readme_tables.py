@@ -32,7 +32,7 @@ ROWS = {
     "PickMultiFragile-v6": ("PickMultiFragile-v4", {"PPO, 3 seeds": "rl_multi_v5_wdrop0",
                                                     "SAC, 3 seeds": "rl_multi_v6_sac", AIDED: "rl_multi_v6_light"}),
     "PlaceFragile-v7": ("PlaceFragile-v4", {"PPO, 3 seeds": "rl_place_v7", "SAC, 3 seeds": "rl_place_v7_sac",
-                                            AIDED: "rl_place_v7_residual_palm"}),
+                                            AIDED: "rl_place_v7_residual_palm/log_std_init"}),
     "PickCradleFragile-v5": ("PickCradleFragile-v4", {"PPO, 3 seeds": "rl_cradle_v5",
                                                       "SAC, 3 seeds": "rl_cradle_v5_sac",
                                                       AIDED: "rl_cradle_v5_residual_palm"}),
@@ -42,7 +42,8 @@ ROWS = {
 }
 
 #: the aids an aided cell names -> the rl_baselines.py option that applies each
-AIDS = {"offset": "--action-offset", "light bias": "--light-bias", "scripted palm": "--residual"}
+AIDS = {"offset": "--action-offset", "light bias": "--light-bias", "scripted palm": "--residual",
+        "log std -1": "--log-std-init"}
 
 #: (id, its keyword arguments as JSON) -> the id that env is, step for step (simgrip.envs.pick_fragile_v6).
 EQUIVALENT = {("PickFragile-v5", '{"w_drop": 0.0}'): "PickFragile-v6",
@@ -143,6 +144,10 @@ def test_learned_cells_are_their_aggregates(row):
         assert "--gamma" not in options and "--normalize" not in options and "--init-from" not in options
         named = {name for name in AIDS if name in cells[column]} if column == AIDED else set()
         assert {AIDS[name] for name in named} == options & set(AIDS.values()), (column, options)
+        if "log std -1" in named:  # the one hyperparameter an aid changes, at the value the cell names
+            cmd = agg["command"]
+            assert float(cmd[cmd.index("--log-std-init") + 1]) == -1.0
+            assert agg["hyperparameters"].endswith("; but log_std_init = -1.0")
         if column == AIDED and "scripted palm" in named:  # every palm action scripted, the curvature learned
             after = agg["command"][agg["command"].index("--residual") + 1:]
             residual = set(itertools.takewhile(lambda a: not a.startswith("--"), after))
