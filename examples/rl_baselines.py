@@ -443,6 +443,10 @@ def main(argv=None) -> int:
     cores = os.cpu_count() or 1
     if args.jobs > cores:
         p.error(f"--jobs: at most the {cores} cores of this machine, got {args.jobs}")
+    if args.log_std_init is not None and set(args.algo) != {"ppo"}:  # the options alone decide, as the checks below
+        p.error("--log-std-init: PPO only (--algo ppo)")
+    if args.log_std_init is not None and args.init_from is not None:
+        p.error("--log-std-init: not with --init-from (the copied policies bring their own log standard deviation)")
     if len(set(args.seeds)) != len(args.seeds):
         p.error(f"--seeds: repeated seed in {args.seeds}")
     if args.checkpoint_minutes and args.checkpoint_minutes > args.minutes:
@@ -466,10 +470,6 @@ def main(argv=None) -> int:
         except ValueError as e:
             p.error(str(e))
     algos = list(dict.fromkeys(args.algo))
-    if args.log_std_init is not None and algos != ["ppo"]:
-        p.error("--log-std-init: PPO only (--algo ppo)")
-    if args.log_std_init is not None and args.init_from is not None:
-        p.error("--log-std-init: not with --init-from (the copied policies bring their own log standard deviation)")
     init_command = _check_init(p, args, algos) if args.init_from is not None else None
     try:
         out = check_output_dir(args.out, "--out")

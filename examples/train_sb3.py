@@ -457,6 +457,11 @@ def main(argv=None) -> int:
                         "ppo_eval.json), copied by simgrip.envs.warm_start (default: a fresh policy)")
     p.add_argument("--out", required=True, help="output folder")
     args = p.parse_args(argv)
+    if args.log_std_init is not None:  # the options alone decide: before the rl extra is looked for
+        if set(args.algo) != {"ppo"}:
+            p.error("--log-std-init: PPO only (--algo ppo)")
+        if args.init_from is not None:
+            p.error("--log-std-init: not with --init-from (the copied policy brings its own log standard deviation)")
     try:
         import stable_baselines3  # noqa: F401
         import torch
@@ -470,11 +475,6 @@ def main(argv=None) -> int:
                      args.light_bias, args.residual).close()
         except ValueError as e:
             p.error(str(e))
-    if args.log_std_init is not None:
-        if args.algo != ["ppo"]:
-            p.error("--log-std-init: PPO only (--algo ppo)")
-        if args.init_from is not None:
-            p.error("--log-std-init: not with --init-from (the copied policy brings its own log standard deviation)")
     if args.init_from is not None:
         if args.algo != ["ppo"]:
             p.error("--init-from: PPO only (--algo ppo)")

@@ -153,7 +153,8 @@ def test_train_sb3_trains_and_evaluates_behind_the_residual(tmp_path, capsys):
 def test_rl_baselines_passes_the_residual_to_every_run(tmp_path, capsys):
     mod = load_example("rl_baselines", "_res")
     args = mod.argparse.Namespace(env=PLACE, minutes=1.0, steps=10, eval_seeds=(8000, 8001), checkpoint_minutes=None,
-                                  env_kwargs={}, normalize=False, action_offset=None, gamma=None, frame_stack=None,
+                                  env_kwargs={}, normalize=False, action_offset=None, gamma=None, log_std_init=None,
+                                  frame_stack=None,
                                   scripted_start=None, light_bias=None, init_from=None, residual=["palm_x", "palm_z"])
     cmd = mod.run_command("ppo", 0, args, tmp_path / "run")
     i = cmd.index("--residual")
