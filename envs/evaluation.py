@@ -20,7 +20,8 @@ import numpy as np
 from simgrip.envs.outcome import outcome  # outcomes() counts with it; also importable from here
 
 __all__ = ["EpisodeResult", "GAMMA", "add_episode_arguments", "check_env_id", "discount", "env_kwargs", "json_object",
-           "log_std", "make_env", "outcome", "outcomes", "positive_int", "non_negative_int", "probability", "run_episodes", "summary"]
+           "log_std", "make_env", "outcome", "outcomes", "positive_int", "non_negative_int", "probability",
+           "run_episodes", "summary"]
 
 #: the discount of the returns :func:`run_episodes` also reports: Stable-Baselines3's default ``gamma`` (PPO, SAC)
 GAMMA = 0.99

@@ -76,9 +76,9 @@ time, and ``eval``: the copied policy's held-out success, return and outcomes be
 ``cpu_s_with_init``, the CPU time of both trainings (the budget counts this training's alone).
 
 ``--gamma G`` changes one hyperparameter, the discount (default 0.99), and the JSON's ``hyperparameters``
-says so; the held-out ``mean_discounted_return`` is then at ``G``.  ``--log-std-init X`` (PPO only) changes another, the policy's
-initial log standard deviation (``policy_kwargs={"log_std_init": X}``; default 0, a standard deviation of 1 in
-every action), also named in ``hyperparameters``.  ``examples/evaluate_policy.py``
+says so; the held-out ``mean_discounted_return`` is then at ``G``.  ``--log-std-init X`` (PPO only) changes
+another, the policy's initial log standard deviation (``policy_kwargs={"log_std_init": X}``; default 0, a
+standard deviation of 1 in every action), also named in ``hyperparameters``.  ``examples/evaluate_policy.py``
 re-evaluates a saved model, or a scripted controller, the same way.
 
 ``--threads`` sets PyTorch's intra-op threads (default 1: one core per
