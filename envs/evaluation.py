@@ -20,8 +20,8 @@ import numpy as np
 from simgrip.envs.outcome import outcome  # outcomes() counts with it; also importable from here
 
 __all__ = ["EpisodeResult", "GAMMA", "add_episode_arguments", "check_env_id", "discount", "env_kwargs", "json_object",
-           "log_std", "make_env", "outcome", "outcomes", "positive_int", "non_negative_int", "probability",
-           "run_episodes", "summary"]
+           "log_std", "log_std_init_conflict", "make_env", "outcome", "outcomes", "positive_int", "non_negative_int",
+           "probability", "run_episodes", "summary"]
 
 #: the discount of the returns :func:`run_episodes` also reports: Stable-Baselines3's default ``gamma`` (PPO, SAC)
 GAMMA = 0.99
@@ -64,6 +64,19 @@ def discount(text: str) -> float:
 def log_std(text: str) -> float:
     """argparse type: a PPO policy's initial log standard deviation, in [-5, 1] (natural log; SB3's default 0)."""
     return _number_in(text, lambda x: -5.0 <= x <= 1.0, "[-5, 1]")
+
+
+def log_std_init_conflict(log_std_init, algos, init_from) -> str | None:
+    """Why ``--log-std-init`` cannot go with these options (``algos``: the names of the algorithms to train;
+    ``init_from``: a warm start, or None), or None: PPO only (SAC's standard deviation is its network's output), and
+    not with a warm start (the copied policy brings its own log standard deviation)."""
+    if log_std_init is None:
+        return None
+    if set(algos) != {"ppo"}:
+        return "--log-std-init: PPO only (--algo ppo)"
+    if init_from is not None:
+        return "--log-std-init: not with --init-from (the copied policy brings its own log standard deviation)"
+    return None
 
 
 def probability(text: str) -> float:

@@ -443,10 +443,11 @@ def main(argv=None) -> int:
     cores = os.cpu_count() or 1
     if args.jobs > cores:
         p.error(f"--jobs: at most the {cores} cores of this machine, got {args.jobs}")
-    if args.log_std_init is not None and set(args.algo) != {"ppo"}:  # the options alone decide, as the checks below
-        p.error("--log-std-init: PPO only (--algo ppo)")
-    if args.log_std_init is not None and args.init_from is not None:
-        p.error("--log-std-init: not with --init-from (the copied policies bring their own log standard deviation)")
+    from simgrip.envs.evaluation import log_std_init_conflict  # imported when used, as _json_object
+
+    why = log_std_init_conflict(args.log_std_init, args.algo, args.init_from)  # the options alone decide
+    if why:
+        p.error(why)
     if len(set(args.seeds)) != len(args.seeds):
         p.error(f"--seeds: repeated seed in {args.seeds}")
     if args.checkpoint_minutes and args.checkpoint_minutes > args.minutes:

@@ -99,8 +99,8 @@ from pathlib import Path
 import numpy as np
 
 import simgrip.envs  # noqa: F401  (registers the simgrip ids)
-from simgrip.envs.evaluation import (GAMMA, check_env_id, discount, json_object, log_std, make_env, non_negative_int,
-                                     outcomes, probability, run_episodes, summary)
+from simgrip.envs.evaluation import (GAMMA, check_env_id, discount, json_object, log_std, log_std_init_conflict,
+                                     make_env, non_negative_int, outcomes, probability, run_episodes, summary)
 from simgrip.io import atomic_write, check_output_dir, check_output_files_in, write_json
 
 ALGOS = ("ppo", "sac")
@@ -457,11 +457,9 @@ def main(argv=None) -> int:
                         "ppo_eval.json), copied by simgrip.envs.warm_start (default: a fresh policy)")
     p.add_argument("--out", required=True, help="output folder")
     args = p.parse_args(argv)
-    if args.log_std_init is not None:  # the options alone decide: before the rl extra is looked for
-        if set(args.algo) != {"ppo"}:
-            p.error("--log-std-init: PPO only (--algo ppo)")
-        if args.init_from is not None:
-            p.error("--log-std-init: not with --init-from (the copied policy brings its own log standard deviation)")
+    why = log_std_init_conflict(args.log_std_init, args.algo, args.init_from)  # before the rl extra is looked for
+    if why:
+        p.error(why)
     try:
         import stable_baselines3  # noqa: F401
         import torch

@@ -173,7 +173,8 @@ def _args(mod, **overrides):
     given but ``overrides``."""
     options = dict(env="simgrip/PickFragile-v6", minutes=1.0, steps=10, eval_seeds=(8000, 8001),
                    checkpoint_minutes=None, env_kwargs={}, normalize=False, action_offset=None, gamma=None,
-                   log_std_init=None, frame_stack=None, scripted_start=None, light_bias=None, init_from=None, residual=None)
+                   log_std_init=None, frame_stack=None, scripted_start=None, light_bias=None, init_from=None,
+                   residual=None)
     return mod.argparse.Namespace(**{**options, **overrides})
 
 

@@ -1,8 +1,9 @@
 """The Gymnasium environments' speed for ``simgrip bench`` (issue 18, item 5), measured in the bench's run.
 
 * every registered id (:data:`simgrip.envs.ENV_IDS`, ``MULTI_ENV_IDS``, ``FRAGILE_ENV_IDS``): env steps per second
-  and the env's overhead over bare ``mj_step`` on the same states (:func:`simgrip.envs.throughput.measure_throughput`, this thread's CPU time, the
-  median over chunks of each chunk's ratio), against the issue's target :data:`ENV_OVERHEAD_TARGET`;
+  and the env's overhead over bare ``mj_step`` on the same states
+  (:func:`simgrip.envs.throughput.measure_throughput`, this thread's CPU time, the median over chunks of each
+  chunk's ratio), against the issue's target :data:`ENV_OVERHEAD_TARGET`;
 * the validity check of an invalid claw state, every pair of links at once against pruned
   (:func:`simgrip.envs.throughput.violation_check_times` on :data:`CLAW_IDS`: the states random actions curl
   through each other).
