@@ -393,10 +393,8 @@ def _main_combine(argv: list[str]) -> int:
     return 0
 
 
-def main(argv=None) -> int:
-    args_in = sys.argv[1:] if argv is None else list(argv)
-    if "--combine" in args_in:
-        return _main_combine(args_in)
+def build_parser() -> argparse.ArgumentParser:
+    """The run mode's options (``--combine`` has its own); tests build ``run_command``'s arguments from it."""
     p = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     p.add_argument("--env", required=True, help="registered env id, e.g. simgrip/PickFragile-v6, or a retired "
                    "simgrip one (simgrip.envs.RETIRED: the runs of docs/baselines/ name them)")
@@ -439,6 +437,14 @@ def main(argv=None) -> int:
                    help="PPO only: start each seed S from DIR/ppo_seed<S>/ppo_model.zip, an earlier run's policy "
                         "on another task (simgrip.envs.warm_start; default: fresh policies)")
     p.add_argument("--out", required=True, help="output folder")
+    return p
+
+
+def main(argv=None) -> int:
+    args_in = sys.argv[1:] if argv is None else list(argv)
+    if "--combine" in args_in:
+        return _main_combine(args_in)
+    p = build_parser()
     args = p.parse_args(argv)
     cores = os.cpu_count() or 1
     if args.jobs > cores:

@@ -15,6 +15,18 @@ def load_example(name: str, tag: str = ""):
     return module
 
 
+def rl_baselines_args(mod, env: str = "simgrip/PickFragile-v6", **overrides):
+    """``examples/rl_baselines.py``'s parsed options (``mod`` is the loaded script) as its ``main`` passes them to
+    ``run_command``: the script's own parser's defaults, so a new option cannot be missing, a short budget, ``env``,
+    and ``overrides`` (each must be an option the parser has)."""
+    args = mod.build_parser().parse_args(["--env", env, "--minutes", "1", "--steps", "10",
+                                          "--eval-seeds", "8000-8001", "--out", "unused"])
+    for name, value in overrides.items():
+        assert hasattr(args, name), name
+        setattr(args, name, value)
+    return args
+
+
 def alive(pid: int) -> bool:
     """Whether process ``pid`` exists and is not a zombie (``/proc``; Linux)."""
     try:

@@ -17,6 +17,8 @@ from pathlib import Path
 
 import pytest
 
+from helpers import rl_baselines_args
+
 SCRIPT = Path(__file__).resolve().parent.parent / "examples" / "rl_baselines.py"
 ROOT = SCRIPT.parent.parent
 
@@ -168,19 +170,9 @@ def test_ctrl_c_or_sigterm_stops_every_child_with_one_line(tmp_path, signum):
     assert not alive, alive
 
 
-def _args(mod, **overrides):
-    """``rl_baselines``' parsed options as ``main`` would pass them to ``run_command``, none of the optional ones
-    given but ``overrides``."""
-    options = dict(env="simgrip/PickFragile-v6", minutes=1.0, steps=10, eval_seeds=(8000, 8001),
-                   checkpoint_minutes=None, env_kwargs={}, normalize=False, action_offset=None, gamma=None,
-                   log_std_init=None, frame_stack=None, scripted_start=None, light_bias=None, init_from=None,
-                   residual=None)
-    return mod.argparse.Namespace(**{**options, **overrides})
-
-
 def test_normalize_reaches_every_run_command(tmp_path):
     mod = _module()
-    args = _args(mod, normalize=True)
+    args = rl_baselines_args(mod, normalize=True)
     assert "--normalize" in mod.run_command("ppo", 0, args, tmp_path)
     args.normalize = False
     assert "--normalize" not in mod.run_command("ppo", 0, args, tmp_path)
@@ -188,7 +180,7 @@ def test_normalize_reaches_every_run_command(tmp_path):
 
 def test_action_offset_reaches_every_run_command(tmp_path):
     mod = _module()
-    args = _args(mod, action_offset=[-0.4, 0.2])
+    args = rl_baselines_args(mod, action_offset=[-0.4, 0.2])
     cmd = mod.run_command("ppo", 0, args, tmp_path)
     i = cmd.index("--action-offset")
     assert [float(x) for x in cmd[i + 1:i + 3]] == [-0.4, 0.2]
@@ -198,7 +190,7 @@ def test_action_offset_reaches_every_run_command(tmp_path):
 
 def test_gamma_reaches_every_run_command(tmp_path):
     mod = _module()
-    args = _args(mod, gamma=0.995)
+    args = rl_baselines_args(mod, gamma=0.995)
     cmd = mod.run_command("ppo", 0, args, tmp_path)
     assert float(cmd[cmd.index("--gamma") + 1]) == 0.995
     args.gamma = None
@@ -207,7 +199,7 @@ def test_gamma_reaches_every_run_command(tmp_path):
 
 def test_log_std_init_reaches_every_run_command(tmp_path):
     mod = _module()
-    args = _args(mod, log_std_init=-1.0)
+    args = rl_baselines_args(mod, log_std_init=-1.0)
     cmd = mod.run_command("ppo", 0, args, tmp_path)
     assert float(cmd[cmd.index("--log-std-init") + 1]) == -1.0
     args.log_std_init = None
@@ -216,7 +208,7 @@ def test_log_std_init_reaches_every_run_command(tmp_path):
 
 def test_frame_stack_reaches_every_run_command(tmp_path):
     mod = _module()
-    args = _args(mod, frame_stack=3)
+    args = rl_baselines_args(mod, frame_stack=3)
     cmd = mod.run_command("ppo", 0, args, tmp_path)
     assert cmd[cmd.index("--frame-stack") + 1] == "3"
     args.frame_stack = None
@@ -236,7 +228,7 @@ def test_a_bad_frame_stack_exits_2_naming_it(value, tmp_path, capsys):
 def test_a_training_aid_reaches_every_run_command(option, env_id, tmp_path):
     mod = _module()
     name = option[2:].replace("-", "_")
-    args = _args(mod, env=env_id, **{name: 0.5})
+    args = rl_baselines_args(mod, env=env_id, **{name: 0.5})
     cmd = mod.run_command("ppo", 0, args, tmp_path)
     assert float(cmd[cmd.index(option) + 1]) == 0.5
     setattr(args, name, None)

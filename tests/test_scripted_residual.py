@@ -11,7 +11,7 @@ import simgrip.envs  # noqa: F401  (registers the ids)
 from simgrip.envs.scripted_policies import policy_maker
 from simgrip.envs.evaluation import make_env
 from simgrip.envs.scripted_residual import PALM_CHANNELS, ScriptedResidual
-from helpers import load_example
+from helpers import load_example, rl_baselines_args
 
 PLACE, PINCH = "simgrip/PlaceFragile-v7", "simgrip/PickFragile-v6"
 
@@ -152,10 +152,7 @@ def test_train_sb3_trains_and_evaluates_behind_the_residual(tmp_path, capsys):
 
 def test_rl_baselines_passes_the_residual_to_every_run(tmp_path, capsys):
     mod = load_example("rl_baselines", "_res")
-    args = mod.argparse.Namespace(env=PLACE, minutes=1.0, steps=10, eval_seeds=(8000, 8001), checkpoint_minutes=None,
-                                  env_kwargs={}, normalize=False, action_offset=None, gamma=None, log_std_init=None,
-                                  frame_stack=None,
-                                  scripted_start=None, light_bias=None, init_from=None, residual=["palm_x", "palm_z"])
+    args = rl_baselines_args(mod, PLACE, residual=["palm_x", "palm_z"])
     cmd = mod.run_command("ppo", 0, args, tmp_path / "run")
     i = cmd.index("--residual")
     assert cmd[i + 1:i + 3] == ["palm_x", "palm_z"]

@@ -15,7 +15,7 @@ import numpy as np
 import pytest
 
 import simgrip.envs  # noqa: F401  (registers the ids)
-from helpers import load_example
+from helpers import load_example, rl_baselines_args
 from simgrip.envs.warm_start import action_names, check_source, plan_transfer, source_record, transfer_ppo
 
 try:  # the plan and the checks need neither; the copies need the rl extra
@@ -242,10 +242,7 @@ def test_rl_baselines_starts_each_seed_from_its_own_source(tmp_path, capsys):
         _ppo(gym.make(PINCH), seed).save(src / f"ppo_seed{seed}" / "ppo_model.zip")
         (src / f"ppo_seed{seed}" / "ppo_eval.json").write_text(
             json.dumps({"algo": "PPO", "env": PINCH, "action_offset": [-0.4, 0.2], "seed": seed}))
-    args = mod.argparse.Namespace(env=PLACE, minutes=1.0, steps=10, eval_seeds=(8000, 8001), checkpoint_minutes=None,
-                                  env_kwargs={}, normalize=False, action_offset=[-0.4, 0.0, 0.2], gamma=None,
-                                  frame_stack=None, scripted_start=None, light_bias=None, init_from=str(src),
-                                  residual=None)
+    args = rl_baselines_args(mod, PLACE, action_offset=[-0.4, 0.0, 0.2], init_from=str(src))
     cmd = mod.run_command("ppo", 1, args, tmp_path / "run")
     assert cmd[cmd.index("--init-from") + 1] == str(src / "ppo_seed1" / "ppo_model.zip")
     base = ["--env", PLACE, "--algo", "ppo", "--action-offset", "-0.4", "0", "0.2", "--init-from", str(src),
