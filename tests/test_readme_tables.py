@@ -38,7 +38,7 @@ ROWS = {
                                                       AIDED: "rl_cradle_v5_residual_palm"}),
     "PickSphereFragile-v5": ("PickSphereFragile-v4", {"PPO, 3 seeds": "rl_sphere_v5",
                                                       "SAC, 3 seeds": "rl_sphere_v5_sac",
-                                                      AIDED: "rl_sphere_v5_residual_palm_light"}),
+                                                      AIDED: "rl_sphere_v5_residual_palm_light/log_std_init"}),
 }
 
 #: the aids an aided cell names -> the rl_baselines.py option that applies each
