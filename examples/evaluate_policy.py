@@ -38,6 +38,9 @@ workpieces a policy loses (a fast closing crushes the lightest).  And ``crushed_
 counted by the control steps from the first step any finger pressed on the workpiece (``info["normal_force"]``
 above 0) to the crush (keys ``"0"``: crushed within the step of the first touch, before the policy could answer
 it; ``"1-4"``, ``"5-24"``, ``"25+"``): a crush on touch is the approach's speed, a later one the squeeze.
+And ``crush_overrun``: over the crushed episodes, the median and largest relative overrun ``x = (F - L) / L`` of
+the crushing step's largest finger force ``F`` over the episode's hidden limit ``L`` (``None`` without a crush):
+what a crush charge graded by ``x`` (the fragile tasks' ``w_crush x / (1 + x)``) charges them.
 """
 
 from __future__ import annotations
@@ -45,6 +48,7 @@ from __future__ import annotations
 import argparse
 import json
 import math
+import statistics
 import sys
 
 import simgrip.envs  # noqa: F401  (registers the simgrip ids)
@@ -109,6 +113,15 @@ def crushed_after_touch(results, touch_steps) -> dict:
             gap = r.length - touch if touch is not None else 0  # (a crush is a touch: None cannot occur)
             counts[next(key for key, lo, hi in TOUCH_BINS if lo <= gap <= hi)] += 1
     return counts
+
+
+def crush_overrun(results) -> dict | None:
+    """``{"crushes", "median", "max"}`` of the relative overrun ``(F - L) / L`` over the crushed episodes: ``F``
+    the largest of the last step's ``info["normal_force"]`` [N] (the crushing step's), ``L`` its
+    ``info["crush_limit"]`` [N]; ``None`` when no episode was crushed."""
+    x = [(max(r.info["normal_force"]) - r.info["crush_limit"]) / r.info["crush_limit"]
+         for r in results if outcome(r.info) == "crushed"]
+    return {"crushes": len(x), "median": statistics.median(x), "max": max(x)} if x else None
 
 
 def place_timeouts(results, place_tolerance: float, on_table: float) -> dict:
@@ -224,6 +237,7 @@ def main(argv=None) -> dict:
     if edges is not None:
         out["by_mass"] = by_mass(results, masses, edges)
         out["crushed_after_touch"] = crushed_after_touch(results, touches)
+        out["crush_overrun"] = crush_overrun(results)
     if hasattr(env.unwrapped, "place_tolerance"):  # the pick-and-place: carried, then held up to the end?
         from simgrip.envs.pick_place import ON_TABLE
 

@@ -334,6 +334,20 @@ def test_crushed_after_touch_bins_the_steps_from_first_touch_to_the_crush():
         "0": 1, "1-4": 2, "5-24": 2, "25+": 1}
 
 
+def test_crush_overrun_is_the_crushing_steps_relative_overrun_of_the_limit():
+    from simgrip.envs.evaluation import EpisodeResult
+
+    # crushed at 1.1 and 3 times the limit (the largest finger's force counts), a success and a timeout not
+    infos = [{"crushed": True, "normal_force": [0.2, 1.1], "crush_limit": 1.0},
+             {"crushed": True, "normal_force": [6.0, 1.0], "crush_limit": 2.0},
+             {"is_success": True, "normal_force": [9.0, 9.0], "crush_limit": 1.0}, {}]
+    results = [EpisodeResult(i, i, 0.0, 10, info) for i, info in enumerate(infos)]
+    module = _example("evaluate_policy")
+    got = module.crush_overrun(results)
+    assert got["crushes"] == 2 and got["median"] == pytest.approx(1.05) and got["max"] == pytest.approx(2.0)
+    assert module.crush_overrun(results[2:]) is None
+
+
 def test_evaluate_policy_times_a_crush_from_the_first_touch(capsys):
     import gymnasium as gym
 
@@ -359,6 +373,10 @@ def test_evaluate_policy_times_a_crush_from_the_first_touch(capsys):
     gap = step - touch
     expected = {"0": gap == 0, "1-4": 1 <= gap <= 4, "5-24": 5 <= gap <= 24, "25+": gap >= 25}
     assert out["crushed_after_touch"] == {k: int(v) for k, v in expected.items()}
+    limit = info["crush_limit"]  # the one crush's overrun, from the same crushing step
+    assert out["crush_overrun"] == {"crushes": 1, "median": (max(info["normal_force"]) - limit) / limit,
+                                    "max": (max(info["normal_force"]) - limit) / limit}
+    assert out["crush_overrun"]["max"] > 0.0
 
 
 def test_place_timeouts_count_the_carried_pieces_never_set_down():
