@@ -47,7 +47,9 @@ earlier ``rl_baselines.py`` run of the same seed on another task (a curriculum: 
 pick-and-place; :mod:`simgrip.envs.warm_start`), recorded as ``init_from`` with that run's command
 (``init_command``); checkpoints count this run's own CPU minutes, to which the source's budget adds;
 ``--gamma G`` passes the discount instead of the default 0.99, and ``--log-std-init X`` (PPO only) the policy's
-initial log standard deviation instead of 0, each named in every JSON's ``hyperparameters``.
+initial log standard deviation instead of 0, each named in every JSON's ``hyperparameters``.  ``--eval-start``
+passes that option (each run also evaluates its policy before the first update, ``start``) and ``aggregate.json``
+gives those rates per algorithm as ``start`` (as a checkpoint's).
 
 Batches of one experiment run apart (some seeds here, others there or later, each with this command but for
 ``--seeds``, ``--jobs`` and ``--out``) are combined into one folder, as if run at once, by
@@ -165,6 +167,8 @@ def run_command(algo: str, seed: int, args, folder: Path) -> list[str]:
         cmd += ["--residual", *args.residual]
     if args.init_from is not None:
         cmd += ["--init-from", str(init_model(args.init_from, algo, seed))]
+    if args.eval_start:
+        cmd += ["--eval-start"]
     return cmd
 
 
@@ -252,7 +256,8 @@ def _stats(values: list[float]) -> dict:
 
 def aggregate(results: list[dict]) -> dict:
     """Per algorithm: held-out success at each checkpoint (``minutes``) and of the final policy over the runs
-    that finished (``mean``, ``min``, ``max``, ``success_rates``; fractions in [0, 1])."""
+    that finished (``mean``, ``min``, ``max``, ``success_rates``; fractions in [0, 1]), and before their first
+    update as ``start`` where the runs evaluated it (``--eval-start``)."""
     out = {}
     for algo in sorted({r["algo"].lower() for r in results}):
         done = [r for r in results if r["algo"].lower() == algo and r.get("returncode") == 0]
@@ -262,6 +267,9 @@ def aggregate(results: list[dict]) -> dict:
             for cp in r.get("checkpoints", ()):
                 by_minute.setdefault(float(cp["minutes"]), []).append(float(cp["success_rate"]))
         entry["checkpoints"] = [{"minutes": m, **_stats(v)} for m, v in sorted(by_minute.items())]
+        starts = [float(r["start"]["success_rate"]) for r in done if "start" in r]
+        if starts:  # --eval-start: the policies before their first update
+            entry["start"] = _stats(starts)
         if done:
             entry["final"] = {"timesteps": [int(r["timesteps"]) for r in done],
                               **_stats([float(r["success_rate"]) for r in done])}
@@ -436,6 +444,8 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--init-from", default=None, metavar="DIR",
                    help="PPO only: start each seed S from DIR/ppo_seed<S>/ppo_model.zip, an earlier run's policy "
                         "on another task (simgrip.envs.warm_start; default: fresh policies)")
+    p.add_argument("--eval-start", action="store_true",
+                   help="each run also evaluates its policy before the first update (JSON: start)")
     p.add_argument("--out", required=True, help="output folder")
     return p
 

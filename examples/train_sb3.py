@@ -81,6 +81,12 @@ another, the policy's initial log standard deviation (``policy_kwargs={"log_std_
 standard deviation of 1 in every action), also named in ``hyperparameters``.  ``examples/evaluate_policy.py``
 re-evaluates a saved model, or a scripted controller, the same way.
 
+``--eval-start`` also evaluates the policy before its first update (a fresh one, or the ``--init-from`` copy) on
+the same held-out seeds and records it as ``start`` (``success_rate``, ``mean_return``,
+``mean_discounted_return``, ``outcomes``): where the learner begins.  Behind ``--residual`` on every action the
+fresh policy's deterministic action is SB3's initial mean, near 0 (its last layer's weights are scaled by 0.01),
+so it starts as the scripted controller and ``start`` says how close.  The budget counts the training alone.
+
 ``--threads`` sets PyTorch's intra-op threads (default 1: one core per
 training; run two trainings side by side to use two cores).
 """
@@ -238,7 +244,7 @@ def train(algo: str, env_id: str, *, steps: int, minutes: float, seed: int, out:
           env_kwargs: dict | None = None, normalize: bool = False, action_offset=None, gamma: float | None = None,
           frame_stack: int | None = None, scripted_start: float | None = None,
           light_bias: float | None = None, init_from: str | None = None, residual=None,
-          log_std_init: float | None = None) -> dict:
+          log_std_init: float | None = None, eval_start: bool = False) -> dict:
     """Train ``algo`` with library defaults within the budget, write its curve, model and evaluation
     (``env_kwargs``: ``gym.make``'s keyword arguments, for training and evaluation alike; ``normalize``: train
     behind SB3's ``VecNormalize`` with its defaults; ``action_offset``: train and evaluate behind
@@ -251,7 +257,8 @@ def train(algo: str, env_id: str, *, steps: int, minutes: float, seed: int, out:
     draws the task's own; ``init_from``: a saved PPO model of another run to start from,
     :mod:`simgrip.envs.warm_start`; ``residual``: action names the scripted controller drives, the policy's action
     added, :class:`simgrip.envs.scripted_residual.ScriptedResidual`, for training and evaluation alike;
-    ``log_std_init``: PPO's initial log standard deviation instead of 0)."""
+    ``log_std_init``: PPO's initial log standard deviation instead of 0; ``eval_start``: evaluate the policy before
+    its first update as well, recorded as ``start``)."""
     env_kwargs = dict(env_kwargs or {})
     from stable_baselines3 import PPO, SAC
     from stable_baselines3.common.callbacks import BaseCallback
@@ -313,6 +320,13 @@ def train(algo: str, env_id: str, *, steps: int, minutes: float, seed: int, out:
                                                   action_offset, frame_stack, residual).items()
                         if k in ("success_rate", "mean_return", "outcomes")}
         t_start, c_start = time.perf_counter(), time.process_time()  # the budget is the training's alone
+    start = None
+    if eval_start:  # the policy before any update (VecNormalize's statistics as they start)
+        start = {k: v for k, v in evaluate(model, env_id, eval_episodes, eval_seed, env_kwargs,
+                                           env if normalize else None, action_offset, frame_stack,
+                                           residual).items()
+                 if k in ("success_rate", "mean_return", "mean_discounted_return", "outcomes")}
+        t_start, c_start = time.perf_counter(), time.process_time()  # the budget is the training's alone
     model.learn(total_timesteps=steps, callback=Budget())
     wall, cpu = time.perf_counter() - t_start, time.process_time() - c_start
     env.close()
@@ -356,6 +370,8 @@ def train(algo: str, env_id: str, *, steps: int, minutes: float, seed: int, out:
         wrappers.append(f"started from {init['algo']} on {init['env']} (warm start)")
     if wrappers:
         result["wrapper"] = ", ".join(wrappers)
+    if start is not None:
+        result["start"] = start
     result.update(evaluate(model, env_id, eval_episodes, eval_seed, env_kwargs, normalizer, action_offset,
                            frame_stack, residual))
     for cp in checkpoints:  # the held-out success of each checkpoint: how soon the target was reached
@@ -455,6 +471,8 @@ def main(argv=None) -> int:
     p.add_argument("--init-from", default=None, metavar="MODEL",
                    help="PPO only: start from this saved PPO model of another run (its folder holds its "
                         "ppo_eval.json), copied by simgrip.envs.warm_start (default: a fresh policy)")
+    p.add_argument("--eval-start", action="store_true",
+                   help="also evaluate the policy before its first update on the held-out seeds (JSON: start)")
     p.add_argument("--out", required=True, help="output folder")
     args = p.parse_args(argv)
     why = log_std_init_conflict(args.log_std_init, args.algo, args.init_from)  # before the rl extra is looked for
@@ -498,7 +516,7 @@ def main(argv=None) -> int:
                        normalize=args.normalize, action_offset=args.action_offset, gamma=args.gamma,
                        frame_stack=args.frame_stack, scripted_start=args.scripted_start,
                        light_bias=args.light_bias, init_from=args.init_from, residual=args.residual,
-                       log_std_init=args.log_std_init)
+                       log_std_init=args.log_std_init, eval_start=args.eval_start)
         print(json.dumps(result), flush=True)
     plot_curves(out)
     return 0

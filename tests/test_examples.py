@@ -222,6 +222,35 @@ def test_train_sb3_log_std_init_sets_ppos_start_and_says_so(tmp_path):
     assert trained["timesteps"] == 2048 and abs(log_std + 1.0).max() < 0.096, log_std
 
 
+def test_train_sb3_eval_start_is_the_untrained_policy_and_leaves_the_training_alone(tmp_path):
+    """``--eval-start``: ``start`` is the held-out evaluation of the policy PPO builds for this seed before any update
+    (built again here, evaluated by the script's own ``evaluate``), and the training after it is the one a run
+    without the option makes (same steps, same final evaluation: the deterministic evaluation draws no random
+    numbers of the training's).  Behind ``--residual`` on every action the fresh policy is the scripted
+    controller plus SB3's initial mean (near 0)."""
+    pytest.importorskip("stable_baselines3")
+    from stable_baselines3 import PPO
+    from stable_baselines3.common.env_util import make_vec_env
+
+    from simgrip.envs.evaluation import make_env
+
+    mod = _example("train_sb3")
+    common = ["--algo", "ppo", "--env", "simgrip/PickFragile-v6", "--steps", "64", "--seed", "3",
+              "--residual", "curvature", "palm_z", "--log-std-init", "-1", "--eval-episodes", "2",
+              "--eval-seed", "8320"]
+    mod.main(common + ["--eval-start", "--out", str(tmp_path / "a")])
+    mod.main(common + ["--out", str(tmp_path / "b")])
+    a, b = (json.loads((tmp_path / k / "ppo_eval.json").read_text()) for k in "ab")
+    res = ["curvature", "palm_z"]
+    env = make_vec_env(lambda: make_env("simgrip/PickFragile-v6", {}, residual=res), n_envs=1, seed=3)
+    fresh = PPO("MlpPolicy", env, seed=3, verbose=0, **mod.model_kwargs("ppo", None, -1.0))
+    ref = mod.evaluate(fresh, "simgrip/PickFragile-v6", 2, 8320, residual=res)
+    assert a["start"] == {k: ref[k] for k in ("success_rate", "mean_return", "mean_discounted_return", "outcomes")}
+    assert "start" not in b
+    assert {k: a[k] for k in ("timesteps", "success_rate", "mean_return")} == \
+        {k: b[k] for k in ("timesteps", "success_rate", "mean_return")}
+
+
 @pytest.mark.parametrize("extra", [["--algo", "sac"], ["--algo", "ppo", "--init-from", "x.zip"],
                                    ["--algo", "ppo", "--log-std-init", "inf"]])
 def test_train_sb3_log_std_init_refusals_exit_2(extra, tmp_path, capsys):

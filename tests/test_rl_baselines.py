@@ -206,6 +206,17 @@ def test_log_std_init_reaches_every_run_command(tmp_path):
     assert "--log-std-init" not in mod.run_command("ppo", 0, args, tmp_path)  # the library's default, not written
 
 
+def test_eval_start_reaches_every_run_command_and_the_aggregate(tmp_path):
+    mod = _module()
+    assert "--eval-start" in mod.run_command("ppo", 0, rl_baselines_args(mod, eval_start=True), tmp_path)
+    assert "--eval-start" not in mod.run_command("ppo", 0, rl_baselines_args(mod), tmp_path)
+    runs = [{"algo": "PPO", "seed": s, "returncode": 0, "success_rate": 0.5, "timesteps": 10,
+             "start": {"success_rate": rate}} for s, rate in ((0, 0.96), (1, 0.9))]
+    start = mod.aggregate(runs)["ppo"]["start"]
+    assert start["success_rates"] == [0.96, 0.9] and start["min"] == 0.9 and start["max"] == 0.96
+    assert "start" not in mod.aggregate([{k: v for k, v in r.items() if k != "start"} for r in runs])["ppo"]
+
+
 def test_frame_stack_reaches_every_run_command(tmp_path):
     mod = _module()
     args = rl_baselines_args(mod, frame_stack=3)
