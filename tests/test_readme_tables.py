@@ -35,7 +35,7 @@ ROWS = {
                                             AIDED: "rl_place_v7_residual_palm/log_std_init"}),
     "PickCradleFragile-v5": ("PickCradleFragile-v4", {"PPO, 3 seeds": "rl_cradle_v5",
                                                       "SAC, 3 seeds": "rl_cradle_v5_sac",
-                                                      AIDED: "rl_cradle_v5_residual_palm"}),
+                                                      AIDED: "rl_cradle_v5_residual_palm/light_log_std_init"}),
     "PickSphereFragile-v5": ("PickSphereFragile-v4", {"PPO, 3 seeds": "rl_sphere_v5",
                                                       "SAC, 3 seeds": "rl_sphere_v5_sac",
                                                       AIDED: "rl_sphere_v5_residual_palm_light/log_std_init"}),
