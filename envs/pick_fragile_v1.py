@@ -106,18 +106,24 @@ from simgrip.envs.pick_fragile import FragilePickEnv, FragilePickMultiEnv
 from simgrip.envs.pick_place import FragilePlaceEnv
 from simgrip.envs.pick_sphere_fragile import FragileSphereEnv
 
-__all__ = ["FragilePickEnvV1", "FragilePickMultiEnvV1", "FragilePlaceEnvV1", "FragileCradleEnvV1",
+__all__ = ["crush_overrun", "FragilePickEnvV1", "FragilePickMultiEnvV1", "FragilePlaceEnvV1", "FragileCradleEnvV1",
            "FragileSphereEnvV1", "V1_REWARD_DEFAULTS", "graded_crush"]
 
 #: v1's reward weights (the others are v0's)
 V1_REWARD_DEFAULTS = {"w_contact": 1.0, "w_touch": 0.02, "w_crush": 2.0, "w_drop": 5.0, "w_squeeze": 0.0}
 
 
+def crush_overrun(force: float, limit: float) -> float:
+    """The relative overrun ``x = max(force - limit, 0) / limit`` of a crush limit (``force``, ``limit`` [N],
+    ``limit > 0``): what :func:`graded_crush` charges by."""
+    return max(force - limit, 0.0) / limit
+
+
 def graded_crush(force: float, limit: float, w_crush: float) -> float:
     """The size (>= 0) of v1's crush penalty: ``w_crush x / (1 + x)``, ``x = max(force - limit, 0) / limit``
     (``force``, ``limit`` [N], ``limit > 0``): 0 at the limit, ``w_crush / 2`` at twice it, rising towards
     ``w_crush`` for an overrun many times the limit (bounded, so one hard squeeze cannot outweigh an episode)."""
-    x = max(force - limit, 0.0) / limit
+    x = crush_overrun(force, limit)
     return w_crush * x / (1.0 + x)
 
 

@@ -119,8 +119,9 @@ def crush_overrun(results) -> dict | None:
     """``{"crushes", "median", "max"}`` of the relative overrun ``(F - L) / L`` over the crushed episodes: ``F``
     the largest of the last step's ``info["normal_force"]`` [N] (the crushing step's), ``L`` its
     ``info["crush_limit"]`` [N]; ``None`` when no episode was crushed."""
-    x = [(max(r.info["normal_force"]) - r.info["crush_limit"]) / r.info["crush_limit"]
-         for r in results if outcome(r.info) == "crushed"]
+    from simgrip.envs.pick_fragile_v1 import crush_overrun as overrun  # the charge's own x
+
+    x = [overrun(max(r.info["normal_force"]), r.info["crush_limit"]) for r in results if outcome(r.info) == "crushed"]
     return {"crushes": len(x), "median": statistics.median(x), "max": max(x)} if x else None
 
 

@@ -311,21 +311,18 @@ def train(algo: str, env_id: str, *, steps: int, minutes: float, seed: int, out:
 
         env = VecNormalize(env)  # SB3's defaults; the Monitor inside still records the env's own returns
     model = cls("MlpPolicy", env, seed=seed, verbose=0, **model_kwargs(algo, gamma, log_std_init))
-    init = None
+    init = start = None
     if init_from is not None:
         init = _warm_start(model, env.envs[0] if hasattr(env, "envs") else env.venv.envs[0], init_from,
                            action_offset)
-        # what the curriculum hands over: the copied policy on the held-out seeds, before any update
-        init["eval"] = {k: v for k, v in evaluate(model, env_id, eval_episodes, eval_seed, env_kwargs, None,
-                                                  action_offset, frame_stack, residual).items()
-                        if k in ("success_rate", "mean_return", "outcomes")}
-        t_start, c_start = time.perf_counter(), time.process_time()  # the budget is the training's alone
-    start = None
-    if eval_start:  # the policy before any update (VecNormalize's statistics as they start)
-        start = {k: v for k, v in evaluate(model, env_id, eval_episodes, eval_seed, env_kwargs,
-                                           env if normalize else None, action_offset, frame_stack,
-                                           residual).items()
-                 if k in ("success_rate", "mean_return", "mean_discounted_return", "outcomes")}
+    if init_from is not None or eval_start:  # the policy before any update, evaluated once for both records
+        # (VecNormalize's statistics as they start; --init-from excludes --normalize)
+        before = evaluate(model, env_id, eval_episodes, eval_seed, env_kwargs, env if normalize else None,
+                          action_offset, frame_stack, residual)
+        if init is not None:  # what the curriculum hands over: the copied policy on the held-out seeds
+            init["eval"] = {k: before[k] for k in ("success_rate", "mean_return", "outcomes")}
+        if eval_start:
+            start = {k: before[k] for k in ("success_rate", "mean_return", "mean_discounted_return", "outcomes")}
         t_start, c_start = time.perf_counter(), time.process_time()  # the budget is the training's alone
     model.learn(total_timesteps=steps, callback=Budget())
     wall, cpu = time.perf_counter() - t_start, time.process_time() - c_start
