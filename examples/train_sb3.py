@@ -278,7 +278,8 @@ def train(algo: str, env_id: str, *, steps: int, minutes: float, seed: int, out:
         """Record every finished training episode; checkpoint; stop when the budget is spent."""
 
         def _on_step(self) -> bool:
-            if checkpoint_minutes and spent() >= 60.0 * checkpoint_minutes * (len(checkpoints) + 1):
+            now = spent()  # one reading serves the checkpoints and the stop: the last checkpoint is never skipped
+            while checkpoint_minutes and now >= 60.0 * checkpoint_minutes * (len(checkpoints) + 1):
                 # the curve so far and the policy, so that a run stopped early can still be evaluated
                 tag = f"{checkpoint_minutes * (len(checkpoints) + 1):g}min"
                 path = out / f"{algo}_model_{tag}.zip"
@@ -300,7 +301,7 @@ def train(algo: str, env_id: str, *, steps: int, minutes: float, seed: int, out:
                     rows.append((len(rows), self.num_timesteps, round(time.perf_counter() - t_start, 3),
                                  round(time.process_time() - c_start, 3), float(ep["r"]), int(ep["l"]),
                                  int(bool(info.get("is_success", False)))))
-            return spent() < budget
+            return now < budget
 
     # make_vec_env calls the maker (gym.make of the id, or of a retired id's spec), then seeds and wraps in Monitor
     env = make_vec_env(lambda: make_env(env_id, env_kwargs, action_offset, frame_stack, scripted_start,

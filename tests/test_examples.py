@@ -251,6 +251,27 @@ def test_train_sb3_eval_start_is_the_untrained_policy_and_leaves_the_training_al
         {k: b[k] for k in ("timesteps", "success_rate", "mean_return")}
 
 
+@pytest.mark.parametrize("budget_s", [30, 31])
+def test_train_sb3_keeps_the_checkpoint_at_the_budgets_end(budget_s, tmp_path, monkeypatch, capsys):
+    """A CPU clock that moves 1 s at each reading: whichever reading ends the budget, the checkpoint due at that
+    moment is written, since the checkpoints and the stop read the clock once per step (two readings, one second
+    apart, once let the stop pass the budget while the checkpoint had not: a run's last checkpoint was lost)."""
+    pytest.importorskip("stable_baselines3")
+    import itertools
+
+    mod = _example("train_sb3")
+    ticks = itertools.count()
+    monkeypatch.setattr(mod.time, "process_time", lambda: float(next(ticks)))
+    minutes = budget_s / 60.0
+    mod.main(["--algo", "ppo", "--env", "simgrip/PickFragile-v6", "--minutes", f"{minutes!r}",
+              "--checkpoint-minutes", f"{minutes / 2!r}", "--eval-episodes", "1", "--out", str(tmp_path)])
+    res = json.loads((tmp_path / "ppo_eval.json").read_text())
+    capsys.readouterr()
+    assert [c["minutes"] for c in res["checkpoints"]] == [round(minutes / 2, 6), round(minutes, 6)]
+    assert all((tmp_path / c["file"]).is_file() for c in res["checkpoints"])
+    assert res["timesteps"] < 64  # the fake clock, not the steps, ended the run
+
+
 @pytest.mark.parametrize("extra", [["--algo", "sac"], ["--algo", "ppo", "--init-from", "x.zip"],
                                    ["--algo", "ppo", "--log-std-init", "inf"]])
 def test_train_sb3_log_std_init_refusals_exit_2(extra, tmp_path, capsys):
