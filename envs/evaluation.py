@@ -19,9 +19,9 @@ import numpy as np
 
 from simgrip.envs.outcome import outcome  # outcomes() counts with it; also importable from here
 
-__all__ = ["EpisodeResult", "GAMMA", "add_episode_arguments", "check_env_id", "discount", "env_kwargs", "json_object",
-           "log_std", "log_std_init_conflict", "make_env", "outcome", "outcomes", "positive_int", "non_negative_int",
-           "probability", "run_episodes", "summary"]
+__all__ = ["EpisodeResult", "GAMMA", "add_episode_arguments", "check_env_id", "critic_warmup_conflict", "discount",
+           "env_kwargs", "json_object", "log_std", "log_std_init_conflict", "make_env", "outcome", "outcomes",
+           "positive_int", "non_negative_int", "probability", "run_episodes", "summary"]
 
 #: the discount of the returns :func:`run_episodes` also reports: Stable-Baselines3's default ``gamma`` (PPO, SAC)
 GAMMA = 0.99
@@ -76,6 +76,14 @@ def log_std_init_conflict(log_std_init, algos, init_from) -> str | None:
         return "--log-std-init: PPO only (--algo ppo)"
     if init_from is not None:
         return "--log-std-init: not with --init-from (the copied policy brings its own log standard deviation)"
+    return None
+
+
+def critic_warmup_conflict(steps, algos) -> str | None:
+    """Why ``--critic-warmup`` cannot go with these algorithms, or None: PPO only (SAC's critic learns off-policy
+    from its first steps; :mod:`simgrip.envs.critic_warmup` freezes an on-policy actor-critic's actor)."""
+    if steps and set(algos) != {"ppo"}:
+        return "--critic-warmup: PPO only (--algo ppo)"
     return None
 
 

@@ -49,7 +49,9 @@ pick-and-place; :mod:`simgrip.envs.warm_start`), recorded as ``init_from`` with 
 ``--gamma G`` passes the discount instead of the default 0.99, and ``--log-std-init X`` (PPO only) the policy's
 initial log standard deviation instead of 0, each named in every JSON's ``hyperparameters``.  ``--eval-start``
 passes that option (each run also evaluates its policy before the first update, ``start``) and ``aggregate.json``
-gives those rates per algorithm as ``start`` (as a checkpoint's).
+gives those rates per algorithm as ``start`` (as a checkpoint's); ``--critic-warmup STEPS`` (PPO only) passes that
+option (each run's first steps with the policy frozen, its value function alone learning,
+:mod:`simgrip.envs.critic_warmup`), recorded as ``critic_warmup``.
 
 Batches of one experiment run apart (some seeds here, others there or later, each with this command but for
 ``--seeds``, ``--jobs`` and ``--out``) are combined into one folder, as if run at once, by
@@ -117,7 +119,7 @@ def _probability(text: str) -> float:
     return probability(text)
 
 
-def _seed(text: str) -> int:
+def _non_negative_int(text: str) -> int:
     try:
         v = int(text)
     except ValueError:
@@ -169,6 +171,8 @@ def run_command(algo: str, seed: int, args, folder: Path) -> list[str]:
         cmd += ["--init-from", str(init_model(args.init_from, algo, seed))]
     if args.eval_start:
         cmd += ["--eval-start"]
+    if args.critic_warmup:
+        cmd += ["--critic-warmup", str(args.critic_warmup)]
     return cmd
 
 
@@ -410,7 +414,8 @@ def build_parser() -> argparse.ArgumentParser:
                    help="keyword arguments of gym.make as a JSON object, e.g. '{\"w_touch\": 0}' (an ablation; "
                         "default none)")
     p.add_argument("--algo", nargs="+", choices=ALGOS, default=list(ALGOS), help="algorithms (default ppo sac)")
-    p.add_argument("--seeds", nargs="+", type=_seed, default=[0, 1, 2], help="training seeds (default 0 1 2)")
+    p.add_argument("--seeds", nargs="+", type=_non_negative_int, default=[0, 1, 2],
+                   help="training seeds (default 0 1 2)")
     p.add_argument("--minutes", type=_positive(float), default=15.0, help="CPU-minute budget per run (default 15)")
     p.add_argument("--checkpoint-minutes", type=_positive(float), default=None,
                    help="evaluate a checkpoint every so many CPU minutes (default: the final policy only)")
@@ -446,6 +451,9 @@ def build_parser() -> argparse.ArgumentParser:
                         "on another task (simgrip.envs.warm_start; default: fresh policies)")
     p.add_argument("--eval-start", action="store_true",
                    help="each run also evaluates its policy before the first update (JSON: start)")
+    p.add_argument("--critic-warmup", type=_non_negative_int, default=0, metavar="STEPS",
+                   help="PPO only: each run's first STEPS steps (whole rollouts of 2048) with the policy frozen, "
+                        "only the value function learning (simgrip.envs.critic_warmup; default 0: none)")
     p.add_argument("--out", required=True, help="output folder")
     return p
 
@@ -459,9 +467,10 @@ def main(argv=None) -> int:
     cores = os.cpu_count() or 1
     if args.jobs > cores:
         p.error(f"--jobs: at most the {cores} cores of this machine, got {args.jobs}")
-    from simgrip.envs.evaluation import log_std_init_conflict  # imported when used, as _json_object
+    from simgrip.envs.evaluation import critic_warmup_conflict, log_std_init_conflict  # imported when used
 
-    why = log_std_init_conflict(args.log_std_init, args.algo, args.init_from)  # the options alone decide
+    why = log_std_init_conflict(args.log_std_init, args.algo, args.init_from) or \
+        critic_warmup_conflict(args.critic_warmup, args.algo)  # the options alone decide
     if why:
         p.error(why)
     if len(set(args.seeds)) != len(args.seeds):
@@ -530,6 +539,7 @@ def main(argv=None) -> int:
         **({"scripted_start": args.scripted_start} if args.scripted_start is not None else {}),
         **({"light_bias": args.light_bias} if args.light_bias is not None else {}),
         **({"residual": list(args.residual)} if args.residual is not None else {}),
+        **({"critic_warmup": args.critic_warmup} if args.critic_warmup else {}),
         **({"init_from": str(args.init_from), "init_command": init_command} if args.init_from is not None else {}),
         **({"wrapper": "VecNormalize (SB3 defaults: observation and return)"} if args.normalize else {}),
         "command": [Path(sys.argv[0]).name] + list(sys.argv[1:] if argv is None else argv)})

@@ -87,6 +87,12 @@ the same held-out seeds and records it as ``start`` (``success_rate``, ``mean_re
 fresh policy's deterministic action is SB3's initial mean, near 0 (its last layer's weights are scaled by 0.01),
 so it starts as the scripted controller and ``start`` says how close.  The budget counts the training alone.
 
+``--critic-warmup STEPS`` (PPO only) spends PPO's first ``STEPS`` environment steps (whole rollouts of 2048) with
+the policy frozen, so that only its value function learns the starting policy's returns before the policy moves
+(:mod:`simgrip.envs.critic_warmup`: residual policy learning's critic warm-up); they count in ``--steps`` and the
+budget.  ``<algo>_eval.json`` records ``critic_warmup``: its ``timesteps``, ``cpu_s``, and per update the value
+function's ``explained_variance`` on the rollout it learned from (before the update) and ``value_loss``.
+
 ``--threads`` sets PyTorch's intra-op threads (default 1: one core per
 training; run two trainings side by side to use two cores).
 """
@@ -105,8 +111,9 @@ from pathlib import Path
 import numpy as np
 
 import simgrip.envs  # noqa: F401  (registers the simgrip ids)
-from simgrip.envs.evaluation import (GAMMA, check_env_id, discount, json_object, log_std, log_std_init_conflict,
-                                     make_env, non_negative_int, outcomes, probability, run_episodes, summary)
+from simgrip.envs.evaluation import (GAMMA, check_env_id, critic_warmup_conflict, discount, json_object, log_std,
+                                     log_std_init_conflict, make_env, non_negative_int, outcomes, probability,
+                                     run_episodes, summary)
 from simgrip.io import atomic_write, check_output_dir, check_output_files_in, write_json
 
 ALGOS = ("ppo", "sac")
@@ -244,7 +251,7 @@ def train(algo: str, env_id: str, *, steps: int, minutes: float, seed: int, out:
           env_kwargs: dict | None = None, normalize: bool = False, action_offset=None, gamma: float | None = None,
           frame_stack: int | None = None, scripted_start: float | None = None,
           light_bias: float | None = None, init_from: str | None = None, residual=None,
-          log_std_init: float | None = None, eval_start: bool = False) -> dict:
+          log_std_init: float | None = None, eval_start: bool = False, critic_warmup: int = 0) -> dict:
     """Train ``algo`` with library defaults within the budget, write its curve, model and evaluation
     (``env_kwargs``: ``gym.make``'s keyword arguments, for training and evaluation alike; ``normalize``: train
     behind SB3's ``VecNormalize`` with its defaults; ``action_offset``: train and evaluate behind
@@ -258,7 +265,9 @@ def train(algo: str, env_id: str, *, steps: int, minutes: float, seed: int, out:
     :mod:`simgrip.envs.warm_start`; ``residual``: action names the scripted controller drives, the policy's action
     added, :class:`simgrip.envs.scripted_residual.ScriptedResidual`, for training and evaluation alike;
     ``log_std_init``: PPO's initial log standard deviation instead of 0; ``eval_start``: evaluate the policy before
-    its first update as well, recorded as ``start``)."""
+    its first update as well, recorded as ``start``; ``critic_warmup``: PPO's first steps, in whole rollouts, with
+    the policy frozen so that only the value function learns, :mod:`simgrip.envs.critic_warmup`; within ``steps``
+    and the budget)."""
     env_kwargs = dict(env_kwargs or {})
     from stable_baselines3 import PPO, SAC
     from stable_baselines3.common.callbacks import BaseCallback
@@ -325,7 +334,39 @@ def train(algo: str, env_id: str, *, steps: int, minutes: float, seed: int, out:
         if eval_start:
             start = {k: before[k] for k in ("success_rate", "mean_return", "mean_discounted_return", "outcomes")}
         t_start, c_start = time.perf_counter(), time.process_time()  # the budget is the training's alone
-    model.learn(total_timesteps=steps, callback=Budget())
+    warmup = None
+    if critic_warmup:  # the value function fitted to the starting policy's returns, the policy held
+        from simgrip.envs.critic_warmup import critic_fit, frozen_actor
+
+        fits = []
+
+        class Fits(BaseCallback):
+            """Each warm-up update's fit (a finished rollout is followed by one; a stopped one is not)."""
+            pending = False
+
+            def _on_rollout_start(self) -> None:
+                if self.pending:
+                    fits.append(critic_fit(self.model))
+                self.pending = False
+
+            def _on_rollout_end(self) -> None:
+                self.pending = True
+
+            def _on_step(self) -> bool:
+                return True
+
+        fit_cb = Fits()
+        with frozen_actor(model):
+            model.learn(total_timesteps=min(critic_warmup, steps), callback=[Budget(), fit_cb])
+        if fit_cb.pending:
+            fits.append(critic_fit(model))
+        warmup = {"timesteps": int(model.num_timesteps), "cpu_s": round(time.process_time() - c_start, 1),
+                  "explained_variance": [f.get("explained_variance") for f in fits],
+                  "value_loss": [f.get("value_loss") for f in fits]}
+    if not critic_warmup:
+        model.learn(total_timesteps=steps, callback=Budget())
+    elif model.num_timesteps < steps and spent() < budget:  # the training goes on from the warm-up's state
+        model.learn(total_timesteps=steps - model.num_timesteps, callback=Budget(), reset_num_timesteps=False)
     wall, cpu = time.perf_counter() - t_start, time.process_time() - c_start
     env.close()
 
@@ -366,6 +407,9 @@ def train(algo: str, env_id: str, *, steps: int, minutes: float, seed: int, out:
         result["init_from"] = init
         result["cpu_s_with_init"] = round(cpu + float(init.get("cpu_s") or 0.0), 1)
         wrappers.append(f"started from {init['algo']} on {init['env']} (warm start)")
+    if warmup is not None:
+        result["critic_warmup"] = warmup
+        wrappers.append(f"critic warm-up: {warmup['timesteps']} steps with the policy frozen")
     if wrappers:
         result["wrapper"] = ", ".join(wrappers)
     if start is not None:
@@ -471,9 +515,14 @@ def main(argv=None) -> int:
                         "ppo_eval.json), copied by simgrip.envs.warm_start (default: a fresh policy)")
     p.add_argument("--eval-start", action="store_true",
                    help="also evaluate the policy before its first update on the held-out seeds (JSON: start)")
+    p.add_argument("--critic-warmup", type=non_negative_int, default=0, metavar="STEPS",
+                   help="PPO only: its first STEPS environment steps (rounded up to whole rollouts of 2048) with the "
+                        "policy frozen, so that only the value function learns (simgrip.envs.critic_warmup; "
+                        "within --steps and --minutes; default 0: none)")
     p.add_argument("--out", required=True, help="output folder")
     args = p.parse_args(argv)
-    why = log_std_init_conflict(args.log_std_init, args.algo, args.init_from)  # before the rl extra is looked for
+    why = log_std_init_conflict(args.log_std_init, args.algo, args.init_from) or \
+        critic_warmup_conflict(args.critic_warmup, args.algo)  # before the rl extra is looked for
     if why:
         p.error(why)
     try:
@@ -514,7 +563,8 @@ def main(argv=None) -> int:
                        normalize=args.normalize, action_offset=args.action_offset, gamma=args.gamma,
                        frame_stack=args.frame_stack, scripted_start=args.scripted_start,
                        light_bias=args.light_bias, init_from=args.init_from, residual=args.residual,
-                       log_std_init=args.log_std_init, eval_start=args.eval_start)
+                       log_std_init=args.log_std_init, eval_start=args.eval_start,
+                       critic_warmup=args.critic_warmup)
         print(json.dumps(result), flush=True)
     plot_curves(out)
     return 0

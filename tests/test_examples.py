@@ -281,6 +281,48 @@ def test_train_sb3_log_std_init_refusals_exit_2(extra, tmp_path, capsys):
     assert e.value.code == 2 and "--log-std-init" in capsys.readouterr().err.strip().splitlines()[-1]
 
 
+def test_train_sb3_critic_warmup_holds_the_policy_then_trains_it(tmp_path):
+    """``--critic-warmup 2048``: PPO's first rollout (2048 steps) with the actor frozen.  Stopped there
+    (``--steps 2048``), the saved policy's actor is the fresh PPO's of that seed bit for bit and its value function
+    is not; run on to 4096 steps the actor moves.  The JSON records the warm-up's steps and the update's fit."""
+    pytest.importorskip("stable_baselines3")
+    import torch
+    from stable_baselines3 import PPO
+    from stable_baselines3.common.env_util import make_vec_env
+
+    from simgrip.envs.critic_warmup import actor_parameters
+    from simgrip.envs.evaluation import make_env
+
+    mod = _example("train_sb3")
+    common = ["--algo", "ppo", "--env", "simgrip/PickFragile-v6", "--seed", "4", "--critic-warmup", "2048",
+              "--eval-episodes", "1", "--eval-seed", "8330"]
+    mod.main(common + ["--steps", "2048", "--out", str(tmp_path / "a")])
+    mod.main(common + ["--steps", "4096", "--out", str(tmp_path / "b")])
+    env = make_vec_env(lambda: make_env("simgrip/PickFragile-v6", {}), n_envs=1, seed=4)
+    policy = PPO("MlpPolicy", env, seed=4, verbose=0).policy
+    fresh = policy.state_dict()
+    ids = {id(p) for p in actor_parameters(policy)}
+    names = [n for n, p in policy.named_parameters() if id(p) in ids]
+    for key, changed in (("a", False), ("b", True)):
+        res = json.loads((tmp_path / key / "ppo_eval.json").read_text())
+        warm = res["critic_warmup"]
+        assert warm["timesteps"] == 2048 and len(warm["explained_variance"]) == len(warm["value_loss"]) == 1
+        assert res["timesteps"] == (4096 if changed else 2048) and "critic warm-up" in res["wrapper"]
+        saved = PPO.load(tmp_path / key / "ppo_model.zip").policy.state_dict()
+        assert any(not torch.equal(saved[n], fresh[n]) for n in fresh if n.startswith("value_net."))
+        assert all(torch.equal(saved[n], fresh[n]) for n in names) != changed
+
+
+def test_train_sb3_critic_warmup_refusals_exit_2(tmp_path, capsys):
+    with pytest.raises(SystemExit) as e:
+        _example("train_sb3").main(["--env", "simgrip/PickFragile-v6", "--algo", "sac", "--critic-warmup", "2048",
+                                    "--out", str(tmp_path / "o")])
+    assert e.value.code == 2 and "--critic-warmup" in capsys.readouterr().err.strip().splitlines()[-1]
+    with pytest.raises(SystemExit) as e:
+        _example("train_sb3").main(["--algo", "ppo", "--critic-warmup", "-1", "--out", str(tmp_path / "o")])
+    assert e.value.code == 2 and "--critic-warmup" in capsys.readouterr().err.strip().splitlines()[-1]
+
+
 def test_evaluate_policy_model_reproduces_train_sb3s_evaluation(tmp_path, capsys):
     """A model evaluated again by evaluate_policy: the held-out figures train_sb3 wrote, digit for digit, at
     the discount it was trained with."""

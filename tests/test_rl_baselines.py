@@ -70,6 +70,8 @@ def test_aggregate_mean_min_max_per_checkpoint_and_failed_runs():
     (["--log-std-init", "-6"], "--log-std-init"),
     (["--log-std-init", "-1", "--algo", "sac"], "--log-std-init"),
     (["--log-std-init", "-1", "--algo", "ppo", "sac"], "--log-std-init"),
+    (["--critic-warmup", "-1", "--algo", "ppo"], "--critic-warmup"),
+    (["--critic-warmup", "2048", "--algo", "sac"], "--critic-warmup"),
 ])
 def test_bad_arguments_exit_2_with_one_line(extra, word, tmp_path, capsys):
     argv = ["--env", "simgrip/PickFragile-v0", "--out", str(tmp_path / "o"), *extra]
@@ -204,6 +206,15 @@ def test_log_std_init_reaches_every_run_command(tmp_path):
     assert float(cmd[cmd.index("--log-std-init") + 1]) == -1.0
     args.log_std_init = None
     assert "--log-std-init" not in mod.run_command("ppo", 0, args, tmp_path)  # the library's default, not written
+
+
+def test_critic_warmup_reaches_every_run_command(tmp_path):
+    mod = _module()
+    args = rl_baselines_args(mod, critic_warmup=40960)
+    cmd = mod.run_command("ppo", 0, args, tmp_path)
+    assert cmd[cmd.index("--critic-warmup") + 1] == "40960"
+    args.critic_warmup = 0
+    assert "--critic-warmup" not in mod.run_command("ppo", 0, args, tmp_path)  # none: not written
 
 
 def test_eval_start_reaches_every_run_command_and_the_aggregate(tmp_path):
