@@ -14,7 +14,8 @@ value function (the policy's ratio is 1, its entropy fixed).  :func:`actor_param
 parameters (SB3's ``MlpPolicy``: the MLP's policy branch, the action head and the state-independent log standard
 deviation); :func:`frozen_actor` freezes them for a block (``requires_grad`` off, so PyTorch's Adam skips them:
 they come out bit for bit as they went in) and :func:`critic_fit` reads how well the value function predicted the
-last rollout's returns before that update (SB3's ``train/explained_variance``, out of sample).
+last rollout's returns before that update (SB3's ``train/explained_variance``, out of sample); :func:`warm_up` runs
+PPO's loop that way and records each update's fit.
 
 ``examples/train_sb3.py --critic-warmup STEPS`` runs it before the training, the CPU time counted in the budget.
 """
@@ -23,7 +24,7 @@ from __future__ import annotations
 
 from contextlib import contextmanager
 
-__all__ = ["actor_parameters", "critic_fit", "frozen_actor"]
+__all__ = ["actor_parameters", "critic_fit", "frozen_actor", "warm_up"]
 
 
 def actor_parameters(policy) -> list:
@@ -36,8 +37,10 @@ def actor_parameters(policy) -> list:
                   if m is not None}
     if any(True for m in extractors.values() for _ in m.parameters()):
         raise ValueError("critic warm-up: the policy's features extractor has parameters (MlpPolicy's has none)")
+    import torch
+
     params = list(policy.mlp_extractor.policy_net.parameters()) + list(policy.action_net.parameters())
-    if isinstance(getattr(policy, "log_std", None), type(params[0])):
+    if isinstance(getattr(policy, "log_std", None), torch.nn.Parameter):
         params.append(policy.log_std)
     return params
 
@@ -68,3 +71,35 @@ def critic_fit(model) -> dict:
     seen = logger.name_to_value
     return {key: float(seen[f"train/{key}"]) for key in ("explained_variance", "value_loss")
             if f"train/{key}" in seen}
+
+
+def warm_up(model, steps: int, callback=None) -> dict:
+    """Run ``model.learn(steps)`` (an SB3 PPO's, in whole rollouts; ``callback`` as ``learn``'s, e.g. a budget that
+    may stop it) inside :func:`frozen_actor`.  Returns the fit of every update made, in order:
+    ``explained_variance`` and ``value_loss`` (lists, :func:`critic_fit`); a rollout the callback stopped is not
+    followed by an update and adds nothing."""
+    from stable_baselines3.common.callbacks import BaseCallback
+
+    fits = []
+
+    class Fits(BaseCallback):
+        """SB3 records an update's fit after the rollout it learns from: read it when the next rollout starts."""
+        pending = False
+
+        def _on_rollout_start(self) -> None:
+            if self.pending:
+                fits.append(critic_fit(self.model))
+            self.pending = False
+
+        def _on_rollout_end(self) -> None:  # (only a finished rollout gets here, and an update follows it)
+            self.pending = True
+
+        def _on_step(self) -> bool:
+            return True
+
+    fit_cb = Fits()
+    with frozen_actor(model):
+        model.learn(total_timesteps=steps, callback=[fit_cb] if callback is None else [callback, fit_cb])
+    if fit_cb.pending:  # the last update's
+        fits.append(critic_fit(model))
+    return {key: [f.get(key) for f in fits] for key in ("explained_variance", "value_loss")}

@@ -336,37 +336,13 @@ def train(algo: str, env_id: str, *, steps: int, minutes: float, seed: int, out:
         t_start, c_start = time.perf_counter(), time.process_time()  # the budget is the training's alone
     warmup = None
     if critic_warmup:  # the value function fitted to the starting policy's returns, the policy held
-        from simgrip.envs.critic_warmup import critic_fit, frozen_actor
+        from simgrip.envs.critic_warmup import warm_up
 
-        fits = []
-
-        class Fits(BaseCallback):
-            """Each warm-up update's fit (a finished rollout is followed by one; a stopped one is not)."""
-            pending = False
-
-            def _on_rollout_start(self) -> None:
-                if self.pending:
-                    fits.append(critic_fit(self.model))
-                self.pending = False
-
-            def _on_rollout_end(self) -> None:
-                self.pending = True
-
-            def _on_step(self) -> bool:
-                return True
-
-        fit_cb = Fits()
-        with frozen_actor(model):
-            model.learn(total_timesteps=min(critic_warmup, steps), callback=[Budget(), fit_cb])
-        if fit_cb.pending:
-            fits.append(critic_fit(model))
-        warmup = {"timesteps": int(model.num_timesteps), "cpu_s": round(time.process_time() - c_start, 1),
-                  "explained_variance": [f.get("explained_variance") for f in fits],
-                  "value_loss": [f.get("value_loss") for f in fits]}
-    if not critic_warmup:
-        model.learn(total_timesteps=steps, callback=Budget())
-    elif model.num_timesteps < steps and spent() < budget:  # the training goes on from the warm-up's state
-        model.learn(total_timesteps=steps - model.num_timesteps, callback=Budget(), reset_num_timesteps=False)
+        fit = warm_up(model, min(critic_warmup, steps), Budget())
+        warmup = {"timesteps": int(model.num_timesteps), "cpu_s": round(time.process_time() - c_start, 1), **fit}
+    if not critic_warmup or (model.num_timesteps < steps and spent() < budget):  # after a warm-up: from its state
+        model.learn(total_timesteps=steps - model.num_timesteps, callback=Budget(),
+                    reset_num_timesteps=not critic_warmup)
     wall, cpu = time.perf_counter() - t_start, time.process_time() - c_start
     env.close()
 
