@@ -12,6 +12,7 @@ naming the option).
 from __future__ import annotations
 
 import argparse
+import math
 from dataclasses import dataclass
 from typing import Any, Callable
 
@@ -19,7 +20,7 @@ import numpy as np
 
 from simgrip.envs.outcome import outcome  # outcomes() counts with it; also importable from here
 
-__all__ = ["EpisodeResult", "GAMMA", "add_episode_arguments", "check_env_id", "critic_warmup_conflict", "discount",
+__all__ = ["EpisodeResult", "GAMMA", "add_episode_arguments", "charge", "check_env_id", "critic_warmup_conflict", "discount",
            "env_kwargs", "json_object", "log_std", "log_std_init_conflict", "make_env", "outcome", "outcomes",
            "positive_int", "non_negative_int", "probability", "run_episodes", "summary"]
 
@@ -90,6 +91,11 @@ def critic_warmup_conflict(steps, algos) -> str | None:
 def probability(text: str) -> float:
     """argparse type: a probability in [0, 1]."""
     return _number_in(text, lambda p: 0.0 <= p <= 1.0, "[0, 1]")
+
+
+def charge(text: str) -> float:
+    """argparse type: a charge in reward units, finite and >= 0."""
+    return _number_in(text, lambda x: 0.0 <= x < math.inf, "[0, inf)")
 
 
 def add_episode_arguments(parser: argparse.ArgumentParser, *, episodes: int = 20) -> None:

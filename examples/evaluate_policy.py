@@ -10,7 +10,8 @@ to optimise: under that discount, its faster and riskier policy is worth more.
 
     python examples/evaluate_policy.py --env simgrip/PickFragile-v6 (--model ZIP [--algo ppo|sac] |
         --policy observation|oracle) [--action-offset A0 A1] [--frame-stack N] [--residual NAME ...]
-        [--scripted-start P] [--env-kwargs JSON] [--episodes 50] [--seed 8000] [--gamma 0.99] [--json]
+        [--scripted-start P] [--env-kwargs JSON] [--episodes 50] [--seed 8000] [--gamma 0.99]
+        [--crush-charge F ...] [--json]
 
 ``--action-offset``, ``--frame-stack`` and ``--residual`` must be the ones the model was trained with
 (``train_sb3.py``'s options of those names);
@@ -41,6 +42,12 @@ it; ``"1-4"``, ``"5-24"``, ``"25+"``): a crush on touch is the approach's speed,
 And ``crush_overrun``: over the crushed episodes, the median and largest relative overrun ``x = (F - L) / L`` of
 the crushing step's largest finger force ``F`` over the episode's hidden limit ``L`` (``None`` without a crush):
 what a crush charge graded by ``x`` (the fragile tasks' ``w_crush x / (1 + x)``) charges them.
+And ``crush_weight``: the mean over the episodes of ``gamma ** (n - 1)`` for each crushed episode of ``n`` steps
+(0 for the others), what a flat charge of 1 on every crush would take off ``mean_discounted_return``
+(:func:`crush_weight`); ``--crush-charge F [F ...]`` adds ``crush_charged_return``, ``{"F":
+mean_discounted_return - F * crush_weight}``: what the policy would be worth to the learner were each crush
+charged ``F`` more, so two policies' worth can be compared under a charge no env has (two policies with returns
+``R_a > R_b`` and weights ``w_a > w_b`` are worth the same at ``F = (R_a - R_b) / (w_a - w_b)``).
 """
 
 from __future__ import annotations
@@ -52,7 +59,7 @@ import statistics
 import sys
 
 import simgrip.envs  # noqa: F401  (registers the simgrip ids)
-from simgrip.envs.evaluation import (check_env_id, discount, json_object, make_env, non_negative_int, outcomes,
+from simgrip.envs.evaluation import (charge, check_env_id, discount, json_object, make_env, non_negative_int, outcomes,
                                      positive_int, probability, run_episodes, summary)
 from simgrip.envs.light_bias import episode_mass, mass_bins
 from simgrip.envs.outcome import outcome
@@ -125,6 +132,16 @@ def crush_overrun(results) -> dict | None:
     return {"crushes": len(x), "median": statistics.median(x), "max": max(x)} if x else None
 
 
+def crush_weight(results, gamma: float) -> float:
+    """What one unit of a flat charge on each crush takes off the mean discounted return: the mean over the
+    episodes of ``gamma ** (n - 1)`` for a crushed episode of ``n`` steps (the crush is its last step, and the
+    charge is paid there as that step's reward, discounted as :func:`~simgrip.envs.evaluation.run_episodes`
+    discounts it), 0 for the others.  A flat charge ``F`` on top of the env's own crush penalty makes the mean
+    discounted return ``mean_discounted_return - F * crush_weight``."""
+    w = [gamma ** (r.length - 1) if outcome(r.info) == "crushed" else 0.0 for r in results]
+    return sum(w) / len(w) if w else 0.0
+
+
 def place_timeouts(results, place_tolerance: float, on_table: float) -> dict:
     """The pick-and-place's timed-out episodes that carried the workpiece and never set it down:
     ``{"held_up": n, "over_target": m}``, ``n`` those that end with it carried and more than ``on_table`` [m]
@@ -164,6 +181,9 @@ def main(argv=None) -> dict:
     p.add_argument("--episodes", type=positive_int, default=50, help="episodes (default 50)")
     p.add_argument("--seed", type=non_negative_int, default=8000, help="seed of the first episode (default 8000)")
     p.add_argument("--gamma", type=discount, default=0.99, help="discount of the reported return (default 0.99)")
+    p.add_argument("--crush-charge", type=charge, nargs="+", default=None, metavar="F",
+                   help="also report the mean discounted return with a flat charge F added to each crush "
+                        "(crush_charged_return; a fragile task only)")
     p.add_argument("--json", action="store_true", help="print only a JSON object")
     args = p.parse_args(argv)
     check_env_id(p, args.env, retired=True)  # make_env builds a retired one through its spec
@@ -189,6 +209,9 @@ def main(argv=None) -> dict:
     masses: list[float] = []
     touches: list[int | None] = []  # per episode: the first step with a finger force (crushed_after_touch)
     edges = mass_bins(env)
+    if args.crush_charge is not None and edges is None:
+        env.close()
+        p.error(f"--crush-charge: {args.env} has no crush (a fragile task only)")
     try:
         on_reset = None
         if args.model is not None:
@@ -239,6 +262,9 @@ def main(argv=None) -> dict:
         out["by_mass"] = by_mass(results, masses, edges)
         out["crushed_after_touch"] = crushed_after_touch(results, touches)
         out["crush_overrun"] = crush_overrun(results)
+        out["crush_weight"] = w = crush_weight(results, args.gamma)
+        if args.crush_charge is not None:
+            out["crush_charged_return"] = {f"{F:g}": out["mean_discounted_return"] - F * w for F in args.crush_charge}
     if hasattr(env.unwrapped, "place_tolerance"):  # the pick-and-place: carried, then held up to the end?
         from simgrip.envs.pick_place import ON_TABLE
 

@@ -440,6 +440,60 @@ def test_crush_overrun_is_the_crushing_steps_relative_overrun_of_the_limit():
     assert module.crush_overrun(results[2:]) is None
 
 
+def test_crush_weight_is_each_crushs_discount_averaged_over_the_episodes():
+    from simgrip.envs.evaluation import EpisodeResult
+
+    # crushed on steps 1 and 3 (lengths 1 and 3: the crush is the last step), a success and a timeout not
+    infos = [{"crushed": True}, {"crushed": True}, {"is_success": True}, {}]
+    results = [EpisodeResult(i, i, 0.0, n, info) for i, (n, info) in enumerate(zip([1, 3, 2, 5], infos))]
+    assert _example("evaluate_policy").crush_weight(results, 0.5) == pytest.approx((1.0 + 0.25) / 4, abs=1e-15)
+    assert _example("evaluate_policy").crush_weight(results[2:], 0.5) == 0.0
+
+
+def test_evaluate_policy_crush_charge_is_the_return_of_an_env_that_charges_it(capsys):
+    """``--crush-charge F``'s return against the same controller run on the env with ``F`` charged on the crushing
+    step by a wrapper (the discounted sum of its rewards, summed afresh)."""
+    import gymnasium as gym
+
+    from simgrip.envs.evaluation import run_episodes
+
+    module = _example("evaluate_policy")
+    # the cradle controller crushes seed 8006's piece and holds 8005's (test above)
+    out = module.main(["--env", "simgrip/PickCradleFragile-v5", "--policy", "observation", "--episodes", "2",
+                       "--seed", "8005", "--gamma", "0.98", "--crush-charge", "0", "10", "--json"])
+    assert out["outcomes"] == {"crushed": 1, "success": 1} and set(out["crush_charged_return"]) == {"0", "10"}
+
+    class Charged(gym.Wrapper):
+        def step(self, action):
+            obs, reward, terminated, truncated, info = self.env.step(action)
+            return obs, reward - (10.0 if info["crushed"] else 0.0), terminated, truncated, info
+
+    env = Charged(gym.make("simgrip/PickCradleFragile-v5"))
+    act, on_reset = module._scripted(env, "observation")
+    results = run_episodes(env, act, 2, 8005, on_reset=on_reset, gamma=0.98)
+    env.close()
+    crushed = [r for r in results if r.info["crushed"]]
+    assert len(crushed) == 1 and out["crush_weight"] == pytest.approx(0.98 ** (crushed[0].length - 1) / 2, rel=1e-12)
+    assert out["crush_charged_return"]["10"] == pytest.approx(sum(r.discounted for r in results) / 2, rel=1e-12)
+    assert out["crush_charged_return"]["0"] == out["mean_discounted_return"]
+
+
+@pytest.mark.parametrize("value", ["-1", "nan", "inf", "x"])
+def test_evaluate_policy_refuses_a_bad_crush_charge(value, capsys):
+    with pytest.raises(SystemExit) as e:
+        _example("evaluate_policy").main(["--env", "simgrip/PickFragile-v6", "--policy", "observation",
+                                          "--crush-charge", value])
+    assert e.value.code == 2 and "--crush-charge" in capsys.readouterr().err
+
+
+def test_evaluate_policy_refuses_a_crush_charge_where_nothing_crushes(tmp_path, capsys):
+    model = tmp_path / "model.zip"
+    model.write_bytes(b"")  # never loaded: the option is refused first
+    with pytest.raises(SystemExit) as e:
+        _example("evaluate_policy").main(["--env", "simgrip/Pick-v1", "--model", str(model), "--crush-charge", "1"])
+    assert e.value.code == 2 and "--crush-charge" in capsys.readouterr().err
+
+
 def test_evaluate_policy_times_a_crush_from_the_first_touch(capsys):
     import gymnasium as gym
 
