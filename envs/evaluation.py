@@ -20,9 +20,9 @@ import numpy as np
 
 from simgrip.envs.outcome import outcome  # outcomes() counts with it; also importable from here
 
-__all__ = ["EpisodeResult", "GAMMA", "add_episode_arguments", "charge", "check_env_id", "critic_warmup_conflict", "discount",
-           "env_kwargs", "json_object", "log_std", "log_std_init_conflict", "make_env", "outcome", "outcomes",
-           "positive_int", "non_negative_int", "probability", "run_episodes", "summary"]
+__all__ = ["EpisodeResult", "GAMMA", "add_episode_arguments", "charge", "check_env_id", "critic_warmup_conflict",
+           "crush_charge_conflict", "discount", "env_kwargs", "json_object", "log_std", "log_std_init_conflict",
+           "make_env", "outcome", "outcomes", "positive_int", "non_negative_int", "probability", "run_episodes", "summary"]
 
 #: the discount of the returns :func:`run_episodes` also reports: Stable-Baselines3's default ``gamma`` (PPO, SAC)
 GAMMA = 0.99
@@ -86,6 +86,17 @@ def critic_warmup_conflict(steps, algos) -> str | None:
     if steps and set(algos) != {"ppo"}:
         return "--critic-warmup: PPO only (--algo ppo)"
     return None
+
+
+def crush_charge_conflict(env_id: str, env_kwargs: dict | None = None) -> str | None:
+    """Why ``--crush-charge`` cannot go with this env, or None: a fragile task only (its unwrapped env has a crush
+    limit, :class:`simgrip.envs.crush_charge.CrushCharge`)."""
+    env = make_env(env_id, env_kwargs)
+    try:
+        fragile = hasattr(env.unwrapped, "crush_limit")
+    finally:
+        env.close()
+    return None if fragile else f"--crush-charge: {env_id} has no crush (a fragile task only)"
 
 
 def probability(text: str) -> float:

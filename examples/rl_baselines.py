@@ -51,7 +51,9 @@ initial log standard deviation instead of 0, each named in every JSON's ``hyperp
 passes that option (each run also evaluates its policy before the first update, ``start``) and ``aggregate.json``
 gives those rates per algorithm as ``start`` (as a checkpoint's); ``--critic-warmup STEPS`` (PPO only) passes that
 option (each run's first steps with the policy frozen, its value function alone learning,
-:mod:`simgrip.envs.critic_warmup`), recorded as ``critic_warmup``.
+:mod:`simgrip.envs.critic_warmup`), recorded as ``critic_warmup``; ``--crush-charge F`` and ``--crush-charge-from
+STEPS`` pass those options (each crush's training reward lowered by ``F`` from training step ``STEPS`` on,
+:mod:`simgrip.envs.crush_charge`), recorded as ``crush_charge``.
 
 Batches of one experiment run apart (some seeds here, others there or later, each with this command but for
 ``--seeds``, ``--jobs`` and ``--out``) are combined into one folder, as if run at once, by
@@ -119,6 +121,12 @@ def _probability(text: str) -> float:
     return probability(text)
 
 
+def _charge(text: str) -> float:
+    from simgrip.envs.evaluation import charge  # imported when used, as _json_object
+
+    return charge(text)
+
+
 def _non_negative_int(text: str) -> int:
     try:
         v = int(text)
@@ -173,6 +181,8 @@ def run_command(algo: str, seed: int, args, folder: Path) -> list[str]:
         cmd += ["--eval-start"]
     if args.critic_warmup:
         cmd += ["--critic-warmup", str(args.critic_warmup)]
+    if args.crush_charge is not None:
+        cmd += ["--crush-charge", repr(args.crush_charge), "--crush-charge-from", str(args.crush_charge_from)]
     return cmd
 
 
@@ -454,6 +464,11 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--critic-warmup", type=_non_negative_int, default=0, metavar="STEPS",
                    help="PPO only: each run's first STEPS steps (whole rollouts of 2048) with the policy frozen, "
                         "only the value function learning (simgrip.envs.critic_warmup; default 0: none)")
+    p.add_argument("--crush-charge", type=_charge, default=None, metavar="F",
+                   help="lower each run's training reward of every crush by F (simgrip.envs.crush_charge; a fragile "
+                        "task only; default none)")
+    p.add_argument("--crush-charge-from", type=_non_negative_int, default=0, metavar="STEPS",
+                   help="with --crush-charge: from this training step on (default 0)")
     p.add_argument("--out", required=True, help="output folder")
     return p
 
@@ -473,6 +488,8 @@ def main(argv=None) -> int:
         critic_warmup_conflict(args.critic_warmup, args.algo)  # the options alone decide
     if why:
         p.error(why)
+    if args.crush_charge_from and args.crush_charge is None:
+        p.error("--crush-charge-from: only with --crush-charge")
     if len(set(args.seeds)) != len(args.seeds):
         p.error(f"--seeds: repeated seed in {args.seeds}")
     if args.checkpoint_minutes and args.checkpoint_minutes > args.minutes:
@@ -495,6 +512,12 @@ def main(argv=None) -> int:
                      args.light_bias, args.residual).close()
         except ValueError as e:
             p.error(str(e))
+    if args.crush_charge is not None:
+        from simgrip.envs.evaluation import crush_charge_conflict
+
+        why = crush_charge_conflict(args.env, args.env_kwargs)
+        if why:
+            p.error(why)
     algos = list(dict.fromkeys(args.algo))
     init_command = _check_init(p, args, algos) if args.init_from is not None else None
     try:
@@ -540,6 +563,8 @@ def main(argv=None) -> int:
         **({"light_bias": args.light_bias} if args.light_bias is not None else {}),
         **({"residual": list(args.residual)} if args.residual is not None else {}),
         **({"critic_warmup": args.critic_warmup} if args.critic_warmup else {}),
+        **({"crush_charge": {"charge": args.crush_charge, "start": args.crush_charge_from}}
+           if args.crush_charge is not None else {}),
         **({"init_from": str(args.init_from), "init_command": init_command} if args.init_from is not None else {}),
         **({"wrapper": "VecNormalize (SB3 defaults: observation and return)"} if args.normalize else {}),
         "command": [Path(sys.argv[0]).name] + list(sys.argv[1:] if argv is None else argv)})

@@ -111,9 +111,9 @@ from pathlib import Path
 import numpy as np
 
 import simgrip.envs  # noqa: F401  (registers the simgrip ids)
-from simgrip.envs.evaluation import (GAMMA, check_env_id, critic_warmup_conflict, discount, json_object, log_std,
-                                     log_std_init_conflict, make_env, non_negative_int, outcomes, probability,
-                                     run_episodes, summary)
+from simgrip.envs.evaluation import (GAMMA, charge, check_env_id, critic_warmup_conflict, crush_charge_conflict,
+                                     discount, json_object, log_std, log_std_init_conflict, make_env, non_negative_int,
+                                     outcomes, probability, run_episodes, summary)
 from simgrip.io import atomic_write, check_output_dir, check_output_files_in, write_json
 
 ALGOS = ("ppo", "sac")
@@ -251,7 +251,8 @@ def train(algo: str, env_id: str, *, steps: int, minutes: float, seed: int, out:
           env_kwargs: dict | None = None, normalize: bool = False, action_offset=None, gamma: float | None = None,
           frame_stack: int | None = None, scripted_start: float | None = None,
           light_bias: float | None = None, init_from: str | None = None, residual=None,
-          log_std_init: float | None = None, eval_start: bool = False, critic_warmup: int = 0) -> dict:
+          log_std_init: float | None = None, eval_start: bool = False, critic_warmup: int = 0,
+          crush_charge: tuple[float, int] | None = None) -> dict:
     """Train ``algo`` with library defaults within the budget, write its curve, model and evaluation
     (``env_kwargs``: ``gym.make``'s keyword arguments, for training and evaluation alike; ``normalize``: train
     behind SB3's ``VecNormalize`` with its defaults; ``action_offset``: train and evaluate behind
@@ -267,7 +268,8 @@ def train(algo: str, env_id: str, *, steps: int, minutes: float, seed: int, out:
     ``log_std_init``: PPO's initial log standard deviation instead of 0; ``eval_start``: evaluate the policy before
     its first update as well, recorded as ``start``; ``critic_warmup``: PPO's first steps, in whole rollouts, with
     the policy frozen so that only the value function learns, :mod:`simgrip.envs.critic_warmup`; within ``steps``
-    and the budget)."""
+    and the budget; ``crush_charge``: ``(charge, start)``, the training reward of every crush from training step
+    ``start`` on lowered by ``charge``, :class:`simgrip.envs.crush_charge.CrushCharge`; evaluation runs the task)."""
     env_kwargs = dict(env_kwargs or {})
     from stable_baselines3 import PPO, SAC
     from stable_baselines3.common.callbacks import BaseCallback
@@ -313,9 +315,15 @@ def train(algo: str, env_id: str, *, steps: int, minutes: float, seed: int, out:
             return now < budget
 
     # make_vec_env calls the maker (gym.make of the id, or of a retired id's spec), then seeds and wraps in Monitor
-    env = make_vec_env(lambda: make_env(env_id, env_kwargs, action_offset, frame_stack, scripted_start,
-                                        light_bias, residual), n_envs=1,
-                       seed=seed)
+    def make_training_env():
+        made = make_env(env_id, env_kwargs, action_offset, frame_stack, scripted_start, light_bias, residual)
+        if crush_charge is None:
+            return made
+        from simgrip.envs.crush_charge import CrushCharge
+
+        return CrushCharge(made, *crush_charge)
+
+    env = make_vec_env(make_training_env, n_envs=1, seed=seed)
     if normalize:
         from stable_baselines3.common.vec_env import VecNormalize
 
@@ -377,6 +385,9 @@ def train(algo: str, env_id: str, *, steps: int, minutes: float, seed: int, out:
     if light_bias is not None:
         result["light_bias"] = float(light_bias)
         wrappers.append(f"LightBias({float(light_bias)!r}) in training")
+    if crush_charge is not None:
+        result["crush_charge"] = {"charge": float(crush_charge[0]), "start": int(crush_charge[1])}
+        wrappers.append(f"CrushCharge({float(crush_charge[0])!r}, from step {int(crush_charge[1])}) in training")
     if normalize:
         wrappers.append("VecNormalize (SB3 defaults: observation and return)")
     if init is not None:
@@ -495,8 +506,15 @@ def main(argv=None) -> int:
                    help="PPO only: its first STEPS environment steps (rounded up to whole rollouts of 2048) with the "
                         "policy frozen, so that only the value function learns (simgrip.envs.critic_warmup; "
                         "within --steps and --minutes; default 0: none)")
+    p.add_argument("--crush-charge", type=charge, default=None, metavar="F",
+                   help="lower the training reward of every crush by F (simgrip.envs.crush_charge; a fragile task "
+                        "only; evaluation runs the task's own reward)")
+    p.add_argument("--crush-charge-from", type=non_negative_int, default=0, metavar="STEPS",
+                   help="with --crush-charge: charge the crushes from this training step on (default 0)")
     p.add_argument("--out", required=True, help="output folder")
     args = p.parse_args(argv)
+    if args.crush_charge_from and args.crush_charge is None:
+        p.error("--crush-charge-from: only with --crush-charge")
     why = log_std_init_conflict(args.log_std_init, args.algo, args.init_from) or \
         critic_warmup_conflict(args.critic_warmup, args.algo)  # before the rl extra is looked for
     if why:
@@ -514,6 +532,10 @@ def main(argv=None) -> int:
                      args.light_bias, args.residual).close()
         except ValueError as e:
             p.error(str(e))
+    if args.crush_charge is not None:
+        why = crush_charge_conflict(args.env, args.env_kwargs)
+        if why:
+            p.error(why)
     if args.init_from is not None:
         if args.algo != ["ppo"]:
             p.error("--init-from: PPO only (--algo ppo)")
@@ -540,7 +562,8 @@ def main(argv=None) -> int:
                        frame_stack=args.frame_stack, scripted_start=args.scripted_start,
                        light_bias=args.light_bias, init_from=args.init_from, residual=args.residual,
                        log_std_init=args.log_std_init, eval_start=args.eval_start,
-                       critic_warmup=args.critic_warmup)
+                       critic_warmup=args.critic_warmup,
+                       crush_charge=None if args.crush_charge is None else (args.crush_charge, args.crush_charge_from))
         print(json.dumps(result), flush=True)
     plot_curves(out)
     return 0

@@ -313,6 +313,52 @@ def test_train_sb3_critic_warmup_holds_the_policy_then_trains_it(tmp_path):
         assert all(torch.equal(saved[n], fresh[n]) for n in names) != changed
 
 
+def test_train_sb3_crush_charge_charges_the_training_crushes_from_its_step(tmp_path):
+    """``--crush-charge 10``: one rollout (2048 steps, the policy not yet updated) runs the same training episodes as
+    without it, each crushed one's return exactly 10 lower; ``--crush-charge-from 2048``: none charged yet.  The
+    held-out evaluation runs the task's own reward, and the JSON records the option."""
+    pytest.importorskip("stable_baselines3")
+    import csv
+
+    mod = _example("train_sb3")
+    common = ["--algo", "ppo", "--env", "simgrip/PickFragile-v6", "--seed", "2", "--action-offset", "-0.4", "0.2",
+              "--steps", "2048", "--eval-episodes", "1", "--eval-seed", "8330"]
+    runs = {}
+    for key, extra in (("plain", []), ("charged", ["--crush-charge", "10"]),
+                       ("later", ["--crush-charge", "10", "--crush-charge-from", "2048"])):
+        mod.main(common + extra + ["--out", str(tmp_path / key)])
+        with open(tmp_path / key / "ppo_curve.csv", newline="") as f:
+            runs[key] = [(float(r["episode_return"]), int(r["length"]), int(r["success"])) for r in csv.DictReader(f)]
+        res = json.loads((tmp_path / key / "ppo_eval.json").read_text())
+        if extra:
+            assert res["crush_charge"] == {"charge": 10.0, "start": 2048 if key == "later" else 0}
+            assert "CrushCharge(10.0" in res["wrapper"]
+        else:
+            assert "crush_charge" not in res
+        runs[key + "_eval"] = (res["mean_return"], res["outcomes"])
+    plain, charged = runs["plain"], runs["charged"]
+    assert len(plain) == len(charged) > 3 and runs["later"] == plain
+    diffs = [round(c[0] - p[0], 9) for p, c in zip(plain, charged)]
+    assert [p[1:] for p in plain] == [c[1:] for c in charged] and set(diffs) == {0.0, -10.0}  # some crushed, not all
+    assert runs["later_eval"] == runs["plain_eval"]  # the same rollout, the same update, the same policy
+    # the charged run's policy differs (its update saw the charges), and its held-out crush is paid the task's own
+    # reward: a crushed episode of v6 returns more than -w_crush = -2 (the lift it was paid is taken back), charged 10
+    # it would return less than -8
+    mean_return, outcomes = runs["charged_eval"]
+    assert outcomes == {"crushed": 1} and mean_return > -2.0
+
+
+def test_train_sb3_crush_charge_refusals_exit_2(tmp_path, capsys):
+    for argv in (["--env", "simgrip/Pick-v1", "--crush-charge", "1"],
+                 ["--env", "simgrip/PickFragile-v6", "--crush-charge", "-1"],
+                 ["--env", "simgrip/PickFragile-v6", "--crush-charge", "nan"],
+                 ["--env", "simgrip/PickFragile-v6", "--crush-charge-from", "10"],
+                 ["--env", "simgrip/PickFragile-v6", "--crush-charge", "1", "--crush-charge-from", "-1"]):
+        with pytest.raises(SystemExit) as e:
+            _example("train_sb3").main(["--algo", "ppo", *argv, "--out", str(tmp_path / "o")])
+        assert e.value.code == 2 and "--crush-charge" in capsys.readouterr().err.strip().splitlines()[-1]
+
+
 def test_train_sb3_critic_warmup_refusals_exit_2(tmp_path, capsys):
     with pytest.raises(SystemExit) as e:
         _example("train_sb3").main(["--env", "simgrip/PickFragile-v6", "--algo", "sac", "--critic-warmup", "2048",

@@ -72,6 +72,10 @@ def test_aggregate_mean_min_max_per_checkpoint_and_failed_runs():
     (["--log-std-init", "-1", "--algo", "ppo", "sac"], "--log-std-init"),
     (["--critic-warmup", "-1", "--algo", "ppo"], "--critic-warmup"),
     (["--critic-warmup", "2048", "--algo", "sac"], "--critic-warmup"),
+    (["--crush-charge", "-1"], "--crush-charge"),
+    (["--crush-charge", "inf"], "--crush-charge"),
+    (["--crush-charge-from", "100"], "--crush-charge-from"),
+    (["--crush-charge", "1", "--crush-charge-from", "-5"], "--crush-charge-from"),
 ])
 def test_bad_arguments_exit_2_with_one_line(extra, word, tmp_path, capsys):
     argv = ["--env", "simgrip/PickFragile-v0", "--out", str(tmp_path / "o"), *extra]
@@ -215,6 +219,21 @@ def test_critic_warmup_reaches_every_run_command(tmp_path):
     assert cmd[cmd.index("--critic-warmup") + 1] == "40960"
     args.critic_warmup = 0
     assert "--critic-warmup" not in mod.run_command("ppo", 0, args, tmp_path)  # none: not written
+
+
+def test_crush_charge_reaches_every_run_command(tmp_path):
+    mod = _module()
+    args = rl_baselines_args(mod, crush_charge=20.0, crush_charge_from=262144)
+    cmd = mod.run_command("ppo", 0, args, tmp_path)
+    assert float(cmd[cmd.index("--crush-charge") + 1]) == 20.0 and cmd[cmd.index("--crush-charge-from") + 1] == "262144"
+    args.crush_charge = None
+    assert "--crush-charge" not in mod.run_command("ppo", 0, args, tmp_path)  # none: not written
+
+
+def test_crush_charge_is_refused_where_nothing_crushes(tmp_path, capsys):
+    with pytest.raises(SystemExit) as e:
+        _module().main(["--env", "simgrip/Pick-v1", "--crush-charge", "1", "--out", str(tmp_path / "o")])
+    assert e.value.code == 2 and "--crush-charge" in capsys.readouterr().err.strip().splitlines()[-1]
 
 
 def test_eval_start_reaches_every_run_command_and_the_aggregate(tmp_path):
