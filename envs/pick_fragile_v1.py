@@ -49,8 +49,7 @@ term (info key)     value per step                                              
 ``reward_crush``    on the crushing step: ``-w_crush x / (1 + x)``, ``x = (F - L) / L``,  ``(-w_crush, 0]``
                     ``F`` the largest finger normal force of the step (the reading that   plus the lift
                     defines the crush), ``L`` the hidden ``crush_limit``; plus the lift   taken back
-                    progress taken back (``-w_lift phi``, as v0); and ``-crush_charge``
-                    (an option, default 0: a flat charge on every crush, below)
+                    progress taken back (``-w_lift phi``, as v0)
 ``reward_drop``     ``-w_drop`` once on a drop or knock-over (v0's term, v1's weight)     ``-w_drop`` (-5)
 ``reward_squeeze``  0 (``w_squeeze = 0``: v0's term read the hidden mass and friction)    0
 ==================  ====================================================================  ==================
@@ -60,14 +59,8 @@ Defaults: ``w_contact = 1``, ``w_touch = 0.02``, ``w_crush = 2``, ``w_drop = 5``
 ``w_lift + w_success = 30`` (Place: ``w_place + w_success = 40``); no unsuccessful episode returns more than
 ``w_contact + w_touch T + w_lift`` (17; Place ``w_contact + w_touch T + w_lift + w_place = 29``).  Never
 touching returns 0; a crush gives up the lift earned and every later touch step, and costs up to ``w_crush``
-more the harder the limit was overrun.
-
-``crush_charge`` (default 0; ``gym.make(..., crush_charge=F)``, ``--env-kwargs '{"crush_charge": F}'`` in the
-example scripts) adds a flat ``F`` to every crush's charge, however small the overrun: an option for a learner's
-reward, not part of the tasks' definitions (the registered ids keep 0).  The graded charge is near 0 for a crush
-just over the limit, the usual crush of a fast closing (``examples/evaluate_policy.py``'s ``crush_overrun``); what a
-flat charge would change for a trained policy is ``evaluate_policy.py --crush-charge F`` (the Gymnasium environments
-page, "A flat charge for a crush").
+more the harder the limit was overrun.  A flat charge on every training crush, whatever its overrun, is a learner's
+option outside the task (:mod:`simgrip.envs.crush_charge`).
 
 What each term reads: ``reward_contact`` and ``reward_touch`` the fingers' tactile normal forces (in the
 observation as ``contact_force``); ``reward_lift`` and ``reward_place`` the workpiece's position (observed
@@ -137,23 +130,21 @@ def graded_crush(force: float, limit: float, w_crush: float) -> float:
 
 class _ShapedV1:
     """v1's reward on top of a v0 fragile env (a mixin placed before it): the contact and touch terms, the graded
-    crush penalty (through :meth:`_crush_penalty`, the hook v0's crush rule calls; plus the flat ``crush_charge``,
-    default 0) and v1's default weights."""
+    crush penalty (through :meth:`_crush_penalty`, the hook v0's crush rule calls) and v1's default weights."""
 
     _touched = False  # every finger has touched the workpiece this episode (reward_contact paid)
 
     def __init__(self, *, w_contact: float = V1_REWARD_DEFAULTS["w_contact"],
                  w_touch: float = V1_REWARD_DEFAULTS["w_touch"], w_crush: float = V1_REWARD_DEFAULTS["w_crush"],
                  w_drop: float = V1_REWARD_DEFAULTS["w_drop"], w_squeeze: float = V1_REWARD_DEFAULTS["w_squeeze"],
-                 crush_charge: float = 0.0, **kwargs):
+                 **kwargs):
         self.w_contact = _num("w_contact", w_contact, positive=False)
         self.w_touch = _num("w_touch", w_touch, positive=False)
         self.w_crush = _num("w_crush", w_crush, positive=False)
-        self.crush_charge = _num("crush_charge", crush_charge, positive=False)
         super().__init__(w_drop=w_drop, w_squeeze=w_squeeze, **kwargs)
 
     def _crush_penalty(self, normal_force) -> float:
-        return self.crush_charge + graded_crush(max(normal_force.tolist()), self.crush_limit, self.w_crush)
+        return graded_crush(max(normal_force.tolist()), self.crush_limit, self.w_crush)
 
     def reset(self, *, seed=None, options=None):
         self._touched = False
