@@ -13,7 +13,7 @@ cent, so it costs about nothing beyond the success it loses.  Under SB3's discou
 grasps, with their crushes, are then worth more than the careful scripted controller's (the sphere's two best
 learners 9.37 and 9.67 against 9.17; ``examples/evaluate_policy.py --crush-charge``), and a flat charge of about
 6-10 per crush would turn that round.  Charged from the first step, the learners stop closing instead (no
-success in the first 81,920 steps of two sphere seeds with ``crush_charge = 10``, against 77 and 76 without):
+success in the first 81,920 steps of two sphere seeds charged 10 from the start, against 77 and 76 without):
 early on every closing crushes, and a charged crush is worth less than never touching.  ``start`` lets the
 learner find the grasp first under the task's own reward and meet the charge once it grips.
 """
