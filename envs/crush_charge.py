@@ -53,7 +53,8 @@ class CrushCharge(gym.Wrapper):
         if isinstance(start, bool) or not isinstance(start, int) or start < 0:
             raise ValueError(f"start must be a whole number >= 0, got {start!r}")
         if not hasattr(env.unwrapped, "crush_limit"):
-            raise ValueError(f"env must be a fragile task (one with a crush limit), got {env.unwrapped.__class__.__name__}")
+            raise ValueError("env must be a fragile task (one with a crush limit), "
+                             f"got {env.unwrapped.__class__.__name__}")
         super().__init__(env)
         self.charge, self.start, self.steps = float(charge), int(start), 0
 

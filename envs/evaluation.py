@@ -22,7 +22,8 @@ from simgrip.envs.outcome import outcome  # outcomes() counts with it; also impo
 
 __all__ = ["EpisodeResult", "GAMMA", "add_episode_arguments", "charge", "check_env_id", "critic_warmup_conflict",
            "crush_charge_conflict", "discount", "env_kwargs", "json_object", "log_std", "log_std_init_conflict",
-           "make_env", "outcome", "outcomes", "positive_int", "non_negative_int", "probability", "run_episodes", "summary"]
+           "make_env", "outcome", "outcomes", "positive_int", "non_negative_int", "probability", "run_episodes",
+           "summary"]
 
 #: the discount of the returns :func:`run_episodes` also reports: Stable-Baselines3's default ``gamma`` (PPO, SAC)
 GAMMA = 0.99

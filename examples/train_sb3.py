@@ -61,6 +61,11 @@ episode plainly; ``<algo>_eval.json`` records ``scripted_start``.
 log mass range (:class:`simgrip.envs.light_bias.LightBias`: the pieces a fast closing crushes); the held-out
 evaluation runs the task's own draw; ``<algo>_eval.json`` records ``light_bias``.
 
+``--crush-charge F`` lowers the training reward of every crush by ``F``, from training step ``--crush-charge-from
+STEPS`` on (default 0; :class:`simgrip.envs.crush_charge.CrushCharge`: a reward curriculum, the grasp found first
+under the task's own reward); the held-out evaluation runs the task's reward; ``<algo>_eval.json`` records
+``crush_charge``.  A task without a crush is refused (exit 2).
+
 ``--residual NAME ...`` trains and evaluates behind :class:`simgrip.envs.scripted_residual.ScriptedResidual`:
 the task's scripted observation-only controller drives the named actions (``palm_x palm_z``: the palm's path)
 and the policy's action is added to its action there; the observation gets the controller's action appended.
