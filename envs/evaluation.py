@@ -21,7 +21,7 @@ import numpy as np
 from simgrip.envs.outcome import outcome  # outcomes() counts with it; also importable from here
 
 __all__ = ["EpisodeResult", "GAMMA", "add_episode_arguments", "charge", "check_env_id", "critic_warmup_conflict",
-           "crush_charge_conflict", "discount", "env_kwargs", "json_object", "log_std", "log_std_init_conflict",
+           "discount", "env_kwargs", "json_object", "log_std", "log_std_init_conflict",
            "make_env", "outcome", "outcomes", "positive_int", "non_negative_int", "probability", "run_episodes",
            "summary"]
 
@@ -89,17 +89,6 @@ def critic_warmup_conflict(steps, algos) -> str | None:
     return None
 
 
-def crush_charge_conflict(env_id: str, env_kwargs: dict | None = None) -> str | None:
-    """Why ``--crush-charge`` cannot go with this env, or None: a fragile task only (its unwrapped env has a crush
-    limit, :class:`simgrip.envs.crush_charge.CrushCharge`)."""
-    env = make_env(env_id, env_kwargs)
-    try:
-        fragile = hasattr(env.unwrapped, "crush_limit")
-    finally:
-        env.close()
-    return None if fragile else f"--crush-charge: {env_id} has no crush (a fragile task only)"
-
-
 def probability(text: str) -> float:
     """argparse type: a probability in [0, 1]."""
     return _number_in(text, lambda p: 0.0 <= p <= 1.0, "[0, 1]")
@@ -132,7 +121,8 @@ def check_env_id(parser: argparse.ArgumentParser, env_id: str, *, retired: bool 
 
 
 def make_env(env_id: str, env_kwargs: dict | None = None, action_offset=None, frame_stack: int | None = None,
-             scripted_start: float | None = None, light_bias: float | None = None, residual=None):
+             scripted_start: float | None = None, light_bias: float | None = None, residual=None,
+             crush_charge: tuple[float, int] | None = None):
     """The env of ``env_id`` (a registered id, or a retired one of ``simgrip.envs.RETIRED`` through its spec) made
     with ``env_kwargs`` (``gym.make``'s keyword arguments), behind
     :class:`~simgrip.envs.action_offset.ActionOffset` ``(action_offset)`` when that is given, and behind
@@ -146,14 +136,17 @@ def make_env(env_id: str, env_kwargs: dict | None = None, action_offset=None, fr
     (:class:`~simgrip.envs.light_bias.LightBias`, innermost).  ``residual`` (action names; training and evaluation
     alike: it is part of the policy): the task's scripted observation-only controller drives those channels and
     the action is added to it (:class:`~simgrip.envs.scripted_residual.ScriptedResidual`, inside the offset and
-    the frame stack; not with ``scripted_start``).
+    the frame stack; not with ``scripted_start``).  ``crush_charge`` (training envs only): ``(charge, start)``, every
+    crush's reward lowered by ``charge`` from the ``start``-th step on (:class:`~simgrip.envs.crush_charge.CrushCharge`,
+    next to ``light_bias``'s).
 
     Raises ValueError naming the option: ``--env-kwargs`` when the env does not take ``env_kwargs`` or refuses a
     value, ``--action-offset`` when the offset does not fit its action space (the env is closed first),
     ``--frame-stack`` when it is not a whole number >= 1 (checked before any env is made), ``--scripted-start``
     when it is not a probability or the env has no scripted controller, ``--light-bias`` when it is not a
     probability or the env is not a fragile task (the env is closed first), ``--residual`` when a name is not one
-    of the env's actions, the env has no scripted controller, or ``scripted_start`` is given too."""
+    of the env's actions, the env has no scripted controller, or ``scripted_start`` is given too, ``--crush-charge``
+    when the env is not a fragile task (the env is closed first)."""
     import json
 
     import gymnasium as gym
@@ -174,6 +167,10 @@ def make_env(env_id: str, env_kwargs: dict | None = None, action_offset=None, fr
         from simgrip.envs.light_bias import LightBias
 
         env = _wrap_or_close(env, LightBias, light_bias, "--light-bias")
+    if crush_charge is not None:
+        from simgrip.envs.crush_charge import CrushCharge
+
+        env = _wrap_or_close(env, lambda e, v: CrushCharge(e, *v), crush_charge, "--crush-charge")
     if scripted_start is not None:
         from simgrip.envs.scripted_start import ScriptedStart
 

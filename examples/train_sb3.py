@@ -116,8 +116,7 @@ from pathlib import Path
 import numpy as np
 
 import simgrip.envs  # noqa: F401  (registers the simgrip ids)
-from simgrip.envs.evaluation import (GAMMA, charge, check_env_id, critic_warmup_conflict, crush_charge_conflict,
-                                     discount, json_object, log_std, log_std_init_conflict, make_env, non_negative_int,
+from simgrip.envs.evaluation import (GAMMA, charge, check_env_id, critic_warmup_conflict, discount, json_object, log_std, log_std_init_conflict, make_env, non_negative_int,
                                      outcomes, probability, run_episodes, summary)
 from simgrip.io import atomic_write, check_output_dir, check_output_files_in, write_json
 
@@ -320,15 +319,9 @@ def train(algo: str, env_id: str, *, steps: int, minutes: float, seed: int, out:
             return now < budget
 
     # make_vec_env calls the maker (gym.make of the id, or of a retired id's spec), then seeds and wraps in Monitor
-    def make_training_env():
-        made = make_env(env_id, env_kwargs, action_offset, frame_stack, scripted_start, light_bias, residual)
-        if crush_charge is None:
-            return made
-        from simgrip.envs.crush_charge import CrushCharge
-
-        return CrushCharge(made, *crush_charge)
-
-    env = make_vec_env(make_training_env, n_envs=1, seed=seed)
+    env = make_vec_env(lambda: make_env(env_id, env_kwargs, action_offset, frame_stack, scripted_start,
+                                        light_bias, residual, crush_charge), n_envs=1,
+                       seed=seed)
     if normalize:
         from stable_baselines3.common.vec_env import VecNormalize
 
@@ -461,6 +454,11 @@ def plot_curves(out: Path, window: int = 100) -> Path | None:
     return target
 
 
+def _charged(args) -> tuple[float, int] | None:
+    """``(charge, start)`` of ``--crush-charge`` and ``--crush-charge-from``, None without the first."""
+    return None if args.crush_charge is None else (args.crush_charge, args.crush_charge_from)
+
+
 def main(argv=None) -> int:
     p = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     p.add_argument("--algo", nargs="+", choices=ALGOS, default=list(ALGOS), help="algorithms, trained one after the other")
@@ -531,16 +529,12 @@ def main(argv=None) -> int:
         p.error('needs Stable-Baselines3 and PyTorch: pip install "simgrip[rl]"')
     check_env_id(p, args.env, retired=True)
     if args.env_kwargs or args.action_offset is not None or args.scripted_start is not None \
-            or args.light_bias is not None or args.residual is not None:
+            or args.light_bias is not None or args.residual is not None or args.crush_charge is not None:
         try:  # refused before any training, the env built once
             make_env(args.env, args.env_kwargs, args.action_offset, args.frame_stack, args.scripted_start,
-                     args.light_bias, args.residual).close()
+                     args.light_bias, args.residual, crush_charge=_charged(args)).close()
         except ValueError as e:
             p.error(str(e))
-    if args.crush_charge is not None:
-        why = crush_charge_conflict(args.env, args.env_kwargs)
-        if why:
-            p.error(why)
     if args.init_from is not None:
         if args.algo != ["ppo"]:
             p.error("--init-from: PPO only (--algo ppo)")
@@ -568,7 +562,7 @@ def main(argv=None) -> int:
                        light_bias=args.light_bias, init_from=args.init_from, residual=args.residual,
                        log_std_init=args.log_std_init, eval_start=args.eval_start,
                        critic_warmup=args.critic_warmup,
-                       crush_charge=None if args.crush_charge is None else (args.crush_charge, args.crush_charge_from))
+                       crush_charge=_charged(args))
         print(json.dumps(result), flush=True)
     plot_curves(out)
     return 0
