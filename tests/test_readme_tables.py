@@ -171,3 +171,61 @@ def test_the_stated_mass_ranges_are_the_envs():
             lo, hi = getattr(u, "box_mass_range", None) or u.mass_range
             env.close()
             assert (f"{lo * 1e3:g}", f"{hi * 1e3:g}") == stated[key], env_id
+
+
+#: the learning-target table's tasks -> the id each batch's record must be (or be step for step, EQUIVALENT)
+TASKS = {"pinch": "PickFragile-v6", "K fingers": "PickMultiFragile-v6", "cradle": "PickCradleFragile-v5",
+         "sphere": "PickSphereFragile-v5", "place": "PlaceFragile-v7"}
+
+_BATCH = re.compile(r"^((?:\d+ / )*\d+) % \((?:seeds )?(\d+)–(\d+)\)$")
+
+
+def target_table() -> list[dict[str, str]]:
+    """The rows of the README table whose first header cell is ``task`` (issue 18's learning target)."""
+    lines = (ROOT / "README.md").read_text(encoding="utf-8").splitlines()
+    start = next(i for i, line in enumerate(lines) if line.startswith("| task |"))
+    cells = []
+    for line in lines[start:]:
+        if not line.startswith("|"):
+            break
+        cells.append([c.strip() for c in line.strip().strip("|").split("|")])
+    return [dict(zip(cells[0], c)) for c in cells[2:]]
+
+
+def test_target_table_is_its_records():
+    """Each batch's per-seed success is its record's final held-out success, its seeds the record's, its
+    verdict the target's rule (at least 2 of 3 seeds at 80 % or more), its aids exactly the record's training
+    options, over 15 CPU-minutes on the task's id and the held-out seeds 8000-8049."""
+    rows = target_table()
+    assert {r["task"] for r in rows} == set(TASKS)
+    verdicts = {}
+    for row in rows:
+        batches, met, folders = (row[k].split("; ") for k in ("success per seed, 15 CPU-min", "met", "record"))
+        assert len(batches) == len(met) == len(folders), row
+        for batch, verdict, folder in zip(batches, met, folders):
+            agg = json.loads((BASELINES / folder / "aggregate.json").read_text(encoding="utf-8"))
+            m = _BATCH.match(batch)
+            assert m, batch
+            rates = [int(v) for v in m.group(1).split(" / ")]
+            final = agg["summary"]["ppo"]["final"]["success_rates"]
+            assert rates == [pct(x) for x in final], (folder, batch)
+            assert agg["seeds"] == list(range(int(m.group(2)), int(m.group(3)) + 1)), (folder, batch)
+            assert agg["minutes"] == 15.0 and agg["eval_seeds"] == [8000, 8049] and agg["algos"] == ["ppo"]
+            assert agg["summary"]["ppo"]["failed"] == 0
+            assert verdict == ("yes" if sum(x >= 0.8 for x in final) >= 2 else "no"), (folder, batch)
+            measured = agg["env"].split("/")[1]
+            as_row = EQUIVALENT.get((measured, json.dumps(agg.get("env_kwargs", {}), sort_keys=True)))
+            assert TASKS[row["task"]] in (measured, as_row), (folder, measured)
+            options = {a for a in agg["command"] if a.startswith("--")}
+            named = set() if row["aids"] == "none" else set(row["aids"].split(", "))
+            assert named <= set(AIDS), row["aids"]
+            assert {AIDS[name] for name in named} == options & set(AIDS.values()), (folder, options)
+            assert not options & {"--gamma", "--normalize", "--init-from", "--crush-charge", "--frame-stack"}
+            verdicts.setdefault(row["task"], []).append(verdict)
+    # the summary sentence under the table
+    text = " ".join((ROOT / "README.md").read_text(encoding="utf-8").split())
+    assert ("So the pinch and the K fingers meet the target, the cradle in one batch of two, and the sphere and "
+            "the place do not.") in text
+    assert all("yes" in verdicts[t] for t in ("pinch", "K fingers", "cradle"))
+    assert verdicts["cradle"].count("yes") == 1 and len(verdicts["cradle"]) == 2
+    assert "yes" not in verdicts["sphere"] + verdicts["place"]
