@@ -52,7 +52,7 @@ residual 0 (what ``train_sb3.py --residual`` learns from, without the feedback):
 ``--grid coarse`` uses every other curvature and one ramp/palm value (for tests).  Output: ``env``,
 ``policy``, ``seeds``, ``success_rate`` (the best member's for the grids), ``outcomes`` (counts of
 success / crushed / dropped / knocked_over / timeout) and, for the grids, every member's success rate.
-Exit 2 (one line) on a bad argument.
+Exit 2 (one line) on a bad argument; Ctrl-C or SIGTERM: one line, exit 130, no file written.
 """
 
 from __future__ import annotations
@@ -330,4 +330,6 @@ def main(argv=None) -> int:
 
 
 if __name__ == "__main__":
-    sys.exit(main())
+    from simgrip.interrupt import run_main
+
+    sys.exit(run_main(main, "baselines"))

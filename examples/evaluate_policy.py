@@ -18,7 +18,7 @@ to optimise: under that discount, its faster and riskier policy is worth more.
 a model trained behind ``VecNormalize`` is not supported here.  Prints one line, or with ``--json`` one JSON
 object: ``{"env", "policy", "episodes", "success_rate", "mean_return", "mean_length", "outcomes",
 "mean_success_length", "mean_discounted_return", "gamma", "eval_seeds"}``.  Exit 2 naming the option on bad
-input.
+input; Ctrl-C or SIGTERM: one line, exit 130.
 
 ``--scripted-start P`` (with ``--model``) starts that share of the episodes part-way through the scripted
 observation-only controller's episode (:class:`simgrip.envs.scripted_start.ScriptedStart`, as
@@ -55,10 +55,15 @@ from __future__ import annotations
 import argparse
 import json
 import math
+import os
+import signal
 import statistics
 import sys
 
-import simgrip.envs  # noqa: F401  (registers the simgrip ids)
+if __name__ == "__main__":  # a Ctrl-C while the modules below load: main's one line and 130 (run_main)
+    signal.signal(signal.SIGINT, lambda signum, frame: (os.write(2, b"evaluate_policy: interrupted\n"), os._exit(130)))
+
+import simgrip.envs  # noqa: E402,F401  (registers the simgrip ids)
 from simgrip.envs.evaluation import (charge, check_env_id, discount, json_object, make_env, non_negative_int, outcomes,
                                      positive_int, probability, run_episodes, summary)
 from simgrip.envs.light_bias import episode_mass, mass_bins
@@ -281,8 +286,6 @@ def main(argv=None) -> dict:
 
 
 if __name__ == "__main__":
-    try:
-        main()
-    except KeyboardInterrupt:
-        print("interrupted", file=sys.stderr)
-        sys.exit(130)
+    from simgrip.interrupt import run_main
+
+    sys.exit(run_main(main, "evaluate_policy"))

@@ -574,4 +574,6 @@ def main(argv=None) -> int:
 
 
 if __name__ == "__main__":
-    sys.exit(main())
+    from simgrip.interrupt import run_main
+
+    sys.exit(run_main(main, "rl_baselines"))

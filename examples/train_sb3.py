@@ -64,7 +64,7 @@ evaluation runs the task's own draw; ``<algo>_eval.json`` records ``light_bias``
 ``--crush-charge F`` lowers the training reward of every crush by ``F``, from training step ``--crush-charge-from
 STEPS`` on (default 0; :class:`simgrip.envs.crush_charge.CrushCharge`: a reward curriculum, the grasp found first
 under the task's own reward); the held-out evaluation runs the task's reward; ``<algo>_eval.json`` records
-``crush_charge``.  A task without a crush is refused (exit 2).
+``crush_charge``.  A task without a crush is refused (exit 2).  Ctrl-C or SIGTERM: one line, exit 130.
 
 ``--residual NAME ...`` trains and evaluates behind :class:`simgrip.envs.scripted_residual.ScriptedResidual`:
 the task's scripted observation-only controller drives the named actions (``palm_x palm_z``: the palm's path)
@@ -108,14 +108,19 @@ import argparse
 import csv
 import io
 import json
+import os
 import pickle
+import signal
 import sys
 import time
 from pathlib import Path
 
-import numpy as np
+if __name__ == "__main__":  # a Ctrl-C while the modules below load: main's one line and 130 (run_main)
+    signal.signal(signal.SIGINT, lambda signum, frame: (os.write(2, b"train_sb3: interrupted\n"), os._exit(130)))
 
-import simgrip.envs  # noqa: F401  (registers the simgrip ids)
+import numpy as np  # noqa: E402
+
+import simgrip.envs  # noqa: E402,F401  (registers the simgrip ids)
 from simgrip.envs.evaluation import (GAMMA, charge, check_env_id, critic_warmup_conflict, discount, json_object, log_std, log_std_init_conflict, make_env, non_negative_int,
                                      outcomes, probability, run_episodes, summary)
 from simgrip.io import atomic_write, check_output_dir, check_output_files_in, write_json
@@ -569,4 +574,6 @@ def main(argv=None) -> int:
 
 
 if __name__ == "__main__":
-    sys.exit(main())
+    from simgrip.interrupt import run_main
+
+    sys.exit(run_main(main, "train_sb3"))

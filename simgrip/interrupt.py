@@ -41,7 +41,7 @@ import threading
 from pathlib import Path
 from typing import Callable
 
-__all__ = ["GRACE_S", "Finish", "kill_descendants", "signals_as_interrupt"]
+__all__ = ["GRACE_S", "Finish", "kill_descendants", "run_main", "signals_as_interrupt"]
 
 #: Seconds the main thread gets to run the handler of a signal before the watchdog acts.  Python
 #: runs pending handlers at its next bytecode (microseconds when the main thread runs Python, some
@@ -197,3 +197,26 @@ def kill_descendants() -> list[int]:
         with contextlib.suppress(OSError):
             os.kill(pid, signal.SIGKILL)
     return order
+
+
+def run_main(main: Callable, prefix: str, argv=None) -> int:
+    """Run a command line's ``main(argv)`` with SIGINT and SIGTERM as ``KeyboardInterrupt``; returns its status.
+
+    An interrupt, whatever it became on its way up (an import cut short raises ``ImportError``), ends as the
+    one line ``{prefix}: interrupted`` on stderr and status 130, without a traceback; a second signal during
+    that is ignored.  Any other exception propagates.  A status that is not an int (a ``main`` that returns
+    its results) counts as 0.  For commands whose children stop with them (none, or their own clean-up in
+    ``main``); the ``simgrip`` command has its own, with a watchdog (:func:`simgrip.cli.main`).
+    """
+    with signals_as_interrupt() as received:
+        try:
+            code = main(argv)
+        except BaseException as exc:
+            if not isinstance(exc, KeyboardInterrupt) and (received.signum is None or isinstance(exc, SystemExit)):
+                raise
+            for sig in _SIGNALS:
+                signal.signal(sig, signal.SIG_IGN)
+            with contextlib.suppress(OSError, ValueError):
+                os.write(2, f"{prefix}: interrupted\n".encode())
+            return 130
+    return code if isinstance(code, int) and not isinstance(code, bool) else 0

@@ -214,3 +214,45 @@ def test_interrupt_inside_one_long_solve(tmp_path, phase, how):
     assert lines[-1] == "simgrip simulate: interrupted", lines
     assert all(PROGRESS_LINE.match(line) for line in lines[:-1]), lines  # progress lines only: no traceback
     assert not session_processes(proc.pid)
+
+
+def test_run_main_ends_an_interrupt_as_one_line_and_130(capfd):
+    """:func:`simgrip.interrupt.run_main`, the learning commands' entry: a KeyboardInterrupt, or what a signal
+    became on its way up (an import cut short raises ImportError), is one line and 130; a signal during the
+    run comes as KeyboardInterrupt; anything else is the command's own; a status that is not an int is 0."""
+    from simgrip.interrupt import run_main
+
+    def raises(exc):
+        def main(argv):
+            raise exc
+        return main
+
+    assert run_main(raises(KeyboardInterrupt()), "cmd") == 130
+    assert capfd.readouterr().err == "cmd: interrupted\n"
+
+    def signalled(argv):
+        os.kill(os.getpid(), signal.SIGINT)
+        time.sleep(5)  # the handler raises in this thread before the sleep ends
+        return 0
+
+    assert run_main(signalled, "cmd") == 130
+    assert capfd.readouterr().err == "cmd: interrupted\n"
+
+    def import_cut_short(argv):
+        try:
+            os.kill(os.getpid(), signal.SIGTERM)
+            time.sleep(5)
+        except KeyboardInterrupt:
+            raise ImportError("partially initialised module") from None
+
+    assert run_main(import_cut_short, "cmd") == 130
+    assert capfd.readouterr().err == "cmd: interrupted\n"
+    with pytest.raises(ImportError):  # no signal: an ImportError is the command's own
+        run_main(raises(ImportError("x")), "cmd")
+    with pytest.raises(SystemExit):  # argparse's exit 2 stays argparse's
+        run_main(raises(SystemExit(2)), "cmd")
+    assert run_main(lambda argv: {"success_rate": 1.0}, "cmd") == 0
+    assert run_main(lambda argv: 1, "cmd") == 1
+    assert run_main(lambda argv: argv, "cmd", ["--x"]) == 0
+    assert signal.getsignal(signal.SIGINT) is signal.default_int_handler  # the handlers restored
+    assert capfd.readouterr().err == ""
