@@ -289,6 +289,10 @@ def _seeds(text: str) -> list[int]:
         raise argparse.ArgumentTypeError(f"--seeds must be A-B (integers), got {text!r}") from None
     if lo < 0 or hi < lo:
         raise argparse.ArgumentTypeError(f"--seeds must be A-B with 0 <= A <= B, got {text!r}")
+    from simgrip.envs.evaluation import MAX_EPISODES
+
+    if hi - lo + 1 > MAX_EPISODES:
+        raise argparse.ArgumentTypeError(f"at most {MAX_EPISODES} seeds (one episode each), got {text!r}")
     return list(range(lo, hi + 1))
 
 
@@ -309,7 +313,7 @@ def main(argv=None) -> int:
                         "curvature alone (simgrip.envs.scripted_residual)")
     p.add_argument("--out", help="JSON file (default: stdout)")
     args = p.parse_args(argv)
-    if args.out:
+    if args.out is not None:
         try:
             check_output_file(args.out, "--out")
         except (ValueError, OSError) as e:
@@ -321,7 +325,7 @@ def main(argv=None) -> int:
             raise
         p.error(str(e))
     text = json.dumps(record, indent=1) + "\n"
-    if args.out:
+    if args.out is not None:
         with atomic_write(args.out, "w", option="--out") as f:
             f.write(text)
     else:

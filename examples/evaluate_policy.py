@@ -64,7 +64,8 @@ if __name__ == "__main__":  # a Ctrl-C while the modules below load: main's one 
     signal.signal(signal.SIGINT, lambda signum, frame: (os.write(2, b"evaluate_policy: interrupted\n"), os._exit(130)))
 
 import simgrip.envs  # noqa: E402,F401  (registers the simgrip ids)
-from simgrip.envs.evaluation import (charge, check_env_id, discount, json_object, make_env, non_negative_int, outcomes,
+from simgrip.envs.evaluation import (charge, check_env_id, discount, episode_count, json_object, make_env,
+                                     non_negative_int, outcomes,
                                      positive_int, probability, run_episodes, summary)
 from simgrip.envs.light_bias import episode_mass, mass_bins
 from simgrip.envs.outcome import outcome
@@ -183,7 +184,7 @@ def main(argv=None) -> dict:
     p.add_argument("--scripted-start", type=probability, default=None, metavar="P",
                    help="with --model: start that share of the episodes part-way through the scripted "
                         "observation-only controller's (simgrip.envs.scripted_start); adds by_handover")
-    p.add_argument("--episodes", type=positive_int, default=50, help="episodes (default 50)")
+    p.add_argument("--episodes", type=episode_count, default=50, help="episodes (default 50, at most 100000)")
     p.add_argument("--seed", type=non_negative_int, default=8000, help="seed of the first episode (default 8000)")
     p.add_argument("--gamma", type=discount, default=0.99, help="discount of the reported return (default 0.99)")
     p.add_argument("--crush-charge", type=charge, nargs="+", default=None, metavar="F",

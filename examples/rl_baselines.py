@@ -137,8 +137,17 @@ def _non_negative_int(text: str) -> int:
     return v
 
 
+def _training_seed(text: str) -> int:
+    from simgrip.envs.evaluation import training_seed  # imported when used, as _json_object
+
+    return training_seed(text)
+
+
 def _seed_range(text: str) -> tuple[int, int]:
-    """``A-B`` (inclusive, A <= B, non-negative) or one seed ``A``."""
+    """``A-B`` (inclusive, 0 <= A <= B, at most ``MAX_EPISODES`` seeds: one evaluation episode each) or one seed
+    ``A``."""
+    from simgrip.envs.evaluation import MAX_EPISODES  # imported when used, as _json_object
+
     parts = text.split("-")
     try:
         lo, hi = (int(parts[0]), int(parts[-1])) if len(parts) in (1, 2) else (None, None)
@@ -146,6 +155,8 @@ def _seed_range(text: str) -> tuple[int, int]:
         lo = hi = None
     if lo is None or lo < 0 or hi < lo:
         raise argparse.ArgumentTypeError(f"expected a seed range A-B with 0 <= A <= B, got {text!r}")
+    if hi - lo + 1 > MAX_EPISODES:
+        raise argparse.ArgumentTypeError(f"at most {MAX_EPISODES} seeds (one evaluation episode each), got {text!r}")
     return lo, hi
 
 
@@ -424,12 +435,12 @@ def build_parser() -> argparse.ArgumentParser:
                    help="keyword arguments of gym.make as a JSON object, e.g. '{\"w_touch\": 0}' (an ablation; "
                         "default none)")
     p.add_argument("--algo", nargs="+", choices=ALGOS, default=list(ALGOS), help="algorithms (default ppo sac)")
-    p.add_argument("--seeds", nargs="+", type=_non_negative_int, default=[0, 1, 2],
-                   help="training seeds (default 0 1 2)")
+    p.add_argument("--seeds", nargs="+", type=_training_seed, default=[0, 1, 2],
+                   help="training seeds (default 0 1 2; each at most 2**32 - 1)")
     p.add_argument("--minutes", type=_positive(float), default=15.0, help="CPU-minute budget per run (default 15)")
     p.add_argument("--checkpoint-minutes", type=_positive(float), default=None,
                    help="evaluate a checkpoint every so many CPU minutes (default: the final policy only)")
-    p.add_argument("--steps", type=_positive(int), default=10_000_000, help="environment-step cap per run")
+    p.add_argument("--steps", type=_positive(int), default=10_000_000, help="environment-step cap per run (PPO: whole rollouts of 2048)")
     p.add_argument("--eval-seeds", type=_seed_range, default=(8000, 8049),
                    help="held-out evaluation seeds A-B, inclusive (default 8000-8049)")
     p.add_argument("--jobs", type=_positive(int), default=1, help="runs at once (default 1, at most the cores)")
@@ -499,17 +510,18 @@ def main(argv=None) -> int:
     if any(importlib.util.find_spec(m) is None for m in ("stable_baselines3", "torch")):  # found, not imported:
         p.error('needs Stable-Baselines3 and PyTorch: pip install "simgrip[rl]"')  # the children import them
     import simgrip.envs  # noqa: F401  (registers the ids)
-    from simgrip.envs.evaluation import check_env_id
+    from simgrip.envs.evaluation import check_env_id, training_files
     from simgrip.io import check_output_dir, check_output_files_in, write_json
 
     check_env_id(p, args.env, retired=True)  # train_sb3.py builds a retired one
     if args.env_kwargs or args.action_offset is not None or args.scripted_start is not None \
-            or args.light_bias is not None or args.residual is not None or args.crush_charge is not None:
+            or args.light_bias is not None or args.residual is not None or args.crush_charge is not None \
+            or args.frame_stack is not None:
         from simgrip.envs.evaluation import make_env  # refused before any run starts, the env built once
 
         try:
             charged = None if args.crush_charge is None else (args.crush_charge, args.crush_charge_from)
-            make_env(args.env, args.env_kwargs, args.action_offset, None, args.scripted_start,
+            make_env(args.env, args.env_kwargs, args.action_offset, args.frame_stack, args.scripted_start,
                      args.light_bias, args.residual, charged).close()
         except ValueError as e:
             p.error(str(e))
@@ -519,6 +531,12 @@ def main(argv=None) -> int:
         out = check_output_dir(args.out, "--out")
         names = [f"{a}_seed{s}.json" for a in algos for s in args.seeds] + ["aggregate.json", "learning_curves.png"]
         check_output_files_in(out, names, "--out")
+        for a in algos:  # each run's folder, its log and what its train_sb3.py writes there
+            for s in args.seeds:
+                folder = check_output_dir(out / f"{a}_seed{s}", "--out", create=False)
+                check_output_files_in(folder, ["log.txt"] + training_files(
+                    [a], minutes=args.minutes, checkpoint_minutes=args.checkpoint_minutes,
+                    normalize=args.normalize), "--out")
     except ValueError as e:
         p.error(str(e))
     jobs = [(a, s, run_command(a, s, args, out / f"{a}_seed{s}"), out / f"{a}_seed{s}") for a in algos

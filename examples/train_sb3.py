@@ -8,7 +8,10 @@ PyTorch; a CPU build of PyTorch is enough).
 For each algorithm: ``algo("MlpPolicy", env)`` with Stable-Baselines3's default
 hyperparameters on one environment, trained until ``--steps`` environment steps
 or ``--minutes`` of the ``--clock``, whichever comes first (the training stops
-at the end of the step that crosses the budget).  ``--clock cpu`` (default)
+at the end of the step that crosses the time budget; the step budget is SB3's
+``learn(total_timesteps)``, which PPO fills with whole rollouts of 2048 steps:
+``--steps 64`` is one rollout and one update; the JSON's ``timesteps`` are the
+steps taken).  ``--clock cpu`` (default)
 counts the process's CPU time, which is what one core gives in that many
 minutes whatever else the machine runs; ``--clock wall`` counts wall-clock
 time.  Then the deterministic
@@ -122,7 +125,8 @@ import numpy as np  # noqa: E402
 
 import simgrip.envs  # noqa: E402,F401  (registers the simgrip ids)
 from simgrip.envs.evaluation import (GAMMA, charge, check_env_id, critic_warmup_conflict, discount, json_object, log_std, log_std_init_conflict, make_env, non_negative_int,
-                                     outcomes, probability, run_episodes, summary)
+                                     episode_count, outcomes, probability, run_episodes, summary,
+                                     training_files, training_seed)
 from simgrip.io import atomic_write, check_output_dir, check_output_files_in, write_json
 
 ALGOS = ("ppo", "sac")
@@ -136,7 +140,7 @@ def _positive(kind):
             v = kind(text)
         except ValueError:
             raise argparse.ArgumentTypeError(f"expected a positive {kind.__name__}, got {text!r}") from None
-        if not v > 0 or v != v:
+        if not v > 0 or v != v or v == float("inf"):
             raise argparse.ArgumentTypeError(f"expected a positive {kind.__name__}, got {text!r}")
         return v
     return parse
@@ -477,11 +481,15 @@ def main(argv=None) -> int:
     p.add_argument("--checkpoint-minutes", type=_positive(float), default=None,
                    help="also save the policy (and the curve so far) every so many budget minutes, "
                         "and evaluate each checkpoint at the end")
-    p.add_argument("--steps", type=_positive(int), default=10_000_000, help="environment-step budget per algorithm")
-    p.add_argument("--seed", type=non_negative_int, default=0, help="training seed (default 0)")
-    p.add_argument("--eval-episodes", type=_positive(int), default=50, help="held-out evaluation episodes (default 50)")
+    p.add_argument("--steps", type=_positive(int), default=10_000_000,
+                   help="environment-step budget per algorithm (PPO: whole rollouts of 2048 steps, as SB3's learn; "
+                        "the steps taken are the JSON's timesteps)")
+    p.add_argument("--seed", type=training_seed, default=0, help="training seed (default 0; at most 2**32 - 1)")
+    p.add_argument("--eval-episodes", type=episode_count, default=50,
+                   help="held-out evaluation episodes (default 50, at most 100000)")
     p.add_argument("--eval-seed", type=non_negative_int, default=1_000_000, help="first evaluation seed (default 1000000)")
-    p.add_argument("--threads", type=_positive(int), default=1, help="PyTorch threads (default 1)")
+    p.add_argument("--threads", type=_positive(int), default=1,
+                   help="PyTorch threads (default 1; at most the machine's cores)")
     p.add_argument("--normalize", action="store_true",
                    help="train behind SB3's VecNormalize (observation and return, library defaults)")
     p.add_argument("--action-offset", type=float, nargs="+", default=None, metavar="A",
@@ -523,6 +531,13 @@ def main(argv=None) -> int:
     args = p.parse_args(argv)
     if args.crush_charge_from and args.crush_charge is None:
         p.error("--crush-charge-from: only with --crush-charge")
+    if len(set(args.algo)) != len(args.algo):
+        p.error(f"--algo: repeated algorithm in {args.algo} (each writes the same files)")
+    if args.checkpoint_minutes and args.checkpoint_minutes > args.minutes:
+        p.error("--checkpoint-minutes: larger than --minutes (no checkpoint would be taken)")
+    cores = os.cpu_count() or 1
+    if args.threads > cores:
+        p.error(f"--threads: at most the {cores} cores of this machine (more only share them), got {args.threads}")
     why = log_std_init_conflict(args.log_std_init, args.algo, args.init_from) or \
         critic_warmup_conflict(args.critic_warmup, args.algo)  # before the rl extra is looked for
     if why:
@@ -534,7 +549,8 @@ def main(argv=None) -> int:
         p.error('needs Stable-Baselines3 and PyTorch: pip install "simgrip[rl]"')
     check_env_id(p, args.env, retired=True)
     if args.env_kwargs or args.action_offset is not None or args.scripted_start is not None \
-            or args.light_bias is not None or args.residual is not None or args.crush_charge is not None:
+            or args.light_bias is not None or args.residual is not None or args.crush_charge is not None \
+            or args.frame_stack is not None:
         try:  # refused before any training, the env built once
             make_env(args.env, args.env_kwargs, args.action_offset, args.frame_stack, args.scripted_start,
                      args.light_bias, args.residual, crush_charge=_charged(args)).close()
@@ -552,9 +568,9 @@ def main(argv=None) -> int:
             p.error(str(e))
     try:  # simgrip.io's output-path policy: a folder, and no FIFO/device/folder where a result file goes
         out = check_output_dir(args.out, "--out")
-        kinds = ("curve.csv", "policy.csv", "model.zip", "eval.json") + (("vecnormalize.pkl",) if args.normalize else ())
-        names = [f"{a}_{kind}" for a in args.algo for kind in kinds]
-        check_output_files_in(out, names + ["curves.png"], "--out")
+        check_output_files_in(out, training_files(args.algo, minutes=args.minutes,
+                                                  checkpoint_minutes=args.checkpoint_minutes,
+                                                  normalize=args.normalize), "--out")
     except ValueError as e:
         p.error(str(e))
     torch.set_num_threads(args.threads)
