@@ -54,6 +54,7 @@ import numpy as np
 from simgrip import intersection as isect
 from simgrip.link_pairs import (BATCH_FINGERS, BATCH_LINKS, all_finger_pairs, all_self_pairs, finger_pair_contacts,
                                 finger_self_pairs)
+from simgrip.validity_hinges import folded_hinges
 from simgrip.intersection import self_clear, self_clear_below  # noqa: F401  (re-exported: the proof's home)
 
 __all__ = ["DEPTH_FRACTION", "SELF_LIMIT_FACTOR", "SOLID_LIMIT_FACTOR", "Solid", "chain_violations", "check_condition_23",
@@ -539,7 +540,7 @@ def state_violations(scene, state) -> list[tuple[str, str]]:
     r_tip = float(scene.r_tip) if scene.grip in ("I", "II") else None
     found = chain_violations(planar, world, r_link=float(scene.r_link), r_tip=r_tip, solid=solid,
                              contact_links=None if solid is None else _contact_links(scene))
-    return found
+    return found + folded_hinges(state.joint_angles)  # what the nodes cannot show (simgrip.validity_hinges)
 
 
 def check_valid(scene, state) -> None:

@@ -16,6 +16,7 @@ import math
 import numpy as np
 
 from simgrip.validity import Solid, mark_invalid, chain_violations
+from simgrip.validity_hinges import folded_hinges
 
 __all__ = ["REFERENCE_SAMPLES", "check_gripper_valid", "gripper_solid", "gripper_violations", "reference_violations"]
 
@@ -124,7 +125,7 @@ def gripper_violations(scene, state) -> list[tuple[str, str]]:
     r_tip = float(scene.r_tip) if scene.grip in ("I", "II") else None
     found = chain_violations(planar, world, r_link=float(scene.r_link), r_tip=r_tip, solid=solid,
                              base_sines=sines, contact_links=_contact_links_of_pairs(scene))
-    return found
+    return found + folded_hinges(state.joint_angles)  # what the nodes cannot show (simgrip.validity_hinges)
 
 
 def check_gripper_valid(scene, state):
