@@ -561,6 +561,9 @@ def main(argv=None) -> int:
 
                     import_mujoco()  # a MUJOCO_GL whose library is missing must not stop work that does not render
                 result = COMMANDS[args.command](args)
+            except BrokenPipeError:  # a command that prints as it goes (sweep's paths), piped into head: not ours
+                _quiet_stdout()
+                return 0
             except ValueError as exc:
                 if received.signum is not None:
                     raise  # what an interrupt became on its way up: the handler below

@@ -222,6 +222,21 @@ def test_closed_stdout_is_quiet():
     assert proc.returncode == 0 and proc.stderr == "", proc.stderr
 
 
+def test_closed_stdout_is_quiet_for_a_command_that_prints_as_it_goes(tmp_path):
+    """sweep prints its files' paths itself (not through the CLI's printer): it printed BrokenPipeError's
+    traceback and exited 1 when piped into ``true``."""
+    import os
+
+    r, w = os.pipe()
+    os.close(r)
+    proc = subprocess.run([sys.executable, "-m", "simgrip.cli", "sweep", "I", "--kappa", "-5", "--links", "8",
+                           "--reference", "none", "--no-map", "--jobs", "1", "--no-progress", "--out",
+                           str(tmp_path / "o")], stdout=w, stderr=subprocess.PIPE, text=True)
+    os.close(w)
+    assert proc.returncode == 0 and "Traceback" not in proc.stderr, proc.stderr
+    assert (tmp_path / "o" / "sweep.csv").is_file()
+
+
 def test_help_returns_0(capsys):
     assert main(["--help"]) == 0
     assert "simgrip" in capsys.readouterr().out
