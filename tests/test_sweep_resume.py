@@ -145,6 +145,28 @@ def test_partial_that_is_a_file_is_refused_before_work(tmp_path, capsys):
     assert (out / PARTIAL).read_text() == "not a folder" and not (out / "sweep.csv").exists()
 
 
+@pytest.mark.parametrize("make", ["fifo", "zeros", "huge"])
+def test_a_spec_json_that_is_not_a_small_regular_file_is_refused_at_once(tmp_path, capsys, make):
+    """``.partial/spec.json`` as a FIFO blocked the resume for ever, as a link to /dev/zero read without end; each
+    is now a damaged spec (one line, exit 2), as is a regular file too large to be a spec."""
+    import os
+
+    out = tmp_path / "o"
+    (out / PARTIAL).mkdir(parents=True)
+    spec = out / PARTIAL / "spec.json"
+    if make == "fifo":
+        os.mkfifo(spec)
+    elif make == "zeros":
+        os.symlink("/dev/zero", spec)
+    else:
+        with open(spec, "wb") as fh:
+            fh.truncate((1 << 20) + 1)
+    rc = main([*ARGS, "--out", str(out), "--resume"])
+    err = capsys.readouterr().err
+    assert rc == 2 and "--resume" in err and "spec.json is damaged" in err and "Traceback" not in err, err
+    assert not (out / "sweep.csv").exists()
+
+
 def test_sweep_csv_that_is_a_folder_is_refused_before_work(tmp_path, capsys):
     out = tmp_path / "o"
     (out / "sweep.csv").mkdir(parents=True)

@@ -34,6 +34,7 @@ import io
 import json
 import math
 import os
+import stat
 import re
 import shutil
 import time
@@ -329,11 +330,7 @@ class PartialStore:
             if not resume:
                 raise ValueError(f"--out {str(self.dir.parent)!r} holds an unfinished sweep ({PARTIAL}/): "
                                  f"add --resume to complete it, or delete {str(self.dir)!r}")
-            spec_path = self.dir / "spec.json"
-            try:
-                saved_spec = json.loads(spec_path.read_text(encoding="utf-8"))
-            except (OSError, ValueError):
-                saved_spec = None
+            saved_spec = _read_spec(self.dir / "spec.json")
             if saved_spec != json.loads(json.dumps(self.spec)):
                 raise ValueError(f"--resume: {str(self.dir)!r} was written for a different sweep "
                                  "(grip, axes, links, method, reference, contact or box depth differ, or its "
@@ -478,3 +475,21 @@ def same_results(a: list[dict], b: list[dict], ignore=TIME_COLUMNS) -> bool:
             if ra[c] != rb[c]:
                 return False
     return True
+
+
+#: the most a saved sweep's ``spec.json`` may hold [bytes]: it is a few hundred; a larger one is damaged
+SPEC_MAX_BYTES = 1 << 20
+
+
+def _read_spec(path: Path):
+    """A saved sweep's spec (its ``spec.json``), or None when it is missing, damaged or not a regular file: a FIFO
+    there would block the read for ever, a link to ``/dev/zero`` read without end (so: checked, and read at most
+    :data:`SPEC_MAX_BYTES`)."""
+    try:
+        if not stat.S_ISREG(os.stat(path).st_mode):
+            return None
+        with open(path, "rb") as fh:
+            raw = fh.read(SPEC_MAX_BYTES + 1)
+        return None if len(raw) > SPEC_MAX_BYTES else json.loads(raw.decode("utf-8"))
+    except (OSError, ValueError):
+        return None
