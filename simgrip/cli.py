@@ -226,16 +226,10 @@ def _profile(args, grip: str):
 
 
 def _links(value) -> int:
-    """``--links`` as an int in ``[2, MAX_LINKS]`` (see :mod:`simgrip.params` for the maximum's reason)."""
-    from simgrip.chain import check_links
+    """``--links`` as an int in ``[2, MAX_LINKS]`` (:func:`simgrip.params.check_link_count`)."""
+    from simgrip.params import check_link_count
 
-    n = check_links(value)
-    if n > MAX_LINKS:
-        raise ValueError(
-            f"links must be at most {MAX_LINKS}, got {n!r} (the chain's error at {MAX_LINKS} links is "
-            f"already below the contact tolerance; see simgrip.params)"
-        )
-    return n
+    return check_link_count(value)
 
 
 def _progress(args, links: int):

@@ -82,6 +82,7 @@ __all__ = [
     "KAPPA_LIMIT",
     "ALPHA_MAX",
     "MAX_LINKS",
+    "check_link_count",
 ]
 
 #: Grip names understood everywhere in simgrip.
@@ -102,6 +103,18 @@ KAPPA_LIMIT = 100.0
 ALPHA_MAX = 100.0
 #: Most links per finger: under MuJoCo's body depth (1023); error (32/n)^2 of n = 32's, below the contact tolerance.
 MAX_LINKS = 1000
+
+
+def check_link_count(value, name: str = "links") -> int:
+    """``value`` as a link count in ``[2, MAX_LINKS]`` (:func:`simgrip.chain.check_links`, then the maximum);
+    ``ValueError`` naming ``name`` otherwise.  What every command's ``--links`` is checked with."""
+    from simgrip.chain import check_links
+
+    n = check_links(value, name)
+    if n > MAX_LINKS:
+        raise ValueError(f"{name} must be at most {MAX_LINKS}, got {n!r} (the chain's error at {MAX_LINKS} links is "
+                         f"already below the contact tolerance; see simgrip.params)")
+    return n
 
 
 class Grip(str, Enum):

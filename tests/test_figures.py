@@ -370,3 +370,30 @@ def test_bad_out_is_refused_before_any_work(tmp_path, capsys, monkeypatch):
         assert "--out" in capsys.readouterr().err
     with pytest.raises(ValueError, match="out_dir"):
         figures.make_figures(tmp_path / "file", which=[6], jobs=1, progress=False)
+
+
+def test_links_and_jobs_are_bounded_as_every_command(tmp_path, capsys, monkeypatch):
+    """``--links`` above MAX_LINKS was drawn (every settle failed, shown only in the legend) and ``--jobs 2000``
+    accepted; one figure with ``--jobs 64`` started a local cluster of one worker for one task.  Now: the
+    simulate command's bound on the links, the sweep's on the jobs, and no more workers than figures."""
+    from simgrip.cli import main
+    from simgrip.figures import make
+    from simgrip.params import MAX_LINKS
+
+    seen = []
+
+    def fake_run_tasks(fn, tasks, *, options, **kw):
+        seen.append(options)
+        return [str(tmp_path / f"{t[0]}.png") for t in tasks]
+
+    monkeypatch.setattr("simgrip.parallel.runner.run_tasks", fake_run_tasks)
+    for argv, needle in ((["--links", str(MAX_LINKS + 1)], "links must be at most"),
+                         (["--jobs", "2000"], "above the bound")):
+        assert main(["figures", "--which", "7", "--no-progress", "--out", str(tmp_path), *argv]) == 2
+        err = capsys.readouterr().err
+        assert needle in err and "Traceback" not in err, err
+    assert seen == []
+    assert main(["figures", "--which", "7", "--no-progress", "--jobs", "64", "--out", str(tmp_path)]) == 0
+    assert "jobs 64 lowered to 1 (1 task to run)" in capsys.readouterr().err
+    assert main(["figures", "--which", "7", "--no-progress", "--out", str(tmp_path)]) == 0
+    assert [o.in_process for o in seen] == [True, True]

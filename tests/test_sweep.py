@@ -358,3 +358,16 @@ def test_profile_runs_every_way_with_identical_rows():
     assert all(r["points_per_s"] > 0 and math.isfinite(r["runner_overhead_per_point_s"]) for r in prof["runs"])
     assert "overhead_vs_loop_fraction" in prof["runs"][1] and "points/s" in format_profile(prof)
     json.dumps(prof, allow_nan=False)
+
+
+def test_links_above_the_maximum_are_refused_before_any_work(tmp_path, capsys):
+    """``sweep --links 1001`` computed (1030: every point rejected, exit 0); simulate refused both: one bound."""
+    from simgrip.cli import main
+    from simgrip.params import MAX_LINKS
+
+    for links in (MAX_LINKS + 1, 1030, 100000):
+        assert main(["sweep", "I", "--kappa", "-5", "--links", str(links), "--jobs", "1", "--no-progress",
+                     "--out", str(tmp_path / "o")]) == 2
+        err = capsys.readouterr().err
+        assert f"links must be at most {MAX_LINKS}" in err and "Traceback" not in err, err
+    assert not (tmp_path / "o").exists()

@@ -73,7 +73,7 @@ def make_figures(out_dir, *, which=None, jobs: int | None = None, progress: bool
     list of Path
         The files written, in the order of ``which``.
     """
-    from simgrip.chain import check_links
+    from simgrip.params import check_link_count
     from simgrip.parallel.runner import RunnerOptions, run_tasks
     from simgrip.io import check_output_dir, check_output_files_in
 
@@ -88,7 +88,7 @@ def make_figures(out_dir, *, which=None, jobs: int | None = None, progress: bool
             raise ValueError(f"which: {exc}") from None
     names = list(dict.fromkeys(names))
     options = RunnerOptions(jobs=jobs, progress=progress) if options is None else options
-    links = check_links(links)
+    links = check_link_count(links)  # [2, MAX_LINKS], as every command's --links
     out = check_output_dir(out_dir, option="out_dir")
     if any(k in RENDERED_FIGURES for k in names):
         from simgrip.sim.gl import RenderingUnavailable, choose_backend
@@ -102,6 +102,15 @@ def make_figures(out_dir, *, which=None, jobs: int | None = None, progress: bool
             print(f"simgrip figures: skipping the renders {', '.join(RENDERED_FIGURES)} ({exc})", file=sys.stderr)
     check_output_files_in(out, [f"{k}.png" for k in names], "out_dir")  # a folder/FIFO at figNN.png: refused now
     order = sorted(names, key=lambda k: -COST.get(k, 1))
+    if not options.remote:  # no more workers than figures, cores (2 each) or memory allow; refused above MAX_JOBS
+        from dataclasses import replace
+
+        from simgrip.sweep.budget import cap_jobs
+
+        jobs, why = cap_jobs(options.jobs, len(order))
+        if why:
+            print(f"simgrip figures: {why}", file=sys.stderr, flush=True)
+        options = options if jobs == options.jobs else replace(options, jobs=jobs)
     paths = run_tasks(_render, [(k, str(out), bool(simulate), links) for k in order],
                       options=options, desc="figures", batch_size=1)
     done = dict(zip(order, paths))

@@ -26,6 +26,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from simgrip.chain import check_links
+from simgrip.params import check_link_count
 from simgrip.params import DimensionlessParams, _finite, check_grip
 from simgrip.profiles import Uniform
 
@@ -329,7 +330,7 @@ def make_grid(grip: str, *, kappa, D=None, M=None, mu=None, b=None, gamma=None, 
         raise ValueError("kappa is required (--kappa K or --kappa START STOP NUM)")
     specs = {a: DEFAULTS[a] if v is None else v for a, v in given.items()}
     counts = {a: axis_count(a, v) for a, v in specs.items()}
-    links = check_links(links)
+    links = check_link_count(links)  # [2, MAX_LINKS], as every command's --links
     check_sweep(counts, links, str(method).strip().lower(), workers=None)
     axes = {a: parse_axis(a, v) for a, v in specs.items()}
     return SweepGrid(grip=grip, axes=axes, links=links, method=method, reference=reference, contact=contact,
