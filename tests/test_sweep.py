@@ -59,6 +59,8 @@ def test_axis_values():
     ("kappa", (-7, -3, 0), "NUM"),
     ("kappa", (-7, -3, 2.5), "NUM"),
     ("kappa", (-3, -7, 3), "STOP"),
+    ("kappa", (-3, -7, 1), "NUM = 1 is START alone"),  # a reversed range with NUM = 1 computed START
+    ("kappa", (-7, 1e308, 1), "NUM = 1 is START alone"),  # a STOP far out of range, never checked
     ("M", ("nan",), "finite"),
     ("M", (1, "nan", 3), "STOP"),
     ("D", ("inf",), "finite"),

@@ -137,6 +137,9 @@ def parse_axis(name: str, values) -> tuple[float, ...]:
         if num > MAX_AXIS_VALUES:
             raise ValueError(f"{name}: NUM = {values[2]!r}: at most {MAX_AXIS_VALUES} values on one axis "
                              "(every value is listed in sweep.json)")
+        if num == 1 and stop != start:  # np.linspace would give START alone: a STOP that is not used is a mistake
+            raise ValueError(f"{name}: NUM = 1 is START alone, but STOP {stop!r} differs from START {start!r}: "
+                             "give one value instead")
         if num > 1 and stop < start:
             raise ValueError(f"{name}: STOP must not be below START when NUM > 1, got START {start!r}, STOP {stop!r}")
         if num > 1 and stop == start:
