@@ -502,11 +502,12 @@ def _quiet_stdout() -> None:
         os.dup2(os.open(os.devnull, os.O_WRONLY), sys.stdout.fileno())
 
 
-def _say_interrupted(prefix: str) -> None:
-    """The one line of an interrupted run on stderr (off a progress bar's line on a terminal)."""
+def _say_interrupted(prefix: str, detail: str = "") -> None:
+    """The one line of an interrupted run on stderr (off a progress bar's line on a terminal); ``detail``, what
+    the command adds (a ``KeyboardInterrupt``'s message: sweep's saved points), after a semicolon."""
     with contextlib.suppress(OSError, ValueError):
         start = "\n" if sys.stderr.isatty() else ""
-        sys.stderr.write(f"{start}{prefix}: interrupted\n")
+        sys.stderr.write(f"{start}{prefix}: interrupted{'; ' + detail if detail else ''}\n")
         sys.stderr.flush()
 
 
@@ -584,7 +585,7 @@ def main(argv=None) -> int:
             previous = {sig: signal.signal(sig, signal.SIG_IGN) for sig in (signal.SIGINT, signal.SIGTERM)}
             try:
                 _clean_after_interrupt(outputs["folders"], outputs["created"])
-                _say_interrupted(prefix)
+                _say_interrupted(prefix, str(exc) if isinstance(exc, KeyboardInterrupt) else "")
             finally:
                 for sig, handler in previous.items():
                     signal.signal(sig, handler)

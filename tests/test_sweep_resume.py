@@ -209,3 +209,23 @@ def test_every_point_saved_resume_only_writes_the_table(tmp_path, reference):
     res, computed, notes = resume(out)
     assert computed == [] and notes == [] and res.resumed == 6 and res.computed == 0
     check_final(out, reference)
+
+
+def test_an_interrupted_sweep_says_so_in_one_line_with_the_resume_hint(tmp_path, capsys, monkeypatch):
+    """The hint where the finished points are used to be a line of its own before the CLI's "interrupted"."""
+    from pathlib import Path
+
+    import simgrip.sweep.run as run
+
+    out = tmp_path / "o"
+
+    def interrupted(grid, *, out, **kw):
+        (Path(out) / PARTIAL).mkdir(parents=True)
+        (Path(out) / PARTIAL / "batch-000000000-000000001-00000000.csv").write_text("")
+        raise KeyboardInterrupt
+
+    monkeypatch.setattr(run, "run_sweep", interrupted)
+    assert main([*ARGS, "--out", str(out)]) == 130
+    lines = capsys.readouterr().err.strip().splitlines()
+    assert lines == [f"simgrip sweep: interrupted; finished points are saved in {out / PARTIAL}; run the same "
+                     "command with --resume to complete the sweep"], lines

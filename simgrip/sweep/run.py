@@ -450,11 +450,15 @@ def cli_sweep(args):
     try:
         res = run_sweep(grid, out=args.out, options=options, batch_size=args.batch_size, resume=args.resume,
                         write_map=not args.no_map)
-    except KeyboardInterrupt:
-        _say_partial(args.out)
+    except KeyboardInterrupt:  # the CLI's one line says it: "interrupted; finished points are saved ..."
+        hint = _partial_hint(args.out)
+        if hint:
+            raise KeyboardInterrupt(hint) from None
         raise
     except RuntimeError:
-        _say_partial(args.out)
+        hint = _partial_hint(args.out)
+        if hint:
+            print(f"simgrip sweep: {hint}", file=sys.stderr)
         raise
     for k in ("csv", "json", "map"):
         if k in res.paths:
@@ -469,10 +473,9 @@ def cli_sweep(args):
     return None
 
 
-def _say_partial(out) -> None:
+def _partial_hint(out) -> str | None:
+    """Where a stopped sweep's finished points are and how to complete it; None when none was saved."""
     part = Path(out) / PARTIAL
     n = sum(1 for _ in part.glob("batch-*.csv")) if part.is_dir() else 0
-    if n:
-        print(f"simgrip sweep: finished points are saved in {part}; run the same command with --resume to "
-              "complete the sweep", file=sys.stderr)
-
+    return (f"finished points are saved in {part}; run the same command with --resume to complete the sweep"
+            if n else None)
