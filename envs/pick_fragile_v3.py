@@ -64,6 +64,8 @@ from __future__ import annotations
 
 import math
 
+import numpy as np
+
 from simgrip.envs.pick_fragile_v2 import (FragileCradleEnvV3, FragilePickEnvV2, FragilePickMultiEnvV2,
                                           FragilePlaceEnvV2, FragileSphereEnvV3)
 
@@ -79,6 +81,8 @@ class _Tactile:
 
     def __init__(self, *, tactile_resolution: float = TACTILE_RESOLUTION, **kwargs):
         try:
+            if isinstance(tactile_resolution, (bool, np.bool_)):  # True is not a force (it was 1 N)
+                raise TypeError
             w = float(tactile_resolution)
         except (TypeError, ValueError):
             raise ValueError(f"tactile_resolution must be a positive number of newtons, "

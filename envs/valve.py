@@ -24,6 +24,8 @@ from __future__ import annotations
 
 import math
 
+import numpy as np
+
 __all__ = ["KAPPA_RATE", "ValveCommand", "absolute_to_valve"]
 
 #: default valve rate: the curvature command's largest change per control step [action units]
@@ -31,6 +33,8 @@ KAPPA_RATE = 0.02
 
 
 def _check_rate(kappa_rate) -> float:
+    if isinstance(kappa_rate, (bool, np.bool_)):  # True is not a rate (it was 1.0)
+        raise ValueError(f"kappa_rate must be a number in (0, 2], got {kappa_rate!r}")
     try:
         rate = float(kappa_rate)
     except (TypeError, ValueError):

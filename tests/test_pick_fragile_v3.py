@@ -102,6 +102,6 @@ def test_tactile_resolution_argument(env_id):
     env = _make(env_id, tactile_resolution=0.5)
     assert env.unwrapped.tactile_resolution == 0.5 and env.unwrapped._force_unit == 0.5
     env.close()
-    for bad in (0, -0.01, float("nan"), float("inf"), "soft", None):
+    for bad in (0, -0.01, float("nan"), float("inf"), "soft", None, True):  # True ran as 1 N
         with pytest.raises(ValueError, match="tactile_resolution"):
             _make(env_id.replace("Pick", "PickMulti"), tactile_resolution=bad)

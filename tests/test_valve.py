@@ -65,8 +65,8 @@ def test_absolute_to_valve_reaches_a_target_at_the_valve_rate():
     assert absolute_to_valve(1.0, 1.0, 0.02) == 0.0
 
 
-@pytest.mark.parametrize("bad", [0.0, -0.01, float("nan"), float("inf"), 2.5, "fast", None])
-def test_bad_kappa_rate_is_refused_by_name(bad):
+@pytest.mark.parametrize("bad", [0.0, -0.01, float("nan"), float("inf"), 2.5, "fast", None, True, np.True_])
+def test_bad_kappa_rate_is_refused_by_name(bad):  # True ran as a rate of 1.0, 50 times the default
     with pytest.raises(ValueError, match="kappa_rate"):
         gym.make("simgrip/PickFragile-v6", kappa_rate=bad)
 
