@@ -19,6 +19,7 @@ import numpy as np
 from simgrip.chain import check_links
 
 __all__ = ["check_action", "check_bool", "check_camera", "check_int", "check_number", "check_positive", "check_range",
+           "check_within",
            "check_reset", "set_finger_arguments", "set_task_arguments"]
 
 
@@ -50,6 +51,18 @@ def check_number(name, value, *, positive=True) -> float:
         raise ValueError(f"{name} must be {what}, got {value!r}") from None
     if not (math.isfinite(v) and (v > 0 if positive else v >= 0)):
         raise ValueError(f"{name} must be {what}, got {value!r}")
+    return v
+
+
+def check_within(name, value, lo: float, hi: float, why: str = "") -> float:
+    """``value`` as a float in ``[lo, hi]`` (bools, NaN refused); ValueError naming ``name`` (and ``why``, the
+    range's own name) otherwise: a value out of range is refused, never clipped into it."""
+    try:
+        v = math.nan if isinstance(value, (bool, np.bool_)) else float(value)
+    except (TypeError, ValueError):
+        v = math.nan
+    if not lo <= v <= hi:  # (NaN fails)
+        raise ValueError(f"{name} must lie in [{lo:g}, {hi:g}]{' (' + why + ')' if why else ''}, got {value!r}")
     return v
 
 

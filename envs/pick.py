@@ -26,7 +26,7 @@ import mujoco
 import numpy as np
 from gymnasium import spaces
 
-from simgrip.envs.arguments import check_camera, check_reset, set_finger_arguments, set_task_arguments
+from simgrip.envs.arguments import check_camera, check_reset, check_within, set_finger_arguments, set_task_arguments
 from simgrip.envs.arguments import check_bool as _bool
 from simgrip.envs.arguments import check_positive as _pos
 from simgrip.envs.arguments import check_range as _range
@@ -490,7 +490,7 @@ class PickEnv(CheckedStep, gym.Env):
             raise ValueError(f"box_width = {width} m is wider than the fingers reach")
         mass = _pos("box_mass", options.get("box_mass", mass))
         mu = _pos("friction", options.get("friction", mu))
-        palm_z = float(np.clip(_pos("palm_height", options.get("palm_height", palm_z)), *self.palm_range))
+        palm_z = check_within("palm_height", options.get("palm_height", palm_z), *self.palm_range, "palm_range")
         m, d = self.model, self.data
         self._set_box(BoxParams(width, mass, mu))
         mujoco.mj_resetData(m, d)

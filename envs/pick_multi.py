@@ -19,7 +19,7 @@ import mujoco
 import numpy as np
 from gymnasium import spaces
 
-from simgrip.envs.arguments import check_camera, check_reset, set_finger_arguments, set_task_arguments
+from simgrip.envs.arguments import check_camera, check_reset, check_within, set_finger_arguments, set_task_arguments
 from simgrip.envs.arguments import check_bool as _bool
 from simgrip.envs.arguments import check_number as _num
 from simgrip.envs.arguments import check_positive as _pos
@@ -400,7 +400,7 @@ class PickMultiEnv(CheckedStep, gym.Env):
                               mass_range=self.mass_range, friction_range=self.friction_range,
                               offset_max=self.offset_max, yaw_range=self.yaw_range, length=self.length)
         palm_z = float(rng.uniform(*self.palm_start))
-        palm_z = float(np.clip(_pos("palm_height", options.get("palm_height", palm_z)), *self.palm_range))
+        palm_z = check_within("palm_height", options.get("palm_height", palm_z), *self.palm_range, "palm_range")
         shape, width, mass, mu, offset, yaw = (work.shape, work.width, work.mass, work.friction, work.offset,
                                                work.yaw)
 

@@ -126,6 +126,9 @@ def test_reset_takes_numpy_integer_seeds_as_the_same_seed(env_id):
     ({"seed": -1}, "seed"), ({"seed": 3.0}, "seed"), ({"seed": True}, "seed"), ({"seed": "3"}, "seed"),
     ({"options": "str"}, "options"), ({"options": ["box_width"]}, "options"), ({"options": 3}, "options"),
     ({"options": {"nonsense": 1}}, "unknown reset options"),
+    # a palm height outside palm_range was clipped into it silently (1e12 m started the palm at 0.25 m)
+    ({"options": {"palm_height": 1e12}}, "palm_height"), ({"options": {"palm_height": 0.01}}, "palm_height"),
+    ({"options": {"palm_height": float("nan")}}, "palm_height"), ({"options": {"palm_height": True}}, "palm_height"),
 ])
 def test_reset_refuses_bad_seeds_and_options_by_name(env_id, kwargs, name):
     """``reset(options='str')`` said "dictionary update sequence element #0"; now ValueError naming it."""
@@ -133,5 +136,19 @@ def test_reset_refuses_bad_seeds_and_options_by_name(env_id, kwargs, name):
     try:
         with pytest.raises(ValueError, match=rf"^{name}\b"):
             env.reset(**kwargs)
+    finally:
+        env.close()
+
+
+@pytest.mark.parametrize("env_id", ["simgrip/Pick-v1", "simgrip/PickMulti-v0", "simgrip/PickSphereFragile-v5"])
+def test_a_palm_height_within_palm_range_is_the_episodes(env_id):
+    env = gym.make(env_id)
+    try:
+        lo, hi = env.unwrapped.palm_range
+        for h in (lo, 0.5 * (lo + hi), hi):
+            _, info = env.reset(seed=0, options={"palm_height": h})
+            assert info["palm_height"] == h
+        with pytest.raises(ValueError, match=r"palm_height must lie in .* \(palm_range\)"):
+            env.reset(seed=0, options={"palm_height": hi * (1 + 1e-9)})
     finally:
         env.close()
