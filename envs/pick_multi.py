@@ -26,7 +26,7 @@ from simgrip.envs.arguments import check_positive as _pos
 from simgrip.envs.arguments import check_range as _range
 from simgrip.envs.pick_multi_model import build_pick_multi_model, half_height, set_workpiece
 from simgrip.envs.pick_multi_observation import MultiObservation, MultiReward, WorkpieceContactForces
-from simgrip.envs.pick_multi_workpiece import WORKPIECE_OPTIONS, WorkpieceParams, draw_workpiece
+from simgrip.envs.pick_multi_workpiece import WORKPIECE_OPTIONS, WorkpieceParams, check_draw_ranges, draw_workpiece
 from simgrip.envs.pick_reward import progress
 from simgrip.envs.pick_step import CheckedStep
 from simgrip.envs.pick_validity import FingerValidity
@@ -253,6 +253,9 @@ class PickMultiEnv(CheckedStep, gym.Env):
             yaw_range = (0.0, 0.0) if self.K == 2 else (-0.15, 0.15)
         self.yaw_range = _range("yaw_range", yaw_range, lo=-math.pi, hi=math.pi, positive=False)
         self.workpiece_height = _pos("workpiece_height", workpiece_height)
+        check_draw_ranges(fingers=self.K, length=self.length, EI=self.EI, rho=self.rho, g=self.g,
+                          size_range=self.size_range, mass_range=self.mass_range, friction_range=self.friction_range,
+                          offset_max=self.offset_max)
         # the tip spheres must fit around the smallest workpiece
         if self.r_tip >= (0.5 * self.size_range[0] + self.r_tip) * math.sin(math.pi / self.K):
             raise ValueError(f"size_range: with fingers = {self.K} the tip spheres (radius {self.r_tip} m) "

@@ -13,7 +13,7 @@ from dataclasses import dataclass
 
 from simgrip.envs.arguments import check_positive
 
-__all__ = ["WORKPIECE_OPTIONS", "WorkpieceParams", "draw_workpiece"]
+__all__ = ["WORKPIECE_OPTIONS", "WorkpieceParams", "check_draw_ranges", "draw_workpiece"]
 
 #: The ``reset`` options that fix a workpiece parameter.
 WORKPIECE_OPTIONS = ("shape", "width", "mass", "friction", "offset", "yaw")
@@ -70,3 +70,30 @@ def draw_workpiece(rng, options: dict, *, shapes, fingers: int, size_range, mass
     if not isinstance(yaw, (int, float)) or isinstance(yaw, bool) or not math.isfinite(yaw):
         raise ValueError(f"yaw must be a finite number (radians), got {yaw!r}")
     return WorkpieceParams(shape, width, mass, mu, offset, float(yaw))
+
+
+def check_draw_ranges(*, fingers: int, length: float, EI: float, rho: float, g: float, size_range, mass_range,
+                      friction_range, offset_max: float) -> None:
+    """Every workpiece the ranges can draw is one the model takes, checked at construction: ValueError naming the
+    range otherwise (before, a training run met it at the reset whose draw left the model's range, hours in).
+
+    ``offset_max`` below the fingers' reach ``length`` (what :func:`draw_workpiece` requires of each offset); each
+    end of ``size_range``, ``mass_range`` and ``friction_range`` within the paper's parameter space per finger
+    (:meth:`simgrip.params.PhysicalParams.dimensionless`: ``m`` = mass / K, ``b`` the width).  Each group is one
+    quantity's (``b/l`` the size's, ``M`` the mass's, ``mu_s`` the friction's) and monotonic in it, so each end is
+    checked with the other two at values every model takes (no mass, no friction, half a finger wide), and the
+    ends bound every draw.  SI units.
+    """
+    from simgrip.params import PhysicalParams
+
+    if not offset_max < length:
+        raise ValueError(f"offset_max must be below the fingers' reach (length = {length} m), got {offset_max!r}")
+    neutral = {"size_range": 0.5 * length, "mass_range": 0.0, "friction_range": 0.0}
+    for name, ends in (("size_range", size_range), ("mass_range", mass_range), ("friction_range", friction_range)):
+        for end in ends:
+            v = dict(neutral, **{name: float(end)})
+            try:
+                PhysicalParams(length=length, EI=EI, rho=rho, g=g, m=v["mass_range"] / fingers, b=v["size_range"],
+                               mu_s=v["friction_range"], gamma=0.8 * length).dimensionless()
+            except ValueError as exc:
+                raise ValueError(f"{name} = {tuple(ends)!r} draws workpieces the model cannot take: {exc}") from None

@@ -152,3 +152,16 @@ def test_a_palm_height_within_palm_range_is_the_episodes(env_id):
             env.reset(seed=0, options={"palm_height": hi * (1 + 1e-9)})
     finally:
         env.close()
+
+
+@pytest.mark.parametrize("env_id", ["simgrip/PickMulti-v0", "simgrip/PickMultiFragile-v6",
+                                    "simgrip/PickSphereFragile-v5"])
+@pytest.mark.parametrize("kwargs, name", [
+    ({"mass_range": (0.01, 1000.0)}, "mass_range"), ({"friction_range": (0.1, 1e12)}, "friction_range"),
+    ({"offset_max": 1e12}, "offset_max"), ({"offset_max": 0.1}, "offset_max"),
+])
+def test_k_finger_draw_ranges_are_checked_at_construction(env_id, kwargs, name):
+    """They were checked only on the draws: ``mass_range=(0.01, 1000)`` built and reset seeds 0-3, then seed 4
+    raised "M must lie in [0, 10000]" without naming the range (a training run meets it hours in)."""
+    with pytest.raises(ValueError, match=rf"^{name}\b"):
+        gym.make(env_id, **kwargs)
