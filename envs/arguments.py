@@ -17,10 +17,17 @@ import mujoco
 import numpy as np
 
 from simgrip.chain import check_links
+from simgrip.params import MAX_LINKS
 
 __all__ = ["check_action", "check_bool", "check_camera", "check_int", "check_number", "check_positive", "check_range",
            "check_within",
            "check_reset", "set_finger_arguments", "set_task_arguments"]
+
+
+#: the longest control step ``timestep * frame_skip`` [s]: a pick lasts a few seconds (300 steps of 20 ms)
+MAX_CONTROL_STEP = 1.0
+#: the longest settle at reset [s]: the default fingers settle within 2 % in 0.18 s (simgrip.envs.pick)
+MAX_SETTLE_TIME = 10.0
 
 
 def check_range(name, value, lo=-math.inf, hi=math.inf, positive=True, strict=False) -> tuple[float, float]:
@@ -177,10 +184,22 @@ def set_task_arguments(env, *, kappa_range, kappa_tau, palm_speed, palm_range, p
     env.drop_distance = check_positive("drop_distance", drop_distance)
     env.timestep = check_positive("timestep", timestep)
     env.frame_skip = check_int("frame_skip", frame_skip, 1)
+    if env.timestep * env.frame_skip > MAX_CONTROL_STEP:
+        raise ValueError(f"frame_skip: the control step timestep * frame_skip must be at most {MAX_CONTROL_STEP:g} s "
+                         f"(a pick lasts a few seconds), got {frame_skip!r} steps of {env.timestep:g} s")
     env.settle_time = check_number("settle_time", settle_time, positive=False)
+    if env.settle_time > MAX_SETTLE_TIME:
+        raise ValueError(f"settle_time must be at most {MAX_SETTLE_TIME:g} s (the fingers settle within 0.2 s), "
+                         f"got {settle_time!r}")
     env.settle_steps = int(round(env.settle_time / env.timestep))
     env.finger_damping_time = check_number("finger_damping_time", finger_damping_time, positive=False)
+    if env.finger_damping_time > 0 and env.timestep >= 2.0 * env.finger_damping_time:
+        raise ValueError(f"timestep must be below 2 finger_damping_time = {2.0 * env.finger_damping_time:g} s (the "
+                         f"hinges' step is stable below it, their damping implicit), got {timestep!r}")
     env.shape_points = check_int("shape_points", shape_points, 2)
+    if env.shape_points > MAX_LINKS:
+        raise ValueError(f"shape_points must be at most {MAX_LINKS} (the finest chain simgrip builds; a sample "
+                         f"between two links' midpoints is interpolated), got {shape_points!r}")
     env.spin_friction = check_positive("spin_friction", spin_friction)
     env.impratio = check_positive("impratio", impratio)
     env.finger_armature = check_number("finger_armature", finger_armature, positive=False)

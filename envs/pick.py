@@ -231,10 +231,10 @@ class PickEnv(CheckedStep, gym.Env):
     | ``target_height``, ``hold_time`` | 0.06 (cradle 0.08), 0.5 | success: box height gain [m] (more than curling the fingers alone gives: up to 4.7 cm pinched, 5.7 cm cradled), hold [s] |
     | ``w_lift``, ``w_success``, ``w_squeeze``, ``w_drop`` | 10, 20, 0.04, 10 | reward weights (>= 0) |
     | ``squeeze_margin``, ``drop_distance`` | 2.0, 0.02 | squeeze allowance (times the least normal force that holds), drop threshold [m] |
-    | ``timestep``, ``frame_skip``, ``settle_time`` | 0.002, 10, 0.1 | physics step [s], steps per action, settling at reset [s] |
+    | ``timestep``, ``frame_skip``, ``settle_time`` | 0.002, 10, 0.1 | physics step [s] (below ``2 finger_damping_time``), steps per action (``timestep * frame_skip <= 1 s``), settling at reset [s] (at most 10) |
     | ``finger_damping_time``, ``finger_armature`` | 0.02, 1e-5 | hinge damping / stiffness [s], hinge armature [kg m^2] |
     | ``r_tip``, ``spin_friction``, ``impratio`` | 0.004, 0.004, 1 | tip/link radius [m], torsional friction length [m], MuJoCo impratio |
-    | ``shape_points`` | 8 | finger shape samples per finger (>= 2) |
+    | ``shape_points`` | 8 | finger shape samples per finger (2 to ``n_links``) |
     | ``width``, ``height``, ``camera`` | 480, 360, ``"front"`` | rendering (pixels, a camera of the model) |
 
     ## Version history

@@ -25,10 +25,11 @@ BAD_ARGUMENTS = {
     "target_height": [0, float("nan")], "hold_time": [-1, float("nan"), float("inf")],
     "w_lift": [-1, float("nan")], "w_success": [float("inf")], "w_squeeze": [-0.1, "x"], "w_drop": [float("nan")],
     "squeeze_margin": [0, float("nan")], "drop_distance": [0, float("inf")],
-    "timestep": [0, float("nan"), -0.002], "frame_skip": [0, 2.5, float("nan"), True],
-    "settle_time": [float("nan"), -1, float("inf")],
+    # the upper bounds: 1e12 built and failed at the first reset in mj_step's argument parsing, without a name
+    "timestep": [0, float("nan"), -0.002, 0.04, 1e12], "frame_skip": [0, 2.5, float("nan"), True, 501, 1e12],
+    "settle_time": [float("nan"), -1, float("inf"), 10.5, 1e12],
     "finger_damping_time": [float("nan"), -0.01, float("inf")],
-    "shape_points": [1, 3.5, float("nan")], "r_tip": [0, float("nan")], "spin_friction": [-1, float("nan")],
+    "shape_points": [1, 3.5, float("nan"), 1001, 1e12], "r_tip": [0, float("nan")], "spin_friction": [-1, float("nan")],
     "impratio": [0, float("nan")], "finger_armature": [-1, float("nan")],
     "width": [0, 10.5, float("nan")], "height": [-1, "tall"], "camera": ["nope", 3, ""],
 }
