@@ -234,7 +234,7 @@ class PickEnv(CheckedStep, gym.Env):
     | ``timestep``, ``frame_skip``, ``settle_time`` | 0.002, 10, 0.1 | physics step [s] (below ``2 finger_damping_time``), steps per action (``timestep * frame_skip <= 1 s``), settling at reset [s] (at most 10) |
     | ``finger_damping_time``, ``finger_armature`` | 0.02, 1e-5 | hinge damping / stiffness [s], hinge armature [kg m^2] |
     | ``r_tip``, ``spin_friction``, ``impratio`` | 0.004, 0.004, 1 | tip/link radius [m], torsional friction length [m], MuJoCo impratio |
-    | ``shape_points`` | 8 | finger shape samples per finger (2 to ``n_links``) |
+    | ``shape_points`` | 8 | finger shape samples per finger (2 to 1000) |
     | ``width``, ``height``, ``camera`` | 480, 360, ``"front"`` | rendering (pixels, a camera of the model) |
 
     ## Version history
