@@ -72,8 +72,9 @@ class _Parser(argparse.ArgumentParser):
         self._negative_number_matcher = _NEGATIVE_NUMBER
 
     def error(self, message):  # pragma: no cover - exercised through main()
-        self.print_usage(sys.stderr)
-        self.exit(EXIT_USAGE, f"simgrip: error: {message}\n")
+        # one line, the command's own name ("simgrip sweep: error: argument --jobs: invalid int value: 'two'"),
+        # as every value the commands check themselves; the usage is --help's
+        self.exit(EXIT_USAGE, f"{self.prog}: error: {message} (see {self.prog} --help)\n")
 
 
 def _add_state_options(p: argparse.ArgumentParser, grips=("free", "I", "II", "III")) -> None:

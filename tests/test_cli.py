@@ -274,3 +274,17 @@ def test_surface_contact_reference_carries_the_couple():
     for rec in (point, surf):
         n_rel = abs(rec["difference"]["normal_force"]) / rec["reference"]["normal_force"]
         assert n_rel < 4e-3  # second-order chain error at n = 16 (0.07 % at n = 32, x4)
+
+
+@pytest.mark.parametrize("argv, prefix, needle", [
+    (["solve", "I", "--kappa", "abc"], "simgrip solve", "--kappa"),
+    (["simulate", "I", "--kappa", "-5", "--links", "2.5"], "simgrip simulate", "--links"),
+    (["sweep", "I", "--kappa", "-5", "--links", "8", "--out", "x", "--jobs", "two"], "simgrip sweep", "--jobs"),
+    (["solve", "--kappa", "-5"], "simgrip solve", "grip"),
+])
+def test_a_value_argparse_cannot_read_is_one_line_naming_it(argv, prefix, needle, capsys):
+    """argparse's own refusals (a wrong type, a missing argument) printed the usage block, 5-10 lines, under the
+    prefix ``simgrip:``; now one line under the command's name, as the values the commands check themselves."""
+    assert main(argv) == 2
+    err = capsys.readouterr().err
+    assert len(err.strip().splitlines()) == 1 and err.startswith(f"{prefix}: error: ") and needle in err, err
