@@ -91,12 +91,16 @@ def _cut(data: bytes) -> bytes:  # what `head -c N` leaves: the last row cut mid
 def test_a_damaged_batch_is_set_aside_and_recomputed(tmp_path, reference, damage, why):
     out = tmp_path / "o"
     bad, good = save(out, reference.records, [(0, 1), (2, 3)])
-    bad.write_bytes(damage(bad.read_bytes()))
+    damaged = damage(bad.read_bytes())
+    bad.write_bytes(damaged)
     res, computed, notes = resume(out)
     assert computed == [0, 1, 4, 5] and res.resumed == 2  # the bad batch's points and the missing ones
     assert len(notes) == 1 and bad.name in notes[0] and why in notes[0], notes
     assert res.counts == reference.counts  # 6 of 6 statuses known: nothing copied from the bad file
     check_final(out, reference)
+    # the set-aside file outlives .partial (it was deleted with it, while the note pointed to it)
+    kept = out / "rejected-batches" / bad.name
+    assert str(kept.parent) in notes[0] and kept.read_bytes() == damaged, notes
 
 
 def test_damaged_batch_moved_aside_then_later_resumes_work(tmp_path, reference):

@@ -29,6 +29,7 @@ and why, and its points are computed again.  When every point is saved,
 
 from __future__ import annotations
 
+import contextlib
 import csv
 import io
 import json
@@ -368,7 +369,8 @@ class PartialStore:
             k += 1
         os.replace(path, dest)
         if note is not None:
-            note(f"set aside {path} ({why}): moved to {dest}; its points are computed again")
+            note(f"set aside {path} ({why}): moved to {dest} (kept in {self.dir.parent / 'rejected-batches'} once the "
+                 "sweep completes); its points are computed again")
 
     def add(self, record: dict) -> None:
         """Queue a finished point; saves the queue when it is large or old enough."""
@@ -452,7 +454,18 @@ class PartialStore:
         return sorted(self.dir.glob("batch-*.csv")) if self.dir.is_dir() else []
 
     def remove(self) -> None:
-        """Delete the folder (after the final files are written)."""
+        """Delete the folder (after the final files are written); the batch files set aside (``rejected/``), which a
+        note pointed to, are kept: moved to ``OUT/rejected-batches/`` (a numbered name where one is taken)."""
+        bin_ = self.dir / REJECTED
+        if bin_.is_dir() and not bin_.is_symlink() and any(bin_.iterdir()):
+            keep = self.dir.parent / "rejected-batches"
+            with contextlib.suppress(OSError):
+                keep.mkdir(exist_ok=True)
+                for path in sorted(bin_.iterdir()):
+                    dest, k = keep / path.name, 1
+                    while os.path.lexists(dest):
+                        dest, k = keep / f"{path.name}.{k}", k + 1
+                    os.replace(path, dest)
         shutil.rmtree(self.dir, ignore_errors=True)
 
 
