@@ -24,6 +24,8 @@ __all__ = ["check_action", "check_bool", "check_camera", "check_int", "check_num
            "check_reset", "set_finger_arguments", "set_task_arguments"]
 
 
+#: the largest rendered image side [pixels]: 8192, within every GL driver's framebuffer limit (OSMesa: 16384)
+MAX_PIXELS = 8192
 #: the longest control step ``timestep * frame_skip`` [s]: a pick lasts a few seconds (300 steps of 20 ms)
 MAX_CONTROL_STEP = 1.0
 #: the longest settle at reset [s]: the default fingers settle within 2 % in 0.18 s (simgrip.envs.pick)
@@ -205,6 +207,10 @@ def set_task_arguments(env, *, kappa_range, kappa_tau, palm_speed, palm_range, p
     env.finger_armature = check_number("finger_armature", finger_armature, positive=False)
     env.width = check_int("width", width, 1)
     env.height = check_int("height", height, 1)
+    for name in ("width", "height"):
+        if getattr(env, name) > MAX_PIXELS:
+            raise ValueError(f"{name} must be at most {MAX_PIXELS} pixels (an offscreen framebuffer GL drivers "
+                             f"allocate), got {getattr(env, name)!r}")
     if not isinstance(camera, str) or not camera:
         raise ValueError(f"camera must be the name of a camera of the model, got {camera!r}")
     env.camera = camera

@@ -31,7 +31,7 @@ BAD_ARGUMENTS = {
     "finger_damping_time": [float("nan"), -0.01, float("inf")],
     "shape_points": [1, 3.5, float("nan"), 1001, 1e12], "r_tip": [0, float("nan")], "spin_friction": [-1, float("nan")],
     "impratio": [0, float("nan")], "finger_armature": [-1, float("nan")],
-    "width": [0, 10.5, float("nan")], "height": [-1, "tall"], "camera": ["nope", 3, ""],
+    "width": [0, 10.5, float("nan"), 8193, 1e12], "height": [-1, "tall", 1e12], "camera": ["nope", 3, ""],
 }
 
 

@@ -88,12 +88,18 @@ def test_headless_rendering_check_env_and_frame(render_backend, tmp_path):
         res["finger"] = int(((r > 150) & (r - b > 80) & (g < 160)).sum())  # orange links
         res["box"] = int(((b > 150) & (b - r > 80)).sum())  # blue box
         res["std"] = float(frame.std())
+        # wider than the model's 640-pixel offscreen buffer: failed at the first render with MuJoCo's own message
+        env = gym.make("simgrip/PickFragile-v6", render_mode="rgb_array", width=800, height=600)
+        env.reset(seed=0)
+        res["wide"] = list(env.render().shape)
+        env.close()
         print(json.dumps(res))
         """,
         tmp_path,
     )
     unexpected = [msg for msg in out["warnings"] if not any(msg.startswith(ok) for ok in CHECK_ENV_ALLOWED)]
     assert not unexpected, unexpected
+    assert out["wide"] == [600, 800, 3]
     assert out["shape"] == [180, 240, 3] and out["dtype"] == "uint8"
     assert out["finger"] > 100, out
     assert out["box"] > 300, out

@@ -167,6 +167,10 @@ def make_renderer(model, height: int, width: int):
         if getattr(gl_context, "GLContext", None) is not wanted:
             # mujoco was imported before MUJOCO_GL was chosen: its renderer would use GLFW (no display)
             gl_context.GLContext = wanted
+    # the offscreen framebuffer the size asked for (the models' own: 640 x 480 or 1280 x 960; an env's width of
+    # 800 failed at the first render with MuJoCo's "Image width 800 > framebuffer width 640"): rendering only
+    glob = model.vis.global_
+    glob.offwidth, glob.offheight = max(int(glob.offwidth), int(width)), max(int(glob.offheight), int(height))
     try:
         return mujoco.Renderer(model, height=height, width=width)
     except Exception as exc:
