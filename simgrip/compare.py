@@ -17,7 +17,7 @@ import math
 
 import numpy as np
 
-from simgrip.params import DimensionlessParams
+from simgrip.params import DimensionlessParams, as_dimensionless
 from simgrip.profiles import as_profile
 from simgrip.report import difference, elastica_record
 from simgrip.settled import settle_fields, settled_record, simulate  # re-exported (__all__)
@@ -195,6 +195,7 @@ def compare(grip: str, params: DimensionlessParams, profile, links: int, **settl
     "elastica", "grip", "available": False, "why"}`` and an empty difference.
     Extra keywords (e.g. ``method="dynamics"``) go to :func:`simulate`.
     """
+    params = as_dimensionless(params)  # PhysicalParams too, as simulate (before any work)
     profile = as_profile(profile)
     if settle_kw.get("contact") == "full" and settle_kw.get("box_depth") is not None:
         from simgrip.compare_full import compare_full  # grasped at a depth: the free-boundary reference

@@ -83,6 +83,7 @@ __all__ = [
     "ALPHA_MAX",
     "MAX_LINKS",
     "check_link_count",
+    "as_dimensionless",
 ]
 
 #: Grip names understood everywhere in simgrip.
@@ -380,3 +381,15 @@ class PhysicalParams:
 
 #: The paper's standard case: D = 1, M = 5, mu_s = 1, b/l = 0.6, gamma/l = 0.8.
 STANDARD = DimensionlessParams()
+
+
+def as_dimensionless(params, name: str = "params") -> "DimensionlessParams":
+    """``params`` as its dimensionless groups: a :class:`DimensionlessParams` as it is, a :class:`PhysicalParams`
+    through :meth:`PhysicalParams.dimensionless` (what :func:`simgrip.compare.simulate` settles either way);
+    ``ValueError`` naming ``name`` for anything else.  For the functions that report in groups (the compare and
+    the records), so that both kinds are taken where ``simulate`` takes both."""
+    if isinstance(params, PhysicalParams):
+        return params.dimensionless()
+    if isinstance(params, DimensionlessParams):
+        return params
+    raise ValueError(f"{name} must be DimensionlessParams or PhysicalParams, got {type(params).__name__}")

@@ -15,7 +15,7 @@ import time
 import numpy as np
 
 from simgrip.contact_report import contact_records, node_records
-from simgrip.params import DimensionlessParams, check_grip
+from simgrip.params import DimensionlessParams, as_dimensionless, check_grip
 from simgrip.profiles import as_profile
 
 __all__ = ["settle_fields", "settled_record", "simulate", "tip_forces", "verdict_fields"]
@@ -121,6 +121,7 @@ def settled_record(state, params: DimensionlessParams, profile=None) -> dict:
     contact in the workpiece).  ``min_eigenvalue`` is the hinge chain's stability
     eigenvalue at this shape when ``profile`` is given.
     """
+    params = as_dimensionless(params)
     c = state.contact
     grip = state.grip
     v = verdict_fields(state)

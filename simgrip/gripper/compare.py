@@ -14,7 +14,7 @@ have no single planar reference; :func:`compare_gripper` refuses them with a
 
 from __future__ import annotations
 
-from simgrip.params import DimensionlessParams, check_grip
+from simgrip.params import DimensionlessParams, as_dimensionless, check_grip
 from simgrip.profiles import as_profile
 
 __all__ = ["compare_gripper"]
@@ -64,6 +64,7 @@ def compare_gripper(grip: str, params: DimensionlessParams, profile, links: int,
     from simgrip.report import difference, elastica_record
 
     grip = check_grip(grip)
+    params = as_dimensionless(params)  # PhysicalParams too, as simulate_gripper (before any work)
     if not isinstance(profile, (list, tuple)):
         profile = as_profile(profile)
     _planar_scene_or_raise(grip, profile, workpiece, contact_angle, offset, workpiece_yaw)

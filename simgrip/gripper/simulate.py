@@ -13,7 +13,7 @@ import math
 import time
 
 from simgrip.compare import settle_fields
-from simgrip.params import DimensionlessParams, Grip
+from simgrip.params import DimensionlessParams, Grip, as_dimensionless
 from simgrip.profiles import as_profile
 
 __all__ = ["gripper_record", "simulate_gripper"]
@@ -147,6 +147,7 @@ def gripper_record(state, params: DimensionlessParams, profile=None) -> dict:
     Angles (``contact_angle``, ``workpiece_yaw``) are in radians, whatever the
     command line took (degrees).
     """
+    params = as_dimensionless(params)
     first = state.records[0] if state.records else None
     return {
         "source": "simulation",

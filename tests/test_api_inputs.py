@@ -1,0 +1,42 @@
+"""The Python API's inputs, tried as a hostile user would (issue 18's audit of every surface; the brief's
+"robust": a clear error naming the parameter, before any work, from the library as from the CLI).
+
+Each case is one that misbehaved: a physical parameter set that ``simulate`` takes and ``compare`` crashed on
+after the settle (AttributeError), ...
+"""
+
+from __future__ import annotations
+
+import pytest
+
+from simgrip import DimensionlessParams, PhysicalParams, Uniform
+
+
+def test_compare_takes_physical_params_as_simulate_does():
+    """``compare("I", PhysicalParams(), ...)`` settled, then raised AttributeError 'no attribute D'; now it
+    reports the groups the physical parameters have, the same numbers as given the groups."""
+    from simgrip.compare import compare
+
+    phys = PhysicalParams()
+    a, b = (compare("I", p, Uniform(-5.5), 8) for p in (phys, phys.dimensionless()))
+    assert a["simulation"]["normal_force"] == b["simulation"]["normal_force"]
+    assert a["reference"]["normal_force"] == b["reference"]["normal_force"]
+    with pytest.raises(ValueError, match="^params must be DimensionlessParams or PhysicalParams, got dict"):
+        compare("I", {"D": 1.0}, -5.5, 8)
+
+
+def test_compare_gripper_and_the_records_take_physical_params():
+    from simgrip.gripper import compare_gripper, gripper_record, simulate_gripper
+    from simgrip.settled import settled_record, simulate
+
+    phys = PhysicalParams()
+    kw = dict(fingers=3, workpiece="cylinder")
+    a = compare_gripper("I", phys, Uniform(-5.5), 8, **kw)
+    b = compare_gripper("I", phys.dimensionless(), Uniform(-5.5), 8, **kw)
+    assert a["simulation"]["normal_force"] == b["simulation"]["normal_force"]
+    state = simulate_gripper("I", phys, Uniform(-5.5), 8, **kw)
+    assert gripper_record(state, phys) == gripper_record(state, phys.dimensionless())
+    planar = simulate("I", phys, Uniform(-5.5), 8)
+    ra, rb = settled_record(planar, phys), settled_record(planar, phys.dimensionless())
+    ra.pop("wall_time_s"), rb.pop("wall_time_s")
+    assert ra == rb
