@@ -15,7 +15,7 @@ import time
 import numpy as np
 
 from simgrip.contact_report import contact_records, node_records
-from simgrip.params import DimensionlessParams, as_dimensionless, check_grip
+from simgrip.params import DimensionlessParams, as_dimensionless, check_grip, check_link_count
 from simgrip.profiles import as_profile
 
 __all__ = ["settle_fields", "settled_record", "simulate", "tip_forces", "verdict_fields"]
@@ -46,7 +46,7 @@ def simulate(grip: str, params: DimensionlessParams, profile, links: int, *, pro
 
     grip = check_grip(grip)  # checked here, once, and handed down as checked values (a Grip, a Count)
     profile = as_profile(profile)
-    links = check_finger_links(links)
+    links = check_finger_links(check_link_count(links))  # [2, MAX_LINKS], as the CLI's --links
     auto = method in (None, "auto")
 
     full = {"contact": "full"} if settle_kw.get("contact") == "full" else {}  # every link touches (issue 17)

@@ -2,7 +2,7 @@
 "robust": a clear error naming the parameter, before any work, from the library as from the CLI).
 
 Each case is one that misbehaved: a physical parameter set that ``simulate`` takes and ``compare`` crashed on
-after the settle (AttributeError), ...
+after the settle (AttributeError); more links than the documented maximum, which only the CLI refused.
 """
 
 from __future__ import annotations
@@ -40,3 +40,19 @@ def test_compare_gripper_and_the_records_take_physical_params():
     ra, rb = settled_record(planar, phys), settled_record(planar, phys.dimensionless())
     ra.pop("wall_time_s"), rb.pop("wall_time_s")
     assert ra == rb
+
+
+def test_the_api_bounds_the_links_as_the_cli_does():
+    """``simulate(..., links=1001)`` ran (4.9 s) and ``modes`` too (21 s), while the docs and every command's
+    ``--links`` stop at MAX_LINKS = 1000; MuJoCo's own limit (1023) was all the API checked."""
+    import simgrip
+    from simgrip.compare import simulate
+    from simgrip.gripper import simulate_gripper
+    from simgrip.params import MAX_LINKS
+
+    p = DimensionlessParams()
+    for call in (lambda: simulate("I", p, -5.5, MAX_LINKS + 1),
+                 lambda: simgrip.modes("free", p, -5.5, MAX_LINKS + 1, count=1),
+                 lambda: simulate_gripper("I", p, -5.5, MAX_LINKS + 1, fingers=3, workpiece="cylinder")):
+        with pytest.raises(ValueError, match=f"^links must be at most {MAX_LINKS}"):
+            call()

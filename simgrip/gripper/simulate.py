@@ -13,7 +13,7 @@ import math
 import time
 
 from simgrip.compare import settle_fields
-from simgrip.params import DimensionlessParams, Grip, as_dimensionless
+from simgrip.params import DimensionlessParams, Grip, as_dimensionless, check_link_count
 from simgrip.profiles import as_profile
 
 __all__ = ["gripper_record", "simulate_gripper"]
@@ -38,7 +38,7 @@ def simulate_gripper(grip: str, params: DimensionlessParams, profile, links: int
     from simgrip.sim.fingers import check_finger_links
 
     grip, K, shape = check_gripper(grip, fingers, workpiece)  # checked here, once; handed down as checked values
-    links = check_finger_links(links)  # a Count: the layers below do not check it again
+    links = check_finger_links(check_link_count(links))  # a Count, in [2, MAX_LINKS]: not checked again below
     if not isinstance(profile, (list, tuple)):
         profile = as_profile(profile)
     start = {}

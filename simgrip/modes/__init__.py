@@ -227,7 +227,7 @@ def modes(grip, params, profile, links, *, count: int = 3, fingers: int = 1, met
         The settle or the BVP failed, the workpiece fell; RuntimeError when the rod's eigenproblem is not
         resolved.
     """
-    from simgrip.params import check_grip
+    from simgrip.params import check_grip, check_link_count
     from simgrip.profiles import as_profile
     from simgrip.settle import settle
     from simgrip.sim.scene import build_scene, check_params
@@ -235,6 +235,7 @@ def modes(grip, params, profile, links, *, count: int = 3, fingers: int = 1, met
     grip = check_grip(grip)
     dimless, phys = check_params(params)
     prof = as_profile(profile)
+    links = check_link_count(links)  # [2, MAX_LINKS], as the CLI's --links
     if isinstance(count, bool) or not isinstance(count, (int, np.integer)) or count < 1:
         raise ValueError(f"count must be a positive integer, got {count!r}")
     if contact not in (None, "point", "surface"):
