@@ -56,3 +56,14 @@ def test_the_api_bounds_the_links_as_the_cli_does():
                  lambda: simulate_gripper("I", p, -5.5, MAX_LINKS + 1, fingers=3, workpiece="cylinder")):
         with pytest.raises(ValueError, match=f"^links must be at most {MAX_LINKS}"):
             call()
+
+
+@pytest.mark.parametrize("gravity", [0.5, float("nan"), "False", 1, None])
+def test_the_bvps_gravity_is_a_switch_not_a_truthy_value(gravity):
+    """``solve(..., gravity=0.5)`` solved with full gravity (the value was read as True), while ``solve_chain``
+    takes a factor: a half-weight rod silently got the whole weight.  The BVP's switch now takes a bool only."""
+    import simgrip.reference as R
+
+    with pytest.raises(ValueError, match="^gravity must be True or False"):
+        R.solve("I", DimensionlessParams(), Uniform(-5.5), gravity=gravity)
+    assert R.solve("I", DimensionlessParams(), Uniform(-5.5), gravity=False).success

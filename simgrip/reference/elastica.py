@@ -216,6 +216,8 @@ def checked_problem(grip, params, profile, *, gravity=True, tip_load=(0.0, 0.0),
     t = check_tip_load(tip_load)
     C = _finite("contact_moment", contact_moment)
     gam = check_gamma(gamma, params) if grip == "III" else 1.0
+    if not isinstance(gravity, (bool, np.bool_)):  # 0.5 or NaN read as True (solve_chain takes a factor: not here)
+        raise ValueError(f"gravity must be True or False (the rod's weight on or off), got {gravity!r}")
     return grip, params, grip_problem(grip, params, prof, gravity=bool(gravity), tip_load=t, C=C, gamma=gam)
 
 
