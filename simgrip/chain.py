@@ -36,7 +36,8 @@ import numpy as np
 
 from simgrip.profiles import CurvatureProfile, as_profile
 
-__all__ = ["ChainSprings", "Count", "chain_springs", "springs_of", "MIN_LINKS", "check_links", "link_positions"]
+__all__ = ["ChainSprings", "Count", "chain_springs", "springs_of", "MIN_LINKS", "check_link_count", "check_links",
+           "link_positions"]
 
 #: Fewest links a finger may have (one clamp hinge plus one interior hinge).
 MIN_LINKS = 2
@@ -59,6 +60,19 @@ def check_links(n, name: str = "links") -> int:
     if type(n) is Count:
         return n
     return _parse_count(n, name)
+
+
+def check_link_count(value, name: str = "links") -> Count:
+    """``value`` as a link count in ``[2, MAX_LINKS]`` (:func:`check_links`, then :data:`simgrip.params.MAX_LINKS`);
+    ``ValueError`` naming ``name`` otherwise.  What every command's ``--links`` and the simulation API are checked
+    with (the reference chains take more: :func:`check_links`)."""
+    from simgrip.params import MAX_LINKS
+
+    n = check_links(value, name)
+    if n > MAX_LINKS:
+        raise ValueError(f"{name} must be at most {MAX_LINKS}, got {n!r} (the chain's error at {MAX_LINKS} links is "
+                         f"already below the contact tolerance; see simgrip.params)")
+    return n
 
 
 def _parse_count(n, name: str) -> Count:

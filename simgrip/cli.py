@@ -228,7 +228,7 @@ def _profile(args, grip: str):
 
 def _links(value) -> int:
     """``--links`` as an int in ``[2, MAX_LINKS]`` (:func:`simgrip.params.check_link_count`)."""
-    from simgrip.params import check_link_count
+    from simgrip.chain import check_link_count
 
     return check_link_count(value)
 

@@ -67,6 +67,8 @@ import math
 from dataclasses import dataclass, fields
 from enum import Enum
 
+import numpy as np
+
 __all__ = [
     "PhysicalParams",
     "DimensionlessParams",
@@ -82,7 +84,6 @@ __all__ = [
     "KAPPA_LIMIT",
     "ALPHA_MAX",
     "MAX_LINKS",
-    "check_link_count",
     "as_dimensionless",
 ]
 
@@ -105,17 +106,6 @@ ALPHA_MAX = 100.0
 #: Most links per finger: under MuJoCo's body depth (1023); error (32/n)^2 of n = 32's, below the contact tolerance.
 MAX_LINKS = 1000
 
-
-def check_link_count(value, name: str = "links") -> int:
-    """``value`` as a link count in ``[2, MAX_LINKS]`` (:func:`simgrip.chain.check_links`, then the maximum);
-    ``ValueError`` naming ``name`` otherwise.  What every command's ``--links`` is checked with."""
-    from simgrip.chain import check_links
-
-    n = check_links(value, name)
-    if n > MAX_LINKS:
-        raise ValueError(f"{name} must be at most {MAX_LINKS}, got {n!r} (the chain's error at {MAX_LINKS} links is "
-                         f"already below the contact tolerance; see simgrip.params)")
-    return n
 
 
 class Grip(str, Enum):
@@ -177,11 +167,14 @@ def check_grip_iii_reach(gamma: float, b: float) -> None:
 
 
 def _finite(name: str, value, unit: str | None = None) -> float:
-    """``value`` as a finite float; ValueError naming ``name`` (and its ``unit``, e.g. "radians") otherwise."""
+    """``value`` as a finite float; ValueError naming ``name`` (and its ``unit``, e.g. "radians") otherwise.
+    A string or a bool is refused, not converted (``D="1"`` was 1.0, ``b=True`` 1.0): docs/limits.md."""
+    what = f"a real number ({unit})" if unit else "a real number"
+    if isinstance(value, (str, bytes, bool, np.bool_)):
+        raise ValueError(f"{name} must be {what}, got {value!r}")
     try:
         v = float(value)
     except (TypeError, ValueError):
-        what = f"a real number ({unit})" if unit else "a real number"
         raise ValueError(f"{name} must be {what}, got {value!r}") from None
     if not math.isfinite(v):
         raise ValueError(f"{name} must be finite, got {value!r}")

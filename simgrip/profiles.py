@@ -56,7 +56,8 @@ class CurvatureProfile:
 
     def scaled(self, factor: float) -> "CurvatureProfile":
         """The profile multiplied by ``factor`` (for ramping curvature)."""
-        return UserProfile(lambda s, f=float(factor), p=self: f * p(s), name=f"{factor:g}*{self!r}")
+        f = _finite("factor", factor)
+        return UserProfile(lambda s, f=f, p=self: f * p(s), name=f"{f:g}*{self!r}")
 
 
 @dataclass(frozen=True)
@@ -75,7 +76,7 @@ class Uniform(CurvatureProfile):
         return self.kappa * (np.asarray(b, dtype=float) - np.asarray(a, dtype=float))
 
     def scaled(self, factor):
-        return Uniform(self.kappa * float(factor))
+        return Uniform(self.kappa * _finite("factor", factor))
 
 
 @dataclass(frozen=True)
@@ -121,7 +122,7 @@ class Concentrated(CurvatureProfile):
         return scale * (_special.betainc(k, k, b) - _special.betainc(k, k, a))
 
     def scaled(self, factor):
-        f = float(factor)
+        f = _finite("factor", factor)
         if f >= 0:
             return Concentrated(self.kappa_max * f, self.alpha, self.p)
         return Concentrated(-self.kappa_max * f, self.alpha, -self.p)
@@ -130,8 +131,9 @@ class Concentrated(CurvatureProfile):
 class UserProfile(CurvatureProfile):
     """Any user callable ``f(s_bar) -> kappa_bar``, vectorised over NumPy arrays.
 
-    The callable is checked on a probe grid: it must return finite values of the
-    same shape as its input (a scalar result is broadcast).
+    The callable is checked on a probe grid and on every later evaluation: it must return finite values within
+    ``|kappa_bar| <= KAPPA_LIMIT`` (Uniform's and Concentrated's bound) of the same shape as its input (a scalar
+    result is broadcast).
     """
 
     def __init__(self, func: Callable[[np.ndarray], np.ndarray], name: str | None = None):
@@ -145,7 +147,7 @@ class UserProfile(CurvatureProfile):
     def _eval(self, s):
         try:
             out = np.asarray(self._func(s), dtype=float)
-        except (TypeError, ValueError) as exc:
+        except (TypeError, ValueError, ArithmeticError) as exc:  # ArithmeticError: 1/0 in the user's callable
             raise ValueError(f"profile {self._name!r} failed on an array of s_bar: {exc}") from exc
         if out.shape != np.shape(s):
             if out.ndim == 0:
@@ -156,6 +158,9 @@ class UserProfile(CurvatureProfile):
                 )
         if not np.all(np.isfinite(out)):
             raise ValueError(f"profile {self._name!r} returned non-finite curvature values")
+        if out.size and float(np.max(np.abs(out))) > KAPPA_LIMIT:  # Uniform's and Concentrated's bound, pointwise
+            raise ValueError(f"profile {self._name!r} returned curvature {float(np.max(np.abs(out))):.3g}, beyond the "
+                             f"model's range |kappa_bar| <= {KAPPA_LIMIT:g} (simgrip.params)")
         return out
 
     def __repr__(self):

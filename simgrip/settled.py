@@ -15,7 +15,8 @@ import time
 import numpy as np
 
 from simgrip.contact_report import contact_records, node_records
-from simgrip.params import DimensionlessParams, as_dimensionless, check_grip, check_link_count
+from simgrip.chain import check_link_count
+from simgrip.params import DimensionlessParams, as_dimensionless, check_grip
 from simgrip.profiles import as_profile
 
 __all__ = ["settle_fields", "settled_record", "simulate", "tip_forces", "verdict_fields"]

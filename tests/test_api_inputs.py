@@ -67,3 +67,38 @@ def test_the_bvps_gravity_is_a_switch_not_a_truthy_value(gravity):
     with pytest.raises(ValueError, match="^gravity must be True or False"):
         R.solve("I", DimensionlessParams(), Uniform(-5.5), gravity=gravity)
     assert R.solve("I", DimensionlessParams(), Uniform(-5.5), gravity=False).success
+
+
+@pytest.mark.parametrize("make, name", [
+    (lambda: DimensionlessParams(D="1"), "D"), (lambda: DimensionlessParams(M=False), "M"),
+    (lambda: DimensionlessParams(b=True), "b"), (lambda: PhysicalParams(m=True), "m"),
+    (lambda: Uniform(True), "kappa"), (lambda: Uniform("-5"), "kappa"), (lambda: Uniform(-5).scaled("2"), "factor"),
+])
+def test_a_string_or_a_bool_is_not_a_number(make, name):
+    """``D="1"`` was 1.0, ``b=True`` 1.0, ``Uniform("-5")`` -5: converted where docs/limits.md says they are
+    refused (a NumPy number is still one)."""
+    import numpy as np
+
+    with pytest.raises(ValueError, match=f"^{name} must be a real number"):
+        make()
+    assert DimensionlessParams(D=np.float64(2.0)).D == 2.0 and Uniform(np.float32(-5.0)).kappa == -5.0
+
+
+def test_a_user_profile_keeps_the_models_curvature_range_and_names_its_failures():
+    """A spike of 1e6 between the probe points settled 66 s into a SettleError; a uniform -1000 was accepted and
+    settled into an invalid state; ``1/0`` raised ZeroDivisionError.  Each is now the profile's ValueError, the
+    spike's before any settle (at the chain's rest angles)."""
+    import numpy as np
+
+    from simgrip import UserProfile
+    from simgrip.compare import simulate
+    from simgrip.params import KAPPA_LIMIT
+
+    spike = UserProfile(lambda s: np.where((s > .5) & (s < .55), 1e6, -5.5), name="spike")  # probes miss it
+    with pytest.raises(ValueError, match="^profile 'spike' returned curvature 1e.06, beyond"):
+        simulate("I", DimensionlessParams(), spike, 12)
+    with pytest.raises(ValueError, match=f"beyond the model's range .kappa_bar. <= {KAPPA_LIMIT:g}"):
+        UserProfile(lambda s: -1000.0 * np.ones_like(s))
+    with pytest.raises(ValueError, match="failed on an array of s_bar: division by zero"):
+        UserProfile(lambda s: 1 / 0)
+    assert simulate("I", DimensionlessParams(), UserProfile(lambda s: -KAPPA_LIMIT + 0 * s), 64) is not None

@@ -73,7 +73,7 @@ def make_figures(out_dir, *, which=None, jobs: int | None = None, progress: bool
     list of Path
         The files written, in the order of ``which``.
     """
-    from simgrip.params import check_link_count
+    from simgrip.chain import check_link_count
     from simgrip.parallel.runner import RunnerOptions, run_tasks
     from simgrip.io import check_output_dir, check_output_files_in
 

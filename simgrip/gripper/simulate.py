@@ -13,7 +13,8 @@ import math
 import time
 
 from simgrip.compare import settle_fields
-from simgrip.params import DimensionlessParams, Grip, as_dimensionless, check_link_count
+from simgrip.chain import check_link_count
+from simgrip.params import DimensionlessParams, Grip, as_dimensionless
 from simgrip.profiles import as_profile
 
 __all__ = ["gripper_record", "simulate_gripper"]

@@ -227,7 +227,8 @@ def modes(grip, params, profile, links, *, count: int = 3, fingers: int = 1, met
         The settle or the BVP failed, the workpiece fell; RuntimeError when the rod's eigenproblem is not
         resolved.
     """
-    from simgrip.params import check_grip, check_link_count
+    from simgrip.chain import check_link_count
+    from simgrip.params import check_grip
     from simgrip.profiles import as_profile
     from simgrip.settle import settle
     from simgrip.sim.scene import build_scene, check_params

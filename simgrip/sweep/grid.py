@@ -25,8 +25,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from simgrip.chain import check_links
-from simgrip.params import check_link_count
+from simgrip.chain import check_link_count, check_links
 from simgrip.params import DimensionlessParams, _finite, check_grip
 from simgrip.profiles import Uniform
 
@@ -87,7 +86,13 @@ SEGMENT_POINTS = 32
 
 
 def _number(name: str, what: str, value) -> float:
-    """``value`` as a finite float; ValueError naming the axis and the part (``the value``, ``START``, ...)."""
+    """``value`` (a number, or the command line's text of one) as a finite float; ValueError naming the axis and
+    the part (``the value``, ``START``, ...)."""
+    if isinstance(value, str):  # the CLI's words ('-7', 'nan'): read here; _finite refuses text elsewhere
+        try:
+            value = float(value)
+        except ValueError:
+            pass  # _finite names it
     return _finite(f"{name}: {what}", value)
 
 
