@@ -138,6 +138,10 @@ def _finish(scene: Scene, state: SettledState, tolerance: float, allow_unconverg
     check_tip_contact(scene, state)
     check_friction_cone(scene, state)
     check_valid(scene, state)  # last: the others read the solve's own verdict (simgrip.validity, issue 17)
+    if not state.converged:  # allow_unconverged: the state the caller asked for, said to be one (never silent)
+        state.warnings.append(f"not converged: {what} stopped at static residual {state.residual:.3g} (tolerance "
+                              f"{tolerance:.3g}) after {effort}; held, feasible and the forces are those of an "
+                              f"unfinished settle (allow_unconverged)")
     state.rest = scene.springs.rest.copy()
     return state
 
