@@ -31,7 +31,9 @@ bound ``|m_i - m_j| - h_i - h_j``: a run pair cleared clears each of its pairs' 
 valid as the pair rows would (the pairs of runs that mix compared and not compared link pairs, e.g. adjacent runs of
 one finger, keep their compared pairs' own rows).  ``n = 12``: 65 rows for two fingers instead of 233, 132 for three
 instead of 564; the usual state is cleared there (issue 18, item 5: ``Pick-v1`` checks every step).
-Only what the screen lets through is measured
+A state past the first screen has its hinges between links checked for a half turn or more
+(:func:`simgrip.validity_hinges.folded_hinges`, what the node checks cannot see; then the messages are those and
+``chain_violations``'). Only what the screen lets through is measured
 exactly: first the pairs the bound left open, by their exact
 segment distance (:func:`simgrip.intersection.segment_distances`, what the exact check measures): all of them
 farther than the limit (by the relative ``CLEAR_MARGIN``) and every hinge within ``pi/2`` (adjacent links cannot
@@ -349,6 +351,9 @@ class FingerValidity:
     def _check(self, q: list, data) -> list:
         if self._cap > 0.0 and self._mild(q):
             return []
+        folded = self._folded(q)  # what no node check can see (simgrip.validity_hinges); a mild state has none
+        if folded:
+            return folded + self._violations(self._world(data))
         bound = self._bound(q, data)
         if bound > 0:
             return []
@@ -386,6 +391,17 @@ class FingerValidity:
         if self._near_clear(q, W, i[near], j[near]):
             return []
         return self._violations(W)
+
+    def _folded(self, q: list) -> list:
+        """:func:`simgrip.validity_hinges.folded_hinges`' messages for the hinges between links (each finger's row of
+        ``_jq`` but its clamp hinge): none unless one turned by ``pi`` or more."""
+        for row in self._jq:
+            for a in row[1:]:
+                if not -math.pi < q[a] < math.pi:
+                    from simgrip.validity_hinges import folded_hinges
+
+                    return [m for _, m in folded_hinges([[q[b] for b in r] for r in self._jq])]
+        return []
 
     def _violations(self, W: np.ndarray, batch: bool | None = None) -> list:
         """:func:`~simgrip.validity.chain_violations`' messages for the nodes ``W`` ``(K, n+1, 3)`` [m] (``batch``: its

@@ -3,6 +3,7 @@
 ``FingerValidity`` returns ``[]`` early on three proofs (every link within the screen's cap of its start
 direction; every compared pair's midpoint bound above the limit; every pair the bound left open farther than
 the limit by its exact segment distance) and otherwise the messages of
+:func:`simgrip.validity_hinges.folded_hinges` (a hinge turned by half a turn or more) and
 :func:`simgrip.validity.chain_violations`.  The reference here is ``chain_violations`` on the same nodes with no
 screen at all: over random finger shapes (uniform curvature plus noise, from straight to 1.7 turns, both signs,
 so that crossings, overlaps and fingers through each other all occur) the probe's messages must equal the
@@ -24,7 +25,11 @@ from simgrip.validity import chain_violations
 
 
 def _reference(v, data):
-    """``chain_violations`` on every node, no screen (what the probe must agree with)."""
+    """``chain_violations`` on every node, no screen, after :func:`simgrip.validity_hinges.folded_hinges` on every
+    hinge (what the probe must agree with: the settle's verdict, :func:`simgrip.validity.state_violations`)."""
+    from simgrip.validity_hinges import folded_hinges
+
+    folded = [m for _, m in folded_hinges([[data.qpos[a] for a in row] for row in v._jq])]
     world = v.nodes(data)
     planar = []
     for f, w in enumerate(world):
@@ -33,7 +38,7 @@ def _reference(v, data):
     L = v._length
     found = chain_violations([p / L for p in planar], [w / L for w in world], r_link=v._r / L, r_tip=None,
                              solid=None, base_sines=v._sines)
-    return [m for _, m in found]
+    return folded + [m for _, m in found]
 
 
 @pytest.mark.parametrize("make", [lambda: PickEnv(), lambda: PickMultiEnv(fingers=3)], ids=["pick", "multi3"])
