@@ -46,6 +46,8 @@ def simulate(grip: str, params: DimensionlessParams, profile, links: int, *, pro
     from simgrip.sim.reuse import build_scene  # compiled once per structure, set in place (bit-identical)
 
     grip = check_grip(grip)  # checked here, once, and handed down as checked values (a Grip, a Count)
+    if progress is not None and not callable(progress):  # (1 raised "'int' object is not callable" mid-build)
+        raise ValueError(f"progress must be None or a callable told each phase, got {progress!r}")
     profile = as_profile(profile)
     links = check_finger_links(check_link_count(links))  # [2, MAX_LINKS], as the CLI's --links
     auto = method in (None, "auto")

@@ -103,3 +103,16 @@ def test_an_unconverged_state_asked_for_says_so():
         assert not s.converged
         assert any(w.startswith("not converged: ") and "allow_unconverged" in w for w in s.warnings), s.warnings
     assert simulate("I", DimensionlessParams(), Uniform(-5.5), 12).warnings == []
+
+
+def test_progress_and_the_largest_loads_bound_are_checked_by_name():
+    """``simulate(..., progress=1)`` raised TypeError "'int' object is not callable" inside the build;
+    ``largest_load(..., M_max=1e5)`` searched loads beyond the model's range of M (1e4)."""
+    from simgrip.compare import simulate
+    from simgrip.params import M_MAX
+    from simgrip.reference.capacity import largest_load
+
+    with pytest.raises(ValueError, match="^progress must be None or a callable"):
+        simulate("I", DimensionlessParams(), -5.5, 8, progress=1)
+    with pytest.raises(ValueError, match=f"^M_max must be at most {M_MAX:g}"):
+        largest_load("I", DimensionlessParams(), Uniform(-5.5), M_max=10 * M_MAX)

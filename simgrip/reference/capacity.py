@@ -18,7 +18,7 @@ from typing import Sequence
 
 from scipy.optimize import brentq
 
-from simgrip.params import DimensionlessParams, _positive, check_grip
+from simgrip.params import M_MAX, DimensionlessParams, _positive, check_grip
 from simgrip.profiles import as_profile
 from simgrip.reference.arguments import check_failures, check_tol
 from simgrip.reference.bvp import BvpProblem
@@ -143,7 +143,10 @@ def largest_load(
     grip, params, P = checked_problem(grip, params, profile, gravity=gravity, tip_load=tip_load,
                                       contact_moment=contact_moment, gamma=gamma)
     _grip_only(grip, "max_load")
-    search = _Search(grip, params, P, _positive("M_max", M_max), _positive("xtol", xtol), check_tol(tol))
+    m_top = _positive("M_max", M_max)
+    if m_top > M_MAX:  # the search's loads are M values: none above the model's range (simgrip.params)
+        raise ValueError(f"M_max must be at most {M_MAX:g} (the model's range of M, simgrip.params), got {M_max!r}")
+    search = _Search(grip, params, P, m_top, _positive("xtol", xtol), check_tol(tol))
     return search.run(check_guess(guess), start)
 
 
