@@ -116,3 +116,22 @@ def test_progress_and_the_largest_loads_bound_are_checked_by_name():
         simulate("I", DimensionlessParams(), -5.5, 8, progress=1)
     with pytest.raises(ValueError, match=f"^M_max must be at most {M_MAX:g}"):
         largest_load("I", DimensionlessParams(), Uniform(-5.5), M_max=10 * M_MAX)
+
+
+@pytest.mark.parametrize("call, name", [
+    (lambda s: s("I", DimensionlessParams(), -5.5, 8, allow_unconverged="no"), "allow_unconverged"),
+    (lambda s: s("I", DimensionlessParams(), -5.5, 8, close="no"), "close"),
+])
+def test_a_switch_takes_true_or_false_not_a_truthy_word(call, name):
+    """``allow_unconverged="no"`` allowed an unconverged state ("no" is truthy), ``close="no"`` closed the fingers;
+    ``modes(reference="no")`` solved the reference and ``build_scene(free_workpiece="no")`` built a free box."""
+    import simgrip
+    from simgrip.compare import simulate
+    from simgrip.sim.scene import build_scene
+
+    with pytest.raises(ValueError, match=f"^{name} must be True or False"):
+        call(simulate)
+    with pytest.raises(ValueError, match="^reference must be True or False"):
+        simgrip.modes("I", DimensionlessParams(), -5.5, 8, reference="no")
+    with pytest.raises(ValueError, match="^free_workpiece must be True or False"):
+        build_scene("I", DimensionlessParams(), -5.5, 8, free_workpiece="no")

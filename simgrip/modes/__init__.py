@@ -239,6 +239,8 @@ def modes(grip, params, profile, links, *, count: int = 3, fingers: int = 1, met
     links = check_link_count(links)  # [2, MAX_LINKS], as the CLI's --links
     if isinstance(count, bool) or not isinstance(count, (int, np.integer)) or count < 1:
         raise ValueError(f"count must be a positive integer, got {count!r}")
+    if not isinstance(reference, (bool, np.bool_)):  # "no" is truthy: reference="no" solved the reference
+        raise ValueError(f"reference must be True or False, got {reference!r}")
     if contact not in (None, "point", "surface"):
         # the linearisation sticks the tip (Grips I/II) or the corner (III) and nothing else: a full-contact
         # state's contact set (links on faces, self-contact) is not a constraint it knows

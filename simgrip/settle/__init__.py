@@ -219,6 +219,9 @@ def _settle(
     """
     if method not in ("newton", "dynamics"):
         raise ValueError(f"method must be 'newton' or 'dynamics', got {method!r}")
+    for name, flag in (("close", close), ("allow_unconverged", allow_unconverged), ("sync", sync)):
+        if not isinstance(flag, (bool, np.bool_)):  # "no" is truthy: allow_unconverged="no" allowed it
+            raise ValueError(f"{name} must be True or False, got {flag!r}")
     if isinstance(scene, Scene) and (scene.contact == "full" or contact == "full"):
         return _settle_full(scene, tol, max_steps, warm_start, close, allow_unconverged, contact, sync)
     if contact is None:

@@ -355,6 +355,9 @@ def build_scene(
     n = check_finger_links(n_links)
     if fingers not in (1, 2) or isinstance(fingers, bool):
         raise ValueError(f"fingers must be 1 or 2, got {fingers!r}")
+    for name, flag in (("free_workpiece", free_workpiece), ("render", render)):
+        if not isinstance(flag, (bool, np.bool_)):  # "no" is truthy: free_workpiece="no" built a free one
+            raise ValueError(f"{name} must be True or False, got {flag!r}")
     r_tip = check_positive("r_tip", r_tip, 0.05)
     r_link = check_positive("r_link", r_link, 0.05)
     r_corner = check_positive("r_corner", r_corner, 0.05)
