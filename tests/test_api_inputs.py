@@ -135,3 +135,16 @@ def test_a_switch_takes_true_or_false_not_a_truthy_word(call, name):
         simgrip.modes("I", DimensionlessParams(), -5.5, 8, reference="no")
     with pytest.raises(ValueError, match="^free_workpiece must be True or False"):
         build_scene("I", DimensionlessParams(), -5.5, 8, free_workpiece="no")
+
+
+def test_a_gripper_offset_of_words_or_bools_is_refused():
+    """``offset=("0.01", "0")`` was read as (0.01, 0) by NumPy's conversion; the other gripper numbers refused
+    words already (workpiece_yaw, contact_angle)."""
+    import numpy as np
+
+    from simgrip.gripper.placement import check_offset
+
+    for bad in (("0.01", "0"), (True, 0.0), "12"):
+        with pytest.raises(ValueError, match="^offset must be two real numbers"):
+            check_offset(bad)
+    assert check_offset(np.array([0.01, 0.0])).tolist() == [0.01, 0.0]

@@ -54,6 +54,8 @@ class Placement:
 def check_offset(value) -> np.ndarray:
     """``offset`` as a finite ``(dx, dy)`` over ``l``; ValueError naming ``offset`` otherwise."""
     try:
+        if isinstance(value, (str, bytes)) or any(isinstance(c, (str, bytes, bool, np.bool_)) for c in value):
+            raise TypeError  # ('0.01', '0') was read as numbers; a bool is not one
         v = np.asarray(value, dtype=float)
     except (TypeError, ValueError):
         raise ValueError(f"offset must be two real numbers (dx, dy) over l, got {value!r}") from None
