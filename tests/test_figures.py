@@ -397,3 +397,26 @@ def test_links_and_jobs_are_bounded_as_every_command(tmp_path, capsys, monkeypat
     assert "jobs 64 lowered to 1 (1 task to run)" in capsys.readouterr().err
     assert main(["figures", "--which", "7", "--no-progress", "--out", str(tmp_path)]) == 0
     assert [o.in_process for o in seen] == [True, True]
+
+
+def test_a_failed_overlay_settle_is_said_on_stderr(tmp_path, capsys, monkeypatch):
+    """A settle that failed on Figs. 6-9's overlay was shown only in the legend (``figures --links 5000`` drew a
+    figure of failed settles with nothing on stderr and exit 0); now one line names the figure and the points."""
+    import numpy as np
+
+    from simgrip.figures import make, overlay
+
+    real = overlay.simulation_overlay
+
+    def one_failed(name, links):
+        out = real(name, links=links)
+        out["failed"] = np.array(out["failed"], dtype=bool)
+        out["failed"][0] = True  # as a settle that raised marks its point
+        return out
+
+    monkeypatch.setattr(overlay, "simulation_overlay", one_failed)
+    paths = make.make_figures(tmp_path, which=[7], jobs=1, progress=False, links=8)
+    assert [p.name for p in paths] == ["fig07.png"] and paths[0].is_file()
+    err = capsys.readouterr().err
+    k0 = real("fig07", links=8)["kappa"][0]
+    assert f"simgrip figures: fig07: the settle failed at kappa_bar = {float(k0):g} (8 links" in err, err

@@ -17,7 +17,8 @@ __all__ = ["make_figures", "add_arguments", "cli_figures"]
 
 
 def _render(task: tuple) -> str:
-    """Compute, plot and write one figure: ``task = (name, out_dir, simulate, links)`` (runs in a worker).
+    """Compute, plot and write one figure: ``task = (name, out_dir, simulate, links)`` (runs in a worker); its
+    path, or ``(path, note)`` where an overlay's settle failed (the note for stderr).
 
     With ``simulate``, figures 6-9 get :func:`simgrip.figures.simulation_overlay` (``links`` links).
     The K-finger figures are :func:`simgrip.figures.gripper.make_gripper_figure`'s.
@@ -41,7 +42,12 @@ def _render(task: tuple) -> str:
 
     data = figure_data(name)
     overlay = simulation_overlay(name, links=links) if simulate and name in OVERLAY_FIGURES else None
-    return str(save_figure(plot_figure(name, data, overlay=overlay), Path(out_dir) / f"{name}.png"))
+    path = str(save_figure(plot_figure(name, data, overlay=overlay), Path(out_dir) / f"{name}.png"))
+    failed = [] if overlay is None else [float(k) for k, f in zip(overlay["kappa"], overlay["failed"]) if f]
+    if failed:  # said on stderr too (make_figures), not only in the figure's legend
+        return path, f"{name}: the settle failed at kappa_bar = {', '.join(f'{k:g}' for k in failed)} " \
+                     f"({links} links; drawn as red crosses)"
+    return path
 
 
 def make_figures(out_dir, *, which=None, jobs: int | None = None, progress: bool = True,
@@ -113,7 +119,12 @@ def make_figures(out_dir, *, which=None, jobs: int | None = None, progress: bool
         options = options if jobs == options.jobs else replace(options, jobs=jobs)
     paths = run_tasks(_render, [(k, str(out), bool(simulate), links) for k in order],
                       options=options, desc="figures", batch_size=1)
-    done = dict(zip(order, paths))
+    done = {}
+    for k, got in zip(order, paths):  # a path, or (path, what failed in it)
+        if isinstance(got, tuple):
+            got, why = got
+            print(f"simgrip figures: {why}", file=sys.stderr, flush=True)
+        done[k] = got
     return [Path(done[k]) for k in names]
 
 
