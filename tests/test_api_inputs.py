@@ -148,3 +148,18 @@ def test_a_gripper_offset_of_words_or_bools_is_refused():
         with pytest.raises(ValueError, match="^offset must be two real numbers"):
             check_offset(bad)
     assert check_offset(np.array([0.01, 0.0])).tolist() == [0.01, 0.0]
+
+
+def test_the_reference_helpers_name_a_wrong_argument():
+    """``margin(None)`` raised AttributeError, ``min_eigenvalue`` of a (3, 2) matrix a broadcasting error."""
+    import numpy as np
+
+    import simgrip.reference as R
+
+    with pytest.raises(ValueError, match="^sol must be an ElasticaSolution"):
+        R.margin(None)
+    with pytest.raises(ValueError, match="^hessian must be a finite square matrix"):
+        R.min_eigenvalue(np.ones((3, 2)))
+    with pytest.raises(ValueError, match=r"^constraint_gradient must have shape \(3,\)"):
+        R.min_eigenvalue(np.eye(3), np.ones(2))
+    assert R.min_eigenvalue(np.diag([3.0, 1.0, 2.0])) == 1.0

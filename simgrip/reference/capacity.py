@@ -43,6 +43,9 @@ def margin_terms(sol: ElasticaSolution) -> dict:
     ``"friction"``: ``mu_s n - |f|``; ``"contact"``: ``n``; Grip III also
     ``"tip_clear"``: ``Y(gamma) - Y(1)`` (forces over ``rho g l``, heights over ``l``).
     """
+    if not isinstance(sol, ElasticaSolution):  # (None raised AttributeError 'no attribute params')
+        raise ValueError(f"sol must be an ElasticaSolution (simgrip.reference.solve's answer), got "
+                         f"{type(sol).__name__}")
     terms = {"friction": sol.params.mu_s * sol.normal_force - abs(sol.friction_force),
              "contact": sol.normal_force}
     if sol.grip == "III":

@@ -89,6 +89,11 @@ def min_eigenvalue(hessian: np.ndarray, constraint_gradient: np.ndarray | None =
         (``E`` orthonormal), the paper's number.
     """
     h = np.asarray(hessian, dtype=float)
+    if h.ndim != 2 or h.shape[0] != h.shape[1] or h.shape[0] < 1 or not np.all(np.isfinite(h)):
+        raise ValueError(f"hessian must be a finite square matrix, got shape {h.shape}")
+    if constraint_gradient is not None and np.shape(constraint_gradient) != (h.shape[0],):
+        raise ValueError(f"constraint_gradient must have shape ({h.shape[0]},), the hessian's size, got "
+                         f"{np.shape(constraint_gradient)}")
     r = _weighted(weights, h.shape[0])
     h = r[:, None] * h * r[None, :]
     if constraint_gradient is None:
