@@ -23,7 +23,7 @@ from simgrip.envs.outcome import outcome  # outcomes() counts with it; also impo
 __all__ = ["EpisodeResult", "GAMMA", "add_episode_arguments", "charge", "check_env_id", "critic_warmup_conflict",
            "discount", "env_kwargs", "json_object", "log_std", "log_std_init_conflict",
            "make_env", "outcome", "outcomes", "positive_int", "non_negative_int", "probability", "run_episodes",
-           "summary", "training_files", "training_seed", "episode_count", "MAX_EPISODES", "MAX_TRAINING_SEED"]
+           "summary", "training_conflict", "training_files", "training_seed", "episode_count", "MAX_EPISODES", "MAX_TRAINING_SEED"]
 
 #: the discount of the returns :func:`run_episodes` also reports: Stable-Baselines3's default ``gamma`` (PPO, SAC)
 GAMMA = 0.99
@@ -117,6 +117,24 @@ def critic_warmup_conflict(steps, algos) -> str | None:
     from its first steps; :mod:`simgrip.envs.critic_warmup` freezes an on-policy actor-critic's actor)."""
     if steps and set(algos) != {"ppo"}:
         return "--critic-warmup: PPO only (--algo ppo)"
+    return None
+
+
+def training_conflict(args) -> str | None:
+    """The first reason the parsed options of ``train_sb3.py`` / ``rl_baselines.py`` (both have ``algo``,
+    ``log_std_init``, ``init_from``, ``critic_warmup``, ``crush_charge``, ``crush_charge_from``, ``minutes`` and
+    ``checkpoint_minutes``) cannot go together, or None: :func:`log_std_init_conflict`,
+    :func:`critic_warmup_conflict`, ``--crush-charge-from`` without ``--crush-charge``, a checkpoint period
+    longer than the budget (no checkpoint would be taken).  The options alone decide (nothing is imported)."""
+    algos = args.algo if isinstance(args.algo, (list, tuple)) else [args.algo]
+    why = log_std_init_conflict(args.log_std_init, algos, args.init_from) or \
+        critic_warmup_conflict(args.critic_warmup, algos)
+    if why:
+        return why
+    if args.crush_charge_from and args.crush_charge is None:
+        return "--crush-charge-from: only with --crush-charge"
+    if args.checkpoint_minutes and args.checkpoint_minutes > args.minutes:
+        return "--checkpoint-minutes: larger than --minutes (no checkpoint would be taken)"
     return None
 
 

@@ -493,18 +493,13 @@ def main(argv=None) -> int:
     cores = os.cpu_count() or 1
     if args.jobs > cores:
         p.error(f"--jobs: at most the {cores} cores of this machine, got {args.jobs}")
-    from simgrip.envs.evaluation import critic_warmup_conflict, log_std_init_conflict  # imported when used
+    from simgrip.envs.evaluation import training_conflict  # imported when used
 
-    why = log_std_init_conflict(args.log_std_init, args.algo, args.init_from) or \
-        critic_warmup_conflict(args.critic_warmup, args.algo)  # the options alone decide
+    why = training_conflict(args)  # the options alone decide
     if why:
         p.error(why)
-    if args.crush_charge_from and args.crush_charge is None:
-        p.error("--crush-charge-from: only with --crush-charge")
     if len(set(args.seeds)) != len(args.seeds):
         p.error(f"--seeds: repeated seed in {args.seeds}")
-    if args.checkpoint_minutes and args.checkpoint_minutes > args.minutes:
-        p.error("--checkpoint-minutes: larger than --minutes (no checkpoint would be taken)")
     import importlib.util
 
     if any(importlib.util.find_spec(m) is None for m in ("stable_baselines3", "torch")):  # found, not imported:

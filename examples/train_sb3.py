@@ -124,9 +124,9 @@ if __name__ == "__main__":  # a Ctrl-C while the modules below load: main's one 
 import numpy as np  # noqa: E402
 
 import simgrip.envs  # noqa: E402,F401  (registers the simgrip ids)
-from simgrip.envs.evaluation import (GAMMA, charge, check_env_id, critic_warmup_conflict, discount, json_object, log_std, log_std_init_conflict, make_env, non_negative_int,
+from simgrip.envs.evaluation import (GAMMA, charge, check_env_id, discount, json_object, log_std, make_env, non_negative_int,
                                      episode_count, outcomes, probability, run_episodes, summary,
-                                     training_files, training_seed)
+                                     training_conflict, training_files, training_seed)
 from simgrip.io import atomic_write, check_output_dir, check_output_files_in, write_json
 
 ALGOS = ("ppo", "sac")
@@ -529,19 +529,14 @@ def main(argv=None) -> int:
                    help="with --crush-charge: charge the crushes from this training step on (default 0)")
     p.add_argument("--out", required=True, help="output folder")
     args = p.parse_args(argv)
-    if args.crush_charge_from and args.crush_charge is None:
-        p.error("--crush-charge-from: only with --crush-charge")
+    why = training_conflict(args)  # before the rl extra is looked for
+    if why:
+        p.error(why)
     if len(set(args.algo)) != len(args.algo):
         p.error(f"--algo: repeated algorithm in {args.algo} (each writes the same files)")
-    if args.checkpoint_minutes and args.checkpoint_minutes > args.minutes:
-        p.error("--checkpoint-minutes: larger than --minutes (no checkpoint would be taken)")
     cores = os.cpu_count() or 1
     if args.threads > cores:
         p.error(f"--threads: at most the {cores} cores of this machine (more only share them), got {args.threads}")
-    why = log_std_init_conflict(args.log_std_init, args.algo, args.init_from) or \
-        critic_warmup_conflict(args.critic_warmup, args.algo)  # before the rl extra is looked for
-    if why:
-        p.error(why)
     try:
         import stable_baselines3  # noqa: F401
         import torch
