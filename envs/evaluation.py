@@ -23,20 +23,20 @@ from simgrip.envs.outcome import outcome  # outcomes() counts with it; also impo
 __all__ = ["EpisodeResult", "GAMMA", "add_episode_arguments", "charge", "check_env_id", "critic_warmup_conflict",
            "discount", "env_kwargs", "json_object", "log_std", "log_std_init_conflict",
            "make_env", "outcome", "outcomes", "positive_int", "non_negative_int", "probability", "run_episodes",
-           "summary", "training_conflict", "training_files", "training_seed", "episode_count", "MAX_EPISODES", "MAX_TRAINING_SEED"]
+           "summary", "checkpoint_tag", "training_conflict", "training_files", "training_seed", "episode_count", "MAX_EPISODES", "MAX_TRAINING_SEED"]
 
 #: the discount of the returns :func:`run_episodes` also reports: Stable-Baselines3's default ``gamma`` (PPO, SAC)
 GAMMA = 0.99
 
 
-def _int_at_least(name: str, lo: int, expected: str, doc: str):
-    """An argparse type: an integer ``>= lo``, refused with ``expected`` in the message."""
+def _int_at_least(name: str, lo: int, expected: str, doc: str, hi: int | None = None):
+    """An argparse type: an integer ``>= lo`` (and ``<= hi`` when given), refused with ``expected`` in the message."""
     def parse(text: str) -> int:
         try:
             v = int(text)
         except ValueError:
             raise argparse.ArgumentTypeError(f"expected {expected}, got {text!r}") from None
-        if v < lo:
+        if v < lo or (hi is not None and v > hi):
             raise argparse.ArgumentTypeError(f"expected {expected}, got {text!r}")
         return v
 
@@ -55,28 +55,12 @@ MAX_TRAINING_SEED = 2**32 - 1
 MAX_EPISODES = 100_000
 
 
-def training_seed(text: str) -> int:
-    """argparse type: a training seed, an integer in ``[0, MAX_TRAINING_SEED]``."""
-    try:
-        v = int(text)
-    except ValueError:
-        v = -1
-    if not 0 <= v <= MAX_TRAINING_SEED:
-        raise argparse.ArgumentTypeError(f"expected an integer seed in [0, {MAX_TRAINING_SEED}] (NumPy's seeding, "
-                                         f"which Stable-Baselines3 uses), got {text!r}")
-    return v
-
-
-def episode_count(text: str) -> int:
-    """argparse type: a number of evaluation episodes, an integer in ``[1, MAX_EPISODES]``."""
-    try:
-        v = int(text)
-    except ValueError:
-        v = 0
-    if not 1 <= v <= MAX_EPISODES:
-        raise argparse.ArgumentTypeError(f"expected a number of episodes in [1, {MAX_EPISODES}] (more buys nothing "
-                                         f"a success rate needs), got {text!r}")
-    return v
+training_seed = _int_at_least(
+    "training_seed", 0, f"an integer seed in [0, {MAX_TRAINING_SEED}] (NumPy's seeding, which Stable-Baselines3 uses)",
+    "argparse type: a training seed, an integer in ``[0, MAX_TRAINING_SEED]``.", hi=MAX_TRAINING_SEED)
+episode_count = _int_at_least(
+    "episode_count", 1, f"a number of episodes in [1, {MAX_EPISODES}] (more buys nothing a success rate needs)",
+    "argparse type: a number of evaluation episodes, an integer in ``[1, MAX_EPISODES]``.", hi=MAX_EPISODES)
 
 
 def _number_in(text: str, ok, interval: str) -> float:
@@ -351,6 +335,12 @@ def outcomes(results: list[EpisodeResult], gamma: float = GAMMA) -> dict:
             "mean_discounted_return": float(np.mean([r.discounted for r in results])), "gamma": float(gamma)}
 
 
+def checkpoint_tag(period: float, k: int) -> str:
+    """The name part of ``train_sb3.py``'s ``k``-th checkpoint every ``period`` budget minutes (``"10min"``), in its
+    files ``<algo>_model_<tag>.zip`` and ``<algo>_vecnormalize_<tag>.pkl``."""
+    return f"{period * k:g}min"
+
+
 def training_files(algos, *, minutes: float, checkpoint_minutes: float | None = None,
                    normalize: bool = False) -> list[str]:
     """The names of the files ``examples/train_sb3.py`` writes into its ``--out`` for ``algos``: per algorithm
@@ -362,6 +352,6 @@ def training_files(algos, *, minutes: float, checkpoint_minutes: float | None = 
     kinds = ["curve.csv", "policy.csv", "model.zip", "eval.json"] + (["vecnormalize.pkl"] if normalize else [])
     if checkpoint_minutes:
         for k in range(1, int(minutes / checkpoint_minutes + 1e-9) + 2):
-            tag = f"{checkpoint_minutes * k:g}min"
+            tag = checkpoint_tag(checkpoint_minutes, k)
             kinds += [f"model_{tag}.zip"] + ([f"vecnormalize_{tag}.pkl"] if normalize else [])
     return [f"{a}_{kind}" for a in algos for kind in kinds] + ["curves.png"]

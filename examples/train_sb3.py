@@ -124,7 +124,7 @@ if __name__ == "__main__":  # a Ctrl-C while the modules below load: main's one 
 import numpy as np  # noqa: E402
 
 import simgrip.envs  # noqa: E402,F401  (registers the simgrip ids)
-from simgrip.envs.evaluation import (GAMMA, charge, check_env_id, discount, json_object, log_std, make_env, non_negative_int,
+from simgrip.envs.evaluation import (GAMMA, charge, check_env_id, checkpoint_tag, discount, json_object, log_std, make_env, non_negative_int,
                                      episode_count, outcomes, probability, run_episodes, summary,
                                      training_conflict, training_files, training_seed)
 from simgrip.io import atomic_write, check_output_dir, check_output_files_in, write_json
@@ -305,7 +305,7 @@ def train(algo: str, env_id: str, *, steps: int, minutes: float, seed: int, out:
             now = spent()  # one reading serves the checkpoints and the stop: the last checkpoint is never skipped
             while checkpoint_minutes and now >= 60.0 * checkpoint_minutes * (len(checkpoints) + 1):
                 # the curve so far and the policy, so that a run stopped early can still be evaluated
-                tag = f"{checkpoint_minutes * (len(checkpoints) + 1):g}min"
+                tag = checkpoint_tag(checkpoint_minutes, len(checkpoints) + 1)
                 path = out / f"{algo}_model_{tag}.zip"
                 _save(self.model, path)
                 if normalize:
