@@ -22,7 +22,8 @@ The last screen runs as one matrix product over every pair of links in prealloca
 (:meth:`FingerValidity._bound`: the midpoint bound against the exact path's clearance, with every hinge
 within ``pi/2``): it answers valid only where the steps below would, and it goes straight to
 :func:`~simgrip.validity.chain_violations` only where they would, so it changes no verdict, only the cost
-(issue 18: six numpy calls instead of ~20 and the pair gathers).  Before the pair rows it tries **coarse rows**
+(issue 18: six numpy calls instead of ~20 and the pair gathers; a model whose rows would pass ``BOUND_MAX_ENTRIES``,
+~(K n)^3 / 2 entries, has no screen and goes to the exact path).  Before the pair rows it tries **coarse rows**
 (:func:`_coarse_spans`): the links cut into runs of ``c ~ sqrt(n)`` links, one row per pair of runs whose link pairs
 are all compared.  Every point of a run lies within half its arc of its chord's midpoint ``M`` (from a point at arc
 ``s`` of ``a`` nodes ``A``, ``B``: ``|p - A| <= s``, ``|p - B| <= a - s``), and a link's midpoint ``m`` within half the
@@ -60,7 +61,7 @@ import numpy as np
 from simgrip.intersection import CLEAR_MARGIN, segment_distances
 from simgrip.validity import SELF_LIMIT_FACTOR, chain_violations
 
-__all__ = ["FingerValidity", "FRAGILE_VALIDITY_EVERY", "record_validity"]
+__all__ = ["BOUND_MAX_ENTRIES", "FingerValidity", "FRAGILE_VALIDITY_EVERY", "record_validity"]
 
 #: the fragile envs' check period [control steps]: 25 steps = 0.5 s at 50 Hz (a violation is a configuration the
 #: fingers hold for a while; every terminating step, a success included, is checked regardless)
@@ -72,6 +73,10 @@ _PAIR_CACHE = 256
 #: relative margin of :meth:`FingerValidity._bound_clear`'s thresholds over round-off (~1e-16 of the chain's size)
 _ROUND_OFF = 1e-8
 _HALF_PI = 0.5 * math.pi
+#: the most entries of the screen's pair rows (:meth:`FingerValidity._bound`: one row per compared pair of links, a
+#: column per node, ~(K n)^3 / 2 for K fingers of n links; 2^22 float64 = 32 MiB, held twice): a larger model is
+#: checked by the exact path alone (the same verdicts; two fingers of 1000 links would need ~60 GiB of rows)
+BOUND_MAX_ENTRIES = 1 << 22
 _min = np.minimum.reduce  # ndarray.min without its Python wrapper
 
 
@@ -185,13 +190,23 @@ class FingerValidity:
         if self._skip_one:  # links i and i+2 of one finger: proved apart by the link between them (_near_clear)
             i = np.arange(K * n - 2)
             keep[i, i + 2] &= (i // n) != ((i + 2) // n)
+        self._hinges = [a for row in self._jq for a in row]
+        # the hinges' qpos as one slice where contiguous (the builder's case): _bound reads their min and max
+        h = self._hinges
+        self._hinge_slice = slice(h[0], h[-1] + 1) if h == list(range(h[0], h[0] + len(h))) else None
+        self._views = (None, None, None)  # (data, its xpos rows, its geom_xpos rows): _bind_views
+        bodies, tips = self._bodies, self._tips
+        self._body_cols = (int(bodies.min()), int(bodies.max()) + 1)
+        self._tip_cols = (int(tips.min()), int(tips.max()) + 1)
+        self._nb = self._body_cols[1] - self._body_cols[0]
+        columns = self._nb + self._tip_cols[1] - self._tip_cols[0]
+        if int(np.count_nonzero(keep)) * columns > BOUND_MAX_ENTRIES:  # (K n)^3 / 2 entries: no screen, exact path
+            self._QT = None
+            return
         pi, pj = np.nonzero(keep)
         # twice the midpoint of link k of finger f is node k + node k+1 (nodes: the link bodies' origins in
         # data.xpos, then the tip geom in data.geom_xpos); one row per pair holds S_i - S_j as +-1 entries over
         # the span of bodies and the span of tip geoms, so the pairs' differences are two matrix products
-        bodies, tips = self._bodies, self._tips
-        self._body_cols = (int(bodies.min()), int(bodies.max()) + 1)
-        self._tip_cols = (int(tips.min()), int(tips.max()) + 1)
         # a pair is cleared when its midpoints are farther apart than the exact path's clearance plus both half
         # lengths, the relative _ROUND_OFF above it: the bound and the exact distances are computed in floating
         # point (~1e-16 of the coordinates, metres from the origin at most).  Each row is divided by twice its
@@ -206,20 +221,14 @@ class FingerValidity:
         self._QcT = np.ascontiguousarray(np.hstack([Cb, Ct]).T)
         self._DcT = np.empty((3, self._QcT.shape[1]))
         self._dc2 = np.empty(self._QcT.shape[1])
-        self._nb = self._body_cols[1] - self._body_cols[0]
-        self._P = np.empty((self._nb + self._tip_cols[1] - self._tip_cols[0], 3))
+        self._P = np.empty((columns, 3))
         self._DT = np.empty((3, pi.size))
         # the other way round: midpoints closer than the clearance (by _ROUND_OFF) put the pair's exact distance
         # below it, so the exact path cannot prove the state valid (:meth:`_bound`); same scale as the rows
         self._C = (self._limit * (1.0 + CLEAR_MARGIN) * (1.0 - _ROUND_OFF) / T) ** 2
         self._pair_self = np.where(pi // n == pj // n, pi // n, -1).tolist()  # the finger of a self pair, else -1
-        self._hinges = [a for row in self._jq for a in row]
-        # the hinges' qpos as one slice where contiguous (the builder's case): _bound reads their min and max
-        h = self._hinges
-        self._hinge_slice = slice(h[0], h[-1] + 1) if h == list(range(h[0], h[0] + len(h))) else None
         self._d2 = np.empty(pi.size)
         self._ones = np.ones(3)
-        self._views = (None, None, None)  # (data, its xpos rows, its geom_xpos rows): _bind_views
 
     def _bind_views(self, data) -> tuple:
         """``(data, data.xpos[bodies], data.geom_xpos[tips])``: the views :meth:`_bound` copies the nodes from, kept
@@ -324,6 +333,8 @@ class FingerValidity:
             for a in self._hinges:
                 if not -_HALF_PI < q[a] < _HALF_PI:
                     return 0
+        if self._QT is None:  # a model too large for the screen's rows (BOUND_MAX_ENTRIES): the exact path decides
+            return 0
         if not self._d2.size:  # no pair is ever compared (the exact path answers valid too)
             return 1
         views = self._views

@@ -57,3 +57,32 @@ def test_screen_gives_the_exact_verdict(make):
     assert counts["screened"] > 30 and counts["doomed"] > 30 and counts["passed_over"] > 10 and counts["invalid"] > 10, counts
     assert math.isfinite(float(d.qpos.sum()))
     env.close()
+
+
+def test_a_model_too_large_for_the_screen_goes_to_the_exact_path(monkeypatch):
+    """A model whose pair rows would pass ``BOUND_MAX_ENTRIES`` builds none (two fingers of 1000 links would need
+    ~60 GiB and raised MemoryError at construction) and answers every state by the exact path: the same verdicts
+    and messages as the screened probe of the same model."""
+    import simgrip.envs.pick_validity as pv
+
+    env = PickEnv()
+    screened = env._validity
+    monkeypatch.setattr(pv, "BOUND_MAX_ENTRIES", 100)  # below this model's 233 rows x 26 nodes
+    large = FingerValidity(env.model, env.fingers)
+    assert large._QT is None and screened._QT is not None
+    m, d = env.model, mujoco.MjData(env.model)
+    rng = np.random.default_rng(7)
+    K, n = env.joint_qpos.shape
+    invalid = 0
+    for _ in range(100):
+        mujoco.mj_resetData(m, d)
+        q = rng.uniform(-13.0, 2.0) / n + rng.normal(0.0, 0.15, (K, n))
+        d.qpos[env.joint_qpos.ravel()] = q.ravel()
+        mujoco.mj_kinematics(m, d)
+        ql = d.qpos.tolist()
+        assert large._bound(ql, d) == 0
+        got = large._check(ql, d)
+        assert got == screened._check(ql, d)
+        invalid += bool(got)
+    assert 10 < invalid < 90  # both verdicts occur
+    env.close()
