@@ -564,7 +564,7 @@ class PickEnv(CheckedStep, gym.Env):
         shifted = math.hypot(bx - x0, by - y0) > 0.03
         knocked = up_z < _COS_TILT or shifted
         self._hold = hold = self._hold + dt if gain >= target and both else 0.0
-        success = hold >= hold_time - 1e-9
+        success = hold > 0.0 and hold >= hold_time - 1e-9  # (held this step: hold_time 0 still needs the lift)
         lost = (dropped or knocked) and not success
         phi = progress(gain, target, lost)
         reward, r_lift, r_success, r_squeeze, r_drop = self._reward(phi, self._phi, success, lost, s0, s1)

@@ -484,7 +484,7 @@ class PickMultiEnv(CheckedStep, gym.Env):
         x0, y0 = self._xy0
         knocked = tilted or math.hypot(x - x0, y - y0) > _SHIFT
         self._hold = hold = self._hold + dt if gain >= target and touching >= 2 else 0.0
-        success = hold >= hold_time - 1e-9
+        success = hold > 0.0 and hold >= hold_time - 1e-9  # (held this step: hold_time 0 still needs the lift)
         lost = (dropped or knocked) and not success
         phi = progress(gain, target, lost)
         reward, r_lift, r_success, r_squeeze, r_drop = self._reward(phi, self._phi, success, lost, side)

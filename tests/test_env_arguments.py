@@ -166,3 +166,15 @@ def test_k_finger_draw_ranges_are_checked_at_construction(env_id, kwargs, name):
     raised "M must lie in [0, 10000]" without naming the range (a training run meets it hours in)."""
     with pytest.raises(ValueError, match=rf"^{name}\b"):
         gym.make(env_id, **kwargs)
+
+
+@pytest.mark.parametrize("env_id", ["simgrip/Pick-v1", "simgrip/PickMulti-v0"])
+def test_hold_time_zero_still_needs_the_lift(env_id):
+    """``hold_time = 0`` (allowed: success on the first step at the target) is no success before the lift: it
+    once declared success on the first step, the workpiece still on the table (``hold >= 0 - 1e-9``)."""
+    env = gym.make(env_id, hold_time=0.0)
+    env.reset(seed=3)
+    _, _, terminated, _, info = env.step(np.zeros(env.action_space.shape, np.float32))
+    lift = info["box_lift"] if "box_lift" in info else info["workpiece_lift"]
+    assert not info["is_success"] and not terminated and lift < 0.01
+    env.close()
