@@ -28,13 +28,17 @@ __all__ = ["check_action", "check_bool", "check_camera", "check_int", "check_num
 MAX_PIXELS = 8192
 #: the longest control step ``timestep * frame_skip`` [s]: a pick lasts a few seconds (300 steps of 20 ms)
 MAX_CONTROL_STEP = 1.0
+#: the tip and link radius ``r_tip`` over the finger length, least and most: 1e-4 (0.01 mm on the default 10 cm
+#: finger; at 1e-8 MuJoCo refuses the links' inertia) to 0.5 (a tip as wide as the finger is long)
+MIN_TIP_RADIUS, MAX_TIP_RADIUS = 1e-4, 0.5
 #: the longest settle at reset [s]: the default fingers settle within 2 % in 0.18 s (simgrip.envs.pick)
 MAX_SETTLE_TIME = 10.0
 
 
-def check_range(name, value, lo=-math.inf, hi=math.inf, positive=True, strict=False) -> tuple[float, float]:
+def check_range(name, value, lo=-math.inf, hi=math.inf, positive=True, strict=False, why: str = "") -> tuple[float, float]:
     """``value`` as a finite ``(low, high)`` pair within ``[lo, hi]``: ``low <= high`` (``low < high`` when
-    ``strict``), ``low > 0`` when ``positive``; ValueError naming ``name`` otherwise."""
+    ``strict``), ``low > 0`` when ``positive``; ValueError naming ``name`` (and ``why``, what sets the bounds)
+    otherwise."""
     try:
         a, b = (float(v) for v in value)
     except (TypeError, ValueError):
@@ -45,7 +49,7 @@ def check_range(name, value, lo=-math.inf, hi=math.inf, positive=True, strict=Fa
     if positive and a <= 0:
         raise ValueError(f"{name} must be positive, got {value!r}")
     if a < lo or b > hi:
-        raise ValueError(f"{name} must lie within [{lo}, {hi}], got {value!r}")
+        raise ValueError(f"{name} must lie within [{lo:g}, {hi:g}]{' (' + why + ')' if why else ''}, got {value!r}")
     return (a, b)
 
 
@@ -153,6 +157,9 @@ def set_finger_arguments(env, *, render_mode, n_links, length, EI, rho, g, r_tip
     env.rho = check_positive("rho", rho)
     env.g = check_positive("g", g)
     env.r_tip = check_positive("r_tip", r_tip)
+    lo, hi = MIN_TIP_RADIUS * env.length, MAX_TIP_RADIUS * env.length
+    env.r_tip = check_within("r_tip", r_tip, lo, hi, f"{MIN_TIP_RADIUS:g} to {MAX_TIP_RADIUS:g} times length = "
+                             f"{env.length:g} m")
 
 
 def set_task_arguments(env, *, kappa_range, kappa_tau, palm_speed, palm_range, palm_start, target_height,

@@ -303,7 +303,7 @@ class PickEnv(CheckedStep, gym.Env):
         self.grip = GRIP_ALIASES[grip.strip()]
         set_finger_arguments(self, render_mode=render_mode, n_links=n_links, length=length, EI=EI, rho=rho, g=g,
                              r_tip=r_tip)
-        self.box_width_range = _range("box_width_range", box_width_range, hi=2 * self.length)
+        self.box_width_range = _range("box_width_range", box_width_range, hi=2 * self.length, why="twice length")
         self.box_mass_range = _range("box_mass_range", box_mass_range)
         self.friction_range = _range("friction_range", friction_range)
         if box_height is None:

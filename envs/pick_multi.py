@@ -245,7 +245,7 @@ class PickMultiEnv(CheckedStep, gym.Env):
         self.shared_curvature = _bool("shared_curvature", shared_curvature)
         set_finger_arguments(self, render_mode=render_mode, n_links=n_links, length=length, EI=EI, rho=rho, g=g,
                              r_tip=r_tip)
-        self.size_range = _range("size_range", size_range, hi=1.9 * self.length)
+        self.size_range = _range("size_range", size_range, hi=1.9 * self.length, why="1.9 times length")
         self.mass_range = _range("mass_range", mass_range)
         self.friction_range = _range("friction_range", friction_range)
         self.offset_max = _num("offset_max", offset_max, positive=False)
