@@ -20,7 +20,7 @@ from simgrip.chain import check_links
 from simgrip.params import MAX_LINKS
 
 __all__ = ["check_action", "check_bool", "check_camera", "check_int", "check_number", "check_positive", "check_range",
-           "check_within",
+           "check_size", "check_within",
            "check_reset", "set_finger_arguments", "set_task_arguments"]
 
 
@@ -31,6 +31,8 @@ MAX_CONTROL_STEP = 1.0
 #: the tip and link radius ``r_tip`` over the finger length, least and most: 1e-4 (0.01 mm on the default 10 cm
 #: finger; at 1e-8 MuJoCo refuses the links' inertia) to 0.5 (a tip as wide as the finger is long)
 MIN_TIP_RADIUS, MAX_TIP_RADIUS = 1e-4, 0.5
+#: a workpiece's height or depth at most this many finger lengths (:func:`check_size`)
+MAX_WORKPIECE_SIZE = 10.0
 #: the longest settle at reset [s]: the default fingers settle within 2 % in 0.18 s (simgrip.envs.pick)
 MAX_SETTLE_TIME = 10.0
 
@@ -76,6 +78,16 @@ def check_within(name, value, lo: float, hi: float, why: str = "") -> float:
         v = math.nan
     if not lo <= v <= hi:  # (NaN fails)
         raise ValueError(f"{name} must lie in [{lo:g}, {hi:g}]{' (' + why + ')' if why else ''}, got {value!r}")
+    return v
+
+
+def check_size(name, value, length: float) -> float:
+    """``value`` as a workpiece dimension [m] in ``(0, MAX_WORKPIECE_SIZE * length]`` (``length``: the fingers');
+    ValueError naming ``name`` otherwise (a box 1e9 m deep was knocked over by its first step, unnamed)."""
+    v = check_positive(name, value)
+    if v > MAX_WORKPIECE_SIZE * length:
+        raise ValueError(f"{name} must be at most {MAX_WORKPIECE_SIZE:g} times length = {length:g} m (fingers "
+                         f"that long pick nothing so big), got {value!r}")
     return v
 
 

@@ -26,10 +26,11 @@ import mujoco
 import numpy as np
 from gymnasium import spaces
 
-from simgrip.envs.arguments import check_camera, check_reset, check_within, set_finger_arguments, set_task_arguments
 from simgrip.envs.arguments import check_bool as _bool
+from simgrip.envs.arguments import check_camera, check_reset, check_size, check_within, set_finger_arguments
 from simgrip.envs.arguments import check_positive as _pos
 from simgrip.envs.arguments import check_range as _range
+from simgrip.envs.arguments import set_task_arguments
 from simgrip.envs.pick_contacts import BoxContactForces
 from simgrip.envs.pick_model import build_pick_model, resize_workpiece
 from simgrip.envs.pick_observation import OBS_LAYOUT, PickObservation, obs_layout
@@ -306,10 +307,9 @@ class PickEnv(CheckedStep, gym.Env):
         self.box_width_range = _range("box_width_range", box_width_range, hi=2 * self.length, why="twice length")
         self.box_mass_range = _range("box_mass_range", box_mass_range)
         self.friction_range = _range("friction_range", friction_range)
-        if box_height is None:
-            box_height = 0.06 if self.grip == "I" else 0.035
-        self.box_height = _pos("box_height", box_height)
-        self.box_depth = _pos("box_depth", box_depth)
+        box_height = (0.06 if self.grip == "I" else 0.035) if box_height is None else box_height
+        self.box_height = check_size("box_height", box_height, self.length)
+        self.box_depth = check_size("box_depth", box_depth, self.length)
         self.per_finger = _bool("per_finger", per_finger)
         if palm_start is None:
             palm_start = (0.105, 0.115) if self.grip == "I" else (0.13, 0.14)

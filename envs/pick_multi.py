@@ -19,7 +19,8 @@ import mujoco
 import numpy as np
 from gymnasium import spaces
 
-from simgrip.envs.arguments import check_camera, check_reset, check_within, set_finger_arguments, set_task_arguments
+from simgrip.envs.arguments import check_camera, check_reset, check_size, check_within, set_finger_arguments
+from simgrip.envs.arguments import set_task_arguments
 from simgrip.envs.arguments import check_bool as _bool
 from simgrip.envs.arguments import check_number as _num
 from simgrip.envs.arguments import check_positive as _pos
@@ -252,7 +253,7 @@ class PickMultiEnv(CheckedStep, gym.Env):
         if yaw_range is None:  # a two-finger pinch turns a turned box out of the grip (see the table)
             yaw_range = (0.0, 0.0) if self.K == 2 else (-0.15, 0.15)
         self.yaw_range = _range("yaw_range", yaw_range, lo=-math.pi, hi=math.pi, positive=False)
-        self.workpiece_height = _pos("workpiece_height", workpiece_height)
+        self.workpiece_height = check_size("workpiece_height", workpiece_height, self.length)
         check_draw_ranges(fingers=self.K, length=self.length, EI=self.EI, rho=self.rho, g=self.g,
                           size_range=self.size_range, mass_range=self.mass_range, friction_range=self.friction_range,
                           offset_max=self.offset_max)

@@ -17,7 +17,7 @@ BAD_ARGUMENTS = {
     "EI": [0, float("nan")], "rho": [-1, float("inf")], "g": [0, float("nan")],
     "box_width_range": [(0.05, 0.01), (0.05, float("nan")), 0.05, (0.1, 0.3)],
     "box_mass_range": [(-0.01, 0.02), ("a", "b")], "friction_range": [(0, 1), None],
-    "box_height": [0, float("nan")], "box_depth": [-1, "deep"],
+    "box_height": [0, float("nan"), 1.01], "box_depth": [-1, "deep", 1e9],  # 1e9: knocked over by step 1, unnamed
     "per_finger": ["yes", 1, None],
     "kappa_range": [(0, 0), (1, -1), (float("-inf"), 0)],
     "kappa_tau": [-0.1, float("nan"), "slow"],
