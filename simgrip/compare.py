@@ -19,7 +19,7 @@ import numpy as np
 
 from simgrip.params import DimensionlessParams, as_dimensionless
 from simgrip.profiles import as_profile
-from simgrip.report import difference, elastica_record
+from simgrip.report import difference, elastica_record, reference_validity  # (the last re-exported)
 from simgrip.settled import settle_fields, settled_record, simulate  # re-exported (__all__)
 
 __all__ = ["BRANCH_LINKS", "simulate", "settled_record", "settle_fields", "reference_for", "reference_of", "chain_reference",
@@ -216,23 +216,6 @@ def compare(grip: str, params: DimensionlessParams, profile, links: int, **settl
     ref_warnings = ref_warnings + reference_validity(ref, sol)
     return {"simulation": sim, "reference": ref, "difference": difference(sim, ref),
             "warnings": ref_warnings + verdict_warnings(sim, ref)}
-
-
-def reference_validity(ref: dict, sol) -> list[str]:
-    """Mark the reference record ``valid`` (:func:`simgrip.validity_shapes.reference_violations`); the messages.
-
-    The BVP allows the rod to pass through itself and the workpiece: an impossible reference gets
-    ``valid: False`` and ``feasible: False`` (it holds nothing) and a warning saying why.
-    """
-    from simgrip.validity_shapes import reference_violations
-
-    found = reference_violations(sol)
-    ref["valid"] = not found
-    if not found:
-        return []
-    ref["feasible"] = False
-    return [f"the reference itself crosses itself / enters the workpiece (the BVP allows it): {m}; the reference "
-            f"is reported not feasible" for m in found]
 
 
 def verdict_warnings(sim: dict, ref: dict) -> list[str]:

@@ -20,7 +20,7 @@ import numpy as np
 
 from simgrip.params import DimensionlessParams
 
-__all__ = ["elastica_record", "solve_record", "format_table", "format_comparison", "difference"]
+__all__ = ["elastica_record", "solve_record", "format_table", "format_comparison", "difference", "reference_validity"]
 
 #: Keys printed first, in this order, by :func:`format_table`.
 _ORDER = (
@@ -95,7 +95,27 @@ def solve_record(grip: str, params: DimensionlessParams, profile, *, K: int = 12
         lam = math.nan
     rec = elastica_record(sol, lam)
     rec["wall_time_s"] = wall
+    warnings = reference_validity(rec, sol)  # a rod through itself or the workpiece is no grip (as compare's)
+    if warnings:
+        rec["warnings"] = warnings
     return rec
+
+
+def reference_validity(ref: dict, sol) -> list[str]:
+    """Mark the reference record ``valid`` (:func:`simgrip.validity_shapes.reference_violations`); the messages.
+
+    The BVP allows the rod to pass through itself and the workpiece: an impossible reference gets
+    ``valid: False`` and ``feasible: False`` (it holds nothing) and a warning saying why.
+    """
+    from simgrip.validity_shapes import reference_violations
+
+    found = reference_violations(sol)
+    ref["valid"] = not found
+    if not found:
+        return []
+    ref["feasible"] = False
+    return [f"the reference itself crosses itself / enters the workpiece (the BVP allows it): {m}; the reference "
+            f"is reported not feasible" for m in found]
 
 
 def _fmt(value) -> str:
@@ -112,7 +132,8 @@ def _fmt(value) -> str:
 
 def format_table(record: dict) -> str:
     """A two-column, human-readable table of a record: five significant digits,
-    ``-`` for a missing value (``None``), ``unbounded`` for an infinite one."""
+    ``-`` for a missing value (``None``), ``unbounded`` for an infinite one; its ``warnings`` after it, one
+    ``WARNING:`` line each (as :func:`format_comparison`'s)."""
 
     def cell(v) -> str:
         if v is None:
@@ -123,12 +144,12 @@ def format_table(record: dict) -> str:
             return "[" + ", ".join(cell(x) for x in v) + "]"
         return _fmt(v)
 
-    keys = [k for k in _ORDER if k in record] + [k for k in record if k not in _ORDER and k != "params"]
+    keys = [k for k in _ORDER if k in record] + [k for k in record if k not in _ORDER and k not in ("params", "warnings")]
     width = max(len(k) for k in keys)
     lines = [f"{k:<{width}}  {cell(record[k])}" for k in keys]
     if "params" in record:
         lines.append(f"{'params':<{width}}  " + ", ".join(f"{k}={cell(v)}" for k, v in record["params"].items()))
-    return "\n".join(lines)
+    return "\n".join(lines + [f"WARNING: {w}" for w in record.get("warnings") or []])
 
 
 def format_comparison(result: dict) -> str:

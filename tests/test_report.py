@@ -88,3 +88,25 @@ def test_table_has_five_digits_and_dashes():
     assert "normal_force    6.656\n" in text and "None" not in text
     assert re.search(r"min_eigenvalue\s+-$", text, re.M)
     assert "params          D=1, M=5, b=0.6, mu_s=1, gamma=0.8" in text
+
+
+def test_table_prints_warnings_as_lines_after_it():
+    rec = {"source": "simulation", "grip": "I", "feasible": False, "warnings": ["one thing", "another"]}
+    lines = format_table(rec).splitlines()
+    assert lines[-2:] == ["WARNING: one thing", "WARNING: another"]
+    assert not any(line.startswith("warnings") for line in lines)
+
+
+def test_solve_reports_a_rod_through_itself_as_no_grip():
+    """``simgrip solve``'s record gets the reference's validity as ``compare`` gives it: this BVP branch
+    (kappa_bar -6.5, D 3, M 12, b 0.3, mu 2; found by an audit with its own shooting solver) crosses itself and
+    enters the box, and was printed ``feasible: True`` with no ``valid``."""
+    from simgrip.params import DimensionlessParams
+    from simgrip.profiles import Uniform
+    from simgrip.report import solve_record
+
+    bad = solve_record("I", DimensionlessParams(D=3.0, M=12.0, b=0.3, mu_s=2.0, gamma=0.8), Uniform(-6.5), K=32)
+    assert bad["valid"] is False and bad["feasible"] is False
+    assert any("crosses itself" in w for w in bad["warnings"])
+    good = solve_record("I", DimensionlessParams(D=1.0, M=5.0, b=0.6, mu_s=1.0, gamma=0.8), Uniform(-5.5), K=32)
+    assert good["valid"] is True and good["feasible"] is True and "warnings" not in good
