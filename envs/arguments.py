@@ -177,7 +177,7 @@ def set_finger_arguments(env, *, render_mode, n_links, length, EI, rho, g, r_tip
 def set_task_arguments(env, *, kappa_range, kappa_tau, palm_speed, palm_range, palm_start, target_height,
                        hold_time, w_lift, w_success, w_squeeze, w_drop, squeeze_margin, drop_distance, timestep,
                        frame_skip, settle_time, finger_damping_time, shape_points, spin_friction, impratio,
-                       finger_armature, width, height, camera) -> None:
+                       finger_armature, width, height, camera, palm_ramp=False) -> None:
     """Check the control, task, reward, physics and rendering arguments and set them on ``env``.
 
     Each argument is set under its own name (SI units: ``kappa_range`` is the curvature command's range of
@@ -185,7 +185,8 @@ def set_task_arguments(env, *, kappa_range, kappa_tau, palm_speed, palm_range, p
     ``palm_range``, ``palm_start`` [m], ``palm_start`` within ``palm_range``; ``target_height`` [m];
     ``hold_time``, ``timestep``, ``settle_time``, ``finger_damping_time`` [s]; ``finger_armature`` [kg m^2];
     ``width``, ``height`` [pixels]; ``camera`` a non-empty name, checked against the model by
-    :func:`check_camera`).  Derived: ``env.settle_steps`` (physics steps of ``settle_time``), ``env.dt``
+    :func:`check_camera`; ``palm_ramp`` a bool: the palm's target ramped within a control step,
+    :mod:`simgrip.envs.palm_servo`).  Derived: ``env.settle_steps`` (physics steps of ``settle_time``), ``env.dt``
     (``timestep * frame_skip``, the control step [s]), ``env._lag_alpha`` (the pneumatic lag's exact
     first-order factor over one control step) and ``env.metadata["render_fps"]``.  ValueError naming the first
     bad argument.
@@ -233,6 +234,7 @@ def set_task_arguments(env, *, kappa_range, kappa_tau, palm_speed, palm_range, p
     if not isinstance(camera, str) or not camera:
         raise ValueError(f"camera must be the name of a camera of the model, got {camera!r}")
     env.camera = camera
+    env.palm_ramp = check_bool("palm_ramp", palm_ramp)
     env.dt = env.timestep * env.frame_skip
     env._lag_alpha = 1.0 if env.kappa_tau == 0 else 1.0 - math.exp(-env.dt / env.kappa_tau)
     env.metadata = dict(env.metadata, render_fps=int(round(1.0 / env.dt)))

@@ -31,6 +31,7 @@ from simgrip.envs.arguments import check_camera, check_reset, check_size, check_
 from simgrip.envs.arguments import check_positive as _pos
 from simgrip.envs.arguments import check_range as _range
 from simgrip.envs.arguments import set_task_arguments
+from simgrip.envs.palm_servo import palm_command
 from simgrip.envs.pick_contacts import BoxContactForces
 from simgrip.envs.pick_model import build_pick_model, resize_workpiece
 from simgrip.envs.pick_observation import OBS_LAYOUT, PickObservation, obs_layout
@@ -298,6 +299,7 @@ class PickEnv(CheckedStep, gym.Env):
         width: int = 480,
         height: int = 360,
         camera: str = "front",
+        palm_ramp: bool = False,
     ):
         if not isinstance(grip, str) or grip.strip() not in GRIP_ALIASES:
             raise ValueError(f"grip must be 'I' (pinch) or 'III' (cradle), got {grip!r}")
@@ -322,8 +324,8 @@ class PickEnv(CheckedStep, gym.Env):
             w_success=w_success, w_squeeze=w_squeeze, w_drop=w_drop, squeeze_margin=squeeze_margin,
             drop_distance=drop_distance, timestep=timestep, frame_skip=frame_skip, settle_time=settle_time,
             finger_damping_time=finger_damping_time, shape_points=shape_points, spin_friction=spin_friction,
-            impratio=impratio, finger_armature=finger_armature, width=width, height=height, camera=camera)
-
+            impratio=impratio, finger_armature=finger_armature, width=width, height=height, camera=camera,
+            palm_ramp=palm_ramp)
         self._build()
         check_camera(self.model, self.camera)
         na = 3 if self.per_finger else 2
@@ -358,8 +360,9 @@ class PickEnv(CheckedStep, gym.Env):
                               box_size=(mid_w, self.box_depth, self.box_height), box_mass_max=self.box_mass_range[1],
                               friction=mu0, spin_friction=self.spin_friction, timestep=self.timestep,
                               impratio=self.impratio, damping_time=self.finger_damping_time,
-                              armature=self.finger_armature)
+                              armature=self.finger_armature, palm_ramp=self.palm_ramp, palm_range=self.palm_range)
         self.spec, self.model = pm.spec, pm.model
+        self._palm = palm_command(self, pm.model)
         self.data = mujoco.MjData(self.model)
         self.fingers = pm.fingers
         self._validity = FingerValidity(self.model, pm.fingers)  # info["valid"] (issue 17)
@@ -420,7 +423,6 @@ class PickEnv(CheckedStep, gym.Env):
     def _reset_state(self):
         self._kcmd = (0.0, 0.0)  # commanded curvatures of fingers 0 and 1
         self._kact = (0.0, 0.0)  # actual curvatures (after the lag)
-        self._palm_target = float(self.palm_start[0])
         self._z0 = 0.0
         self._xy0 = (0.0, 0.0)  # the box's starting (x, y)
         self._lifted_rel = None
@@ -467,9 +469,9 @@ class PickEnv(CheckedStep, gym.Env):
         # what step() reads, in one tuple (one attribute lookup); the constants beside it never change
         self._hot = (self.model, d, self._check, self._qpos, self._qvel, self._ctrl, self._tips[0], self._tips[1],
                      self._contact_forces, self._observe, d.warning.number, self._spring_view, self._unit_rest2)
-        self._consts = (self.kappa_range[0], self.kappa_range[1], self.per_finger, self._lag_alpha,
-                        self.palm_range[0], self.palm_range[1], self.palm_speed, self.dt, self.frame_skip,
-                        self.box_qpos, self.palm_qpos, self.target_height, self.hold_time, self.drop_distance)
+        self._consts = (self.kappa_range[0], self.kappa_range[1], self.per_finger, self._lag_alpha, self.dt,
+                        self.frame_skip, self.box_qpos, self.palm_qpos, self.target_height, self.hold_time,
+                        self.drop_distance)
 
     def _get_obs(self, forces, q: list, v: list):
         """The observation (``q``, ``v``: ``data.qpos.tolist()``, ``data.qvel.tolist()``)."""
@@ -497,8 +499,7 @@ class PickEnv(CheckedStep, gym.Env):
         self._reset_state()
         self._set_rest(0.0, 0.0)
         d.qpos[self.palm_qpos] = palm_z
-        self._palm_target = palm_z
-        d.ctrl[0] = palm_z
+        self._palm.reset(d, palm_z)
         d.qpos[self.box_qpos:self.box_qpos + 3] = [0.0, 0.0, self._pedestal_h + 0.5 * self.box_height]
         d.qpos[self.box_qpos + 3:self.box_qpos + 7] = [1.0, 0.0, 0.0, 0.0]
         self._start_shape()  # the fingers' shape before the settle (a subclass's pre-grasp; here straight)
@@ -523,7 +524,7 @@ class PickEnv(CheckedStep, gym.Env):
         # step(action) checked the episode and the action (pick_step.CheckedStep). Every line here runs once per control step beside
         # frame_skip mj_step calls: constants and views are bound once (_bind_views), arrays read as lists (one
         # tolist each) and combined in Python.
-        lo, hi, per_finger, alpha, palm_lo, palm_hi, palm_step, dt, fs, bq, pq, target, hold_time, drop = self._consts
+        lo, hi, per_finger, alpha, dt, fs, bq, pq, target, hold_time, drop = self._consts
         model, data, check, qpos, qvel, ctrl, tip0, tip1, contact_forces, observe, warnings, rest, unit = self._hot
         k0 = lo + 0.5 * (a[0] + 1.0) * (hi - lo)
         k1 = lo + 0.5 * (a[1] + 1.0) * (hi - lo) if per_finger else k0
@@ -536,9 +537,7 @@ class PickEnv(CheckedStep, gym.Env):
             np.multiply(unit, c0, out=rest)
         else:
             self._set_rest(c0, c1)
-        palm = self._palm_target + a[-1] * palm_step * dt  # min(max(., palm_lo), palm_hi), written out
-        self._palm_target = palm = palm_lo if palm_lo > palm else (palm_hi if palm_hi < palm else palm)
-        ctrl[0] = palm
+        self._palm.command(ctrl, a[-1])  # the palm's target, held or ramped over the step (envs.palm_servo)
         warnings.fill(0)  # check.clear()
         mujoco.mj_step(model, data, fs)  # nstep = frame_skip (positional: pybind's keyword parsing costs more)
         q, v = qpos.tolist(), qvel.tolist()

@@ -32,6 +32,7 @@ import mujoco
 import numpy as np
 
 from simgrip.chain import chain_springs
+from simgrip.envs.palm_servo import PALM_KP, add_palm_servo  # noqa: F401  (PALM_KP re-exported)
 from simgrip.models import model_path
 from simgrip.profiles import Uniform
 from simgrip.sim.contacts import add_pair
@@ -44,9 +45,8 @@ __all__ = ["FINGER_PREFIX", "PEDESTAL_HEIGHT", "PickModel", "build_pick_model", 
 FINGER_PREFIX = "hand_"
 #: Height of the cradle grip's pedestal [m] (its half width is 6 mm).
 PEDESTAL_HEIGHT = 0.04
-#: Palm mass [kg] and servo stiffness [N/m].
+#: Palm mass [kg] (its servos' stiffness: PALM_KP, simgrip.envs.palm_servo).
 PALM_MASS = 0.2
-PALM_KP = 4000.0
 #: Contact softness of every pair of the pick scene.
 PICK_SOLREF = (0.005, 1.0)
 PICK_SOLIMP = (0.95, 0.99, 0.001, 0.5, 2.0)
@@ -90,18 +90,20 @@ class PickModel:
 
 def build_pick_model(grip: str, *, n_links: int, length: float, EI: float, rho: float, g: float, r_tip: float,
                      box_size, box_mass_max: float, friction: float, spin_friction: float, timestep: float,
-                     impratio: float, damping_time: float, armature: float) -> PickModel:
+                     impratio: float, damping_time: float, armature: float, palm_ramp: bool = False,
+                     palm_range=(-math.inf, math.inf)) -> PickModel:
     """Build and compile the pick scene of ``grip`` (``"I"`` or ``"III"``); SI units.
 
     ``box_size`` is the box's initial full size ``(x, y, z)`` [m] (the
     environment resizes it per episode); ``box_mass_max`` [kg] sizes the palm
     servo's damping (critical with the heaviest box); ``friction`` is the
     initial finger-box friction.  ``damping_time`` [s] and ``armature``
-    [kg m^2] go to every finger hinge.
+    [kg m^2] go to every finger hinge; ``palm_ramp``, ``palm_range``: :func:`hand_spec`'s.
     """
     n = check_finger_links(n_links, parent_depth=1, name="n_links")
     spec = hand_spec(fingers=2, n=n, length=length, EI=EI, rho=rho, g=g, r_tip=r_tip, mass_max=box_mass_max,
-                     timestep=timestep, impratio=impratio, damping_time=damping_time, armature=armature)
+                     timestep=timestep, impratio=impratio, damping_time=damping_time, armature=armature,
+                     palm_ramp=palm_ramp, palm_range=palm_range)
     hx, hy, hz = (0.5 * float(v) for v in box_size)
     spec.geom("box").size = [hx, hy, hz]
     pedestal = PEDESTAL_HEIGHT if grip == "III" else 0.0
@@ -128,12 +130,13 @@ def build_pick_model(grip: str, *, n_links: int, length: float, EI: float, rho: 
 
 def hand_spec(*, fingers: int, n: int, length: float, EI: float, rho: float, g: float, r_tip: float,
               mass_max: float, timestep: float, impratio: float, damping_time: float, armature: float,
-              keep_box: bool = True) -> mujoco.MjSpec:
+              keep_box: bool = True, palm_ramp: bool = False, palm_range=(-math.inf, math.inf)) -> mujoco.MjSpec:
     """``models/pick_scene.xml`` with its options (``timestep`` [s], ``impratio``, gravity ``g`` [m/s^2]), the
     palm's slide and servo (critically damped for the palm, the fingers and a workpiece of ``mass_max`` [kg]) and
     ``fingers`` straight fingers of ``n`` links under the palm (:func:`simgrip.sim.fingers.add_fingers`: link
     and tip radius ``r_tip`` [m], hinge ``damping_time`` [s] and ``armature`` [kg m^2]); without the scene's
-    box unless ``keep_box``."""
+    box unless ``keep_box``; ``palm_ramp``: the palm's target ramped within a control step, kept in ``palm_range``
+    [m] (:mod:`simgrip.envs.palm_servo`)."""
     spec = mujoco.MjSpec.from_file(str(model_path("pick_scene.xml")))
     spec.option.timestep = timestep
     spec.option.impratio = impratio
@@ -141,7 +144,7 @@ def hand_spec(*, fingers: int, n: int, length: float, EI: float, rho: float, g: 
     if not keep_box:
         spec.delete(spec.body("box"))
     palm = spec.body("palm")
-    _add_palm_servo(spec, palm, PALM_MASS + fingers * rho * length + mass_max)
+    _add_palm_slide(spec, palm, PALM_MASS + fingers * rho * length + mass_max, palm_ramp, palm_range)
     add_fingers(spec, palm, chain_springs(Uniform(0.0), n), fingers=fingers, length=length, EI=EI, rho=rho,
                 r_link=r_tip, r_tip=r_tip, damping_time=damping_time, armature=armature, prefix=FINGER_PREFIX)
     return spec
@@ -175,15 +178,15 @@ def resize_workpiece(model: mujoco.MjModel, data: mujoco.MjData, *, shape: str, 
     mujoco.mj_setConst(model, data)
 
 
-def _add_palm_servo(spec, palm, moving_mass: float) -> None:
-    """The palm's vertical slide ``palm_z`` and the servo ``palm_servo`` (critically damped for ``moving_mass`` [kg])."""
+def _add_palm_slide(spec, palm, moving_mass: float, ramp: bool, z_range) -> None:
+    """The palm's vertical slide ``palm_z`` and the servo ``palm_servo`` (critically damped for ``moving_mass`` [kg];
+    ``ramp``: its target ramped within a control step, kept in ``z_range`` [m], :mod:`simgrip.envs.palm_servo`)."""
     palm.gravcomp = 1.0
     palm.add_joint(name="palm_z", type=mujoco.mjtJoint.mjJNT_SLIDE, axis=[0, 0, 1])
     palm.explicitinertial = True
     palm.mass = PALM_MASS
     palm.inertia = [1e-4, 1e-4, 1e-4]
-    servo = spec.add_actuator(name="palm_servo", target="palm_z", trntype=mujoco.mjtTrn.mjTRN_JOINT)
-    servo.set_to_position(kp=PALM_KP, kv=2.0 * math.sqrt(PALM_KP * moving_mass))
+    add_palm_servo(spec, "palm_servo", "palm_z", moving_mass, ramp=ramp, lo=z_range[0], hi=z_range[1])
 
 
 def _add_pairs(spec, n: int, mu: float, spin: float, pedestal: bool) -> list[str]:

@@ -21,6 +21,7 @@ from gymnasium import spaces
 
 from simgrip.envs.arguments import check_camera, check_reset, check_size, check_within, set_finger_arguments
 from simgrip.envs.arguments import set_task_arguments
+from simgrip.envs.palm_servo import palm_command
 from simgrip.envs.arguments import check_bool as _bool
 from simgrip.envs.arguments import check_number as _num
 from simgrip.envs.arguments import check_positive as _pos
@@ -227,6 +228,7 @@ class PickMultiEnv(CheckedStep, gym.Env):
         width: int = 480,
         height: int = 360,
         camera: str = "gripper",
+        palm_ramp: bool = False,
     ):
         _, self.K, _ = check_gripper("I", fingers, "cylinder")
         if shapes is None:
@@ -267,8 +269,8 @@ class PickMultiEnv(CheckedStep, gym.Env):
             w_success=w_success, w_squeeze=w_squeeze, w_drop=w_drop, squeeze_margin=squeeze_margin,
             drop_distance=drop_distance, timestep=timestep, frame_skip=frame_skip, settle_time=settle_time,
             finger_damping_time=finger_damping_time, shape_points=shape_points, spin_friction=spin_friction,
-            impratio=impratio, finger_armature=finger_armature, width=width, height=height, camera=camera)
-
+            impratio=impratio, finger_armature=finger_armature, width=width, height=height, camera=camera,
+            palm_ramp=palm_ramp)
         self._build()
         check_camera(self.model, self.camera)
         nk = 1 if self.shared_curvature else self.K
@@ -280,9 +282,8 @@ class PickMultiEnv(CheckedStep, gym.Env):
         self.obs_layout, self.obs_slices = self._observe.layout, self._observe.slices
         self._renderers = {}
         # the constants step reads, in one tuple (read once, at construction)
-        self._consts = (self.kappa_range[0], self.kappa_range[1], self._lag_alpha, self.palm_range[0],
-                        self.palm_range[1], self.palm_speed, self.dt, self.frame_skip, self.work_qpos, self.palm_qpos,
-                        self.target_height, self.hold_time, self.drop_distance)
+        self._consts = (self.kappa_range[0], self.kappa_range[1], self._lag_alpha, self.dt, self.frame_skip,
+                        self.work_qpos, self.palm_qpos, self.target_height, self.hold_time, self.drop_distance)
         self._reset_state()
 
     # ------------------------------------------------------------------ model
@@ -292,7 +293,8 @@ class PickMultiEnv(CheckedStep, gym.Env):
                   r_tip=self.r_tip, width=float(np.mean(self.size_range)), height=self.workpiece_height,
                   mass_max=self.mass_range[1], friction=float(np.mean(self.friction_range)),
                   spin_friction=self.spin_friction, timestep=self.timestep, impratio=self.impratio,
-                  damping_time=self.finger_damping_time, armature=self.finger_armature)
+                  damping_time=self.finger_damping_time, armature=self.finger_armature, palm_ramp=self.palm_ramp,
+                  palm_range=self.palm_range)
         self._models = {s: build_pick_multi_model(s, **kw) for s in self.shapes}
         self._datas = {s: mujoco.MjData(pm.model) for s, pm in self._models.items()}
         pm = self._models[self.shapes[0]]
@@ -306,6 +308,7 @@ class PickMultiEnv(CheckedStep, gym.Env):
         self._validity = FingerValidity(pm.model, pm.fingers)  # info["valid"] (issue 17; same addresses every shape)
         self.azimuths = pm.azimuths
         self.palm_qpos, self.palm_dof = pm.palm_qpos, pm.palm_dof
+        self._palm = palm_command(self, pm.model)  # (the same actuator in every shape's model)
         self.work_qpos, self.work_dof = pm.work_qpos, pm.work_dof
         self._hinges = pm.fingers.hinge_qpos
         # W of the tactile observation log(1 + F/W) [N]: the mean weight, or a subclass's sensor scale
@@ -358,7 +361,6 @@ class PickMultiEnv(CheckedStep, gym.Env):
         nk = 1 if self.shared_curvature else self.K
         self._kcmd = [0.0] * nk  # commanded curvatures (Python floats: the step's arithmetic, that of numpy)
         self._kact = [0.0] * nk  # actual curvatures (after the lag)
-        self._palm_target = float(self.palm_start[0])
         self._z0 = 0.0
         self._xy0 = (0.0, 0.0)
         self._lifted_rel = None
@@ -417,8 +419,7 @@ class PickMultiEnv(CheckedStep, gym.Env):
         self._reset_state()  # (after self.workpiece: the episode's reward constants)
         self._set_kappa(self._kact)
         d.qpos[self.palm_qpos] = palm_z
-        self._palm_target = palm_z
-        d.ctrl[0] = palm_z
+        self._palm.reset(d, palm_z)
         wq = self.work_qpos
         d.qpos[wq:wq + 3] = [offset[0], offset[1], half_height(shape, size)]
         d.qpos[wq + 3:wq + 7] = [math.cos(0.5 * yaw), 0.0, 0.0, math.sin(0.5 * yaw)]
@@ -439,7 +440,7 @@ class PickMultiEnv(CheckedStep, gym.Env):
         # mj_step calls: the constants bound once (_consts) and the views per model (_select, _hot), the state read
         # as lists once, the reward's constants bound per episode (MultiReward), the arithmetic that of
         # multi_reward and MultiObservation (min / max written out as comparisons, the same values)
-        lo, hi, alpha, palm_lo, palm_hi, palm_step, dt, fs, wq, pq, target, hold_time, drop = self._consts
+        lo, hi, alpha, dt, fs, wq, pq, target, hold_time, drop = self._consts
         m, d, check, qpos, qvel, ctrl, warnings = self._hot
         # pneumatic lag: exact first-order response over one control step, rest angles held within it
         if len(a) == 2:  # one shared command (the default): the comprehensions below, written out
@@ -455,9 +456,7 @@ class PickMultiEnv(CheckedStep, gym.Env):
                 np.multiply(self._unit_rest, kap[0], out=self._spring)
             else:
                 self._set_kappa(kap)
-        palm = self._palm_target + a[-1] * palm_step * dt  # min(max(., palm_lo), palm_hi), written out
-        self._palm_target = palm = palm_lo if palm_lo > palm else (palm_hi if palm_hi < palm else palm)
-        ctrl[0] = palm
+        self._palm.command(ctrl, a[-1])  # the palm's target, held or ramped over the step (envs.palm_servo)
         warnings.fill(0)  # check.clear()
         mujoco.mj_step(m, d, fs)  # nstep (positional: pybind's keyword parsing costs more)
         q, v = qpos.tolist(), qvel.tolist()

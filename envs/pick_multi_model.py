@@ -27,6 +27,7 @@ the fingers) and resizes the workpiece per episode (:func:`set_workpiece`).
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass
 
 import mujoco
@@ -102,20 +103,21 @@ def half_height(shape: str, size) -> float:
 def build_pick_multi_model(shape: str, *, fingers: int, n_links: int, length: float, EI: float, rho: float,
                            g: float, r_tip: float, width: float, height: float, mass_max: float, friction: float,
                            spin_friction: float, timestep: float, impratio: float, damping_time: float,
-                           armature: float) -> PickMultiModel:
+                           armature: float, palm_ramp: bool = False, palm_range=(-math.inf, math.inf)
+                           ) -> PickMultiModel:
     """Build and compile the K-finger pick scene with a workpiece of ``shape`` (SI units).
 
     ``width``, ``height`` [m] size the workpiece initially (the environment
     resizes it per episode); ``mass_max`` [kg] sizes the palm servo's damping
     (critical with the heaviest workpiece); ``friction`` is the initial
     finger-workpiece friction; ``damping_time`` [s] and ``armature`` [kg m^2]
-    go to every finger hinge.
+    go to every finger hinge; ``palm_ramp``, ``palm_range``: :func:`~simgrip.envs.pick_model.hand_spec`'s.
     """
     n = check_finger_links(n_links, parent_depth=1, name="n_links")
     K = int(fingers)
     spec = hand_spec(fingers=K, n=n, length=length, EI=EI, rho=rho, g=g, r_tip=r_tip, mass_max=mass_max,
                      timestep=timestep, impratio=impratio, damping_time=damping_time, armature=armature,
-                     keep_box=False)
+                     keep_box=False, palm_ramp=palm_ramp, palm_range=palm_range)
     azimuths = finger_azimuths(K)
     orient_fingers(spec, azimuths, FINGER_PREFIX)
     size = workpiece_size(shape, width, height)

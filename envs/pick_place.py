@@ -46,7 +46,8 @@ from simgrip.envs.arguments import check_positive as _pos
 from simgrip.envs.arguments import check_range as _range
 from simgrip.envs.pick_contacts import BoxContactForces
 from simgrip.envs.pick_fragile import FragilePickEnv
-from simgrip.envs.pick_model import PALM_KP, PALM_MASS
+from simgrip.envs.palm_servo import add_palm_servo, palm_command
+from simgrip.envs.pick_model import PALM_MASS
 from simgrip.envs.pick_validity import FingerValidity
 from simgrip.sim.fingers import index_fingers
 
@@ -101,10 +102,11 @@ class FragilePlaceEnv(FragilePickEnv):
         palm = spec.body("palm")
         palm.add_joint(name="palm_x", type=mujoco.mjtJoint.mjJNT_SLIDE, axis=[1, 0, 0])
         moving = PALM_MASS + 2 * self.rho * self.length + self.box_mass_range[1]
-        servo = spec.add_actuator(name="palm_x_servo", target="palm_x", trntype=mujoco.mjtTrn.mjTRN_JOINT)
-        servo.set_to_position(kp=PALM_KP, kv=2.0 * math.sqrt(PALM_KP * moving))
+        add_palm_servo(spec, "palm_x_servo", "palm_x", moving, ramp=self.palm_ramp, lo=-self.x_range, hi=self.x_range)
         model = spec.compile()
         self.model, self.data = model, mujoco.MjData(model)
+        self._palm = palm_command(self, model)
+        self._palm_x = palm_command(self, model, 1, -self.x_range, self.x_range)
 
         def joint(name):
             return mujoco.mj_name2id(model, mujoco.mjtObj.mjOBJ_JOINT, name)
@@ -122,7 +124,6 @@ class FragilePlaceEnv(FragilePickEnv):
 
     # ------------------------------------------------------------------ episode
     def _place_state(self, x0: float):
-        self._palm_x_target = 0.0
         self._x0 = x0
         self._carried = False
         self._place_hold = 0.0
@@ -154,15 +155,14 @@ class FragilePlaceEnv(FragilePickEnv):
         side = 1.0 if rng.uniform() < 0.5 else -1.0
         self.target_x = side * float(rng.uniform(*self.target_range)) if target is None else target
         self._place_state(float(self.data.qpos[self.box_qpos]))
+        self._palm_x.reset(self.data, 0.0)  # (held at x = 0 through the settle: the servo's target and ctrl at 0)
         self._dxy = (self._xy0[0], self._xy0[1])  # the box's start relative to the palm (palm at x = 0)
         info["target_x"] = self.target_x
         return self._extend(obs), info
 
     def _step_checked(self, a: list):
         d = self.data
-        self._palm_x_target = min(max(self._palm_x_target + a[1] * self.palm_speed * self.dt, -self.x_range),
-                                  self.x_range)
-        d.ctrl[1] = self._palm_x_target
+        self._palm_x.command(d.ctrl, a[1])  # held or ramped, as the vertical slide (envs.palm_servo)
         if not self._needs_reset:  # the knock-over rule's "pushed 3 cm" follows the palm
             self._xy0 = (float(d.qpos[self._palm_x_qpos]) + self._dxy[0], self._dxy[1])
         obs, reward, terminated, truncated, info = super()._step_checked(a)

@@ -32,7 +32,7 @@ BAD_ARGUMENTS = {
     # r_tip 1e-9 failed in MuJoCo's compiler ("mass and inertia of moving bodies"), not naming it
     "shape_points": [1, 3.5, float("nan"), 1001, 1e12], "r_tip": [0, float("nan"), 1e-9, 1.0], "spin_friction": [-1, float("nan")],
     "impratio": [0, float("nan")], "finger_armature": [-1, float("nan")],
-    "width": [0, 10.5, float("nan"), 8193, 1e12], "height": [-1, "tall", 1e12], "camera": ["nope", 3, ""],
+    "width": [0, 10.5, float("nan"), 8193, 1e12], "height": [-1, "tall", 1e12], "camera": ["nope", 3, ""], "palm_ramp": ["yes", 1, None],
 }
 
 

@@ -178,7 +178,7 @@ def test_reset_restores_rest_angles_control_and_warmstart():
     np.testing.assert_array_equal(d.ctrl, ctrl0)
     np.testing.assert_array_equal(d.qpos, qpos0)
     np.testing.assert_array_equal(d.qacc_warmstart, warm0)  # solver warm start
-    assert env._palm_target == ctrl0[0] and env._hold == 0.0 and env._lifted_rel is None
+    assert env._palm.target == ctrl0[0] and env._hold == 0.0 and env._lifted_rel is None
     assert np.all(env._kappa == 0) and np.all(env._kappa_cmd == 0)
     env.close()
 
