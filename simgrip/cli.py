@@ -478,8 +478,9 @@ COMMANDS = {
 }
 
 
-#: Commands that do not import MuJoCo up front: solve needs none; render chooses its GL backend first (named error).
-_NO_MUJOCO_IMPORT = ("solve", "render")
+#: Commands that do not import MuJoCo up front: render chooses its GL backend first (named error).  (solve imports it
+#: too: its validity check builds the simulation's solids, :func:`simgrip.report.reference_validity`.)
+_NO_MUJOCO_IMPORT = ("render",)
 
 
 def _signals_as_interrupt(on_stuck=None):

@@ -83,12 +83,14 @@ def test_commands_that_do_not_render_ignore_a_broken_mujoco_gl(tmp_path):
     value = "bogus"
     env = {k: v for k, v in os.environ.items() if k not in ("PYOPENGL_PLATFORM",)}
     env["MUJOCO_GL"] = value
-    proc = subprocess.run([sys.executable, "-m", "simgrip.cli", "simulate", "I", "--kappa", "-6", "--links", "8",
-                           "--json"], env=env, capture_output=True, text=True, timeout=120, cwd=tmp_path)
-    assert proc.returncode == 0, proc.stderr
-    assert json.loads(proc.stdout)["grip"] == "I"
-    assert proc.stderr.strip().splitlines() == [
-        next(ln for ln in proc.stderr.splitlines() if ln.startswith(f"simgrip: warning: MUJOCO_GL={value} cannot be loaded"))]
+    for args in (["simulate", "I", "--kappa", "-6", "--links", "8"], ["solve", "I", "--kappa", "-6"]):
+        # (solve too: its validity check builds the simulation's solids, and once died here with a traceback)
+        proc = subprocess.run([sys.executable, "-m", "simgrip.cli", *args, "--json"], env=env, capture_output=True,
+                              text=True, timeout=120, cwd=tmp_path)
+        assert proc.returncode == 0, proc.stderr
+        assert json.loads(proc.stdout)["grip"] == "I"
+        assert proc.stderr.strip().splitlines() == [next(
+            ln for ln in proc.stderr.splitlines() if ln.startswith(f"simgrip: warning: MUJOCO_GL={value} cannot be loaded"))]
     proc = subprocess.run([sys.executable, "-m", "simgrip.cli", "render", "--png", "g.png", "--gif", "p.gif"],
                           env=env, capture_output=True, text=True, timeout=120, cwd=tmp_path)
     assert proc.returncode == 1 and "Traceback" not in proc.stderr
