@@ -143,14 +143,17 @@ def add_episode_arguments(parser: argparse.ArgumentParser, *, episodes: int = 20
 
 
 def check_env_id(parser: argparse.ArgumentParser, env_id: str, *, retired: bool = False) -> None:
-    """Exit 2 naming ``--env`` when ``env_id`` is not registered (with ``retired=True``: nor a retired simgrip id
-    of ``simgrip.envs.RETIRED``, which :func:`make_env` builds)."""
+    """Exit 2 naming ``--env`` when ``env_id`` is not a registered simgrip pick env (with ``retired=True``: nor a
+    retired simgrip id of ``simgrip.envs.RETIRED``, which :func:`make_env` builds): another library's env
+    (``CartPole-v1``) has no ``is_success`` and no pick policy, and failed mid-run."""
     import gymnasium as gym
 
     from simgrip.envs import RETIRED
 
     if env_id not in gym.registry and not (retired and env_id in RETIRED):
         parser.error(f"--env: unknown id {env_id!r}")
+    if not env_id.startswith("simgrip/"):
+        parser.error(f"--env: {env_id!r} is not a simgrip env (simgrip/...: the scripts read its pick info keys)")
 
 
 def make_env(env_id: str, env_kwargs: dict | None = None, action_offset=None, frame_stack: int | None = None,
@@ -244,8 +247,10 @@ def env_kwargs(parser: argparse.ArgumentParser, args: argparse.Namespace) -> dic
 
     if args.env not in MULTI_ENV_IDS:
         parser.error(f"--fingers: {args.env} has two fingers; the finger count is chosen for {', '.join(MULTI_ENV_IDS)}")
-    if args.fingers < 2:
-        parser.error(f"--fingers: at least 2, got {args.fingers}")
+    from simgrip.gripper.scene import MAX_FINGERS
+
+    if not 2 <= args.fingers <= MAX_FINGERS:
+        parser.error(f"--fingers: 2 to {MAX_FINGERS}, got {args.fingers}")
     return {"fingers": args.fingers}
 
 

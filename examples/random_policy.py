@@ -12,10 +12,12 @@ line per episode and a summary, or with ``--json`` only one JSON object:
 
 import argparse
 import json
+import sys
 
 import gymnasium as gym
 
 import simgrip.envs  # noqa: F401  (registers the simgrip ids)
+from simgrip.interrupt import run_main
 from simgrip.envs.evaluation import add_episode_arguments, check_env_id, env_kwargs, run_episodes, summary
 
 
@@ -45,4 +47,4 @@ def main(argv=None):
 
 
 if __name__ == "__main__":
-    main()
+    sys.exit(run_main(main, "random_policy"))

@@ -21,10 +21,12 @@ object: ``{"episodes", "success_rate", "mean_return"}``.
 
 import argparse
 import json
+import sys
 
 import gymnasium as gym
 
 import simgrip.envs  # noqa: F401  (registers the simgrip ids)
+from simgrip.interrupt import run_main
 from simgrip.envs.evaluation import add_episode_arguments, check_env_id, env_kwargs, run_episodes, summary
 from simgrip.envs.pick_multi import PickMultiEnv
 from simgrip.envs.scripted import ObservationPickPolicy, ScriptedPickPolicy
@@ -83,4 +85,4 @@ def main(argv=None):
 
 
 if __name__ == "__main__":
-    main()
+    sys.exit(run_main(main, "scripted_pick"))

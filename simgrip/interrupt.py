@@ -37,6 +37,7 @@ import contextlib
 import os
 import signal
 import socket
+import sys
 import threading
 from pathlib import Path
 from typing import Callable
@@ -204,13 +205,19 @@ def run_main(main: Callable, prefix: str, argv=None) -> int:
 
     An interrupt, whatever it became on its way up (an import cut short raises ``ImportError``), ends as the
     one line ``{prefix}: interrupted`` on stderr and status 130, without a traceback; a second signal during
-    that is ignored.  Any other exception propagates.  A status that is not an int (a ``main`` that returns
-    its results) counts as 0.  For commands whose children stop with them (none, or their own clean-up in
-    ``main``); the ``simgrip`` command has its own, with a watchdog (:func:`simgrip.cli.main`).
+    that is ignored.  Output piped into a reader that stopped (``| head``) ends quietly with status 0 (stdout
+    pointed at ``/dev/null``, so that the interpreter's last flush stays quiet).  Any other exception
+    propagates.  A status that is not an int (a ``main`` that returns its results) counts as 0.  For commands
+    whose children stop with them (none, or their own clean-up in ``main``); the ``simgrip`` command has its
+    own, with a watchdog (:func:`simgrip.cli.main`).
     """
     with signals_as_interrupt() as received:
         try:
             code = main(argv)
+        except BrokenPipeError:
+            with contextlib.suppress(OSError, ValueError):
+                os.dup2(os.open(os.devnull, os.O_WRONLY), sys.stdout.fileno())
+            return 0
         except BaseException as exc:
             if not isinstance(exc, KeyboardInterrupt) and (received.signum is None or isinstance(exc, SystemExit)):
                 raise

@@ -110,3 +110,30 @@ def test_rl_baselines_ctrl_c_before_the_trainings_start(tmp_path):
     assert r.returncode == 130
     _one_line(r.stderr, "rl_baselines")
     assert not (tmp_path / "runs").exists()
+
+
+@pytest.mark.parametrize("script", ["random_policy", "scripted_pick"])
+def test_episode_examples_ctrl_c_one_line(script):
+    """The two episode examples under run_main too (an audit found a KeyboardInterrupt traceback)."""
+    code, err = _ctrl_c_after([sys.executable, str(EXAMPLES / f"{script}.py"), "--episodes", "100000"], 2.0, ROOT)
+    assert code == 130
+    _one_line(err, script)
+
+
+@pytest.mark.parametrize("script", ["random_policy", "scripted_pick"])
+def test_episode_examples_into_a_closed_pipe_end_quietly(script):
+    """``scripted_pick.py --episodes 3 | head -1`` printed a BrokenPipeError traceback and exited 1."""
+    r = subprocess.run(f"{sys.executable} {EXAMPLES / f'{script}.py'} --episodes 3 | head -c 1",
+                       shell=True, capture_output=True, text=True, env=_env(), cwd=ROOT, timeout=120)
+    assert r.returncode == 0 and "Traceback" not in r.stderr and r.stderr == "", r.stderr
+
+
+@pytest.mark.parametrize("args, name", [(["--env", "CartPole-v1"], "--env"),
+                                        (["--env", "simgrip/PickMulti-v0", "--fingers", "100000"], "--fingers")])
+@pytest.mark.parametrize("script", ["random_policy", "scripted_pick"])
+def test_episode_examples_refuse_by_name(script, args, name):
+    """Another library's env (no pick info keys: a KeyError mid-run) and a finger count past MAX_FINGERS (a
+    ValueError traceback from the env) are refused before any episode, in argparse's way, naming the option."""
+    r = subprocess.run([sys.executable, str(EXAMPLES / f"{script}.py"), *args], capture_output=True, text=True,
+                       env=_env(), cwd=ROOT, timeout=120)
+    assert r.returncode == 2 and name in r.stderr.strip().splitlines()[-1] and "Traceback" not in r.stderr

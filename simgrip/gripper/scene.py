@@ -71,6 +71,9 @@ __all__ = ["GRIPPER_GRIPS", "WORKPIECES", "GripperScene", "build_gripper", "chec
 
 #: Workpiece shapes of a K-finger gripper.
 WORKPIECES = ("box", "cylinder", "sphere")
+#: The most fingers a gripper has: grippers have 2-6, research hands ~10; MuJoCo's compile grows as fingers x
+#: links^3 (32 fingers of 1000 links: ~2.5 minutes before any settle)
+MAX_FINGERS = 32
 #: Grips a K-finger gripper is built for.
 GRIPPER_GRIPS = ("I", "II", "III")
 #: Default tip sphere radius over ``l`` (as the planar scene's).
@@ -98,8 +101,8 @@ def check_gripper(grip, fingers, workpiece) -> tuple[Grip, int, str]:
         raise ValueError(f"workpiece must be 'box' with fingers = 4 for Grip III (each finger carries the bottom edge "
                          f"of its face; two fingers are the planar cradle, simgrip.sim.scene), got workpiece = "
                          f"{workpiece!r}, fingers = {fingers!r}")
-    if isinstance(fingers, bool) or not isinstance(fingers, (int, np.integer)) or fingers < 2:
-        raise ValueError(f"fingers must be an integer >= 2, got {fingers!r}")
+    if isinstance(fingers, bool) or not isinstance(fingers, (int, np.integer)) or not 2 <= fingers <= MAX_FINGERS:
+        raise ValueError(f"fingers must be an integer in [2, {MAX_FINGERS}], got {fingers!r}")
     if not isinstance(workpiece, str) or workpiece.strip().lower() not in WORKPIECES:
         raise ValueError(f"workpiece must be one of {WORKPIECES}, got {workpiece!r}")
     w = workpiece.strip().lower()
