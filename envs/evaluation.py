@@ -53,6 +53,10 @@ MAX_TRAINING_SEED = 2**32 - 1
 #: the most evaluation episodes a command runs: 100,000 already puts a success rate's 95 % interval within
 #: +-0.31 % (the normal approximation at p = 1/2), finer than any result needs; more only runs for hours
 MAX_EPISODES = 100_000
+#: the longest training budget ``--minutes`` (a week: the project's runs take 15 to 45 CPU-minutes)
+MAX_TRAINING_MINUTES = 7 * 24 * 60
+#: the most checkpoints a training takes (``--minutes / --checkpoint-minutes``; each is evaluated on its episodes)
+MAX_CHECKPOINTS = 1000
 
 
 training_seed = _int_at_least(
@@ -109,7 +113,8 @@ def training_conflict(args) -> str | None:
     ``log_std_init``, ``init_from``, ``critic_warmup``, ``crush_charge``, ``crush_charge_from``, ``minutes`` and
     ``checkpoint_minutes``) cannot go together, or None: :func:`log_std_init_conflict`,
     :func:`critic_warmup_conflict`, ``--crush-charge-from`` without ``--crush-charge``, a checkpoint period
-    longer than the budget (no checkpoint would be taken).  The options alone decide (nothing is imported)."""
+    longer than the budget (no checkpoint would be taken), a budget over :data:`MAX_TRAINING_MINUTES` or more
+    than :data:`MAX_CHECKPOINTS` checkpoints.  The options alone decide (nothing is imported)."""
     algos = args.algo if isinstance(args.algo, (list, tuple)) else [args.algo]
     why = log_std_init_conflict(args.log_std_init, algos, args.init_from) or \
         critic_warmup_conflict(args.critic_warmup, algos)
@@ -117,8 +122,13 @@ def training_conflict(args) -> str | None:
         return why
     if args.crush_charge_from and args.crush_charge is None:
         return "--crush-charge-from: only with --crush-charge"
+    if args.minutes > MAX_TRAINING_MINUTES:
+        return f"--minutes: at most {MAX_TRAINING_MINUTES} (a week), got {args.minutes:g}"
     if args.checkpoint_minutes and args.checkpoint_minutes > args.minutes:
         return "--checkpoint-minutes: larger than --minutes (no checkpoint would be taken)"
+    if args.checkpoint_minutes and args.minutes / args.checkpoint_minutes > MAX_CHECKPOINTS:
+        return (f"--checkpoint-minutes: {args.minutes:g} / {args.checkpoint_minutes:g} minutes is "
+                f"{args.minutes / args.checkpoint_minutes:.3g} checkpoints, each evaluated; at most {MAX_CHECKPOINTS}")
     return None
 
 
@@ -134,7 +144,8 @@ def charge(text: str) -> float:
 
 def add_episode_arguments(parser: argparse.ArgumentParser, *, episodes: int = 20) -> None:
     """Add ``--episodes N``, ``--seed S`` (first episode's seed), ``--env ID`` and ``--json``."""
-    parser.add_argument("--episodes", type=positive_int, default=episodes, help=f"number of episodes (default {episodes})")
+    parser.add_argument("--episodes", type=episode_count, default=episodes,
+                        help=f"number of episodes, 1 to {MAX_EPISODES} (default {episodes})")
     parser.add_argument("--seed", type=non_negative_int, default=0, help="seed of the first episode (default 0)")
     parser.add_argument("--env", default="simgrip/Pick-v1", help="registered env id (default simgrip/Pick-v1)")
     parser.add_argument("--fingers", type=positive_int, default=None,

@@ -40,6 +40,8 @@ TRAIN = ["--algo", "ppo", "--env", "simgrip/PickFragile-v6", "--steps", "64", "-
     (["--threads", str((os.cpu_count() or 1) + 1)], ["--threads", "cores"]),
     (["--eval-episodes", "100001"], ["--eval-episodes", "100000"]),
     (["--frame-stack", "1000000"], ["--frame-stack", "300 steps"]),
+    (["--minutes", "1e308"], ["--minutes", "a week"]),  # (ran: an audit)
+    (["--minutes", "0.05", "--checkpoint-minutes", "0.000001"], ["--checkpoint-minutes", "at most 1000"]),
 ])
 def test_train_sb3_refuses(extra, needles, tmp_path, capsys):
     pytest.importorskip("stable_baselines3")
@@ -82,6 +84,8 @@ def test_rl_baselines_checks_each_runs_folder_before_any_run(make, needles, tmp_
     (["--seeds", str(2**32)], ["--seeds", "4294967295"]),
     (["--eval-seeds", "0-100000"], ["--eval-seeds", "100000 seeds"]),
     (["--frame-stack", "301"], ["--frame-stack", "300 steps"]),
+    (["--minutes", "1e308"], ["--minutes", "a week"]),
+    (["--minutes", "0.05", "--checkpoint-minutes", "0.000001"], ["--checkpoint-minutes", "at most 1000"]),
 ])
 def test_rl_baselines_refuses(extra, needles, tmp_path, capsys):
     pytest.importorskip("stable_baselines3")

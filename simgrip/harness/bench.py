@@ -138,9 +138,13 @@ def _call(spec):
         return {"skip": args[0], "n": args[1], "error": err, "note": err}
 
 
-def _check_positive(name, value):
-    if value is not None and (isinstance(value, bool) or int(value) != value or int(value) < 1):
-        raise ValueError(f"{name} must be a positive integer, got {value!r}")
+#: the most timing repeats (the median of 3 already steadies a noisy machine; each repeat reruns every timing)
+MAX_REPEATS = 100
+
+
+def _check_positive(name, value, most: int = MAX_REPEATS):
+    if value is not None and (isinstance(value, bool) or int(value) != value or not 1 <= int(value) <= most):
+        raise ValueError(f"{name} must be an integer in [1, {most}], got {value!r}")
 
 
 def run_bench(
