@@ -87,8 +87,8 @@ def _add_state_options(p: argparse.ArgumentParser, grips=("free", "I", "II", "II
     g.add_argument("--mu", type=float, default=1.0, help=f"static friction coefficient mu_s, 0..{MU_MAX:g} [default 1]")
     g.add_argument("--gamma", type=float, default=0.8, help="Grip III contact arc length gamma/l, 0 < gamma < 1 [default 0.8]")
     g.add_argument("--profile", default="uniform", help="curvature profile: uniform or concentrated (eq. 34)")
-    g.add_argument("--kappa-max", type=float, default=6.0, help=f"peak |kappa_bar| of the concentrated profile, 0..{KAPPA_LIMIT:g} [default 6]")
-    g.add_argument("--alpha", type=float, default=2.0, help=f"concentration exponent of eq. (34), 0..{ALPHA_MAX:g} [default 2]")
+    g.add_argument("--kappa-max", type=float, default=None, help=f"peak |kappa_bar| of the concentrated profile, 0..{KAPPA_LIMIT:g} [default 6]")
+    g.add_argument("--alpha", type=float, default=None, help=f"concentration exponent of eq. (34), 0..{ALPHA_MAX:g} [default 2]")
     g.add_argument("--sign", type=int, default=None, help="sign p of eq. (34): -1 curls down, +1 up [default: +1 for Grip II, else -1]")
     p.add_argument("--json", action="store_true", help="print one JSON object instead of a table")
 
@@ -213,16 +213,25 @@ def _params(args) -> DimensionlessParams:
 
 
 def _profile(args, grip: str):
+    """The curvature profile of ``--profile`` and its options; ValueError naming an option the profile does not
+    read (an audit found ``--kappa`` ignored by the concentrated profile, ``--sign`` by the uniform one)."""
     kind = str(args.profile).strip().lower()
     if kind == "uniform":
         if args.kappa is None:
             raise ValueError("kappa is required for the uniform profile (--kappa K)")
+        given = [o for o, v in (("--kappa-max", args.kappa_max), ("--alpha", args.alpha), ("--sign", args.sign))
+                 if v is not None]
+        if given:
+            raise ValueError(f"{given[0]}: only with --profile concentrated (the uniform profile has --kappa alone)")
         return Uniform(args.kappa)
     if kind == "concentrated":
+        if args.kappa is not None:
+            raise ValueError("kappa: the concentrated profile takes --kappa-max, --alpha and --sign, not --kappa")
         sign = args.sign if args.sign is not None else (1 if grip == "II" else -1)
         if sign not in (-1, 1):
             raise ValueError(f"sign (p of eq. 34) must be -1 or +1, got {sign!r}")
-        return Concentrated(kappa_max=args.kappa_max, alpha=args.alpha, p=sign)
+        return Concentrated(kappa_max=6.0 if args.kappa_max is None else args.kappa_max,
+                            alpha=2.0 if args.alpha is None else args.alpha, p=sign)
     raise ValueError(f"profile must be 'uniform' or 'concentrated', got {args.profile!r}")
 
 
@@ -323,6 +332,10 @@ def _gripper_arguments(args, grip: str) -> dict | None:
         if args.fingers is None:
             raise ValueError("fingers: --workpiece, --contact-angle, --offset, --workpiece-yaw and --kappa-per-finger "
                              "need --fingers K")
+        for option in ("box_depth", "extra_friction"):  # (the planar finger's full-contact scene's; an audit found
+            if getattr(args, option, None) is not None:  # them ignored with --fingers)
+                raise ValueError(f"--{option.replace('_', '-')}: the planar finger's --contact full only, not with "
+                                 f"--fingers")
         if per_finger:
             if args.kappa is not None:
                 raise ValueError("kappa_per_finger: give --kappa-per-finger or --kappa, not both")
@@ -504,6 +517,14 @@ def _quiet_stdout() -> None:
         os.dup2(os.open(os.devnull, os.O_WRONLY), sys.stdout.fileno())
 
 
+def _drop_empty(created: list) -> None:
+    """Remove the output folders this run created that are still empty (a run that failed leaves nothing behind:
+    an audit found an empty ``--out`` after a scheduler that was not reached)."""
+    for folder in created:
+        with contextlib.suppress(OSError):  # (not empty, gone, or not ours to remove: left as it is)
+            folder.rmdir()
+
+
 def _say_interrupted(prefix: str, detail: str = "") -> None:
     """The one line of an interrupted run on stderr (off a progress bar's line on a terminal); ``detail``, what
     the command adds (a ``KeyboardInterrupt``'s message: sweep's saved points), after a semicolon."""
@@ -564,11 +585,13 @@ def main(argv=None) -> int:
             except ValueError as exc:
                 if received.signum is not None:
                     raise  # what an interrupt became on its way up: the handler below
+                _drop_empty(outputs["created"])
                 print(f"{prefix}: error: {exc}", file=sys.stderr)
                 return EXIT_USAGE
             except RuntimeError as exc:  # ElasticaError, DiscreteError, SettleError, RunnerError: named, never silent
                 if received.signum is not None:
                     raise
+                _drop_empty(outputs["created"])
                 print(f"{prefix}: failed: {type(exc).__name__}: {exc}", file=sys.stderr)
                 return EXIT_FAILED
             try:

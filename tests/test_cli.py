@@ -301,3 +301,36 @@ def test_work_it_cannot_finish_is_refused_by_name(argv, needle, capsys, tmp_path
     err = capsys.readouterr().err
     assert len(err.strip().splitlines()) == 1 and needle in err, err
     assert not list(tmp_path.iterdir())
+
+
+@pytest.mark.parametrize("argv, needle", [
+    (["solve", "I", "--kappa", "-5", "--profile", "concentrated"], "kappa: the concentrated profile"),
+    (["solve", "I", "--kappa", "-5", "--sign", "1"], "--sign: only with --profile concentrated"),
+    (["solve", "I", "--kappa", "-5", "--alpha", "3"], "--alpha: only with --profile concentrated"),
+    (["simulate", "I", "--kappa", "-5", "--links", "8", "--fingers", "2", "--contact", "full", "--box-depth", "0.2"],
+     "--box-depth: the planar finger's --contact full only"),
+    (["sweep", "I", "--kappa", "-5", "--links", "8", "--throughput", "--resume", "--out", "o"],
+     "--resume: not with --throughput"),
+    (["sweep", "I", "--kappa", "-5", "--links", "8", "--throughput", "--no-map", "--out", "o"],
+     "--no-map: not with --throughput"),
+])
+def test_an_option_the_command_would_ignore_is_refused(argv, needle, capsys, tmp_path, monkeypatch):
+    """Found by an audit: each of these ran and silently ignored the option (the same output as without it)."""
+    monkeypatch.chdir(tmp_path)
+    assert main(argv) == 2
+    err = capsys.readouterr().err
+    assert len(err.strip().splitlines()) == 1 and needle in err, err
+    assert not list(tmp_path.iterdir())
+
+
+def test_a_scheduler_not_reached_leaves_no_folder_and_no_timing_first(capsys, tmp_path):
+    """``sweep --throughput --scheduler`` once ran ~5 s of local timing before trying the address, and a failed
+    command left its new, empty ``--out`` behind."""
+    import time
+
+    out = tmp_path / "o"
+    t0 = time.perf_counter()
+    assert main(["sweep", "I", "--kappa", "-5", "--links", "8", "--throughput", "--scheduler", "tcp://127.0.0.1:1",
+                 "--connect-timeout", "1", "--out", str(out)]) == 2
+    assert time.perf_counter() - t0 < 8
+    assert "cannot be reached" in capsys.readouterr().err and not out.exists()

@@ -172,6 +172,10 @@ def test_stress_case_count_bounded_before_any_case(tmp_path, capsys):
         check_stress(1, 10**7, workers=2, here=SMALL)
     with pytest.raises(ValueError, match="memory"):  # 10^5 cases x 10 kB = 1 GB > half of 1 GB
         check_stress(10**5, 0, workers=2, here=Machine(memory=2**30, cores=2))
+    # full-contact cases, 20 cases each, named as themselves (they were counted into gripper_cases' message)
+    assert check_stress(10, 0, full_cases=2, workers=1, here=SMALL) == pytest.approx(50 * 0.15)
+    with pytest.raises(ValueError, match=r"^full_cases: 2 cases \+ 1000000 \(1e\+06\) full-contact cases"):
+        check_stress(2, 0, full_cases=10**6, workers=2, here=SMALL)
 
 
 def test_machine_is_read():

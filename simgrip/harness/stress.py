@@ -389,9 +389,8 @@ def run_stress(
         if capped != options.jobs:
             options = dataclasses.replace(options, jobs=capped)
     workers = None if options.remote else (1 if options.in_process else options.local_workers)
-    # a full-contact case costs ~20 point-contact cases (0.5-4 s against 0.15 s): counted so in the budget
-    # before any case is made: memory and time bounded
-    check_stress(int(cases), int(n_gripper) + 20 * int(n_full), workers=workers)
+    # before any case is made: memory and time bounded (a full-contact case counted as FULL_CASE_WEIGHT cases)
+    check_stress(int(cases), int(n_gripper), full_cases=int(n_full), workers=workers)
     todo = make_cases(cases, seed, grid_cases, max_links)
     g_todo = sg.make_gripper_cases(n_gripper, seed, max_links=min(32, max_links))
     f_todo = make_full_cases(int(n_full), seed, max_links=min(16, max_links))

@@ -329,12 +329,17 @@ def cap_jobs(jobs, tasks: int, *, option: str = "jobs", here: Machine | None = N
     return capped, f"{option} {jobs} lowered to {capped} ({'; '.join(why)})"
 
 
-def check_stress(cases: int, gripper_cases: int = 0, *, workers: int | None = 1, here: Machine | None = None) -> float:
+#: a full-contact stress case's cost in point-contact cases (0.5-4 s against 0.15 s)
+FULL_CASE_WEIGHT = 20
+
+
+def check_stress(cases: int, gripper_cases: int = 0, *, full_cases: int = 0, workers: int | None = 1,
+                 here: Machine | None = None) -> float:
     """Refuse a stress run this machine cannot finish; returns its estimated wall time [s].
 
-    Raises ``ValueError`` naming ``cases`` (or ``gripper_cases``) with the
-    estimate: memory at :data:`STRESS_CASE_BYTES` a case, time at
-    :data:`STRESS_SECONDS_PER_CASE` a case and worker, at most
+    Raises ``ValueError`` naming ``cases``, ``gripper_cases`` or ``full_cases`` (the largest share) with the
+    estimate: memory at :data:`STRESS_CASE_BYTES` a case, time at :data:`STRESS_SECONDS_PER_CASE` a case and
+    worker (a full-contact case counts :data:`FULL_CASE_WEIGHT` cases: 0.5-4 s against 0.15 s), at most
     :data:`MAX_CASES` cases, half the available memory, :data:`MAX_WALL_DAYS`.
     """
     here = machine() if here is None else here
@@ -342,12 +347,14 @@ def check_stress(cases: int, gripper_cases: int = 0, *, workers: int | None = 1,
     limit_mem = int(MEMORY_FRACTION * here.memory // STRESS_CASE_BYTES)
     limit_time = int(MAX_WALL_DAYS * 86400 * w / STRESS_SECONDS_PER_CASE)
     limit = min(MAX_CASES, limit_mem, limit_time)
-    total = int(cases) + int(gripper_cases)
+    parts = [("cases", int(cases), "cases"), ("gripper_cases", int(gripper_cases), "K-finger cases"),
+             ("full_cases", FULL_CASE_WEIGHT * int(full_cases), "full-contact cases")]
+    total = sum(v for _, v, _ in parts)
     seconds = _f(total) * STRESS_SECONDS_PER_CASE / w
     if total > limit:
-        name = "gripper_cases" if gripper_cases > cases else "cases"
-        what = f"{count_text(int(cases))} cases" + (f" + {count_text(int(gripper_cases))} K-finger cases"
-                                                    if gripper_cases else "")
+        name = max(parts, key=lambda part: part[1])[0]
+        what = " + ".join(f"{count_text(int(full_cases))} {label} (as {count_text(v)})" if key == "full_cases"
+                          else f"{count_text(v)} {label}" for key, v, label in parts if v or key == "cases")
         raise ValueError(f"{name}: {what} would need ~{human_bytes(_f(total) * STRESS_CASE_BYTES)}"
                          f" of memory and ~{human_seconds(seconds)} on {w} worker{'s' * (w != 1)}; at most {limit} "
                          f"cases here (bounds: {MAX_CASES} cases, {MEMORY_FRACTION:.0%} of "

@@ -78,6 +78,15 @@ def profile_sweep(grid, *, workers: int = 2, batch_size: int | None = None, prog
 
     if isinstance(workers, bool) or not isinstance(workers, int) or workers < 1:
         raise ValueError(f"workers must be a positive integer, got {workers!r}")
+    k_remote = 0
+    if remote is not None and remote.remote:  # reached first: a wrong address fails before the minutes of timing
+        from simgrip.parallel.dask_cluster import RemoteDask
+
+        probe = RemoteDask(remote.scheduler, remote.scheduler_file, timeout=remote.connect_timeout)
+        try:
+            k_remote = max(1, len(probe.client.scheduler_info()["workers"]))
+        finally:
+            probe.stop(False)
     points = list(grid.points())
     n = len(points)
     bs = batch_size or default_batch_size(n, workers)
@@ -119,14 +128,7 @@ def profile_sweep(grid, *, workers: int = 2, batch_size: int | None = None, prog
             runs.append(on_cluster(workers, time.perf_counter() - t0, RunnerOptions(scheduler=address, progress=progress),
                                    f"dask_cli_{workers}_workers"))
     if remote is not None and remote.remote:
-        from simgrip.parallel.dask_cluster import RemoteDask
-
-        probe = RemoteDask(remote.scheduler, remote.scheduler_file)
-        try:
-            k = max(1, len(probe.client.scheduler_info()["workers"]))
-        finally:
-            probe.stop(False)
-        runs.append(on_cluster(k, 0.0, remote, "given_cluster"))
+        runs.append(on_cluster(k_remote, 0.0, remote, "given_cluster"))
     return {"grid": grid.spec(), "points": n, "batch_size": bs, "settle_s_per_point": t_loop / n, "runs": runs}
 
 
