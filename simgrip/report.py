@@ -258,7 +258,9 @@ def format_comparison(result: dict) -> str:
     def footer(name, rec):
         times = {"wall_time_s": "time", "build_time_s": "build"}
         items = [f"{times[k]} {num(v, 2, '')} s" if k in times else f"{k.replace('_', ' ')} {num(v, 2, '')}"
-                 for k, v in rec.items() if k not in used and v is not None]
+                 for k, v in rec.items() if k not in used and k not in ("nodes", "contacts") and v is not None]
+        if rec.get("contacts") is not None:  # (the centreline and each contact: --json's, not a footer's)
+            items.append(f"contacts {len(rec['contacts'])} (--json lists them and the centreline)")
         if name == "simulation":
             items.append("warnings " + ("none" if not warnings else str(len(warnings))))
         return f"{name}: " + ", ".join(items) if items else ""
