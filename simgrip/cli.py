@@ -371,9 +371,10 @@ def _cmd_modes(args):
         if args.fingers is None:
             raise ValueError("fingers: --workpiece needs --fingers K")
         rec = gripper_modes(grip, params, profile, links, fingers=args.fingers, workpiece=args.workpiece or "cylinder",
-                            count=args.count, method=args.method, contact=args.contact)
+                            count=args.count, method=args.method, contact=args.contact, progress=_progress(args, links))
         return json.dumps(rec, allow_nan=False) if args.json else format_gripper_modes(rec)
-    result = modes(grip, params, profile, links, count=args.count, method=args.method, contact=args.contact)
+    result = modes(grip, params, profile, links, count=args.count, method=args.method, contact=args.contact,
+                   progress=_progress(args, links))
     return json.dumps(result.record(), allow_nan=False) if args.json else format_modes(result)
 
 

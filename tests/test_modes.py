@@ -163,3 +163,26 @@ def test_modes_refuse_a_contact_mode_they_do_not_linearise(contact):
 
     with pytest.raises(ValueError, match="contact must be 'point' or 'surface'"):
         modes_of("I", STANDARD, -6.0, 8, contact=contact)
+
+
+def test_modes_tell_their_phases():
+    """``modes`` and ``gripper_modes`` take ``progress`` as ``simulate`` does (the CLI prints a long job's
+    phases; an audit found ``modes --links 1000 --fingers K`` silent for minutes)."""
+    import contextlib
+
+    from simgrip.modes import modes
+    from simgrip.modes.gripper import gripper_modes
+    from simgrip.params import DimensionlessParams
+    from simgrip.profiles import Uniform
+
+    told = []
+
+    def progress(what):
+        told.append(what)
+        return contextlib.nullcontext()
+
+    modes("I", DimensionlessParams(), Uniform(-5.5), 8, count=1, reference=False, progress=progress)
+    gripper_modes("I", DimensionlessParams(), Uniform(-5.5), 8, fingers=3, count=1, reference=False,
+                  progress=progress)
+    assert told == ["building the model (8 links per finger)", "settling",
+                    "building the model (3 fingers x 8 links)", "settling"]

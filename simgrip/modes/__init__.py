@@ -195,7 +195,7 @@ def _check_count(count, dofs: int) -> int:
 
 
 def modes(grip, params, profile, links, *, count: int = 3, fingers: int = 1, method: str | None = None,
-          contact: str | None = None, reference: bool = True, **settle_kw) -> ModeResult:
+          contact: str | None = None, reference: bool = True, progress=None, **settle_kw) -> ModeResult:
     """Natural frequencies and mode shapes of the settled finger(s) of ``grip``, beside the rod's.
 
     Parameters
@@ -213,6 +213,8 @@ def modes(grip, params, profile, links, *, count: int = 3, fingers: int = 1, met
         The symmetric reduction (1) or both mirrored fingers (2; no reference).
     method, contact, settle_kw
         Passed to :func:`simgrip.settle.settle` (default Newton, point contact).
+    progress : callable, optional
+        Told the build's and the settle's phases (:mod:`simgrip.progress`; None: silent).
     reference : bool
         Also solve the linearised elastica (free rod, Grips I/II with one finger).
 
@@ -248,14 +250,18 @@ def modes(grip, params, profile, links, *, count: int = 3, fingers: int = 1, met
         # state's contact set (links on faces, self-contact) is not a constraint it knows
         raise ValueError(f"contact must be 'point' or 'surface' for the modes (the sticking tip or corner is their "
                          f"only constraint; contact='full' is not linearised), got {contact!r}")
-    scene = build_scene(grip, params, prof, links, fingers=fingers)
+    from simgrip.progress import phase
+
+    with phase(progress, f"building the model ({links} links per finger)"):
+        scene = build_scene(grip, params, prof, links, fingers=fingers)
     t0 = time.perf_counter()
     kw = dict(settle_kw)
     if method is not None:
         kw["method"] = method
     if contact is not None:
         kw["contact"] = contact
-    state = settle(scene, **kw)
+    with phase(progress, "settling"):
+        state = settle(scene, **kw)
     t_settle = time.perf_counter() - t0
     import mujoco
 

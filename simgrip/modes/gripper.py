@@ -55,7 +55,7 @@ def symmetric_basis(scene) -> np.ndarray:
 
 
 def gripper_modes(grip, params, profile, links, *, fingers: int, workpiece: str = "cylinder", count: int = 3,
-                  reference: bool = True, **settle_kw):
+                  reference: bool = True, progress=None, **settle_kw):
     """Natural frequencies of the settled K-finger gripper, its symmetric modes and the rod's.
 
     Parameters
@@ -96,9 +96,13 @@ def gripper_modes(grip, params, profile, links, *, fingers: int, workpiece: str 
     prof = as_profile(profile)
     if isinstance(count, bool) or not isinstance(count, (int, np.integer)) or not 1 <= count <= int(links) - 1:
         raise ValueError(f"count must be an integer in [1, links - 1 = {int(links) - 1}], got {count!r}")
-    scene = build_gripper(grip, params, prof, links, fingers=fingers, workpiece=workpiece)
+    from simgrip.progress import phase
+
+    with phase(progress, f"building the model ({fingers} fingers x {links} links)"):
+        scene = build_gripper(grip, params, prof, links, fingers=fingers, workpiece=workpiece)
     t0 = time.perf_counter()
-    state = settle_gripper(scene, **settle_kw)
+    with phase(progress, "settling"):
+        state = settle_gripper(scene, **settle_kw)
     t_settle = time.perf_counter() - t0
     if not state.held or len(state.records) != scene.fingers:
         raise ModesError(f"grip {grip}: the settled gripper does not hold the workpiece with every finger: there is "
