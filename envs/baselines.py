@@ -65,6 +65,7 @@ from collections import Counter
 import gymnasium as gym
 import numpy as np
 
+from simgrip.command_parser import CommandParser
 from simgrip.envs.outcome import outcome
 from simgrip.envs.scripted_policies import controller, policy_maker
 from simgrip.envs.scripted_policies import task as _task
@@ -302,7 +303,7 @@ def main(argv=None) -> int:
     from simgrip.envs import FRAGILE_ENV_IDS, RETIRED
     from simgrip.io import atomic_write, check_output_file
 
-    p = argparse.ArgumentParser(prog="python -m simgrip.envs.baselines", description=__doc__.splitlines()[0])
+    p = CommandParser(prog="python -m simgrip.envs.baselines", description=__doc__.splitlines()[0])
     # the retired ids too: the stored JSONs of docs/baselines/ were written with them
     p.add_argument("--env", required=True, choices=FRAGILE_ENV_IDS + tuple(RETIRED))
     p.add_argument("--policy", required=True, choices=("random", "constant", "openloop", "oracle", "observation"))

@@ -17,13 +17,14 @@ how many successes had one.  Measured (``docs/environments.md``, "Forces within 
 
 from __future__ import annotations
 
-import argparse
 import json
 import math
 import sys
 
 import mujoco
 import numpy as np
+
+from simgrip.command_parser import CommandParser
 
 __all__ = ["force_peaks", "step_with_peaks"]
 
@@ -121,7 +122,7 @@ def main(argv=None) -> int:
     from simgrip.envs.baselines import _seeds
     from simgrip.interrupt import run_main
 
-    p = argparse.ArgumentParser(prog="python -m simgrip.envs.substep_forces",
+    p = CommandParser(prog="python -m simgrip.envs.substep_forces",
                                 description="The fingers' normal forces within a control step against the value "
                                             "at its end, under the task's scripted controller (JSON on stdout).")
     p.add_argument("--env", required=True, help="a registered fragile pick id")

@@ -64,6 +64,7 @@ if __name__ == "__main__":  # a Ctrl-C while the modules below load: main's one 
     signal.signal(signal.SIGINT, lambda signum, frame: (os.write(2, b"evaluate_policy: interrupted\n"), os._exit(130)))
 
 import simgrip.envs  # noqa: E402,F401  (registers the simgrip ids)
+from simgrip.command_parser import CommandParser
 from simgrip.envs.evaluation import (charge, check_env_id, discount, episode_count, json_object, make_env,
                                      non_negative_int, outcomes,
                                      positive_int, probability, run_episodes, summary)
@@ -166,7 +167,7 @@ def carried(results) -> dict:
 
 
 def main(argv=None) -> dict:
-    p = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
+    p = CommandParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     p.add_argument("--env", required=True, help="registered env id, e.g. simgrip/PickFragile-v6, or a retired "
                    "simgrip one (simgrip.envs.RETIRED: the models of docs/baselines/ were trained on them)")
     p.add_argument("--env-kwargs", type=json_object, default={}, metavar="JSON",

@@ -17,8 +17,9 @@ import sys
 import gymnasium as gym
 
 import simgrip.envs  # noqa: F401  (registers the simgrip ids)
-from simgrip.interrupt import run_main
+from simgrip.command_parser import CommandParser
 from simgrip.envs.evaluation import add_episode_arguments, check_env_id, env_kwargs, run_episodes, summary
+from simgrip.interrupt import run_main
 
 
 def _line(r) -> str:
@@ -28,7 +29,7 @@ def _line(r) -> str:
 
 
 def main(argv=None):
-    p = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
+    p = CommandParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     add_episode_arguments(p)
     args = p.parse_args(argv)
     check_env_id(p, args.env)

@@ -81,6 +81,8 @@ import sys
 import time
 from pathlib import Path
 
+from simgrip.command_parser import CommandParser
+
 ALGOS = ("ppo", "sac")
 TRAIN_SCRIPT = Path(__file__).resolve().with_name("train_sb3.py")
 
@@ -397,7 +399,7 @@ def _print_summary(summary: dict) -> None:
 
 
 def _main_combine(argv: list[str]) -> int:
-    p = argparse.ArgumentParser(prog="rl_baselines.py --combine",
+    p = CommandParser(prog="rl_baselines.py --combine",
                                 description="Combine batches of one experiment (see the module docstring).")
     p.add_argument("--combine", nargs="+", required=True, metavar="BATCH", help="the batches' --out folders")
     p.add_argument("--out", required=True, help="output folder (not one of the batches)")
@@ -428,7 +430,7 @@ def _main_combine(argv: list[str]) -> int:
 
 def build_parser() -> argparse.ArgumentParser:
     """The run mode's options (``--combine`` has its own); tests build ``run_command``'s arguments from it."""
-    p = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
+    p = CommandParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     p.add_argument("--env", required=True, help="registered env id, e.g. simgrip/PickFragile-v6, or a retired "
                    "simgrip one (simgrip.envs.RETIRED: the runs of docs/baselines/ name them)")
     p.add_argument("--env-kwargs", type=_json_object, default={}, metavar="JSON",

@@ -26,18 +26,19 @@ import sys
 import gymnasium as gym
 
 import simgrip.envs  # noqa: F401  (registers the simgrip ids)
-from simgrip.interrupt import run_main
+from simgrip.command_parser import CommandParser
 from simgrip.envs.evaluation import add_episode_arguments, check_env_id, env_kwargs, run_episodes, summary
 from simgrip.envs.pick_multi import PickMultiEnv
 from simgrip.envs.scripted import ObservationPickPolicy, ScriptedPickPolicy
 from simgrip.envs.scripted_multi import ObservationMultiPolicy, ScriptedMultiPolicy
+from simgrip.interrupt import run_main
 
 POLICIES = {"oracle": ScriptedPickPolicy, "observation": ObservationPickPolicy}
 MULTI_POLICIES = {"oracle": ScriptedMultiPolicy, "observation": ObservationMultiPolicy}
 
 
 def main(argv=None):
-    p = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
+    p = CommandParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     add_episode_arguments(p)
     p.add_argument("--policy", choices=sorted(POLICIES), default="oracle",
                    help="oracle (reads the true box or workpiece) or observation (sees only the observation)")

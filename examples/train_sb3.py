@@ -124,6 +124,7 @@ if __name__ == "__main__":  # a Ctrl-C while the modules below load: main's one 
 import numpy as np  # noqa: E402
 
 import simgrip.envs  # noqa: E402,F401  (registers the simgrip ids)
+from simgrip.command_parser import CommandParser
 from simgrip.envs.evaluation import (GAMMA, charge, check_env_id, checkpoint_tag, discount, json_object, log_std, make_env, non_negative_int,
                                      episode_count, outcomes, probability, run_episodes, summary,
                                      training_conflict, training_files, training_seed)
@@ -469,7 +470,7 @@ def _charged(args) -> tuple[float, int] | None:
 
 
 def main(argv=None) -> int:
-    p = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
+    p = CommandParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     p.add_argument("--algo", nargs="+", choices=ALGOS, default=list(ALGOS), help="algorithms, trained one after the other")
     p.add_argument("--env", default="simgrip/Pick-v1",
                    help="registered env id, or a retired simgrip one (simgrip.envs.RETIRED; default simgrip/Pick-v1)")

@@ -24,7 +24,6 @@ import argparse
 import contextlib
 import json
 import math
-import re
 import signal
 import sys
 import threading
@@ -41,12 +40,12 @@ from simgrip.params import (
     DimensionlessParams,
     check_grip,
 )
+from simgrip.command_parser import EXIT_USAGE, CommandParser
 from simgrip.profiles import Concentrated, Uniform
 
 __all__ = ["main", "build_parser"]
 
 EXIT_FAILED = 1
-EXIT_USAGE = 2
 EXIT_INTERRUPTED = 130  # 128 + SIGINT, what shells report for a Ctrl-C
 #: Most nodes of solve's discrete stability check: its error falls as 1/K^2, ~1e-8 relative here, in about 2 s.
 MAX_K = 16384
@@ -56,25 +55,11 @@ MAX_K = 16384
 SLOW_LINKS = 512
 from simgrip.cli_outputs import OUTPUT_OPTIONS, RENDER_DEFAULTS, check_outputs as _check_outputs  # noqa: F401
 from simgrip.cli_outputs import clean_after_interrupt as _clean_after_interrupt, render_outputs as _render_outputs
+from simgrip.cli_outputs import drop_empty as _drop_empty
 
 
-#: What argparse should read as a negative number, not an option: ``-5``, ``-0.5``, ``-.5``, ``-1e6``,
-#: ``-inf``, ``-nan`` (argparse's own pattern misses exponents, inf and nan, so ``--kappa -1e6`` was
-#: "expected one argument"); they then reach the option's type and validation, which names the parameter.
-_NEGATIVE_NUMBER = re.compile(r"^-(?:(?:\d+\.?\d*|\.\d+)(?:[eE][-+]?\d+)?|inf(?:inity)?|nan)$", re.IGNORECASE)
-
-
-class _Parser(argparse.ArgumentParser):
-    """argparse with a consistent one-line error and exit code 2, and negative numbers read as values."""
-
-    def __init__(self, *args, **kwargs):
-        super().__init__(*args, **kwargs)
-        self._negative_number_matcher = _NEGATIVE_NUMBER
-
-    def error(self, message):  # pragma: no cover - exercised through main()
-        # one line, the command's own name ("simgrip sweep: error: argument --jobs: invalid int value: 'two'"),
-        # as every value the commands check themselves; the usage is --help's
-        self.exit(EXIT_USAGE, f"{self.prog}: error: {message} (see {self.prog} --help)\n")
+#: argparse with a one-line error (status 2) and negative numbers read as values (:mod:`simgrip.command_parser`)
+_Parser = CommandParser
 
 
 def _add_state_options(p: argparse.ArgumentParser, grips=("free", "I", "II", "III")) -> None:
@@ -516,14 +501,6 @@ def _quiet_stdout() -> None:
 
     with contextlib.suppress(OSError, ValueError):
         os.dup2(os.open(os.devnull, os.O_WRONLY), sys.stdout.fileno())
-
-
-def _drop_empty(created: list) -> None:
-    """Remove the output folders this run created that are still empty (a run that failed leaves nothing behind:
-    an audit found an empty ``--out`` after a scheduler that was not reached)."""
-    for folder in created:
-        with contextlib.suppress(OSError):  # (not empty, gone, or not ours to remove: left as it is)
-            folder.rmdir()
 
 
 def _say_interrupted(prefix: str, detail: str = "") -> None:

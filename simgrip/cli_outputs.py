@@ -6,7 +6,7 @@ from __future__ import annotations
 import contextlib
 from pathlib import Path
 
-__all__ = ["OUTPUT_OPTIONS", "RENDER_DEFAULTS", "check_outputs", "clean_after_interrupt", "render_outputs"]
+__all__ = ["OUTPUT_OPTIONS", "RENDER_DEFAULTS", "check_outputs", "clean_after_interrupt", "drop_empty", "render_outputs"]
 
 #: Output options and whether each names a folder (True) or a file (False), checked before any work.
 OUTPUT_OPTIONS = {"out": ("--out", True), "png": ("--png", False), "gif": ("--gif", False)}
@@ -82,3 +82,11 @@ def clean_after_interrupt(folders: list[Path], created: list[Path]) -> None:
     for folder in created:
         with contextlib.suppress(OSError):
             folder.rmdir()  # only if empty
+
+
+def drop_empty(created: list) -> None:
+    """Remove the output folders this run created that are still empty (a run that failed leaves nothing behind:
+    an audit found an empty ``--out`` after a scheduler that was not reached)."""
+    for folder in created:
+        with contextlib.suppress(OSError):  # (not empty, gone, or not ours to remove: left as it is)
+            folder.rmdir()

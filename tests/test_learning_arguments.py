@@ -23,7 +23,8 @@ def _refused(main, argv, capsys, *needles):
         main(argv)
     err = capsys.readouterr().err
     assert exc.value.code == 2, err
-    last = err.strip().splitlines()[-1]  # argparse's usage lines, then the one line of the error
+    assert len(err.strip().splitlines()) == 1, err  # one line (simgrip.command_parser), the usage left to --help
+    last = err.strip().splitlines()[-1]
     assert "error:" in last and "Traceback" not in err, err
     for needle in needles:
         assert needle in last, (needle, err)
@@ -96,6 +97,15 @@ def test_rl_baselines_refuses(extra, needles, tmp_path, capsys):
 def test_evaluate_policy_refuses_more_episodes_than_any_rate_needs(capsys):
     argv = ["--env", "simgrip/PickFragile-v6", "--policy", "observation", "--episodes", "100001"]
     _refused(load_example("evaluate_policy").main, argv, capsys, "--episodes", "100000")
+
+
+@pytest.mark.parametrize("value", ["-inf", "-1e6", "-0.5"])
+def test_a_negative_number_reaches_its_option_in_one_line(value, capsys):
+    """The examples parse as the ``simgrip`` command does (:mod:`simgrip.command_parser`): a negative number is a
+    value (``--gamma -inf`` was "expected one argument"), and the error is one line, not argparse's usage block
+    (4-13 lines: an audit)."""
+    argv = ["--env", "simgrip/PickFragile-v6", "--policy", "observation", "--gamma", value]
+    _refused(load_example("evaluate_policy").main, argv, capsys, "--gamma")
 
 
 @pytest.mark.parametrize("extra, needles", [

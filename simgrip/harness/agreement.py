@@ -26,12 +26,12 @@ Run: ``python -m simgrip.harness.agreement STRESS_JSON [--jobs J] [--out FILE]``
 
 from __future__ import annotations
 
-import argparse
 import math
 import sys
 import time
 from concurrent.futures import ProcessPoolExecutor
 
+from simgrip.command_parser import CommandParser
 from simgrip.gripper.state import FRICTION_MARGIN
 
 __all__ = ["MARGIN", "agreement_case", "couple_rotation", "method_agreement"]
@@ -144,7 +144,7 @@ def main(argv=None) -> int:  # pragma: no cover - manual run
 
     from simgrip.io import write_json
 
-    ap = argparse.ArgumentParser(prog="python -m simgrip.harness.agreement")
+    ap = CommandParser(prog="python -m simgrip.harness.agreement")
     ap.add_argument("stress_json")
     ap.add_argument("--jobs", type=int, default=1)
     ap.add_argument("--out", default=None)

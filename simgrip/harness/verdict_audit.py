@@ -62,11 +62,12 @@ representative subset the test suite runs (``tests/test_verdict_audit.py``).
 
 from __future__ import annotations
 
-import argparse
 import itertools
 import sys
 import time
 import traceback
+
+from simgrip.command_parser import CommandParser
 
 __all__ = ["D_VALUES", "M_VALUES", "MU_VALUES", "KAPPAS", "EDGES", "VARIANTS", "LINKS", "audit_points",
            "quick_points", "audit_point", "summarise", "run_audit", "format_table", "main"]
@@ -332,7 +333,7 @@ def main(argv=None) -> int:
     """``python -m simgrip.harness.verdict_audit --out DIR [--jobs N] [--quick] [--no-progress]``."""
     from simgrip.io import atomic_write, check_output_dir, check_output_files_in, write_json
 
-    ap = argparse.ArgumentParser(prog="python -m simgrip.harness.verdict_audit",
+    ap = CommandParser(prog="python -m simgrip.harness.verdict_audit",
                                  description="hold/drop verdicts of the Newton settle, the dynamics and the BVP "
                                              "over the accepted parameter box (issue 16 section 6)")
     ap.add_argument("--out", required=True, help="folder for verdict_audit.json and verdict_audit.md")
