@@ -555,7 +555,8 @@ def main(argv=None) -> int:
                 if args.command not in _NO_MUJOCO_IMPORT:
                     from simgrip.sim.gl import import_mujoco
 
-                    import_mujoco()  # a MUJOCO_GL whose library is missing must not stop work that does not render
+                    # a broken MUJOCO_GL must not stop work that does not render; warnings not into ./MUJOCO_LOG.TXT
+                    import_mujoco().set_mju_user_warning(lambda msg: print(f"{prefix}: MuJoCo: {msg}", file=sys.stderr))
                 result = COMMANDS[args.command](args)
             except BrokenPipeError:  # a command that prints as it goes (sweep's paths), piped into head: not ours
                 _quiet_stdout()
