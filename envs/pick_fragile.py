@@ -8,7 +8,8 @@ cylinder by default; other shapes and offsets by argument) are :class:`~simgrip.
 1. **A crush limit.**  Each episode's workpiece survives a normal force of at
    most ``crush_limit`` [N] on any one finger (the finger's summed contact
    normal force on it, read at the end of every control step, 50 Hz, as a
-   tactile sensor reads it).  A larger force crushes it: the episode
+   tactile sensor reads it; ``crush_at="peak"``: its largest value within the step,
+   :mod:`simgrip.envs.touch_history`).  A larger force crushes it: the episode
    terminates as a failure (``info["crushed"]``, reward ``-w_drop`` and the lift
    progress taken back, as for a drop).
 2. **A wide draw.**  Mass is log-uniform over a 20-fold range, friction wide,
@@ -97,6 +98,7 @@ from __future__ import annotations
 import math
 
 import gymnasium as gym
+import numpy as np
 
 from simgrip.envs.arguments import check_positive as _pos
 from simgrip.envs.arguments import check_range as _range
@@ -104,6 +106,7 @@ from simgrip.envs.arguments import check_reset
 from simgrip.envs.pick import PickEnv
 from simgrip.envs.pick_multi import PickMultiEnv
 from simgrip.envs.pick_validity import FRAGILE_VALIDITY_EVERY, record_validity
+from simgrip.envs.touch_history import TouchPeaks, add_touch_sensors
 
 __all__ = ["FragilePickEnv", "FragilePickMultiEnv", "FRAGILE_DEFAULTS"]
 
@@ -122,6 +125,44 @@ class _Fragile:
     _MASS_KEY = "mass"  # the parent's reset option of the mass
     _PARENT_OPTIONS: tuple = ()
     _final_check = True  # check validity on terminating steps here (False: the subclass does, after its success)
+    crush_at = "end"  # which force the crush rule reads: at the control step's end, or its peak within it
+    _touch = None  # the peak's reader (crush_at "peak": TouchPeaks)
+
+    def _crush_at(self, crush_at) -> None:
+        """Check and set ``crush_at`` (before the parent builds its model: :meth:`_build` reads it)."""
+        if crush_at not in ("end", "peak"):
+            raise ValueError(f"crush_at must be 'end' (the force at the control step's end) or 'peak' (its largest "
+                             f"value within the step), got {crush_at!r}")
+        self.crush_at = crush_at
+
+    def _build(self):
+        """The parent's model; with ``crush_at="peak"`` each finger's touch sensor added (:mod:`simgrip.envs.
+        touch_history`) and the model compiled again (the same addresses: a sensor adds no body, joint or geom)."""
+        super()._build()
+        if self.crush_at != "peak":
+            return
+        import mujoco
+
+        from simgrip.envs.palm_servo import palm_command
+
+        fs = self.frame_skip
+        if hasattr(self, "_models"):  # the K-finger env: one model per workpiece shape
+            for shape, pm in self._models.items():
+                add_touch_sensors(pm.spec, fingers=self.K, n_links=self.n, frame_skip=fs, workpiece="workpiece")
+                pm.model = pm.spec.compile()
+                self._datas[shape] = mujoco.MjData(pm.model)
+            self._select(self.shapes[0])
+        else:
+            add_touch_sensors(self.spec, fingers=2, n_links=self.n, frame_skip=fs, workpiece="box")
+            self.model = self.spec.compile()
+            self.data = mujoco.MjData(self.model)
+        self._palm = palm_command(self, self.model)
+        self._bind_touch()
+
+    def _bind_touch(self) -> None:
+        """The peak's reader for the current model (again after a subclass compiles its own, the place's)."""
+        if self.crush_at == "peak":
+            self._touch = TouchPeaks(self.model, fingers=getattr(self, "K", 2), frame_skip=self.frame_skip)
 
     def _fragile_args(self, crush_ratio_range):
         self.crush_ratio_range = _range("crush_ratio_range", crush_ratio_range)
@@ -177,7 +218,12 @@ class _Fragile:
 
     def _step_checked(self, a: list):
         obs, reward, terminated, truncated, info = super()._step_checked(a)
-        crushed = max(self._normal) > self.crush_limit  # the parent's info["normal_force"], as floats
+        if self._touch is None:
+            forces = self._normal  # the parent's info["normal_force"], as floats
+        else:  # crush_at "peak": each finger's largest within the step
+            forces = self._touch.read(self.data)
+            info["peak_normal_force"] = np.array(forces)
+        crushed = max(forces) > self.crush_limit
         r_crush = 0.0
         if crushed:
             if info["is_success"]:
@@ -185,7 +231,8 @@ class _Fragile:
                 info["reward_success"] = 0.0
                 info["is_success"] = False
             if not (info["dropped"] or info["knocked_over"]):  # not already charged as lost
-                r_crush = -self._crush_penalty(info["normal_force"]) - self.w_lift * self._phi
+                r_crush = -self._crush_penalty(info.get("peak_normal_force", info["normal_force"])) \
+                    - self.w_lift * self._phi
                 self._phi = 0.0
             terminated = True
             self._needs_reset = True
@@ -207,7 +254,8 @@ class FragilePickEnv(_Fragile, PickEnv):
     ``info["workpiece_lift"]``, ``info["crushed"]``, ``info["dropped"]``).  Arguments: those of ``PickEnv``
     with the defaults ``box_mass_range = (0.01, 0.2)`` kg (drawn log-uniform), ``friction_range = (0.3, 1.2)``,
     ``box_width_range = (0.03, 0.075)`` m, ``palm_start = (0.085, 0.09)`` m, plus ``crush_ratio_range =
-    (1.3, 1.7)``.
+    (1.3, 1.7)`` and ``crush_at = "end"`` (``"peak"``: the crush rule reads each finger's largest force within
+    the control step, ``info["peak_normal_force"]``; :mod:`simgrip.envs.touch_history`).
     """
 
     _MASS_KEY = "box_mass"
@@ -215,7 +263,8 @@ class FragilePickEnv(_Fragile, PickEnv):
 
     def __init__(self, *, crush_ratio_range=FRAGILE_DEFAULTS["crush_ratio_range"],
                  box_mass_range=FRAGILE_DEFAULTS["mass_range"], friction_range=FRAGILE_DEFAULTS["friction_range"],
-                 box_width_range=FRAGILE_DEFAULTS["size_range"], palm_start=(0.085, 0.09), **kwargs):
+                 box_width_range=FRAGILE_DEFAULTS["size_range"], palm_start=(0.085, 0.09), crush_at="end", **kwargs):
+        self._crush_at(crush_at)
         # palm_start lower than Pick-v1's (0.105, 0.115): the tips meet the box lower, leaving room to slide up
         # its faces while the grip force is found
         super().__init__(box_mass_range=box_mass_range, friction_range=friction_range,
@@ -235,7 +284,8 @@ class FragilePickMultiEnv(_Fragile, PickMultiEnv):
     (centred), ``palm_start = (0.085, 0.09)`` m (lower than ``PickMulti-v0``'s: the tips meet the cylinder
     lower, leaving room to slide up it while the grip force is found), ``mass_range = (0.01, 0.2)`` kg
     (log-uniform), ``friction_range = (0.3, 1.2)``, ``size_range =
-    (0.03, 0.075)`` m, plus ``crush_ratio_range = (1.3, 1.7)``.  ``N_hold = m g / (K mu)`` counts every finger
+    (0.03, 0.075)`` m, plus ``crush_ratio_range = (1.3, 1.7)`` and ``crush_at = "end"`` (as
+    :class:`FragilePickEnv`'s).  ``N_hold = m g / (K mu)`` counts every finger
     as carrying its share through friction on a vertical face (a cylinder's).  Other settings are harder and
     not yet solved by the scripted controllers (issue 18, measured on seeds 5000-5029 with the palm
     started at 0.105-0.115 m): an off-centre
@@ -252,7 +302,8 @@ class FragilePickMultiEnv(_Fragile, PickMultiEnv):
     def __init__(self, *, crush_ratio_range=FRAGILE_DEFAULTS["crush_ratio_range"],
                  mass_range=FRAGILE_DEFAULTS["mass_range"], friction_range=FRAGILE_DEFAULTS["friction_range"],
                  size_range=FRAGILE_DEFAULTS["size_range"], shapes=("cylinder",), offset_max=0.0,
-                 palm_start=(0.085, 0.09), **kwargs):
+                 palm_start=(0.085, 0.09), crush_at="end", **kwargs):
+        self._crush_at(crush_at)
         super().__init__(mass_range=mass_range, friction_range=friction_range, size_range=size_range, shapes=shapes,
                          offset_max=offset_max, palm_start=palm_start, **kwargs)
         self._mass_range = self.mass_range

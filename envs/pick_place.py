@@ -107,6 +107,7 @@ class FragilePlaceEnv(FragilePickEnv):
         self.model, self.data = model, mujoco.MjData(model)
         self._palm = palm_command(self, model)
         self._palm_x = palm_command(self, model, 1, -self.x_range, self.x_range)
+        self._bind_touch()  # (crush_at "peak": the touch sensors' reader for this model)
 
         def joint(name):
             return mujoco.mj_name2id(model, mujoco.mjtObj.mjOBJ_JOINT, name)

@@ -1,0 +1,87 @@
+"""``crush_at="peak"`` (``simgrip.envs.touch_history``): the crush rule reads each finger's largest normal force
+within the control step, summed in C by MuJoCo's contact sensors.
+
+* the sensors' peaks are the physics-step-by-physics-step replay's (``simgrip.envs.substep_forces``), to the bit,
+  on every fragile task, held palm and ramped;
+* the rule crushes at the first step whose peak passes the limit, where the end-of-step rule crushes at the
+  first step whose end value does: an episode replayed with a limit between a step's end value and its peak;
+* the default stays ``"end"`` (every registered id, bit for bit: ``tests/test_env_rollouts.py``), and a bad
+  value is refused by name.
+"""
+
+from __future__ import annotations
+
+import gymnasium as gym
+import numpy as np
+import pytest
+
+import simgrip.envs  # noqa: F401  (registers the ids)
+from simgrip.envs import FRAGILE_ENV_IDS
+from simgrip.envs.scripted_policies import policy_maker
+from simgrip.envs.substep_forces import step_with_peaks
+
+
+@pytest.mark.parametrize("ramp", [False, True], ids=["held", "ramped"])
+@pytest.mark.parametrize("env_id", FRAGILE_ENV_IDS)
+def test_the_sensors_peak_is_the_replays(env_id, ramp):
+    """Two episodes of the task's scripted controller (random actions never reach the claws' workpieces)."""
+    env = gym.make(env_id, crush_at="peak", palm_ramp=ramp)
+    make = policy_maker(env, "observation")
+    touched = 0
+    for seed in (8000, 8001):
+        obs, info = env.reset(seed=seed)
+        act = make(env, info, seed)
+        for t in range(400):
+            obs, _, term, trunc, info, peaks = step_with_peaks(env, act(obs, t))
+            assert info["peak_normal_force"].tolist() == peaks
+            assert np.all(info["peak_normal_force"] >= info["normal_force"])
+            touched += max(peaks) > 0.0
+            if term or trunc:
+                break
+    assert touched > 10  # (forces to compare)
+    env.close()
+
+
+def _run(env, seed, limit, actions=None):
+    """Per step (end value, peak) of the largest finger under the scripted controller, or under ``actions``;
+    and the step that crushed (None)."""
+    obs, info = env.reset(seed=seed, options={"crush_limit": limit})
+    act = policy_maker(env, "observation")(env, info, seed)
+    rows, taken, crushed_at = [], [], None
+    for t in range(len(actions) if actions is not None else 400):
+        a = actions[t] if actions is not None else np.asarray(act(obs, t), dtype=np.float32)
+        taken.append(a)
+        obs, _, term, trunc, info = env.step(a)
+        rows.append((max(info["normal_force"]), max(info.get("peak_normal_force", info["normal_force"]))))
+        if info["crushed"]:
+            crushed_at = t
+        if term or trunc:
+            break
+    return rows, taken, crushed_at
+
+
+def test_the_rule_crushes_on_the_peak():
+    sphere = "simgrip/PickSphereFragile-v5"
+    peak_env, end_env = gym.make(sphere, crush_at="peak"), gym.make(sphere)
+    rows, actions, _ = _run(peak_env, 8000, 1e9)
+    k = next(t for t, (e, p) in enumerate(rows) if e > 0.0 and p > 1.2 * e)  # a step whose peak is well above
+    limit = 0.5 * (rows[k][0] + rows[k][1])
+    first_peak = next(t for t, (_, p) in enumerate(rows) if p > limit)
+    first_end = next((t for t, (e, _) in enumerate(rows) if e > limit), None)
+    assert first_end is None or first_end > first_peak
+    _, _, crushed_peak = _run(peak_env, 8000, limit, actions)
+    _, _, crushed_end = _run(end_env, 8000, limit, actions)
+    assert crushed_peak == first_peak
+    assert crushed_end == first_end
+    peak_env.close()
+    end_env.close()
+
+
+def test_the_default_reads_the_end_and_a_bad_value_is_named():
+    env = gym.make("simgrip/PickFragile-v6")
+    env.reset(seed=0)
+    _, _, _, _, info = env.step(env.action_space.sample())
+    assert env.unwrapped.crush_at == "end" and "peak_normal_force" not in info
+    env.close()
+    with pytest.raises(ValueError, match="crush_at must be 'end'"):
+        gym.make("simgrip/PickFragile-v6", crush_at="max")
