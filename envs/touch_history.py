@@ -62,14 +62,35 @@ class TouchPeaks:
         if any(int(model.sensor_history[i][0]) != fs for i in ids):
             raise ValueError(f"frame_skip: the touch sensors keep {model.sensor_history[ids[0]][0]} samples, not {fs}")
         self._fs, self._ids = fs, ids
-        self._adr = [int(model.sensor_historyadr[i]) + 2 + fs for i in ids]  # each sensor's first value
-        self._dim = [int(model.sensor_dim[i]) for i in ids]
+        adr = [int(model.sensor_historyadr[i]) + 2 + fs for i in ids]  # each sensor's first value
+        dims = {int(model.sensor_dim[i]) for i in ids}
+        steps = {b - a for a, b in zip(adr, adr[1:])}
+        if len(dims) != 1 or len(steps) > 1:
+            raise ValueError("model: the touch sensors' histories are not evenly laid out")
+        self._first, self._dim = adr[0], dims.pop()
+        self._gap = steps.pop() if steps else 0
+        self._views = (None, None)  # (data, the normal components' view of its history): _bind
+        self._sums = np.empty((len(ids), fs))  # each finger's summed normal force at each physics step [N]
+        self._peaks = np.empty(len(ids))
+
+    def __getstate__(self):
+        state = self.__dict__.copy()
+        state["_views"] = (None, None)  # a view of one MjData: bound again on the next read
+        return state
+
+    def _bind(self, data):
+        """A strided view ``(fingers, frame_skip, contacts)`` of the normal components in ``data.history``."""
+        h = data.history
+        item = h.itemsize
+        view = np.lib.stride_tricks.as_strided(
+            h[self._first:], shape=(len(self._ids), self._fs, self._dim // 3),
+            strides=(self._gap * item, self._dim * item, 3 * item), writeable=False)
+        self._views = (data, view)
+        return view
 
     def read(self, data) -> list:
         """Each finger's largest summed normal force over the last ``frame_skip`` physics steps [N]."""
-        h, fs = data.history, self._fs
-        out = []
-        for a, dim in zip(self._adr, self._dim):
-            v = h[a:a + fs * dim].reshape(fs, dim // 3, 3)
-            out.append(float(np.max(np.add.reduce(v[:, :, 0], axis=1))))
-        return out
+        d, view = self._views
+        if d is not data:
+            view = self._bind(data)
+        return np.maximum.reduce(np.add.reduce(view, axis=2, out=self._sums), axis=1, out=self._peaks).tolist()

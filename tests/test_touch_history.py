@@ -85,3 +85,17 @@ def test_the_default_reads_the_end_and_a_bad_value_is_named():
     env.close()
     with pytest.raises(ValueError, match="crush_at must be 'end'"):
         gym.make("simgrip/PickFragile-v6", crush_at="max")
+
+
+def test_a_peak_env_pickles_and_continues_alike():
+    import pickle
+
+    env = gym.make("simgrip/PickFragile-v6", crush_at="peak").unwrapped
+    env.reset(seed=4)
+    for _ in range(20):
+        env.step(np.array([-0.3, 0.2], np.float32))
+    copy = pickle.loads(pickle.dumps(env))
+    for _ in range(20):
+        a = np.array([-0.3, 0.5], np.float32)
+        one, other = env.step(a)[4], copy.step(a)[4]
+        assert one["peak_normal_force"].tolist() == other["peak_normal_force"].tolist()
