@@ -252,14 +252,15 @@ def _behind_residual(env, policy: str, residual):
         raise ValueError(f"--residual: {e}") from None
 
 
-def evaluate(env_id: str, policy: str, seeds, grid: str = "full", residual=None) -> dict:
+def evaluate(env_id: str, policy: str, seeds, grid: str = "full", residual=None, env_kwargs=None) -> dict:
     """Run ``policy`` on ``env_id`` (``gym.make``, its registered time limit; a retired id of
     ``simgrip.envs.RETIRED`` through :func:`~simgrip.envs.retired_spec`, its time limit as it was registered)
-    over ``seeds``, behind the scripted palm where ``residual`` names its actions (module docstring); the JSON
-    record.  ValueError naming ``--residual`` (the env closed first)."""
+    over ``seeds``, behind the scripted palm where ``residual`` names its actions (module docstring), the env
+    made with ``env_kwargs`` (``gym.make``'s keywords, recorded as ``env_kwargs`` when given); the JSON record.
+    ValueError naming ``--residual`` (the env closed first) or, from the env, the keyword."""
     from simgrip.envs import RETIRED, retired_spec
 
-    env = gym.make(retired_spec(env_id) if env_id in RETIRED else env_id)
+    env = gym.make(retired_spec(env_id) if env_id in RETIRED else env_id, **dict(env_kwargs or {}))
     try:
         if residual is not None:
             members = _residual_members(policy, grid, _task(env)[3])
@@ -277,6 +278,8 @@ def evaluate(env_id: str, policy: str, seeds, grid: str = "full", residual=None)
            "success_rate": best["success_rate"], "outcomes": best["outcomes"]}
     if residual is not None:
         out["residual"] = list(residual)
+    if env_kwargs:
+        out["env_kwargs"] = dict(env_kwargs)
     if len(rows) > 1:
         out.update({"grid": grid, "best": {k: v for k, v in best.items() if k != "outcomes"}, "members": rows})
     return out
@@ -297,6 +300,12 @@ def _seeds(text: str) -> list[int]:
     return list(range(lo, hi + 1))
 
 
+def _json_object(text: str) -> dict:
+    from simgrip.envs.evaluation import json_object  # (imported when used, as the other helpers)
+
+    return json_object(text)
+
+
 def main(argv=None) -> int:
     """The command line; returns the exit status (2 on a bad argument)."""
     import simgrip.envs  # noqa: F401  (registers the ids)
@@ -312,6 +321,8 @@ def main(argv=None) -> int:
     p.add_argument("--residual", nargs="+", default=None, metavar="NAME",
                    help="constant/openloop: the palm actions the scripted controller drives, the member the "
                         "curvature alone (simgrip.envs.scripted_residual)")
+    p.add_argument("--env-kwargs", type=_json_object, default=None, metavar="JSON",
+                   help="gym.make's keyword arguments, a JSON object ('{\"palm_ramp\": true}')")
     p.add_argument("--out", help="JSON file (default: stdout)")
     args = p.parse_args(argv)
     if args.out is not None:
@@ -320,11 +331,15 @@ def main(argv=None) -> int:
         except (ValueError, OSError) as e:
             p.error(str(e))
     try:
-        record = evaluate(args.env, args.policy, args.seeds, args.grid, args.residual)
+        record = evaluate(args.env, args.policy, args.seeds, args.grid, args.residual, args.env_kwargs)
     except ValueError as e:
-        if not str(e).startswith("--residual"):
+        if not str(e).startswith("--residual") and not args.env_kwargs:
             raise
-        p.error(str(e))
+        p.error(f"--env-kwargs: {e}" if not str(e).startswith("--residual") else str(e))
+    except TypeError as e:  # a keyword the env does not take
+        if not args.env_kwargs:
+            raise
+        p.error(f"--env-kwargs: {e}")
     text = json.dumps(record, indent=1) + "\n"
     if args.out is not None:
         with atomic_write(args.out, "w", option="--out") as f:

@@ -99,3 +99,21 @@ def test_a_peak_env_pickles_and_continues_alike():
         a = np.array([-0.3, 0.5], np.float32)
         one, other = env.step(a)[4], copy.step(a)[4]
         assert one["peak_normal_force"].tolist() == other["peak_normal_force"].tolist()
+
+
+def test_baselines_take_env_kwargs_and_name_a_bad_one(capsys):
+    """``python -m simgrip.envs.baselines --env-kwargs`` (the docs' table of the controllers under the ramp and
+    the peak rule): recorded in the JSON; a keyword the env refuses is one line naming --env-kwargs."""
+    import json
+
+    from simgrip.envs.baselines import main
+
+    assert main(["--env", "simgrip/PickFragile-v6", "--policy", "observation", "--seeds", "8000-8001",
+                 "--env-kwargs", '{"palm_ramp": true, "crush_at": "peak"}']) == 0
+    assert json.loads(capsys.readouterr().out)["env_kwargs"] == {"palm_ramp": True, "crush_at": "peak"}
+    for bad in ('{"crush_at": "max"}', '{"bogus": 1}'):
+        with pytest.raises(SystemExit) as exc:
+            main(["--env", "simgrip/PickFragile-v6", "--policy", "observation", "--seeds", "8000-8001",
+                  "--env-kwargs", bad])
+        err = capsys.readouterr().err
+        assert exc.value.code == 2 and len(err.strip().splitlines()) == 1 and "--env-kwargs" in err, err
