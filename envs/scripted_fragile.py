@@ -47,17 +47,31 @@ __all__ = ["CLAW_POLICIES", "CradleFragilePolicy", "ObservationFragilePolicy", "
            "AbsolutePlacePolicy"]
 
 
-class _Closing:
-    """The shared recipe: close slowly while probing upwards, freeze the curvature on a trigger, lift, hold."""
+#: the closing rate before first contact [action units a step]: the default, and on an env whose crush rule reads
+#: the peak within the control step (``crush_at="peak"``, :mod:`simgrip.envs.touch_history`), where a faster first
+#: touch's impact crushes light pieces: half of it, chosen on seeds 6100-6149 (``docs/environments.md``, "Forces
+#: within a control step")
+CLOSING_RATE, PEAK_CLOSING_RATE = 0.008, 0.004
 
-    def __init__(self, *, start: float = 0.6, rate: float = 0.008, rel_rate: float = 0.04, min_rate: float = 0.002,
-                 probe_speed: float = 0.1, lift_speed: float = 1.0, lift_ramp: int = 10):
-        self.start, self.rate, self.rel_rate, self.min_rate = start, rate, rel_rate, min_rate
+
+class _Closing:
+    """The shared recipe: close slowly while probing upwards, freeze the curvature on a trigger, lift, hold.
+
+    ``rate``: the closing rate before first contact (None: :data:`CLOSING_RATE`, or :data:`PEAK_CLOSING_RATE` on an
+    env with ``crush_at="peak"``, chosen at ``reset``)."""
+
+    def __init__(self, *, start: float = 0.6, rate: float | None = None, rel_rate: float = 0.04,
+                 min_rate: float = 0.002, probe_speed: float = 0.1, lift_speed: float = 1.0, lift_ramp: int = 10):
+        self._rate = rate
+        self.start, self.rel_rate, self.min_rate = start, rel_rate, min_rate
+        self.rate = CLOSING_RATE if rate is None else rate
         self.probe_speed = probe_speed
         self.lift_speed, self.lift_ramp = lift_speed, lift_ramp
 
     def reset(self, env, info=None):
         u = env.unwrapped
+        if self._rate is None:
+            self.rate = PEAK_CLOSING_RATE if getattr(u, "crush_at", "end") == "peak" else CLOSING_RATE
         sl = u.obs_slices
         self._i_kact = sl["kappa_actual"].start
         self._i_lift = sl["box_lift" if "box_lift" in sl else "workpiece_lift"]

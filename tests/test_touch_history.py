@@ -117,3 +117,21 @@ def test_baselines_take_env_kwargs_and_name_a_bad_one(capsys):
                   "--env-kwargs", bad])
         err = capsys.readouterr().err
         assert exc.value.code == 2 and len(err.strip().splitlines()) == 1 and "--env-kwargs" in err, err
+
+
+def test_the_controllers_close_gentler_where_the_peak_is_read():
+    """On a ``crush_at="peak"`` env the scripted controllers close at PEAK_CLOSING_RATE before first contact (a
+    faster first touch's impact crushes light pieces there); elsewhere at CLOSING_RATE, as every stored baseline
+    was run; a rate given explicitly is kept."""
+    from simgrip.envs.scripted_fragile import (CLOSING_RATE, PEAK_CLOSING_RATE, ObservationFragilePolicy,
+                                               SphereFragilePolicy)
+
+    for env_id, cls in (("simgrip/PickFragile-v6", ObservationFragilePolicy),
+                        ("simgrip/PickSphereFragile-v5", SphereFragilePolicy)):
+        for kwargs, want in (({}, CLOSING_RATE), ({"crush_at": "peak"}, PEAK_CLOSING_RATE)):
+            env = gym.make(env_id, **kwargs)
+            _, info = env.reset(seed=0)
+            for pol, rate in ((cls(), want), (cls(rate=0.01), 0.01)):
+                pol.reset(env, info)
+                assert pol.rate == rate
+            env.close()
