@@ -230,6 +230,7 @@ class PickEnv(CheckedStep, gym.Env):
     | ``kappa_range`` | (-10, 0) | curvature command bounds (dimensionless, low < high) |
     | ``kappa_tau`` | 0.1 | pneumatic lag [s] (0: none) |
     | ``palm_speed``, ``palm_range``, ``palm_start`` | 0.1, (0.05, 0.25), (0.105, 0.115) (cradle (0.13, 0.14)) | palm speed [m/s], target range, start range [m] |
+    | ``palm_ramp`` | False | the palm's target held over a control step (False) or ramped within it (:mod:`simgrip.envs.palm_servo`) |
     | ``target_height``, ``hold_time`` | 0.06 (cradle 0.08), 0.5 | success: box height gain [m] (more than curling the fingers alone gives: up to 4.7 cm pinched, 5.7 cm cradled), hold [s] |
     | ``w_lift``, ``w_success``, ``w_squeeze``, ``w_drop`` | 10, 20, 0.04, 10 | reward weights (>= 0) |
     | ``squeeze_margin``, ``drop_distance`` | 2.0, 0.02 | squeeze allowance (times the least normal force that holds), drop threshold [m] |

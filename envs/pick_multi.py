@@ -172,6 +172,7 @@ class PickMultiEnv(CheckedStep, gym.Env):
     | ``size_range``, ``mass_range``, ``friction_range``, ``offset_max``, ``yaw_range``, ``workpiece_height`` | see above | randomisation |
     | ``kappa_range``, ``kappa_tau`` | (-10, 0), 0.1 | curvature bounds, pneumatic lag [s] |
     | ``palm_speed``, ``palm_range``, ``palm_start`` | 0.1, (0.05, 0.25), (0.105, 0.115) | [m/s], [m], [m] |
+    | ``palm_ramp`` | False | the palm's target held over a control step or ramped within it (:mod:`simgrip.envs.palm_servo`) |
     | ``target_height``, ``hold_time`` | 0.06, 0.5 | success [m], [s] |
     | ``w_lift``, ``w_success``, ``w_squeeze``, ``w_drop``, ``squeeze_margin``, ``drop_distance`` | 10, 20, 0.04, 10, 2, 0.02 | reward and drop |
     | ``timestep``, ``frame_skip``, ``settle_time``, ``finger_damping_time``, ``finger_armature`` | 0.002, 10, 0.1, 0.02, 1e-5 | physics |
