@@ -336,10 +336,10 @@ def main(argv=None) -> int:
         if not str(e).startswith("--residual") and not args.env_kwargs:
             raise
         p.error(f"--env-kwargs: {e}" if not str(e).startswith("--residual") else str(e))
-    except TypeError as e:  # a keyword the env does not take
-        if not args.env_kwargs:
+    except Exception as e:  # a keyword the env does not take, or a setting the controllers do not drive
+        if not args.env_kwargs:  # (per_finger: three actions, read as the place's; render_mode "human": no display)
             raise
-        p.error(f"--env-kwargs: {e}")
+        p.error(f"--env-kwargs: {type(e).__name__}: {e} (with {json.dumps(args.env_kwargs)})")
     text = json.dumps(record, indent=1) + "\n"
     if args.out is not None:
         with atomic_write(args.out, "w", option="--out") as f:

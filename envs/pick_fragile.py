@@ -130,7 +130,7 @@ class _Fragile:
 
     def _crush_at(self, crush_at) -> None:
         """Check and set ``crush_at`` (before the parent builds its model: :meth:`_build` reads it)."""
-        if crush_at not in ("end", "peak"):
+        if not isinstance(crush_at, str) or crush_at not in ("end", "peak"):
             raise ValueError(f"crush_at must be 'end' (the force at the control step's end) or 'peak' (its largest "
                              f"value within the step), got {crush_at!r}")
         self.crush_at = crush_at

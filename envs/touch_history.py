@@ -12,7 +12,8 @@ physics steps (``crush_at="end"``, every registered id); within the step the for
   constraint forces the env's own end-of-step reader reads, so the history is the step's physics steps' forces;
 * :class:`TouchPeaks` reads those histories once per control step: per finger the largest, over the samples,
   of the summed normal forces [N].  Equal to a physics-step-by-physics-step replay's peaks
-  (:func:`simgrip.envs.substep_forces.step_with_peaks`), to the bit (``tests/test_touch_history.py``).
+  (:func:`simgrip.envs.substep_forces.step_with_peaks`) to rounding: NumPy sums a finger's contacts pairwise, the
+  env's reader one by one, 1-2 units in the last place apart where a finger has several (``tests/test_touch_history.py``).
 
 The history's layout (MuJoCo 4): per sensor, two bookkeeping entries, ``nsample`` sample times, then
 ``nsample`` samples of the sensor's ``dim`` values, a ring buffer: the order of the samples does not matter to
