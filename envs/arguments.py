@@ -168,7 +168,6 @@ def set_finger_arguments(env, *, render_mode, n_links, length, EI, rho, g, r_tip
     env.EI = check_positive("EI", EI)
     env.rho = check_positive("rho", rho)
     env.g = check_positive("g", g)
-    env.r_tip = check_positive("r_tip", r_tip)
     lo, hi = MIN_TIP_RADIUS * env.length, MAX_TIP_RADIUS * env.length
     env.r_tip = check_within("r_tip", r_tip, lo, hi, f"{MIN_TIP_RADIUS:g} to {MAX_TIP_RADIUS:g} times length = "
                              f"{env.length:g} m")

@@ -58,10 +58,6 @@ from simgrip.cli_outputs import clean_after_interrupt as _clean_after_interrupt,
 from simgrip.cli_outputs import drop_empty as _drop_empty
 
 
-#: argparse with a one-line error (status 2) and negative numbers read as values (:mod:`simgrip.command_parser`)
-_Parser = CommandParser
-
-
 def _add_state_options(p: argparse.ArgumentParser, grips=("free", "I", "II", "III")) -> None:
     p.add_argument("grip", help=f"one of {', '.join(grips)}")
     g = p.add_argument_group("rod, workpiece and curvature (dimensionless)")
@@ -80,8 +76,8 @@ def _add_state_options(p: argparse.ArgumentParser, grips=("free", "I", "II", "II
 
 def build_parser() -> argparse.ArgumentParser:
     """The argument parser of the ``simgrip`` command."""
-    parser = _Parser(prog="simgrip", description="Soft-finger grips: elastica reference, MuJoCo simulation, figures and benchmarks.")
-    sub = parser.add_subparsers(dest="command", required=True, parser_class=_Parser)
+    parser = CommandParser(prog="simgrip", description="Soft-finger grips: elastica reference, MuJoCo simulation, figures and benchmarks.")
+    sub = parser.add_subparsers(dest="command", required=True, parser_class=CommandParser)
 
     p = sub.add_parser("solve", help="solve the elastica boundary-value problem of one grip")
     _add_state_options(p)

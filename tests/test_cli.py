@@ -290,17 +290,22 @@ def test_a_value_argparse_cannot_read_is_one_line_naming_it(argv, prefix, needle
     assert len(err.strip().splitlines()) == 1 and err.startswith(f"{prefix}: error: ") and needle in err, err
 
 
+def _refused_in_one_line(argv, needle, capsys, tmp_path, monkeypatch):
+    """``main(argv)`` run in an empty folder: status 2, one line of stderr holding ``needle``, nothing written."""
+    monkeypatch.chdir(tmp_path)
+    assert main(argv) == 2
+    err = capsys.readouterr().err
+    assert len(err.strip().splitlines()) == 1 and needle in err, err
+    assert not list(tmp_path.iterdir())
+
+
 @pytest.mark.parametrize("argv, needle", [
     (["bench", "--quick", "--repeats", "99999999999999999999", "--out", "b"], "repeats must be an integer in [1, 100]"),
     (["simulate", "I", "--kappa", "-5", "--fingers", "999999999999999999999"], "fingers must be an integer in [2, 32]"),
 ])
 def test_work_it_cannot_finish_is_refused_by_name(argv, needle, capsys, tmp_path, monkeypatch):
     """Found by an audit: ``bench --repeats 10^20`` ran for ever, ``--fingers 10^21`` raised OverflowError."""
-    monkeypatch.chdir(tmp_path)
-    assert main(argv) == 2
-    err = capsys.readouterr().err
-    assert len(err.strip().splitlines()) == 1 and needle in err, err
-    assert not list(tmp_path.iterdir())
+    _refused_in_one_line(argv, needle, capsys, tmp_path, monkeypatch)
 
 
 @pytest.mark.parametrize("argv, needle", [
@@ -316,11 +321,7 @@ def test_work_it_cannot_finish_is_refused_by_name(argv, needle, capsys, tmp_path
 ])
 def test_an_option_the_command_would_ignore_is_refused(argv, needle, capsys, tmp_path, monkeypatch):
     """Found by an audit: each of these ran and silently ignored the option (the same output as without it)."""
-    monkeypatch.chdir(tmp_path)
-    assert main(argv) == 2
-    err = capsys.readouterr().err
-    assert len(err.strip().splitlines()) == 1 and needle in err, err
-    assert not list(tmp_path.iterdir())
+    _refused_in_one_line(argv, needle, capsys, tmp_path, monkeypatch)
 
 
 def test_a_scheduler_not_reached_leaves_no_folder_and_no_timing_first(capsys, tmp_path):

@@ -142,7 +142,7 @@ def _call(spec):
 MAX_REPEATS = 100
 
 
-def _check_positive(name, value, most: int = MAX_REPEATS):
+def _check_count(name, value, most: int = MAX_REPEATS):
     if value is not None and (isinstance(value, bool) or int(value) != value or not 1 <= int(value) <= most):
         raise ValueError(f"{name} must be an integer in [1, {most}], got {value!r}")
 
@@ -187,7 +187,7 @@ def run_bench(
     from simgrip.harness.bench_envs import env_speed
     from simgrip.parallel.runner import RunnerOptions, run_tasks
 
-    _check_positive("repeats", repeats)
+    _check_count("repeats", repeats)
     options = RunnerOptions(jobs=jobs, progress=progress) if options is None else options
     out = check_output_dir(out_dir, option="out_dir")
     check_output_files_in(out, OUTPUT_FILES, "out_dir")  # before the minutes of work, not at the end
