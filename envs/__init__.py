@@ -9,11 +9,11 @@ id                                what                                      max 
 ``simgrip/Pick-v1``               Grip I: palm-down tip pinch (50 Hz)       200 (4 s)
 ``simgrip/PickCradle-v1``         Grip III: cradle from a pedestal (50 Hz)  250 (5 s)
 ``simgrip/PickMulti-v0``          K fingers around a box, cylinder, sphere  200 (4 s)
-``simgrip/PickFragile-v6``        Grip I pinch of a fragile workpiece       300 (6 s)
-``simgrip/PickMultiFragile-v6``   K fingers around a fragile workpiece      300 (6 s)
-``simgrip/PlaceFragile-v7``       pinch, carry to a target, set down        400 (8 s)
-``simgrip/PickCradleFragile-v5``  Grip III cradle, hand start height drawn  300 (6 s)
-``simgrip/PickSphereFragile-v5``  K fingers around a sphere, height drawn   300 (6 s)
+``simgrip/PickFragile-v7``        Grip I pinch of a fragile workpiece       300 (6 s)
+``simgrip/PickMultiFragile-v7``   K fingers around a fragile workpiece      300 (6 s)
+``simgrip/PlaceFragile-v8``       pinch, carry to a target, set down        400 (8 s)
+``simgrip/PickCradleFragile-v6``  Grip III cradle, hand start height drawn  300 (6 s)
+``simgrip/PickSphereFragile-v6``  K fingers around a sphere, height drawn   300 (6 s)
 ================================  ========================================  =========
 
 The five fragile tasks (a hidden crush limit per episode) command the curvature through a valve (the action
@@ -25,9 +25,10 @@ the pinch, the K fingers and the pick-and-place charge no drop penalty, so a cru
 (:mod:`simgrip.envs.pick_fragile_v6`, :mod:`simgrip.envs.pick_place_v5`); the pick-and-place pays a grip that
 holds the workpiece up 0.5 s, the pinch's success, as a milestone (:mod:`simgrip.envs.pick_place_v6`), and
 keeps the lift pay of a carried workpiece as it is lowered, paying its set-down over the target
-(:mod:`simgrip.envs.pick_place_v7`).
-Their older versions are retired, not registered: ``PickFragile`` and ``PickMultiFragile`` v0-v5,
-``PickCradleFragile`` and ``PickSphereFragile`` v0-v4 and ``PlaceFragile`` v0-v6 (``RETIRED``);
+(:mod:`simgrip.envs.pick_place_v7`); the palm's target moves along a line within each control step and the crush
+rule reads each finger's largest force within it (:mod:`simgrip.envs.pick_fragile_v7`).
+Their older versions are retired, not registered: ``PickFragile`` and ``PickMultiFragile`` v0-v6,
+``PickCradleFragile`` and ``PickSphereFragile`` v0-v5 and ``PlaceFragile`` v0-v7 (``RETIRED``);
 ``gym.make(retired_spec("simgrip/PickFragile-v2"))`` still builds one exactly, with its time limit.
 
 >>> import gymnasium as gym, simgrip.envs
@@ -54,18 +55,13 @@ _ENVS = {
     "simgrip/Pick-v1": ("simgrip.envs.pick:PickEnv", {"grip": "I"}, 200),
     "simgrip/PickCradle-v1": ("simgrip.envs.pick:PickEnv", {"grip": "III"}, 250),
     "simgrip/PickMulti-v0": ("simgrip.envs.pick_multi:PickMultiEnv", {}, 200),
-    # the newest of each: the valve, the tactile forces on the sensor's scale (simgrip.envs.pick_fragile_v3)
-    # the pinch and the K fingers from a pre-grasp (simgrip.envs.pick_fragile_v4), without the per-step touch
-    # pay (simgrip.envs.pick_fragile_v5), without the drop penalty (simgrip.envs.pick_fragile_v6)
-    "simgrip/PickFragile-v6": ("simgrip.envs.pick_fragile_v6:FragilePickEnvV6", {}, 300),
-    "simgrip/PickMultiFragile-v6": ("simgrip.envs.pick_fragile_v6:FragilePickMultiEnvV6", {}, 300),
-    # pick-and-place from a pre-grasp, no touch pay (simgrip.envs.pick_place_v4), no drop penalty
-    # (simgrip.envs.pick_place_v5), paying a grip that holds (simgrip.envs.pick_place_v6) and the set-down
-    # (simgrip.envs.pick_place_v7)
-    "simgrip/PlaceFragile-v7": ("simgrip.envs.pick_place_v7:FragilePlaceEnvV7", {}, 400),
-    # the claws paid for approaching the grasp height, not per touching step (simgrip.envs.pick_claw_v5)
-    "simgrip/PickCradleFragile-v5": ("simgrip.envs.pick_claw_v5:FragileCradleEnvV5", {}, 300),
-    "simgrip/PickSphereFragile-v5": ("simgrip.envs.pick_claw_v5:FragileSphereEnvV5", {}, 300),
+    # the newest of each: the palm's target ramped within the control step and the crush rule on each finger's
+    # peak force within it (simgrip.envs.pick_fragile_v7), over the versions retired below
+    "simgrip/PickFragile-v7": ("simgrip.envs.pick_fragile_v7:FragilePickEnvV7", {}, 300),
+    "simgrip/PickMultiFragile-v7": ("simgrip.envs.pick_fragile_v7:FragilePickMultiEnvV7", {}, 300),
+    "simgrip/PlaceFragile-v8": ("simgrip.envs.pick_fragile_v7:FragilePlaceEnvV8", {}, 400),
+    "simgrip/PickCradleFragile-v6": ("simgrip.envs.pick_fragile_v7:FragileCradleEnvV6", {}, 300),
+    "simgrip/PickSphereFragile-v6": ("simgrip.envs.pick_fragile_v7:FragileSphereEnvV6", {}, 300),
 }
 #: Retired ids (issue 18), not registered: id -> (entry point, kwargs, max_episode_steps), as they were
 #: registered.  Each task's newest version (in ``_ENVS``) subclasses its class; ``gym.make`` of a retired id
@@ -113,14 +109,23 @@ RETIRED = {
     "simgrip/PlaceFragile-v5": ("simgrip.envs.pick_place_v5:FragilePlaceEnvV5", {}, 400),
     # pick-and-place paying a grip that holds (simgrip.envs.pick_place_v6); lowering takes the lift pay back
     "simgrip/PlaceFragile-v6": ("simgrip.envs.pick_place_v6:FragilePlaceEnvV6", {}, 400),
+    # the valve, the tactile scale (simgrip.envs.pick_fragile_v3), the pinch and the K fingers from a pre-grasp
+    # (simgrip.envs.pick_fragile_v4) without the touch pay (v5) and the drop penalty (simgrip.envs.pick_fragile_v6);
+    # the place paying the set-down (simgrip.envs.pick_place_v7); the claws paid for the approach
+    # (simgrip.envs.pick_claw_v5): the palm's target held over each control step, the crush rule at its end
+    "simgrip/PickFragile-v6": ("simgrip.envs.pick_fragile_v6:FragilePickEnvV6", {}, 300),
+    "simgrip/PickMultiFragile-v6": ("simgrip.envs.pick_fragile_v6:FragilePickMultiEnvV6", {}, 300),
+    "simgrip/PlaceFragile-v7": ("simgrip.envs.pick_place_v7:FragilePlaceEnvV7", {}, 400),
+    "simgrip/PickCradleFragile-v5": ("simgrip.envs.pick_claw_v5:FragileCradleEnvV5", {}, 300),
+    "simgrip/PickSphereFragile-v5": ("simgrip.envs.pick_claw_v5:FragileSphereEnvV5", {}, 300),
 }
 ENV_IDS = tuple(k for k, v in _ENVS.items() if v[0] == "simgrip.envs.pick:PickEnv")
 MULTI_ENV_IDS = tuple(k for k, v in _ENVS.items() if v[0] == "simgrip.envs.pick_multi:PickMultiEnv")
 FRAGILE_ENV_IDS = tuple(k for k, v in _ENVS.items()
                         if v[0].split(":")[0] in ("simgrip.envs.pick_fragile_v3", "simgrip.envs.pick_fragile_v4",
                                                   "simgrip.envs.pick_fragile_v5", "simgrip.envs.pick_fragile_v6",
-                                                  "simgrip.envs.pick_claw_v5",
-                                                  "simgrip.envs.pick_place_v7"))
+                                                  "simgrip.envs.pick_claw_v5", "simgrip.envs.pick_place_v7",
+                                                  "simgrip.envs.pick_fragile_v7"))
 
 
 def retired_spec(env_id: str) -> EnvSpec:

@@ -1,6 +1,6 @@
 """Non-learned baselines of the fragile pick tasks, one command each, written as JSON (issue 18).
 
-``python -m simgrip.envs.baselines --env simgrip/PickFragile-v6 --policy constant --seeds 5000-5049 --out F.json``
+``python -m simgrip.envs.baselines --env simgrip/PickFragile-v7 --policy constant --seeds 5000-5049 --out F.json``
 
 ``--env``: a registered fragile id (``simgrip.envs.FRAGILE_ENV_IDS``) or a retired one (``simgrip.envs.RETIRED``,
 built through :func:`~simgrip.envs.retired_spec`: the stored JSONs of ``docs/baselines/`` name them).

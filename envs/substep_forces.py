@@ -13,6 +13,9 @@ how many successes had one.  Measured (``docs/environments.md``, "Forces within 
 
     python -m simgrip.envs.substep_forces --env simgrip/PickSphereFragile-v5 --seeds 8000-8049
     python -m simgrip.envs.substep_forces --env simgrip/PickSphereFragile-v5 --seeds 8000-8049 --palm-ramp
+
+(the ids then registered, retired since by the versions that ramp the palm and read the peak,
+:mod:`simgrip.envs.pick_fragile_v7`; a retired id is made through :func:`simgrip.envs.retired_spec`).
 """
 
 from __future__ import annotations
@@ -87,7 +90,9 @@ def force_peaks(env_id: str, seeds, *, policy: str = "observation", env_kwargs=N
     from simgrip.envs.outcome import outcome
     from simgrip.envs.scripted_policies import policy_maker
 
-    env = gym.make(env_id, **dict(env_kwargs or {}))
+    from simgrip.envs import RETIRED, retired_spec
+
+    env = gym.make(retired_spec(env_id) if env_id in RETIRED else env_id, **dict(env_kwargs or {}))
     try:
         make = policy_maker(env, policy)
         ratios, unseen, ends, unseen_ok = [], 0, {}, 0
@@ -125,17 +130,18 @@ def main(argv=None) -> int:
     p = CommandParser(prog="python -m simgrip.envs.substep_forces",
                                 description="The fingers' normal forces within a control step against the value "
                                             "at its end, under the task's scripted controller (JSON on stdout).")
-    p.add_argument("--env", required=True, help="a registered fragile pick id")
+    p.add_argument("--env", required=True, help="a fragile pick id, registered or retired")
     p.add_argument("--seeds", default="8000-8049", type=_seeds, help="A-B, inclusive (default 8000-8049)")
     p.add_argument("--policy", default="observation", choices=("observation", "oracle"))
     p.add_argument("--palm-ramp", action="store_true", help="the env made with palm_ramp=True")
 
     def run(argv) -> int:
         args = p.parse_args(argv)
-        from simgrip.envs import FRAGILE_ENV_IDS
+        from simgrip.envs import FRAGILE_ENV_IDS, RETIRED
 
-        if args.env not in FRAGILE_ENV_IDS:
-            p.error(f"--env must be a registered fragile id ({', '.join(FRAGILE_ENV_IDS)}), got {args.env!r}")
+        if args.env not in FRAGILE_ENV_IDS and args.env not in RETIRED:
+            p.error(f"--env must be a fragile id, registered ({', '.join(FRAGILE_ENV_IDS)}) or retired, "
+                    f"got {args.env!r}")
         rec = force_peaks(args.env, args.seeds, policy=args.policy,
                           env_kwargs={"palm_ramp": True} if args.palm_ramp else None)
         print(json.dumps(rec, indent=1))

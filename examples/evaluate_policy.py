@@ -8,7 +8,7 @@ discounted by ``--gamma`` (default 0.99, SB3's default): the quantity PPO and SA
 settles below a controller's success rate while its discounted return is above the controller's is not failing
 to optimise: under that discount, its faster and riskier policy is worth more.
 
-    python examples/evaluate_policy.py --env simgrip/PickFragile-v6 (--model ZIP [--algo ppo|sac] |
+    python examples/evaluate_policy.py --env simgrip/PickFragile-v7 (--model ZIP [--algo ppo|sac] |
         --policy observation|oracle) [--action-offset A0 A1] [--frame-stack N] [--residual NAME ...]
         [--scripted-start P] [--env-kwargs JSON] [--episodes 50] [--seed 8000] [--gamma 0.99]
         [--crush-charge F ...] [--json]
@@ -36,8 +36,8 @@ lifts and then fails in the carry (crushed or dropped after the carry began) aga
 On a fragile task the JSON also has ``by_mass``: the outcomes counted per third of the task's log mass range
 (the hidden mass of each episode; keys ``"5-18 g"``, ...; :func:`simgrip.envs.light_bias.mass_bins`): which
 workpieces a policy loses (a fast closing crushes the lightest).  And ``crushed_after_touch``: the crushed episodes
-counted by the control steps from the first step any finger pressed on the workpiece (``info["normal_force"]``
-above 0) to the crush (keys ``"0"``: crushed within the step of the first touch, before the policy could answer
+counted by the control steps from the first step any finger pressed on the workpiece (``info["normal_force"]``,
+or ``info["peak_normal_force"]`` where the crush rule reads the peak, above 0) to the crush (keys ``"0"``: crushed within the step of the first touch, before the policy could answer
 it; ``"1-4"``, ``"5-24"``, ``"25+"``): a crush on touch is the approach's speed, a later one the squeeze.
 And ``crush_overrun``: over the crushed episodes, the median and largest relative overrun ``x = (F - L) / L`` of
 the crushing step's largest finger force ``F`` over the episode's hidden limit ``L`` (``None`` without a crush):
@@ -118,7 +118,7 @@ def by_mass(results, masses, edges) -> dict:
 
 def crushed_after_touch(results, touch_steps) -> dict:
     """The crushed episodes counted per :data:`TOUCH_BINS` bin of the control steps from the first touch to the
-    crush (``touch_steps[i]``: the 1-based step of episode ``i`` whose ``info["normal_force"]`` was first above 0,
+    crush (``touch_steps[i]``: the 1-based step of episode ``i`` whose force (:func:`crush_force`) was first above 0,
     ``None`` if none; the crush is the episode's last step), keyed ``"0"``, ``"1-4"``, ``"5-24"``, ``"25+"`` (every
     bin kept, 0 where empty)."""
     counts = dict.fromkeys((key for key, _, _ in TOUCH_BINS), 0)
@@ -129,13 +129,19 @@ def crushed_after_touch(results, touch_steps) -> dict:
     return counts
 
 
+def crush_force(info) -> list:
+    """Each finger's force the crush rule read in a step's ``info`` [N]: ``peak_normal_force`` (the largest within
+    the step) where the env reads the peak (``crush_at="peak"``), else ``normal_force`` (the step's end)."""
+    return info.get("peak_normal_force", info["normal_force"])
+
+
 def crush_overrun(results) -> dict | None:
     """``{"crushes", "median", "max"}`` of the relative overrun ``(F - L) / L`` over the crushed episodes: ``F``
-    the largest of the last step's ``info["normal_force"]`` [N] (the crushing step's), ``L`` its
+    the largest of the last step's :func:`crush_force` [N] (the crushing step's), ``L`` its
     ``info["crush_limit"]`` [N]; ``None`` when no episode was crushed."""
     from simgrip.envs.pick_fragile_v1 import crush_overrun as overrun  # the charge's own x
 
-    x = [overrun(max(r.info["normal_force"]), r.info["crush_limit"]) for r in results if outcome(r.info) == "crushed"]
+    x = [overrun(max(crush_force(r.info)), r.info["crush_limit"]) for r in results if outcome(r.info) == "crushed"]
     return {"crushes": len(x), "median": statistics.median(x), "max": max(x)} if x else None
 
 
@@ -168,7 +174,7 @@ def carried(results) -> dict:
 
 def main(argv=None) -> dict:
     p = CommandParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
-    p.add_argument("--env", required=True, help="registered env id, e.g. simgrip/PickFragile-v6, or a retired "
+    p.add_argument("--env", required=True, help="registered env id, e.g. simgrip/PickFragile-v7, or a retired "
                    "simgrip one (simgrip.envs.RETIRED: the models of docs/baselines/ were trained on them)")
     p.add_argument("--env-kwargs", type=json_object, default={}, metavar="JSON",
                    help="keyword arguments of gym.make, as the model was trained with")
@@ -251,7 +257,7 @@ def main(argv=None) -> dict:
                 then(env_, info, seed)
 
         def on_step(info, n):
-            if touches[-1] is None and "normal_force" in info and max(info["normal_force"]) > 0.0:
+            if touches[-1] is None and "normal_force" in info and max(crush_force(info)) > 0.0:
                 touches[-1] = n
 
         results = run_episodes(env, act, args.episodes, args.seed, on_reset=on_reset_and_mass, on_step=on_step,

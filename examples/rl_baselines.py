@@ -431,7 +431,7 @@ def _main_combine(argv: list[str]) -> int:
 def build_parser() -> argparse.ArgumentParser:
     """The run mode's options (``--combine`` has its own); tests build ``run_command``'s arguments from it."""
     p = CommandParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
-    p.add_argument("--env", required=True, help="registered env id, e.g. simgrip/PickFragile-v6, or a retired "
+    p.add_argument("--env", required=True, help="registered env id, e.g. simgrip/PickFragile-v7, or a retired "
                    "simgrip one (simgrip.envs.RETIRED: the runs of docs/baselines/ name them)")
     p.add_argument("--env-kwargs", type=_json_object, default={}, metavar="JSON",
                    help="keyword arguments of gym.make as a JSON object, e.g. '{\"w_touch\": 0}' (an ablation; "

@@ -15,7 +15,7 @@ def load_example(name: str, tag: str = ""):
     return module
 
 
-def rl_baselines_args(mod, env: str = "simgrip/PickFragile-v6", **overrides):
+def rl_baselines_args(mod, env: str = "simgrip/PickFragile-v7", **overrides):
     """``examples/rl_baselines.py``'s parsed options (``mod`` is the loaded script) as its ``main`` passes them to
     ``run_command``: the script's own parser's defaults, so a new option cannot be missing, a short budget, ``env``,
     and ``overrides`` (each must be an option the parser has)."""

@@ -7,7 +7,7 @@ import pytest
 import simgrip.envs  # noqa: F401  (registers the ids)
 from simgrip.envs.action_offset import PROBE_OFFSET, ActionOffset
 
-ENV = "simgrip/PickFragile-v6"
+ENV = "simgrip/PickFragile-v7"
 
 
 def _rollout(env, actions, seed=8000):
@@ -57,7 +57,7 @@ def test_a_discrete_action_space_is_refused():
         ActionOffset(gym.make("CartPole-v1"), (0.0,))
 
 
-@pytest.mark.parametrize("env_id", ["simgrip/PickFragile-v6", "simgrip/PickMultiFragile-v6"])
+@pytest.mark.parametrize("env_id", ["simgrip/PickFragile-v7", "simgrip/PickMultiFragile-v7"])
 def test_the_probe_alone_is_no_solution(env_id):
     # the zero action behind PROBE_OFFSET is a constant schedule: it must not pick the workpieces up by itself
     env = ActionOffset(gym.make(env_id), PROBE_OFFSET)

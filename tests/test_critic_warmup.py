@@ -13,7 +13,7 @@ from simgrip.envs.evaluation import critic_warmup_conflict, make_env  # noqa: E4
 
 
 def _ppo(**kwargs):
-    env = make_vec_env(lambda: make_env("simgrip/PickFragile-v6", {}), n_envs=1, seed=5)
+    env = make_vec_env(lambda: make_env("simgrip/PickFragile-v7", {}), n_envs=1, seed=5)
     return PPO("MlpPolicy", env, seed=5, verbose=0, n_steps=64, batch_size=32, n_epochs=2, **kwargs)
 
 

@@ -35,8 +35,8 @@ def _closing_episode(env, seed: int) -> list:
 
 
 def test_the_charge_lowers_the_crushing_steps_reward_and_nothing_else():
-    plain = _closing_episode(gym.make("simgrip/PickMultiFragile-v6"), 3)
-    charged = _closing_episode(CrushCharge(gym.make("simgrip/PickMultiFragile-v6"), 7.5), 3)
+    plain = _closing_episode(gym.make("simgrip/PickMultiFragile-v7"), 3)
+    charged = _closing_episode(CrushCharge(gym.make("simgrip/PickMultiFragile-v7"), 7.5), 3)
     assert len(plain) == len(charged) and plain[-1][2] and charged[-1][2]  # both end in the crush
     for (o0, r0, c0, _), (o1, r1, c1, i1) in zip(plain, charged):
         assert np.array_equal(o0, o1) and c0 == c1
@@ -44,7 +44,7 @@ def test_the_charge_lowers_the_crushing_steps_reward_and_nothing_else():
 
 
 def test_the_charge_starts_at_its_step_counted_over_episodes():
-    env = CrushCharge(gym.make("simgrip/PickMultiFragile-v6"), 7.5, start=1)
+    env = CrushCharge(gym.make("simgrip/PickMultiFragile-v7"), 7.5, start=1)
     first = _closing_episode(env, 3)
     n = len(first)
     env.start = n + len(first)  # the second episode (the same seed: as long) crushes on its last step, step 2n - 1
@@ -64,7 +64,7 @@ def test_the_charge_starts_at_its_step_counted_over_episodes():
 ])
 def test_bad_arguments_name_themselves(kwargs, word):
     with pytest.raises(ValueError, match=word):
-        CrushCharge(gym.make("simgrip/PickFragile-v6"), **kwargs)
+        CrushCharge(gym.make("simgrip/PickFragile-v7"), **kwargs)
 
 
 def test_a_task_without_a_crush_is_refused():
@@ -90,9 +90,9 @@ def test_evaluate_policy_crush_charge_is_the_return_of_an_env_that_charges_it(ca
     from simgrip.envs.evaluation import run_episodes
 
     module = _example("evaluate_policy")
-    # the cradle controller crushes seed 8006's piece and holds 8005's (test above)
-    out = module.main(["--env", "simgrip/PickCradleFragile-v5", "--policy", "observation", "--episodes", "2",
-                       "--seed", "8005", "--gamma", "0.98", "--crush-charge", "0", "10", "--json"])
+    # the cradle controller crushes seed 8011's piece and holds 8010's
+    out = module.main(["--env", "simgrip/PickCradleFragile-v6", "--policy", "observation", "--episodes", "2",
+                       "--seed", "8010", "--gamma", "0.98", "--crush-charge", "0", "10", "--json"])
     assert out["outcomes"] == {"crushed": 1, "success": 1} and set(out["crush_charged_return"]) == {"0", "10"}
 
     class Charged(gym.Wrapper):
@@ -100,9 +100,9 @@ def test_evaluate_policy_crush_charge_is_the_return_of_an_env_that_charges_it(ca
             obs, reward, terminated, truncated, info = self.env.step(action)
             return obs, reward - (10.0 if info["crushed"] else 0.0), terminated, truncated, info
 
-    env = Charged(gym.make("simgrip/PickCradleFragile-v5"))
+    env = Charged(gym.make("simgrip/PickCradleFragile-v6"))
     act, on_reset = module._scripted(env, "observation")
-    results = run_episodes(env, act, 2, 8005, on_reset=on_reset, gamma=0.98)
+    results = run_episodes(env, act, 2, 8010, on_reset=on_reset, gamma=0.98)
     env.close()
     crushed = [r for r in results if r.info["crushed"]]
     assert len(crushed) == 1 and out["crush_weight"] == pytest.approx(0.98 ** (crushed[0].length - 1) / 2, rel=1e-12)
@@ -113,7 +113,7 @@ def test_evaluate_policy_crush_charge_is_the_return_of_an_env_that_charges_it(ca
 @pytest.mark.parametrize("value", ["-1", "nan", "inf", "x"])
 def test_evaluate_policy_refuses_a_bad_crush_charge(value, capsys):
     with pytest.raises(SystemExit) as e:
-        _example("evaluate_policy").main(["--env", "simgrip/PickFragile-v6", "--policy", "observation",
+        _example("evaluate_policy").main(["--env", "simgrip/PickFragile-v7", "--policy", "observation",
                                           "--crush-charge", value])
     assert e.value.code == 2 and "--crush-charge" in capsys.readouterr().err
 
@@ -134,7 +134,7 @@ def test_train_sb3_crush_charge_charges_the_training_crushes_from_its_step(tmp_p
     import csv
 
     mod = _example("train_sb3")
-    common = ["--algo", "ppo", "--env", "simgrip/PickFragile-v6", "--seed", "2", "--action-offset", "-0.4", "0.2",
+    common = ["--algo", "ppo", "--env", "simgrip/PickFragile-v7", "--seed", "2", "--action-offset", "-0.4", "0.2",
               "--steps", "2048", "--eval-episodes", "1", "--eval-seed", "8330"]
     runs = {}
     for key, extra in (("plain", []), ("charged", ["--crush-charge", "10"]),
@@ -163,10 +163,10 @@ def test_train_sb3_crush_charge_charges_the_training_crushes_from_its_step(tmp_p
 
 def test_train_sb3_crush_charge_refusals_exit_2(tmp_path, capsys):
     for argv in (["--env", "simgrip/Pick-v1", "--crush-charge", "1"],
-                 ["--env", "simgrip/PickFragile-v6", "--crush-charge", "-1"],
-                 ["--env", "simgrip/PickFragile-v6", "--crush-charge", "nan"],
-                 ["--env", "simgrip/PickFragile-v6", "--crush-charge-from", "10"],
-                 ["--env", "simgrip/PickFragile-v6", "--crush-charge", "1", "--crush-charge-from", "-1"]):
+                 ["--env", "simgrip/PickFragile-v7", "--crush-charge", "-1"],
+                 ["--env", "simgrip/PickFragile-v7", "--crush-charge", "nan"],
+                 ["--env", "simgrip/PickFragile-v7", "--crush-charge-from", "10"],
+                 ["--env", "simgrip/PickFragile-v7", "--crush-charge", "1", "--crush-charge-from", "-1"]):
         with pytest.raises(SystemExit) as e:
             _example("train_sb3").main(["--algo", "ppo", *argv, "--out", str(tmp_path / "o")])
         assert e.value.code == 2 and "--crush-charge" in capsys.readouterr().err.strip().splitlines()[-1]

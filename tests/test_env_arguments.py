@@ -142,7 +142,7 @@ def test_reset_refuses_bad_seeds_and_options_by_name(env_id, kwargs, name):
         env.close()
 
 
-@pytest.mark.parametrize("env_id", ["simgrip/Pick-v1", "simgrip/PickMulti-v0", "simgrip/PickSphereFragile-v5"])
+@pytest.mark.parametrize("env_id", ["simgrip/Pick-v1", "simgrip/PickMulti-v0", "simgrip/PickSphereFragile-v6"])
 def test_a_palm_height_within_palm_range_is_the_episodes(env_id):
     env = gym.make(env_id)
     try:
@@ -156,8 +156,8 @@ def test_a_palm_height_within_palm_range_is_the_episodes(env_id):
         env.close()
 
 
-@pytest.mark.parametrize("env_id", ["simgrip/PickMulti-v0", "simgrip/PickMultiFragile-v6",
-                                    "simgrip/PickSphereFragile-v5"])
+@pytest.mark.parametrize("env_id", ["simgrip/PickMulti-v0", "simgrip/PickMultiFragile-v7",
+                                    "simgrip/PickSphereFragile-v6"])
 @pytest.mark.parametrize("kwargs, name", [
     ({"mass_range": (0.01, 1000.0)}, "mass_range"), ({"friction_range": (0.1, 1e12)}, "friction_range"),
     ({"offset_max": 1e12}, "offset_max"), ({"offset_max": 0.1}, "offset_max"),

@@ -11,7 +11,8 @@ IDS = ["simgrip/Pick-v1", "simgrip/PickMulti-v0", "simgrip/PickFragile-v0", "sim
        "simgrip/PickFragile-v4", "simgrip/PickMultiFragile-v4", "simgrip/PickFragile-v5",
        "simgrip/PickMultiFragile-v5", "simgrip/PickFragile-v6", "simgrip/PickMultiFragile-v6", "simgrip/PlaceFragile-v3", "simgrip/PlaceFragile-v4", "simgrip/PlaceFragile-v5", "simgrip/PlaceFragile-v6", "simgrip/PlaceFragile-v7",
        "simgrip/PickCradleFragile-v4", "simgrip/PickSphereFragile-v4", "simgrip/PickCradleFragile-v5",
-       "simgrip/PickSphereFragile-v5"]
+       "simgrip/PickSphereFragile-v5", "simgrip/PickFragile-v7", "simgrip/PickMultiFragile-v7",
+       "simgrip/PlaceFragile-v8", "simgrip/PickCradleFragile-v6", "simgrip/PickSphereFragile-v6"]
 
 
 @pytest.mark.parametrize("env_id", IDS)

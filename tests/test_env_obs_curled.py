@@ -68,7 +68,7 @@ def test_sphere_task_rollout_clips_as_the_full_clip():
 
     import simgrip.envs  # noqa: F401  (registers the ids)
 
-    env = gym.make("simgrip/PickSphereFragile-v5").unwrapped
+    env = gym.make("simgrip/PickSphereFragile-v6").unwrapped
     rng = np.random.default_rng(3)
     env.reset(seed=7)
     curled = 0
@@ -103,7 +103,7 @@ def test_cradle_rollout_clips_as_the_full_clip():
 
     import simgrip.envs  # noqa: F401  (registers the ids)
 
-    env = gym.make("simgrip/PickCradleFragile-v5").unwrapped
+    env = gym.make("simgrip/PickCradleFragile-v6").unwrapped
     rng = np.random.default_rng(0)
     env.reset(seed=0)
     shape = env.obs_slices["finger_shape"]

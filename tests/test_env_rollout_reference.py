@@ -18,7 +18,9 @@ replayed through ``retired_spec``; ids registered since were appended by the sam
 PickMultiFragile-v4, recorded at 5aaecbb's successors, whose env layer gives the recorded ids' bytes; PickFragile-v5,
 PickMultiFragile-v5, PickCradleFragile-v5 and PickSphereFragile-v5 at a9625e7 with v5 added, appended without
 re-recording the others; PlaceFragile-v4 likewise; PickFragile-v6 and PickMultiFragile-v6 with v6 added, the
-others' digests reproduced unchanged; PlaceFragile-v5 likewise, then PlaceFragile-v6 and PlaceFragile-v7).  The physics is MuJoCo's: the reference holds for the MuJoCo versions
+others' digests reproduced unchanged; PlaceFragile-v5 likewise, then PlaceFragile-v6 and PlaceFragile-v7;
+PickFragile-v7, PickMultiFragile-v7, PlaceFragile-v8, PickCradleFragile-v6 and PickSphereFragile-v6 under MuJoCo 4.0.1,
+the others' digests reproduced unchanged).  The physics is MuJoCo's: the reference holds for the MuJoCo versions
 stored beside it (the one it was recorded with and each later one whose replay gave every digest,
 ``--add-version``: ``tests/reference_versions.py``); another version skips, saying so.  An intended change
 of an env's output regenerates the file with the command above.

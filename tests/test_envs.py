@@ -89,7 +89,7 @@ def test_headless_rendering_check_env_and_frame(render_backend, tmp_path):
         res["box"] = int(((b > 150) & (b - r > 80)).sum())  # blue box
         res["std"] = float(frame.std())
         # wider than the model's 640-pixel offscreen buffer: failed at the first render with MuJoCo's own message
-        env = gym.make("simgrip/PickFragile-v6", render_mode="rgb_array", width=800, height=600)
+        env = gym.make("simgrip/PickFragile-v7", render_mode="rgb_array", width=800, height=600)
         env.reset(seed=0)
         res["wide"] = list(env.render().shape)
         env.close()

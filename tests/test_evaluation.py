@@ -98,19 +98,19 @@ def test_make_env_names_the_option_it_refuses():
     env = make_env("simgrip/PickFragile-v2", {"w_touch": 0.0}, (-0.4, 0.2))  # a retired id, through its spec
     assert isinstance(env, ActionOffset) and env.spec.id == "simgrip/PickFragile-v2" and env.unwrapped.w_touch == 0.0
     env.close()
-    with pytest.raises(ValueError, match="^--env-kwargs: simgrip/PickFragile-v6 does not take"):
-        make_env("simgrip/PickFragile-v6", {"w_nope": 1})
+    with pytest.raises(ValueError, match="^--env-kwargs: simgrip/PickFragile-v7 does not take"):
+        make_env("simgrip/PickFragile-v7", {"w_nope": 1})
     with pytest.raises(ValueError, match="^--action-offset: offset must be 2 finite numbers"):
-        make_env("simgrip/PickFragile-v6", None, (0.1,))
+        make_env("simgrip/PickFragile-v7", None, (0.1,))
     for bad in (0, -1, 2.0, True, "3"):
         with pytest.raises(ValueError, match="^--frame-stack: a whole number >= 1"):
-            make_env("simgrip/PickFragile-v6", None, None, bad)
+            make_env("simgrip/PickFragile-v7", None, None, bad)
 
 
 def test_make_env_stacks_the_last_observations():
-    plain = make_env("simgrip/PickFragile-v6")
-    one = make_env("simgrip/PickFragile-v6", None, None, 1)  # 1: the env's own observation, no wrapper
-    stacked = make_env("simgrip/PickFragile-v6", None, (-0.4, 0.2), 3)
+    plain = make_env("simgrip/PickFragile-v7")
+    one = make_env("simgrip/PickFragile-v7", None, None, 1)  # 1: the env's own observation, no wrapper
+    stacked = make_env("simgrip/PickFragile-v7", None, (-0.4, 0.2), 3)
     try:
         assert type(one) is type(plain) and one.observation_space == plain.observation_space
         n = plain.observation_space.shape[0]

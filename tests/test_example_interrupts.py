@@ -69,7 +69,7 @@ def _one_line(err: str, name: str) -> None:
 
 def test_baselines_ctrl_c_one_line_and_no_file(tmp_path):
     out = tmp_path / "open.json"
-    code, err = _ctrl_c_after([sys.executable, "-m", "simgrip.envs.baselines", "--env", "simgrip/PickFragile-v6",
+    code, err = _ctrl_c_after([sys.executable, "-m", "simgrip.envs.baselines", "--env", "simgrip/PickFragile-v7",
                                "--policy", "openloop", "--seeds", "8000-8999", "--out", str(out)], 2.0, tmp_path)
     assert code == 130
     _one_line(err, "baselines")
@@ -78,7 +78,7 @@ def test_baselines_ctrl_c_one_line_and_no_file(tmp_path):
 
 def test_evaluate_policy_ctrl_c_one_line(tmp_path):
     code, err = _ctrl_c_after([sys.executable, str(EXAMPLES / "evaluate_policy.py"), "--env",
-                               "simgrip/PickFragile-v6", "--policy", "observation", "--episodes", "500"], 2.0, ROOT)
+                               "simgrip/PickFragile-v7", "--policy", "observation", "--episodes", "500"], 2.0, ROOT)
     assert code == 130
     _one_line(err, "evaluate_policy")
 
@@ -86,7 +86,7 @@ def test_evaluate_policy_ctrl_c_one_line(tmp_path):
 def test_train_sb3_ctrl_c_one_line(tmp_path):
     pytest.importorskip("stable_baselines3")
     code, err = _ctrl_c_after([sys.executable, str(EXAMPLES / "train_sb3.py"), "--algo", "ppo", "--env",
-                               "simgrip/PickFragile-v6", "--minutes", "5", "--eval-episodes", "1",
+                               "simgrip/PickFragile-v7", "--minutes", "5", "--eval-episodes", "1",
                                "--out", str(tmp_path / "run")], 4.0, ROOT)
     assert code == 130
     _one_line(err, "train_sb3")
@@ -97,7 +97,7 @@ def test_rl_baselines_ctrl_c_before_the_trainings_start(tmp_path):
     line and 130 too: before run_main it printed a traceback (the driver handled it only around the runs).  The
     script runs as ``__main__`` with its env check made to raise what a Ctrl-C there raises."""
     pytest.importorskip("stable_baselines3")
-    argv = ["rl_baselines.py", "--env", "simgrip/PickFragile-v6", "--algo", "ppo", "--seeds", "0", "--minutes", "5",
+    argv = ["rl_baselines.py", "--env", "simgrip/PickFragile-v7", "--algo", "ppo", "--seeds", "0", "--minutes", "5",
             "--out", str(tmp_path / "runs")]
     code = ("import runpy, sys\n"
             "import simgrip.envs.evaluation as evaluation\n"

@@ -52,8 +52,8 @@ def test_train_sb3_evaluates_with_the_env_kwargs_it_was_given():
             return np.array([-0.3, 0.0], np.float32), None
 
     evaluate = _example("train_sb3").evaluate
-    plain = evaluate(Closing(), "simgrip/PickFragile-v6", 1, 8000)
-    paid = evaluate(Closing(), "simgrip/PickFragile-v6", 1, 8000, {"w_touch": 0.5})
+    plain = evaluate(Closing(), "simgrip/PickFragile-v7", 1, 8000)
+    paid = evaluate(Closing(), "simgrip/PickFragile-v7", 1, 8000, {"w_touch": 0.5})
     assert paid["mean_return"] > plain["mean_return"] + 0.5  # touch steps paid: the kwargs reached the env
 
 
@@ -67,10 +67,10 @@ def test_train_sb3_evaluates_behind_the_action_offset_it_was_given():
             return np.zeros(2, np.float32), None
 
     evaluate = _example("train_sb3").evaluate
-    held = evaluate(Zero(), "simgrip/PickFragile-v6", 2, 8000)
-    probed = evaluate(Zero(), "simgrip/PickFragile-v6", 2, 8000, None, None, [-0.4, 0.2])
+    held = evaluate(Zero(), "simgrip/PickFragile-v7", 2, 8000)
+    probed = evaluate(Zero(), "simgrip/PickFragile-v7", 2, 8000, None, None, [-0.4, 0.2])
     # the same episodes run by hand behind the wrapper: the evaluation went through it
-    env = ActionOffset(gym.make("simgrip/PickFragile-v6"), [-0.4, 0.2])
+    env = ActionOffset(gym.make("simgrip/PickFragile-v7"), [-0.4, 0.2])
     returns = []
     for seed in (8000, 8001):
         env.reset(seed=seed)
@@ -104,7 +104,7 @@ def test_train_sb3_policy_log_starts_at_ppo_initial_gaussian(tmp_path, capsys):
     # the first window's 2048 samples must show exactly that; the second, after one update, a changed log_std
     pytest.importorskip("stable_baselines3")
     module = _example("train_sb3")
-    module.main(["--algo", "ppo", "--env", "simgrip/PickFragile-v6", "--steps", "4096", "--eval-episodes", "1",
+    module.main(["--algo", "ppo", "--env", "simgrip/PickFragile-v7", "--steps", "4096", "--eval-episodes", "1",
                  "--out", str(tmp_path)])
     capsys.readouterr()
     with open(tmp_path / "ppo_policy.csv") as fh:
@@ -133,17 +133,17 @@ def test_train_sb3_evaluates_through_the_frozen_normalizer():
             return np.zeros(2, np.float32), None
 
     evaluate = _example("train_sb3").evaluate
-    evaluate(Recorder(), "simgrip/PickFragile-v6", 1, 8000, None, Shift())
+    evaluate(Recorder(), "simgrip/PickFragile-v7", 1, 8000, None, Shift())
     assert seen and all(np.all(o < -500.0) for o in seen)  # the env's observations are bounded by 100
     seen.clear()
-    evaluate(Recorder(), "simgrip/PickFragile-v6", 1, 8000)
+    evaluate(Recorder(), "simgrip/PickFragile-v7", 1, 8000)
     assert seen and all(np.all(o > -500.0) for o in seen)
 
 
 def test_train_sb3_normalize_saves_the_statistics_with_every_model(tmp_path, capsys):
     pytest.importorskip("stable_baselines3")
     module = _example("train_sb3")
-    module.main(["--algo", "ppo", "--env", "simgrip/PickFragile-v6", "--minutes", "0.06", "--checkpoint-minutes",
+    module.main(["--algo", "ppo", "--env", "simgrip/PickFragile-v7", "--minutes", "0.06", "--checkpoint-minutes",
                  "0.03", "--eval-episodes", "1", "--normalize", "--out", str(tmp_path)])
     res = json.loads(capsys.readouterr().out.strip().splitlines()[-1])
     assert "VecNormalize" in res["wrapper"] and res["episodes"] == 1
@@ -159,10 +159,10 @@ def test_evaluate_policy_scripted_matches_the_baselines_harness(capsys):
     """The scripted controller through evaluate_policy ends its episodes as simgrip.envs.baselines runs it."""
     from simgrip.envs.baselines import evaluate
 
-    out = _example("evaluate_policy").main(["--env", "simgrip/PickFragile-v6", "--policy", "observation",
+    out = _example("evaluate_policy").main(["--env", "simgrip/PickFragile-v7", "--policy", "observation",
                                             "--episodes", "3", "--seed", "8300", "--json"])
     assert json.loads(capsys.readouterr().out.strip()) == out
-    ref = evaluate("simgrip/PickFragile-v6", "observation", list(range(8300, 8303)))
+    ref = evaluate("simgrip/PickFragile-v7", "observation", list(range(8300, 8303)))
     assert out["outcomes"] == ref["outcomes"] and out["success_rate"] == ref["success_rate"]
     assert out["gamma"] == 0.99 and out["eval_seeds"] == [8300, 8302]
     assert out["mean_discounted_return"] < out["mean_return"]  # rewards are paid late in an episode
@@ -182,7 +182,7 @@ def test_evaluate_policy_scripted_matches_the_baselines_harness(capsys):
 ])
 def test_evaluate_policy_bad_options_exit_2_naming_them(argv, word, capsys):
     with pytest.raises(SystemExit) as e:
-        _example("evaluate_policy").main(["--env", "simgrip/PickFragile-v6", *argv])
+        _example("evaluate_policy").main(["--env", "simgrip/PickFragile-v7", *argv])
     assert e.value.code == 2
     assert word in capsys.readouterr().err
 
@@ -213,7 +213,7 @@ def test_train_sb3_log_std_init_sets_ppos_start_and_says_so(tmp_path):
     pytest.importorskip("stable_baselines3")
     from stable_baselines3 import PPO
 
-    _example("train_sb3").main(["--algo", "ppo", "--env", "simgrip/PickFragile-v6", "--steps", "64",
+    _example("train_sb3").main(["--algo", "ppo", "--env", "simgrip/PickFragile-v7", "--steps", "64",
                                 "--log-std-init", "-1", "--gamma", "0.95", "--eval-episodes", "1",
                                 "--eval-seed", "8310", "--out", str(tmp_path)])
     trained = json.loads((tmp_path / "ppo_eval.json").read_text())
@@ -235,16 +235,16 @@ def test_train_sb3_eval_start_is_the_untrained_policy_and_leaves_the_training_al
     from simgrip.envs.evaluation import make_env
 
     mod = _example("train_sb3")
-    common = ["--algo", "ppo", "--env", "simgrip/PickFragile-v6", "--steps", "64", "--seed", "3",
+    common = ["--algo", "ppo", "--env", "simgrip/PickFragile-v7", "--steps", "64", "--seed", "3",
               "--residual", "curvature", "palm_z", "--log-std-init", "-1", "--eval-episodes", "2",
               "--eval-seed", "8320"]
     mod.main(common + ["--eval-start", "--out", str(tmp_path / "a")])
     mod.main(common + ["--out", str(tmp_path / "b")])
     a, b = (json.loads((tmp_path / k / "ppo_eval.json").read_text()) for k in "ab")
     res = ["curvature", "palm_z"]
-    env = make_vec_env(lambda: make_env("simgrip/PickFragile-v6", {}, residual=res), n_envs=1, seed=3)
+    env = make_vec_env(lambda: make_env("simgrip/PickFragile-v7", {}, residual=res), n_envs=1, seed=3)
     fresh = PPO("MlpPolicy", env, seed=3, verbose=0, **mod.model_kwargs("ppo", None, -1.0))
-    ref = mod.evaluate(fresh, "simgrip/PickFragile-v6", 2, 8320, residual=res)
+    ref = mod.evaluate(fresh, "simgrip/PickFragile-v7", 2, 8320, residual=res)
     assert a["start"] == {k: ref[k] for k in ("success_rate", "mean_return", "mean_discounted_return", "outcomes")}
     assert "start" not in b
     assert {k: a[k] for k in ("timesteps", "success_rate", "mean_return")} == \
@@ -263,7 +263,7 @@ def test_train_sb3_keeps_the_checkpoint_at_the_budgets_end(budget_s, tmp_path, m
     ticks = itertools.count()
     monkeypatch.setattr(mod.time, "process_time", lambda: float(next(ticks)))
     minutes = budget_s / 60.0
-    mod.main(["--algo", "ppo", "--env", "simgrip/PickFragile-v6", "--minutes", f"{minutes!r}",
+    mod.main(["--algo", "ppo", "--env", "simgrip/PickFragile-v7", "--minutes", f"{minutes!r}",
               "--checkpoint-minutes", f"{minutes / 2!r}", "--eval-episodes", "1", "--out", str(tmp_path)])
     res = json.loads((tmp_path / "ppo_eval.json").read_text())
     capsys.readouterr()
@@ -276,7 +276,7 @@ def test_train_sb3_keeps_the_checkpoint_at_the_budgets_end(budget_s, tmp_path, m
                                    ["--algo", "ppo", "--log-std-init", "inf"]])
 def test_train_sb3_log_std_init_refusals_exit_2(extra, tmp_path, capsys):
     with pytest.raises(SystemExit) as e:
-        _example("train_sb3").main(["--env", "simgrip/PickFragile-v6", "--log-std-init", "-1", *extra,
+        _example("train_sb3").main(["--env", "simgrip/PickFragile-v7", "--log-std-init", "-1", *extra,
                                     "--out", str(tmp_path / "o")])
     assert e.value.code == 2 and "--log-std-init" in capsys.readouterr().err.strip().splitlines()[-1]
 
@@ -294,11 +294,11 @@ def test_train_sb3_critic_warmup_holds_the_policy_then_trains_it(tmp_path):
     from simgrip.envs.evaluation import make_env
 
     mod = _example("train_sb3")
-    common = ["--algo", "ppo", "--env", "simgrip/PickFragile-v6", "--seed", "4", "--critic-warmup", "2048",
+    common = ["--algo", "ppo", "--env", "simgrip/PickFragile-v7", "--seed", "4", "--critic-warmup", "2048",
               "--eval-episodes", "1", "--eval-seed", "8330"]
     mod.main(common + ["--steps", "2048", "--out", str(tmp_path / "a")])
     mod.main(common + ["--steps", "4096", "--out", str(tmp_path / "b")])
-    env = make_vec_env(lambda: make_env("simgrip/PickFragile-v6", {}), n_envs=1, seed=4)
+    env = make_vec_env(lambda: make_env("simgrip/PickFragile-v7", {}), n_envs=1, seed=4)
     policy = PPO("MlpPolicy", env, seed=4, verbose=0).policy
     fresh = policy.state_dict()
     ids = {id(p) for p in actor_parameters(policy)}
@@ -315,7 +315,7 @@ def test_train_sb3_critic_warmup_holds_the_policy_then_trains_it(tmp_path):
 
 def test_train_sb3_critic_warmup_refusals_exit_2(tmp_path, capsys):
     with pytest.raises(SystemExit) as e:
-        _example("train_sb3").main(["--env", "simgrip/PickFragile-v6", "--algo", "sac", "--critic-warmup", "2048",
+        _example("train_sb3").main(["--env", "simgrip/PickFragile-v7", "--algo", "sac", "--critic-warmup", "2048",
                                     "--out", str(tmp_path / "o")])
     assert e.value.code == 2 and "--critic-warmup" in capsys.readouterr().err.strip().splitlines()[-1]
     with pytest.raises(SystemExit) as e:
@@ -327,7 +327,7 @@ def test_evaluate_policy_model_reproduces_train_sb3s_evaluation(tmp_path, capsys
     """A model evaluated again by evaluate_policy: the held-out figures train_sb3 wrote, digit for digit, at
     the discount it was trained with."""
     pytest.importorskip("stable_baselines3")
-    _example("train_sb3").main(["--algo", "sac", "--env", "simgrip/PickFragile-v6", "--steps", "150",
+    _example("train_sb3").main(["--algo", "sac", "--env", "simgrip/PickFragile-v7", "--steps", "150",
                                 "--action-offset", "-0.4", "0.2", "--gamma", "0.95", "--eval-episodes", "2",
                                 "--frame-stack", "2", "--eval-seed", "8310", "--out", str(tmp_path)])
     trained = json.loads((tmp_path / "sac_eval.json").read_text())
@@ -335,14 +335,14 @@ def test_evaluate_policy_model_reproduces_train_sb3s_evaluation(tmp_path, capsys
     assert trained["frame_stack"] == 2 and "FrameStackObservation(2)" in trained["wrapper"]
     capsys.readouterr()
     again = _example("evaluate_policy").main([
-        "--env", "simgrip/PickFragile-v6", "--model", str(tmp_path / "sac_model.zip"), "--algo", "sac",
+        "--env", "simgrip/PickFragile-v7", "--model", str(tmp_path / "sac_model.zip"), "--algo", "sac",
         "--action-offset", "-0.4", "0.2", "--frame-stack", "2", "--episodes", "2", "--seed", "8310",
         "--gamma", "0.95", "--json"])
     for key in ("success_rate", "mean_return", "mean_length", "outcomes", "mean_success_length",
                 "mean_discounted_return", "gamma", "eval_seeds"):
         assert again[key] == trained[key], key
     with pytest.raises(SystemExit) as e:  # without the stack it was trained on, the spaces differ
-        _example("evaluate_policy").main(["--env", "simgrip/PickFragile-v6", "--model",
+        _example("evaluate_policy").main(["--env", "simgrip/PickFragile-v7", "--model",
                                           str(tmp_path / "sac_model.zip"), "--algo", "sac",
                                           "--action-offset", "-0.4", "0.2"])
     assert e.value.code == 2 and "--frame-stack" in capsys.readouterr().err
@@ -372,25 +372,25 @@ def _trained_with_a_training_aid(module, tmp_path, env_id: str, steps: int, eval
 def test_train_sb3_scripted_start_trains_from_scripted_states_and_evaluates_plainly(tmp_path, capsys):
     pytest.importorskip("stable_baselines3")
     module = _example("train_sb3")
-    _trained_with_a_training_aid(module, tmp_path, "simgrip/PlaceFragile-v7", 800, 8320, "--scripted-start",
+    _trained_with_a_training_aid(module, tmp_path, "simgrip/PlaceFragile-v8", 800, 8320, "--scripted-start",
                                  "ScriptedStart")
     with open(tmp_path / "sac_curve.csv") as fh:
         lengths = [int(row["length"]) for row in csv.DictReader(fh)]
     assert lengths and max(lengths) < 400  # every training episode started part-way (its limit: 400 steps)
     with pytest.raises(SystemExit) as e:
-        module.main(["--algo", "sac", "--env", "simgrip/PlaceFragile-v7", "--scripted-start", "-0.1",
+        module.main(["--algo", "sac", "--env", "simgrip/PlaceFragile-v8", "--scripted-start", "-0.1",
                      "--out", str(tmp_path / "o")])
     assert e.value.code == 2 and "--scripted-start" in capsys.readouterr().err
     capsys.readouterr()
     # where it has got to: evaluated from scripted starts, the outcomes per handover bin
     ev = _example("evaluate_policy")
-    out = ev.main(["--env", "simgrip/PlaceFragile-v7", "--model", str(tmp_path / "sac_model.zip"), "--algo", "sac",
+    out = ev.main(["--env", "simgrip/PlaceFragile-v8", "--model", str(tmp_path / "sac_model.zip"), "--algo", "sac",
                    "--scripted-start", "1", "--episodes", "3", "--seed", "8320", "--json"])
     assert out["scripted_start"] == 1.0
     assert sum(sum(c.values()) for c in out["by_handover"].values()) == 3
     assert all(int(k.split("-")[1]) - int(k.split("-")[0]) == 49 for k in out["by_handover"])
     with pytest.raises(SystemExit) as e:
-        ev.main(["--env", "simgrip/PlaceFragile-v7", "--policy", "observation", "--scripted-start", "1"])
+        ev.main(["--env", "simgrip/PlaceFragile-v8", "--policy", "observation", "--scripted-start", "1"])
     assert e.value.code == 2 and "--scripted-start" in capsys.readouterr().err
 
 
@@ -444,20 +444,21 @@ def test_evaluate_policy_times_a_crush_from_the_first_touch(capsys):
     import gymnasium as gym
 
     module = _example("evaluate_policy")
-    # the cradle controller crushes seed 8006's piece (and holds 8005's): counted once, in the bin of the steps
-    # between the first step with a finger force and the crush, counted here by stepping the same controller
-    out = module.main(["--env", "simgrip/PickCradleFragile-v5", "--policy", "observation", "--episodes", "2",
-                       "--seed", "8005", "--json"])
+    # the cradle controller crushes seed 8011's piece (and holds 8010's): counted once, in the bin of the steps
+    # between the first step with a finger force within it and the crush, counted here by stepping the same
+    # controller (v6 reads the peak: info["peak_normal_force"], the force that crushed it)
+    out = module.main(["--env", "simgrip/PickCradleFragile-v6", "--policy", "observation", "--episodes", "2",
+                       "--seed", "8010", "--json"])
     assert out["outcomes"] == {"crushed": 1, "success": 1}
-    env = gym.make("simgrip/PickCradleFragile-v5")
+    env = gym.make("simgrip/PickCradleFragile-v6")
     act, on_reset = module._scripted(env, "observation")
-    obs, info = env.reset(seed=8006)
-    on_reset(env, info, 8006)
+    obs, info = env.reset(seed=8011)
+    on_reset(env, info, 8011)
     step, touch, done = 0, None, False
     while not done:
         obs, _, terminated, truncated, info = env.step(act(obs))
         step += 1
-        if touch is None and max(info["normal_force"]) > 0.0:
+        if touch is None and max(info["peak_normal_force"]) > 0.0:
             touch = step
         done = terminated or truncated
     env.close()
@@ -466,8 +467,8 @@ def test_evaluate_policy_times_a_crush_from_the_first_touch(capsys):
     expected = {"0": gap == 0, "1-4": 1 <= gap <= 4, "5-24": 5 <= gap <= 24, "25+": gap >= 25}
     assert out["crushed_after_touch"] == {k: int(v) for k, v in expected.items()}
     limit = info["crush_limit"]  # the one crush's overrun, from the same crushing step
-    assert out["crush_overrun"] == {"crushes": 1, "median": (max(info["normal_force"]) - limit) / limit,
-                                    "max": (max(info["normal_force"]) - limit) / limit}
+    x = (max(info["peak_normal_force"]) - limit) / limit
+    assert x > 0.0 and out["crush_overrun"] == {"crushes": 1, "median": x, "max": x}
     assert out["crush_overrun"]["max"] > 0.0
 
 
@@ -491,11 +492,11 @@ def test_place_timeouts_count_the_carried_pieces_never_set_down():
 
 def test_evaluate_policy_counts_the_places_hovering_timeouts(capsys):
     # the observation-only controller sets every piece of these seeds down: none held up at the end
-    out = _example("evaluate_policy").main(["--env", "simgrip/PlaceFragile-v7", "--policy", "observation",
+    out = _example("evaluate_policy").main(["--env", "simgrip/PlaceFragile-v8", "--policy", "observation",
                                             "--episodes", "2", "--seed", "8004", "--json"])
     assert out["place_timeouts"] == {"held_up": 0, "over_target": 0} and out["success_rate"] == 1.0
     assert out["carried"] == {"episodes": 2, "outcomes": {"success": 2}}  # a place is carried first
-    pinch = _example("evaluate_policy").main(["--env", "simgrip/PickFragile-v6", "--policy", "observation",
+    pinch = _example("evaluate_policy").main(["--env", "simgrip/PickFragile-v7", "--policy", "observation",
                                               "--episodes", "1", "--seed", "8004", "--json"])
     assert "place_timeouts" not in pinch and "carried" not in pinch
 
@@ -505,9 +506,9 @@ def test_evaluate_policy_counts_a_fragile_tasks_outcomes_by_hidden_mass(capsys):
 
     from simgrip.envs.light_bias import episode_mass, mass_bins
 
-    out = _example("evaluate_policy").main(["--env", "simgrip/PickMultiFragile-v6", "--policy", "observation",
+    out = _example("evaluate_policy").main(["--env", "simgrip/PickMultiFragile-v7", "--policy", "observation",
                                             "--episodes", "3", "--seed", "8330", "--json"])
-    env = gym.make("simgrip/PickMultiFragile-v6")
+    env = gym.make("simgrip/PickMultiFragile-v7")
     edges = mass_bins(env)
     masses = []
     for seed in (8330, 8331, 8332):
@@ -524,10 +525,10 @@ def test_train_sb3_light_bias_trains_on_light_pieces_and_evaluates_on_the_task(t
     pytest.importorskip("stable_baselines3")
 
     module = _example("train_sb3")
-    _trained_with_a_training_aid(module, tmp_path, "simgrip/PickMultiFragile-v6", 300, 8340, "--light-bias",
+    _trained_with_a_training_aid(module, tmp_path, "simgrip/PickMultiFragile-v7", 300, 8340, "--light-bias",
                                  "LightBias")
     with pytest.raises(SystemExit) as e:
-        module.main(["--algo", "sac", "--env", "simgrip/PickMultiFragile-v6", "--light-bias", "1.5",
+        module.main(["--algo", "sac", "--env", "simgrip/PickMultiFragile-v7", "--light-bias", "1.5",
                      "--out", str(tmp_path / "o")])
     assert e.value.code == 2 and "--light-bias" in capsys.readouterr().err
     assert not (tmp_path / "o").exists()

@@ -30,7 +30,7 @@ def _refused(main, argv, capsys, *needles):
         assert needle in last, (needle, err)
 
 
-TRAIN = ["--algo", "ppo", "--env", "simgrip/PickFragile-v6", "--steps", "64", "--eval-episodes", "1"]
+TRAIN = ["--algo", "ppo", "--env", "simgrip/PickFragile-v7", "--steps", "64", "--eval-episodes", "1"]
 
 
 @pytest.mark.parametrize("extra, needles", [
@@ -53,7 +53,7 @@ def test_train_sb3_refuses(extra, needles, tmp_path, capsys):
 
 def test_train_sb3_refuses_a_repeated_algorithm(tmp_path, capsys):
     pytest.importorskip("stable_baselines3")
-    argv = ["--algo", "ppo", "ppo", "--env", "simgrip/PickFragile-v6", "--out", str(tmp_path / "run")]
+    argv = ["--algo", "ppo", "ppo", "--env", "simgrip/PickFragile-v7", "--out", str(tmp_path / "run")]
     _refused(load_example("train_sb3").main, argv, capsys, "--algo", "repeated")
 
 
@@ -65,7 +65,7 @@ def test_train_sb3_checks_its_checkpoints_before_training(tmp_path, capsys):
                                                       str(tmp_path / "run")], capsys, "ppo_model_10min.zip", "FIFO")
 
 
-RL = ["--env", "simgrip/PickFragile-v6", "--algo", "ppo", "--seeds", "0", "--minutes", "10", "--checkpoint-minutes",
+RL = ["--env", "simgrip/PickFragile-v7", "--algo", "ppo", "--seeds", "0", "--minutes", "10", "--checkpoint-minutes",
       "5", "--eval-seeds", "8000-8000"]
 
 
@@ -95,7 +95,7 @@ def test_rl_baselines_refuses(extra, needles, tmp_path, capsys):
 
 
 def test_evaluate_policy_refuses_more_episodes_than_any_rate_needs(capsys):
-    argv = ["--env", "simgrip/PickFragile-v6", "--policy", "observation", "--episodes", "100001"]
+    argv = ["--env", "simgrip/PickFragile-v7", "--policy", "observation", "--episodes", "100001"]
     _refused(load_example("evaluate_policy").main, argv, capsys, "--episodes", "100000")
 
 
@@ -104,7 +104,7 @@ def test_a_negative_number_reaches_its_option_in_one_line(value, capsys):
     """The examples parse as the ``simgrip`` command does (:mod:`simgrip.command_parser`): a negative number is a
     value (``--gamma -inf`` was "expected one argument"), and the error is one line, not argparse's usage block
     (4-13 lines: an audit)."""
-    argv = ["--env", "simgrip/PickFragile-v6", "--policy", "observation", "--gamma", value]
+    argv = ["--env", "simgrip/PickFragile-v7", "--policy", "observation", "--gamma", value]
     _refused(load_example("evaluate_policy").main, argv, capsys, "--gamma")
 
 
@@ -115,4 +115,4 @@ def test_a_negative_number_reaches_its_option_in_one_line(value, capsys):
 def test_baselines_refuses(extra, needles, capsys):
     from simgrip.envs.baselines import main
 
-    _refused(main, ["--env", "simgrip/PickFragile-v6", "--policy", "random", *extra], capsys, *needles)
+    _refused(main, ["--env", "simgrip/PickFragile-v7", "--policy", "random", *extra], capsys, *needles)

@@ -12,7 +12,7 @@ from simgrip.envs.evaluation import make_env
 from simgrip.envs.light_bias import LIGHT_SHARE, LightBias
 from simgrip.envs.scripted_start import ScriptedStart
 
-MULTI = "simgrip/PickMultiFragile-v6"
+MULTI = "simgrip/PickMultiFragile-v7"
 
 
 def _mass(env) -> float:

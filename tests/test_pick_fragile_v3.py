@@ -31,10 +31,10 @@ PREVIOUS = {"simgrip/PickFragile-v3": "simgrip/PickFragile-v2",
 #: (pick_claw_v5: the reward);
 #: PlaceFragile-v3 by v4 (simgrip.envs.pick_place_v4: the pre-grasp and no touch pay), v4 by v5, v5 by v6 and v6
 #: by v7 (pick_place_v5, _v6, _v7: the reward)
-V4 = {"simgrip/PickFragile-v6": "simgrip/PickFragile-v3", "simgrip/PickMultiFragile-v6": "simgrip/PickMultiFragile-v3",
-      "simgrip/PickCradleFragile-v5": "simgrip/PickCradleFragile-v4",
-      "simgrip/PickSphereFragile-v5": "simgrip/PickSphereFragile-v4",
-      "simgrip/PlaceFragile-v7": "simgrip/PlaceFragile-v3"}
+V4 = {"simgrip/PickFragile-v7": "simgrip/PickFragile-v3", "simgrip/PickMultiFragile-v7": "simgrip/PickMultiFragile-v3",
+      "simgrip/PickCradleFragile-v6": "simgrip/PickCradleFragile-v4",
+      "simgrip/PickSphereFragile-v6": "simgrip/PickSphereFragile-v4",
+      "simgrip/PlaceFragile-v8": "simgrip/PlaceFragile-v3"}
 
 
 def _make(env_id, **kwargs):

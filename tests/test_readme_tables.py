@@ -163,8 +163,8 @@ def test_the_stated_mass_ranges_are_the_envs():
     m = re.search(r"mass \((\d+)–(\d+) g; cradle and sphere (\d+)–(\d+) g\)", text)
     assert m, "the README's fragile-suite mass ranges"
     stated = {"pinch": m.group(1, 2), "claws": m.group(3, 4)}
-    for ids, key in ((("PickFragile-v6", "PickMultiFragile-v6", "PlaceFragile-v7"), "pinch"),
-                     (("PickCradleFragile-v5", "PickSphereFragile-v5"), "claws")):
+    for ids, key in ((("PickFragile-v7", "PickMultiFragile-v7", "PlaceFragile-v8"), "pinch"),
+                     (("PickCradleFragile-v6", "PickSphereFragile-v6"), "claws")):
         for env_id in ids:
             env = gym.make("simgrip/" + env_id)
             u = env.unwrapped

@@ -18,9 +18,10 @@ from simgrip.envs import FRAGILE_ENV_IDS, RETIRED, retired_spec
 
 #: each fragile task's newest registered version (the tactile scale, simgrip.envs.pick_fragile_v3; the pre-grasp, _v4;
 #: no per-step touch pay, _v5; no drop penalty, _v6; the claws' approach term, pick_claw_v5; the place's pre-grasp,
-#: pick_place_v4, no drop penalty, pick_place_v5, the grip's pay, pick_place_v6, and the set-down's, pick_place_v7)
-NEWEST = {"simgrip/PickFragile": "v6", "simgrip/PickMultiFragile": "v6", "simgrip/PlaceFragile": "v7",
-          "simgrip/PickCradleFragile": "v5", "simgrip/PickSphereFragile": "v5"}
+#: pick_place_v4, no drop penalty, pick_place_v5, the grip's pay, pick_place_v6, and the set-down's, pick_place_v7;
+#: every task's ramped palm and peak crush rule, pick_fragile_v7)
+NEWEST = {"simgrip/PickFragile": "v7", "simgrip/PickMultiFragile": "v7", "simgrip/PlaceFragile": "v8",
+          "simgrip/PickCradleFragile": "v6", "simgrip/PickSphereFragile": "v6"}
 RETIRED_IDS = [f"{name}-v{k}" for name, newest in NEWEST.items() for k in range(int(newest[1:]))]
 
 
@@ -82,7 +83,7 @@ def test_make_keyword_arguments_reach_the_retired_class():
         env.close()
 
 
-@pytest.mark.parametrize("bad, why", [("simgrip/PickFragile-v6", "registered"), ("simgrip/Pick-v0", "retired"),
+@pytest.mark.parametrize("bad, why", [("simgrip/PickFragile-v7", "registered"), ("simgrip/Pick-v0", "retired"),
                                       ("simgrip/NoSuch-v0", "retired"), (None, "retired")])
 def test_retired_spec_of_anything_else_is_a_value_error_naming_it(bad, why):
     with pytest.raises(ValueError, match=f"env_id: {bad!r}.*{why}"):

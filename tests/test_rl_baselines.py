@@ -108,7 +108,7 @@ def test_smoke_two_seeds_aggregate_and_plot(tmp_path):
 
 def test_env_kwargs_the_env_does_not_take_exit_2_before_any_run(tmp_path, capsys):
     _needs_sb3()
-    argv = ["--env", "simgrip/PickFragile-v6", "--out", str(tmp_path / "o"), "--env-kwargs", '{"w_tuch": 0}']
+    argv = ["--env", "simgrip/PickFragile-v7", "--out", str(tmp_path / "o"), "--env-kwargs", '{"w_tuch": 0}']
     with pytest.raises(SystemExit) as e:
         _module().main(argv)
     assert e.value.code == 2
@@ -259,13 +259,13 @@ def test_frame_stack_reaches_every_run_command(tmp_path):
 @pytest.mark.parametrize("value", ["0", "-2", "1.5", "x"])
 def test_a_bad_frame_stack_exits_2_naming_it(value, tmp_path, capsys):
     with pytest.raises(SystemExit) as e:
-        _module().main(["--env", "simgrip/PickFragile-v6", "--out", str(tmp_path / "o"), "--frame-stack", value])
+        _module().main(["--env", "simgrip/PickFragile-v7", "--out", str(tmp_path / "o"), "--frame-stack", value])
     assert e.value.code == 2 and "--frame-stack" in capsys.readouterr().err
     assert not (tmp_path / "o").exists()
 
 
-@pytest.mark.parametrize("option, env_id", [("--scripted-start", "simgrip/PlaceFragile-v7"),
-                                            ("--light-bias", "simgrip/PickMultiFragile-v6")])
+@pytest.mark.parametrize("option, env_id", [("--scripted-start", "simgrip/PlaceFragile-v8"),
+                                            ("--light-bias", "simgrip/PickMultiFragile-v7")])
 def test_a_training_aid_reaches_every_run_command(option, env_id, tmp_path):
     mod = _module()
     name = option[2:].replace("-", "_")
@@ -277,9 +277,9 @@ def test_a_training_aid_reaches_every_run_command(option, env_id, tmp_path):
 
 
 @pytest.mark.parametrize("option, env_id, value", [
-    ("--scripted-start", "simgrip/PlaceFragile-v7", "1.5"), ("--scripted-start", "simgrip/PlaceFragile-v7", "nan"),
-    ("--scripted-start", "simgrip/PlaceFragile-v7", "x"), ("--scripted-start", "simgrip/Pick-v1", "0.5"),
-    ("--light-bias", "simgrip/PickMultiFragile-v6", "1.5"), ("--light-bias", "simgrip/PickMultiFragile-v6", "nan"),
+    ("--scripted-start", "simgrip/PlaceFragile-v8", "1.5"), ("--scripted-start", "simgrip/PlaceFragile-v8", "nan"),
+    ("--scripted-start", "simgrip/PlaceFragile-v8", "x"), ("--scripted-start", "simgrip/Pick-v1", "0.5"),
+    ("--light-bias", "simgrip/PickMultiFragile-v7", "1.5"), ("--light-bias", "simgrip/PickMultiFragile-v7", "nan"),
     ("--light-bias", "simgrip/Pick-v1", "0.5")])
 def test_a_bad_training_aid_exits_2_naming_it(option, env_id, value, tmp_path, capsys):
     with pytest.raises(SystemExit) as e:
@@ -298,7 +298,7 @@ def _batch(folder: Path, seeds, rates, **fields) -> Path:
              "checkpoints": [{"minutes": 5.0, "success_rate": rate / 2}, {"minutes": 10.0, "success_rate": rate}]}
         (folder / f"ppo_seed{s}.json").write_text(json.dumps(r))
         results.append(r)
-    head = {"env": "simgrip/PickFragile-v6", "algos": ["ppo"], "seeds": list(seeds), "minutes": 10.0,
+    head = {"env": "simgrip/PickFragile-v7", "algos": ["ppo"], "seeds": list(seeds), "minutes": 10.0,
             "checkpoint_minutes": 5.0, "clock": "cpu", "eval_seeds": [8000, 8049],
             "hyperparameters": "Stable-Baselines3 defaults, one env, one torch thread",
             "summary": _module().aggregate(results), "command": ["rl_baselines.py", "--seeds", *map(str, seeds)],

@@ -13,7 +13,7 @@ from simgrip.envs.evaluation import make_env
 from simgrip.envs.scripted_residual import PALM_CHANNELS, ScriptedResidual
 from helpers import load_example, rl_baselines_args
 
-PLACE, PINCH = "simgrip/PlaceFragile-v7", "simgrip/PickFragile-v6"
+PLACE, PINCH = "simgrip/PlaceFragile-v8", "simgrip/PickFragile-v7"
 
 
 def _beside(env_id, channels, actions, seed):

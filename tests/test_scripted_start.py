@@ -12,7 +12,7 @@ from simgrip.envs.baselines import policy_maker
 from simgrip.envs.evaluation import make_env
 from simgrip.envs.scripted_start import ScriptedStart
 
-PLACE = "simgrip/PlaceFragile-v7"
+PLACE = "simgrip/PlaceFragile-v8"
 
 
 def _scripted_prefix(env_id, seed, k, **make_kwargs):

@@ -9,6 +9,7 @@
 
 from __future__ import annotations
 
+import json
 import subprocess
 import sys
 
@@ -19,7 +20,7 @@ import pytest
 import simgrip.envs  # noqa: F401  (registers the ids)
 from simgrip.envs.substep_forces import force_peaks, step_with_peaks
 
-SPHERE = "simgrip/PickSphereFragile-v5"
+SPHERE = "simgrip/PickSphereFragile-v6"
 
 
 def _actions(env, n, seed=0):
@@ -27,7 +28,7 @@ def _actions(env, n, seed=0):
     return [rng.uniform(-1, 1, env.action_space.shape).astype(np.float32) for _ in range(n)]
 
 
-@pytest.mark.parametrize("env_id", ["simgrip/PickFragile-v6", SPHERE])
+@pytest.mark.parametrize("env_id", ["simgrip/PickFragile-v7", SPHERE])
 def test_the_replay_changes_nothing(env_id):
     measured, plain = gym.make(env_id), gym.make(env_id)
     measured.reset(seed=5)
@@ -47,14 +48,15 @@ def test_the_replay_changes_nothing(env_id):
 def test_the_held_palm_jerks_the_grip_and_the_ramp_does_not():
     """The sphere's scripted controller on two held-out episodes: within a step the grip force peaks at a median
     1.4 times its end value with the palm's target held (docs: 1.41 over 8000-8049), 1.00 with it ramped."""
-    held = force_peaks(SPHERE, [8000, 8001])
-    ramped = force_peaks(SPHERE, [8000, 8001], env_kwargs={"palm_ramp": True})
+    # the rule at the step's end, as the docs' figures were measured (on the ids then registered)
+    held = force_peaks(SPHERE, [8000, 8001], env_kwargs={"palm_ramp": False, "crush_at": "end"})
+    ramped = force_peaks(SPHERE, [8000, 8001], env_kwargs={"crush_at": "end"})
     assert held["steps"] > 50 and ramped["steps"] > 50
     assert held["ratio_median"] > 1.2 and held["unseen_steps"] > 5
     assert ramped["ratio_median"] < 1.02 and ramped["unseen_steps"] < held["unseen_steps"] / 5
 
 
-@pytest.mark.parametrize("env_id", ["simgrip/Pick-v1", "simgrip/PlaceFragile-v7"])
+@pytest.mark.parametrize("env_id", ["simgrip/Pick-v1", "simgrip/PlaceFragile-v8"])
 def test_the_ramp_reaches_the_held_target_each_step(env_id):
     env = gym.make(env_id, palm_ramp=True)
     env.reset(seed=2)
@@ -72,5 +74,14 @@ def test_the_ramp_reaches_the_held_target_each_step(env_id):
 def test_the_command_refuses_an_unknown_env():
     r = subprocess.run([sys.executable, "-m", "simgrip.envs.substep_forces", "--env", "simgrip/Pick-v1"],
                        capture_output=True, text=True, timeout=120)
-    assert r.returncode == 2 and "--env must be a registered fragile id" in r.stderr
+    assert r.returncode == 2 and "--env must be a fragile id" in r.stderr
     assert "Traceback" not in r.stderr
+
+
+def test_a_retired_id_is_measured_as_it_was_registered():
+    """The docs' commands name the ids registered when they were measured (held palm, end-of-step rule)."""
+    r = subprocess.run([sys.executable, "-m", "simgrip.envs.substep_forces", "--env",
+                        "simgrip/PickSphereFragile-v5", "--seeds", "8000-8000"], capture_output=True, text=True,
+                       timeout=300)
+    assert r.returncode == 0, r.stderr
+    assert r.stdout == json.dumps(force_peaks("simgrip/PickSphereFragile-v5", [8000]), indent=1) + "\n"

@@ -24,7 +24,7 @@ def test_bad_arguments_are_named(kwargs, name):
         measure_throughput(**kwargs)
 
 
-@pytest.mark.parametrize("env_id", ["simgrip/PickMulti-v0", "simgrip/PlaceFragile-v7"])
+@pytest.mark.parametrize("env_id", ["simgrip/PickMulti-v0", "simgrip/PlaceFragile-v8"])
 def test_replay_covers_the_same_physics(env_id):
     """The raw replay ends every chunk in the environment's state, bit for bit: K fingers (a new model per
     shape after a reset) and the second palm servo (all of ctrl replayed)."""
@@ -42,7 +42,7 @@ def test_env_id_must_be_a_registered_pick_env():
 def test_violation_check_times_both_ways_on_the_claws_invalid_states():
     """Random actions curl the sphere claws through each other: the states reach chain_violations, timed both ways,
     and both ways give the same messages on each."""
-    r = violation_check_times("simgrip/PickSphereFragile-v5", steps=1500, repeats=1)
+    r = violation_check_times("simgrip/PickSphereFragile-v6", steps=1500, repeats=1)
     assert r["checks"] == 60 and r["states"] > 0 and r["same"] is True  # FRAGILE_VALIDITY_EVERY = 25 steps
     assert r["batched_us"] > 0 and r["pruned_us"] > 0
     with pytest.raises(ValueError, match="env_id"):

@@ -17,7 +17,7 @@ import numpy as np
 import pytest
 
 import simgrip.envs  # noqa: F401  (registers the ids)
-from simgrip.envs import FRAGILE_ENV_IDS
+from simgrip.envs import FRAGILE_ENV_IDS, retired_spec
 from simgrip.envs.scripted_policies import policy_maker
 from simgrip.envs.substep_forces import step_with_peaks
 
@@ -62,8 +62,8 @@ def _run(env, seed, limit, actions=None):
 
 
 def test_the_rule_crushes_on_the_peak():
-    sphere = "simgrip/PickSphereFragile-v5"
-    peak_env, end_env = gym.make(sphere, crush_at="peak"), gym.make(sphere)
+    sphere = "simgrip/PickSphereFragile-v6"
+    peak_env, end_env = gym.make(sphere), gym.make(sphere, crush_at="end")
     rows, actions, _ = _run(peak_env, 8000, 1e9)
     k = next(t for t, (e, p) in enumerate(rows) if e > 0.0 and p > 1.2 * e)  # a step whose peak is well above
     limit = 0.5 * (rows[k][0] + rows[k][1])
@@ -78,20 +78,25 @@ def test_the_rule_crushes_on_the_peak():
     end_env.close()
 
 
-def test_the_default_reads_the_end_and_a_bad_value_is_named():
-    env = gym.make("simgrip/PickFragile-v6")
+def test_the_default_reads_the_end_before_v7_and_a_bad_value_is_named():
+    env = gym.make(retired_spec("simgrip/PickFragile-v6"))
     env.reset(seed=0)
     _, _, _, _, info = env.step(env.action_space.sample())
     assert env.unwrapped.crush_at == "end" and "peak_normal_force" not in info
     env.close()
+    env = gym.make("simgrip/PickFragile-v7", crush_at="end")
+    env.reset(seed=0)
+    _, _, _, _, info = env.step(env.action_space.sample())
+    assert "peak_normal_force" not in info
+    env.close()
     with pytest.raises(ValueError, match="crush_at must be 'end'"):
-        gym.make("simgrip/PickFragile-v6", crush_at="max")
+        gym.make("simgrip/PickFragile-v7", crush_at="max")
 
 
 def test_a_peak_env_pickles_and_continues_alike():
     import pickle
 
-    env = gym.make("simgrip/PickFragile-v6", crush_at="peak").unwrapped
+    env = gym.make("simgrip/PickFragile-v7").unwrapped
     env.reset(seed=4)
     for _ in range(20):
         env.step(np.array([-0.3, 0.2], np.float32))
@@ -109,12 +114,12 @@ def test_baselines_take_env_kwargs_and_name_a_bad_one(capsys):
 
     from simgrip.envs.baselines import main
 
-    assert main(["--env", "simgrip/PickFragile-v6", "--policy", "observation", "--seeds", "8000-8001",
-                 "--env-kwargs", '{"palm_ramp": true, "crush_at": "peak"}']) == 0
-    assert json.loads(capsys.readouterr().out)["env_kwargs"] == {"palm_ramp": True, "crush_at": "peak"}
+    assert main(["--env", "simgrip/PickFragile-v7", "--policy", "observation", "--seeds", "8000-8001",
+                 "--env-kwargs", '{"palm_ramp": false, "crush_at": "end"}']) == 0
+    assert json.loads(capsys.readouterr().out)["env_kwargs"] == {"palm_ramp": False, "crush_at": "end"}
     for bad in ('{"crush_at": "max"}', '{"bogus": 1}', '{"per_finger": true}'):
         with pytest.raises(SystemExit) as exc:
-            main(["--env", "simgrip/PickFragile-v6", "--policy", "observation", "--seeds", "8000-8001",
+            main(["--env", "simgrip/PickFragile-v7", "--policy", "observation", "--seeds", "8000-8001",
                   "--env-kwargs", bad])
         err = capsys.readouterr().err
         assert exc.value.code == 2 and len(err.strip().splitlines()) == 1 and "--env-kwargs" in err, err
@@ -127,9 +132,9 @@ def test_the_controllers_close_gentler_where_the_peak_is_read():
     from simgrip.envs.scripted_fragile import (CLOSING_RATE, PEAK_CLOSING_RATE, ObservationFragilePolicy,
                                                SphereFragilePolicy)
 
-    for env_id, cls in (("simgrip/PickFragile-v6", ObservationFragilePolicy),
-                        ("simgrip/PickSphereFragile-v5", SphereFragilePolicy)):
-        for kwargs, want in (({}, CLOSING_RATE), ({"crush_at": "peak"}, PEAK_CLOSING_RATE)):
+    for env_id, cls in (("simgrip/PickFragile-v7", ObservationFragilePolicy),
+                        ("simgrip/PickSphereFragile-v6", SphereFragilePolicy)):
+        for kwargs, want in (({"crush_at": "end"}, CLOSING_RATE), ({}, PEAK_CLOSING_RATE)):
             env = gym.make(env_id, **kwargs)
             _, info = env.reset(seed=0)
             for pol, rate in ((cls(), want), (cls(rate=0.01), 0.01)):
@@ -141,7 +146,7 @@ def test_the_controllers_close_gentler_where_the_peak_is_read():
 def test_the_peak_with_several_contacts_per_finger():
     """Full closing and a palm jerked up and down on a finger of 40 links presses several contacts per finger at
     once (an audit found the pairwise sum 1-2 ulp off the one-by-one sum there; the scripted controller keeps one)."""
-    env = gym.make("simgrip/PickFragile-v6", crush_at="peak", n_links=40)
+    env = gym.make("simgrip/PickFragile-v7", n_links=40)
     env.reset(seed=0, options={"crush_limit": 1e9})
     rng = np.random.default_rng(0)
     several = 0

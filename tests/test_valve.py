@@ -17,8 +17,8 @@ from simgrip.envs.pick_fragile_v2 import V2_CRUSH_RATIO, V2_MASS, FragilePickEnv
 from simgrip.envs.valve import KAPPA_RATE, absolute_to_valve
 from env_checks import assert_sb3_check_env_clean
 
-VALVE_IDS = ("simgrip/PickFragile-v6", "simgrip/PickMultiFragile-v6", "simgrip/PlaceFragile-v7",
-             "simgrip/PickCradleFragile-v5", "simgrip/PickSphereFragile-v5")
+VALVE_IDS = ("simgrip/PickFragile-v7", "simgrip/PickMultiFragile-v7", "simgrip/PlaceFragile-v8",
+             "simgrip/PickCradleFragile-v6", "simgrip/PickSphereFragile-v6")
 
 
 @pytest.mark.parametrize("env_id", VALVE_IDS)
@@ -68,11 +68,11 @@ def test_absolute_to_valve_reaches_a_target_at_the_valve_rate():
 @pytest.mark.parametrize("bad", [0.0, -0.01, float("nan"), float("inf"), 2.5, "fast", None, True, np.True_])
 def test_bad_kappa_rate_is_refused_by_name(bad):  # True ran as a rate of 1.0, 50 times the default
     with pytest.raises(ValueError, match="kappa_rate"):
-        gym.make("simgrip/PickFragile-v6", kappa_rate=bad)
+        gym.make("simgrip/PickFragile-v7", kappa_rate=bad)
 
 
 def test_a_nan_rate_is_refused_like_any_action():
-    env = gym.make("simgrip/PickFragile-v6")
+    env = gym.make("simgrip/PickFragile-v7")
     env.reset(seed=0)
     with pytest.raises(ValueError, match="finite"):
         env.step(np.array([np.nan, 0.0], dtype=np.float32))

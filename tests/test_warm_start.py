@@ -25,7 +25,7 @@ except ImportError:
     sb3 = torch = None
 needs_sb3 = pytest.mark.skipif(sb3 is None, reason='needs the rl extra: pip install ".[rl]"')
 
-PINCH, PLACE = "simgrip/PickFragile-v6", "simgrip/PlaceFragile-v7"
+PINCH, PLACE = "simgrip/PickFragile-v7", "simgrip/PlaceFragile-v8"
 TOL = 1e-5
 
 

@@ -19,7 +19,7 @@ __all__ = ["CLAW_IDS", "ENV_OVERHEAD_TARGET", "env_speed", "envs_md"]
 #: Issue 18, item 5: the env's overhead over bare ``mj_step`` [%], at most.
 ENV_OVERHEAD_TARGET = 10.0
 #: The envs whose random actions reach the exact validity check (the claws).
-CLAW_IDS = ("simgrip/PickCradleFragile-v5", "simgrip/PickSphereFragile-v5")
+CLAW_IDS = ("simgrip/PickCradleFragile-v6", "simgrip/PickSphereFragile-v6")
 
 
 def env_speed(quick: bool = False) -> dict:
