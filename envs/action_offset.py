@@ -11,7 +11,9 @@ palm. From there the valve's random walk touches and sometimes crushes, the palm
 piece, and in three of six seeds both means stayed within 0.1 of 0 until the noise shrank, with no success
 ever found. The seeds that learned had, within their first ten updates, moved the means to about ``(-0.4,
 +0.2)``: close through the valve at 0.4 of its rate while raising the palm at 0.2 of its speed, a slow
-close-and-lift probe like the scripted observation-only controller's. :data:`PROBE_OFFSET` starts there.
+close-and-lift probe like the scripted observation-only controller's. :data:`PROBE_OFFSET` starts there;
+:data:`PEAK_PROBE_OFFSET` closes at half that rate, as the scripted controllers do where the crush rule reads the
+peak force within the control step.
 Held as a constant action it is a fixed schedule inside the constant-action grid of
 :mod:`simgrip.envs.baselines`, whose every member scores 0 % on the pinch's and the K fingers' held-out seeds
 (``tests/test_action_offset.py`` checks the probe itself on seeds 6200-6209: no success): when to stop
@@ -25,10 +27,15 @@ import math
 import gymnasium as gym
 import numpy as np
 
-__all__ = ["ActionOffset", "PROBE_OFFSET"]
+__all__ = ["ActionOffset", "PEAK_PROBE_OFFSET", "PROBE_OFFSET"]
 
 #: the valve tasks' probe: the valve closing at 0.4 of its rate, the palm rising at 0.2 of its speed
 PROBE_OFFSET = (-0.4, 0.2)
+#: the probe where the crush rule reads the peak within a control step (``crush_at="peak"``,
+#: :mod:`simgrip.envs.pick_fragile_v7`): the valve closing at the scripted controllers' rate there,
+#: :data:`~simgrip.envs.scripted_fragile.PEAK_CLOSING_RATE` / :data:`~simgrip.envs.valve.KAPPA_RATE` = 0.2 of its
+#: rate (a faster first touch's impact crushes light pieces), the palm as :data:`PROBE_OFFSET`
+PEAK_PROBE_OFFSET = (-0.2, 0.2)
 
 
 class ActionOffset(gym.ActionWrapper):

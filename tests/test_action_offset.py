@@ -5,7 +5,7 @@ import numpy as np
 import pytest
 
 import simgrip.envs  # noqa: F401  (registers the ids)
-from simgrip.envs.action_offset import PROBE_OFFSET, ActionOffset
+from simgrip.envs.action_offset import PEAK_PROBE_OFFSET, PROBE_OFFSET, ActionOffset
 
 ENV = "simgrip/PickFragile-v7"
 
@@ -57,10 +57,18 @@ def test_a_discrete_action_space_is_refused():
         ActionOffset(gym.make("CartPole-v1"), (0.0,))
 
 
+def test_the_peak_probe_closes_at_the_scripted_controllers_peak_rate():
+    from simgrip.envs.scripted_fragile import PEAK_CLOSING_RATE
+    from simgrip.envs.valve import KAPPA_RATE
+
+    assert PEAK_PROBE_OFFSET == pytest.approx((-PEAK_CLOSING_RATE / KAPPA_RATE, PROBE_OFFSET[1]), abs=1e-15)
+
+
+@pytest.mark.parametrize("offset", [PROBE_OFFSET, PEAK_PROBE_OFFSET], ids=["probe", "peak_probe"])
 @pytest.mark.parametrize("env_id", ["simgrip/PickFragile-v7", "simgrip/PickMultiFragile-v7"])
-def test_the_probe_alone_is_no_solution(env_id):
-    # the zero action behind PROBE_OFFSET is a constant schedule: it must not pick the workpieces up by itself
-    env = ActionOffset(gym.make(env_id), PROBE_OFFSET)
+def test_the_probe_alone_is_no_solution(env_id, offset):
+    # the zero action behind either probe is a constant schedule: it must not pick the workpieces up by itself
+    env = ActionOffset(gym.make(env_id), offset)
     successes = 0
     for seed in range(6200, 6210):
         env.reset(seed=seed)
