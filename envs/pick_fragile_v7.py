@@ -24,12 +24,12 @@ finger's force peaked within the step a median 1.02-1.74 times above the end-of-
 limit unseen.  With the ramped palm the median ratio is 1.00; what stays is the impact of first touch, a real peak
 of the model, which only the peak rule sees.  A workpiece is crushed by the largest force it feels.
 
-Baselines (held-out seeds 6000-6049, the environments page's table; each version is the older one made with
-``--env-kwargs '{"palm_ramp": true, "crush_at": "peak"}'`` step for step, ``tests/test_pick_fragile_v7.py``):
+Baselines (held-out seeds 6000-6049, the README's table, ``docs/baselines/ID-POLICY.json``; each version is
+the older one made with ``palm_ramp=True, crush_at="peak"``, step for step, ``tests/test_pick_fragile_v7.py``):
 random and the best constant action 0 % on every task, the best open-loop schedule 22 / 20 / 6 / 8 / 8 %
 (pinch, K fingers, place, cradle, sphere); the scripted controllers close at
 :data:`~simgrip.envs.scripted_fragile.PEAK_CLOSING_RATE` before first contact (a faster first touch's impact
-crushes light pieces) and succeed on 84-100 %.
+crushes light pieces): observation-only 94 / 94 / 100 / 88 / 94 %, the oracles 98 / 98 / 92 / 86 / 80 %.
 
 Info keys (every ``step``): the older versions' (:mod:`simgrip.envs.pick_fragile_v6`,
 :mod:`simgrip.envs.pick_place_v7`, :mod:`simgrip.envs.pick_claw_v5`), ``peak_normal_force`` added:

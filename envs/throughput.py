@@ -45,7 +45,7 @@ def measure_throughput(steps: int = 2000, *, grip: str = "I", seed: int = 0, rep
     grip, env_kwargs
         The environment (:class:`~simgrip.envs.pick.PickEnv` arguments).
     env_id : str, optional
-        A registered id (``"simgrip/PickFragile-v0"``, ``"simgrip/PickMulti-v0"``: any
+        A registered id (or a retired one, made as it was registered) (``"simgrip/PickFragile-v0"``, ``"simgrip/PickMulti-v0"``: any
         :class:`~simgrip.envs.pick.PickEnv` or :class:`~simgrip.envs.pick_multi.PickMultiEnv`) measured
         instead, made with ``env_kwargs`` (``grip`` is then not used).
     seed : int
@@ -90,9 +90,7 @@ def measure_throughput(steps: int = 2000, *, grip: str = "I", seed: int = 0, rep
 
         import simgrip.envs  # noqa: F401  (registers the ids)
 
-        if not isinstance(env_id, str) or env_id not in gym.registry:
-            raise ValueError(f"env_id must be a registered id, got {env_id!r}")
-        env = gym.make(env_id, **dict(env_kwargs or {})).unwrapped
+        env = gym.make(_spec(env_id), **dict(env_kwargs or {})).unwrapped
         if not isinstance(env, (PickEnv, PickMultiEnv)):
             env.close()
             raise ValueError(f"env_id must name a pick env (PickEnv or PickMultiEnv), got {env_id!r}")
@@ -180,6 +178,21 @@ def _measure(env, steps: int, seed: int, repeats: int, chunk: int, timer) -> tup
     return best, ratios, diff
 
 
+def _spec(env_id):
+    """What ``gym.make`` makes ``env_id`` from: a registered id itself, a retired one's
+    :func:`~simgrip.envs.retired_spec` (the speed page's figures name the ids registered when they were measured);
+    ValueError naming ``env_id`` otherwise."""
+    import gymnasium as gym
+
+    from simgrip.envs import RETIRED, retired_spec
+
+    if isinstance(env_id, str) and env_id in RETIRED:
+        return retired_spec(env_id)
+    if not isinstance(env_id, str) or env_id not in gym.registry:
+        raise ValueError(f"env_id must be a registered or retired id, got {env_id!r}")
+    return env_id
+
+
 def _bind(env, kind, chunk: int, seed: int) -> tuple:
     """Reset ``env`` with ``seed`` and bind what the loop reads: the (new) model and data, the rest angles'
     view, state buffers and the control log (``PickMultiEnv`` holds one model per workpiece shape)."""
@@ -192,7 +205,7 @@ def _bind(env, kind, chunk: int, seed: int) -> tuple:
 def violation_check_times(env_id: str, *, steps: int = 4000, seed: int = 0, repeats: int = 7) -> dict:
     """What a validity check costs in the states that reach :func:`~simgrip.validity.chain_violations`, both ways.
 
-    Steps the registered pick env ``env_id`` with uniform random actions (``numpy.random.default_rng(seed)``,
+    Steps the pick env ``env_id`` (registered, or retired: made as it was registered) with uniform random actions (``numpy.random.default_rng(seed)``,
     episodes reset with seeds ``seed, seed + 1, ...``), keeps the fingers' nodes at every checked step whose state is
     invalid (``info["valid"]`` False: the check went to ``chain_violations``), then times the env's own
     ``_violations`` on them with ``batch=True`` (every pair of links at once, :mod:`simgrip.link_pairs`) and
@@ -204,12 +217,11 @@ def violation_check_times(env_id: str, *, steps: int = 4000, seed: int = 0, repe
 
     import simgrip.envs  # noqa: F401  (registers the ids)
 
-    if not isinstance(env_id, str) or env_id not in gym.registry:
-        raise ValueError(f"env_id must be a registered id, got {env_id!r}")
+    spec = _spec(env_id)
     for name, value in (("steps", steps), ("repeats", repeats)):
         if int(value) < 1:
             raise ValueError(f"{name} must be a positive integer, got {value!r}")
-    env = gym.make(env_id).unwrapped
+    env = gym.make(spec).unwrapped
     try:
         probe = env._validity
         rng = np.random.default_rng(seed)
