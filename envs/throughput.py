@@ -45,9 +45,9 @@ def measure_throughput(steps: int = 2000, *, grip: str = "I", seed: int = 0, rep
     grip, env_kwargs
         The environment (:class:`~simgrip.envs.pick.PickEnv` arguments).
     env_id : str, optional
-        A registered id (or a retired one, made as it was registered) (``"simgrip/PickFragile-v0"``, ``"simgrip/PickMulti-v0"``: any
-        :class:`~simgrip.envs.pick.PickEnv` or :class:`~simgrip.envs.pick_multi.PickMultiEnv`) measured
-        instead, made with ``env_kwargs`` (``grip`` is then not used).
+        A registered id (``"simgrip/PickFragile-v7"``, ``"simgrip/PickMulti-v0"``: any
+        :class:`~simgrip.envs.pick.PickEnv` or :class:`~simgrip.envs.pick_multi.PickMultiEnv`), or a retired one
+        made as it was registered, measured instead, made with ``env_kwargs`` (``grip`` is then not used).
     seed : int
         Seeds the random actions and the episodes.
     repeats : int
