@@ -322,7 +322,7 @@ def main(argv=None) -> int:
                    help="constant/openloop: the palm actions the scripted controller drives, the member the "
                         "curvature alone (simgrip.envs.scripted_residual)")
     p.add_argument("--env-kwargs", type=_json_object, default=None, metavar="JSON",
-                   help="gym.make's keyword arguments, a JSON object ('{\"palm_ramp\": true}')")
+                   help="gym.make's keyword arguments, a JSON object ('{\"crush_at\": \"end\"}')")
     p.add_argument("--out", help="JSON file (default: stdout)")
     args = p.parse_args(argv)
     if args.out is not None:

@@ -3,7 +3,8 @@
 A palm action ``a`` in ``[-1, 1]`` moves the slide's target by ``a * speed * dt`` [m] per control step of ``dt``
 [s], clamped to the slide's range.  How the servo sees the new target within the step:
 
-* **held** (``ramp=False``, every registered id so far): a position servo whose ``ctrl`` is the target; the
+* **held** (``ramp=False``: ``Pick-v1``, ``PickCradle-v1``, ``PickMulti-v0`` and the fragile ids before
+  :mod:`simgrip.envs.pick_fragile_v7`): a position servo whose ``ctrl`` is the target; the
   target jumps at the start of the control step and is held over its ``frame_skip`` physics steps (a
   zero-order hold).  Each jump is a jerk: lifting at full speed (0.1 m/s, 2 mm a step at 50 Hz) yanks
   the palm every control step, and a finger's normal force on a held workpiece peaks within the step

@@ -18,7 +18,8 @@ the reward left as they were:
    The tactile observation still reads the end of the step, as a skin sampled at the control rate would.
 
 Why (measured; the Gymnasium environments page, "Forces within a control step", ``python -m
-simgrip.envs.substep_forces --env ID --seeds 8000-8049``): under the older versions' observation-only controller a
+simgrip.envs.substep_forces --env OLDER_ID --seeds 8000-8049``, the retired id): under the older versions'
+observation-only controller a
 finger's force peaked within the step a median 1.02-1.74 times above the end-of-step value the crush rule read
 (95th percentile up to 2.9), and 3-18 of each task's successes had a step whose force passed the piece's crush
 limit unseen.  With the ramped palm the median ratio is 1.00; what stays is the impact of first touch, a real peak
@@ -27,9 +28,9 @@ of the model, which only the peak rule sees.  A workpiece is crushed by the larg
 Baselines (held-out seeds 6000-6049, the README's table, ``docs/baselines/ID-POLICY.json``; each version is
 the older one made with ``palm_ramp=True, crush_at="peak"``, step for step, ``tests/test_pick_fragile_v7.py``):
 random and the best constant action 0 % on every task, the best open-loop schedule 22 / 20 / 6 / 8 / 8 %
-(pinch, K fingers, place, cradle, sphere); the scripted controllers close at
+(pinch, K fingers, place, cradle, sphere); the pinch's, the K fingers' and the claws' scripted controllers close at
 :data:`~simgrip.envs.scripted_fragile.PEAK_CLOSING_RATE` before first contact (a faster first touch's impact
-crushes light pieces): observation-only 94 / 94 / 100 / 88 / 94 %, the oracles 98 / 98 / 92 / 86 / 80 %.
+crushes light pieces; the place's observation-only controller approaches at its own 0.0025): observation-only 94 / 94 / 100 / 88 / 94 %, the oracles 98 / 98 / 92 / 86 / 80 %.
 
 Info keys (every ``step``): the older versions' (:mod:`simgrip.envs.pick_fragile_v6`,
 :mod:`simgrip.envs.pick_place_v7`, :mod:`simgrip.envs.pick_claw_v5`), ``peak_normal_force`` added:
@@ -57,7 +58,7 @@ key                      meaning
 ``gripped``              the place: held ``carry_height`` up, both fingers on it, for ``grip_time``
 ``target_x``             the place: this episode's target [m]
 ``reward_*``             the terms: ``reward_lift``, ``reward_success``, ``reward_squeeze`` (0),
-                         ``reward_drop`` (0), ``reward_crush``, ``reward_contact``, ``reward_touch`` (0);
+                         ``reward_drop`` (0; the claws charge ``w_drop = 5``), ``reward_crush``, ``reward_contact``, ``reward_touch`` (0);
                          the place also ``reward_place``, ``reward_hold``, ``reward_set_down``; the claws
                          ``reward_approach``
 =======================  ==========================================================================

@@ -83,7 +83,9 @@ def force_peaks(env_id: str, seeds, *, policy: str = "observation", env_kwargs=N
     ``ratio_median``, ``ratio_p95``, ``ratio_max`` (the largest finger's peak over its end value),
     ``unseen_steps`` (steps whose peak crossed the crush limit while the end value did not: the rule saw no
     crush), ``outcomes`` (how the episodes ended), ``unseen_successes`` (successes with such a step: a crush
-    under a rule that reads the peak), ``env``, ``policy``, ``seeds``, ``env_kwargs``."""
+    under a rule that reads the peak), ``env``, ``policy``, ``seeds``, ``env_kwargs``, ``crush_at``.  On an env
+    whose rule reads the peak (``crush_at="peak"``, the registered fragile ids) such a step is a crush, so
+    ``unseen_steps`` and ``unseen_successes`` are None."""
     import gymnasium as gym
 
     import simgrip.envs  # noqa: F401  (registers the ids)
@@ -114,17 +116,21 @@ def force_peaks(env_id: str, seeds, *, policy: str = "observation", env_kwargs=N
             key = outcome(info)
             ends[key] = ends.get(key, 0) + 1
             unseen_ok += crossed and key == "success"
+        crush_at = env.unwrapped.crush_at
     finally:
         env.close()
+    if crush_at == "peak":  # (a peak over the limit ended the episode: nothing went unseen)
+        unseen = unseen_ok = None
     r = np.array(ratios) if ratios else np.array([math.nan])
     return {"env": env_id, "policy": policy, "seeds": [int(seeds[0]), int(seeds[-1])], "episodes": len(seeds),
             "env_kwargs": dict(env_kwargs or {}), "steps": len(ratios), "ratio_median": float(np.median(r)),
             "ratio_p95": float(np.percentile(r, 95)), "ratio_max": float(np.max(r)), "unseen_steps": unseen,
-            "outcomes": dict(sorted(ends.items())), "unseen_successes": int(unseen_ok)}
+            "outcomes": dict(sorted(ends.items())),
+            "unseen_successes": None if unseen_ok is None else int(unseen_ok), "crush_at": crush_at}
 
 
 def main(argv=None) -> int:
-    from simgrip.envs.baselines import _seeds
+    from simgrip.envs.baselines import _json_object, _seeds
     from simgrip.interrupt import run_main
 
     p = CommandParser(prog="python -m simgrip.envs.substep_forces",
@@ -133,7 +139,11 @@ def main(argv=None) -> int:
     p.add_argument("--env", required=True, help="a fragile pick id, registered or retired")
     p.add_argument("--seeds", default="8000-8049", type=_seeds, help="A-B, inclusive (default 8000-8049)")
     p.add_argument("--policy", default="observation", choices=("observation", "oracle"))
-    p.add_argument("--palm-ramp", action="store_true", help="the env made with palm_ramp=True")
+    p.add_argument("--palm-ramp", action="store_true",
+                   help="the env made with palm_ramp=True (the registered fragile ids ramp it already)")
+    p.add_argument("--env-kwargs", type=_json_object, default=None, metavar="JSON",
+                   help="gym.make's keyword arguments, a JSON object ('{\"palm_ramp\": false, \"crush_at\": "
+                        "\"end\"}': a registered id as the versions before it)")
 
     def run(argv) -> int:
         args = p.parse_args(argv)
@@ -142,8 +152,15 @@ def main(argv=None) -> int:
         if args.env not in FRAGILE_ENV_IDS and args.env not in RETIRED:
             p.error(f"--env must be a fragile id, registered ({', '.join(FRAGILE_ENV_IDS)}) or retired, "
                     f"got {args.env!r}")
-        rec = force_peaks(args.env, args.seeds, policy=args.policy,
-                          env_kwargs={"palm_ramp": True} if args.palm_ramp else None)
+        kwargs = dict(args.env_kwargs or {})
+        if args.palm_ramp:
+            if kwargs.get("palm_ramp", True) is not True:
+                p.error("--palm-ramp contradicts --env-kwargs' palm_ramp")
+            kwargs["palm_ramp"] = True
+        try:
+            rec = force_peaks(args.env, args.seeds, policy=args.policy, env_kwargs=kwargs or None)
+        except (TypeError, ValueError) as exc:  # a keyword the env refuses
+            p.error(f"--env-kwargs: {exc}")
         print(json.dumps(rec, indent=1))
         return 0
 

@@ -1,7 +1,8 @@
 """Each finger's largest normal force within a control step, summed by MuJoCo's contact sensors in C.
 
 The fragile envs' crush rule reads each finger's normal force after the control step's ``frame_skip``
-physics steps (``crush_at="end"``, every registered id); within the step the force can be higher
+physics steps (``crush_at="end"``: every fragile id before :mod:`simgrip.envs.pick_fragile_v7`, whose registered
+versions read the peak); within the step the force can be higher
 (``docs/environments.md``, "Forces within a control step": the first touch's impact, and the held palm's jerk).
 ``crush_at="peak"`` reads the largest value within the step instead, at no Python cost per physics step:
 

@@ -450,7 +450,7 @@ def build_parser() -> argparse.ArgumentParser:
                    help="train behind SB3's VecNormalize (observation and return, library defaults; default off)")
     p.add_argument("--action-offset", type=float, nargs="+", default=None, metavar="A",
                    help="train and evaluate behind simgrip.envs.action_offset.ActionOffset (one number per action; "
-                        "the valve tasks' probe: -0.4 0.2; default none)")
+                        "the valve tasks' probe: -0.4 0.2, -0.2 0.2 where the crush rule reads the peak; default none)")
     p.add_argument("--frame-stack", type=_positive(int), default=None, metavar="N",
                    help="train and evaluate on the last N observations (Gymnasium's FrameStackObservation; "
                         "default 1: the env's own)")

@@ -49,7 +49,8 @@ env's own, unnormalised).
 
 ``--action-offset A0 A1 ...`` trains and evaluates behind :class:`simgrip.envs.action_offset.ActionOffset`:
 the env performs ``clip(action + offset)``, so PPO's zero-mean start performs the offset's motion (on the
-valve tasks ``-0.4 0.2``, the slow close-and-lift probe); ``<algo>_eval.json`` records ``action_offset``.
+valve tasks ``-0.4 0.2``, the slow close-and-lift probe; ``-0.2 0.2`` where the crush rule reads the peak,
+:data:`simgrip.envs.action_offset.PEAK_PROBE_OFFSET`); ``<algo>_eval.json`` records ``action_offset``.
 
 ``--frame-stack N`` trains and evaluates on the last ``N`` observations (Gymnasium's ``FrameStackObservation``,
 the issue's "frame stacking": the policy then sees how the forces and the shapes change from step to step;
@@ -495,7 +496,8 @@ def main(argv=None) -> int:
                    help="train behind SB3's VecNormalize (observation and return, library defaults)")
     p.add_argument("--action-offset", type=float, nargs="+", default=None, metavar="A",
                    help="train and evaluate behind simgrip.envs.action_offset.ActionOffset: the env performs "
-                        "clip(action + offset); one number per action (the valve tasks' probe: -0.4 0.2)")
+                        "clip(action + offset); one number per action (the valve tasks' probe: -0.4 0.2; "
+                        "-0.2 0.2 where the crush rule reads the peak)")
     p.add_argument("--frame-stack", type=_positive(int), default=None, metavar="N",
                    help="train and evaluate on the last N observations (Gymnasium's FrameStackObservation; "
                         "default 1: the env's own)")

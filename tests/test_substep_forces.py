@@ -84,4 +84,24 @@ def test_a_retired_id_is_measured_as_it_was_registered():
                         "simgrip/PickSphereFragile-v5", "--seeds", "8000-8000"], capture_output=True, text=True,
                        timeout=300)
     assert r.returncode == 0, r.stderr
-    assert r.stdout == json.dumps(force_peaks("simgrip/PickSphereFragile-v5", [8000]), indent=1) + "\n"
+    got = json.loads(r.stdout)
+    # the registered version made with the older defaults back measures the same
+    want = force_peaks(SPHERE, [8000], env_kwargs={"palm_ramp": False, "crush_at": "end"})
+    assert got["crush_at"] == "end" and isinstance(got["unseen_steps"], int)
+    for key in ("env", "env_kwargs"):
+        del got[key], want[key]
+    assert got == want
+
+
+def test_on_a_peak_env_nothing_goes_unseen_and_env_kwargs_reach_it():
+    ramped = force_peaks(SPHERE, [8000])
+    assert ramped["crush_at"] == "peak" and ramped["unseen_steps"] is None and ramped["unseen_successes"] is None
+    r = subprocess.run([sys.executable, "-m", "simgrip.envs.substep_forces", "--env", SPHERE, "--seeds", "8000-8000",
+                        "--env-kwargs", '{"crush_at": "end"}'], capture_output=True, text=True, timeout=300)
+    assert r.returncode == 0, r.stderr
+    rec = json.loads(r.stdout)
+    assert rec["crush_at"] == "end" and rec["env_kwargs"] == {"crush_at": "end"} and rec["unseen_steps"] is not None
+    for args in (["--env-kwargs", '{"bogus": 1}'], ["--palm-ramp", "--env-kwargs", '{"palm_ramp": false}']):
+        r = subprocess.run([sys.executable, "-m", "simgrip.envs.substep_forces", "--env", SPHERE, "--seeds",
+                            "8000-8000", *args], capture_output=True, text=True, timeout=300)
+        assert r.returncode == 2 and len(r.stderr.strip().splitlines()) == 1 and "--env-kwargs" in r.stderr, r.stderr

@@ -34,8 +34,15 @@ def test_replay_covers_the_same_physics(env_id):
 
 def test_env_id_must_be_a_registered_or_retired_pick_env():
     # a retired id is measured as it was registered (the speed page names the ids of the day)
+    from simgrip.envs.throughput import _spec
+
     r = measure_throughput(steps=20, repeats=1, chunk=10, clock="cpu", env_id="simgrip/PickSphereFragile-v5")
     assert r["chunks"] == 2 and r["replay_max_abs_diff"] == 0.0
+    import gymnasium as gym
+
+    u = gym.make(_spec("simgrip/PickSphereFragile-v5")).unwrapped
+    assert (u.palm_ramp, u.crush_at) == (False, "end")  # the held palm and the end-of-step rule, as registered
+    u.close()
     with pytest.raises(ValueError, match="env_id"):
         measure_throughput(steps=10, env_id="simgrip/NoSuch-v0")
     with pytest.raises(ValueError, match="env_id"):
