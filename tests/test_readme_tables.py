@@ -27,27 +27,57 @@ AIDED = "PPO behind its aid, 3 seeds"
 
 #: README row -> (the id whose non-learned records it shows, {learned column header: aggregate folder}).
 ROWS = {
-    "PickFragile-v6": ("PickFragile-v4", {"PPO, 3 seeds": "rl_pick_v5_wdrop0", "SAC, 3 seeds": "rl_pick_v6_sac",
-                                          AIDED: "rl_pick_v6_offset"}),
-    "PickMultiFragile-v6": ("PickMultiFragile-v4", {"PPO, 3 seeds": "rl_multi_v5_wdrop0",
-                                                    "SAC, 3 seeds": "rl_multi_v6_sac", AIDED: "rl_multi_v6_light"}),
-    "PlaceFragile-v7": ("PlaceFragile-v4", {"PPO, 3 seeds": "rl_place_v7", "SAC, 3 seeds": "rl_place_v7_sac",
+    "PickFragile-v7": ("PickFragile-v7", {"PPO, 3 seeds": "rl_pick_v5_wdrop0", "SAC, 3 seeds": "rl_pick_v6_sac",
+                                          AIDED: "rl_pick_v7_peak_offset"}),
+    "PickMultiFragile-v7": ("PickMultiFragile-v7", {"PPO, 3 seeds": "rl_multi_v5_wdrop0",
+                                                    "SAC, 3 seeds": "rl_multi_v6_sac", AIDED: "rl_multi_v7_peak_light"}),
+    "PlaceFragile-v8": ("PlaceFragile-v8", {"PPO, 3 seeds": "rl_place_v7", "SAC, 3 seeds": "rl_place_v7_sac",
                                             AIDED: "rl_place_v7_residual_palm/log_std_init"}),
-    "PickCradleFragile-v5": ("PickCradleFragile-v4", {"PPO, 3 seeds": "rl_cradle_v5",
+    "PickCradleFragile-v6": ("PickCradleFragile-v6", {"PPO, 3 seeds": "rl_cradle_v5",
                                                       "SAC, 3 seeds": "rl_cradle_v5_sac",
                                                       AIDED: "rl_cradle_v5_residual_palm/light_log_std_init"}),
-    "PickSphereFragile-v5": ("PickSphereFragile-v4", {"PPO, 3 seeds": "rl_sphere_v5",
+    "PickSphereFragile-v6": ("PickSphereFragile-v6", {"PPO, 3 seeds": "rl_sphere_v5",
                                                       "SAC, 3 seeds": "rl_sphere_v5_sac",
                                                       AIDED: "rl_sphere_v5_residual_palm_light/log_std_init"}),
 }
 
 #: the aids an aided cell names -> the rl_baselines.py option that applies each
-AIDS = {"offset": "--action-offset", "light bias": "--light-bias", "scripted palm": "--residual",
-        "log std -1": "--log-std-init"}
+AIDS = {"offset": "--action-offset", "peak offset": "--action-offset", "light bias": "--light-bias",
+        "scripted palm": "--residual", "log std -1": "--log-std-init"}
 
-#: (id, its keyword arguments as JSON) -> the id that env is, step for step (simgrip.envs.pick_fragile_v6).
+
+def assert_the_offset_named(text: str, command: list) -> None:
+    """"peak offset" (simgrip.envs.action_offset.PEAK_PROBE_OFFSET) closes the valve at -0.2, "offset" (PROBE_OFFSET)
+    at -0.4: the record's --action-offset is the one the text names (nothing to check where it names neither)."""
+    if "offset" not in text:
+        return
+    valve = float(command[command.index("--action-offset") + 1])
+    assert valve == (-0.2 if "peak offset" in text else -0.4), (text, valve)
+
+_RAMP_PEAK = '{"crush_at": "peak", "palm_ramp": true}'
+#: (id, its keyword arguments as JSON, keys sorted) -> the id that env is, step for step
+#: (tests/test_pick_fragile_v6.py, tests/test_pick_fragile_v7.py)
 EQUIVALENT = {("PickFragile-v5", '{"w_drop": 0.0}'): "PickFragile-v6",
-              ("PickMultiFragile-v5", '{"w_drop": 0.0}'): "PickMultiFragile-v6"}
+              ("PickMultiFragile-v5", '{"w_drop": 0.0}'): "PickMultiFragile-v6",
+              ("PickFragile-v6", _RAMP_PEAK): "PickFragile-v7",
+              ("PickMultiFragile-v6", _RAMP_PEAK): "PickMultiFragile-v7",
+              ("PlaceFragile-v7", _RAMP_PEAK): "PlaceFragile-v8",
+              ("PickCradleFragile-v5", _RAMP_PEAK): "PickCradleFragile-v6",
+              ("PickSphereFragile-v5", _RAMP_PEAK): "PickSphereFragile-v6"}
+
+
+def training_command(agg: dict) -> list:
+    """The ``rl_baselines.py`` command that trained a record's runs: its ``command``, or for a record combined from
+    batches (``--combine``, which checks that they are one experiment over different seeds) the first batch's."""
+    return agg["combined_from"][0] if "combined_from" in agg else agg["command"]
+
+
+def measured_as(rec: dict) -> str:
+    """The id (no namespace) whose env a record's run was, step for step: its own id, or the id its keyword
+    arguments make it (EQUIVALENT)."""
+    measured = rec["env"].split("/")[1]
+    return EQUIVALENT.get((measured, json.dumps(rec.get("env_kwargs", {}), sort_keys=True)), measured)
+
 
 _PCT = re.compile(r"^(\d+) %")
 _INTERVAL = re.compile(r"\[(\d+), (\d+)\]")
@@ -97,6 +127,7 @@ def test_non_learned_cells_are_their_records(row):
                            ("observation-only", "observation")):
         rec = record(base, policy)
         assert rec["seeds"] == [6000, 6049] and rec["episodes"] == 50
+        assert measured_as(rec) == base, (column, rec["env"])
         cell = cells[column]
         assert int(_PCT.match(cell).group(1)) == pct(rec["success_rate"]), (column, cell)
         interval = _INTERVAL.search(cell)
@@ -111,7 +142,7 @@ def test_non_learned_cells_are_their_records(row):
             member = next(m for m in rec["members"] if all(m[k] == v for k, v in params.items()))
             assert int(tuned.group(1)) == pct(member["success_rate"]), (column, cell)
     held_out = [record(base, f"{p}-8000") for p in ("oracle", "observation")]
-    assert all(r["seeds"] == [8000, 8049] for r in held_out)
+    assert all(r["seeds"] == [8000, 8049] and measured_as(r) == base for r in held_out)
     assert cells["oracle / observation-only on 8000–8049"] == " / ".join(
         str(pct(r["success_rate"])) for r in held_out) + " %"
 
@@ -133,23 +164,24 @@ def test_learned_cells_are_their_aggregates(row):
         assert [c["minutes"] for c in summary["checkpoints"]] == [5.0, 10.0, 15.0]
         final = summary["final"]
         assert [int(v) for v in m.groups()] == means + [pct(final["min"]), pct(final["max"])], (column, folder)
-        # the row's id is the record's; or the record's id with keyword arguments that make it the row's env step
-        # for step (tests/test_pick_fragile_v6.py); or the README marks the older id it was measured on
-        measured = agg["env"].split("/")[1]
-        as_row = EQUIVALENT.get((measured, json.dumps(agg.get("env_kwargs", {}), sort_keys=True)))
-        assert (measured == row or as_row == row
-                or cells[column].endswith(" " + measured.rsplit("-", 1)[1])), (column, measured)
+        # the row's id is the record's, or the record's id with keyword arguments that make it the row's env step
+        # for step (EQUIVALENT); or the cell ends with the older version it was measured on, " v6"
+        measured = measured_as(agg)
+        assert measured == row or (measured.rsplit("-", 1)[0] == row.rsplit("-", 1)[0]
+                                   and cells[column].endswith(" " + measured.rsplit("-", 1)[1])), (column, measured)
         # the learner's options: SB3's defaults, and in the aided column exactly the aids the cell names
-        options = {a for a in agg["command"] if a.startswith("--")}
+        options = {a for a in training_command(agg) if a.startswith("--")}
         assert "--gamma" not in options and "--normalize" not in options and "--init-from" not in options
         named = {name for name in AIDS if name in cells[column]} if column == AIDED else set()
         assert {AIDS[name] for name in named} == options & set(AIDS.values()), (column, options)
+        if column == AIDED:
+            assert_the_offset_named(cells[column], training_command(agg))
         if "log std -1" in named:  # the one hyperparameter an aid changes, at the value the cell names
-            cmd = agg["command"]
+            cmd = training_command(agg)
             assert float(cmd[cmd.index("--log-std-init") + 1]) == -1.0
             assert agg["hyperparameters"].endswith("; but log_std_init = -1.0")
         if column == AIDED and "scripted palm" in named:  # every palm action scripted, the curvature learned
-            after = agg["command"][agg["command"].index("--residual") + 1:]
+            after = training_command(agg)[training_command(agg).index("--residual") + 1:]
             residual = set(itertools.takewhile(lambda a: not a.startswith("--"), after))
             assert "palm_z" in residual and residual <= {"palm_x", "palm_z"}
 
@@ -173,9 +205,10 @@ def test_the_stated_mass_ranges_are_the_envs():
             assert (f"{lo * 1e3:g}", f"{hi * 1e3:g}") == stated[key], env_id
 
 
-#: the learning-target table's tasks -> the id each batch's record must be (or be step for step, EQUIVALENT)
-TASKS = {"pinch": "PickFragile-v6", "K fingers": "PickMultiFragile-v6", "cradle": "PickCradleFragile-v5",
-         "sphere": "PickSphereFragile-v5", "place": "PlaceFragile-v7"}
+#: the learning-target table's tasks -> the id each batch's record must be (or be step for step, EQUIVALENT); a
+#: row whose task names an older version ("pinch, v6") holds batches measured on that version
+TASKS = {"pinch": "PickFragile-v7", "K fingers": "PickMultiFragile-v7", "cradle": "PickCradleFragile-v6",
+         "sphere": "PickSphereFragile-v6", "place": "PlaceFragile-v8"}
 
 _BATCH = re.compile(r"^((?:\d+ / )*\d+) % \((?:seeds )?(\d+)–(\d+)\)$")
 
@@ -201,9 +234,11 @@ def test_target_table_is_its_records():
     verdict the target's rule (at least 2 of 3 seeds at 80 % or more), its aids exactly the record's training
     options, over 15 CPU-minutes on the task's id and the held-out seeds 8000-8049."""
     rows = target_table()
-    assert {r["task"] for r in rows} == set(TASKS)
+    assert {r["task"].split(", ")[0] for r in rows} == set(TASKS)
     verdicts = {}
     for row in rows:
+        task, *older = row["task"].split(", ")
+        want = TASKS[task] if not older else TASKS[task].rsplit("-", 1)[0] + "-" + older[0]
         batches, met, folders = (row[k].split("; ") for k in ("success per seed, 15 CPU-min", "met", "record"))
         assert len(batches) == len(met) == len(folders), row
         for batch, verdict, folder in zip(batches, met, folders):
@@ -217,19 +252,20 @@ def test_target_table_is_its_records():
             assert agg["minutes"] == 15.0 and agg["eval_seeds"] == [8000, 8049] and agg["algos"] == ["ppo"]
             assert agg["summary"]["ppo"]["failed"] == 0
             assert verdict == ("yes" if sum(x >= 0.8 for x in final) >= 2 else "no"), (folder, batch)
-            measured = agg["env"].split("/")[1]
-            as_row = EQUIVALENT.get((measured, json.dumps(agg.get("env_kwargs", {}), sort_keys=True)))
-            assert TASKS[row["task"]] in (measured, as_row), (folder, measured)
-            options = {a for a in agg["command"] if a.startswith("--")}
+            assert measured_as(agg) == want, (folder, agg["env"])
+            options = {a for a in training_command(agg) if a.startswith("--")}
             named = set() if row["aids"] == "none" else set(row["aids"].split(", "))
             assert named <= set(AIDS), row["aids"]
             assert {AIDS[name] for name in named} == options & set(AIDS.values()), (folder, options)
+            assert_the_offset_named(row["aids"], training_command(agg))
             assert not options & {"--gamma", "--normalize", "--init-from", "--crush-charge", "--frame-stack"}
             verdicts.setdefault(row["task"], []).append(verdict)
-    # the summary sentence under the table
+    # the summary sentence under the table (a task with ", vN" holds the batches of its version before)
     text = " ".join(TARGET_PAGE.read_text(encoding="utf-8").split())
-    assert ("So the pinch and the K fingers meet the target, the cradle in one batch of two, and the sphere and "
-            "the place do not.") in text
-    assert all("yes" in verdicts[t] for t in ("pinch", "K fingers", "cradle"))
-    assert verdicts["cradle"].count("yes") == 1 and len(verdicts["cradle"]) == 2
-    assert "yes" not in verdicts["sphere"] + verdicts["place"]
+    assert ("So on the registered versions neither the pinch nor the K fingers meets the target (the cradle, the "
+            "sphere and the place are not rerun yet); on the versions before, the pinch and the K fingers met it, "
+            "the cradle in one batch of two, and the sphere and the place did not.") in text
+    assert "yes" not in verdicts["pinch"] + verdicts["K fingers"]
+    assert all("yes" in verdicts[t] for t in ("pinch, v6", "K fingers, v6", "cradle, v5"))
+    assert verdicts["cradle, v5"].count("yes") == 1 and len(verdicts["cradle, v5"]) == 2
+    assert "yes" not in verdicts["sphere, v5"] + verdicts["place, v7"]
