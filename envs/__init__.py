@@ -48,7 +48,7 @@ from __future__ import annotations
 
 from gymnasium.envs.registration import EnvSpec, register, registry
 
-__all__ = ["ENV_IDS", "FRAGILE_ENV_IDS", "MULTI_ENV_IDS", "RETIRED", "register_envs", "retired_spec"]
+__all__ = ["ENV_IDS", "FRAGILE_ENV_IDS", "MULTI_ENV_IDS", "RETIRED", "make_spec", "register_envs", "retired_spec"]
 
 #: id -> (entry point, kwargs, max_episode_steps)
 _ENVS = {
@@ -141,6 +141,12 @@ def retired_spec(env_id: str) -> EnvSpec:
                             f" (retired: {', '.join(RETIRED)})"))
     entry, kwargs, steps = RETIRED[env_id]
     return EnvSpec(id=env_id, entry_point=entry, kwargs=dict(kwargs), max_episode_steps=steps)
+
+
+def make_spec(env_id):
+    """What ``gym.make`` builds ``env_id`` from: a retired id's :func:`retired_spec`, anything else as it is (a
+    registered id; ``gym.make`` names an unknown one)."""
+    return retired_spec(env_id) if isinstance(env_id, str) and env_id in RETIRED else env_id
 
 
 def register_envs() -> None:

@@ -258,9 +258,9 @@ def evaluate(env_id: str, policy: str, seeds, grid: str = "full", residual=None,
     over ``seeds``, behind the scripted palm where ``residual`` names its actions (module docstring), the env
     made with ``env_kwargs`` (``gym.make``'s keywords, recorded as ``env_kwargs`` when given); the JSON record.
     ValueError naming ``--residual`` (the env closed first) or, from the env, the keyword."""
-    from simgrip.envs import RETIRED, retired_spec
+    from simgrip.envs import make_spec
 
-    env = gym.make(retired_spec(env_id) if env_id in RETIRED else env_id, **dict(env_kwargs or {}))
+    env = gym.make(make_spec(env_id), **dict(env_kwargs or {}))
     try:
         if residual is not None:
             members = _residual_members(policy, grid, _task(env)[3])

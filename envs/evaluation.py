@@ -199,7 +199,7 @@ def make_env(env_id: str, env_kwargs: dict | None = None, action_offset=None, fr
 
     import gymnasium as gym
 
-    from simgrip.envs import RETIRED, retired_spec
+    from simgrip.envs import make_spec
 
     if frame_stack is not None and (isinstance(frame_stack, bool) or not isinstance(frame_stack, int)
                                     or frame_stack < 1):
@@ -208,7 +208,7 @@ def make_env(env_id: str, env_kwargs: dict | None = None, action_offset=None, fr
         raise ValueError("--residual: not with --scripted-start (the controller would start mid-episode)")
     kwargs = dict(env_kwargs or {})
     try:
-        env = gym.make(retired_spec(env_id) if env_id in RETIRED else env_id, **kwargs)
+        env = gym.make(make_spec(env_id), **kwargs)
     except (TypeError, ValueError) as e:
         raise ValueError(f"--env-kwargs: {env_id} does not take {json.dumps(kwargs)}: {e}") from None
     if light_bias is not None:

@@ -92,9 +92,9 @@ def force_peaks(env_id: str, seeds, *, policy: str = "observation", env_kwargs=N
     from simgrip.envs.outcome import outcome
     from simgrip.envs.scripted_policies import policy_maker
 
-    from simgrip.envs import RETIRED, retired_spec
+    from simgrip.envs import make_spec
 
-    env = gym.make(retired_spec(env_id) if env_id in RETIRED else env_id, **dict(env_kwargs or {}))
+    env = gym.make(make_spec(env_id), **dict(env_kwargs or {}))
     try:
         make = policy_maker(env, policy)
         ratios, unseen, ends, unseen_ok = [], 0, {}, 0

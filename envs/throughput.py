@@ -184,13 +184,11 @@ def _spec(env_id):
     ValueError naming ``env_id`` otherwise."""
     import gymnasium as gym
 
-    from simgrip.envs import RETIRED, retired_spec
+    from simgrip.envs import RETIRED, make_spec
 
-    if isinstance(env_id, str) and env_id in RETIRED:
-        return retired_spec(env_id)
-    if not isinstance(env_id, str) or env_id not in gym.registry:
+    if not isinstance(env_id, str) or (env_id not in gym.registry and env_id not in RETIRED):
         raise ValueError(f"env_id must be a registered or retired id, got {env_id!r}")
-    return env_id
+    return make_spec(env_id)
 
 
 def _bind(env, kind, chunk: int, seed: int) -> tuple:
