@@ -289,6 +289,7 @@ def train(algo: str, env_id: str, *, steps: int, minutes: float, seed: int, out:
     from stable_baselines3 import PPO, SAC
     from stable_baselines3.common.callbacks import BaseCallback
     from stable_baselines3.common.env_util import make_vec_env
+    from stable_baselines3.common.logger import Logger
 
     cls = {"ppo": PPO, "sac": SAC}[algo]
     rows = []
@@ -338,6 +339,7 @@ def train(algo: str, env_id: str, *, steps: int, minutes: float, seed: int, out:
 
         env = VecNormalize(env)  # SB3's defaults; the Monitor inside still records the env's own returns
     model = cls("MlpPolicy", env, seed=seed, verbose=0, **model_kwargs(algo, gamma, log_std_init))
+    model.set_logger(Logger(None, []))  # no output; SB3's own would make an empty /tmp/SB3-<time> per learn()
     init = start = None
     if init_from is not None:
         init = _warm_start(model, env.envs[0] if hasattr(env, "envs") else env.venv.envs[0], init_from,

@@ -2,6 +2,7 @@
 
 import csv
 import json
+import tempfile
 
 import gymnasium as gym
 import pytest
@@ -85,10 +86,15 @@ def test_train_sb3_evaluates_behind_the_action_offset_it_was_given():
     assert held["mean_return"] != pytest.approx(probed["mean_return"], abs=1e-6)
 
 
-def test_train_sb3_smoke(tmp_path, capsys):
+def test_train_sb3_smoke(tmp_path, capsys, monkeypatch):
     pytest.importorskip("stable_baselines3")
     module = _example("train_sb3")
+    scratch = tmp_path.parent / (tmp_path.name + "_tmpdir")
+    scratch.mkdir()
+    monkeypatch.delenv("SB3_LOGDIR", raising=False)
+    monkeypatch.setattr(tempfile, "tempdir", str(scratch))  # where SB3's own logger makes its SB3-<time> folder
     module.main(["--algo", "sac", "--steps", "120", "--eval-episodes", "1", "--out", str(tmp_path)])
+    assert list(scratch.glob("SB3-*")) == []  # no empty log folder left per run (torch's own caches may be)
     res = json.loads(capsys.readouterr().out.strip().splitlines()[-1])
     assert res["algo"] == "SAC" and res["timesteps"] >= 120 and res["episodes"] == 1
     assert sorted(p.name for p in tmp_path.iterdir()) == ["curves.png", "sac_curve.csv", "sac_eval.json",
