@@ -208,6 +208,34 @@ def test_exception_from_the_task_propagates_from_a_worker():
     assert not _gone_within(descendants() - before, 5.0)  # the cluster's processes are gone
 
 
+WARNING_TASK = textwrap.dedent("""
+    from simgrip.parallel.runner import RunnerOptions, run_tasks
+
+    def warn(x):  # a NaN position: MuJoCo warns (mjWARN_BADQPOS) and resets the state
+        import mujoco
+        m = mujoco.MjModel.from_xml_string("<mujoco><worldbody><body><freejoint/><geom size='.1'/></body>"
+                                           "</worldbody></mujoco>")
+        d = mujoco.MjData(m)
+        d.qpos[0] = float("nan")
+        mujoco.mj_step(m, d)
+        return int(d.warning[mujoco.mjtWarning.mjWARN_BADQPOS].number)
+
+    if __name__ == "__main__":
+        print(run_tasks(warn, [0, 1], options=RunnerOptions(jobs=2, progress=False), batch_size=1))
+""")
+
+
+def test_a_workers_mujoco_warning_goes_to_stderr_not_a_log_file(tmp_path):
+    """Without a handler MuJoCo appends its warnings to ``MUJOCO_LOG.TXT`` in the working folder: the workers of a
+    local cluster (the user's folder is theirs) said them there (an audit); now one line each on stderr."""
+    r = subprocess.run([sys.executable, "-c", WARNING_TASK], cwd=tmp_path, capture_output=True, text=True,
+                       timeout=120, env={**os.environ, "PYTHONPATH": str(HERE.parent)})
+    assert r.returncode == 0, r.stderr
+    assert r.stdout.strip() == "[1, 1]"  # each task warned
+    assert r.stderr.count(": MuJoCo: Nan, Inf or huge value in QPOS") == 2 and "simgrip worker" in r.stderr
+    assert list(tmp_path.iterdir()) == []
+
+
 def test_a_killed_worker_loses_no_item(tmp_path):
     marker = tmp_path / "killed"
     items = [(x, 5, str(marker)) for x in range(12)]

@@ -163,21 +163,12 @@ def cable_run(cable: Cable, steps: int):
     return tips, vmax, active_warnings(d)
 
 
-class _quiet:
+def _quiet():
     """MuJoCo's warning printer off for a block (the warnings are still counted in ``data.warning`` and
     recorded); the previous handler restored after."""
+    from simgrip.sim.checks import warnings_to
 
-    def __enter__(self):
-        import mujoco
-
-        self._prev = mujoco.get_mju_user_warning()
-        mujoco.set_mju_user_warning(lambda msg: None)
-
-    def __exit__(self, *exc):
-        import mujoco
-
-        mujoco.set_mju_user_warning(self._prev)
-        return False
+    return warnings_to(lambda msg: None)
 
 
 def steps_to_error(err: np.ndarray, target: float) -> int | None:

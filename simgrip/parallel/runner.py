@@ -42,7 +42,8 @@ still starting.  Worker processes of the local cluster start with SIGINT
 blocked, so a Ctrl-C at a terminal (sent to the whole process group) is handled
 once, by this process.  Scripts that start a local cluster need the
 ``if __name__ == "__main__":`` guard (worker processes are spawned and import
-the main module).  The runner writes no files.
+the main module).  The runner writes no files; its workers' MuJoCo warnings go
+to their stderr, not into ``MUJOCO_LOG.TXT``.
 """
 
 from __future__ import annotations
@@ -201,8 +202,11 @@ def default_batch_size(n_items: int, workers: int) -> int:
 
 
 def _run_batch(fn, chunk):
-    """Worker side: ``[fn(x) for x in chunk]`` with one BLAS thread."""
-    with blas_threads(1):
+    """Worker side: ``[fn(x) for x in chunk]`` with one BLAS thread, MuJoCo's warnings on the worker's stderr (not
+    into ``MUJOCO_LOG.TXT`` in its working folder, the user's)."""
+    from simgrip.sim.checks import warnings_to_stderr
+
+    with blas_threads(1), warnings_to_stderr(f"simgrip worker {os.getpid()}"):
         return [fn(x) for x in chunk]
 
 

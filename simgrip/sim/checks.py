@@ -17,7 +17,8 @@ from typing import Iterator
 import mujoco
 import numpy as np
 
-__all__ = ["PhysicsError", "StateCheck", "active_warnings", "check_invalid_state", "clear_warnings", "invalid_state"]
+__all__ = ["PhysicsError", "StateCheck", "active_warnings", "check_invalid_state", "clear_warnings", "invalid_state",
+           "warnings_to", "warnings_to_stderr"]
 
 
 class PhysicsError(RuntimeError):
@@ -91,3 +92,26 @@ def check_invalid_state(data: mujoco.MjData, what: str = "simulation", error: ty
     why = invalid_state(data)
     if why is not None:
         raise error(f"{what} diverged ({why})")
+
+
+@contextlib.contextmanager
+def warnings_to(handler) -> Iterator[None]:
+    """MuJoCo's warning printer replaced by ``handler(message)`` for a block, the previous one restored after.
+
+    Without a handler MuJoCo appends each warning to ``MUJOCO_LOG.TXT`` in the working folder (and prints it):
+    a file the user did not ask for, written by every process that steps a model (a Dask worker's included).
+    The warnings are still counted in ``data.warning`` whatever the handler does.
+    """
+    previous = mujoco.get_mju_user_warning()
+    mujoco.set_mju_user_warning(handler)
+    try:
+        yield
+    finally:
+        mujoco.set_mju_user_warning(previous)
+
+
+def warnings_to_stderr(prefix: str):
+    """:func:`warnings_to` a one-line ``"<prefix>: MuJoCo: <message>"`` on stderr."""
+    import sys
+
+    return warnings_to(lambda msg: print(f"{prefix}: MuJoCo: {msg}", file=sys.stderr, flush=True))
