@@ -29,7 +29,7 @@ AIDED = "PPO behind its aid, 3 seeds"
 ROWS = {
     "PickFragile-v7": ("PickFragile-v7", {"PPO, 3 seeds": "rl_pick_v7", "SAC, 3 seeds": "rl_pick_v6_sac",
                                           AIDED: "rl_pick_v7_peak_log_std_gamma"}),
-    "PickMultiFragile-v7": ("PickMultiFragile-v7", {"PPO, 3 seeds": "rl_multi_v5_wdrop0",
+    "PickMultiFragile-v7": ("PickMultiFragile-v7", {"PPO, 3 seeds": "rl_multi_v7",
                                                     "SAC, 3 seeds": "rl_multi_v6_sac", AIDED: "rl_multi_v7_peak_light"}),
     "PlaceFragile-v8": ("PlaceFragile-v8", {"PPO, 3 seeds": "rl_place_v7", "SAC, 3 seeds": "rl_place_v7_sac",
                                             AIDED: "rl_place_v7_residual_palm/log_std_init"}),
