@@ -552,7 +552,10 @@ def main(argv=None) -> int:
                     from simgrip.sim.gl import import_mujoco
 
                     # a broken MUJOCO_GL must not stop work that does not render; warnings not into ./MUJOCO_LOG.TXT
-                    import_mujoco().set_mju_user_warning(lambda msg: print(f"{prefix}: MuJoCo: {msg}", file=sys.stderr))
+                    mujoco = import_mujoco()
+                    from simgrip.sim.checks import stderr_printer
+
+                    mujoco.set_mju_user_warning(stderr_printer(prefix))
                 result = COMMANDS[args.command](args)
             except BrokenPipeError:  # a command that prints as it goes (sweep's paths), piped into head: not ours
                 _quiet_stdout()

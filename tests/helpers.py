@@ -34,3 +34,17 @@ def alive(pid: int) -> bool:
             return fh.read().rsplit(")", 1)[1].split()[0] != "Z"
     except OSError:
         return False
+
+
+def nan_position_step(x=None):
+    """One ``mj_step`` of a free ball whose position is NaN: MuJoCo warns once (``mjWARN_BADQPOS``, "Nan, Inf or
+    huge value in QPOS") through its warning handler and resets the state; returns the warning's count (1).
+    ``x`` is ignored (a task for :func:`simgrip.parallel.runner.run_tasks`)."""
+    import mujoco
+
+    m = mujoco.MjModel.from_xml_string("<mujoco><worldbody><body><freejoint/><geom size='.1'/></body>"
+                                       "</worldbody></mujoco>")
+    d = mujoco.MjData(m)
+    d.qpos[0] = float("nan")
+    mujoco.mj_step(m, d)
+    return int(d.warning[mujoco.mjtWarning.mjWARN_BADQPOS].number)

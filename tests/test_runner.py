@@ -209,19 +209,11 @@ def test_exception_from_the_task_propagates_from_a_worker():
 
 
 WARNING_TASK = textwrap.dedent("""
+    from helpers import nan_position_step
     from simgrip.parallel.runner import RunnerOptions, run_tasks
 
-    def warn(x):  # a NaN position: MuJoCo warns (mjWARN_BADQPOS) and resets the state
-        import mujoco
-        m = mujoco.MjModel.from_xml_string("<mujoco><worldbody><body><freejoint/><geom size='.1'/></body>"
-                                           "</worldbody></mujoco>")
-        d = mujoco.MjData(m)
-        d.qpos[0] = float("nan")
-        mujoco.mj_step(m, d)
-        return int(d.warning[mujoco.mjtWarning.mjWARN_BADQPOS].number)
-
     if __name__ == "__main__":
-        print(run_tasks(warn, [0, 1], options=RunnerOptions(jobs=2, progress=False), batch_size=1))
+        print(run_tasks(nan_position_step, [0, 1], options=RunnerOptions(jobs=2, progress=False), batch_size=1))
 """)
 
 
@@ -229,7 +221,7 @@ def test_a_workers_mujoco_warning_goes_to_stderr_not_a_log_file(tmp_path):
     """Without a handler MuJoCo appends its warnings to ``MUJOCO_LOG.TXT`` in the working folder: the workers of a
     local cluster (the user's folder is theirs) said them there (an audit); now one line each on stderr."""
     r = subprocess.run([sys.executable, "-c", WARNING_TASK], cwd=tmp_path, capture_output=True, text=True,
-                       timeout=120, env={**os.environ, "PYTHONPATH": str(HERE.parent)})
+                       timeout=120, env={**os.environ, "PYTHONPATH": os.pathsep.join([str(HERE.parent), str(HERE)])})
     assert r.returncode == 0, r.stderr
     assert r.stdout.strip() == "[1, 1]"  # each task warned
     assert r.stderr.count(": MuJoCo: Nan, Inf or huge value in QPOS") == 2 and "simgrip worker" in r.stderr

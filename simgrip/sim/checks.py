@@ -18,7 +18,7 @@ import mujoco
 import numpy as np
 
 __all__ = ["PhysicsError", "StateCheck", "active_warnings", "check_invalid_state", "clear_warnings", "invalid_state",
-           "warnings_to", "warnings_to_stderr"]
+           "stderr_printer", "warnings_to", "warnings_to_stderr"]
 
 
 class PhysicsError(RuntimeError):
@@ -110,8 +110,17 @@ def warnings_to(handler) -> Iterator[None]:
         mujoco.set_mju_user_warning(previous)
 
 
-def warnings_to_stderr(prefix: str):
-    """:func:`warnings_to` a one-line ``"<prefix>: MuJoCo: <message>"`` on stderr."""
+def stderr_printer(prefix: str):
+    """A warning handler for MuJoCo (:func:`warnings_to`, ``mujoco.set_mju_user_warning``) that prints
+    ``"<prefix>: MuJoCo: <message>"`` as one line on stderr."""
     import sys
 
-    return warnings_to(lambda msg: print(f"{prefix}: MuJoCo: {msg}", file=sys.stderr, flush=True))
+    def print_warning(msg: str) -> None:
+        print(f"{prefix}: MuJoCo: {msg}", file=sys.stderr, flush=True)
+
+    return print_warning
+
+
+def warnings_to_stderr(prefix: str):
+    """:func:`warnings_to` :func:`stderr_printer`'s one line on stderr."""
+    return warnings_to(stderr_printer(prefix))
