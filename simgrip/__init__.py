@@ -4,9 +4,41 @@ Data flows one way: parameters and curvature profile -> scene (MjSpec) ->
 settle -> settled state -> comparison with the elastica reference.
 """
 
-import importlib.util as _ilu
 import sys as _sys
-from pathlib import Path as _Path
+
+
+def _quiet_interrupt_while_the_command_starts() -> None:
+    """In the ``simgrip`` command only (its console script is the main program): a Ctrl-C while the command's
+    modules are still importing (NumPy, Gymnasium: ~0.2-0.5 s, before :func:`simgrip.cli.main` takes the signals
+    over) prints ``simgrip: interrupted`` and exits with status 130, as later, instead of an import traceback.
+    Nothing has started then (no worker, no output).  A program that merely imports simgrip is left alone."""
+    import os
+    import signal
+
+    main = _sys.modules.get("__main__")
+    script = getattr(main, "__file__", None) or ""
+    if getattr(main, "__spec__", None) is not None or not _sys.argv or not script:
+        return
+    if os.path.basename(script) not in ("simgrip", "simgrip-script.py", "simgrip.exe") or os.path.abspath(
+            script) != os.path.abspath(_sys.argv[0]):
+        return
+    if signal.getsignal(signal.SIGINT) is not signal.default_int_handler:  # someone else's handler: theirs
+        return
+
+    def interrupted(signum, frame):
+        try:
+            _sys.stderr.write("simgrip: interrupted\n")
+            _sys.stderr.flush()
+        finally:
+            os._exit(130)  # 128 + SIGINT, as simgrip.cli.EXIT_INTERRUPTED
+
+    signal.signal(signal.SIGINT, interrupted)
+
+
+_quiet_interrupt_while_the_command_starts()
+
+import importlib.util as _ilu  # noqa: E402 - after the interrupt handler above, the first thing the command does
+from pathlib import Path as _Path  # noqa: E402
 
 
 def _map_source_checkout() -> None:

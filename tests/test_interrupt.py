@@ -256,3 +256,36 @@ def test_run_main_ends_an_interrupt_as_one_line_and_130(capfd):
     assert run_main(lambda argv: argv, "cmd", ["--x"]) == 0
     assert signal.getsignal(signal.SIGINT) is signal.default_int_handler  # the handlers restored
     assert capfd.readouterr().err == ""
+
+
+#: The ``simgrip`` console script's shape (pip writes ``from simgrip.cli import main`` then ``sys.exit(main())``),
+#: with a hook that sends the process SIGINT while ``simgrip.params`` (NumPy) is being imported: a Ctrl-C in the
+#: command's first ~0.3 s, before :func:`simgrip.cli.main` takes the signals over.
+EARLY_SCRIPT = """
+import os, signal, sys
+
+class InterruptOnImport:
+    def find_spec(self, name, path=None, target=None):
+        if name == "simgrip.params":
+            os.kill(os.getpid(), signal.SIGINT)
+        return None
+
+sys.meta_path.insert(0, InterruptOnImport())
+from simgrip.cli import main
+sys.exit(main(["--help"]))
+"""
+
+
+@pytest.mark.parametrize("name", ["simgrip", "my_script.py"])
+def test_a_ctrl_c_while_the_command_imports_is_one_line_too(tmp_path, name):
+    """A Ctrl-C while ``simgrip`` was still importing printed a ``KeyboardInterrupt`` traceback (a known leftover
+    of issue 18's audit): now the command's one line and 130.  A program of the user's that imports simgrip keeps
+    Python's ``KeyboardInterrupt`` (the control case: the hook does interrupt the import)."""
+    script = tmp_path / name
+    script.write_text(EARLY_SCRIPT)
+    r = subprocess.run([sys.executable, str(script)], capture_output=True, text=True, timeout=120, cwd=tmp_path)
+    if name == "simgrip":
+        assert (r.returncode, r.stderr, r.stdout) == (130, "simgrip: interrupted\n", "")
+    else:
+        # (Python ends an uncaught KeyboardInterrupt by SIGINT itself: status -2)
+        assert r.returncode == -signal.SIGINT and r.stderr.rstrip().endswith("KeyboardInterrupt")
