@@ -314,7 +314,8 @@ def main(argv=None) -> int:
 
     p = CommandParser(prog="python -m simgrip.envs.baselines", description=__doc__.splitlines()[0])
     # the retired ids too: the stored JSONs of docs/baselines/ were written with them
-    p.add_argument("--env", required=True, choices=FRAGILE_ENV_IDS + tuple(RETIRED))
+    p.add_argument("--env", required=True, choices=FRAGILE_ENV_IDS + tuple(RETIRED), metavar="ID",
+                   help="a fragile pick id: " + ", ".join(FRAGILE_ENV_IDS) + ", or a retired one (simgrip.envs.RETIRED)")
     p.add_argument("--policy", required=True, choices=("random", "constant", "openloop", "oracle", "observation"))
     p.add_argument("--seeds", type=_seeds, default=_seeds("5000-5049"), help="A-B, inclusive (default 5000-5049)")
     p.add_argument("--grid", choices=("full", "coarse"), default="full")
