@@ -49,6 +49,11 @@ residual 0 (what ``train_sb3.py --residual`` learns from, without the feedback):
 ``VALVE_GRID`` held (an absolute-command env: ``a_k`` of ``KAPPA_GRID``), ``openloop`` the command driven to
 ``a_k`` of ``KAPPA_GRID`` as fast as the valve allows and held.  The record adds ``residual``.
 
+``--member JSON`` runs one member of a grid alone (recorded as ``member``): the member a record chose on its
+seeds (its ``best``), evaluated on others, e.g. the pinch's open-loop member chosen on 6100–6149 on 1000 seeds
+no test uses (``--policy openloop --member '{"kappa": 0.3, "ramp_steps": 50, "palm": 0.5}' --seeds
+10000-10999``).
+
 ``--grid coarse`` uses every other curvature and one ramp/palm value (for tests).  Output: ``env``,
 ``policy``, ``seeds``, ``success_rate`` (the best member's for the grids), ``outcomes`` (counts of
 success / crushed / dropped / knocked_over / timeout) and, for the grids, every member's success rate.
@@ -252,12 +257,15 @@ def _behind_residual(env, policy: str, residual):
         raise ValueError(f"--residual: {e}") from None
 
 
-def evaluate(env_id: str, policy: str, seeds, grid: str = "full", residual=None, env_kwargs=None) -> dict:
+def evaluate(env_id: str, policy: str, seeds, grid: str = "full", residual=None, env_kwargs=None,
+             member=None) -> dict:
     """Run ``policy`` on ``env_id`` (``gym.make``, its registered time limit; a retired id of
     ``simgrip.envs.RETIRED`` through :func:`~simgrip.envs.retired_spec`, its time limit as it was registered)
     over ``seeds``, behind the scripted palm where ``residual`` names its actions (module docstring), the env
     made with ``env_kwargs`` (``gym.make``'s keywords, recorded as ``env_kwargs`` when given); the JSON record.
-    ValueError naming ``--residual`` (the env closed first) or, from the env, the keyword."""
+    ``member``, a dict of one grid member's parameters (a record's ``best``, without ``success_rate``), runs that
+    member alone (recorded as ``member``): a member tuned on some seeds, evaluated on others.
+    ValueError naming ``--residual`` or ``--member`` (the env closed first) or, from the env, the keyword."""
     from simgrip.envs import make_spec
 
     env = gym.make(make_spec(env_id), **dict(env_kwargs or {}))
@@ -267,6 +275,8 @@ def evaluate(env_id: str, policy: str, seeds, grid: str = "full", residual=None,
             env = _behind_residual(env, policy, residual)
         else:
             members = _members(policy, grid, *_task(env))
+        if member is not None:
+            members = _the_member(members, member)
         rows = []
         for params, make in members:
             counts = run_policy(env, make, seeds)
@@ -276,6 +286,8 @@ def evaluate(env_id: str, policy: str, seeds, grid: str = "full", residual=None,
     best = max(rows, key=lambda r: r["success_rate"])
     out = {"env": env_id, "policy": policy, "seeds": [int(seeds[0]), int(seeds[-1])], "episodes": len(seeds),
            "success_rate": best["success_rate"], "outcomes": best["outcomes"]}
+    if member is not None:
+        out["member"] = {k: v for k, v in best.items() if k not in ("success_rate", "outcomes")}
     if residual is not None:
         out["residual"] = list(residual)
     if env_kwargs:
@@ -283,6 +295,17 @@ def evaluate(env_id: str, policy: str, seeds, grid: str = "full", residual=None,
     if len(rows) > 1:
         out.update({"grid": grid, "best": {k: v for k, v in best.items() if k != "outcomes"}, "members": rows})
     return out
+
+
+def _the_member(members: list, member: dict) -> list:
+    """The one ``(params, make)`` of ``members`` whose parameters are ``member``'s (every key, equal values)."""
+    keys = sorted(members[0][0]) if members else []
+    if not isinstance(member, dict) or sorted(member) != keys:
+        raise ValueError(f"--member must name this grid's parameters {keys}, got {member!r}")
+    found = [(p, make) for p, make in members if all(p[k] == member[k] for k in keys)]
+    if not found:
+        raise ValueError(f"--member {json.dumps(member)} is not a member of the grid (--grid, --policy)")
+    return found[:1]
 
 
 def _seeds(text: str) -> list[int]:
@@ -322,6 +345,9 @@ def main(argv=None) -> int:
     p.add_argument("--residual", nargs="+", default=None, metavar="NAME",
                    help="constant/openloop: the palm actions the scripted controller drives, the member the "
                         "curvature alone (simgrip.envs.scripted_residual)")
+    p.add_argument("--member", type=_json_object, default=None, metavar="JSON",
+                   help="constant/openloop: run this member of the grid alone, e.g. a record's best chosen on other "
+                        "seeds ('{\"kappa\": 0.3, \"ramp_steps\": 50, \"palm\": 0.5}')")
     p.add_argument("--env-kwargs", type=_json_object, default=None, metavar="JSON",
                    help="gym.make's keyword arguments, a JSON object ('{\"crush_at\": \"end\"}')")
     p.add_argument("--out", help="JSON file (default: stdout)")
@@ -332,11 +358,12 @@ def main(argv=None) -> int:
         except (ValueError, OSError) as e:
             p.error(str(e))
     try:
-        record = evaluate(args.env, args.policy, args.seeds, args.grid, args.residual, args.env_kwargs)
+        record = evaluate(args.env, args.policy, args.seeds, args.grid, args.residual, args.env_kwargs, args.member)
     except ValueError as e:
-        if not str(e).startswith("--residual") and not args.env_kwargs:
+        ours = str(e).startswith(("--residual", "--member"))
+        if not ours and not args.env_kwargs:
             raise
-        p.error(f"--env-kwargs: {e}" if not str(e).startswith("--residual") else str(e))
+        p.error(str(e) if ours else f"--env-kwargs: {e}")
     except Exception as e:  # a keyword the env does not take, or a setting the controllers do not drive
         if not args.env_kwargs:  # (per_finger: three actions, read as the place's; render_mode "human": no display)
             raise
