@@ -43,19 +43,21 @@ ROWS = {
 
 #: the aids an aided cell names -> the rl_baselines.py option that applies each
 AIDS = {"offset": "--action-offset", "peak offset": "--action-offset", "light bias": "--light-bias",
-        "scripted palm": "--residual", "log std -1": "--log-std-init", "γ 0.995": "--gamma"}
+        "scripted palm": "--residual", "log std": "--log-std-init", "γ": "--gamma"}
 
 
 def assert_the_hyperparameters_named(text: str, agg: dict) -> None:
-    """"log std -1" and "γ 0.995" (the aids that change one of SB3's hyperparameters) at the values they name, in the
-    training command and in the record's ``hyperparameters``; nothing to check where the text names neither (that
-    the options are exactly the aids named: AIDS)."""
+    """"log std X" and "γ X" (the aids that change one of SB3's hyperparameters: "log std -1", "γ 0.995") at the
+    values they name, in the training command and in the record's ``hyperparameters``; nothing to check where the
+    text names neither (that the options are exactly the aids named: AIDS)."""
     cmd = training_command(agg)
-    for name, option, value, said in (("log std -1", "--log-std-init", -1.0, "log_std_init = -1.0"),
-                                      ("γ 0.995", "--gamma", 0.995, "gamma = 0.995")):
-        if name in text:
-            assert float(cmd[cmd.index(option) + 1]) == value, (name, cmd)
-            assert f"; but {said}" in agg["hyperparameters"], (name, agg["hyperparameters"])
+    for pattern, option, key in ((r"log std (-?[\d.]+)", "--log-std-init", "log_std_init"),
+                                 (r"γ ([\d.]+)", "--gamma", "gamma")):
+        named = re.search(pattern, text)
+        if named:
+            value = float(named.group(1))
+            assert float(cmd[cmd.index(option) + 1]) == value, (named.group(0), cmd)
+            assert f"; but {key} = {value!r}" in agg["hyperparameters"], (named.group(0), agg["hyperparameters"])
 
 
 def assert_the_offset_named(text: str, command: list) -> None:
@@ -263,7 +265,8 @@ def test_target_table_is_its_records():
             assert verdict == ("yes" if sum(x >= 0.8 for x in final) >= 2 else "no"), (folder, batch)
             assert measured_as(agg) == want, (folder, agg["env"])
             options = {a for a in training_command(agg) if a.startswith("--")}
-            named = set() if row["aids"] == "none" else set(row["aids"].split(", "))
+            # each aid by its name, its value dropped ("log std -1" -> "log std", "γ 0.995" -> "γ")
+            named = set() if row["aids"] == "none" else {re.sub(r" -?[\d.]+$", "", a) for a in row["aids"].split(", ")}
             assert named <= set(AIDS), row["aids"]
             assert {AIDS[name] for name in named} == options & set(AIDS.values()), (folder, options)
             assert_the_offset_named(row["aids"], training_command(agg))
