@@ -283,3 +283,31 @@ def test_target_table_is_its_records():
     assert all("yes" in verdicts[t] for t in ("pinch, v6", "K fingers, v6", "cradle, v5"))
     assert verdicts["cradle, v5"].count("yes") == 1 and len(verdicts["cradle, v5"]) == 2
     assert "yes" not in verdicts["sphere, v5"] + verdicts["place, v7"]
+
+
+def test_the_tuned_open_loop_members_on_unseen_seeds():
+    """The README's sentence on the open-loop members tuned on 6100-6149, run on 1000 seeds no test uses, is their
+    records (``baselines --member``); the other members it bounds are of the same grid, on the same seeds."""
+    def interval(k, n):
+        return f"{100 * beta.ppf(0.025, k, n - k + 1):.1f}–{100 * beta.ppf(0.975, k + 1, n - k):.1f}"
+
+    text = " ".join((ROOT / "README.md").read_text(encoding="utf-8").split())
+    recs = {}
+    for base in ("PickFragile-v7", "PickMultiFragile-v7"):
+        rec = recs[base] = record(base, "openloop-10000")
+        tuned = {k: v for k, v in record(base, "openloop-6100")["best"].items() if k != "success_rate"}
+        assert rec["member"] == tuned and rec["seeds"] == [10000, 10999] and rec["episodes"] == 1000
+        grid = {json.dumps({k: v for k, v in m.items() if k not in ("success_rate", "outcomes")}, sort_keys=True)
+                for m in record(base, "openloop")["members"]}
+        others = [json.loads(p.read_text(encoding="utf-8")) for p in (BASELINES / "openloop_10000").glob("*.json")]
+        others = [o for o in others if o["env"] == "simgrip/" + base]
+        assert len(others) == 5 and all(o["seeds"] == [10000, 10999] for o in others)
+        assert {json.dumps(o["member"], sort_keys=True) for o in others} | {json.dumps(tuned, sort_keys=True)} <= grid
+        assert len({json.dumps(o["member"], sort_keys=True) for o in others} | {json.dumps(tuned, sort_keys=True)}) == 6
+        recs[base, "most"] = max([o["success_rate"] for o in others] + [rec["success_rate"]])
+    p, m = recs["PickFragile-v7"], recs["PickMultiFragile-v7"]
+    k = [round(r["success_rate"] * r["episodes"]) for r in (p, m)]
+    assert (f"succeed in {100 * p['success_rate']:.1f} % of the pinch's episodes and {100 * m['success_rate']:.1f} % "
+            f"of the K fingers' (95 %: {interval(k[0], 1000)} and {interval(k[1], 1000)} %), and the five members of "
+            f"each grid ranked next on the two 50-seed sets in at most "
+            f"{100 * max(recs['PickFragile-v7', 'most'], recs['PickMultiFragile-v7', 'most']):.1f} %") in text
