@@ -20,7 +20,7 @@ import numpy as np
 
 from simgrip.envs.outcome import outcome  # outcomes() counts with it; also importable from here
 
-__all__ = ["EpisodeResult", "GAMMA", "add_episode_arguments", "charge", "check_env_id", "critic_warmup_conflict",
+__all__ = ["add_training_aid_arguments", "EpisodeResult", "GAMMA", "add_episode_arguments", "charge", "check_env_id", "critic_warmup_conflict",
            "discount", "env_kwargs", "json_object", "log_std", "log_std_init_conflict",
            "make_env", "outcome", "outcomes", "positive_int", "non_negative_int", "probability", "run_episodes",
            "summary", "checkpoint_tag", "training_conflict", "training_files", "training_seed", "episode_count", "MAX_EPISODES", "MAX_TRAINING_SEED"]
@@ -151,6 +151,43 @@ def add_episode_arguments(parser: argparse.ArgumentParser, *, episodes: int = 20
     parser.add_argument("--fingers", type=positive_int, default=None,
                         help="fingers K of simgrip/PickMulti-v0 (default: the env's, 3); other envs have two")
     parser.add_argument("--json", action="store_true", help="print only a JSON summary")
+
+
+def add_training_aid_arguments(parser: argparse.ArgumentParser) -> None:
+    """Add the training aids ``examples/train_sb3.py`` applies and ``examples/rl_baselines.py`` passes to each of
+    its runs, with the same names, checks and meanings: ``--normalize``, ``--action-offset A ...``,
+    ``--frame-stack N``, ``--gamma G``, ``--log-std-init X``, ``--scripted-start P``, ``--light-bias P``,
+    ``--residual NAME ...``, ``--crush-charge F`` and ``--crush-charge-from STEPS`` (each off by default)."""
+    add = parser.add_argument
+    add("--normalize", action="store_true",
+        help="train behind SB3's VecNormalize (observation and return, library defaults; default off)")
+    add("--action-offset", type=float, nargs="+", default=None, metavar="A",
+        help="train and evaluate behind simgrip.envs.action_offset.ActionOffset: the env performs clip(action + "
+             "offset); one number per action (the valve tasks' probe: -0.4 0.2; -0.2 0.2 where the crush rule "
+             "reads the peak; default none)")
+    add("--frame-stack", type=positive_int, default=None, metavar="N",
+        help="train and evaluate on the last N observations (Gymnasium's FrameStackObservation; default 1: the "
+             "env's own)")
+    add("--gamma", type=discount, default=None,
+        help="the discount, in (0, 1], instead of the library default 0.99 (recorded in the JSON)")
+    add("--log-std-init", type=log_std, default=None, metavar="X",
+        help="PPO only: the policy's initial log standard deviation, in [-5, 1], instead of the library default 0 "
+             "(recorded in the JSON)")
+    add("--scripted-start", type=probability, default=None, metavar="P",
+        help="start that share of the training episodes part-way through the scripted observation-only "
+             "controller's episode (simgrip.envs.scripted_start; evaluation starts plainly; default none)")
+    add("--light-bias", type=probability, default=None, metavar="P",
+        help="draw that share of the training episodes' workpieces from the lightest third of the mass range "
+             "(simgrip.envs.light_bias; evaluation draws the task's own; default none)")
+    add("--residual", nargs="+", default=None, metavar="NAME",
+        help="train and evaluate behind simgrip.envs.scripted_residual.ScriptedResidual: the task's scripted "
+             "observation-only controller drives these actions (the place's palm: palm_x palm_z) and the policy's "
+             "action is added to it (default none)")
+    add("--crush-charge", type=charge, default=None, metavar="F",
+        help="lower the training reward of every crush by F (simgrip.envs.crush_charge; a fragile task only; "
+             "evaluation runs the task's own reward; default none)")
+    add("--crush-charge-from", type=non_negative_int, default=0, metavar="STEPS",
+        help="with --crush-charge: charge the crushes from this training step on (default 0)")
 
 
 def check_env_id(parser: argparse.ArgumentParser, env_id: str, *, retired: bool = False) -> None:

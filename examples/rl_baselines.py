@@ -105,30 +105,6 @@ def _json_object(text: str) -> dict:
     return json_object(text)
 
 
-def _discount(text: str) -> float:
-    from simgrip.envs.evaluation import discount  # imported when used, as _json_object
-
-    return discount(text)
-
-
-def _log_std(text: str) -> float:
-    from simgrip.envs.evaluation import log_std  # imported when used, as _json_object
-
-    return log_std(text)
-
-
-def _probability(text: str) -> float:
-    from simgrip.envs.evaluation import probability  # imported when used, as _json_object
-
-    return probability(text)
-
-
-def _charge(text: str) -> float:
-    from simgrip.envs.evaluation import charge  # imported when used, as _json_object
-
-    return charge(text)
-
-
 def _non_negative_int(text: str) -> int:
     try:
         v = int(text)
@@ -446,29 +422,9 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--eval-seeds", type=_seed_range, default=(8000, 8049),
                    help="held-out evaluation seeds A-B, inclusive (default 8000-8049)")
     p.add_argument("--jobs", type=_positive(int), default=1, help="runs at once (default 1, at most the cores)")
-    p.add_argument("--normalize", action="store_true",
-                   help="train behind SB3's VecNormalize (observation and return, library defaults; default off)")
-    p.add_argument("--action-offset", type=float, nargs="+", default=None, metavar="A",
-                   help="train and evaluate behind simgrip.envs.action_offset.ActionOffset (one number per action; "
-                        "the valve tasks' probe: -0.4 0.2, -0.2 0.2 where the crush rule reads the peak; default none)")
-    p.add_argument("--frame-stack", type=_positive(int), default=None, metavar="N",
-                   help="train and evaluate on the last N observations (Gymnasium's FrameStackObservation; "
-                        "default 1: the env's own)")
-    p.add_argument("--gamma", type=_discount, default=None,
-                   help="the discount, in (0, 1], instead of the library default 0.99 (recorded in the JSON)")
-    p.add_argument("--log-std-init", type=_log_std, default=None, metavar="X",
-                   help="PPO only: the policy's initial log standard deviation, in [-5, 1], instead of the library "
-                        "default 0 (recorded in the JSON)")
-    p.add_argument("--scripted-start", type=_probability, default=None, metavar="P",
-                   help="start that share of the training episodes part-way through the scripted observation-only "
-                        "controller's episode (simgrip.envs.scripted_start; evaluation starts plainly; default none)")
-    p.add_argument("--light-bias", type=_probability, default=None, metavar="P",
-                   help="draw that share of the training episodes' workpieces from the lightest third of the mass "
-                        "range (simgrip.envs.light_bias; evaluation draws the task's own; default none)")
-    p.add_argument("--residual", nargs="+", default=None, metavar="NAME",
-                   help="train and evaluate behind simgrip.envs.scripted_residual.ScriptedResidual: the scripted "
-                        "observation-only controller drives these actions (the place's palm: palm_x palm_z), the "
-                        "policy's action added (default none)")
+    from simgrip.envs.evaluation import add_training_aid_arguments
+
+    add_training_aid_arguments(p)
     p.add_argument("--init-from", default=None, metavar="DIR",
                    help="PPO only: start each seed S from DIR/ppo_seed<S>/ppo_model.zip, an earlier run's policy "
                         "on another task (simgrip.envs.warm_start; default: fresh policies)")
@@ -477,11 +433,6 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--critic-warmup", type=_non_negative_int, default=0, metavar="STEPS",
                    help="PPO only: each run's first STEPS steps (whole rollouts of 2048) with the policy frozen, "
                         "only the value function learning (simgrip.envs.critic_warmup; default 0: none)")
-    p.add_argument("--crush-charge", type=_charge, default=None, metavar="F",
-                   help="lower each run's training reward of every crush by F (simgrip.envs.crush_charge; a fragile "
-                        "task only; default none)")
-    p.add_argument("--crush-charge-from", type=_non_negative_int, default=0, metavar="STEPS",
-                   help="with --crush-charge: from this training step on (default 0)")
     p.add_argument("--out", required=True, help="output folder")
     return p
 

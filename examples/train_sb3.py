@@ -126,8 +126,8 @@ import numpy as np  # noqa: E402
 
 import simgrip.envs  # noqa: E402,F401  (registers the simgrip ids)
 from simgrip.command_parser import CommandParser
-from simgrip.envs.evaluation import (GAMMA, charge, check_env_id, checkpoint_tag, discount, json_object, log_std, make_env, non_negative_int,
-                                     episode_count, outcomes, probability, run_episodes, summary,
+from simgrip.envs.evaluation import (GAMMA, add_training_aid_arguments, check_env_id, checkpoint_tag, episode_count,
+                                     json_object, make_env, non_negative_int, outcomes, run_episodes, summary,
                                      training_conflict, training_files, training_seed)
 from simgrip.io import atomic_write, check_output_dir, check_output_files_in, write_json
 
@@ -494,30 +494,7 @@ def main(argv=None) -> int:
     p.add_argument("--eval-seed", type=non_negative_int, default=1_000_000, help="first evaluation seed (default 1000000)")
     p.add_argument("--threads", type=_positive(int), default=1,
                    help="PyTorch threads (default 1; at most the machine's cores)")
-    p.add_argument("--normalize", action="store_true",
-                   help="train behind SB3's VecNormalize (observation and return, library defaults)")
-    p.add_argument("--action-offset", type=float, nargs="+", default=None, metavar="A",
-                   help="train and evaluate behind simgrip.envs.action_offset.ActionOffset: the env performs "
-                        "clip(action + offset); one number per action (the valve tasks' probe: -0.4 0.2; "
-                        "-0.2 0.2 where the crush rule reads the peak)")
-    p.add_argument("--frame-stack", type=_positive(int), default=None, metavar="N",
-                   help="train and evaluate on the last N observations (Gymnasium's FrameStackObservation; "
-                        "default 1: the env's own)")
-    p.add_argument("--gamma", type=discount, default=None,
-                   help="the discount, in (0, 1], instead of the library default 0.99 (recorded in the JSON)")
-    p.add_argument("--log-std-init", type=log_std, default=None, metavar="X",
-                   help="PPO only: the policy's initial log standard deviation, in [-5, 1], instead of the library "
-                        "default 0 (recorded in the JSON)")
-    p.add_argument("--scripted-start", type=probability, default=None, metavar="P",
-                   help="start that share of the training episodes part-way through the scripted observation-only "
-                        "controller's episode (simgrip.envs.scripted_start; evaluation starts plainly)")
-    p.add_argument("--light-bias", type=probability, default=None, metavar="P",
-                   help="draw that share of the training episodes' workpieces from the lightest third of the mass "
-                        "range (simgrip.envs.light_bias; evaluation draws the task's own)")
-    p.add_argument("--residual", nargs="+", default=None, metavar="NAME",
-                   help="train and evaluate behind simgrip.envs.scripted_residual.ScriptedResidual: the task's "
-                        "scripted observation-only controller drives these actions (the place's palm: palm_x "
-                        "palm_z) and the policy's action is added to it")
+    add_training_aid_arguments(p)
     p.add_argument("--init-from", default=None, metavar="MODEL",
                    help="PPO only: start from this saved PPO model of another run (its folder holds its "
                         "ppo_eval.json), copied by simgrip.envs.warm_start (default: a fresh policy)")
@@ -527,11 +504,6 @@ def main(argv=None) -> int:
                    help="PPO only: its first STEPS environment steps (rounded up to whole rollouts of 2048) with the "
                         "policy frozen, so that only the value function learns (simgrip.envs.critic_warmup; "
                         "within --steps and --minutes; default 0: none)")
-    p.add_argument("--crush-charge", type=charge, default=None, metavar="F",
-                   help="lower the training reward of every crush by F (simgrip.envs.crush_charge; a fragile task "
-                        "only; evaluation runs the task's own reward)")
-    p.add_argument("--crush-charge-from", type=non_negative_int, default=0, metavar="STEPS",
-                   help="with --crush-charge: charge the crushes from this training step on (default 0)")
     p.add_argument("--out", required=True, help="output folder")
     args = p.parse_args(argv)
     why = training_conflict(args)  # before the rl extra is looked for
