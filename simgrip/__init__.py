@@ -17,7 +17,8 @@ def _quiet_interrupt_while_the_command_starts() -> None:
 
     main = _sys.modules.get("__main__")
     script = getattr(main, "__file__", None) or ""
-    if getattr(main, "__spec__", None) is not None or not _sys.argv or not script:
+    if getattr(main, "__name__", None) != "__main__" or getattr(main, "__spec__", None) is not None \
+            or not _sys.argv or not script:  # (a worker spawned by the command runs it as __mp_main__: not ours)
         return
     if os.path.basename(script) not in ("simgrip", "simgrip-script.py", "simgrip.exe") or os.path.abspath(
             script) != os.path.abspath(_sys.argv[0]):

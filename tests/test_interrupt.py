@@ -289,3 +289,34 @@ def test_a_ctrl_c_while_the_command_imports_is_one_line_too(tmp_path, name):
     else:
         # (Python ends an uncaught KeyboardInterrupt by SIGINT itself: status -2)
         assert r.returncode == -signal.SIGINT and r.stderr.rstrip().endswith("KeyboardInterrupt")
+
+
+SPAWNING_SCRIPT = """
+import multiprocessing as mp
+import signal
+
+
+def probe(q):
+    import simgrip  # noqa: F401
+    q.put(signal.getsignal(signal.SIGINT) is signal.default_int_handler)
+
+
+if __name__ == "__main__":
+    import simgrip  # noqa: F401
+    ctx = mp.get_context("spawn")
+    q = ctx.Queue()
+    p = ctx.Process(target=probe, args=(q,))
+    p.start()
+    print(signal.getsignal(signal.SIGINT) is signal.default_int_handler, q.get())
+    p.join()
+"""
+
+
+def test_a_process_the_command_spawns_keeps_pythons_interrupt(tmp_path):
+    """A process spawned by the command (a Dask worker) runs the command's script as ``__mp_main__``: it must keep
+    Python's ``KeyboardInterrupt`` (its own shutdown), not the command's early one-line exit (found in review)."""
+    script = tmp_path / "simgrip"
+    script.write_text(SPAWNING_SCRIPT)
+    r = subprocess.run([sys.executable, str(script)], capture_output=True, text=True, timeout=120, cwd=tmp_path)
+    assert r.returncode == 0, r.stderr
+    assert r.stdout.split() == ["False", "True"]  # the command's own process: the early handler; the child: Python's
