@@ -36,7 +36,7 @@ ROWS = {
     "PickCradleFragile-v6": ("PickCradleFragile-v6", {"PPO, 3 seeds": "rl_cradle_v6",
                                                       "SAC, 3 seeds": "rl_cradle_v5_sac",
                                                       AIDED: "rl_cradle_v5_residual_palm/light_log_std_init"}),
-    "PickSphereFragile-v6": ("PickSphereFragile-v6", {"PPO, 3 seeds": "rl_sphere_v5",
+    "PickSphereFragile-v6": ("PickSphereFragile-v6", {"PPO, 3 seeds": "rl_sphere_v6",
                                                       "SAC, 3 seeds": "rl_sphere_v5_sac",
                                                       AIDED: "rl_sphere_v5_residual_palm_light/log_std_init"}),
 }
