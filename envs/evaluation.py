@@ -20,7 +20,7 @@ import numpy as np
 
 from simgrip.envs.outcome import outcome  # outcomes() counts with it; also importable from here
 
-__all__ = ["add_training_aid_arguments", "EpisodeResult", "GAMMA", "add_episode_arguments", "charge", "check_env_id", "critic_warmup_conflict",
+__all__ = ["EpisodeResult", "GAMMA", "add_episode_arguments", "add_training_aid_arguments", "charge", "check_env_id", "critic_warmup_conflict",
            "discount", "env_kwargs", "json_object", "log_std", "log_std_init_conflict",
            "make_env", "outcome", "outcomes", "positive_int", "non_negative_int", "probability", "run_episodes",
            "summary", "checkpoint_tag", "training_conflict", "training_files", "training_seed", "episode_count", "MAX_EPISODES", "MAX_TRAINING_SEED"]

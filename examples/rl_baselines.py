@@ -99,12 +99,6 @@ def _positive(kind):
     return parse
 
 
-def _json_object(text: str) -> dict:
-    from simgrip.envs.evaluation import json_object  # imported when used: --help stays light
-
-    return json_object(text)
-
-
 def _non_negative_int(text: str) -> int:
     try:
         v = int(text)
@@ -115,16 +109,10 @@ def _non_negative_int(text: str) -> int:
     return v
 
 
-def _training_seed(text: str) -> int:
-    from simgrip.envs.evaluation import training_seed  # imported when used, as _json_object
-
-    return training_seed(text)
-
-
 def _seed_range(text: str) -> tuple[int, int]:
     """``A-B`` (inclusive, 0 <= A <= B, at most ``MAX_EPISODES`` seeds: one evaluation episode each) or one seed
     ``A``."""
-    from simgrip.envs.evaluation import MAX_EPISODES  # imported when used, as _json_object
+    from simgrip.envs.evaluation import MAX_EPISODES  # (imported when used, as build_parser's types)
 
     parts = text.split("-")
     try:
@@ -406,14 +394,16 @@ def _main_combine(argv: list[str]) -> int:
 
 def build_parser() -> argparse.ArgumentParser:
     """The run mode's options (``--combine`` has its own); tests build ``run_command``'s arguments from it."""
+    from simgrip.envs.evaluation import add_training_aid_arguments, json_object, training_seed
+
     p = CommandParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     p.add_argument("--env", required=True, help="registered env id, e.g. simgrip/PickFragile-v7, or a retired "
                    "simgrip one (simgrip.envs.RETIRED: the runs of docs/baselines/ name them)")
-    p.add_argument("--env-kwargs", type=_json_object, default={}, metavar="JSON",
+    p.add_argument("--env-kwargs", type=json_object, default={}, metavar="JSON",
                    help="keyword arguments of gym.make as a JSON object, e.g. '{\"w_touch\": 0}' (an ablation; "
                         "default none)")
     p.add_argument("--algo", nargs="+", choices=ALGOS, default=list(ALGOS), help="algorithms (default ppo sac)")
-    p.add_argument("--seeds", nargs="+", type=_training_seed, default=[0, 1, 2],
+    p.add_argument("--seeds", nargs="+", type=training_seed, default=[0, 1, 2],
                    help="training seeds (default 0 1 2; each at most 2**32 - 1)")
     p.add_argument("--minutes", type=_positive(float), default=15.0, help="CPU-minute budget per run (default 15)")
     p.add_argument("--checkpoint-minutes", type=_positive(float), default=None,
@@ -422,8 +412,6 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--eval-seeds", type=_seed_range, default=(8000, 8049),
                    help="held-out evaluation seeds A-B, inclusive (default 8000-8049)")
     p.add_argument("--jobs", type=_positive(int), default=1, help="runs at once (default 1, at most the cores)")
-    from simgrip.envs.evaluation import add_training_aid_arguments
-
     add_training_aid_arguments(p)
     p.add_argument("--init-from", default=None, metavar="DIR",
                    help="PPO only: start each seed S from DIR/ppo_seed<S>/ppo_model.zip, an earlier run's policy "

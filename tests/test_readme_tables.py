@@ -118,11 +118,12 @@ def pct(x: float) -> int:
     return round(100 * x)
 
 
-def clopper_pearson(k: int, n: int) -> tuple[int, int]:
-    """The 95 % Clopper-Pearson interval of ``k`` successes in ``n``, each end rounded to the nearest percent."""
+def clopper_pearson(k: int, n: int, digits: int | None = None) -> tuple:
+    """The 95 % Clopper-Pearson interval of ``k`` successes in ``n`` in percent, each end rounded to the nearest
+    percent (``digits`` None) or to ``digits`` decimals."""
     lo = 0.0 if k == 0 else beta.ppf(0.025, k, n - k + 1)
     hi = 1.0 if k == n else beta.ppf(0.975, k + 1, n - k)
-    return round(100 * lo), round(100 * hi)
+    return round(100 * lo, digits), round(100 * hi, digits)
 
 
 def test_table_has_every_row_and_column():
@@ -289,7 +290,7 @@ def test_the_tuned_open_loop_members_on_unseen_seeds():
     """The README's sentence on the open-loop members tuned on 6100-6149, run on 1000 seeds no test uses, is their
     records (``baselines --member``); the other members it bounds are of the same grid, on the same seeds."""
     def interval(k, n):
-        return f"{100 * beta.ppf(0.025, k, n - k + 1):.1f}–{100 * beta.ppf(0.975, k + 1, n - k):.1f}"
+        return "{:.1f}–{:.1f}".format(*clopper_pearson(k, n, 1))
 
     text = " ".join((ROOT / "README.md").read_text(encoding="utf-8").split())
     recs = {}
