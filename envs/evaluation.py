@@ -157,7 +157,8 @@ def add_training_aid_arguments(parser: argparse.ArgumentParser) -> None:
     """Add the training aids ``examples/train_sb3.py`` applies and ``examples/rl_baselines.py`` passes to each of
     its runs, with the same names, checks and meanings: ``--normalize``, ``--action-offset A ...``,
     ``--frame-stack N``, ``--gamma G``, ``--log-std-init X``, ``--scripted-start P``, ``--light-bias P``,
-    ``--residual NAME ...``, ``--crush-charge F`` and ``--crush-charge-from STEPS`` (each off by default)."""
+    ``--residual NAME ...``, ``--crush-charge F``, ``--crush-charge-from STEPS`` and ``--lr-decay`` (each off by
+    default)."""
     add = parser.add_argument
     add("--normalize", action="store_true",
         help="train behind SB3's VecNormalize (observation and return, library defaults; default off)")
@@ -188,6 +189,9 @@ def add_training_aid_arguments(parser: argparse.ArgumentParser) -> None:
              "evaluation runs the task's own reward; default none)")
     add("--crush-charge-from", type=non_negative_int, default=0, metavar="STEPS",
         help="with --crush-charge: charge the crushes from this training step on (default 0)")
+    add("--lr-decay", action="store_true",
+        help="the learning rate falls linearly from the library default to 0 over the time budget "
+             "(simgrip.envs.lr_decay; recorded in the JSON; default off: constant)")
 
 
 def check_env_id(parser: argparse.ArgumentParser, env_id: str, *, retired: bool = False) -> None:

@@ -87,7 +87,9 @@ time, and ``eval``: the copied policy's held-out success, return and outcomes be
 ``--gamma G`` changes one hyperparameter, the discount (default 0.99), and the JSON's ``hyperparameters``
 says so; the held-out ``mean_discounted_return`` is then at ``G``.  ``--log-std-init X`` (PPO only) changes
 another, the policy's initial log standard deviation (``policy_kwargs={"log_std_init": X}``; default 0, a
-standard deviation of 1 in every action), also named in ``hyperparameters``.  ``examples/evaluate_policy.py``
+standard deviation of 1 in every action), also named in ``hyperparameters``, and ``--lr-decay`` a third, the
+learning rate, which falls linearly from the library's default to 0 over the budget
+(:mod:`simgrip.envs.lr_decay`).  ``examples/evaluate_policy.py``
 re-evaluates a saved model, or a scripted controller, the same way.
 
 ``--eval-start`` also evaluates the policy before its first update (a fresh one, or the ``--init-from`` copy) on
@@ -110,6 +112,7 @@ from __future__ import annotations
 
 import argparse
 import csv
+import inspect
 import io
 import json
 import os
@@ -129,6 +132,7 @@ from simgrip.command_parser import CommandParser
 from simgrip.envs.evaluation import (GAMMA, add_training_aid_arguments, check_env_id, checkpoint_tag, episode_count,
                                      json_object, make_env, non_negative_int, outcomes, run_episodes, summary,
                                      training_conflict, training_files, training_seed)
+from simgrip.envs.lr_decay import BudgetDecay
 from simgrip.io import atomic_write, check_output_dir, check_output_files_in, write_json
 
 ALGOS = ("ppo", "sac")
@@ -243,10 +247,13 @@ def _warm_start(model, train_env, init_from: str, action_offset) -> dict:
             "new_observation": list(plan.new_obs), "new_actions": list(plan.new_actions)}
 
 
-def model_kwargs(algo: str, gamma: float | None, log_std_init: float | None) -> dict:
+def model_kwargs(algo: str, gamma: float | None, log_std_init: float | None, lr_decay=None) -> dict:
     """The keyword arguments that change the library's defaults: ``gamma``; ``log_std_init`` (PPO only: SAC's
-    standard deviation is an output of its network, not a parameter)."""
+    standard deviation is an output of its network, not a parameter); ``lr_decay``, a
+    :class:`simgrip.envs.lr_decay.BudgetDecay` for the learning rate."""
     kwargs = {} if gamma is None else {"gamma": gamma}
+    if lr_decay is not None:
+        kwargs["learning_rate"] = lr_decay
     if log_std_init is not None:
         if algo != "ppo":
             raise ValueError(f"log_std_init: PPO only, got algo {algo!r}")
@@ -254,10 +261,11 @@ def model_kwargs(algo: str, gamma: float | None, log_std_init: float | None) -> 
     return kwargs
 
 
-def hyperparameters(gamma: float | None, log_std_init: float | None) -> str:
+def hyperparameters(gamma: float | None, log_std_init: float | None, lr_decay=None) -> str:
     """The JSON's ``hyperparameters``: the library's defaults, and which ones this run changed."""
     changed = ([] if gamma is None else [f"gamma = {gamma!r}"]) + \
-        ([] if log_std_init is None else [f"log_std_init = {log_std_init!r}"])
+        ([] if log_std_init is None else [f"log_std_init = {log_std_init!r}"]) + \
+        ([] if lr_decay is None else [f"learning_rate = {lr_decay.initial!r} falling linearly to 0 over the budget"])
     return "Stable-Baselines3 defaults" + (" but " + ", ".join(changed) if changed else "")
 
 
@@ -267,7 +275,7 @@ def train(algo: str, env_id: str, *, steps: int, minutes: float, seed: int, out:
           frame_stack: int | None = None, scripted_start: float | None = None,
           light_bias: float | None = None, init_from: str | None = None, residual=None,
           log_std_init: float | None = None, eval_start: bool = False, critic_warmup: int = 0,
-          crush_charge: tuple[float, int] | None = None) -> dict:
+          crush_charge: tuple[float, int] | None = None, lr_decay: bool = False) -> dict:
     """Train ``algo`` with library defaults within the budget, write its curve, model and evaluation
     (``env_kwargs``: ``gym.make``'s keyword arguments, for training and evaluation alike; ``normalize``: train
     behind SB3's ``VecNormalize`` with its defaults; ``action_offset``: train and evaluate behind
@@ -284,7 +292,9 @@ def train(algo: str, env_id: str, *, steps: int, minutes: float, seed: int, out:
     its first update as well, recorded as ``start``; ``critic_warmup``: PPO's first steps, in whole rollouts, with
     the policy frozen so that only the value function learns, :mod:`simgrip.envs.critic_warmup`; within ``steps``
     and the budget; ``crush_charge``: ``(charge, start)``, the training reward of every crush from training step
-    ``start`` on lowered by ``charge``, :class:`simgrip.envs.crush_charge.CrushCharge`; evaluation runs the task)."""
+    ``start`` on lowered by ``charge``, :class:`simgrip.envs.crush_charge.CrushCharge`; evaluation runs the task;
+    ``lr_decay``: the library's learning rate falling linearly to 0 over the budget, on its clock,
+    :class:`simgrip.envs.lr_decay.BudgetDecay`)."""
     env_kwargs = dict(env_kwargs or {})
     from stable_baselines3 import PPO, SAC
     from stable_baselines3.common.callbacks import BaseCallback
@@ -338,7 +348,9 @@ def train(algo: str, env_id: str, *, steps: int, minutes: float, seed: int, out:
         from stable_baselines3.common.vec_env import VecNormalize
 
         env = VecNormalize(env)  # SB3's defaults; the Monitor inside still records the env's own returns
-    model = cls("MlpPolicy", env, seed=seed, verbose=0, **model_kwargs(algo, gamma, log_std_init))
+    decay = BudgetDecay(inspect.signature(cls).parameters["learning_rate"].default, budget, clock) \
+        if lr_decay else None
+    model = cls("MlpPolicy", env, seed=seed, verbose=0, **model_kwargs(algo, gamma, log_std_init, decay))
     model.set_logger(Logger(None, []))  # no output; SB3's own would make an empty /tmp/SB3-<time> per learn()
     init = start = None
     if init_from is not None:
@@ -353,6 +365,8 @@ def train(algo: str, env_id: str, *, steps: int, minutes: float, seed: int, out:
         if eval_start:
             start = {k: before[k] for k in ("success_rate", "mean_return", "mean_discounted_return", "outcomes")}
         t_start, c_start = time.perf_counter(), time.process_time()  # the budget is the training's alone
+        if decay is not None:
+            decay.start()
     warmup = None
     if critic_warmup:  # the value function fitted to the starting policy's returns, the policy held
         from simgrip.envs.critic_warmup import warm_up
@@ -377,7 +391,7 @@ def train(algo: str, env_id: str, *, steps: int, minutes: float, seed: int, out:
     result = {"algo": algo.upper(), "env": env_id, "timesteps": int(model.num_timesteps), "wall_s": round(wall, 1), "cpu_s": round(cpu, 1),
               "clock": clock, "budget_minutes": minutes,
               "train_episodes": len(rows), "seed": seed,
-              "hyperparameters": hyperparameters(gamma, log_std_init)}
+              "hyperparameters": hyperparameters(gamma, log_std_init, decay)}
     if env_kwargs:
         result["env_kwargs"] = env_kwargs
     wrappers = []
@@ -553,7 +567,7 @@ def main(argv=None) -> int:
                        normalize=args.normalize, action_offset=args.action_offset, gamma=args.gamma,
                        frame_stack=args.frame_stack, scripted_start=args.scripted_start,
                        light_bias=args.light_bias, init_from=args.init_from, residual=args.residual,
-                       log_std_init=args.log_std_init, eval_start=args.eval_start,
+                       log_std_init=args.log_std_init, eval_start=args.eval_start, lr_decay=args.lr_decay,
                        critic_warmup=args.critic_warmup,
                        crush_charge=_charged(args))
         print(json.dumps(result), flush=True)
