@@ -43,13 +43,14 @@ ROWS = {
 
 #: the aids an aided cell names -> the rl_baselines.py option that applies each
 AIDS = {"offset": "--action-offset", "peak offset": "--action-offset", "light bias": "--light-bias",
-        "scripted palm": "--residual", "log std": "--log-std-init", "γ": "--gamma"}
+        "scripted palm": "--residual", "log std": "--log-std-init", "γ": "--gamma", "lr decay": "--lr-decay"}
 
 
 def assert_the_hyperparameters_named(text: str, agg: dict) -> None:
     """"log std X" and "γ X" (the aids that change one of SB3's hyperparameters: "log std -1", "γ 0.995") at the
-    values they name, in the training command and in the record's ``hyperparameters``; nothing to check where the
-    text names neither (that the options are exactly the aids named: AIDS)."""
+    values they name, and "lr decay" (the learning rate), in the training command and in the record's
+    ``hyperparameters``; nothing to check where the text names none (that the options are exactly the aids named:
+    AIDS)."""
     cmd = training_command(agg)
     for pattern, option, key in ((r"log std (-?[\d.]+)", "--log-std-init", "log_std_init"),
                                  (r"γ ([\d.]+)", "--gamma", "gamma")):
@@ -58,6 +59,9 @@ def assert_the_hyperparameters_named(text: str, agg: dict) -> None:
             value = float(named.group(1))
             assert float(cmd[cmd.index(option) + 1]) == value, (named.group(0), cmd)
             assert f"; but {key} = {value!r}" in agg["hyperparameters"], (named.group(0), agg["hyperparameters"])
+    if "lr decay" in text:
+        assert "--lr-decay" in cmd and "; but the learning rate falls linearly to 0 over the budget" in \
+            agg["hyperparameters"], (text, agg["hyperparameters"])
 
 
 def assert_the_offset_named(text: str, command: list) -> None:
