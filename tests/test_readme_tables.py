@@ -27,7 +27,7 @@ AIDED = "PPO behind its aid, 3 seeds"
 
 #: README row -> (the id whose non-learned records it shows, {learned column header: aggregate folder}).
 ROWS = {
-    "PickFragile-v7": ("PickFragile-v7", {"PPO, 3 seeds": "rl_pick_v7", "SAC, 3 seeds": "rl_pick_v6_sac",
+    "PickFragile-v7": ("PickFragile-v7", {"PPO, 3 seeds": "rl_pick_v7", "SAC, 3 seeds": "rl_pick_v7_sac",
                                           AIDED: "rl_pick_v7_peak_log_std_gamma"}),
     "PickMultiFragile-v7": ("PickMultiFragile-v7", {"PPO, 3 seeds": "rl_multi_v7",
                                                     "SAC, 3 seeds": "rl_multi_v6_sac", AIDED: "rl_multi_v7_peak_light"}),
