@@ -30,7 +30,7 @@ ROWS = {
     "PickFragile-v7": ("PickFragile-v7", {"PPO, 3 seeds": "rl_pick_v7", "SAC, 3 seeds": "rl_pick_v7_sac",
                                           AIDED: "rl_pick_v7_peak_log_std_gamma"}),
     "PickMultiFragile-v7": ("PickMultiFragile-v7", {"PPO, 3 seeds": "rl_multi_v7",
-                                                    "SAC, 3 seeds": "rl_multi_v6_sac", AIDED: "rl_multi_v7_peak_light"}),
+                                                    "SAC, 3 seeds": "rl_multi_v7_sac", AIDED: "rl_multi_v7_peak_light"}),
     "PlaceFragile-v8": ("PlaceFragile-v8", {"PPO, 3 seeds": "rl_place_v8", "SAC, 3 seeds": "rl_place_v7_sac",
                                             AIDED: "rl_place_v8_residual_palm_log_std"}),
     "PickCradleFragile-v6": ("PickCradleFragile-v6", {"PPO, 3 seeds": "rl_cradle_v6",
