@@ -52,7 +52,7 @@ class BudgetDecay:
         if clock not in _CLOCKS:
             raise ValueError(f"clock must be 'cpu' or 'wall', got {clock!r}")
         self.initial, self.budget_s, self.clock = float(initial), float(budget_s), clock
-        self.started = _CLOCKS[clock]()
+        self.start()
 
     def start(self) -> None:
         """Start the budget now (the training's own: after any evaluation before it)."""
