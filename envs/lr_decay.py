@@ -54,9 +54,13 @@ class BudgetDecay:
         self.initial, self.budget_s, self.clock = float(initial), float(budget_s), clock
         self.start()
 
-    def start(self) -> None:
-        """Start the budget now (the training's own: after any evaluation before it)."""
-        self.started = _CLOCKS[self.clock]()
+    def start(self, at: float | None = None) -> None:
+        """Start the budget now, or at ``at``, a reading of ``clock`` in seconds (the training's budget's own start:
+        ``examples/train_sb3.py`` passes the reading its budget starts from, before the model is built, and again
+        after any evaluation before the training)."""
+        if at is not None and (isinstance(at, bool) or not isinstance(at, (int, float)) or not math.isfinite(at)):
+            raise ValueError(f"at must be a finite reading of the clock, got {at!r}")
+        self.started = _CLOCKS[self.clock]() if at is None else float(at)
 
     def fraction_left(self) -> float:
         """The share of the budget not yet spent, in [0, 1]."""

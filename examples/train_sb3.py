@@ -350,6 +350,8 @@ def train(algo: str, env_id: str, *, steps: int, minutes: float, seed: int, out:
         env = VecNormalize(env)  # SB3's defaults; the Monitor inside still records the env's own returns
     decay = BudgetDecay(inspect.signature(cls).parameters["learning_rate"].default, budget, clock) \
         if lr_decay else None
+    if decay is not None:  # on the budget's own clock, from the budget's start (before the model is built)
+        decay.start(c_start if clock == "cpu" else t_start)
     model = cls("MlpPolicy", env, seed=seed, verbose=0, **model_kwargs(algo, gamma, log_std_init, decay))
     model.set_logger(Logger(None, []))  # no output; SB3's own would make an empty /tmp/SB3-<time> per learn()
     init = start = None
@@ -366,7 +368,7 @@ def train(algo: str, env_id: str, *, steps: int, minutes: float, seed: int, out:
             start = {k: before[k] for k in ("success_rate", "mean_return", "mean_discounted_return", "outcomes")}
         t_start, c_start = time.perf_counter(), time.process_time()  # the budget is the training's alone
         if decay is not None:
-            decay.start()
+            decay.start(c_start if clock == "cpu" else t_start)
     warmup = None
     if critic_warmup:  # the value function fitted to the starting policy's returns, the policy held
         from simgrip.envs.critic_warmup import warm_up

@@ -47,6 +47,19 @@ def test_start_restarts_the_budget(clock):
     assert decay(1.0) == 0.75
 
 
+def test_start_at_a_reading_of_the_clock_counts_from_it(clock):
+    """The training script starts the schedule at its budget's start, a reading taken before the model was built."""
+    clock[0] = 130.0
+    decay = BudgetDecay(1.0, 60.0)
+    decay.start(at=100.0)
+    assert decay.started == 100.0 and decay(1.0) == 0.5
+    clock[0] = 160.0
+    assert decay(1.0) == 0.0  # the budget's end on the budget's own count, not 60 s after the schedule was made
+    for bad in (math.nan, math.inf, "100", True):
+        with pytest.raises(ValueError, match="at"):
+            decay.start(at=bad)
+
+
 def test_it_pickles_with_its_numbers_and_clock():
     decay = BudgetDecay(3e-4, 900.0, "wall")
     again = pickle.loads(pickle.dumps(decay))
@@ -81,17 +94,21 @@ def test_train_sb3_lr_decay_uses_the_schedule_and_says_so(tmp_path):
     times the share of the budget left then, so strictly between 0 and 3e-4, and the saved model's schedule is the
     budget's."""
     pytest.importorskip("stable_baselines3")
+    import time
+
     from stable_baselines3 import PPO
 
+    before = time.process_time()
     _example("train_sb3").main(["--algo", "ppo", "--env", "simgrip/PickFragile-v7", "--steps", "64",
                                 "--minutes", "2", "--lr-decay", "--eval-episodes", "1", "--eval-seed", "8310",
                                 "--out", str(tmp_path)])
     trained = json.loads((tmp_path / "ppo_eval.json").read_text())
     assert trained["hyperparameters"] == ("Stable-Baselines3 defaults but learning_rate = 0.0003 falling linearly "
                                           "to 0 over the budget")
+    spent = trained["cpu_s"]  # the whole training's CPU time, the update inside it
     model = PPO.load(tmp_path / "ppo_model.zip", device="cpu")
     assert isinstance(model.learning_rate, BudgetDecay)
     assert (model.learning_rate.initial, model.learning_rate.budget_s) == (3e-4, 120.0)
+    assert before <= model.learning_rate.started <= time.process_time() - spent  # from the budget's start
     used = model.policy.optimizer.param_groups[0]["lr"]
-    spent = trained["cpu_s"]  # the whole training's CPU time, the update inside it
     assert 3e-4 * (1.0 - spent / 120.0) <= used < 3e-4, (used, spent)
