@@ -1,4 +1,7 @@
-"""Fixtures shared by several test modules."""
+"""Fixtures shared by several test modules, and how many processes the suite uses."""
+
+import os
+from pathlib import Path
 
 import pytest
 
@@ -6,6 +9,17 @@ from simgrip import STANDARD, Uniform
 from simgrip.scenes import build_scene
 from simgrip.settle import settle
 from settle_cases import KAPPA
+
+
+def pytest_xdist_auto_num_workers(config):
+    """``-n auto`` (``pyproject.toml``'s ``addopts``, capped at 4 by ``--maxprocesses``): one worker a core this
+    process may run on, and no more workers than the test files asked for by name (``pytest tests/test_x.py``);
+    where that is one, the tests run in this process with no worker at all (0)."""
+    cores = len(os.sched_getaffinity(0)) if hasattr(os, "sched_getaffinity") else (os.cpu_count() or 1)
+    files = {str(arg).split("::")[0] for arg in config.args}
+    if files and all(Path(f).is_file() for f in files):
+        cores = min(cores, len(files))
+    return cores if cores > 1 else 0
 
 
 @pytest.fixture(scope="session")
