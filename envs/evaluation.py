@@ -21,7 +21,7 @@ import numpy as np
 from simgrip.envs.outcome import outcome  # outcomes() counts with it; also importable from here
 
 __all__ = ["EpisodeResult", "GAMMA", "add_episode_arguments", "add_training_aid_arguments", "charge", "check_env_id", "critic_warmup_conflict",
-           "discount", "env_kwargs", "json_object", "log_std", "log_std_init_conflict",
+           "discount", "entropy_coefficient", "env_kwargs", "json_object", "log_std", "log_std_init_conflict",
            "make_env", "outcome", "outcomes", "positive_int", "non_negative_int", "probability", "run_episodes",
            "summary", "checkpoint_tag", "training_conflict", "training_files", "training_seed", "episode_count", "MAX_EPISODES", "MAX_TRAINING_SEED"]
 
@@ -87,6 +87,11 @@ def log_std(text: str) -> float:
     return _number_in(text, lambda x: -5.0 <= x <= 1.0, "[-5, 1]")
 
 
+def entropy_coefficient(text: str) -> float:
+    """argparse type: PPO's entropy coefficient, in [0, 1] (SB3's default 0: no entropy bonus)."""
+    return _number_in(text, lambda x: 0.0 <= x <= 1.0, "[0, 1]")
+
+
 def log_std_init_conflict(log_std_init, algos, init_from) -> str | None:
     """Why ``--log-std-init`` cannot go with these options (``algos``: the names of the algorithms to train;
     ``init_from``: a warm start, or None), or None: PPO only (SAC's standard deviation is its network's output), and
@@ -112,7 +117,7 @@ def training_conflict(args) -> str | None:
     """The first reason the parsed options of ``train_sb3.py`` / ``rl_baselines.py`` (both have ``algo``,
     ``log_std_init``, ``init_from``, ``critic_warmup``, ``crush_charge``, ``crush_charge_from``, ``minutes`` and
     ``checkpoint_minutes``) cannot go together, or None: :func:`log_std_init_conflict`,
-    :func:`critic_warmup_conflict`, ``--crush-charge-from`` without ``--crush-charge``, a checkpoint period
+    :func:`critic_warmup_conflict`, ``--ent-coef`` with SAC, ``--crush-charge-from`` without ``--crush-charge``, a checkpoint period
     longer than the budget (no checkpoint would be taken), a budget over :data:`MAX_TRAINING_MINUTES` or more
     than :data:`MAX_CHECKPOINTS` checkpoints.  The options alone decide (nothing is imported)."""
     algos = args.algo if isinstance(args.algo, (list, tuple)) else [args.algo]
@@ -120,6 +125,8 @@ def training_conflict(args) -> str | None:
         critic_warmup_conflict(args.critic_warmup, algos)
     if why:
         return why
+    if getattr(args, "ent_coef", None) is not None and set(algos) != {"ppo"}:
+        return "--ent-coef: PPO only (--algo ppo; SAC tunes its own entropy coefficient)"
     if args.crush_charge_from and args.crush_charge is None:
         return "--crush-charge-from: only with --crush-charge"
     if args.minutes > MAX_TRAINING_MINUTES:
@@ -157,8 +164,8 @@ def add_training_aid_arguments(parser: argparse.ArgumentParser) -> None:
     """Add the training aids ``examples/train_sb3.py`` applies and ``examples/rl_baselines.py`` passes to each of
     its runs, with the same names, checks and meanings: ``--normalize``, ``--action-offset A ...``,
     ``--frame-stack N``, ``--gamma G``, ``--log-std-init X``, ``--scripted-start P``, ``--light-bias P``,
-    ``--residual NAME ...``, ``--crush-charge F``, ``--crush-charge-from STEPS`` and ``--lr-decay`` (each off by
-    default)."""
+    ``--residual NAME ...``, ``--crush-charge F``, ``--crush-charge-from STEPS``, ``--lr-decay`` and ``--ent-coef C``
+    (each off by default)."""
     add = parser.add_argument
     add("--normalize", action="store_true",
         help="train behind SB3's VecNormalize (observation and return, library defaults; default off)")
@@ -192,6 +199,9 @@ def add_training_aid_arguments(parser: argparse.ArgumentParser) -> None:
     add("--lr-decay", action="store_true",
         help="the learning rate falls linearly from the library default to 0 over the time budget "
              "(simgrip.envs.lr_decay; recorded in the JSON; default off: constant)")
+    add("--ent-coef", type=entropy_coefficient, default=None, metavar="C",
+        help="PPO only: the entropy bonus's coefficient, in [0, 1], instead of the library default 0 (recorded in "
+             "the JSON)")
 
 
 def check_env_id(parser: argparse.ArgumentParser, env_id: str, *, retired: bool = False) -> None:

@@ -47,8 +47,8 @@ earlier ``rl_baselines.py`` run of the same seed on another task (a curriculum: 
 pick-and-place; :mod:`simgrip.envs.warm_start`), recorded as ``init_from`` with that run's command
 (``init_command``); checkpoints count this run's own CPU minutes, to which the source's budget adds;
 ``--gamma G`` passes the discount instead of the default 0.99, and ``--log-std-init X`` (PPO only) the policy's
-initial log standard deviation instead of 0, and ``--lr-decay`` a learning rate falling linearly to 0 over the
-budget (:mod:`simgrip.envs.lr_decay`), each named in every JSON's ``hyperparameters``.  ``--eval-start``
+initial log standard deviation instead of 0, ``--lr-decay`` a learning rate falling linearly to 0 over the
+budget (:mod:`simgrip.envs.lr_decay`), and ``--ent-coef C`` (PPO only) the entropy bonus's coefficient, each named in every JSON's ``hyperparameters``.  ``--eval-start``
 passes that option (each run also evaluates its policy before the first update, ``start``) and ``aggregate.json``
 gives those rates per algorithm as ``start`` (as a checkpoint's); ``--critic-warmup STEPS`` (PPO only) passes that
 option (each run's first steps with the policy frozen, its value function alone learning,
@@ -149,6 +149,8 @@ def run_command(algo: str, seed: int, args, folder: Path) -> list[str]:
         cmd += ["--log-std-init", repr(args.log_std_init)]
     if args.lr_decay:
         cmd += ["--lr-decay"]
+    if args.ent_coef is not None:
+        cmd += ["--ent-coef", repr(args.ent_coef)]
     if args.scripted_start is not None:
         cmd += ["--scripted-start", repr(args.scripted_start)]
     if args.light_bias is not None:
@@ -507,7 +509,8 @@ def main(argv=None) -> int:
         "env": args.env, **({"env_kwargs": args.env_kwargs} if args.env_kwargs else {}), "algos": algos, "seeds": args.seeds, "minutes": args.minutes,
         "checkpoint_minutes": args.checkpoint_minutes, "clock": "cpu", "eval_seeds": [lo, hi],
         "hyperparameters": "Stable-Baselines3 defaults, one env, one torch thread" + "".join(
-            f"; but {k} = {v!r}" for k, v in (("gamma", args.gamma), ("log_std_init", args.log_std_init))
+            f"; but {k} = {v!r}" for k, v in (("gamma", args.gamma), ("log_std_init", args.log_std_init),
+                                             ("ent_coef", args.ent_coef))
             if v is not None) + ("; but the learning rate falls linearly to 0 over the budget" if args.lr_decay
                                  else ""), "summary": summary,
         **({"action_offset": [float(x) for x in args.action_offset]} if args.action_offset is not None else {}),

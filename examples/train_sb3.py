@@ -89,7 +89,8 @@ says so; the held-out ``mean_discounted_return`` is then at ``G``.  ``--log-std-
 another, the policy's initial log standard deviation (``policy_kwargs={"log_std_init": X}``; default 0, a
 standard deviation of 1 in every action), also named in ``hyperparameters``, and ``--lr-decay`` a third, the
 learning rate, which falls linearly from the library's default to 0 over the budget
-(:mod:`simgrip.envs.lr_decay`).  ``examples/evaluate_policy.py``
+(:mod:`simgrip.envs.lr_decay`), and ``--ent-coef C`` (PPO only) a fourth, the entropy bonus's coefficient
+(default 0).  ``examples/evaluate_policy.py``
 re-evaluates a saved model, or a scripted controller, the same way.
 
 ``--eval-start`` also evaluates the policy before its first update (a fresh one, or the ``--init-from`` copy) on
@@ -247,11 +248,16 @@ def _warm_start(model, train_env, init_from: str, action_offset) -> dict:
             "new_observation": list(plan.new_obs), "new_actions": list(plan.new_actions)}
 
 
-def model_kwargs(algo: str, gamma: float | None, log_std_init: float | None, lr_decay=None) -> dict:
+def model_kwargs(algo: str, gamma: float | None, log_std_init: float | None, lr_decay=None,
+                 ent_coef: float | None = None) -> dict:
     """The keyword arguments that change the library's defaults: ``gamma``; ``log_std_init`` (PPO only: SAC's
     standard deviation is an output of its network, not a parameter); ``lr_decay``, a
-    :class:`simgrip.envs.lr_decay.BudgetDecay` for the learning rate."""
+    :class:`simgrip.envs.lr_decay.BudgetDecay` for the learning rate; ``ent_coef`` (PPO only)."""
     kwargs = {} if gamma is None else {"gamma": gamma}
+    if ent_coef is not None:
+        if algo != "ppo":
+            raise ValueError(f"ent_coef: PPO only, got algo {algo!r}")
+        kwargs["ent_coef"] = float(ent_coef)
     if lr_decay is not None:
         kwargs["learning_rate"] = lr_decay
     if log_std_init is not None:
@@ -261,10 +267,12 @@ def model_kwargs(algo: str, gamma: float | None, log_std_init: float | None, lr_
     return kwargs
 
 
-def hyperparameters(gamma: float | None, log_std_init: float | None, lr_decay=None) -> str:
+def hyperparameters(gamma: float | None, log_std_init: float | None, lr_decay=None,
+                    ent_coef: float | None = None) -> str:
     """The JSON's ``hyperparameters``: the library's defaults, and which ones this run changed."""
     changed = ([] if gamma is None else [f"gamma = {gamma!r}"]) + \
         ([] if log_std_init is None else [f"log_std_init = {log_std_init!r}"]) + \
+        ([] if ent_coef is None else [f"ent_coef = {ent_coef!r}"]) + \
         ([] if lr_decay is None else [f"learning_rate = {lr_decay.initial!r} falling linearly to 0 over the budget"])
     return "Stable-Baselines3 defaults" + (" but " + ", ".join(changed) if changed else "")
 
@@ -275,7 +283,8 @@ def train(algo: str, env_id: str, *, steps: int, minutes: float, seed: int, out:
           frame_stack: int | None = None, scripted_start: float | None = None,
           light_bias: float | None = None, init_from: str | None = None, residual=None,
           log_std_init: float | None = None, eval_start: bool = False, critic_warmup: int = 0,
-          crush_charge: tuple[float, int] | None = None, lr_decay: bool = False) -> dict:
+          crush_charge: tuple[float, int] | None = None, lr_decay: bool = False,
+          ent_coef: float | None = None) -> dict:
     """Train ``algo`` with library defaults within the budget, write its curve, model and evaluation
     (``env_kwargs``: ``gym.make``'s keyword arguments, for training and evaluation alike; ``normalize``: train
     behind SB3's ``VecNormalize`` with its defaults; ``action_offset``: train and evaluate behind
@@ -294,7 +303,7 @@ def train(algo: str, env_id: str, *, steps: int, minutes: float, seed: int, out:
     and the budget; ``crush_charge``: ``(charge, start)``, the training reward of every crush from training step
     ``start`` on lowered by ``charge``, :class:`simgrip.envs.crush_charge.CrushCharge`; evaluation runs the task;
     ``lr_decay``: the library's learning rate falling linearly to 0 over the budget, on its clock,
-    :class:`simgrip.envs.lr_decay.BudgetDecay`)."""
+    :class:`simgrip.envs.lr_decay.BudgetDecay`; ``ent_coef``: PPO's entropy coefficient instead of 0)."""
     env_kwargs = dict(env_kwargs or {})
     from stable_baselines3 import PPO, SAC
     from stable_baselines3.common.callbacks import BaseCallback
@@ -352,7 +361,8 @@ def train(algo: str, env_id: str, *, steps: int, minutes: float, seed: int, out:
         if lr_decay else None
     if decay is not None:  # on the budget's own clock, from the budget's start (before the model is built)
         decay.start(c_start if clock == "cpu" else t_start)
-    model = cls("MlpPolicy", env, seed=seed, verbose=0, **model_kwargs(algo, gamma, log_std_init, decay))
+    model = cls("MlpPolicy", env, seed=seed, verbose=0, **model_kwargs(algo, gamma, log_std_init, decay,
+                                                                       ent_coef))
     model.set_logger(Logger(None, []))  # no output; SB3's own would make an empty /tmp/SB3-<time> per learn()
     init = start = None
     if init_from is not None:
@@ -393,7 +403,7 @@ def train(algo: str, env_id: str, *, steps: int, minutes: float, seed: int, out:
     result = {"algo": algo.upper(), "env": env_id, "timesteps": int(model.num_timesteps), "wall_s": round(wall, 1), "cpu_s": round(cpu, 1),
               "clock": clock, "budget_minutes": minutes,
               "train_episodes": len(rows), "seed": seed,
-              "hyperparameters": hyperparameters(gamma, log_std_init, decay)}
+              "hyperparameters": hyperparameters(gamma, log_std_init, decay, ent_coef)}
     if env_kwargs:
         result["env_kwargs"] = env_kwargs
     wrappers = []
@@ -570,6 +580,7 @@ def main(argv=None) -> int:
                        frame_stack=args.frame_stack, scripted_start=args.scripted_start,
                        light_bias=args.light_bias, init_from=args.init_from, residual=args.residual,
                        log_std_init=args.log_std_init, eval_start=args.eval_start, lr_decay=args.lr_decay,
+                       ent_coef=args.ent_coef,
                        critic_warmup=args.critic_warmup,
                        crush_charge=_charged(args))
         print(json.dumps(result), flush=True)
