@@ -43,17 +43,18 @@ ROWS = {
 
 #: the aids an aided cell names -> the rl_baselines.py option that applies each
 AIDS = {"offset": "--action-offset", "peak offset": "--action-offset", "light bias": "--light-bias",
-        "scripted palm": "--residual", "log std": "--log-std-init", "γ": "--gamma", "lr decay": "--lr-decay"}
+        "scripted palm": "--residual", "log std": "--log-std-init", "γ": "--gamma", "lr decay": "--lr-decay",
+        "entropy": "--ent-coef"}
 
 
 def assert_the_hyperparameters_named(text: str, agg: dict) -> None:
-    """"log std X" and "γ X" (the aids that change one of SB3's hyperparameters: "log std -1", "γ 0.995") at the
-    values they name, and "lr decay" (the learning rate), in the training command and in the record's
+    """"log std X", "γ X" and "entropy X" (the aids that change one of SB3's hyperparameters: "log std -1", "γ 0.995",
+    "entropy 0.01") at the values they name, and "lr decay" (the learning rate), in the training command and in the record's
     ``hyperparameters``; nothing to check where the text names none (that the options are exactly the aids named:
     AIDS)."""
     cmd = training_command(agg)
     for pattern, option, key in ((r"log std (-?[\d.]+)", "--log-std-init", "log_std_init"),
-                                 (r"γ ([\d.]+)", "--gamma", "gamma")):
+                                 (r"γ ([\d.]+)", "--gamma", "gamma"), (r"entropy ([\d.]+)", "--ent-coef", "ent_coef")):
         named = re.search(pattern, text)
         if named:
             value = float(named.group(1))
