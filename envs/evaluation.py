@@ -164,7 +164,8 @@ def add_training_aid_arguments(parser: argparse.ArgumentParser) -> None:
     """Add the training aids ``examples/train_sb3.py`` applies and ``examples/rl_baselines.py`` passes to each of
     its runs, with the same names, checks and meanings: ``--normalize``, ``--action-offset A ...``,
     ``--frame-stack N``, ``--gamma G``, ``--log-std-init X``, ``--scripted-start P``, ``--light-bias P``,
-    ``--residual NAME ...``, ``--crush-charge F``, ``--crush-charge-from STEPS``, ``--lr-decay`` and ``--ent-coef C``
+    ``--residual NAME ...``, ``--crush-charge F``, ``--crush-charge-from STEPS``, ``--step-charge C``, ``--lr-decay`` and
+    ``--ent-coef C``
     (each off by default)."""
     add = parser.add_argument
     add("--normalize", action="store_true",
@@ -196,6 +197,9 @@ def add_training_aid_arguments(parser: argparse.ArgumentParser) -> None:
              "evaluation runs the task's own reward; default none)")
     add("--crush-charge-from", type=non_negative_int, default=0, metavar="STEPS",
         help="with --crush-charge: charge the crushes from this training step on (default 0)")
+    add("--step-charge", type=charge, default=None, metavar="C",
+        help="lower the training reward of every step by C, a cost of time (simgrip.envs.step_charge; evaluation "
+             "runs the task's own reward; default none)")
     add("--lr-decay", action="store_true",
         help="the learning rate falls linearly from the library default to 0 over the time budget "
              "(simgrip.envs.lr_decay; recorded in the JSON; default off: constant)")
@@ -220,7 +224,7 @@ def check_env_id(parser: argparse.ArgumentParser, env_id: str, *, retired: bool 
 
 def make_env(env_id: str, env_kwargs: dict | None = None, action_offset=None, frame_stack: int | None = None,
              scripted_start: float | None = None, light_bias: float | None = None, residual=None,
-             crush_charge: tuple[float, int] | None = None):
+             crush_charge: tuple[float, int] | None = None, step_charge: float | None = None):
     """The env of ``env_id`` (a registered id, or a retired one of ``simgrip.envs.RETIRED`` through its spec) made
     with ``env_kwargs`` (``gym.make``'s keyword arguments), behind
     :class:`~simgrip.envs.action_offset.ActionOffset` ``(action_offset)`` when that is given, and behind
@@ -236,7 +240,8 @@ def make_env(env_id: str, env_kwargs: dict | None = None, action_offset=None, fr
     the action is added to it (:class:`~simgrip.envs.scripted_residual.ScriptedResidual`, inside the offset and
     the frame stack; not with ``scripted_start``).  ``crush_charge`` (training envs only): ``(charge, start)``, every
     crush's reward lowered by ``charge`` from the ``start``-th step on (:class:`~simgrip.envs.crush_charge.CrushCharge`,
-    next to ``light_bias``'s).
+    next to ``light_bias``'s).  ``step_charge`` (training envs only): every step's reward lowered by it
+    (:class:`~simgrip.envs.step_charge.StepCharge`, next to the crush charge's).
 
     Raises ValueError naming the option: ``--env-kwargs`` when the env does not take ``env_kwargs`` or refuses a
     value, ``--action-offset`` when the offset does not fit its action space (the env is closed first),
@@ -270,6 +275,10 @@ def make_env(env_id: str, env_kwargs: dict | None = None, action_offset=None, fr
         from simgrip.envs.crush_charge import CrushCharge
 
         env = _wrap_or_close(env, lambda e, v: CrushCharge(e, *v), crush_charge, "--crush-charge")
+    if step_charge is not None:
+        from simgrip.envs.step_charge import StepCharge
+
+        env = _wrap_or_close(env, StepCharge, step_charge, "--step-charge")
     if scripted_start is not None:
         from simgrip.envs.scripted_start import ScriptedStart
 

@@ -54,7 +54,8 @@ gives those rates per algorithm as ``start`` (as a checkpoint's); ``--critic-war
 option (each run's first steps with the policy frozen, its value function alone learning,
 :mod:`simgrip.envs.critic_warmup`), recorded as ``critic_warmup``; ``--crush-charge F`` and ``--crush-charge-from
 STEPS`` pass those options (each crush's training reward lowered by ``F`` from training step ``STEPS`` on,
-:mod:`simgrip.envs.crush_charge`), recorded as ``crush_charge``.
+:mod:`simgrip.envs.crush_charge`), recorded as ``crush_charge``; ``--step-charge C`` passes that option (every
+training step's reward lowered by ``C``, :mod:`simgrip.envs.step_charge`), recorded as ``step_charge``.
 
 Batches of one experiment run apart (some seeds here, others there or later, each with this command but for
 ``--seeds``, ``--jobs`` and ``--out``) are combined into one folder, as if run at once, by
@@ -165,6 +166,8 @@ def run_command(algo: str, seed: int, args, folder: Path) -> list[str]:
         cmd += ["--critic-warmup", str(args.critic_warmup)]
     if args.crush_charge is not None:
         cmd += ["--crush-charge", repr(args.crush_charge), "--crush-charge-from", str(args.crush_charge_from)]
+    if args.step_charge is not None:
+        cmd += ["--step-charge", repr(args.step_charge)]
     return cmd
 
 
@@ -521,6 +524,7 @@ def main(argv=None) -> int:
         **({"critic_warmup": args.critic_warmup} if args.critic_warmup else {}),
         **({"crush_charge": {"charge": args.crush_charge, "start": args.crush_charge_from}}
            if args.crush_charge is not None else {}),
+        **({"step_charge": args.step_charge} if args.step_charge is not None else {}),
         **({"init_from": str(args.init_from), "init_command": init_command} if args.init_from is not None else {}),
         **({"wrapper": "VecNormalize (SB3 defaults: observation and return)"} if args.normalize else {}),
         "command": [Path(sys.argv[0]).name] + list(sys.argv[1:] if argv is None else argv)})

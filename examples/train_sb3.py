@@ -68,7 +68,9 @@ evaluation runs the task's own draw; ``<algo>_eval.json`` records ``light_bias``
 ``--crush-charge F`` lowers the training reward of every crush by ``F``, from training step ``--crush-charge-from
 STEPS`` on (default 0; :class:`simgrip.envs.crush_charge.CrushCharge`: a reward curriculum, the grasp found first
 under the task's own reward); the held-out evaluation runs the task's reward; ``<algo>_eval.json`` records
-``crush_charge``.  A task without a crush is refused (exit 2).  Ctrl-C or SIGTERM: one line, exit 130.
+``crush_charge``.  A task without a crush is refused (exit 2).  ``--step-charge C`` lowers every training step's reward
+by ``C`` (:class:`simgrip.envs.step_charge.StepCharge`, a cost of time), recorded as ``step_charge``.  Ctrl-C or
+SIGTERM: one line, exit 130.
 
 ``--residual NAME ...`` trains and evaluates behind :class:`simgrip.envs.scripted_residual.ScriptedResidual`:
 the task's scripted observation-only controller drives the named actions (``palm_x palm_z``: the palm's path)
@@ -284,7 +286,7 @@ def train(algo: str, env_id: str, *, steps: int, minutes: float, seed: int, out:
           light_bias: float | None = None, init_from: str | None = None, residual=None,
           log_std_init: float | None = None, eval_start: bool = False, critic_warmup: int = 0,
           crush_charge: tuple[float, int] | None = None, lr_decay: bool = False,
-          ent_coef: float | None = None) -> dict:
+          ent_coef: float | None = None, step_charge: float | None = None) -> dict:
     """Train ``algo`` with library defaults within the budget, write its curve, model and evaluation
     (``env_kwargs``: ``gym.make``'s keyword arguments, for training and evaluation alike; ``normalize``: train
     behind SB3's ``VecNormalize`` with its defaults; ``action_offset``: train and evaluate behind
@@ -303,7 +305,8 @@ def train(algo: str, env_id: str, *, steps: int, minutes: float, seed: int, out:
     and the budget; ``crush_charge``: ``(charge, start)``, the training reward of every crush from training step
     ``start`` on lowered by ``charge``, :class:`simgrip.envs.crush_charge.CrushCharge`; evaluation runs the task;
     ``lr_decay``: the library's learning rate falling linearly to 0 over the budget, on its clock,
-    :class:`simgrip.envs.lr_decay.BudgetDecay`; ``ent_coef``: PPO's entropy coefficient instead of 0)."""
+    :class:`simgrip.envs.lr_decay.BudgetDecay`; ``ent_coef``: PPO's entropy coefficient instead of 0;
+    ``step_charge``: every training step's reward lowered by it, :class:`simgrip.envs.step_charge.StepCharge`)."""
     env_kwargs = dict(env_kwargs or {})
     from stable_baselines3 import PPO, SAC
     from stable_baselines3.common.callbacks import BaseCallback
@@ -351,7 +354,7 @@ def train(algo: str, env_id: str, *, steps: int, minutes: float, seed: int, out:
 
     # make_vec_env calls the maker (gym.make of the id, or of a retired id's spec), then seeds and wraps in Monitor
     env = make_vec_env(lambda: make_env(env_id, env_kwargs, action_offset, frame_stack, scripted_start,
-                                        light_bias, residual, crush_charge), n_envs=1,
+                                        light_bias, residual, crush_charge, step_charge), n_envs=1,
                        seed=seed)
     if normalize:
         from stable_baselines3.common.vec_env import VecNormalize
@@ -425,6 +428,9 @@ def train(algo: str, env_id: str, *, steps: int, minutes: float, seed: int, out:
     if crush_charge is not None:
         result["crush_charge"] = {"charge": float(crush_charge[0]), "start": int(crush_charge[1])}
         wrappers.append(f"CrushCharge({float(crush_charge[0])!r}, from step {int(crush_charge[1])}) in training")
+    if step_charge is not None:
+        result["step_charge"] = float(step_charge)
+        wrappers.append(f"StepCharge({float(step_charge)!r}) in training")
     if normalize:
         wrappers.append("VecNormalize (SB3 defaults: observation and return)")
     if init is not None:
@@ -548,10 +554,10 @@ def main(argv=None) -> int:
     check_env_id(p, args.env, retired=True)
     if args.env_kwargs or args.action_offset is not None or args.scripted_start is not None \
             or args.light_bias is not None or args.residual is not None or args.crush_charge is not None \
-            or args.frame_stack is not None:
+            or args.frame_stack is not None or args.step_charge is not None:
         try:  # refused before any training, the env built once
             make_env(args.env, args.env_kwargs, args.action_offset, args.frame_stack, args.scripted_start,
-                     args.light_bias, args.residual, crush_charge=_charged(args)).close()
+                     args.light_bias, args.residual, crush_charge=_charged(args), step_charge=args.step_charge).close()
         except ValueError as e:
             p.error(str(e))
     if args.init_from is not None:
@@ -580,9 +586,8 @@ def main(argv=None) -> int:
                        frame_stack=args.frame_stack, scripted_start=args.scripted_start,
                        light_bias=args.light_bias, init_from=args.init_from, residual=args.residual,
                        log_std_init=args.log_std_init, eval_start=args.eval_start, lr_decay=args.lr_decay,
-                       ent_coef=args.ent_coef,
-                       critic_warmup=args.critic_warmup,
-                       crush_charge=_charged(args))
+                       ent_coef=args.ent_coef, critic_warmup=args.critic_warmup,
+                       crush_charge=_charged(args), step_charge=args.step_charge)
         print(json.dumps(result), flush=True)
     plot_curves(out)
     return 0
