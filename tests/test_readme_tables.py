@@ -31,7 +31,7 @@ ROWS = {
                                           AIDED: "rl_pick_v7_peak_log_std_gamma"}),
     "PickMultiFragile-v7": ("PickMultiFragile-v7", {"PPO, 3 seeds": "rl_multi_v7",
                                                     "SAC, 3 seeds": "rl_multi_v7_sac", AIDED: "rl_multi_v7_peak_light"}),
-    "PlaceFragile-v8": ("PlaceFragile-v8", {"PPO, 3 seeds": "rl_place_v8", "SAC, 3 seeds": "rl_place_v7_sac",
+    "PlaceFragile-v8": ("PlaceFragile-v8", {"PPO, 3 seeds": "rl_place_v8", "SAC, 3 seeds": "rl_place_v8_sac",
                                             AIDED: "rl_place_v8_residual_palm_log_std"}),
     "PickCradleFragile-v6": ("PickCradleFragile-v6", {"PPO, 3 seeds": "rl_cradle_v6",
                                                       "SAC, 3 seeds": "rl_cradle_v5_sac",
