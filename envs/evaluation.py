@@ -117,9 +117,10 @@ def training_conflict(args) -> str | None:
     """The first reason the parsed options of ``train_sb3.py`` / ``rl_baselines.py`` (both have ``algo``,
     ``log_std_init``, ``init_from``, ``critic_warmup``, ``crush_charge``, ``crush_charge_from``, ``minutes`` and
     ``checkpoint_minutes``) cannot go together, or None: :func:`log_std_init_conflict`,
-    :func:`critic_warmup_conflict`, ``--ent-coef`` with SAC, ``--crush-charge-from`` without ``--crush-charge``, a checkpoint period
-    longer than the budget (no checkpoint would be taken), a budget over :data:`MAX_TRAINING_MINUTES` or more
-    than :data:`MAX_CHECKPOINTS` checkpoints.  The options alone decide (nothing is imported)."""
+    :func:`critic_warmup_conflict`, ``--ent-coef`` with SAC, ``--crush-charge-from`` without ``--crush-charge``, a
+    checkpoint period longer than the budget (no checkpoint would be taken), a budget over
+    :data:`MAX_TRAINING_MINUTES` or more than :data:`MAX_CHECKPOINTS` checkpoints.  The options alone decide
+    (nothing is imported)."""
     algos = args.algo if isinstance(args.algo, (list, tuple)) else [args.algo]
     why = log_std_init_conflict(args.log_std_init, algos, args.init_from) or \
         critic_warmup_conflict(args.critic_warmup, algos)
@@ -164,9 +165,8 @@ def add_training_aid_arguments(parser: argparse.ArgumentParser) -> None:
     """Add the training aids ``examples/train_sb3.py`` applies and ``examples/rl_baselines.py`` passes to each of
     its runs, with the same names, checks and meanings: ``--normalize``, ``--action-offset A ...``,
     ``--frame-stack N``, ``--gamma G``, ``--log-std-init X``, ``--scripted-start P``, ``--light-bias P``,
-    ``--residual NAME ...``, ``--crush-charge F``, ``--crush-charge-from STEPS``, ``--step-charge C``, ``--lr-decay`` and
-    ``--ent-coef C``
-    (each off by default)."""
+    ``--residual NAME ...``, ``--crush-charge F``, ``--crush-charge-from STEPS``, ``--step-charge C``,
+    ``--lr-decay`` and ``--ent-coef C`` (each off by default)."""
     add = parser.add_argument
     add("--normalize", action="store_true",
         help="train behind SB3's VecNormalize (observation and return, library defaults; default off)")

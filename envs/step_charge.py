@@ -4,14 +4,14 @@ r"""A charge on every training step: a cost of time (issue 18's training aids).
 ``info["reward_step_charge"]`` (``-charge``).  A training aid only: the task's success, observation and own reward
 are unchanged, and the held-out evaluation runs the task itself.
 
-Why (measured; the Gymnasium environments page, "Where the seeds that never grip end"): every seed of the pinch and
-the K fingers that never grips ends holding its valve and its palm still.  Such a policy touches the workpiece
-once (the one-off contact reward, 1) and then times out, a return of about 1.0 an episode, while the near-random
-episodes of a learner's first minutes return 0.46-0.92 (their crushes take back what they earned), so a learner
-that meets too few successes early climbs to the hold and stays there.  A charge ``c`` a step costs the hold
+Why (measured; the learning page, ``docs/learning.md``, "Where the seeds that never grip end"): every seed of the
+pinch and the K fingers that never grips ends holding its valve and its palm still.  Such a policy touches the
+workpiece once (the one-off contact reward, 1) and then times out, a return of about 1.0 an episode, while the
+near-random episodes of a learner's first minutes return 0.46-0.92 (their crushes take back what they earned), so a
+learner that meets too few successes early climbs to the hold and stays there.  A charge ``c`` a step costs the hold
 ``300 c`` (the episode's length) and a short attempt far less: with ``c = 0.005`` the hold returns about -0.5 and an
-attempt ended by a crush after 100 steps about 0.5 less than before, while a success (at least 30) keeps nearly
-all of its worth.  It also makes a quicker end worth a little more, a crush included: the price of the aid.
+attempt ended by a crush after 100 steps about 0.5 less than before, while a success (at least 30) keeps nearly all
+of its worth.  It also makes a quicker end worth a little more, a crush included: the price of the aid.
 """
 
 from __future__ import annotations

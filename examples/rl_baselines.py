@@ -47,15 +47,16 @@ earlier ``rl_baselines.py`` run of the same seed on another task (a curriculum: 
 pick-and-place; :mod:`simgrip.envs.warm_start`), recorded as ``init_from`` with that run's command
 (``init_command``); checkpoints count this run's own CPU minutes, to which the source's budget adds;
 ``--gamma G`` passes the discount instead of the default 0.99, and ``--log-std-init X`` (PPO only) the policy's
-initial log standard deviation instead of 0, ``--lr-decay`` a learning rate falling linearly to 0 over the
-budget (:mod:`simgrip.envs.lr_decay`), and ``--ent-coef C`` (PPO only) the entropy bonus's coefficient, each named in every JSON's ``hyperparameters``.  ``--eval-start``
-passes that option (each run also evaluates its policy before the first update, ``start``) and ``aggregate.json``
-gives those rates per algorithm as ``start`` (as a checkpoint's); ``--critic-warmup STEPS`` (PPO only) passes that
-option (each run's first steps with the policy frozen, its value function alone learning,
-:mod:`simgrip.envs.critic_warmup`), recorded as ``critic_warmup``; ``--crush-charge F`` and ``--crush-charge-from
-STEPS`` pass those options (each crush's training reward lowered by ``F`` from training step ``STEPS`` on,
-:mod:`simgrip.envs.crush_charge`), recorded as ``crush_charge``; ``--step-charge C`` passes that option (every
-training step's reward lowered by ``C``, :mod:`simgrip.envs.step_charge`), recorded as ``step_charge``.
+initial log standard deviation instead of 0, ``--lr-decay`` a learning rate falling linearly to 0 over the budget
+(:mod:`simgrip.envs.lr_decay`), and ``--ent-coef C`` (PPO only) the entropy bonus's coefficient, each named in every
+JSON's ``hyperparameters``.  ``--eval-start`` passes that option (each run also evaluates its policy before the
+first update, ``start``) and ``aggregate.json`` gives those rates per algorithm as ``start`` (as a checkpoint's);
+``--critic-warmup STEPS`` (PPO only) passes that option (each run's first steps with the policy frozen, its value
+function alone learning, :mod:`simgrip.envs.critic_warmup`), recorded as ``critic_warmup``; ``--crush-charge F`` and
+``--crush-charge-from STEPS`` pass those options (each crush's training reward lowered by ``F`` from training step
+``STEPS`` on, :mod:`simgrip.envs.crush_charge`), recorded as ``crush_charge``; ``--step-charge C`` passes that
+option (every training step's reward lowered by ``C``, :mod:`simgrip.envs.step_charge`), recorded as
+``step_charge``.
 
 Batches of one experiment run apart (some seeds here, others there or later, each with this command but for
 ``--seeds``, ``--jobs`` and ``--out``) are combined into one folder, as if run at once, by

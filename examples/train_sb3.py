@@ -68,8 +68,8 @@ evaluation runs the task's own draw; ``<algo>_eval.json`` records ``light_bias``
 ``--crush-charge F`` lowers the training reward of every crush by ``F``, from training step ``--crush-charge-from
 STEPS`` on (default 0; :class:`simgrip.envs.crush_charge.CrushCharge`: a reward curriculum, the grasp found first
 under the task's own reward); the held-out evaluation runs the task's reward; ``<algo>_eval.json`` records
-``crush_charge``.  A task without a crush is refused (exit 2).  ``--step-charge C`` lowers every training step's reward
-by ``C`` (:class:`simgrip.envs.step_charge.StepCharge`, a cost of time), recorded as ``step_charge``.  Ctrl-C or
+``crush_charge``.  A task without a crush is refused (exit 2).  ``--step-charge C`` lowers every training step's
+reward by ``C`` (:class:`simgrip.envs.step_charge.StepCharge`, a cost of time), recorded as ``step_charge``.  Ctrl-C or
 SIGTERM: one line, exit 130.
 
 ``--residual NAME ...`` trains and evaluates behind :class:`simgrip.envs.scripted_residual.ScriptedResidual`:
