@@ -44,14 +44,15 @@ ROWS = {
 #: the aids an aided cell names -> the rl_baselines.py option that applies each
 AIDS = {"offset": "--action-offset", "peak offset": "--action-offset", "light bias": "--light-bias",
         "scripted palm": "--residual", "log std": "--log-std-init", "γ": "--gamma", "lr decay": "--lr-decay",
-        "entropy": "--ent-coef"}
+        "entropy": "--ent-coef", "step charge": "--step-charge"}
 
 
 def assert_the_hyperparameters_named(text: str, agg: dict) -> None:
     """"log std X", "γ X" and "entropy X" (the aids that change one of SB3's hyperparameters: "log std -1", "γ 0.995",
-    "entropy 0.01") at the values they name, and "lr decay" (the learning rate), in the training command and in the record's
-    ``hyperparameters``; nothing to check where the text names none (that the options are exactly the aids named:
-    AIDS)."""
+    "entropy 0.01") at the values they name, and "lr decay" (the learning rate), in the training command and in the
+    record's ``hyperparameters``; "step charge X" (the training reward's charge a step) at its value in the command
+    and the record's ``step_charge``; nothing to check where the text names none (that the options are exactly the
+    aids named: AIDS)."""
     cmd = training_command(agg)
     for pattern, option, key in ((r"log std (-?[\d.]+)", "--log-std-init", "log_std_init"),
                                  (r"γ ([\d.]+)", "--gamma", "gamma"), (r"entropy ([\d.]+)", "--ent-coef", "ent_coef")):
@@ -60,6 +61,10 @@ def assert_the_hyperparameters_named(text: str, agg: dict) -> None:
             value = float(named.group(1))
             assert float(cmd[cmd.index(option) + 1]) == value, (named.group(0), cmd)
             assert f"; but {key} = {value!r}" in agg["hyperparameters"], (named.group(0), agg["hyperparameters"])
+    named = re.search(r"step charge ([\d.]+)", text)
+    if named:  # a training-reward wrapper, not a hyperparameter: in the command and the record's step_charge
+        value = float(named.group(1))
+        assert float(cmd[cmd.index("--step-charge") + 1]) == value == agg["step_charge"], (named.group(0), cmd)
     if "lr decay" in text:
         assert "--lr-decay" in cmd and "; but the learning rate falls linearly to 0 over the budget" in \
             agg["hyperparameters"], (text, agg["hyperparameters"])
