@@ -20,7 +20,7 @@ from simgrip.chain import check_links
 from simgrip.params import MAX_LINKS
 
 __all__ = ["check_action", "check_bool", "check_camera", "check_int", "check_number", "check_positive", "check_range",
-           "check_size", "check_within",
+           "check_charge", "check_size", "check_within",
            "check_reset", "set_finger_arguments", "set_task_arguments"]
 
 
@@ -89,6 +89,15 @@ def check_size(name, value, length: float) -> float:
         raise ValueError(f"{name} must be at most {MAX_WORKPIECE_SIZE:g} times length = {length:g} m (fingers "
                          f"that long pick nothing so big), got {value!r}")
     return v
+
+
+def check_charge(name, value) -> float:
+    """``value`` as a charge in reward units: an int or float, finite and >= 0 (bools and strings refused, unlike
+    :func:`check_number`); ValueError naming ``name`` otherwise (the training aids' charges,
+    :mod:`simgrip.envs.crush_charge` and :mod:`simgrip.envs.step_charge`)."""
+    if isinstance(value, bool) or not isinstance(value, (int, float)) or not (0.0 <= value < math.inf):
+        raise ValueError(f"{name} must be a finite number >= 0, got {value!r}")
+    return float(value)
 
 
 def check_positive(name, value) -> float:

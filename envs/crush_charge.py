@@ -20,9 +20,9 @@ learner find the grasp first under the task's own reward and meet the charge onc
 
 from __future__ import annotations
 
-import math
-
 import gymnasium as gym
+
+from simgrip.envs.arguments import check_charge
 
 __all__ = ["CrushCharge"]
 
@@ -48,8 +48,7 @@ class CrushCharge(gym.Wrapper):
     """
 
     def __init__(self, env, charge: float, start: int = 0):
-        if isinstance(charge, bool) or not isinstance(charge, (int, float)) or not (0.0 <= charge < math.inf):
-            raise ValueError(f"charge must be a finite number >= 0, got {charge!r}")
+        charge = check_charge("charge", charge)
         if isinstance(start, bool) or not isinstance(start, int) or start < 0:
             raise ValueError(f"start must be a whole number >= 0, got {start!r}")
         if not hasattr(env.unwrapped, "crush_limit"):

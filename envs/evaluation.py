@@ -115,8 +115,8 @@ def critic_warmup_conflict(steps, algos) -> str | None:
 
 def training_conflict(args) -> str | None:
     """The first reason the parsed options of ``train_sb3.py`` / ``rl_baselines.py`` (both have ``algo``,
-    ``log_std_init``, ``init_from``, ``critic_warmup``, ``crush_charge``, ``crush_charge_from``, ``minutes`` and
-    ``checkpoint_minutes``) cannot go together, or None: :func:`log_std_init_conflict`,
+    ``log_std_init``, ``ent_coef``, ``init_from``, ``critic_warmup``, ``crush_charge``, ``crush_charge_from``,
+    ``minutes`` and ``checkpoint_minutes``) cannot go together, or None: :func:`log_std_init_conflict`,
     :func:`critic_warmup_conflict`, ``--ent-coef`` with SAC, ``--crush-charge-from`` without ``--crush-charge``, a
     checkpoint period longer than the budget (no checkpoint would be taken), a budget over
     :data:`MAX_TRAINING_MINUTES` or more than :data:`MAX_CHECKPOINTS` checkpoints.  The options alone decide
@@ -126,7 +126,7 @@ def training_conflict(args) -> str | None:
         critic_warmup_conflict(args.critic_warmup, algos)
     if why:
         return why
-    if getattr(args, "ent_coef", None) is not None and set(algos) != {"ppo"}:
+    if args.ent_coef is not None and set(algos) != {"ppo"}:
         return "--ent-coef: PPO only (--algo ppo; SAC tunes its own entropy coefficient)"
     if args.crush_charge_from and args.crush_charge is None:
         return "--crush-charge-from: only with --crush-charge"

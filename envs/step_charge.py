@@ -16,9 +16,9 @@ of its worth.  It also makes a quicker end worth a little more, a crush included
 
 from __future__ import annotations
 
-import math
-
 import gymnasium as gym
+
+from simgrip.envs.arguments import check_charge
 
 __all__ = ["StepCharge"]
 
@@ -37,10 +37,9 @@ class StepCharge(gym.Wrapper):
     """
 
     def __init__(self, env, charge: float):
-        if isinstance(charge, bool) or not isinstance(charge, (int, float)) or not (0.0 <= charge < math.inf):
-            raise ValueError(f"charge must be a finite number >= 0, got {charge!r}")
+        charge = check_charge("charge", charge)
         super().__init__(env)
-        self.charge = float(charge)
+        self.charge = charge
 
     def step(self, action):
         obs, reward, terminated, truncated, info = self.env.step(action)
