@@ -6,11 +6,14 @@ rewinds the simulation to the chunk's start (``mj_getState`` /
 ``mj_setState``) and integrates exactly the same physics again with bare
 :func:`mujoco.mj_step` calls, writing the rest angles and the palm servo target
 (all of ``data.ctrl``) that ``step`` wrote: once with one ``mj_step`` call per physics step and once
-with ``mj_step(..., nstep=frame_skip)`` (what the environment uses).  Both
+with ``mj_step(..., nstep=frame_skip)`` (what the environment uses), and once
+through :func:`~simgrip.envs.step_floor.floor_step`, the least a Python step
+of the environment's interface does (writes, ``mj_step``, the state read back,
+an observation array and an ``info`` of the environment's keys).  All
 timings therefore cover the same states, contacts included, for the same
 number of physics steps; ``replay_max_abs_diff`` checks it (the largest
-difference between the replay's end state and the environment's, over every
-chunk and both replays: 0 when the replay is faithful).
+difference between a replay's end state and the environment's, over every
+chunk and the three replays: 0 when the replay is faithful).
 
 The overhead is the environment's extra time (action checks, curvature lag,
 contact forces, observation, reward) over the raw stepping.  Both sides are timed
@@ -30,6 +33,8 @@ import time
 
 import mujoco
 import numpy as np
+
+from simgrip.envs.step_floor import floor_step
 
 __all__ = ["measure_throughput", "violation_check_times"]
 
@@ -66,9 +71,12 @@ def measure_throughput(steps: int = 2000, *, grip: str = "I", seed: int = 0, rep
         ``raw_physics_steps_per_s`` (one ``mj_step`` call per physics step),
         ``raw_nstep_physics_steps_per_s`` (``nstep=frame_skip``),
         ``overhead_percent`` (env against the one-call-per-step loop, median of
-        the chunks' ratios), ``overhead_vs_nstep_percent``, ``frame_skip``,
-        ``timestep``, ``steps``, ``chunks``, ``clock``, ``replay_max_abs_diff``
-        (module docstring).
+        the chunks' ratios), ``overhead_vs_nstep_percent``,
+        ``floor_overhead_percent`` (the interface's least Python step,
+        :mod:`simgrip.envs.step_floor`, against the same loop, the same
+        median: the part of ``overhead_percent`` no task code can remove),
+        ``frame_skip``, ``timestep``, ``steps``, ``chunks``, ``clock``,
+        ``replay_max_abs_diff`` (module docstring).
     """
     from simgrip.envs.pick import PickEnv
     from simgrip.envs.pick_multi import PickMultiEnv
@@ -112,6 +120,7 @@ def measure_throughput(steps: int = 2000, *, grip: str = "I", seed: int = 0, rep
         "raw_nstep_physics_steps_per_s": n_phys / best["nstep"],
         "overhead_percent": 100.0 * (float(np.median(ratios["single"])) - 1.0),
         "overhead_vs_nstep_percent": 100.0 * (float(np.median(ratios["nstep"])) - 1.0),
+        "floor_overhead_percent": 100.0 * (float(np.median(ratios["floor"])) - 1.0),
         "replay_max_abs_diff": diff,
     }
 
@@ -125,14 +134,15 @@ def _measure(env, steps: int, seed: int, repeats: int, chunk: int, timer) -> tup
     log_spring = np.empty((chunk, idx.size))
     if np.array_equal(idx, np.arange(idx[0], idx[0] + idx.size)):
         idx = slice(int(idx[0]), int(idx[0]) + idx.size)  # the builder makes them contiguous: a slice copies less
-    best = {"env": np.inf, "single": np.inf, "nstep": np.inf}
-    ratios = {"single": [], "nstep": []}
+    best = {"env": np.inf, "single": np.inf, "nstep": np.inf, "floor": np.inf}
+    ratios = {"single": [], "nstep": [], "floor": []}
+    obs_size = env.observation_space.shape[0]
     diff = 0.0
     for r in range(repeats):
         rng = np.random.default_rng(seed + r)
         actions = rng.uniform(-1, 1, size=(steps, env.action_space.shape[0])).astype(np.float32)
         m, d, spring, start, end, log_ctrl, ctrl = _bind(env, kind, chunk, seed + 1000 * r)
-        total = {"env": 0.0, "single": 0.0, "nstep": 0.0}
+        total = {"env": 0.0, "single": 0.0, "nstep": 0.0, "floor": 0.0}
         i = 0
         while i < steps:
             mujoco.mj_getState(m, d, start, kind)
@@ -141,7 +151,7 @@ def _measure(env, steps: int, seed: int, repeats: int, chunk: int, timer) -> tup
             while n < chunk and i + n < steps and not done:
                 a = actions[i + n]
                 t0 = timer()  # each step timed alone, as the replay times each control step's physics
-                _, _, term, trunc, _ = env.step(a)
+                _, _, term, trunc, info = env.step(a)
                 t_env += timer() - t0
                 log_spring[n] = spring[idx]  # the replay's log, outside the timing as the replay's writes are
                 log_ctrl[n] = ctrl
@@ -149,11 +159,19 @@ def _measure(env, steps: int, seed: int, repeats: int, chunk: int, timer) -> tup
                 done = term or trunc
             total["env"] += t_env
             mujoco.mj_getState(m, d, end, kind)
-            for mode in ("single", "nstep"):
+            floor = floor_step(m, d, frame_skip=fs, obs_size=obs_size, info=info, spring_index=idx)
+            elapsed = {}
+            for mode in ("single", "nstep", "floor"):
                 mujoco.mj_setState(m, d, start, kind)
                 spring[idx] = spring0
-                elapsed = 0.0
+                t = 0.0
                 for k in range(n):
+                    if mode == "floor":  # the floor's step writes them itself, as the environment's does
+                        row_spring, row_ctrl = log_spring[k], log_ctrl[k]
+                        t0 = timer()
+                        floor(row_spring, row_ctrl)
+                        t += timer() - t0
+                        continue
                     spring[idx] = log_spring[k]
                     ctrl[:] = log_ctrl[k]
                     t0 = timer()
@@ -162,12 +180,15 @@ def _measure(env, steps: int, seed: int, repeats: int, chunk: int, timer) -> tup
                             mujoco.mj_step(m, d)
                     else:
                         mujoco.mj_step(m, d, nstep=fs)
-                    elapsed += timer() - t0
-                total[mode] += elapsed
-                ratios[mode].append(t_env / elapsed)
+                    t += timer() - t0
+                total[mode] += t
+                elapsed[mode] = t
                 replayed = np.empty_like(end)
                 mujoco.mj_getState(m, d, replayed, kind)
                 diff = max(diff, float(np.max(np.abs(replayed - end))))
+            for mode in ("single", "nstep"):
+                ratios[mode].append(t_env / elapsed[mode])
+            ratios["floor"].append(elapsed["floor"] / elapsed["single"])
             mujoco.mj_setState(m, d, end, kind)
             spring[idx] = log_spring[n - 1]
             i += n

@@ -15,6 +15,7 @@ def test_throughput_reports_every_figure(clock):
         assert r[key] > 0
     assert r["env_physics_steps_per_s"] == pytest.approx(r["env_steps_per_s"] * r["frame_skip"])
     assert r["overhead_percent"] > -100 and r["overhead_vs_nstep_percent"] > -100
+    assert r["floor_overhead_percent"] > -100 and r["replay_max_abs_diff"] == 0.0  # the floor's replay too
 
 
 @pytest.mark.parametrize("kwargs, name", [(dict(steps=0), "steps"), (dict(chunk=0), "chunk"),

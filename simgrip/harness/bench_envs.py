@@ -3,7 +3,8 @@
 * every registered id (:data:`simgrip.envs.ENV_IDS`, ``MULTI_ENV_IDS``, ``FRAGILE_ENV_IDS``): env steps per second
   and the env's overhead over bare ``mj_step`` on the same states
   (:func:`simgrip.envs.throughput.measure_throughput`, this thread's CPU time, the median over chunks of each
-  chunk's ratio), against the issue's target :data:`ENV_OVERHEAD_TARGET`;
+  chunk's ratio), against the issue's target :data:`ENV_OVERHEAD_TARGET`, beside the interface's floor (the least
+  Python step of the env's interface on the same states, :mod:`simgrip.envs.step_floor`);
 * the validity check of an invalid claw state, every pair of links at once against pruned
   (:func:`simgrip.envs.throughput.violation_check_times` on :data:`CLAW_IDS`: the states random actions curl
   through each other).
@@ -42,11 +43,14 @@ def envs_md(speed: dict) -> list[str]:
     L = ["", "## Gymnasium pick environments", "",
          f"Overhead over bare `mj_step` on the same states (CPU time, median of the chunks' ratios; issue 18: "
          f"at most {ENV_OVERHEAD_TARGET:g} %):", "",
-         "| env | env steps/s | raw mj_step steps/s | overhead | met |", "|---|---|---|---|---|"]
+         "| env | env steps/s | raw mj_step steps/s | overhead | met | interface floor |",
+         "|---|---|---|---|---|---|"]
     for env_id, e in speed.get("throughput", {}).items():
         met = "yes" if e["overhead_percent"] <= ENV_OVERHEAD_TARGET else "no"
         L.append(f"| {env_id} | {e['env_steps_per_s']:.0f} | {e['raw_physics_steps_per_s']:.0f} | "
-                 f"{e['overhead_percent']:.1f} % | {met} |")
+                 f"{e['overhead_percent']:.1f} % | {met} | {e['floor_overhead_percent']:.1f} % |")
+    L += ["", "The interface floor is the least Python step of the env's interface replayed on the same states "
+          "(`simgrip.envs.step_floor`): the part of the overhead no task code can remove."]
     if speed.get("validity"):
         L += ["", "The validity check of an invalid state (random actions; every pair of links at once against a "
               "finger and a pair of fingers at a time):", "",
