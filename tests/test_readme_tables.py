@@ -34,10 +34,10 @@ ROWS = {
     "PlaceFragile-v8": ("PlaceFragile-v8", {"PPO, 3 seeds": "rl_place_v8", "SAC, 3 seeds": "rl_place_v8_sac",
                                             AIDED: "rl_place_v8_residual_palm_log_std"}),
     "PickCradleFragile-v6": ("PickCradleFragile-v6", {"PPO, 3 seeds": "rl_cradle_v6",
-                                                      "SAC, 3 seeds": "rl_cradle_v5_sac",
+                                                      "SAC, 3 seeds": "rl_cradle_v6_sac",
                                                       AIDED: "rl_cradle_v6_residual_palm_light_log_std"}),
     "PickSphereFragile-v6": ("PickSphereFragile-v6", {"PPO, 3 seeds": "rl_sphere_v6",
-                                                      "SAC, 3 seeds": "rl_sphere_v5_sac",
+                                                      "SAC, 3 seeds": "rl_sphere_v6_sac",
                                                       AIDED: "rl_sphere_v6_residual_palm_light_log_std"}),
 }
 
@@ -51,7 +51,8 @@ def assert_the_hyperparameters_named(text: str, agg: dict) -> None:
     """"log std X", "γ X" and "entropy X" (the aids that change one of SB3's hyperparameters: "log std -1", "γ 0.995",
     "entropy 0.01") at the values they name, and "lr decay" (the learning rate), in the training command and in the
     record's ``hyperparameters``; "step charge X" (the training reward's charge a step) at its value in the command
-    and the record's ``step_charge``; nothing to check where the text names none (that the options are exactly the
+    and the record's ``step_charge``; "light bias [X]" at X (0.5 where no value is named) in the command and the
+    record's ``light_bias``; nothing to check where the text names none (that the options are exactly the
     aids named: AIDS)."""
     cmd = training_command(agg)
     for pattern, option, key in ((r"log std (-?[\d.]+)", "--log-std-init", "log_std_init"),
@@ -65,6 +66,10 @@ def assert_the_hyperparameters_named(text: str, agg: dict) -> None:
     if named:  # a training-reward wrapper, not a hyperparameter: in the command and the record's step_charge
         value = float(named.group(1))
         assert float(cmd[cmd.index("--step-charge") + 1]) == value == agg["step_charge"], (named.group(0), cmd)
+    named = re.search(r"light bias( [\d.]+)?", text)
+    if named:  # a training draw's wrapper: at the value named, 0.5 (the aid as first adopted) where none is
+        value = float(named.group(1) or 0.5)
+        assert float(cmd[cmd.index("--light-bias") + 1]) == value == agg["light_bias"], (named.group(0), cmd)
     if "lr decay" in text:
         assert "--lr-decay" in cmd and "; but the learning rate falls linearly to 0 over the budget" in \
             agg["hyperparameters"], (text, agg["hyperparameters"])
