@@ -62,7 +62,8 @@ def floor_step(model, data, *, frame_skip: int, obs_size: int, info: dict, sprin
         if not isinstance(key, str):
             raise ValueError(f"info keys must be strings, got {key!r}")
         j = i % state
-        if isinstance(value, np.ndarray):
+        if isinstance(value, np.ndarray):  # a slice of the value's length (the state is longer than any)
+            j = i % max(state - value.size + 1, 1)
             items.append(f"{key!r}: array(s[{j}:{j + value.size}])")
         elif isinstance(value, (bool, np.bool_)):
             items.append(f"{key!r}: s[{j}] > 0.0")
