@@ -23,7 +23,8 @@ from simgrip.envs.outcome import outcome  # outcomes() counts with it; also impo
 __all__ = ["EpisodeResult", "GAMMA", "add_episode_arguments", "add_training_aid_arguments", "charge", "check_env_id", "critic_warmup_conflict",
            "discount", "entropy_coefficient", "env_kwargs", "json_object", "log_std", "log_std_init_conflict",
            "make_env", "outcome", "outcomes", "positive_int", "non_negative_int", "probability", "run_episodes",
-           "summary", "checkpoint_tag", "training_conflict", "training_files", "training_seed", "episode_count", "MAX_EPISODES", "MAX_TRAINING_SEED"]
+           "summary", "checkpoint_tag", "training_conflict", "training_files", "training_seed", "episode_count",
+           "env_count", "MAX_EPISODES", "MAX_ENVS", "MAX_TRAINING_SEED"]
 
 #: the discount of the returns :func:`run_episodes` also reports: Stable-Baselines3's default ``gamma`` (PPO, SAC)
 GAMMA = 0.99
@@ -55,6 +56,9 @@ MAX_TRAINING_SEED = 2**32 - 1
 MAX_EPISODES = 100_000
 #: the longest training budget ``--minutes`` (a week: the project's runs take 15 to 45 CPU-minutes)
 MAX_TRAINING_MINUTES = 7 * 24 * 60
+#: the most environments a training steps side by side (``--n-envs``): SB3's ``DummyVecEnv`` steps them one after
+#: the other in the training's own process, so past a few dozen they only lengthen PPO's rollouts (2048 steps each)
+MAX_ENVS = 64
 #: the most checkpoints a training takes (``--minutes / --checkpoint-minutes``; each is evaluated on its episodes)
 MAX_CHECKPOINTS = 1000
 
@@ -62,6 +66,9 @@ MAX_CHECKPOINTS = 1000
 training_seed = _int_at_least(
     "training_seed", 0, f"an integer seed in [0, {MAX_TRAINING_SEED}] (NumPy's seeding, which Stable-Baselines3 uses)",
     "argparse type: a training seed, an integer in ``[0, MAX_TRAINING_SEED]``.", hi=MAX_TRAINING_SEED)
+env_count = _int_at_least(
+    "env_count", 1, f"a number of environments in [1, {MAX_ENVS}]",
+    "argparse type: the environments a training steps side by side, an integer in ``[1, MAX_ENVS]``.", hi=MAX_ENVS)
 episode_count = _int_at_least(
     "episode_count", 1, f"a number of episodes in [1, {MAX_EPISODES}] (more buys nothing a success rate needs)",
     "argparse type: a number of evaluation episodes, an integer in ``[1, MAX_EPISODES]``.", hi=MAX_EPISODES)
@@ -166,7 +173,7 @@ def add_training_aid_arguments(parser: argparse.ArgumentParser) -> None:
     its runs, with the same names, checks and meanings: ``--normalize``, ``--action-offset A ...``,
     ``--frame-stack N``, ``--gamma G``, ``--log-std-init X``, ``--scripted-start P``, ``--light-bias P``,
     ``--residual NAME ...``, ``--crush-charge F``, ``--crush-charge-from STEPS``, ``--step-charge C``,
-    ``--lr-decay`` and ``--ent-coef C`` (each off by default)."""
+    ``--lr-decay``, ``--ent-coef C`` (each off by default) and ``--n-envs N`` (default 1)."""
     add = parser.add_argument
     add("--normalize", action="store_true",
         help="train behind SB3's VecNormalize (observation and return, library defaults; default off)")
@@ -206,6 +213,10 @@ def add_training_aid_arguments(parser: argparse.ArgumentParser) -> None:
     add("--ent-coef", type=entropy_coefficient, default=None, metavar="C",
         help="PPO only: the entropy bonus's coefficient, in [0, 1], instead of the library default 0 (recorded in "
              "the JSON)")
+    add("--n-envs", type=env_count, default=1, metavar="N",
+        help=f"train on N copies of the env, stepped one after the other in the training's process (SB3's "
+             f"make_vec_env: DummyVecEnv, copy i seeded --seed + i; PPO's rollouts become 2048 * N steps, the policy "
+             f"run once per N steps; 1 to {MAX_ENVS}; recorded in the JSON; default 1)")
 
 
 def check_env_id(parser: argparse.ArgumentParser, env_id: str, *, retired: bool = False) -> None:

@@ -56,7 +56,9 @@ function alone learning, :mod:`simgrip.envs.critic_warmup`), recorded as ``criti
 ``--crush-charge-from STEPS`` pass those options (each crush's training reward lowered by ``F`` from training step
 ``STEPS`` on, :mod:`simgrip.envs.crush_charge`), recorded as ``crush_charge``; ``--step-charge C`` passes that
 option (every training step's reward lowered by ``C``, :mod:`simgrip.envs.step_charge`), recorded as
-``step_charge``.
+``step_charge``; ``--n-envs N`` passes that option (each run trains on ``N`` copies of the env stepped one after the
+other in its own process, SB3's ``DummyVecEnv``: still one core a run), recorded as ``n_envs`` and in
+``hyperparameters``.
 
 Batches of one experiment run apart (some seeds here, others there or later, each with this command but for
 ``--seeds``, ``--jobs`` and ``--out``) are combined into one folder, as if run at once, by
@@ -169,6 +171,8 @@ def run_command(algo: str, seed: int, args, folder: Path) -> list[str]:
         cmd += ["--crush-charge", repr(args.crush_charge), "--crush-charge-from", str(args.crush_charge_from)]
     if args.step_charge is not None:
         cmd += ["--step-charge", repr(args.step_charge)]
+    if args.n_envs != 1:
+        cmd += ["--n-envs", str(args.n_envs)]
     return cmd
 
 
@@ -512,7 +516,9 @@ def main(argv=None) -> int:
     write_json(out / "aggregate.json", {
         "env": args.env, **({"env_kwargs": args.env_kwargs} if args.env_kwargs else {}), "algos": algos, "seeds": args.seeds, "minutes": args.minutes,
         "checkpoint_minutes": args.checkpoint_minutes, "clock": "cpu", "eval_seeds": [lo, hi],
-        "hyperparameters": "Stable-Baselines3 defaults, one env, one torch thread" + "".join(
+        "hyperparameters": "Stable-Baselines3 defaults, " + ("one env" if args.n_envs == 1 else
+                                                             f"{args.n_envs} envs (DummyVecEnv)") +
+        ", one torch thread" + "".join(
             f"; but {k} = {v!r}" for k, v in (("gamma", args.gamma), ("log_std_init", args.log_std_init),
                                              ("ent_coef", args.ent_coef))
             if v is not None) + ("; but the learning rate falls linearly to 0 over the budget" if args.lr_decay
@@ -526,6 +532,7 @@ def main(argv=None) -> int:
         **({"crush_charge": {"charge": args.crush_charge, "start": args.crush_charge_from}}
            if args.crush_charge is not None else {}),
         **({"step_charge": args.step_charge} if args.step_charge is not None else {}),
+        **({"n_envs": args.n_envs} if args.n_envs != 1 else {}),
         **({"init_from": str(args.init_from), "init_command": init_command} if args.init_from is not None else {}),
         **({"wrapper": "VecNormalize (SB3 defaults: observation and return)"} if args.normalize else {}),
         "command": [Path(sys.argv[0]).name] + list(sys.argv[1:] if argv is None else argv)})

@@ -107,6 +107,11 @@ the policy frozen, so that only its value function learns the starting policy's 
 budget.  ``<algo>_eval.json`` records ``critic_warmup``: its ``timesteps``, ``cpu_s``, and per update the value
 function's ``explained_variance`` on the rollout it learned from (before the update) and ``value_loss``.
 
+``--n-envs N`` trains on ``N`` copies of the env (Stable-Baselines3's ``make_vec_env``: a ``DummyVecEnv`` that steps
+them one after the other in this process, copy ``i`` seeded ``--seed + i``): the policy then runs once for ``N``
+environment steps and PPO's rollouts hold ``2048 * N`` steps (SAC keeps one gradient step per environment step), so
+a CPU-minute buys more steps; the evaluation runs one env as always; ``<algo>_eval.json`` records ``n_envs``.
+
 ``--threads`` sets PyTorch's intra-op threads (default 1: one core per
 training; run two trainings side by side to use two cores).
 """
@@ -114,9 +119,7 @@ training; run two trainings side by side to use two cores).
 from __future__ import annotations
 
 import argparse
-import csv
 import inspect
-import io
 import json
 import os
 import pickle
@@ -136,6 +139,7 @@ from simgrip.envs.evaluation import (GAMMA, add_training_aid_arguments, check_en
                                      json_object, make_env, non_negative_int, outcomes, run_episodes, summary,
                                      training_conflict, training_files, training_seed)
 from simgrip.envs.lr_decay import BudgetDecay
+from simgrip.envs.training_logs import ActionWindow, write_curve, write_policy
 from simgrip.io import atomic_write, check_output_dir, check_output_files_in, write_json
 
 ALGOS = ("ppo", "sac")
@@ -170,48 +174,6 @@ def evaluate(model, env_id: str, episodes: int, seed0: int, env_kwargs=None, nor
     finally:
         env.close()
     return {**summary(results), **outcomes(results, gamma), "eval_seeds": [seed0, seed0 + episodes - 1]}
-
-
-def _write_curve(path: Path, rows) -> None:
-    buf = io.StringIO()
-    w = csv.writer(buf)
-    w.writerow(["episode", "timesteps", "wall_s", "cpu_s", "episode_return", "length", "success"])
-    w.writerows(rows)
-    with atomic_write(path) as fh:
-        fh.write(buf.getvalue())
-
-
-class _ActionWindow:
-    """Running sums of the sampled actions over one window of training steps (one ``<algo>_policy.csv`` row)."""
-
-    def __init__(self):
-        self.n, self.s, self.ss = 0, 0.0, 0.0
-
-    def add(self, actions) -> None:
-        a = np.asarray(actions, dtype=float).reshape(-1, np.shape(actions)[-1])
-        self.n += a.shape[0]
-        self.s = self.s + a.sum(axis=0)
-        self.ss = self.ss + (a * a).sum(axis=0)
-
-    def row(self, timesteps: int, cpu_s: float, log_std) -> tuple:
-        """``(timesteps, cpu_s, means..., stds..., log_stds...)``; the window restarts."""
-        mean = self.s / self.n
-        std = np.sqrt(np.maximum(self.ss / self.n - mean * mean, 0.0))
-        log_std = [""] * mean.size if log_std is None else [round(float(x), 6) for x in log_std]
-        self.n, self.s, self.ss = 0, 0.0, 0.0
-        return (timesteps, round(cpu_s, 3), *[round(float(x), 6) for x in mean], *[round(float(x), 6) for x in std],
-                *log_std)
-
-
-def _write_policy(path: Path, rows) -> None:
-    buf = io.StringIO()
-    w = csv.writer(buf)
-    dims = (len(rows[0]) - 2) // 3 if rows else 0
-    w.writerow(["timesteps", "cpu_s", *[f"action_mean_{i}" for i in range(dims)],
-                *[f"action_std_{i}" for i in range(dims)], *[f"log_std_{i}" for i in range(dims)]])
-    w.writerows(rows)
-    with atomic_write(path) as fh:
-        fh.write(buf.getvalue())
 
 
 def _log_std(model):
@@ -286,7 +248,7 @@ def train(algo: str, env_id: str, *, steps: int, minutes: float, seed: int, out:
           light_bias: float | None = None, init_from: str | None = None, residual=None,
           log_std_init: float | None = None, eval_start: bool = False, critic_warmup: int = 0,
           crush_charge: tuple[float, int] | None = None, lr_decay: bool = False,
-          ent_coef: float | None = None, step_charge: float | None = None) -> dict:
+          ent_coef: float | None = None, step_charge: float | None = None, n_envs: int = 1) -> dict:
     """Train ``algo`` with library defaults within the budget, write its curve, model and evaluation
     (``env_kwargs``: ``gym.make``'s keyword arguments, for training and evaluation alike; ``normalize``: train
     behind SB3's ``VecNormalize`` with its defaults; ``action_offset``: train and evaluate behind
@@ -306,7 +268,9 @@ def train(algo: str, env_id: str, *, steps: int, minutes: float, seed: int, out:
     ``start`` on lowered by ``charge``, :class:`simgrip.envs.crush_charge.CrushCharge`; evaluation runs the task;
     ``lr_decay``: the library's learning rate falling linearly to 0 over the budget, on its clock,
     :class:`simgrip.envs.lr_decay.BudgetDecay`; ``ent_coef``: PPO's entropy coefficient instead of 0;
-    ``step_charge``: every training step's reward lowered by it, :class:`simgrip.envs.step_charge.StepCharge`)."""
+    ``step_charge``: every training step's reward lowered by it, :class:`simgrip.envs.step_charge.StepCharge`;
+    ``n_envs``: copies of the training env stepped one after the other, SB3's ``DummyVecEnv``, copy ``i`` seeded
+    ``seed + i``)."""
     env_kwargs = dict(env_kwargs or {})
     from stable_baselines3 import PPO, SAC
     from stable_baselines3.common.callbacks import BaseCallback
@@ -315,7 +279,7 @@ def train(algo: str, env_id: str, *, steps: int, minutes: float, seed: int, out:
 
     cls = {"ppo": PPO, "sac": SAC}[algo]
     rows = []
-    policy_rows, window = [], _ActionWindow()
+    policy_rows, window = [], ActionWindow()
     t_start, c_start = time.perf_counter(), time.process_time()
     budget = 60.0 * minutes
     spent = (lambda: time.process_time() - c_start) if clock == "cpu" else (lambda: time.perf_counter() - t_start)
@@ -336,8 +300,8 @@ def train(algo: str, env_id: str, *, steps: int, minutes: float, seed: int, out:
                 if normalize:
                     normalizers[path.name] = out / f"{algo}_vecnormalize_{tag}.pkl"
                     _save_normalizer(env, normalizers[path.name])
-                _write_curve(out / f"{algo}_curve.csv", rows)
-                _write_policy(out / f"{algo}_policy.csv", policy_rows)
+                write_curve(out / f"{algo}_curve.csv", rows)
+                write_policy(out / f"{algo}_policy.csv", policy_rows)
                 checkpoints.append({"minutes": round(checkpoint_minutes * (len(checkpoints) + 1), 6),
                                     "timesteps": int(self.num_timesteps), "file": path.name})
             window.add(self.locals["actions"])
@@ -354,7 +318,7 @@ def train(algo: str, env_id: str, *, steps: int, minutes: float, seed: int, out:
 
     # make_vec_env calls the maker (gym.make of the id, or of a retired id's spec), then seeds and wraps in Monitor
     env = make_vec_env(lambda: make_env(env_id, env_kwargs, action_offset, frame_stack, scripted_start,
-                                        light_bias, residual, crush_charge, step_charge), n_envs=1,
+                                        light_bias, residual, crush_charge, step_charge), n_envs=n_envs,
                        seed=seed)
     if normalize:
         from stable_baselines3.common.vec_env import VecNormalize
@@ -394,10 +358,10 @@ def train(algo: str, env_id: str, *, steps: int, minutes: float, seed: int, out:
     wall, cpu = time.perf_counter() - t_start, time.process_time() - c_start
     env.close()
 
-    _write_curve(out / f"{algo}_curve.csv", rows)
+    write_curve(out / f"{algo}_curve.csv", rows)
     if window.n:  # the last, partial window
         policy_rows.append(window.row(int(model.num_timesteps), cpu, _log_std(model)))
-    _write_policy(out / f"{algo}_policy.csv", policy_rows)
+    write_policy(out / f"{algo}_policy.csv", policy_rows)
     _save(model, out / f"{algo}_model.zip")
     normalizer = None
     if normalize:
@@ -405,7 +369,7 @@ def train(algo: str, env_id: str, *, steps: int, minutes: float, seed: int, out:
         normalizer = _load_normalizer(out / f"{algo}_vecnormalize.pkl")
     result = {"algo": algo.upper(), "env": env_id, "timesteps": int(model.num_timesteps), "wall_s": round(wall, 1), "cpu_s": round(cpu, 1),
               "clock": clock, "budget_minutes": minutes,
-              "train_episodes": len(rows), "seed": seed,
+              "train_episodes": len(rows), "seed": seed, "n_envs": n_envs,
               "hyperparameters": hyperparameters(gamma, log_std_init, decay, ent_coef)}
     if env_kwargs:
         result["env_kwargs"] = env_kwargs
@@ -431,6 +395,8 @@ def train(algo: str, env_id: str, *, steps: int, minutes: float, seed: int, out:
     if step_charge is not None:
         result["step_charge"] = float(step_charge)
         wrappers.append(f"StepCharge({float(step_charge)!r}) in training")
+    if n_envs > 1:
+        wrappers.append(f"DummyVecEnv of {n_envs} copies in training")
     if normalize:
         wrappers.append("VecNormalize (SB3 defaults: observation and return)")
     if init is not None:
@@ -587,7 +553,7 @@ def main(argv=None) -> int:
                        light_bias=args.light_bias, init_from=args.init_from, residual=args.residual,
                        log_std_init=args.log_std_init, eval_start=args.eval_start, lr_decay=args.lr_decay,
                        ent_coef=args.ent_coef, critic_warmup=args.critic_warmup,
-                       crush_charge=_charged(args), step_charge=args.step_charge)
+                       crush_charge=_charged(args), step_charge=args.step_charge, n_envs=args.n_envs)
         print(json.dumps(result), flush=True)
     plot_curves(out)
     return 0
