@@ -176,6 +176,15 @@ def run_command(algo: str, seed: int, args, folder: Path) -> list[str]:
     return cmd
 
 
+def hyperparameters(args) -> str:
+    """``aggregate.json``'s ``hyperparameters``: the library's defaults, the envs a run steps and its one torch
+    thread, and each hyperparameter ``args`` changes."""
+    return "Stable-Baselines3 defaults, " + ("one env" if args.n_envs == 1 else f"{args.n_envs} envs (DummyVecEnv)") \
+        + ", one torch thread" + "".join(f"; but {k} = {v!r}" for k, v in (
+            ("gamma", args.gamma), ("log_std_init", args.log_std_init), ("ent_coef", args.ent_coef)) if v is not None) \
+        + ("; but the learning rate falls linearly to 0 over the budget" if args.lr_decay else "")
+
+
 def init_model(folder, algo: str, seed: int) -> Path:
     """The model a run of ``--init-from folder`` starts from: that folder's run of the same algorithm and seed."""
     return Path(folder) / f"{algo}_seed{seed}" / f"{algo}_model.zip"
@@ -516,13 +525,7 @@ def main(argv=None) -> int:
     write_json(out / "aggregate.json", {
         "env": args.env, **({"env_kwargs": args.env_kwargs} if args.env_kwargs else {}), "algos": algos, "seeds": args.seeds, "minutes": args.minutes,
         "checkpoint_minutes": args.checkpoint_minutes, "clock": "cpu", "eval_seeds": [lo, hi],
-        "hyperparameters": "Stable-Baselines3 defaults, " + ("one env" if args.n_envs == 1 else
-                                                             f"{args.n_envs} envs (DummyVecEnv)") +
-        ", one torch thread" + "".join(
-            f"; but {k} = {v!r}" for k, v in (("gamma", args.gamma), ("log_std_init", args.log_std_init),
-                                             ("ent_coef", args.ent_coef))
-            if v is not None) + ("; but the learning rate falls linearly to 0 over the budget" if args.lr_decay
-                                 else ""), "summary": summary,
+        "hyperparameters": hyperparameters(args), "summary": summary,
         **({"action_offset": [float(x) for x in args.action_offset]} if args.action_offset is not None else {}),
         **({"frame_stack": args.frame_stack} if args.frame_stack is not None else {}),
         **({"scripted_start": args.scripted_start} if args.scripted_start is not None else {}),
