@@ -9,7 +9,7 @@ For each algorithm: ``algo("MlpPolicy", env)`` with Stable-Baselines3's default
 hyperparameters on one environment, trained until ``--steps`` environment steps
 or ``--minutes`` of the ``--clock``, whichever comes first (the training stops
 at the end of the step that crosses the time budget; the step budget is SB3's
-``learn(total_timesteps)``, which PPO fills with whole rollouts of 2048 steps:
+``learn(total_timesteps)``, which PPO fills with whole rollouts of 2048 steps (a copy, with ``--n-envs``):
 ``--steps 64`` is one rollout and one update; the JSON's ``timesteps`` are the
 steps taken).  ``--clock cpu`` (default)
 counts the process's CPU time, which is what one core gives in that many
@@ -109,8 +109,9 @@ function's ``explained_variance`` on the rollout it learned from (before the upd
 
 ``--n-envs N`` trains on ``N`` copies of the env (Stable-Baselines3's ``make_vec_env``: a ``DummyVecEnv`` that steps
 them one after the other in this process, copy ``i`` seeded ``--seed + i``): the policy then runs once for ``N``
-environment steps and PPO's rollouts hold ``2048 * N`` steps (SAC keeps one gradient step per environment step), so
-a CPU-minute buys more steps; the evaluation runs one env as always; ``<algo>_eval.json`` records ``n_envs``.
+environment steps and PPO's rollouts hold ``2048 * N`` steps (its updates as many minibatches of 64 more), so a
+CPU-minute buys more steps; SAC's default, one gradient step a call of its ``train_freq`` (one vector step), becomes
+one per ``N`` environment steps.  The evaluation runs one env as always; ``<algo>_eval.json`` records ``n_envs``.
 
 ``--threads`` sets PyTorch's intra-op threads (default 1: one core per
 training; run two trainings side by side to use two cores).
