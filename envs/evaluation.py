@@ -173,7 +173,7 @@ def add_training_aid_arguments(parser: argparse.ArgumentParser) -> None:
     its runs, with the same names, checks and meanings: ``--normalize``, ``--action-offset A ...``,
     ``--frame-stack N``, ``--gamma G``, ``--log-std-init X``, ``--scripted-start P``, ``--light-bias P``,
     ``--residual NAME ...``, ``--crush-charge F``, ``--crush-charge-from STEPS``, ``--step-charge C``,
-    ``--lr-decay``, ``--ent-coef C`` (each off by default) and ``--n-envs N`` (default 1)."""
+    ``--crush-margin C``, ``--lr-decay``, ``--ent-coef C`` (each off by default) and ``--n-envs N`` (default 1)."""
     add = parser.add_argument
     add("--normalize", action="store_true",
         help="train behind SB3's VecNormalize (observation and return, library defaults; default off)")
@@ -207,6 +207,10 @@ def add_training_aid_arguments(parser: argparse.ArgumentParser) -> None:
     add("--step-charge", type=charge, default=None, metavar="C",
         help="lower the training reward of every step by C, a cost of time (simgrip.envs.step_charge; evaluation "
              "runs the task's own reward; default none)")
+    add("--crush-margin", type=charge, default=None, metavar="C",
+        help="lower the training reward of every step by C times how far its largest finger force has gone from 0.8 "
+             "of the hidden crush limit to the limit (simgrip.envs.crush_margin; a fragile task only; evaluation runs "
+             "the task's own reward; default none)")
     add("--lr-decay", action="store_true",
         help="the learning rate falls linearly from the library default to 0 over the time budget "
              "(simgrip.envs.lr_decay; recorded in the JSON; default off: constant)")
@@ -235,7 +239,8 @@ def check_env_id(parser: argparse.ArgumentParser, env_id: str, *, retired: bool 
 
 def make_env(env_id: str, env_kwargs: dict | None = None, action_offset=None, frame_stack: int | None = None,
              scripted_start: float | None = None, light_bias: float | None = None, residual=None,
-             crush_charge: tuple[float, int] | None = None, step_charge: float | None = None):
+             crush_charge: tuple[float, int] | None = None, step_charge: float | None = None,
+             crush_margin: float | None = None):
     """The env of ``env_id`` (a registered id, or a retired one of ``simgrip.envs.RETIRED`` through its spec) made
     with ``env_kwargs`` (``gym.make``'s keyword arguments), behind
     :class:`~simgrip.envs.action_offset.ActionOffset` ``(action_offset)`` when that is given, and behind
@@ -252,7 +257,9 @@ def make_env(env_id: str, env_kwargs: dict | None = None, action_offset=None, fr
     the frame stack; not with ``scripted_start``).  ``crush_charge`` (training envs only): ``(charge, start)``, every
     crush's reward lowered by ``charge`` from the ``start``-th step on (:class:`~simgrip.envs.crush_charge.CrushCharge`,
     next to ``light_bias``'s).  ``step_charge`` (training envs only): every step's reward lowered by it
-    (:class:`~simgrip.envs.step_charge.StepCharge`, next to the crush charge's).
+    (:class:`~simgrip.envs.step_charge.StepCharge`, next to the crush charge's).  ``crush_margin`` (training envs
+    only): every step's reward lowered by that charge times how near its largest finger force came to the hidden
+    crush limit (:class:`~simgrip.envs.crush_margin.CrushMargin`, next to the step charge's).
 
     Raises ValueError naming the option: ``--env-kwargs`` when the env does not take ``env_kwargs`` or refuses a
     value, ``--action-offset`` when the offset does not fit its action space (the env is closed first),
@@ -261,7 +268,7 @@ def make_env(env_id: str, env_kwargs: dict | None = None, action_offset=None, fr
     when it is not a probability or the env has no scripted controller, ``--light-bias`` when it is not a
     probability or the env is not a fragile task (the env is closed first), ``--residual`` when a name is not one
     of the env's actions, the env has no scripted controller, or ``scripted_start`` is given too, ``--crush-charge``
-    when the env is not a fragile task (the env is closed first)."""
+    and ``--crush-margin`` when the env is not a fragile task (the env is closed first)."""
     import json
 
     import gymnasium as gym
@@ -290,6 +297,10 @@ def make_env(env_id: str, env_kwargs: dict | None = None, action_offset=None, fr
         from simgrip.envs.step_charge import StepCharge
 
         env = _wrap_or_close(env, StepCharge, step_charge, "--step-charge")
+    if crush_margin is not None:
+        from simgrip.envs.crush_margin import CrushMargin
+
+        env = _wrap_or_close(env, CrushMargin, crush_margin, "--crush-margin")
     if scripted_start is not None:
         from simgrip.envs.scripted_start import ScriptedStart
 

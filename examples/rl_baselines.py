@@ -56,7 +56,9 @@ function alone learning, :mod:`simgrip.envs.critic_warmup`), recorded as ``criti
 ``--crush-charge-from STEPS`` pass those options (each crush's training reward lowered by ``F`` from training step
 ``STEPS`` on, :mod:`simgrip.envs.crush_charge`), recorded as ``crush_charge``; ``--step-charge C`` passes that
 option (every training step's reward lowered by ``C``, :mod:`simgrip.envs.step_charge`), recorded as
-``step_charge``; ``--n-envs N`` passes that option (each run trains on ``N`` copies of the env stepped one after the
+``step_charge``; ``--crush-margin C`` passes that option (each step's training reward lowered by ``C`` times how
+near its largest finger force came to the hidden crush limit, :mod:`simgrip.envs.crush_margin`), recorded as
+``crush_margin``; ``--n-envs N`` passes that option (each run trains on ``N`` copies of the env stepped one after the
 other in its own process, SB3's ``DummyVecEnv``: still one core a run), recorded as ``n_envs`` and in
 ``hyperparameters``.
 
@@ -171,6 +173,8 @@ def run_command(algo: str, seed: int, args, folder: Path) -> list[str]:
         cmd += ["--crush-charge", repr(args.crush_charge), "--crush-charge-from", str(args.crush_charge_from)]
     if args.step_charge is not None:
         cmd += ["--step-charge", repr(args.step_charge)]
+    if args.crush_margin is not None:
+        cmd += ["--crush-margin", repr(args.crush_margin)]
     if args.n_envs != 1:
         cmd += ["--n-envs", str(args.n_envs)]
     return cmd
@@ -535,6 +539,7 @@ def main(argv=None) -> int:
         **({"crush_charge": {"charge": args.crush_charge, "start": args.crush_charge_from}}
            if args.crush_charge is not None else {}),
         **({"step_charge": args.step_charge} if args.step_charge is not None else {}),
+        **({"crush_margin": args.crush_margin} if args.crush_margin is not None else {}),
         **({"n_envs": args.n_envs} if args.n_envs != 1 else {}),
         **({"init_from": str(args.init_from), "init_command": init_command} if args.init_from is not None else {}),
         **({"wrapper": "VecNormalize (SB3 defaults: observation and return)"} if args.normalize else {}),

@@ -69,8 +69,10 @@ evaluation runs the task's own draw; ``<algo>_eval.json`` records ``light_bias``
 STEPS`` on (default 0; :class:`simgrip.envs.crush_charge.CrushCharge`: a reward curriculum, the grasp found first
 under the task's own reward); the held-out evaluation runs the task's reward; ``<algo>_eval.json`` records
 ``crush_charge``.  A task without a crush is refused (exit 2).  ``--step-charge C`` lowers every training step's
-reward by ``C`` (:class:`simgrip.envs.step_charge.StepCharge`, a cost of time), recorded as ``step_charge``.  Ctrl-C or
-SIGTERM: one line, exit 130.
+reward by ``C`` (:class:`simgrip.envs.step_charge.StepCharge`, a cost of time), recorded as ``step_charge``.
+``--crush-margin C`` lowers every training step's reward by ``C`` times how far its largest finger force has gone
+from 0.8 of the hidden crush limit towards it (:class:`simgrip.envs.crush_margin.CrushMargin`, a dense shaping that
+reads the limit the policy never sees), recorded as ``crush_margin``.  Ctrl-C or SIGTERM: one line, exit 130.
 
 ``--residual NAME ...`` trains and evaluates behind :class:`simgrip.envs.scripted_residual.ScriptedResidual`:
 the task's scripted observation-only controller drives the named actions (``palm_x palm_z``: the palm's path)
@@ -249,7 +251,8 @@ def train(algo: str, env_id: str, *, steps: int, minutes: float, seed: int, out:
           light_bias: float | None = None, init_from: str | None = None, residual=None,
           log_std_init: float | None = None, eval_start: bool = False, critic_warmup: int = 0,
           crush_charge: tuple[float, int] | None = None, lr_decay: bool = False,
-          ent_coef: float | None = None, step_charge: float | None = None, n_envs: int = 1) -> dict:
+          ent_coef: float | None = None, step_charge: float | None = None, n_envs: int = 1,
+          crush_margin: float | None = None) -> dict:
     """Train ``algo`` with library defaults within the budget, write its curve, model and evaluation
     (``env_kwargs``: ``gym.make``'s keyword arguments, for training and evaluation alike; ``normalize``: train
     behind SB3's ``VecNormalize`` with its defaults; ``action_offset``: train and evaluate behind
@@ -271,7 +274,8 @@ def train(algo: str, env_id: str, *, steps: int, minutes: float, seed: int, out:
     :class:`simgrip.envs.lr_decay.BudgetDecay`; ``ent_coef``: PPO's entropy coefficient instead of 0;
     ``step_charge``: every training step's reward lowered by it, :class:`simgrip.envs.step_charge.StepCharge`;
     ``n_envs``: copies of the training env stepped one after the other, SB3's ``DummyVecEnv``, copy ``i`` seeded
-    ``seed + i``)."""
+    ``seed + i``; ``crush_margin``: every training step's reward lowered by it times how near the step's largest
+    finger force came to the crush limit, :class:`simgrip.envs.crush_margin.CrushMargin`)."""
     env_kwargs = dict(env_kwargs or {})
     from stable_baselines3 import PPO, SAC
     from stable_baselines3.common.callbacks import BaseCallback
@@ -319,7 +323,8 @@ def train(algo: str, env_id: str, *, steps: int, minutes: float, seed: int, out:
 
     # make_vec_env calls the maker (gym.make of the id, or of a retired id's spec), then seeds and wraps in Monitor
     env = make_vec_env(lambda: make_env(env_id, env_kwargs, action_offset, frame_stack, scripted_start,
-                                        light_bias, residual, crush_charge, step_charge), n_envs=n_envs,
+                                        light_bias, residual, crush_charge, step_charge, crush_margin),
+                       n_envs=n_envs,
                        seed=seed)
     if normalize:
         from stable_baselines3.common.vec_env import VecNormalize
@@ -396,6 +401,9 @@ def train(algo: str, env_id: str, *, steps: int, minutes: float, seed: int, out:
     if step_charge is not None:
         result["step_charge"] = float(step_charge)
         wrappers.append(f"StepCharge({float(step_charge)!r}) in training")
+    if crush_margin is not None:
+        result["crush_margin"] = float(crush_margin)
+        wrappers.append(f"CrushMargin({float(crush_margin)!r}) in training")
     if n_envs > 1:
         wrappers.append(f"DummyVecEnv of {n_envs} copies in training")
     if normalize:
@@ -521,10 +529,11 @@ def main(argv=None) -> int:
     check_env_id(p, args.env, retired=True)
     if args.env_kwargs or args.action_offset is not None or args.scripted_start is not None \
             or args.light_bias is not None or args.residual is not None or args.crush_charge is not None \
-            or args.frame_stack is not None or args.step_charge is not None:
+            or args.frame_stack is not None or args.step_charge is not None or args.crush_margin is not None:
         try:  # refused before any training, the env built once
             make_env(args.env, args.env_kwargs, args.action_offset, args.frame_stack, args.scripted_start,
-                     args.light_bias, args.residual, crush_charge=_charged(args), step_charge=args.step_charge).close()
+                     args.light_bias, args.residual, crush_charge=_charged(args), step_charge=args.step_charge,
+                     crush_margin=args.crush_margin).close()
         except ValueError as e:
             p.error(str(e))
     if args.init_from is not None:
@@ -554,7 +563,8 @@ def main(argv=None) -> int:
                        light_bias=args.light_bias, init_from=args.init_from, residual=args.residual,
                        log_std_init=args.log_std_init, eval_start=args.eval_start, lr_decay=args.lr_decay,
                        ent_coef=args.ent_coef, critic_warmup=args.critic_warmup,
-                       crush_charge=_charged(args), step_charge=args.step_charge, n_envs=args.n_envs)
+                       crush_charge=_charged(args), step_charge=args.step_charge, n_envs=args.n_envs,
+                       crush_margin=args.crush_margin)
         print(json.dumps(result), flush=True)
     plot_curves(out)
     return 0
