@@ -44,14 +44,15 @@ ROWS = {
 #: the aids an aided cell names -> the rl_baselines.py option that applies each
 AIDS = {"offset": "--action-offset", "peak offset": "--action-offset", "light bias": "--light-bias",
         "scripted palm": "--residual", "log std": "--log-std-init", "γ": "--gamma", "lr decay": "--lr-decay",
-        "entropy": "--ent-coef", "step charge": "--step-charge"}
+        "entropy": "--ent-coef", "step charge": "--step-charge", "crush margin": "--crush-margin", "envs": "--n-envs"}
 
 
 def assert_the_hyperparameters_named(text: str, agg: dict) -> None:
     """"log std X", "γ X" and "entropy X" (the aids that change one of SB3's hyperparameters: "log std -1", "γ 0.995",
     "entropy 0.01") at the values they name, and "lr decay" (the learning rate), in the training command and in the
     record's ``hyperparameters``; "step charge X" (the training reward's charge a step) at its value in the command
-    and the record's ``step_charge``; "light bias [X]" at X (0.5 where no value is named) in the command and the
+    and the record's ``step_charge``, "crush margin X" likewise (``crush_margin``); "N envs" (copies of the training
+    env) at N in the command, the record's ``n_envs`` and its ``hyperparameters``; "light bias [X]" at X (0.5 where no value is named) in the command and the
     record's ``light_bias``; nothing to check where the text names none (that the options are exactly the
     aids named: AIDS)."""
     cmd = training_command(agg)
@@ -66,6 +67,15 @@ def assert_the_hyperparameters_named(text: str, agg: dict) -> None:
     if named:  # a training-reward wrapper, not a hyperparameter: in the command and the record's step_charge
         value = float(named.group(1))
         assert float(cmd[cmd.index("--step-charge") + 1]) == value == agg["step_charge"], (named.group(0), cmd)
+    named = re.search(r"crush margin ([\d.]+)", text)
+    if named:  # the same for the dense crush shaping: in the command and the record's crush_margin
+        value = float(named.group(1))
+        assert float(cmd[cmd.index("--crush-margin") + 1]) == value == agg["crush_margin"], (named.group(0), cmd)
+    named = re.search(r"(\d+) envs", text)
+    if named:  # copies of the training env (SB3's DummyVecEnv): the command's, the record's and its hyperparameters
+        n = int(named.group(1))
+        assert int(cmd[cmd.index("--n-envs") + 1]) == n == agg["n_envs"], (named.group(0), cmd)
+        assert f"Stable-Baselines3 defaults, {n} envs (DummyVecEnv)," in agg["hyperparameters"]
     named = re.search(r"light bias( [\d.]+)?", text)
     if named:  # a training draw's wrapper: at the value named, 0.5 (the aid as first adopted) where none is
         value = float(named.group(1) or 0.5)
@@ -282,7 +292,9 @@ def test_target_table_is_its_records():
             assert measured_as(agg) == want, (folder, agg["env"])
             options = {a for a in training_command(agg) if a.startswith("--")}
             # each aid by its name, its value dropped ("log std -1" -> "log std", "γ 0.995" -> "γ")
-            named = set() if row["aids"] == "none" else {re.sub(r" -?[\d.]+$", "", a) for a in row["aids"].split(", ")}
+            # ("4 envs" -> "envs")
+            named = set() if row["aids"] == "none" else {re.sub(r" -?[\d.]+$", "", re.sub(r"^\d+ (envs)$", r"\1", a))
+                                                         for a in row["aids"].split(", ")}
             assert named <= set(AIDS), row["aids"]
             assert {AIDS[name] for name in named} == options & set(AIDS.values()), (folder, options)
             assert_the_offset_named(row["aids"], training_command(agg))
