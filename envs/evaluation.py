@@ -24,7 +24,7 @@ __all__ = ["EpisodeResult", "GAMMA", "add_episode_arguments", "add_training_aid_
            "discount", "entropy_coefficient", "env_kwargs", "json_object", "log_std", "log_std_init_conflict",
            "make_env", "outcome", "outcomes", "positive_int", "non_negative_int", "probability", "run_episodes",
            "summary", "checkpoint_tag", "training_conflict", "training_files", "training_seed", "episode_count",
-           "env_count", "MAX_EPISODES", "MAX_ENVS", "MAX_TRAINING_SEED"]
+           "env_count", "rollout_steps", "MAX_EPISODES", "MAX_ENVS", "MAX_TRAINING_SEED"]
 
 #: the discount of the returns :func:`run_episodes` also reports: Stable-Baselines3's default ``gamma`` (PPO, SAC)
 GAMMA = 0.99
@@ -66,6 +66,9 @@ MAX_CHECKPOINTS = 1000
 training_seed = _int_at_least(
     "training_seed", 0, f"an integer seed in [0, {MAX_TRAINING_SEED}] (NumPy's seeding, which Stable-Baselines3 uses)",
     "argparse type: a training seed, an integer in ``[0, MAX_TRAINING_SEED]``.", hi=MAX_TRAINING_SEED)
+rollout_steps = _int_at_least(
+    "rollout_steps", 2, "a number of steps in [2, 1048576]",
+    "argparse type: PPO's steps a rollout collects from each env, an integer in ``[2, 2**20]``.", hi=2**20)
 env_count = _int_at_least(
     "env_count", 1, f"a number of environments in [1, {MAX_ENVS}]",
     "argparse type: the environments a training steps side by side, an integer in ``[1, MAX_ENVS]``.", hi=MAX_ENVS)
@@ -133,6 +136,8 @@ def training_conflict(args) -> str | None:
         critic_warmup_conflict(args.critic_warmup, algos)
     if why:
         return why
+    if getattr(args, "n_steps", None) is not None and set(algos) != {"ppo"}:
+        return "--n-steps: PPO only (--algo ppo; SAC collects no rollouts)"
     if args.ent_coef is not None and set(algos) != {"ppo"}:
         return "--ent-coef: PPO only (--algo ppo; SAC tunes its own entropy coefficient)"
     if args.crush_charge_from and args.crush_charge is None:
@@ -173,7 +178,8 @@ def add_training_aid_arguments(parser: argparse.ArgumentParser) -> None:
     its runs, with the same names, checks and meanings: ``--normalize``, ``--action-offset A ...``,
     ``--frame-stack N``, ``--gamma G``, ``--log-std-init X``, ``--scripted-start P``, ``--light-bias P``,
     ``--residual NAME ...``, ``--crush-charge F``, ``--crush-charge-from STEPS``, ``--step-charge C``,
-    ``--crush-margin C``, ``--lr-decay``, ``--ent-coef C`` (each off by default) and ``--n-envs N`` (default 1)."""
+    ``--crush-margin C``, ``--lr-decay``, ``--ent-coef C``, ``--n-steps S`` (each off by default) and ``--n-envs N``
+    (default 1)."""
     add = parser.add_argument
     add("--normalize", action="store_true",
         help="train behind SB3's VecNormalize (observation and return, library defaults; default off)")
@@ -217,6 +223,10 @@ def add_training_aid_arguments(parser: argparse.ArgumentParser) -> None:
     add("--ent-coef", type=entropy_coefficient, default=None, metavar="C",
         help="PPO only: the entropy bonus's coefficient, in [0, 1], instead of the library default 0 (recorded in "
              "the JSON)")
+    add("--n-steps", type=rollout_steps, default=None, metavar="S",
+        help="PPO only: the steps a rollout collects from each env, instead of the library default 2048 (with "
+             "--n-envs N the rollout holds S * N steps: --n-envs 4 --n-steps 512 keeps the default's 2048 an update; "
+             "recorded in the JSON)")
     add("--n-envs", type=env_count, default=1, metavar="N",
         help=f"train on N copies of the env, stepped one after the other in the training's process (SB3's "
              f"make_vec_env: DummyVecEnv, copy i seeded --seed + i; PPO's rollouts become 2048 * N steps, the policy "

@@ -60,6 +60,7 @@ option (every training step's reward lowered by ``C``, :mod:`simgrip.envs.step_c
 near its largest finger force came to the hidden crush limit, :mod:`simgrip.envs.crush_margin`), recorded as
 ``crush_margin``; ``--n-envs N`` passes that option (each run trains on ``N`` copies of the env stepped one after the
 other in its own process, SB3's ``DummyVecEnv``: still one core a run), recorded as ``n_envs`` and in
+``hyperparameters``; ``--n-steps S`` (PPO only) passes PPO's steps a rollout collects from each env, named in
 ``hyperparameters``.
 
 Batches of one experiment run apart (some seeds here, others there or later, each with this command but for
@@ -177,6 +178,8 @@ def run_command(algo: str, seed: int, args, folder: Path) -> list[str]:
         cmd += ["--crush-margin", repr(args.crush_margin)]
     if args.n_envs != 1:
         cmd += ["--n-envs", str(args.n_envs)]
+    if args.n_steps is not None:
+        cmd += ["--n-steps", str(args.n_steps)]
     return cmd
 
 
@@ -185,7 +188,8 @@ def hyperparameters(args) -> str:
     thread, and each hyperparameter ``args`` changes."""
     return "Stable-Baselines3 defaults, " + ("one env" if args.n_envs == 1 else f"{args.n_envs} envs (DummyVecEnv)") \
         + ", one torch thread" + "".join(f"; but {k} = {v!r}" for k, v in (
-            ("gamma", args.gamma), ("log_std_init", args.log_std_init), ("ent_coef", args.ent_coef)) if v is not None) \
+            ("gamma", args.gamma), ("log_std_init", args.log_std_init), ("ent_coef", args.ent_coef),
+            ("n_steps", args.n_steps)) if v is not None) \
         + ("; but the learning rate falls linearly to 0 over the budget" if args.lr_decay else "")
 
 

@@ -113,7 +113,9 @@ function's ``explained_variance`` on the rollout it learned from (before the upd
 them one after the other in this process, copy ``i`` seeded ``--seed + i``): the policy then runs once for ``N``
 environment steps and PPO's rollouts hold ``2048 * N`` steps (its updates as many minibatches of 64 more), so a
 CPU-minute buys more steps; SAC's default, one gradient step a call of its ``train_freq`` (one vector step), becomes
-one per ``N`` environment steps.  The evaluation runs one env as always; ``<algo>_eval.json`` records ``n_envs``.
+one per ``N`` environment steps.  ``--n-steps S`` (PPO only) changes the steps a rollout collects from each env
+(default 2048; ``--n-envs 4 --n-steps 512`` keeps the default's 2048 steps an update), named in ``hyperparameters``.
+The evaluation runs one env as always; ``<algo>_eval.json`` records ``n_envs``.
 
 ``--threads`` sets PyTorch's intra-op threads (default 1: one core per
 training; run two trainings side by side to use two cores).
@@ -216,15 +218,20 @@ def _warm_start(model, train_env, init_from: str, action_offset) -> dict:
 
 
 def model_kwargs(algo: str, gamma: float | None, log_std_init: float | None, lr_decay=None,
-                 ent_coef: float | None = None) -> dict:
+                 ent_coef: float | None = None, n_steps: int | None = None) -> dict:
     """The keyword arguments that change the library's defaults: ``gamma``; ``log_std_init`` (PPO only: SAC's
     standard deviation is an output of its network, not a parameter); ``lr_decay``, a
-    :class:`simgrip.envs.lr_decay.BudgetDecay` for the learning rate; ``ent_coef`` (PPO only)."""
+    :class:`simgrip.envs.lr_decay.BudgetDecay` for the learning rate; ``ent_coef`` and ``n_steps``, the steps a
+    rollout collects from each env (PPO only)."""
     kwargs = {} if gamma is None else {"gamma": gamma}
     if ent_coef is not None:
         if algo != "ppo":
             raise ValueError(f"ent_coef: PPO only, got algo {algo!r}")
         kwargs["ent_coef"] = float(ent_coef)
+    if n_steps is not None:
+        if algo != "ppo":
+            raise ValueError(f"n_steps: PPO only, got algo {algo!r}")
+        kwargs["n_steps"] = int(n_steps)
     if lr_decay is not None:
         kwargs["learning_rate"] = lr_decay
     if log_std_init is not None:
@@ -235,11 +242,12 @@ def model_kwargs(algo: str, gamma: float | None, log_std_init: float | None, lr_
 
 
 def hyperparameters(gamma: float | None, log_std_init: float | None, lr_decay=None,
-                    ent_coef: float | None = None) -> str:
+                    ent_coef: float | None = None, n_steps: int | None = None) -> str:
     """The JSON's ``hyperparameters``: the library's defaults, and which ones this run changed."""
     changed = ([] if gamma is None else [f"gamma = {gamma!r}"]) + \
         ([] if log_std_init is None else [f"log_std_init = {log_std_init!r}"]) + \
         ([] if ent_coef is None else [f"ent_coef = {ent_coef!r}"]) + \
+        ([] if n_steps is None else [f"n_steps = {n_steps!r}"]) + \
         ([] if lr_decay is None else [f"learning_rate = {lr_decay.initial!r} falling linearly to 0 over the budget"])
     return "Stable-Baselines3 defaults" + (" but " + ", ".join(changed) if changed else "")
 
@@ -252,7 +260,7 @@ def train(algo: str, env_id: str, *, steps: int, minutes: float, seed: int, out:
           log_std_init: float | None = None, eval_start: bool = False, critic_warmup: int = 0,
           crush_charge: tuple[float, int] | None = None, lr_decay: bool = False,
           ent_coef: float | None = None, step_charge: float | None = None, n_envs: int = 1,
-          crush_margin: float | None = None) -> dict:
+          crush_margin: float | None = None, n_steps: int | None = None) -> dict:
     """Train ``algo`` with library defaults within the budget, write its curve, model and evaluation
     (``env_kwargs``: ``gym.make``'s keyword arguments, for training and evaluation alike; ``normalize``: train
     behind SB3's ``VecNormalize`` with its defaults; ``action_offset``: train and evaluate behind
@@ -275,7 +283,8 @@ def train(algo: str, env_id: str, *, steps: int, minutes: float, seed: int, out:
     ``step_charge``: every training step's reward lowered by it, :class:`simgrip.envs.step_charge.StepCharge`;
     ``n_envs``: copies of the training env stepped one after the other, SB3's ``DummyVecEnv``, copy ``i`` seeded
     ``seed + i``; ``crush_margin``: every training step's reward lowered by it times how near the step's largest
-    finger force came to the crush limit, :class:`simgrip.envs.crush_margin.CrushMargin`)."""
+    finger force came to the crush limit, :class:`simgrip.envs.crush_margin.CrushMargin`; ``n_steps``: PPO's steps a
+    rollout collects from each env instead of 2048)."""
     env_kwargs = dict(env_kwargs or {})
     from stable_baselines3 import PPO, SAC
     from stable_baselines3.common.callbacks import BaseCallback
@@ -335,7 +344,7 @@ def train(algo: str, env_id: str, *, steps: int, minutes: float, seed: int, out:
     if decay is not None:  # on the budget's own clock, from the budget's start (before the model is built)
         decay.start(c_start if clock == "cpu" else t_start)
     model = cls("MlpPolicy", env, seed=seed, verbose=0, **model_kwargs(algo, gamma, log_std_init, decay,
-                                                                       ent_coef))
+                                                                       ent_coef, n_steps))
     model.set_logger(Logger(None, []))  # no output; SB3's own would make an empty /tmp/SB3-<time> per learn()
     init = start = None
     if init_from is not None:
@@ -376,7 +385,7 @@ def train(algo: str, env_id: str, *, steps: int, minutes: float, seed: int, out:
     result = {"algo": algo.upper(), "env": env_id, "timesteps": int(model.num_timesteps), "wall_s": round(wall, 1), "cpu_s": round(cpu, 1),
               "clock": clock, "budget_minutes": minutes,
               "train_episodes": len(rows), "seed": seed, "n_envs": n_envs,
-              "hyperparameters": hyperparameters(gamma, log_std_init, decay, ent_coef)}
+              "hyperparameters": hyperparameters(gamma, log_std_init, decay, ent_coef, n_steps)}
     if env_kwargs:
         result["env_kwargs"] = env_kwargs
     wrappers = []
@@ -564,7 +573,7 @@ def main(argv=None) -> int:
                        log_std_init=args.log_std_init, eval_start=args.eval_start, lr_decay=args.lr_decay,
                        ent_coef=args.ent_coef, critic_warmup=args.critic_warmup,
                        crush_charge=_charged(args), step_charge=args.step_charge, n_envs=args.n_envs,
-                       crush_margin=args.crush_margin)
+                       crush_margin=args.crush_margin, n_steps=args.n_steps)
         print(json.dumps(result), flush=True)
     plot_curves(out)
     return 0
