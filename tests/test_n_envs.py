@@ -1,9 +1,10 @@
 """``--n-envs N`` of ``examples/train_sb3.py`` and ``examples/rl_baselines.py``: the training steps ``N`` copies of
-the env in its own process (Stable-Baselines3's ``DummyVecEnv``).
+the env in its own process (Stable-Baselines3's ``DummyVecEnv``); and ``--n-steps S``, PPO's steps a rollout
+collects from each env.
 
-Checked on what it changes and records: PPO's rollout becomes ``2048 * N`` steps (one rollout under ``--steps 64``),
-the JSON names the copies, the same command gives the same numbers twice, bad counts exit 2 naming the option,
-and the driver passes it to every run and names it in ``aggregate.json``."""
+Checked on what they change and record: PPO's rollout becomes ``S * N`` steps (one rollout under ``--steps 64``),
+the JSON names the copies and the rollout's length, the same command gives the same numbers twice, bad values exit
+2 naming the option, and the driver passes both to every run and names them in ``aggregate.json``."""
 
 from __future__ import annotations
 
@@ -14,10 +15,10 @@ import pytest
 from helpers import load_example as _example, rl_baselines_args
 
 
-def _train(out, n_envs: int) -> dict:
+def _train(out, n_envs: int, *extra: str) -> dict:
     _example("train_sb3").main(["--algo", "ppo", "--env", "simgrip/PickFragile-v7", "--steps", "64", "--seed", "5",
                                 "--n-envs", str(n_envs), "--eval-episodes", "2", "--eval-seed", "8320",
-                                "--out", str(out)])
+                                "--out", str(out), *extra])
     return json.loads((out / "ppo_eval.json").read_text())
 
 
@@ -39,6 +40,15 @@ def test_two_copies_fill_one_rollout_of_twice_the_steps_and_repeat_bit_for_bit(t
                                                                           .read_text())
 
 
+def test_n_steps_sets_each_envs_share_of_the_rollout(tmp_path):
+    pytest.importorskip("stable_baselines3")
+    four = _train(tmp_path, 4, "--n-steps", "512")
+    assert four["timesteps"] == 2048 and four["n_envs"] == 4
+    assert four["hyperparameters"] == "Stable-Baselines3 defaults but n_steps = 512"
+    policy = (tmp_path / "ppo_policy.csv").read_text().splitlines()
+    assert [r.split(",")[0] for r in policy[1:]] == ["2048"]  # one window: the one rollout
+
+
 def test_one_env_is_recorded_as_one(tmp_path):
     pytest.importorskip("stable_baselines3")
     one = _train(tmp_path, 1)
@@ -46,12 +56,22 @@ def test_one_env_is_recorded_as_one(tmp_path):
 
 
 @pytest.mark.parametrize("script", ["train_sb3", "rl_baselines"])
-@pytest.mark.parametrize("value", ["0", "-1", "65", "2.5", "x"])
-def test_a_bad_count_exits_2_naming_it(script, value, tmp_path, capsys):
+@pytest.mark.parametrize("option, value", [("--n-envs", "0"), ("--n-envs", "-1"), ("--n-envs", "65"),
+                                           ("--n-envs", "2.5"), ("--n-envs", "x"), ("--n-steps", "1"),
+                                           ("--n-steps", "1048577"), ("--n-steps", "nan")])
+def test_a_bad_count_exits_2_naming_it(script, option, value, tmp_path, capsys):
     with pytest.raises(SystemExit) as e:
-        _example(script).main(["--env", "simgrip/PickFragile-v7", "--out", str(tmp_path / "o"), "--n-envs", value])
-    assert e.value.code == 2 and "--n-envs" in capsys.readouterr().err
+        _example(script).main(["--env", "simgrip/PickFragile-v7", "--out", str(tmp_path / "o"), option, value])
+    assert e.value.code == 2 and option in capsys.readouterr().err
     assert not (tmp_path / "o").exists()
+
+
+@pytest.mark.parametrize("script", ["train_sb3", "rl_baselines"])
+def test_n_steps_is_ppos_alone(script, tmp_path, capsys):
+    with pytest.raises(SystemExit) as e:
+        _example(script).main(["--env", "simgrip/PickFragile-v7", "--algo", "sac", "--out", str(tmp_path / "o"),
+                               "--n-steps", "512"])
+    assert e.value.code == 2 and "--n-steps: PPO only" in capsys.readouterr().err
 
 
 def test_rl_baselines_passes_it_to_every_run_and_names_it(tmp_path):
@@ -60,7 +80,11 @@ def test_rl_baselines_passes_it_to_every_run_and_names_it(tmp_path):
     cmd = mod.run_command("ppo", 0, args, tmp_path)
     assert cmd[cmd.index("--n-envs") + 1] == "4" and cmd[cmd.index("--threads") + 1] == "1"
     assert mod.hyperparameters(args) == "Stable-Baselines3 defaults, 4 envs (DummyVecEnv), one torch thread"
-    args.n_envs, args.gamma, args.lr_decay = 1, 0.995, True
+    args.n_steps = 512
+    assert mod.run_command("ppo", 0, args, tmp_path)[-2:] == ["--n-steps", "512"]
+    assert mod.hyperparameters(args).endswith("one torch thread; but n_steps = 512")
+    args.n_envs, args.n_steps, args.gamma, args.lr_decay = 1, None, 0.995, True
     assert "--n-envs" not in mod.run_command("ppo", 0, args, tmp_path)
+    assert "--n-steps" not in mod.run_command("ppo", 0, args, tmp_path)
     assert mod.hyperparameters(args) == ("Stable-Baselines3 defaults, one env, one torch thread; but gamma = 0.995; "
                                          "but the learning rate falls linearly to 0 over the budget")

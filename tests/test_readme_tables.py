@@ -44,7 +44,8 @@ ROWS = {
 #: the aids an aided cell names -> the rl_baselines.py option that applies each
 AIDS = {"offset": "--action-offset", "peak offset": "--action-offset", "light bias": "--light-bias",
         "scripted palm": "--residual", "log std": "--log-std-init", "γ": "--gamma", "lr decay": "--lr-decay",
-        "entropy": "--ent-coef", "step charge": "--step-charge", "crush margin": "--crush-margin", "envs": "--n-envs"}
+        "entropy": "--ent-coef", "step charge": "--step-charge", "crush margin": "--crush-margin", "envs": "--n-envs",
+        "n steps": "--n-steps"}
 
 
 def assert_the_hyperparameters_named(text: str, agg: dict) -> None:
@@ -52,7 +53,8 @@ def assert_the_hyperparameters_named(text: str, agg: dict) -> None:
     "entropy 0.01") at the values they name, and "lr decay" (the learning rate), in the training command and in the
     record's ``hyperparameters``; "step charge X" (the training reward's charge a step) at its value in the command
     and the record's ``step_charge``, "crush margin X" likewise (``crush_margin``); "N envs" (copies of the training
-    env) at N in the command, the record's ``n_envs`` and its ``hyperparameters``; "light bias [X]" at X (0.5 where no value is named) in the command and the
+    env) at N in the command, the record's ``n_envs`` and its ``hyperparameters``, "n steps S" (PPO's rollout a
+    copy) at S in the command and the ``hyperparameters``; "light bias [X]" at X (0.5 where no value is named) in the command and the
     record's ``light_bias``; nothing to check where the text names none (that the options are exactly the
     aids named: AIDS)."""
     cmd = training_command(agg)
@@ -71,6 +73,11 @@ def assert_the_hyperparameters_named(text: str, agg: dict) -> None:
     if named:  # the same for the dense crush shaping: in the command and the record's crush_margin
         value = float(named.group(1))
         assert float(cmd[cmd.index("--crush-margin") + 1]) == value == agg["crush_margin"], (named.group(0), cmd)
+    named = re.search(r"n steps (\d+)", text)
+    if named:  # PPO's rollout a copy: a hyperparameter, an integer
+        value = int(named.group(1))
+        assert int(cmd[cmd.index("--n-steps") + 1]) == value, (named.group(0), cmd)
+        assert f"; but n_steps = {value}" in agg["hyperparameters"], (named.group(0), agg["hyperparameters"])
     named = re.search(r"(\d+) envs", text)
     if named:  # copies of the training env (SB3's DummyVecEnv): the command's, the record's and its hyperparameters
         n = int(named.group(1))
