@@ -126,8 +126,8 @@ def critic_warmup_conflict(steps, algos) -> str | None:
 def training_conflict(args) -> str | None:
     """The first reason the parsed options of ``train_sb3.py`` / ``rl_baselines.py`` (both have ``algo``,
     ``log_std_init``, ``ent_coef``, ``init_from``, ``critic_warmup``, ``crush_charge``, ``crush_charge_from``,
-    ``minutes`` and ``checkpoint_minutes``) cannot go together, or None: :func:`log_std_init_conflict`,
-    :func:`critic_warmup_conflict`, ``--ent-coef`` with SAC, ``--crush-charge-from`` without ``--crush-charge``, a
+    ``minutes`` and ``checkpoint_minutes``; ``n_steps`` where present) cannot go together, or None:
+    :func:`log_std_init_conflict`, :func:`critic_warmup_conflict`, ``--n-steps`` or ``--ent-coef`` with SAC, ``--crush-charge-from`` without ``--crush-charge``, a
     checkpoint period longer than the budget (no checkpoint would be taken), a budget over
     :data:`MAX_TRAINING_MINUTES` or more than :data:`MAX_CHECKPOINTS` checkpoints.  The options alone decide
     (nothing is imported)."""
@@ -229,8 +229,8 @@ def add_training_aid_arguments(parser: argparse.ArgumentParser) -> None:
              "recorded in the JSON)")
     add("--n-envs", type=env_count, default=1, metavar="N",
         help=f"train on N copies of the env, stepped one after the other in the training's process (SB3's "
-             f"make_vec_env: DummyVecEnv, copy i seeded --seed + i; PPO's rollouts become 2048 * N steps, the policy "
-             f"run once per N steps; 1 to {MAX_ENVS}; recorded in the JSON; default 1)")
+             f"make_vec_env: DummyVecEnv, copy i seeded --seed + i; PPO's rollouts become N times as long, the "
+             f"policy run once per N steps; 1 to {MAX_ENVS}; recorded in the JSON; default 1)")
 
 
 def check_env_id(parser: argparse.ArgumentParser, env_id: str, *, retired: bool = False) -> None:
