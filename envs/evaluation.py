@@ -127,9 +127,9 @@ def training_conflict(args) -> str | None:
     """The first reason the parsed options of ``train_sb3.py`` / ``rl_baselines.py`` (both have ``algo``,
     ``log_std_init``, ``ent_coef``, ``init_from``, ``critic_warmup``, ``crush_charge``, ``crush_charge_from``,
     ``minutes`` and ``checkpoint_minutes``; ``n_steps`` where present) cannot go together, or None:
-    :func:`log_std_init_conflict`, :func:`critic_warmup_conflict`, ``--n-steps`` or ``--ent-coef`` with SAC, ``--crush-charge-from`` without ``--crush-charge``, a
-    checkpoint period longer than the budget (no checkpoint would be taken), a budget over
-    :data:`MAX_TRAINING_MINUTES` or more than :data:`MAX_CHECKPOINTS` checkpoints.  The options alone decide
+    :func:`log_std_init_conflict`, :func:`critic_warmup_conflict`, ``--n-steps`` or ``--ent-coef`` with SAC,
+    ``--crush-charge-from`` without ``--crush-charge``, a checkpoint period longer than the budget (no checkpoint
+    would be taken), a budget over :data:`MAX_TRAINING_MINUTES` or more than :data:`MAX_CHECKPOINTS` checkpoints.  The options alone decide
     (nothing is imported)."""
     algos = args.algo if isinstance(args.algo, (list, tuple)) else [args.algo]
     why = log_std_init_conflict(args.log_std_init, algos, args.init_from) or \
