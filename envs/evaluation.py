@@ -129,8 +129,8 @@ def training_conflict(args) -> str | None:
     ``minutes`` and ``checkpoint_minutes``; ``n_steps`` where present) cannot go together, or None:
     :func:`log_std_init_conflict`, :func:`critic_warmup_conflict`, ``--n-steps`` or ``--ent-coef`` with SAC,
     ``--crush-charge-from`` without ``--crush-charge``, a checkpoint period longer than the budget (no checkpoint
-    would be taken), a budget over :data:`MAX_TRAINING_MINUTES` or more than :data:`MAX_CHECKPOINTS` checkpoints.  The options alone decide
-    (nothing is imported)."""
+    would be taken), a budget over :data:`MAX_TRAINING_MINUTES` or more than :data:`MAX_CHECKPOINTS` checkpoints.
+    The options alone decide (nothing is imported)."""
     algos = args.algo if isinstance(args.algo, (list, tuple)) else [args.algo]
     why = log_std_init_conflict(args.log_std_init, algos, args.init_from) or \
         critic_warmup_conflict(args.critic_warmup, algos)
