@@ -471,10 +471,6 @@ def main(argv=None) -> int:
         p.error(why)
     if len(set(args.seeds)) != len(args.seeds):
         p.error(f"--seeds: repeated seed in {args.seeds}")
-    import importlib.util
-
-    if any(importlib.util.find_spec(m) is None for m in ("stable_baselines3", "torch")):  # found, not imported:
-        p.error('needs Stable-Baselines3 and PyTorch: pip install "simgrip[rl]"')  # the children import them
     import simgrip.envs  # noqa: F401  (registers the ids)
     from simgrip.envs.evaluation import check_env_id, training_files
     from simgrip.io import check_output_dir, check_output_files_in, write_json
@@ -491,6 +487,11 @@ def main(argv=None) -> int:
                      args.light_bias, args.residual, charged, args.step_charge, args.crush_margin).close()
         except ValueError as e:
             p.error(str(e))
+    import importlib.util
+
+    # after the options and the env are checked (a bad one is named whether the rl extra is there or not)
+    if any(importlib.util.find_spec(m) is None for m in ("stable_baselines3", "torch")):  # found, not imported:
+        p.error('needs Stable-Baselines3 and PyTorch: pip install "simgrip[rl]"')  # the children import them
     algos = list(dict.fromkeys(args.algo))
     init_command = _check_init(p, args, algos) if args.init_from is not None else None
     try:

@@ -530,11 +530,6 @@ def main(argv=None) -> int:
     cores = os.cpu_count() or 1
     if args.threads > cores:
         p.error(f"--threads: at most the {cores} cores of this machine (more only share them), got {args.threads}")
-    try:
-        import stable_baselines3  # noqa: F401
-        import torch
-    except ImportError:
-        p.error('needs Stable-Baselines3 and PyTorch: pip install "simgrip[rl]"')
     check_env_id(p, args.env, retired=True)
     if args.env_kwargs or args.action_offset is not None or args.scripted_start is not None \
             or args.light_bias is not None or args.residual is not None or args.crush_charge is not None \
@@ -545,6 +540,11 @@ def main(argv=None) -> int:
                      crush_margin=args.crush_margin).close()
         except ValueError as e:
             p.error(str(e))
+    try:  # after the options and the env are checked: a bad one is named whether the rl extra is there or not
+        import stable_baselines3  # noqa: F401
+        import torch
+    except ImportError:
+        p.error('needs Stable-Baselines3 and PyTorch: pip install "simgrip[rl]"')
     if args.init_from is not None:
         if args.algo != ["ppo"]:
             p.error("--init-from: PPO only (--algo ppo)")
