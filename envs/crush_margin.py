@@ -54,11 +54,12 @@ class CrushMargin(gym.Wrapper):
                              f"got {env.unwrapped.__class__.__name__}")
         super().__init__(env)
         self.charge = charge
+        self._task = env.unwrapped  # its crush_limit, drawn anew at each reset
 
     def step(self, action):
         obs, reward, terminated, truncated, info = self.env.step(action)
         forces = info.get("peak_normal_force", info["normal_force"])
-        share = max(forces) / self.env.unwrapped.crush_limit
+        share = max(forces) / self._task.crush_limit
         cost = self.charge * min(max((share - MARGIN_ONSET) / (1.0 - MARGIN_ONSET), 0.0), 1.0)
         info["reward_crush_margin"] = 0.0 - cost
         return obs, reward - cost, terminated, truncated, info

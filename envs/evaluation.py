@@ -20,7 +20,8 @@ import numpy as np
 
 from simgrip.envs.outcome import outcome  # outcomes() counts with it; also importable from here
 
-__all__ = ["EpisodeResult", "GAMMA", "add_episode_arguments", "add_training_aid_arguments", "charge", "check_env_id", "critic_warmup_conflict",
+__all__ = ["EpisodeResult", "GAMMA", "add_episode_arguments", "add_training_aid_arguments", "charge", "check_env_id",
+           "check_training_env", "critic_warmup_conflict",
            "discount", "entropy_coefficient", "env_kwargs", "json_object", "log_std", "log_std_init_conflict",
            "make_env", "outcome", "outcomes", "positive_int", "non_negative_int", "probability", "run_episodes",
            "summary", "checkpoint_tag", "training_conflict", "training_files", "training_seed", "episode_count",
@@ -126,7 +127,7 @@ def critic_warmup_conflict(steps, algos) -> str | None:
 def training_conflict(args) -> str | None:
     """The first reason the parsed options of ``train_sb3.py`` / ``rl_baselines.py`` (both have ``algo``,
     ``log_std_init``, ``ent_coef``, ``init_from``, ``critic_warmup``, ``crush_charge``, ``crush_charge_from``,
-    ``minutes`` and ``checkpoint_minutes``; ``n_steps`` where present) cannot go together, or None:
+    ``minutes``, ``checkpoint_minutes`` and ``n_steps``) cannot go together, or None:
     :func:`log_std_init_conflict`, :func:`critic_warmup_conflict`, ``--n-steps`` or ``--ent-coef`` with SAC,
     ``--crush-charge-from`` without ``--crush-charge``, a checkpoint period longer than the budget (no checkpoint
     would be taken), a budget over :data:`MAX_TRAINING_MINUTES` or more than :data:`MAX_CHECKPOINTS` checkpoints.
@@ -136,7 +137,7 @@ def training_conflict(args) -> str | None:
         critic_warmup_conflict(args.critic_warmup, algos)
     if why:
         return why
-    if getattr(args, "n_steps", None) is not None and set(algos) != {"ppo"}:
+    if args.n_steps is not None and set(algos) != {"ppo"}:
         return "--n-steps: PPO only (--algo ppo; SAC collects no rollouts)"
     if args.ent_coef is not None and set(algos) != {"ppo"}:
         return "--ent-coef: PPO only (--algo ppo; SAC tunes its own entropy coefficient)"
@@ -331,6 +332,20 @@ def make_env(env_id: str, env_kwargs: dict | None = None, action_offset=None, fr
                              f"the first observation), got {frame_stack}")
         env = gym.wrappers.FrameStackObservation(env, frame_stack)
     return env
+
+
+def check_training_env(args) -> None:
+    """Build and close the training env that the parsed options of ``train_sb3.py`` / ``rl_baselines.py`` describe
+    (:func:`make_env` with their ``env``, ``env_kwargs`` and training aids), so that an option the env refuses is
+    named before any training starts; nothing is built when no option shapes the env.  Raises :func:`make_env`'s
+    ValueError, naming the option."""
+    if not (args.env_kwargs or args.frame_stack is not None or any(
+            getattr(args, name) is not None for name in ("action_offset", "scripted_start", "light_bias", "residual",
+                                                          "crush_charge", "step_charge", "crush_margin"))):
+        return
+    charged = None if args.crush_charge is None else (args.crush_charge, args.crush_charge_from)
+    make_env(args.env, args.env_kwargs, args.action_offset, args.frame_stack, args.scripted_start, args.light_bias,
+             args.residual, charged, args.step_charge, args.crush_margin).close()
 
 
 def _wrap_or_close(env, wrapper, value, option: str):

@@ -476,17 +476,12 @@ def main(argv=None) -> int:
     from simgrip.io import check_output_dir, check_output_files_in, write_json
 
     check_env_id(p, args.env, retired=True)  # train_sb3.py builds a retired one
-    if args.env_kwargs or args.action_offset is not None or args.scripted_start is not None \
-            or args.light_bias is not None or args.residual is not None or args.crush_charge is not None \
-            or args.frame_stack is not None or args.step_charge is not None or args.crush_margin is not None:
-        from simgrip.envs.evaluation import make_env  # refused before any run starts, the env built once
+    from simgrip.envs.evaluation import check_training_env
 
-        try:
-            charged = None if args.crush_charge is None else (args.crush_charge, args.crush_charge_from)
-            make_env(args.env, args.env_kwargs, args.action_offset, args.frame_stack, args.scripted_start,
-                     args.light_bias, args.residual, charged, args.step_charge, args.crush_margin).close()
-        except ValueError as e:
-            p.error(str(e))
+    try:  # refused before any run starts, the env built once
+        check_training_env(args)
+    except ValueError as e:
+        p.error(str(e))
     import importlib.util
 
     # after the options and the env are checked (a bad one is named whether the rl extra is there or not)

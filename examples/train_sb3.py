@@ -140,7 +140,7 @@ import numpy as np  # noqa: E402
 
 import simgrip.envs  # noqa: E402,F401  (registers the simgrip ids)
 from simgrip.command_parser import CommandParser
-from simgrip.envs.evaluation import (GAMMA, add_training_aid_arguments, check_env_id, checkpoint_tag, episode_count,
+from simgrip.envs.evaluation import (GAMMA, add_training_aid_arguments, check_env_id, check_training_env, checkpoint_tag, episode_count,
                                      json_object, make_env, non_negative_int, outcomes, run_episodes, summary,
                                      training_conflict, training_files, training_seed)
 from simgrip.envs.lr_decay import BudgetDecay
@@ -531,15 +531,10 @@ def main(argv=None) -> int:
     if args.threads > cores:
         p.error(f"--threads: at most the {cores} cores of this machine (more only share them), got {args.threads}")
     check_env_id(p, args.env, retired=True)
-    if args.env_kwargs or args.action_offset is not None or args.scripted_start is not None \
-            or args.light_bias is not None or args.residual is not None or args.crush_charge is not None \
-            or args.frame_stack is not None or args.step_charge is not None or args.crush_margin is not None:
-        try:  # refused before any training, the env built once
-            make_env(args.env, args.env_kwargs, args.action_offset, args.frame_stack, args.scripted_start,
-                     args.light_bias, args.residual, crush_charge=_charged(args), step_charge=args.step_charge,
-                     crush_margin=args.crush_margin).close()
-        except ValueError as e:
-            p.error(str(e))
+    try:  # refused before any training, the env built once
+        check_training_env(args)
+    except ValueError as e:
+        p.error(str(e))
     try:  # after the options and the env are checked: a bad one is named whether the rl extra is there or not
         import stable_baselines3  # noqa: F401
         import torch
