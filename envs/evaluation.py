@@ -19,11 +19,12 @@ from typing import Any, Callable
 import numpy as np
 
 from simgrip.envs.outcome import outcome  # outcomes() counts with it; also importable from here
+from simgrip.envs.selection import selection_conflict
 
 __all__ = ["EpisodeResult", "GAMMA", "add_episode_arguments", "add_training_aid_arguments", "charge", "check_env_id",
            "check_training_env", "critic_warmup_conflict",
            "discount", "entropy_coefficient", "env_kwargs", "json_object", "log_std", "log_std_init_conflict",
-           "make_env", "outcome", "outcomes", "positive_int", "non_negative_int", "probability", "run_episodes",
+           "make_env", "outcome", "outcomes", "period_minutes", "positive_int", "non_negative_int", "probability", "run_episodes",
            "summary", "checkpoint_tag", "training_conflict", "training_files", "training_seed", "episode_count",
            "env_count", "rollout_steps", "MAX_EPISODES", "MAX_ENVS", "MAX_TRAINING_SEED"]
 
@@ -127,9 +128,10 @@ def critic_warmup_conflict(steps, algos) -> str | None:
 def training_conflict(args) -> str | None:
     """The first reason the parsed options of ``train_sb3.py`` / ``rl_baselines.py`` (both have ``algo``,
     ``log_std_init``, ``ent_coef``, ``init_from``, ``critic_warmup``, ``crush_charge``, ``crush_charge_from``,
-    ``minutes``, ``checkpoint_minutes`` and ``n_steps``) cannot go together, or None:
+    ``minutes``, ``checkpoint_minutes``, ``n_steps``, ``normalize``, the ``select_*`` options and the held-out
+    seeds: ``eval_seeds``, or ``eval_seed`` and ``eval_episodes``) cannot go together, or None:
     :func:`log_std_init_conflict`, :func:`critic_warmup_conflict`, ``--n-steps`` or ``--ent-coef`` with SAC,
-    ``--crush-charge-from`` without ``--crush-charge``, a checkpoint period longer than the budget (no checkpoint
+    ``--crush-charge-from`` without ``--crush-charge``, :func:`simgrip.envs.selection.selection_conflict`, a checkpoint period longer than the budget (no checkpoint
     would be taken), a budget over :data:`MAX_TRAINING_MINUTES` or more than :data:`MAX_CHECKPOINTS` checkpoints.
     The options alone decide (nothing is imported)."""
     algos = args.algo if isinstance(args.algo, (list, tuple)) else [args.algo]
@@ -143,6 +145,10 @@ def training_conflict(args) -> str | None:
         return "--ent-coef: PPO only (--algo ppo; SAC tunes its own entropy coefficient)"
     if args.crush_charge_from and args.crush_charge is None:
         return "--crush-charge-from: only with --crush-charge"
+    why = selection_conflict(args, args.eval_seeds if hasattr(args, "eval_seeds")
+                             else (args.eval_seed, args.eval_seed + args.eval_episodes - 1))
+    if why:
+        return why
     if args.minutes > MAX_TRAINING_MINUTES:
         return f"--minutes: at most {MAX_TRAINING_MINUTES} (a week), got {args.minutes:g}"
     if args.checkpoint_minutes and args.checkpoint_minutes > args.minutes:
@@ -151,6 +157,11 @@ def training_conflict(args) -> str | None:
         return (f"--checkpoint-minutes: {args.minutes:g} / {args.checkpoint_minutes:g} minutes is "
                 f"{args.minutes / args.checkpoint_minutes:.3g} checkpoints, each evaluated; at most {MAX_CHECKPOINTS}")
     return None
+
+
+def period_minutes(text: str) -> float:
+    """argparse type: a period in budget minutes, finite and > 0."""
+    return _number_in(text, lambda x: 0.0 < x < math.inf, "(0, inf)")
 
 
 def probability(text: str) -> float:
@@ -179,8 +190,8 @@ def add_training_aid_arguments(parser: argparse.ArgumentParser) -> None:
     its runs, with the same names, checks and meanings: ``--normalize``, ``--action-offset A ...``,
     ``--frame-stack N``, ``--gamma G``, ``--log-std-init X``, ``--scripted-start P``, ``--light-bias P``,
     ``--residual NAME ...``, ``--crush-charge F``, ``--crush-charge-from STEPS``, ``--step-charge C``,
-    ``--crush-margin C``, ``--lr-decay``, ``--ent-coef C``, ``--n-steps S`` (each off by default) and ``--n-envs N``
-    (default 1)."""
+    ``--crush-margin C``, ``--lr-decay``, ``--ent-coef C``, ``--n-steps S``, ``--select-every M``,
+    ``--select-episodes E``, ``--select-seed S`` (each off by default) and ``--n-envs N`` (default 1)."""
     add = parser.add_argument
     add("--normalize", action="store_true",
         help="train behind SB3's VecNormalize (observation and return, library defaults; default off)")
@@ -228,6 +239,15 @@ def add_training_aid_arguments(parser: argparse.ArgumentParser) -> None:
         help="PPO only: the steps a rollout collects from each env, instead of the library default 2048 (with "
              "--n-envs N the rollout holds S * N steps: --n-envs 4 --n-steps 512 keeps the default's 2048 an update; "
              "recorded in the JSON)")
+    add("--select-every", type=period_minutes, default=None, metavar="M",
+        help="every M budget minutes run the policy on the validation seeds and keep the best so far as the "
+             "result (simgrip.envs.selection: the validations' time counts in the budget; the held-out evaluation "
+             "runs the chosen policy; recorded in the JSON; default off: the last policy)")
+    add("--select-episodes", type=episode_count, default=None, metavar="E",
+        help="with --select-every: validation episodes (default 50)")
+    add("--select-seed", type=non_negative_int, default=None, metavar="S",
+        help="with --select-every: the first validation seed (default 20000; the seeds must not meet the held-out "
+             "ones)")
     add("--n-envs", type=env_count, default=1, metavar="N",
         help=f"train on N copies of the env, stepped one after the other in the training's process (SB3's "
              f"make_vec_env: DummyVecEnv, copy i seeded --seed + i; PPO's rollouts become N times as long, the "

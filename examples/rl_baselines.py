@@ -61,7 +61,9 @@ near its largest finger force came to the hidden crush limit, :mod:`simgrip.envs
 ``crush_margin``; ``--n-envs N`` passes that option (each run trains on ``N`` copies of the env stepped one after the
 other in its own process, SB3's ``DummyVecEnv``: still one core a run), recorded as ``n_envs`` and in
 ``hyperparameters``; ``--n-steps S`` (PPO only) passes PPO's steps a rollout collects from each env, named in
-``hyperparameters``.
+``hyperparameters``; ``--select-every M`` (with ``--select-episodes E``, ``--select-seed S``) passes those options
+(every ``M`` budget minutes each run validates its policy on seeds apart from ``--eval-seeds`` and keeps the best,
+:mod:`simgrip.envs.selection`, the validations inside the budget), recorded as ``selection``.
 
 Batches of one experiment run apart (some seeds here, others there or later, each with this command but for
 ``--seeds``, ``--jobs`` and ``--out``) are combined into one folder, as if run at once, by
@@ -90,6 +92,7 @@ import time
 from pathlib import Path
 
 from simgrip.command_parser import CommandParser
+from simgrip.envs.selection import spec_from
 
 ALGOS = ("ppo", "sac")
 TRAIN_SCRIPT = Path(__file__).resolve().with_name("train_sb3.py")
@@ -180,6 +183,10 @@ def run_command(algo: str, seed: int, args, folder: Path) -> list[str]:
         cmd += ["--n-envs", str(args.n_envs)]
     if args.n_steps is not None:
         cmd += ["--n-steps", str(args.n_steps)]
+    spec = spec_from(args)
+    if spec is not None:
+        cmd += ["--select-every", repr(spec.every_minutes), "--select-episodes", str(spec.episodes),
+                "--select-seed", str(spec.seed)]
     return cmd
 
 
@@ -541,6 +548,8 @@ def main(argv=None) -> int:
         **({"step_charge": args.step_charge} if args.step_charge is not None else {}),
         **({"crush_margin": args.crush_margin} if args.crush_margin is not None else {}),
         **({"n_envs": args.n_envs} if args.n_envs != 1 else {}),
+        **({"selection": {"every_minutes": spec.every_minutes, "episodes": spec.episodes, "seeds": list(spec.seeds)}}
+           if (spec := spec_from(args)) is not None else {}),
         **({"init_from": str(args.init_from), "init_command": init_command} if args.init_from is not None else {}),
         **({"wrapper": "VecNormalize (SB3 defaults: observation and return)"} if args.normalize else {}),
         "command": [Path(sys.argv[0]).name] + list(sys.argv[1:] if argv is None else argv)})

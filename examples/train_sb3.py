@@ -5,23 +5,18 @@ PyTorch; a CPU build of PyTorch is enough).
 
     python examples/train_sb3.py --algo ppo sac --minutes 15 --out runs/pick [--env simgrip/Pick-v1]
 
-For each algorithm: ``algo("MlpPolicy", env)`` with Stable-Baselines3's default
-hyperparameters on one environment, trained until ``--steps`` environment steps
-or ``--minutes`` of the ``--clock``, whichever comes first (the training stops
-at the end of the step that crosses the time budget; the step budget is SB3's
-``learn(total_timesteps)``, which PPO fills with whole rollouts of 2048 steps (a copy, with ``--n-envs``):
-``--steps 64`` is one rollout and one update; the JSON's ``timesteps`` are the
-steps taken).  ``--clock cpu`` (default)
-counts the process's CPU time, which is what one core gives in that many
-minutes whatever else the machine runs; ``--clock wall`` counts wall-clock
-time.  Then the deterministic
-policy runs ``--eval-episodes`` episodes on held-out seeds (``--eval-seed``,
-``--eval-seed + 1``, ...; training episodes are drawn from ``--seed``).
+For each algorithm: ``algo("MlpPolicy", env)`` with Stable-Baselines3's default hyperparameters on one environment,
+trained until ``--steps`` environment steps or ``--minutes`` of the ``--clock``, whichever comes first (the
+training stops at the end of the step that crosses the time budget; PPO fills SB3's ``learn(total_timesteps)``
+with whole rollouts of 2048 steps a copy: ``--steps 64`` is one rollout and one update; the JSON's ``timesteps``
+are the steps taken).  ``--clock cpu`` (default) counts the process's CPU time, what one core gives in that many
+minutes whatever else the machine runs; ``--clock wall`` wall-clock time.  Then the deterministic policy runs
+``--eval-episodes`` episodes on held-out seeds (``--eval-seed``, ``--eval-seed + 1``, ...; training episodes are
+drawn from ``--seed``).
 
 Writes into ``--out`` (created if needed, files written whole):
 
-* ``<algo>_curve.csv``: one row per training episode: ``episode, timesteps,
-  wall_s, cpu_s, episode_return, length, success``;
+* ``<algo>_curve.csv``: one row per training episode: ``episode, timesteps, wall_s, cpu_s, episode_return, length, success``;
 * ``<algo>_policy.csv``: one row per ``POLICY_WINDOW`` (2048, PPO's rollout) training steps: ``timesteps,
   cpu_s``, then per action ``i`` the mean and standard deviation of the actions the algorithm sampled in that
   window (``action_mean_i``, ``action_std_i``: PPO's Gaussian samples before they are clipped to the action
@@ -36,9 +31,8 @@ Writes into ``--out`` (created if needed, files written whole):
 * ``<algo>_model.zip``: the trained policy (with ``--checkpoint-minutes M`` also
   ``<algo>_model_<k M>min.zip`` every ``M`` budget minutes, and the curve so far;
   their held-out results go into ``<algo>_eval.json``);
-* ``curves.png``: success rate of the training episodes (moving average over
-  100 episodes) against environment steps and against CPU minutes, for
-  every ``*_curve.csv`` in ``--out`` (so two runs into one folder share a plot).
+* ``curves.png``: success rate of the training episodes (moving average over 100 episodes) against environment
+  steps and against CPU minutes, for every ``*_curve.csv`` in ``--out`` (so two runs into one folder share a plot).
 
 ``--normalize`` wraps the training env in Stable-Baselines3's ``VecNormalize`` (running mean and variance of
 the observation and of the discounted return, the library's defaults: clipped at 10, ``gamma = 0.99``, the
@@ -117,6 +111,11 @@ one per ``N`` environment steps.  ``--n-steps S`` (PPO only) changes the steps a
 (default 2048; ``--n-envs 4 --n-steps 512`` keeps the default's 2048 steps an update), named in ``hyperparameters``.
 The evaluation runs one env as always; ``<algo>_eval.json`` records ``n_envs``.
 
+``--select-every M`` runs the policy on validation seeds (``--select-episodes``, ``--select-seed``; never the
+held-out ones) every ``M`` budget minutes and keeps the best as the model and every checkpoint
+(:mod:`simgrip.envs.selection`: the validations count in the budget); ``<algo>_eval.json``'s ``selection`` lists
+them, the one chosen and the last policy's held-out success beside the chosen one's.
+
 ``--threads`` sets PyTorch's intra-op threads (default 1: one core per
 training; run two trainings side by side to use two cores).
 """
@@ -144,6 +143,7 @@ from simgrip.envs.evaluation import (GAMMA, add_training_aid_arguments, check_en
                                      json_object, make_env, non_negative_int, outcomes, run_episodes, summary,
                                      training_conflict, training_files, training_seed)
 from simgrip.envs.lr_decay import BudgetDecay
+from simgrip.envs.selection import Selection, SelectionSpec, spec_from
 from simgrip.envs.training_logs import ActionWindow, write_curve, write_policy
 from simgrip.io import atomic_write, check_output_dir, check_output_files_in, write_json
 
@@ -260,7 +260,7 @@ def train(algo: str, env_id: str, *, steps: int, minutes: float, seed: int, out:
           log_std_init: float | None = None, eval_start: bool = False, critic_warmup: int = 0,
           crush_charge: tuple[float, int] | None = None, lr_decay: bool = False,
           ent_coef: float | None = None, step_charge: float | None = None, n_envs: int = 1,
-          crush_margin: float | None = None, n_steps: int | None = None) -> dict:
+          crush_margin: float | None = None, n_steps: int | None = None, selection: SelectionSpec | None = None) -> dict:
     """Train ``algo`` with library defaults within the budget, write its curve, model and evaluation
     (``env_kwargs``: ``gym.make``'s keyword arguments, for training and evaluation alike; ``normalize``: train
     behind SB3's ``VecNormalize`` with its defaults; ``action_offset``: train and evaluate behind
@@ -284,7 +284,8 @@ def train(algo: str, env_id: str, *, steps: int, minutes: float, seed: int, out:
     ``n_envs``: copies of the training env stepped one after the other, SB3's ``DummyVecEnv``, copy ``i`` seeded
     ``seed + i``; ``crush_margin``: every training step's reward lowered by it times how near the step's largest
     finger force came to the crush limit, :class:`simgrip.envs.crush_margin.CrushMargin`; ``n_steps``: PPO's steps a
-    rollout collects from each env instead of 2048)."""
+    rollout collects from each env instead of 2048; ``selection``: validate the policy periodically within the
+    budget and keep the best, :mod:`simgrip.envs.selection`)."""
     env_kwargs = dict(env_kwargs or {})
     from stable_baselines3 import PPO, SAC
     from stable_baselines3.common.callbacks import BaseCallback
@@ -299,6 +300,10 @@ def train(algo: str, env_id: str, *, steps: int, minutes: float, seed: int, out:
     spent = (lambda: time.process_time() - c_start) if clock == "cpu" else (lambda: time.perf_counter() - t_start)
 
     checkpoints = []
+    best = out / f"{algo}_model.zip"  # with a selection: the best validated policy so far
+    chooser = None if selection is None else Selection(
+        selection, budget, lambda m: evaluate(m, env_id, selection.episodes, selection.seed, env_kwargs, None,
+                                              action_offset, frame_stack, residual), lambda m: _save(m, best))
     normalizers = {}  # a checkpoint's model file -> its VecNormalize statistics (with --normalize)
 
     class Budget(BaseCallback):
@@ -306,18 +311,26 @@ def train(algo: str, env_id: str, *, steps: int, minutes: float, seed: int, out:
 
         def _on_step(self) -> bool:
             now = spent()  # one reading serves the checkpoints and the stop: the last checkpoint is never skipped
-            while checkpoint_minutes and now >= 60.0 * checkpoint_minutes * (len(checkpoints) + 1):
+            stop = chooser is not None and chooser.step(self.model, now, self.num_timesteps, spent)
+            now = now if chooser is None else spent()  # (at the last validation every checkpoint up to the budget is due)
+            while checkpoint_minutes and (now >= 60.0 * checkpoint_minutes * (len(checkpoints) + 1) or stop and
+                                          checkpoint_minutes * (len(checkpoints) + 1) <= minutes + 1e-9):
                 # the curve so far and the policy, so that a run stopped early can still be evaluated
                 tag = checkpoint_tag(checkpoint_minutes, len(checkpoints) + 1)
                 path = out / f"{algo}_model_{tag}.zip"
-                _save(self.model, path)
+                if chooser is not None and chooser.best is not None:  # the best validated by now
+                    with atomic_write(path, "wb") as fh:
+                        fh.write(best.read_bytes())
+                else:
+                    _save(self.model, path)
                 if normalize:
                     normalizers[path.name] = out / f"{algo}_vecnormalize_{tag}.pkl"
                     _save_normalizer(env, normalizers[path.name])
                 write_curve(out / f"{algo}_curve.csv", rows)
                 write_policy(out / f"{algo}_policy.csv", policy_rows)
                 checkpoints.append({"minutes": round(checkpoint_minutes * (len(checkpoints) + 1), 6),
-                                    "timesteps": int(self.num_timesteps), "file": path.name})
+                                    "timesteps": int(self.num_timesteps), "file": path.name,
+                                    **({} if chooser is None else {"validation": chooser.best})})
             window.add(self.locals["actions"])
             if window.n >= POLICY_WINDOW:
                 policy_rows.append(window.row(int(self.num_timesteps), time.process_time() - c_start,
@@ -328,7 +341,7 @@ def train(algo: str, env_id: str, *, steps: int, minutes: float, seed: int, out:
                     rows.append((len(rows), self.num_timesteps, round(time.perf_counter() - t_start, 3),
                                  round(time.process_time() - c_start, 3), float(ep["r"]), int(ep["l"]),
                                  int(bool(info.get("is_success", False)))))
-            return now < budget
+            return now < budget and not stop
 
     # make_vec_env calls the maker (gym.make of the id, or of a retired id's spec), then seeds and wraps in Monitor
     env = make_vec_env(lambda: make_env(env_id, env_kwargs, action_offset, frame_stack, scripted_start,
@@ -370,6 +383,8 @@ def train(algo: str, env_id: str, *, steps: int, minutes: float, seed: int, out:
     if not critic_warmup or (model.num_timesteps < steps and spent() < budget):  # after a warm-up: from its state
         model.learn(total_timesteps=steps - model.num_timesteps, callback=Budget(),
                     reset_num_timesteps=not critic_warmup)
+    if chooser is not None and not chooser.final:  # stopped by --steps: the last policy is a candidate too
+        chooser.run(model, spent(), model.num_timesteps, spent)
     wall, cpu = time.perf_counter() - t_start, time.process_time() - c_start
     env.close()
 
@@ -377,7 +392,8 @@ def train(algo: str, env_id: str, *, steps: int, minutes: float, seed: int, out:
     if window.n:  # the last, partial window
         policy_rows.append(window.row(int(model.num_timesteps), cpu, _log_std(model)))
     write_policy(out / f"{algo}_policy.csv", policy_rows)
-    _save(model, out / f"{algo}_model.zip")
+    if chooser is None:
+        _save(model, best)
     normalizer = None
     if normalize:
         _save_normalizer(env, out / f"{algo}_vecnormalize.pkl")
@@ -428,6 +444,10 @@ def train(algo: str, env_id: str, *, steps: int, minutes: float, seed: int, out:
         result["wrapper"] = ", ".join(wrappers)
     if start is not None:
         result["start"] = start
+    if chooser is not None:  # the held-out success of the chosen policy, and of the last beside it
+        last = evaluate(model, env_id, eval_episodes, eval_seed, env_kwargs, None, action_offset, frame_stack, residual)
+        result["selection"] = {**chooser.record(), "last": {k: last[k] for k in ("success_rate", "mean_return", "outcomes")}}
+        model = cls.load(best)
     result.update(evaluate(model, env_id, eval_episodes, eval_seed, env_kwargs, normalizer, action_offset,
                            frame_stack, residual))
     for cp in checkpoints:  # the held-out success of each checkpoint: how soon the target was reached
@@ -568,7 +588,7 @@ def main(argv=None) -> int:
                        log_std_init=args.log_std_init, eval_start=args.eval_start, lr_decay=args.lr_decay,
                        ent_coef=args.ent_coef, critic_warmup=args.critic_warmup,
                        crush_charge=_charged(args), step_charge=args.step_charge, n_envs=args.n_envs,
-                       crush_margin=args.crush_margin, n_steps=args.n_steps)
+                       crush_margin=args.crush_margin, n_steps=args.n_steps, selection=spec_from(args))
         print(json.dumps(result), flush=True)
     plot_curves(out)
     return 0
