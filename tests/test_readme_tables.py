@@ -45,7 +45,7 @@ ROWS = {
 AIDS = {"offset": "--action-offset", "peak offset": "--action-offset", "light bias": "--light-bias",
         "scripted palm": "--residual", "log std": "--log-std-init", "γ": "--gamma", "lr decay": "--lr-decay",
         "entropy": "--ent-coef", "step charge": "--step-charge", "crush margin": "--crush-margin", "envs": "--n-envs",
-        "n steps": "--n-steps"}
+        "n steps": "--n-steps", "select every": "--select-every"}
 
 
 def assert_the_hyperparameters_named(text: str, agg: dict) -> None:
@@ -54,7 +54,8 @@ def assert_the_hyperparameters_named(text: str, agg: dict) -> None:
     record's ``hyperparameters``; "step charge X" (the training reward's charge a step) at its value in the command
     and the record's ``step_charge``, "crush margin X" likewise (``crush_margin``); "N envs" (copies of the training
     env) at N in the command, the record's ``n_envs`` and its ``hyperparameters``, "n steps S" (PPO's rollout a
-    copy) at S in the command and the ``hyperparameters``; "light bias [X]" at X (0.5 where no value is named) in the command and the
+    copy) at S in the command and the ``hyperparameters``; "select every M" (the best of validations every M budget
+    minutes kept) at M in the command and the record's ``selection``; "light bias [X]" at X (0.5 where no value is named) in the command and the
     record's ``light_bias``; nothing to check where the text names none (that the options are exactly the
     aids named: AIDS)."""
     cmd = training_command(agg)
@@ -78,6 +79,10 @@ def assert_the_hyperparameters_named(text: str, agg: dict) -> None:
         value = int(named.group(1))
         assert int(cmd[cmd.index("--n-steps") + 1]) == value, (named.group(0), cmd)
         assert f"; but n_steps = {value}" in agg["hyperparameters"], (named.group(0), agg["hyperparameters"])
+    named = re.search(r"select every ([\d.]+)", text)
+    if named:  # model selection within the budget: the command's period, the record's selection
+        value = float(named.group(1))
+        assert float(cmd[cmd.index("--select-every") + 1]) == value == agg["selection"]["every_minutes"], cmd
     named = re.search(r"(\d+) envs", text)
     if named:  # copies of the training env (SB3's DummyVecEnv): the command's, the record's and its hyperparameters
         n = int(named.group(1))
