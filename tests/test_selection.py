@@ -172,3 +172,26 @@ def test_the_last_checkpoint_is_the_kept_model_and_the_validations_count_in_the_
     assert (tmp_path / cps[-1]["file"]).read_bytes() == (tmp_path / "ppo_model.zip").read_bytes()
     assert cps[-1]["success_rate"] == rec["success_rate"]
     assert rec["cpu_s"] >= sel["cpu_s"] > 0  # the validations ran inside the training's CPU time
+
+
+def test_validations_leave_the_training_as_it_was(tmp_path):
+    """The validations draw no random number (a deterministic policy on envs of their own): the same command with
+    and without them trains the same policy, episode for episode."""
+    pytest.importorskip("stable_baselines3")
+    common = ["--algo", "ppo", "--env", "simgrip/PickFragile-v7", "--steps", "4096", "--seed", "4", "--minutes", "4",
+              "--eval-episodes", "1", "--eval-seed", "8350"]
+    _example("train_sb3").main([*common, "--out", str(tmp_path / "plain")])
+    _example("train_sb3").main([*common, "--select-every", "0.005", "--select-episodes", "1",
+                                "--out", str(tmp_path / "chosen")])
+    sel = json.loads((tmp_path / "chosen" / "ppo_eval.json").read_text())["selection"]
+    assert sum(v["timesteps"] < 4096 for v in sel["validations"]) >= 2  # some ran mid-training
+
+    def rows(run, name, times):  # a CSV's rows without its time columns
+        lines = (tmp_path / run / name).read_text().splitlines()
+        return [[c for i, c in enumerate(line.split(",")) if i not in times] for line in lines]
+
+    assert rows("plain", "ppo_curve.csv", (2, 3)) == rows("chosen", "ppo_curve.csv", (2, 3))
+    assert rows("plain", "ppo_policy.csv", (1,)) == rows("chosen", "ppo_policy.csv", (1,))
+    plain = json.loads((tmp_path / "plain" / "ppo_eval.json").read_text())
+    assert plain["timesteps"] == 4096 and sel["validations"][-1]["timesteps"] == 4096
+    assert sel["last"]["success_rate"] == plain["success_rate"] and sel["last"]["mean_return"] == plain["mean_return"]
