@@ -355,3 +355,20 @@ def test_the_tuned_open_loop_members_on_unseen_seeds():
             f"of the K fingers' (95 %: {interval(k[0], 1000)} and {interval(k[1], 1000)} %), and the five members of "
             f"each grid ranked next on the two 50-seed sets in at most "
             f"{100 * max(recs['PickFragile-v7', 'most'], recs['PickMultiFragile-v7', 'most']):.1f} %") in text
+
+
+def test_the_longer_budgets_under_the_target_table_are_their_records():
+    """Each "(`--minutes M`, seeds A–B) ends at x / y / z % (`record`" under the target table: the record's budget,
+    seeds and final held-out success per seed, and the checkpoints it names ("at 15 CPU-min x / y / z %")."""
+    text = " ".join(TARGET_PAGE.read_text(encoding="utf-8").split())
+    found = re.findall(r"\(`--minutes (\d+)`, seeds (\d+)–(\d+)\) ends at ([\d /]+) %(?: \(at 15 CPU-min ([\d /]+) %\))? "
+                       r"\(`(rl_[\w/]+)`", text)
+    assert len(found) >= 2, found
+    for minutes, first, last, rates, at15, folder in found:
+        agg = json.loads((BASELINES / folder / "aggregate.json").read_text(encoding="utf-8"))
+        assert agg["minutes"] == float(minutes) and agg["seeds"] == list(range(int(first), int(last) + 1)), folder
+        summary = agg["summary"]["ppo"]
+        assert [int(v) for v in rates.split(" / ")] == [pct(x) for x in summary["final"]["success_rates"]], folder
+        if at15:
+            cp = next(c for c in summary["checkpoints"] if c["minutes"] == 15.0)
+            assert [int(v) for v in at15.split(" / ")] == [pct(x) for x in cp["success_rates"]], folder
