@@ -120,13 +120,14 @@ class Selection:
         """The time [s] the next validation is due: ``k M`` minutes, at most the budget."""
         return min(60.0 * self.spec.every_minutes * (len(self.validations) + 1), self.budget_s)
 
-    def step(self, model, now: float, timesteps: int, spent: Callable[[], float]) -> bool:
-        """Validate ``model`` if one is due at ``now`` (seconds spent); True once the validation due at the
-        budget has run (the training then stops)."""
+    def step(self, model, now: float, timesteps: int, spent: Callable[[], float]) -> tuple[float, bool]:
+        """Validate ``model`` if one is due at ``now`` (seconds spent).  Returns the seconds spent after it
+        (``spent()`` read again only where a validation ran) and whether the validation due at the budget has run
+        (the training then stops)."""
         if self.final or now + COST_FACTOR * self.cost < self.due():
-            return self.final
+            return now, self.final
         self.run(model, now, timesteps, spent)
-        return self.final
+        return spent(), self.final
 
     def run(self, model, now: float, timesteps: int, spent: Callable[[], float]) -> None:
         """Validate ``model`` now (``now``: seconds spent; ``spent()`` reads the clock again after it)."""

@@ -311,8 +311,8 @@ def train(algo: str, env_id: str, *, steps: int, minutes: float, seed: int, out:
 
         def _on_step(self) -> bool:
             now = spent()  # one reading serves the checkpoints and the stop: the last checkpoint is never skipped
-            stop = chooser is not None and chooser.step(self.model, now, self.num_timesteps, spent)
-            now = now if chooser is None else spent()  # (at the last validation every checkpoint up to the budget is due)
+            # (read again after a validation: at the last one every checkpoint up to the budget is due)
+            now, stop = (now, False) if chooser is None else chooser.step(self.model, now, self.num_timesteps, spent)
             while checkpoint_minutes and (now >= 60.0 * checkpoint_minutes * (len(checkpoints) + 1) or stop and
                                           checkpoint_minutes * (len(checkpoints) + 1) <= minutes + 1e-9):
                 # the curve so far and the policy, so that a run stopped early can still be evaluated

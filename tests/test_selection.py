@@ -44,20 +44,20 @@ def _selection(results, costs, *, every=1.0, budget_s=300.0):
 def test_a_validation_runs_when_due_less_the_dearest_cost_so_far():
     sel, clock, saved, calls = _selection([(0.2, 1.0), (0.4, 2.0), (0.4, 3.0)], [2.0, 4.0, 1.0], budget_s=150.0)
     assert sel.due() == 60.0
-    assert not sel.step("m0", 59.9, 10, clock) and calls == []  # no cost known yet: due at 60 s exactly
+    assert sel.step("m0", 59.9, 10, clock) == (59.9, False) and calls == []  # no cost known yet: due at 60 s exactly
     clock.t = 60.0
-    assert not sel.step("m1", 60.0, 20, clock) and calls == ["m1"]
+    assert sel.step("m1", 60.0, 20, clock) == (62.0, False) and calls == ["m1"]  # the clock read after it
     assert sel.cost == 2.0 and sel.due() == 120.0
     # the next starts COST_FACTOR * 2 s early, so that it ends by its due time
     early = 120.0 - COST_FACTOR * 2.0
     clock.t = early - 0.01
-    assert not sel.step("m2", clock.t, 30, clock) and len(calls) == 1
+    assert not sel.step("m2", clock.t, 30, clock)[1] and len(calls) == 1
     clock.t = early
-    assert not sel.step("m2", early, 30, clock) and calls == ["m1", "m2"]
+    assert not sel.step("m2", early, 30, clock)[1] and calls == ["m1", "m2"]
     assert sel.cost == 4.0 and sel.due() == 150.0  # the third is due at the budget, not at 180 s
     clock.t = 150.0 - COST_FACTOR * 4.0
-    assert sel.step("m3", clock.t, 40, clock)  # the one due at the budget: the training stops
-    assert sel.final and sel.step("m4", 149.0, 50, clock) and len(calls) == 3  # and nothing runs after it
+    assert sel.step("m3", clock.t, 40, clock)[1]  # the one due at the budget: the training stops
+    assert sel.final and sel.step("m4", 149.0, 50, clock) == (149.0, True) and len(calls) == 3  # nothing after
     assert [v["timesteps"] for v in sel.validations] == [20, 30, 40]
     assert [v["cpu_s"] for v in sel.validations] == [2.0, 4.0, 1.0]
     assert sel.validations[1]["minutes"] == round(early / 60.0, 4)
