@@ -24,7 +24,7 @@ from simgrip.envs.selection import selection_conflict
 __all__ = ["EpisodeResult", "GAMMA", "add_episode_arguments", "add_training_aid_arguments", "charge", "check_env_id",
            "check_training_env", "critic_warmup_conflict",
            "discount", "entropy_coefficient", "env_kwargs", "json_object", "log_std", "log_std_init_conflict",
-           "make_env", "outcome", "outcomes", "period_minutes", "positive_int", "non_negative_int", "probability", "run_episodes",
+           "make_env", "outcome", "outcomes", "positive_minutes", "positive_int", "non_negative_int", "probability", "run_episodes",
            "summary", "checkpoint_tag", "training_conflict", "training_files", "training_seed", "episode_count",
            "env_count", "rollout_steps", "MAX_EPISODES", "MAX_ENVS", "MAX_TRAINING_SEED"]
 
@@ -159,8 +159,8 @@ def training_conflict(args) -> str | None:
     return None
 
 
-def period_minutes(text: str) -> float:
-    """argparse type: a period in budget minutes, finite and > 0."""
+def positive_minutes(text: str) -> float:
+    """argparse type: a budget or a period in minutes, finite and > 0."""
     return _number_in(text, lambda x: 0.0 < x < math.inf, "(0, inf)")
 
 
@@ -239,7 +239,7 @@ def add_training_aid_arguments(parser: argparse.ArgumentParser) -> None:
         help="PPO only: the steps a rollout collects from each env, instead of the library default 2048 (with "
              "--n-envs N the rollout holds S * N steps: --n-envs 4 --n-steps 512 keeps the default's 2048 an update; "
              "recorded in the JSON)")
-    add("--select-every", type=period_minutes, default=None, metavar="M",
+    add("--select-every", type=positive_minutes, default=None, metavar="M",
         help="every M budget minutes run the policy on the validation seeds and keep the best so far as the "
              "result (simgrip.envs.selection: the validations' time counts in the budget; the held-out evaluation "
              "runs the chosen policy; recorded in the JSON; default off: the last policy)")

@@ -98,18 +98,6 @@ ALGOS = ("ppo", "sac")
 TRAIN_SCRIPT = Path(__file__).resolve().with_name("train_sb3.py")
 
 
-def _positive(kind):
-    def parse(text):
-        try:
-            v = kind(text)
-        except ValueError:
-            raise argparse.ArgumentTypeError(f"expected a positive {kind.__name__}, got {text!r}") from None
-        if not v > 0 or v != v or v == float("inf"):
-            raise argparse.ArgumentTypeError(f"expected a positive {kind.__name__}, got {text!r}")
-        return v
-    return parse
-
-
 def _non_negative_int(text: str) -> int:
     try:
         v = int(text)
@@ -431,7 +419,8 @@ def _main_combine(argv: list[str]) -> int:
 
 def build_parser() -> argparse.ArgumentParser:
     """The run mode's options (``--combine`` has its own); tests build ``run_command``'s arguments from it."""
-    from simgrip.envs.evaluation import add_training_aid_arguments, json_object, training_seed
+    from simgrip.envs.evaluation import (add_training_aid_arguments, json_object, positive_int, positive_minutes,
+                                         training_seed)
 
     p = CommandParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     p.add_argument("--env", required=True, help="registered env id, e.g. simgrip/PickFragile-v7, or a retired "
@@ -442,13 +431,13 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--algo", nargs="+", choices=ALGOS, default=list(ALGOS), help="algorithms (default ppo sac)")
     p.add_argument("--seeds", nargs="+", type=training_seed, default=[0, 1, 2],
                    help="training seeds (default 0 1 2; each at most 2**32 - 1)")
-    p.add_argument("--minutes", type=_positive(float), default=15.0, help="CPU-minute budget per run (default 15)")
-    p.add_argument("--checkpoint-minutes", type=_positive(float), default=None,
+    p.add_argument("--minutes", type=positive_minutes, default=15.0, help="CPU-minute budget per run (default 15)")
+    p.add_argument("--checkpoint-minutes", type=positive_minutes, default=None,
                    help="evaluate a checkpoint every so many CPU minutes (default: the final policy only)")
-    p.add_argument("--steps", type=_positive(int), default=10_000_000, help="environment-step cap per run (PPO: whole rollouts of 2048)")
+    p.add_argument("--steps", type=positive_int, default=10_000_000, help="environment-step cap per run (PPO: whole rollouts of 2048)")
     p.add_argument("--eval-seeds", type=_seed_range, default=(8000, 8049),
                    help="held-out evaluation seeds A-B, inclusive (default 8000-8049)")
-    p.add_argument("--jobs", type=_positive(int), default=1, help="runs at once (default 1, at most the cores)")
+    p.add_argument("--jobs", type=positive_int, default=1, help="runs at once (default 1, at most the cores)")
     add_training_aid_arguments(p)
     p.add_argument("--init-from", default=None, metavar="DIR",
                    help="PPO only: start each seed S from DIR/ppo_seed<S>/ppo_model.zip, an earlier run's policy "

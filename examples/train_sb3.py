@@ -140,8 +140,9 @@ import numpy as np  # noqa: E402
 import simgrip.envs  # noqa: E402,F401  (registers the simgrip ids)
 from simgrip.command_parser import CommandParser
 from simgrip.envs.evaluation import (GAMMA, add_training_aid_arguments, check_env_id, check_training_env, checkpoint_tag, episode_count,
-                                     json_object, make_env, non_negative_int, outcomes, run_episodes, summary,
-                                     training_conflict, training_files, training_seed)
+                                     json_object, make_env, non_negative_int, outcomes, positive_int,
+                                     positive_minutes, run_episodes, summary, training_conflict, training_files,
+                                     training_seed)
 from simgrip.envs.lr_decay import BudgetDecay
 from simgrip.envs.selection import Selection, SelectionSpec, spec_from
 from simgrip.envs.training_logs import ActionWindow, write_curve, write_policy
@@ -150,18 +151,6 @@ from simgrip.io import atomic_write, check_output_dir, check_output_files_in, wr
 ALGOS = ("ppo", "sac")
 #: training steps per row of ``<algo>_policy.csv`` (PPO's default rollout length)
 POLICY_WINDOW = 2048
-
-
-def _positive(kind):
-    def parse(text):
-        try:
-            v = kind(text)
-        except ValueError:
-            raise argparse.ArgumentTypeError(f"expected a positive {kind.__name__}, got {text!r}") from None
-        if not v > 0 or v != v or v == float("inf"):
-            raise argparse.ArgumentTypeError(f"expected a positive {kind.__name__}, got {text!r}")
-        return v
-    return parse
 
 
 def evaluate(model, env_id: str, episodes: int, seed0: int, env_kwargs=None, normalizer=None,
@@ -515,20 +504,20 @@ def main(argv=None) -> int:
                    help="registered env id, or a retired simgrip one (simgrip.envs.RETIRED; default simgrip/Pick-v1)")
     p.add_argument("--env-kwargs", type=json_object, default={}, metavar="JSON",
                    help="keyword arguments of gym.make as a JSON object, e.g. '{\"w_touch\": 0}' (default none)")
-    p.add_argument("--minutes", type=_positive(float), default=15.0, help="time budget per algorithm (default 15)")
+    p.add_argument("--minutes", type=positive_minutes, default=15.0, help="time budget per algorithm (default 15)")
     p.add_argument("--clock", choices=("cpu", "wall"), default="cpu",
                    help="what --minutes counts: the process's CPU time (default) or wall-clock time")
-    p.add_argument("--checkpoint-minutes", type=_positive(float), default=None,
+    p.add_argument("--checkpoint-minutes", type=positive_minutes, default=None,
                    help="also save the policy (and the curve so far) every so many budget minutes, "
                         "and evaluate each checkpoint at the end")
-    p.add_argument("--steps", type=_positive(int), default=10_000_000,
+    p.add_argument("--steps", type=positive_int, default=10_000_000,
                    help="environment-step budget per algorithm (PPO: whole rollouts of 2048 steps, as SB3's learn; "
                         "the steps taken are the JSON's timesteps)")
     p.add_argument("--seed", type=training_seed, default=0, help="training seed (default 0; at most 2**32 - 1)")
     p.add_argument("--eval-episodes", type=episode_count, default=50,
                    help="held-out evaluation episodes (default 50, at most 100000)")
     p.add_argument("--eval-seed", type=non_negative_int, default=1_000_000, help="first evaluation seed (default 1000000)")
-    p.add_argument("--threads", type=_positive(int), default=1,
+    p.add_argument("--threads", type=positive_int, default=1,
                    help="PyTorch threads (default 1; at most the machine's cores)")
     add_training_aid_arguments(p)
     p.add_argument("--init-from", default=None, metavar="MODEL",
