@@ -22,9 +22,9 @@ from simgrip.envs.outcome import outcome  # outcomes() counts with it; also impo
 from simgrip.envs.selection import selection_conflict
 
 __all__ = ["EpisodeResult", "GAMMA", "add_episode_arguments", "add_training_aid_arguments", "charge", "check_env_id",
-           "check_training_env", "critic_warmup_conflict",
+           "critic_warmup_conflict",
            "discount", "entropy_coefficient", "env_kwargs", "json_object", "log_std", "log_std_init_conflict",
-           "make_env", "outcome", "outcomes", "positive_minutes", "positive_int", "non_negative_int", "probability", "run_episodes",
+           "outcome", "outcomes", "positive_minutes", "positive_int", "non_negative_int", "probability", "run_episodes",
            "summary", "checkpoint_tag", "training_conflict", "training_files", "training_seed", "episode_count",
            "env_count", "rollout_steps", "MAX_EPISODES", "MAX_ENVS", "MAX_TRAINING_SEED"]
 
@@ -256,8 +256,8 @@ def add_training_aid_arguments(parser: argparse.ArgumentParser) -> None:
 
 def check_env_id(parser: argparse.ArgumentParser, env_id: str, *, retired: bool = False) -> None:
     """Exit 2 naming ``--env`` when ``env_id`` is not a registered simgrip pick env (with ``retired=True``: nor a
-    retired simgrip id of ``simgrip.envs.RETIRED``, which :func:`make_env` builds): another library's env
-    (``CartPole-v1``) has no ``is_success`` and no pick policy, and failed mid-run."""
+    retired simgrip id of ``simgrip.envs.RETIRED``, which :func:`simgrip.envs.env_options.make_env` builds):
+    another library's env (``CartPole-v1``) has no ``is_success`` and no pick policy, and failed mid-run."""
     import gymnasium as gym
 
     from simgrip.envs import RETIRED
@@ -266,115 +266,6 @@ def check_env_id(parser: argparse.ArgumentParser, env_id: str, *, retired: bool 
         parser.error(f"--env: unknown id {env_id!r}")
     if not env_id.startswith("simgrip/"):
         parser.error(f"--env: {env_id!r} is not a simgrip env (simgrip/...: the scripts read its pick info keys)")
-
-
-def make_env(env_id: str, env_kwargs: dict | None = None, action_offset=None, frame_stack: int | None = None,
-             scripted_start: float | None = None, light_bias: float | None = None, residual=None,
-             crush_charge: tuple[float, int] | None = None, step_charge: float | None = None,
-             crush_margin: float | None = None):
-    """The env of ``env_id`` (a registered id, or a retired one of ``simgrip.envs.RETIRED`` through its spec) made
-    with ``env_kwargs`` (``gym.make``'s keyword arguments), behind
-    :class:`~simgrip.envs.action_offset.ActionOffset` ``(action_offset)`` when that is given, and behind
-    Gymnasium's ``FrameStackObservation(env, frame_stack)`` when ``frame_stack`` is 2 or more (the observation
-    becomes the last ``frame_stack`` observations, oldest first, shape ``(frame_stack, n)``; after ``reset`` the
-    first one repeated): what the training and evaluation scripts build and check their options with.
-    ``scripted_start`` (training envs only): with that probability a reset starts part-way through the task's
-    scripted observation-only controller's episode (:class:`~simgrip.envs.scripted_start.ScriptedStart`, next
-    to the env, inside the offset and the frame stack).  ``light_bias`` (training envs only): with that probability
-    a reset draws the workpiece's mass from the light end of the task's range
-    (:class:`~simgrip.envs.light_bias.LightBias`, innermost).  ``residual`` (action names; training and evaluation
-    alike: it is part of the policy): the task's scripted observation-only controller drives those channels and
-    the action is added to it (:class:`~simgrip.envs.scripted_residual.ScriptedResidual`, inside the offset and
-    the frame stack; not with ``scripted_start``).  ``crush_charge`` (training envs only): ``(charge, start)``, every
-    crush's reward lowered by ``charge`` from the ``start``-th step on (:class:`~simgrip.envs.crush_charge.CrushCharge`,
-    next to ``light_bias``'s).  ``step_charge`` (training envs only): every step's reward lowered by it
-    (:class:`~simgrip.envs.step_charge.StepCharge`, next to the crush charge's).  ``crush_margin`` (training envs
-    only): every step's reward lowered by that charge times how near its largest finger force came to the hidden
-    crush limit (:class:`~simgrip.envs.crush_margin.CrushMargin`, next to the step charge's).
-
-    Raises ValueError naming the option: ``--env-kwargs`` when the env does not take ``env_kwargs`` or refuses a
-    value, ``--action-offset`` when the offset does not fit its action space (the env is closed first),
-    ``--frame-stack`` when it is not a whole number >= 1 (checked before any env is made) or is longer than the
-    env's episodes, ``--scripted-start``
-    when it is not a probability or the env has no scripted controller, ``--light-bias`` when it is not a
-    probability or the env is not a fragile task (the env is closed first), ``--residual`` when a name is not one
-    of the env's actions, the env has no scripted controller, or ``scripted_start`` is given too, ``--crush-charge``
-    and ``--crush-margin`` when the env is not a fragile task (the env is closed first)."""
-    import json
-
-    import gymnasium as gym
-
-    from simgrip.envs import make_spec
-
-    if frame_stack is not None and (isinstance(frame_stack, bool) or not isinstance(frame_stack, int)
-                                    or frame_stack < 1):
-        raise ValueError(f"--frame-stack: a whole number >= 1, got {frame_stack!r}")
-    if residual is not None and scripted_start is not None:
-        raise ValueError("--residual: not with --scripted-start (the controller would start mid-episode)")
-    kwargs = dict(env_kwargs or {})
-    try:
-        env = gym.make(make_spec(env_id), **kwargs)
-    except (TypeError, ValueError) as e:
-        raise ValueError(f"--env-kwargs: {env_id} does not take {json.dumps(kwargs)}: {e}") from None
-    if light_bias is not None:
-        from simgrip.envs.light_bias import LightBias
-
-        env = _wrap_or_close(env, LightBias, light_bias, "--light-bias")
-    if crush_charge is not None:
-        from simgrip.envs.crush_charge import CrushCharge
-
-        env = _wrap_or_close(env, lambda e, v: CrushCharge(e, *v), crush_charge, "--crush-charge")
-    if step_charge is not None:
-        from simgrip.envs.step_charge import StepCharge
-
-        env = _wrap_or_close(env, StepCharge, step_charge, "--step-charge")
-    if crush_margin is not None:
-        from simgrip.envs.crush_margin import CrushMargin
-
-        env = _wrap_or_close(env, CrushMargin, crush_margin, "--crush-margin")
-    if scripted_start is not None:
-        from simgrip.envs.scripted_start import ScriptedStart
-
-        env = _wrap_or_close(env, ScriptedStart, scripted_start, "--scripted-start")
-    if residual is not None:
-        from simgrip.envs.scripted_residual import ScriptedResidual
-
-        env = _wrap_or_close(env, ScriptedResidual, residual, "--residual")
-    if action_offset is not None:
-        from simgrip.envs.action_offset import ActionOffset
-
-        env = _wrap_or_close(env, ActionOffset, action_offset, "--action-offset")
-    if frame_stack is not None and frame_stack > 1:
-        longest = getattr(env.spec, "max_episode_steps", None)
-        if longest is not None and frame_stack > longest:
-            env.close()
-            raise ValueError(f"--frame-stack: at most the episode's {longest} steps (a longer stack only repeats "
-                             f"the first observation), got {frame_stack}")
-        env = gym.wrappers.FrameStackObservation(env, frame_stack)
-    return env
-
-
-def check_training_env(args) -> None:
-    """Build and close the training env that the parsed options of ``train_sb3.py`` / ``rl_baselines.py`` describe
-    (:func:`make_env` with their ``env``, ``env_kwargs`` and training aids), so that an option the env refuses is
-    named before any training starts; nothing is built when no option shapes the env.  Raises :func:`make_env`'s
-    ValueError, naming the option."""
-    if not (args.env_kwargs or args.frame_stack is not None or any(
-            getattr(args, name) is not None for name in ("action_offset", "scripted_start", "light_bias", "residual",
-                                                          "crush_charge", "step_charge", "crush_margin"))):
-        return
-    charged = None if args.crush_charge is None else (args.crush_charge, args.crush_charge_from)
-    make_env(args.env, args.env_kwargs, args.action_offset, args.frame_stack, args.scripted_start, args.light_bias,
-             args.residual, charged, args.step_charge, args.crush_margin).close()
-
-
-def _wrap_or_close(env, wrapper, value, option: str):
-    """``wrapper(env, value)``; on its ValueError ``env`` is closed and the error re-raised naming ``option``."""
-    try:
-        return wrapper(env, value)
-    except ValueError as e:
-        env.close()
-        raise ValueError(f"{option}: {e}") from None
 
 
 def env_kwargs(parser: argparse.ArgumentParser, args: argparse.Namespace) -> dict:

@@ -9,7 +9,7 @@ episode's mass itself, log-uniform over the lightest ``share`` of that range in 
 and hands it to the env as the reset's mass option; everything else of the episode (size, friction, crush
 ratio, pre-grasp gap, placement) is the env's own draw from the same seed, and the hidden crush limit follows
 from the drawn mass as always (``hold_force x crush ratio``).  The other resets are the env's own.  A training
-aid only: evaluation runs the registered task (:func:`simgrip.envs.evaluation.make_env` builds evaluation envs
+aid only: evaluation runs the registered task (:func:`simgrip.envs.env_options.make_env` builds evaluation envs
 without it), whose draw it leaves unchanged.  ``reset``'s info gains ``light_bias`` (True when the wrapper drew
 the mass).
 

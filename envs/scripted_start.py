@@ -14,7 +14,7 @@ steps' rewards are not the learner's: ``reset`` returns the observation and ``re
 
 This is reference-state initialisation (Peng et al. 2018, "DeepMimic"; "start from demonstration states",
 Salimans & Chen 2018), a training aid only: the learner's actions are its own from the handover on, and it is
-evaluated on the plain task from the pre-grasp (:func:`simgrip.envs.evaluation.make_env` builds evaluation envs
+evaluated on the plain task from the pre-grasp (:func:`simgrip.envs.env_options.make_env` builds evaluation envs
 without it).
 
 Why (measured on the pick-and-place, ``PlaceFragile-v5``; the Gymnasium environments page, "Pick-and-place

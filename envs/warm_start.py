@@ -214,11 +214,11 @@ def prepare_transfer(model_path, target_env, target_offset=None, *, normalize: b
     onto ``target_env`` (:func:`plan_transfer`, the source env built from its record; ``target_offset``: the
     target's action offset) and the loaded source model, checked to be of the env its record names.  Returns
     ``(record, plan, model)``; ``ValueError`` naming the option otherwise."""
-    from simgrip.envs.evaluation import make_env
+    from simgrip.envs.env_options import EnvOptions, make_env
 
     rec = source_record(model_path)
     check_source(rec, normalize=normalize, frame_stack=frame_stack)
-    src_env = make_env(rec["env"], rec.get("env_kwargs") or {})
+    src_env = make_env(rec["env"], EnvOptions(env_kwargs=rec.get("env_kwargs") or {}))
     try:
         plan = plan_transfer(src_env, target_env, rec.get("action_offset"), target_offset)
     finally:
@@ -233,12 +233,12 @@ def check_init_from(model_path, env_id: str, env_kwargs=None, target_offset=None
     """:func:`prepare_transfer` onto a fresh ``env_id`` (made with ``env_kwargs``, closed after): the example
     scripts' check of ``--init-from`` before any training (``ValueError`` naming the option; refused with a
     ``residual``, whose observation has the controller's action appended)."""
-    from simgrip.envs.evaluation import make_env
+    from simgrip.envs.env_options import EnvOptions, make_env
 
     if residual is not None:
         raise ValueError("--init-from: not with --residual (the observation has the controller's action appended)")
 
-    env = make_env(env_id, env_kwargs or {})
+    env = make_env(env_id, EnvOptions(env_kwargs=env_kwargs or {}))
     try:
         prepare_transfer(model_path, env, target_offset, normalize=normalize, frame_stack=frame_stack)
     finally:

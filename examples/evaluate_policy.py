@@ -65,9 +65,9 @@ if __name__ == "__main__":  # a Ctrl-C while the modules below load: main's one 
 
 import simgrip.envs  # noqa: E402,F401  (registers the simgrip ids)
 from simgrip.command_parser import CommandParser
-from simgrip.envs.evaluation import (charge, check_env_id, discount, episode_count, json_object, make_env,
-                                     non_negative_int, outcomes,
-                                     positive_int, probability, run_episodes, summary)
+from simgrip.envs.env_options import EnvOptions, make_env
+from simgrip.envs.evaluation import (charge, check_env_id, discount, episode_count, json_object, non_negative_int,
+                                     outcomes, positive_int, probability, run_episodes, summary)
 from simgrip.envs.light_bias import episode_mass, mass_bins
 from simgrip.envs.outcome import outcome
 
@@ -214,8 +214,10 @@ def main(argv=None) -> dict:
         if not os.path.isfile(args.model):
             p.error(f"--model: {args.model!r} is not a file")
     try:
-        env = make_env(args.env, args.env_kwargs, args.action_offset, args.frame_stack, args.scripted_start,
-                       residual=args.residual)
+        # (its --crush-charge scores the episodes: not the training wrapper of that name)
+        env = make_env(args.env, EnvOptions(env_kwargs=args.env_kwargs or {}, action_offset=args.action_offset,
+                                            frame_stack=args.frame_stack, residual=args.residual,
+                                            scripted_start=args.scripted_start))
     except ValueError as exc:
         p.error(str(exc))
     handovers: list[int] = []

@@ -472,7 +472,7 @@ def main(argv=None) -> int:
     from simgrip.io import check_output_dir, check_output_files_in, write_json
 
     check_env_id(p, args.env, retired=True)  # train_sb3.py builds a retired one
-    from simgrip.envs.evaluation import check_training_env
+    from simgrip.envs.env_options import check_training_env
 
     try:  # refused before any run starts, the env built once
         check_training_env(args)

@@ -139,10 +139,10 @@ import numpy as np  # noqa: E402
 
 import simgrip.envs  # noqa: E402,F401  (registers the simgrip ids)
 from simgrip.command_parser import CommandParser
-from simgrip.envs.evaluation import (GAMMA, add_training_aid_arguments, check_env_id, check_training_env, checkpoint_tag, episode_count,
-                                     json_object, make_env, non_negative_int, outcomes, positive_int,
-                                     positive_minutes, run_episodes, summary, training_conflict, training_files,
-                                     training_seed)
+from simgrip.envs.env_options import EnvOptions, check_training_env, make_env
+from simgrip.envs.evaluation import (GAMMA, add_training_aid_arguments, check_env_id, checkpoint_tag, episode_count,
+                                     json_object, non_negative_int, outcomes, positive_int, positive_minutes,
+                                     run_episodes, summary, training_conflict, training_files, training_seed)
 from simgrip.envs.lr_decay import BudgetDecay
 from simgrip.envs.selection import Selection, SelectionSpec, spec_from
 from simgrip.envs.training_logs import ActionWindow, write_curve, write_policy
@@ -153,13 +153,13 @@ ALGOS = ("ppo", "sac")
 POLICY_WINDOW = 2048
 
 
-def evaluate(model, env_id: str, episodes: int, seed0: int, env_kwargs=None, normalizer=None,
-             action_offset=None, frame_stack=None, residual=None) -> dict:
+def evaluate(model, env_id: str, episodes: int, seed0: int, options: EnvOptions | None = None,
+             normalizer=None) -> dict:
     """Run the deterministic policy of ``model`` for ``episodes`` episodes on seeds ``seed0 + i`` (the env made
-    with ``env_kwargs`` and behind ``action_offset``, ``frame_stack`` and ``residual``, as it was trained;
-    ``normalizer``: the ``VecNormalize`` it was trained behind, whose frozen observation statistics then normalise
-    what the policy sees)."""
-    env = make_env(env_id, env_kwargs, action_offset, frame_stack, residual=residual)
+    with ``options`` less their training aids, :meth:`simgrip.envs.env_options.EnvOptions.evaluation`, as it was
+    trained; ``normalizer``: the ``VecNormalize`` it was trained behind, whose frozen observation statistics then
+    normalise what the policy sees)."""
+    env = make_env(env_id, None if options is None else options.evaluation())
     see = (lambda obs: obs) if normalizer is None else normalizer.normalize_obs
     try:
         gamma = getattr(model, "gamma", GAMMA)  # an SB3 model's own; anything else with predict(): SB3's default
@@ -243,39 +243,25 @@ def hyperparameters(gamma: float | None, log_std_init: float | None, lr_decay=No
 
 def train(algo: str, env_id: str, *, steps: int, minutes: float, seed: int, out: Path,
           eval_episodes: int, eval_seed: int, clock: str = "cpu", checkpoint_minutes: float | None = None,
-          env_kwargs: dict | None = None, normalize: bool = False, action_offset=None, gamma: float | None = None,
-          frame_stack: int | None = None, scripted_start: float | None = None,
-          light_bias: float | None = None, init_from: str | None = None, residual=None,
-          log_std_init: float | None = None, eval_start: bool = False, critic_warmup: int = 0,
-          crush_charge: tuple[float, int] | None = None, lr_decay: bool = False,
-          ent_coef: float | None = None, step_charge: float | None = None, n_envs: int = 1,
-          crush_margin: float | None = None, n_steps: int | None = None, selection: SelectionSpec | None = None) -> dict:
+          options: EnvOptions | None = None, normalize: bool = False, gamma: float | None = None,
+          init_from: str | None = None, log_std_init: float | None = None, eval_start: bool = False,
+          critic_warmup: int = 0, lr_decay: bool = False, ent_coef: float | None = None, n_envs: int = 1,
+          n_steps: int | None = None, selection: SelectionSpec | None = None) -> dict:
     """Train ``algo`` with library defaults within the budget, write its curve, model and evaluation
-    (``env_kwargs``: ``gym.make``'s keyword arguments, for training and evaluation alike; ``normalize``: train
-    behind SB3's ``VecNormalize`` with its defaults; ``action_offset``: train and evaluate behind
-    :class:`simgrip.envs.action_offset.ActionOffset`, see the module's docstring; ``frame_stack``: train and
-    evaluate on the last ``frame_stack`` observations, :func:`simgrip.envs.evaluation.make_env`; ``gamma``: the
-    algorithm's discount instead of its default 0.99, the one hyperparameter changed; ``scripted_start``: that
-    share of the training episodes starts part-way through the scripted controller's episode,
-    :class:`simgrip.envs.scripted_start.ScriptedStart`; evaluation starts plainly; ``light_bias``: that share of the
-    training episodes' masses drawn from the light end, :class:`simgrip.envs.light_bias.LightBias`; evaluation
-    draws the task's own; ``init_from``: a saved PPO model of another run to start from,
-    :mod:`simgrip.envs.warm_start`; ``residual``: action names the scripted controller drives, the policy's action
-    added, :class:`simgrip.envs.scripted_residual.ScriptedResidual`, for training and evaluation alike;
-    ``log_std_init``: PPO's initial log standard deviation instead of 0; ``eval_start``: evaluate the policy before
-    its first update as well, recorded as ``start``; ``critic_warmup``: PPO's first steps, in whole rollouts, with
-    the policy frozen so that only the value function learns, :mod:`simgrip.envs.critic_warmup`; within ``steps``
-    and the budget; ``crush_charge``: ``(charge, start)``, the training reward of every crush from training step
-    ``start`` on lowered by ``charge``, :class:`simgrip.envs.crush_charge.CrushCharge`; evaluation runs the task;
-    ``lr_decay``: the library's learning rate falling linearly to 0 over the budget, on its clock,
-    :class:`simgrip.envs.lr_decay.BudgetDecay`; ``ent_coef``: PPO's entropy coefficient instead of 0;
-    ``step_charge``: every training step's reward lowered by it, :class:`simgrip.envs.step_charge.StepCharge`;
-    ``n_envs``: copies of the training env stepped one after the other, SB3's ``DummyVecEnv``, copy ``i`` seeded
-    ``seed + i``; ``crush_margin``: every training step's reward lowered by it times how near the step's largest
-    finger force came to the crush limit, :class:`simgrip.envs.crush_margin.CrushMargin`; ``n_steps``: PPO's steps a
-    rollout collects from each env instead of 2048; ``selection``: validate the policy periodically within the
-    budget and keep the best, :mod:`simgrip.envs.selection`)."""
-    env_kwargs = dict(env_kwargs or {})
+    (``options``: the env's keyword arguments and wrappers, :class:`simgrip.envs.env_options.EnvOptions`: training
+    behind all of them, evaluation behind those that are part of the policy, the action offset, the residual and
+    the frame stack; ``normalize``: train behind SB3's ``VecNormalize`` with its defaults; ``gamma``: the
+    algorithm's discount instead of its default 0.99, the one hyperparameter changed; ``init_from``: a saved PPO
+    model of another run to start from, :mod:`simgrip.envs.warm_start`; ``log_std_init``: PPO's initial log
+    standard deviation instead of 0; ``eval_start``: evaluate the policy before its first update as well, recorded
+    as ``start``; ``critic_warmup``: PPO's first steps, in whole rollouts, with the policy frozen so that only the
+    value function learns, :mod:`simgrip.envs.critic_warmup`; within ``steps`` and the budget; ``lr_decay``: the
+    library's learning rate falling linearly to 0 over the budget, on its clock,
+    :class:`simgrip.envs.lr_decay.BudgetDecay`; ``ent_coef``: PPO's entropy coefficient instead of 0; ``n_envs``:
+    copies of the training env stepped one after the other, SB3's ``DummyVecEnv``, copy ``i`` seeded ``seed + i``;
+    ``n_steps``: PPO's steps a rollout collects from each env instead of 2048; ``selection``: validate the policy
+    periodically within the budget and keep the best, :mod:`simgrip.envs.selection`)."""
+    options = EnvOptions() if options is None else options
     from stable_baselines3 import PPO, SAC
     from stable_baselines3.common.callbacks import BaseCallback
     from stable_baselines3.common.env_util import make_vec_env
@@ -291,8 +277,8 @@ def train(algo: str, env_id: str, *, steps: int, minutes: float, seed: int, out:
     checkpoints = []
     best = out / f"{algo}_model.zip"  # with a selection: the best validated policy so far
     chooser = None if selection is None else Selection(
-        selection, budget, lambda m: evaluate(m, env_id, selection.episodes, selection.seed, env_kwargs, None,
-                                              action_offset, frame_stack, residual), lambda m: _save(m, best))
+        selection, budget, lambda m: evaluate(m, env_id, selection.episodes, selection.seed, options),
+        lambda m: _save(m, best))
     normalizers = {}  # a checkpoint's model file -> its VecNormalize statistics (with --normalize)
 
     class Budget(BaseCallback):
@@ -333,10 +319,7 @@ def train(algo: str, env_id: str, *, steps: int, minutes: float, seed: int, out:
             return now < budget and not stop
 
     # make_vec_env calls the maker (gym.make of the id, or of a retired id's spec), then seeds and wraps in Monitor
-    env = make_vec_env(lambda: make_env(env_id, env_kwargs, action_offset, frame_stack, scripted_start,
-                                        light_bias, residual, crush_charge, step_charge, crush_margin),
-                       n_envs=n_envs,
-                       seed=seed)
+    env = make_vec_env(lambda: make_env(env_id, options), n_envs=n_envs, seed=seed)
     if normalize:
         from stable_baselines3.common.vec_env import VecNormalize
 
@@ -351,11 +334,10 @@ def train(algo: str, env_id: str, *, steps: int, minutes: float, seed: int, out:
     init = start = None
     if init_from is not None:
         init = _warm_start(model, env.envs[0] if hasattr(env, "envs") else env.venv.envs[0], init_from,
-                           action_offset)
+                           options.action_offset)
     if init_from is not None or eval_start:  # the policy before any update, evaluated once for both records
         # (VecNormalize's statistics as they start; --init-from excludes --normalize)
-        before = evaluate(model, env_id, eval_episodes, eval_seed, env_kwargs, env if normalize else None,
-                          action_offset, frame_stack, residual)
+        before = evaluate(model, env_id, eval_episodes, eval_seed, options, env if normalize else None)
         if init is not None:  # what the curriculum hands over: the copied policy on the held-out seeds
             init["eval"] = {k: before[k] for k in ("success_rate", "mean_return", "outcomes")}
         if eval_start:
@@ -391,33 +373,8 @@ def train(algo: str, env_id: str, *, steps: int, minutes: float, seed: int, out:
               "clock": clock, "budget_minutes": minutes,
               "train_episodes": len(rows), "seed": seed, "n_envs": n_envs,
               "hyperparameters": hyperparameters(gamma, log_std_init, decay, ent_coef, n_steps)}
-    if env_kwargs:
-        result["env_kwargs"] = env_kwargs
-    wrappers = []
-    if action_offset is not None:
-        result["action_offset"] = [float(x) for x in action_offset]
-        wrappers.append(f"ActionOffset({result['action_offset']})")
-    if residual is not None:
-        result["residual"] = list(residual)
-        wrappers.append(f"ScriptedResidual({list(residual)})")
-    if frame_stack is not None and frame_stack > 1:
-        result["frame_stack"] = int(frame_stack)
-        wrappers.append(f"FrameStackObservation({int(frame_stack)})")
-    if scripted_start is not None:
-        result["scripted_start"] = float(scripted_start)
-        wrappers.append(f"ScriptedStart({float(scripted_start)!r}) in training")
-    if light_bias is not None:
-        result["light_bias"] = float(light_bias)
-        wrappers.append(f"LightBias({float(light_bias)!r}) in training")
-    if crush_charge is not None:
-        result["crush_charge"] = {"charge": float(crush_charge[0]), "start": int(crush_charge[1])}
-        wrappers.append(f"CrushCharge({float(crush_charge[0])!r}, from step {int(crush_charge[1])}) in training")
-    if step_charge is not None:
-        result["step_charge"] = float(step_charge)
-        wrappers.append(f"StepCharge({float(step_charge)!r}) in training")
-    if crush_margin is not None:
-        result["crush_margin"] = float(crush_margin)
-        wrappers.append(f"CrushMargin({float(crush_margin)!r}) in training")
+    keys, wrappers = options.record()
+    result.update(keys)
     if n_envs > 1:
         wrappers.append(f"DummyVecEnv of {n_envs} copies in training")
     if normalize:
@@ -434,16 +391,14 @@ def train(algo: str, env_id: str, *, steps: int, minutes: float, seed: int, out:
     if start is not None:
         result["start"] = start
     if chooser is not None:  # the held-out success of the chosen policy, and of the last beside it
-        last = evaluate(model, env_id, eval_episodes, eval_seed, env_kwargs, None, action_offset, frame_stack, residual)
+        last = evaluate(model, env_id, eval_episodes, eval_seed, options)
         result["selection"] = {**chooser.record(), "last": {k: last[k] for k in ("success_rate", "mean_return", "outcomes")}}
         model = cls.load(best)
-    result.update(evaluate(model, env_id, eval_episodes, eval_seed, env_kwargs, normalizer, action_offset,
-                           frame_stack, residual))
+    result.update(evaluate(model, env_id, eval_episodes, eval_seed, options, normalizer))
     for cp in checkpoints:  # the held-out success of each checkpoint: how soon the target was reached
         cp_model = cls.load(out / cp["file"])
         cp_norm = _load_normalizer(normalizers[cp["file"]]) if normalize else None
-        cp.update({k: v for k, v in evaluate(cp_model, env_id, eval_episodes, eval_seed, env_kwargs, cp_norm,
-                                             action_offset, frame_stack, residual).items()
+        cp.update({k: v for k, v in evaluate(cp_model, env_id, eval_episodes, eval_seed, options, cp_norm).items()
                    if k in ("success_rate", "mean_return")})
     if checkpoints:
         result["checkpoints"] = checkpoints
@@ -490,11 +445,6 @@ def plot_curves(out: Path, window: int = 100) -> Path | None:
         fig.savefig(fh, format="png", dpi=110)
     plt.close(fig)
     return target
-
-
-def _charged(args) -> tuple[float, int] | None:
-    """``(charge, start)`` of ``--crush-charge`` and ``--crush-charge-from``, None without the first."""
-    return None if args.crush_charge is None else (args.crush_charge, args.crush_charge_from)
 
 
 def main(argv=None) -> int:
@@ -570,14 +520,11 @@ def main(argv=None) -> int:
     for algo in args.algo:
         result = train(algo, args.env, steps=args.steps, minutes=args.minutes, seed=args.seed, out=out,
                        eval_episodes=args.eval_episodes, eval_seed=args.eval_seed, clock=args.clock,
-                       checkpoint_minutes=args.checkpoint_minutes, env_kwargs=args.env_kwargs,
-                       normalize=args.normalize, action_offset=args.action_offset, gamma=args.gamma,
-                       frame_stack=args.frame_stack, scripted_start=args.scripted_start,
-                       light_bias=args.light_bias, init_from=args.init_from, residual=args.residual,
+                       checkpoint_minutes=args.checkpoint_minutes, options=EnvOptions.from_args(args),
+                       normalize=args.normalize, gamma=args.gamma, init_from=args.init_from,
                        log_std_init=args.log_std_init, eval_start=args.eval_start, lr_decay=args.lr_decay,
-                       ent_coef=args.ent_coef, critic_warmup=args.critic_warmup,
-                       crush_charge=_charged(args), step_charge=args.step_charge, n_envs=args.n_envs,
-                       crush_margin=args.crush_margin, n_steps=args.n_steps, selection=spec_from(args))
+                       ent_coef=args.ent_coef, critic_warmup=args.critic_warmup, n_envs=args.n_envs,
+                       n_steps=args.n_steps, selection=spec_from(args))
         print(json.dumps(result), flush=True)
     plot_curves(out)
     return 0

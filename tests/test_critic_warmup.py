@@ -10,11 +10,12 @@ from stable_baselines3.common.logger import Logger  # noqa: E402
 from stable_baselines3.common.torch_layers import BaseFeaturesExtractor  # noqa: E402
 
 from simgrip.envs.critic_warmup import actor_parameters, critic_fit, frozen_actor  # noqa: E402
-from simgrip.envs.evaluation import critic_warmup_conflict, make_env  # noqa: E402
+from simgrip.envs.env_options import make_env  # noqa: E402
+from simgrip.envs.evaluation import critic_warmup_conflict  # noqa: E402
 
 
 def _ppo(**kwargs):
-    env = make_vec_env(lambda: make_env("simgrip/PickFragile-v7", {}), n_envs=1, seed=5)
+    env = make_vec_env(lambda: make_env("simgrip/PickFragile-v7"), n_envs=1, seed=5)
     model = PPO("MlpPolicy", env, seed=5, verbose=0, n_steps=64, batch_size=32, n_epochs=2, **kwargs)
     model.set_logger(Logger(None, []))  # as train_sb3 does: no SB3-<time> folder per learn()
     return model

@@ -17,7 +17,7 @@ import pytest
 
 import simgrip.envs  # noqa: F401  (registers the ids)
 from simgrip.envs.crush_margin import MARGIN_ONSET, CrushMargin
-from simgrip.envs.evaluation import make_env
+from simgrip.envs.env_options import EnvOptions, make_env
 from helpers import load_example as _example, rl_baselines_args
 
 
@@ -63,14 +63,14 @@ def test_a_task_without_a_crush_limit_is_refused():
         CrushMargin(env, 0.2)
     env.close()
     with pytest.raises(ValueError, match="--crush-margin"):
-        make_env("simgrip/Pick-v1", crush_margin=0.2)
+        make_env("simgrip/Pick-v1", EnvOptions(crush_margin=0.2))
 
 
 def test_make_env_puts_it_on_the_training_env_only_where_asked():
-    env = make_env("simgrip/PickMultiFragile-v7", light_bias=0.5, step_charge=0.005, crush_margin=0.2)
+    env = make_env("simgrip/PickMultiFragile-v7", EnvOptions(light_bias=0.5, step_charge=0.005, crush_margin=0.2))
     assert isinstance(env, CrushMargin) and env.charge == 0.2
     env.close()
-    env = make_env("simgrip/PickMultiFragile-v7", step_charge=0.005)
+    env = make_env("simgrip/PickMultiFragile-v7", EnvOptions(step_charge=0.005))
     assert not isinstance(env, CrushMargin)
     env.close()
 

@@ -7,7 +7,8 @@ import numpy as np
 import pytest
 
 import simgrip.envs  # noqa: F401
-from simgrip.envs.evaluation import (GAMMA, add_episode_arguments, check_env_id, make_env, outcomes, run_episodes,
+from simgrip.envs.env_options import EnvOptions, make_env
+from simgrip.envs.evaluation import (GAMMA, add_episode_arguments, check_env_id, outcomes, run_episodes,
                                      summary)
 
 
@@ -95,22 +96,22 @@ def test_default_discount_is_sb3s():
 def test_make_env_names_the_option_it_refuses():
     from simgrip.envs.action_offset import ActionOffset
 
-    env = make_env("simgrip/PickFragile-v2", {"w_touch": 0.0}, (-0.4, 0.2))  # a retired id, through its spec
+    env = make_env("simgrip/PickFragile-v2", EnvOptions({"w_touch": 0.0}, (-0.4, 0.2)))  # a retired id (its spec)
     assert isinstance(env, ActionOffset) and env.spec.id == "simgrip/PickFragile-v2" and env.unwrapped.w_touch == 0.0
     env.close()
     with pytest.raises(ValueError, match="^--env-kwargs: simgrip/PickFragile-v7 does not take"):
-        make_env("simgrip/PickFragile-v7", {"w_nope": 1})
+        make_env("simgrip/PickFragile-v7", EnvOptions({"w_nope": 1}))
     with pytest.raises(ValueError, match="^--action-offset: offset must be 2 finite numbers"):
-        make_env("simgrip/PickFragile-v7", None, (0.1,))
+        make_env("simgrip/PickFragile-v7", EnvOptions(action_offset=(0.1,)))
     for bad in (0, -1, 2.0, True, "3"):
         with pytest.raises(ValueError, match="^--frame-stack: a whole number >= 1"):
-            make_env("simgrip/PickFragile-v7", None, None, bad)
+            make_env("simgrip/PickFragile-v7", EnvOptions(frame_stack=bad))
 
 
 def test_make_env_stacks_the_last_observations():
     plain = make_env("simgrip/PickFragile-v7")
-    one = make_env("simgrip/PickFragile-v7", None, None, 1)  # 1: the env's own observation, no wrapper
-    stacked = make_env("simgrip/PickFragile-v7", None, (-0.4, 0.2), 3)
+    one = make_env("simgrip/PickFragile-v7", EnvOptions(frame_stack=1))  # 1: the env's own observation, no wrapper
+    stacked = make_env("simgrip/PickFragile-v7", EnvOptions(action_offset=(-0.4, 0.2), frame_stack=3))
     try:
         assert type(one) is type(plain) and one.observation_space == plain.observation_space
         n = plain.observation_space.shape[0]

@@ -52,9 +52,11 @@ def test_train_sb3_evaluates_with_the_env_kwargs_it_was_given():
         def predict(self, obs, deterministic=True):
             return np.array([-0.3, 0.0], np.float32), None
 
+    from simgrip.envs.env_options import EnvOptions
+
     evaluate = _example("train_sb3").evaluate
     plain = evaluate(Closing(), "simgrip/PickFragile-v7", 1, 8000)
-    paid = evaluate(Closing(), "simgrip/PickFragile-v7", 1, 8000, {"w_touch": 0.5})
+    paid = evaluate(Closing(), "simgrip/PickFragile-v7", 1, 8000, EnvOptions({"w_touch": 0.5}))
     assert paid["mean_return"] > plain["mean_return"] + 0.5  # touch steps paid: the kwargs reached the env
 
 
@@ -62,6 +64,7 @@ def test_train_sb3_evaluates_behind_the_action_offset_it_was_given():
     import numpy as np
 
     from simgrip.envs.action_offset import ActionOffset
+    from simgrip.envs.env_options import EnvOptions
 
     class Zero:  # PPO's start: the mean action 0
         def predict(self, obs, deterministic=True):
@@ -69,7 +72,7 @@ def test_train_sb3_evaluates_behind_the_action_offset_it_was_given():
 
     evaluate = _example("train_sb3").evaluate
     held = evaluate(Zero(), "simgrip/PickFragile-v7", 2, 8000)
-    probed = evaluate(Zero(), "simgrip/PickFragile-v7", 2, 8000, None, None, [-0.4, 0.2])
+    probed = evaluate(Zero(), "simgrip/PickFragile-v7", 2, 8000, EnvOptions(action_offset=(-0.4, 0.2)))
     # the same episodes run by hand behind the wrapper: the evaluation went through it
     env = ActionOffset(gym.make("simgrip/PickFragile-v7"), [-0.4, 0.2])
     returns = []
@@ -238,7 +241,7 @@ def test_train_sb3_eval_start_is_the_untrained_policy_and_leaves_the_training_al
     from stable_baselines3 import PPO
     from stable_baselines3.common.env_util import make_vec_env
 
-    from simgrip.envs.evaluation import make_env
+    from simgrip.envs.env_options import EnvOptions, make_env
 
     mod = _example("train_sb3")
     common = ["--algo", "ppo", "--env", "simgrip/PickFragile-v7", "--steps", "64", "--seed", "3",
@@ -248,9 +251,9 @@ def test_train_sb3_eval_start_is_the_untrained_policy_and_leaves_the_training_al
     mod.main(common + ["--out", str(tmp_path / "b")])
     a, b = (json.loads((tmp_path / k / "ppo_eval.json").read_text()) for k in "ab")
     res = ["curvature", "palm_z"]
-    env = make_vec_env(lambda: make_env("simgrip/PickFragile-v7", {}, residual=res), n_envs=1, seed=3)
+    env = make_vec_env(lambda: make_env("simgrip/PickFragile-v7", EnvOptions(residual=res)), n_envs=1, seed=3)
     fresh = PPO("MlpPolicy", env, seed=3, verbose=0, **mod.model_kwargs("ppo", None, -1.0))
-    ref = mod.evaluate(fresh, "simgrip/PickFragile-v7", 2, 8320, residual=res)
+    ref = mod.evaluate(fresh, "simgrip/PickFragile-v7", 2, 8320, EnvOptions(residual=res))
     assert a["start"] == {k: ref[k] for k in ("success_rate", "mean_return", "mean_discounted_return", "outcomes")}
     assert "start" not in b
     assert {k: a[k] for k in ("timesteps", "success_rate", "mean_return")} == \
@@ -297,14 +300,14 @@ def test_train_sb3_critic_warmup_holds_the_policy_then_trains_it(tmp_path):
     from stable_baselines3.common.env_util import make_vec_env
 
     from simgrip.envs.critic_warmup import actor_parameters
-    from simgrip.envs.evaluation import make_env
+    from simgrip.envs.env_options import make_env
 
     mod = _example("train_sb3")
     common = ["--algo", "ppo", "--env", "simgrip/PickFragile-v7", "--seed", "4", "--critic-warmup", "2048",
               "--eval-episodes", "1", "--eval-seed", "8330"]
     mod.main(common + ["--steps", "2048", "--out", str(tmp_path / "a")])
     mod.main(common + ["--steps", "4096", "--out", str(tmp_path / "b")])
-    env = make_vec_env(lambda: make_env("simgrip/PickFragile-v7", {}), n_envs=1, seed=4)
+    env = make_vec_env(lambda: make_env("simgrip/PickFragile-v7"), n_envs=1, seed=4)
     policy = PPO("MlpPolicy", env, seed=4, verbose=0).policy
     fresh = policy.state_dict()
     ids = {id(p) for p in actor_parameters(policy)}

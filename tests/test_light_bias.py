@@ -8,7 +8,7 @@ import pytest
 
 import simgrip.envs  # noqa: F401  (registers the ids)
 from simgrip.envs import FRAGILE_ENV_IDS
-from simgrip.envs.evaluation import make_env
+from simgrip.envs.env_options import EnvOptions, make_env
 from simgrip.envs.light_bias import LIGHT_SHARE, LightBias
 from simgrip.envs.scripted_start import ScriptedStart
 
@@ -102,12 +102,12 @@ def test_an_env_that_is_not_fragile_is_refused():
 
 
 def test_make_env_puts_it_innermost_and_names_the_option():
-    env = make_env(MULTI, None, (-0.4, 0.2), 2, 0.25, 0.5)
+    env = make_env(MULTI, EnvOptions(action_offset=(-0.4, 0.2), frame_stack=2, scripted_start=0.25, light_bias=0.5))
     scripted = env.env.env  # FrameStackObservation(ActionOffset(ScriptedStart(LightBias(...))))
     assert isinstance(scripted, ScriptedStart) and isinstance(scripted.env, LightBias)
     assert scripted.env.probability == 0.5
     env.close()
     with pytest.raises(ValueError, match="^--light-bias: probability must be"):
-        make_env(MULTI, None, None, None, None, 2.0)
+        make_env(MULTI, EnvOptions(light_bias=2.0))
     with pytest.raises(ValueError, match="^--light-bias: env: "):
-        make_env("simgrip/Pick-v1", None, None, None, None, 0.5)
+        make_env("simgrip/Pick-v1", EnvOptions(light_bias=0.5))

@@ -9,7 +9,7 @@ import pytest
 
 import simgrip.envs  # noqa: F401  (registers the ids)
 from simgrip.envs.scripted_policies import policy_maker
-from simgrip.envs.evaluation import make_env
+from simgrip.envs.env_options import EnvOptions, make_env
 from simgrip.envs.scripted_residual import PALM_CHANNELS, ScriptedResidual
 from helpers import load_example, rl_baselines_args
 
@@ -84,9 +84,9 @@ def test_bad_channels_are_refused_naming_them(channels, word):
 
 def test_an_env_without_a_scripted_controller_and_a_scripted_start_are_refused():
     with pytest.raises(ValueError, match="--residual: env"):
-        make_env("simgrip/Pick-v1", residual=["palm_z"])
+        make_env("simgrip/Pick-v1", EnvOptions(residual=("palm_z",)))
     with pytest.raises(ValueError, match="--residual: not with --scripted-start"):
-        make_env(PLACE, residual=list(PALM_CHANNELS), scripted_start=0.5)
+        make_env(PLACE, EnvOptions(residual=tuple(PALM_CHANNELS), scripted_start=0.5))
     with pytest.raises(RuntimeError, match="reset"):
         ScriptedResidual(gym.make(PLACE), PALM_CHANNELS).step(np.zeros(3, np.float32))
 
@@ -94,7 +94,7 @@ def test_an_env_without_a_scripted_controller_and_a_scripted_start_are_refused()
 def test_make_env_puts_the_offset_outside_the_residual():
     """``make_env(offset, residual)``: the env performs ``clip(b + clip(a + offset))``; PPO's zero start then
     closes through the valve at 0.4 of its rate while the script moves the palm."""
-    wrapped = make_env(PLACE, action_offset=[-0.4, 0.0, 0.0], residual=list(PALM_CHANNELS))
+    wrapped = make_env(PLACE, EnvOptions(action_offset=(-0.4, 0.0, 0.0), residual=tuple(PALM_CHANNELS)))
     assert isinstance(wrapped.env, ScriptedResidual)
     obs_w, _ = wrapped.reset(seed=8030)
     ref = ScriptedResidual(gym.make(PLACE), PALM_CHANNELS)

@@ -9,7 +9,7 @@ import pytest
 import simgrip.envs  # noqa: F401  (registers the ids)
 from simgrip.envs import FRAGILE_ENV_IDS
 from simgrip.envs.baselines import policy_maker
-from simgrip.envs.evaluation import make_env
+from simgrip.envs.env_options import EnvOptions, make_env
 from simgrip.envs.scripted_start import ScriptedStart
 
 PLACE = "simgrip/PlaceFragile-v8"
@@ -109,11 +109,11 @@ def test_an_env_without_a_scripted_controller_is_refused():
 
 
 def test_make_env_puts_it_next_to_the_env_and_names_the_option():
-    env = make_env(PLACE, None, (-0.4, 0.0, 0.2), 2, 0.25)
+    env = make_env(PLACE, EnvOptions(action_offset=(-0.4, 0.0, 0.2), frame_stack=2, scripted_start=0.25))
     inner = env.env.env  # FrameStackObservation(ActionOffset(ScriptedStart(...)))
     assert isinstance(inner, ScriptedStart) and inner.probability == 0.25
     env.close()
     with pytest.raises(ValueError, match="^--scripted-start: probability must be"):
-        make_env(PLACE, None, None, None, 2.0)
+        make_env(PLACE, EnvOptions(scripted_start=2.0))
     with pytest.raises(ValueError, match="^--scripted-start: env: "):
-        make_env("simgrip/Pick-v1", None, None, None, 0.5)
+        make_env("simgrip/Pick-v1", EnvOptions(scripted_start=0.5))

@@ -15,7 +15,7 @@ import numpy as np
 import pytest
 
 import simgrip.envs  # noqa: F401  (registers the ids)
-from simgrip.envs.evaluation import make_env
+from simgrip.envs.env_options import EnvOptions, make_env
 from simgrip.envs.step_charge import StepCharge
 from helpers import load_example as _example, rl_baselines_args
 
@@ -48,7 +48,7 @@ def test_a_bad_charge_is_refused_by_name(bad):
 
 
 def test_make_env_puts_it_on_the_training_env_only_where_asked():
-    env = make_env("simgrip/PickMultiFragile-v7", light_bias=0.5, step_charge=0.005)
+    env = make_env("simgrip/PickMultiFragile-v7", EnvOptions(light_bias=0.5, step_charge=0.005))
     assert isinstance(env, StepCharge) and env.charge == 0.005
     env.close()
     env = make_env("simgrip/PickMultiFragile-v7")
