@@ -57,7 +57,6 @@ from __future__ import annotations
 import math
 
 import mujoco
-import numpy as np
 
 from simgrip.envs.arguments import check_range
 from simgrip.envs.pick_fragile_v3 import FragilePickEnvV3, FragilePickMultiEnvV3

@@ -24,7 +24,6 @@ from simgrip.envs.arguments import set_task_arguments
 from simgrip.envs.palm_servo import palm_command
 from simgrip.envs.arguments import check_bool as _bool
 from simgrip.envs.arguments import check_number as _num
-from simgrip.envs.arguments import check_positive as _pos
 from simgrip.envs.arguments import check_range as _range
 from simgrip.envs.pick_multi_model import build_pick_multi_model, half_height, set_workpiece
 from simgrip.envs.pick_multi_observation import MultiObservation, MultiReward, WorkpieceContactForces
