@@ -375,29 +375,37 @@ def test_the_longer_budgets_under_the_target_table_are_their_records():
 
 
 def test_the_peak_probe_screens_on_the_learning_page_are_their_records():
-    """The learning page's table of the claws and the place behind the peak probe: each seed's checkpoints, its
-    final crushes and those within the step of the first touch (its ``evaluate_seedS.json``, the final model run
-    on the same held-out seeds) and its steps are the record's; the aids are the peak probe's offset."""
+    """The learning page's table of the stop-62 screens (the claws and the place behind the peak probe, the place
+    with the crush margin, and its control): each seed's checkpoints, its final crushes and those within the step
+    of the first touch (its ``evaluate_seedS.json``, the final model run on the same held-out seeds), its steps,
+    and the offset and the margin the options name are the record's."""
     lines = (ROOT / "docs" / "learning.md").read_text(encoding="utf-8").splitlines()
-    start = next(i for i, line in enumerate(lines) if line.startswith("| task | 5 / 10 / 15 CPU-min, seed 0 |"))
+    start = next(i for i, line in enumerate(lines) if line.startswith("| task | options | seed 0 at 5 / 10 / 15"))
     rows = []
     for line in lines[start + 2:]:
         if not line.startswith("|"):
             break
         rows.append([c.strip() for c in line.strip().strip("|").split("|")])
-    assert [r[0] for r in rows] == ["place", "cradle", "sphere"]
-    for task, seed0, seed1, crushes, steps, _, folder in rows:
+    assert [r[0] for r in rows] == ["place", "place", "place", "cradle", "sphere"]
+    for task, options, seed0, seed1, crushes, steps, folder in rows:
         folder = folder.strip("`/")
         agg = json.loads((BASELINES / folder / "aggregate.json").read_text(encoding="utf-8"))
         assert measured_as(agg) == TASKS[task] and agg["seeds"] == [0, 1] and agg["minutes"] == 15.0, folder
-        assert float(training_command(agg)[training_command(agg).index("--action-offset") + 1]) == -0.2, folder
+        command = training_command(agg)
+        assert float(command[command.index("--action-offset") + 1]) == (-0.2 if "peak" in options else -0.4)
+        margin = re.search(r"crush margin ([\d.]+)", options)
+        assert ("--crush-margin" in command) == bool(margin), folder
+        if margin:
+            value = float(margin.group(1))
+            assert float(command[command.index("--crush-margin") + 1]) == value == agg["crush_margin"], folder
         said = re.findall(r"(\d+) \((\d+)\)", crushes)
         for seed, cells in enumerate((seed0, seed1)):
             run = json.loads((BASELINES / folder / f"ppo_seed{seed}.json").read_text(encoding="utf-8"))
             assert [int(v) for v in cells.rstrip(" %").split(" / ")] == \
                 [pct(c["success_rate"]) for c in run["checkpoints"]], (folder, seed)
             ev = json.loads((BASELINES / folder / f"evaluate_seed{seed}.json").read_text(encoding="utf-8"))
-            assert ev["success_rate"] == run["success_rate"] and ev["eval_seeds"] == [8000, 8049] and ev["episodes"] == 50
+            assert ev["success_rate"] == run["success_rate"] and ev["eval_seeds"] == [8000, 8049]
+            assert ev["episodes"] == 50
             assert (int(said[seed][0]), int(said[seed][1])) == (ev["outcomes"]["crushed"],
                                                                 ev["crushed_after_touch"]["0"]), (folder, seed)
             assert f"{round(run['timesteps'] / 1000)}k" == steps.split(", ")[seed], (folder, seed)
