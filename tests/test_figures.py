@@ -377,7 +377,6 @@ def test_links_and_jobs_are_bounded_as_every_command(tmp_path, capsys, monkeypat
     accepted; one figure with ``--jobs 64`` started a local cluster of one worker for one task.  Now: the
     simulate command's bound on the links, the sweep's on the jobs, and no more workers than figures."""
     from simgrip.cli import main
-    from simgrip.figures import make
     from simgrip.params import MAX_LINKS
 
     seen = []

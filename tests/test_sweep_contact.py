@@ -10,7 +10,6 @@ import pytest
 from simgrip.cli import main
 from simgrip.parallel.runner import RunnerOptions
 from simgrip.sweep.grid import make_grid
-from simgrip.sweep.run import run_sweep
 from simgrip.sweep.store import PARTIAL, read_csv
 
 ONE = RunnerOptions(jobs=1, progress=False)

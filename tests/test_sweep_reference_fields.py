@@ -6,7 +6,6 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from simgrip.reference.elastica import ElasticaSolution
 from simgrip.sweep import reference as sweep_reference
 from simgrip.sweep.grid import make_grid
 
