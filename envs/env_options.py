@@ -78,9 +78,7 @@ class EnvOptions:
 
     def shaped(self) -> bool:
         """Whether any option shapes the env (False: :func:`make_env` gives the registered task itself)."""
-        return bool(self.env_kwargs) or any(getattr(self, name) is not None for name in (
-            "action_offset", "frame_stack", "residual", "scripted_start", "light_bias", "crush_charge",
-            "step_charge", "crush_margin"))
+        return self != EnvOptions()
 
     def record(self) -> tuple[dict, list[str]]:
         """What ``<algo>_eval.json`` records of the options: its keys (``env_kwargs``, ``action_offset``,

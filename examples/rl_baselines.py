@@ -98,16 +98,6 @@ ALGOS = ("ppo", "sac")
 TRAIN_SCRIPT = Path(__file__).resolve().with_name("train_sb3.py")
 
 
-def _non_negative_int(text: str) -> int:
-    try:
-        v = int(text)
-    except ValueError:
-        raise argparse.ArgumentTypeError(f"expected a non-negative integer, got {text!r}") from None
-    if v < 0:
-        raise argparse.ArgumentTypeError(f"expected a non-negative integer, got {text!r}")
-    return v
-
-
 def _seed_range(text: str) -> tuple[int, int]:
     """``A-B`` (inclusive, 0 <= A <= B, at most ``MAX_EPISODES`` seeds: one evaluation episode each) or one seed
     ``A``."""
@@ -419,8 +409,8 @@ def _main_combine(argv: list[str]) -> int:
 
 def build_parser() -> argparse.ArgumentParser:
     """The run mode's options (``--combine`` has its own); tests build ``run_command``'s arguments from it."""
-    from simgrip.envs.evaluation import (add_training_aid_arguments, json_object, positive_int, positive_minutes,
-                                         training_seed)
+    from simgrip.envs.evaluation import (add_training_aid_arguments, json_object, non_negative_int, positive_int,
+                                         positive_minutes, training_seed)
 
     p = CommandParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     p.add_argument("--env", required=True, help="registered env id, e.g. simgrip/PickFragile-v7, or a retired "
@@ -444,7 +434,7 @@ def build_parser() -> argparse.ArgumentParser:
                         "on another task (simgrip.envs.warm_start; default: fresh policies)")
     p.add_argument("--eval-start", action="store_true",
                    help="each run also evaluates its policy before the first update (JSON: start)")
-    p.add_argument("--critic-warmup", type=_non_negative_int, default=0, metavar="STEPS",
+    p.add_argument("--critic-warmup", type=non_negative_int, default=0, metavar="STEPS",
                    help="PPO only: each run's first STEPS steps (whole rollouts of 2048) with the policy frozen, "
                         "only the value function learning (simgrip.envs.critic_warmup; default 0: none)")
     p.add_argument("--out", required=True, help="output folder")
