@@ -75,6 +75,11 @@ the summary and the command is equal) over different seeds, copies their ``<algo
 ``aggregate.json`` (the seeds merged, the summary recomputed, ``combined_from``: each batch's command) and
 ``learning_curves.png``; the runs' folders (models, logs) stay in the batches.
 
+A recorded batch is rerun step for step on a machine of another speed by its own command with ``--replay FOLDER``
+(the batch's folder, e.g. ``docs/baselines/rl_pick_v7_peak_log_std_gamma``): each run checkpoints and stops at its
+record's steps instead of at the clock's, and its JSON's ``replay`` sets its results beside the record's
+(``identical`` when all are equal; :mod:`simgrip.envs.budget_replay`, which says what cannot be replayed).
+
 Ctrl-C, or SIGTERM (``kill``, ``timeout``, a batch scheduler), stops every running child (SIGTERM, then SIGKILL
 after 5 s) and exits 130 with one line.  Exit 2 (one
 line) on a bad argument, 1 when a run failed (its log names why; the others are still aggregated).
@@ -165,7 +170,35 @@ def run_command(algo: str, seed: int, args, folder: Path) -> list[str]:
     if spec is not None:
         cmd += ["--select-every", repr(spec.every_minutes), "--select-episodes", str(spec.episodes),
                 "--select-seed", str(spec.seed)]
+    if getattr(args, "replay", None) is not None:
+        cmd += ["--replay", str(replay_record(args.replay, algo, seed))]
     return cmd
+
+
+def replay_record(folder, algo: str, seed: int) -> Path:
+    """The record ``--replay FOLDER`` replays for ``(algo, seed)``: the batch's ``<algo>_seed<S>.json``."""
+    return Path(folder) / f"{algo}_seed{seed}.json"
+
+
+def _check_replay(args, jobs) -> str | None:
+    """Why ``--replay`` cannot replay one of the runs ``jobs`` (None: it can): each run's record must be there and
+    be that run's, checked by ``train_sb3.py``'s own rule on the command it will run
+    (:mod:`simgrip.envs.budget_replay`)."""
+    import importlib.util
+
+    spec = importlib.util.spec_from_file_location("_train_sb3", TRAIN_SCRIPT)
+    train_sb3 = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(train_sb3)
+    parser = train_sb3.build_parser()
+    for algo, seed, cmd, _ in jobs:
+        record = replay_record(args.replay, algo, seed)
+        if not record.is_file():
+            return f"--replay: no record of {algo} seed {seed} in {str(args.replay)!r} (expected {record.name})"
+        try:
+            train_sb3.replay_schedule(parser.parse_args(cmd[2:]))
+        except ValueError as e:
+            return f"{e} ({record})"
+    return None
 
 
 def hyperparameters(args) -> str:
@@ -437,6 +470,10 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--critic-warmup", type=non_negative_int, default=0, metavar="STEPS",
                    help="PPO only: each run's first STEPS steps (whole rollouts of 2048) with the policy frozen, "
                         "only the value function learning (simgrip.envs.critic_warmup; default 0: none)")
+    p.add_argument("--replay", default=None, metavar="FOLDER",
+                   help="rerun the batch recorded in FOLDER (its <algo>_seed<S>.json, this command being its own) "
+                        "with each run checkpointed and stopped at its record's steps instead of the clock's "
+                        "(simgrip.envs.budget_replay); each run's JSON compares the results as replay")
     p.add_argument("--out", required=True, help="output folder")
     return p
 
@@ -489,6 +526,10 @@ def main(argv=None) -> int:
         p.error(str(e))
     jobs = [(a, s, run_command(a, s, args, out / f"{a}_seed{s}"), out / f"{a}_seed{s}") for a in algos
             for s in args.seeds]
+    if args.replay is not None:
+        why = _check_replay(args, jobs)
+        if why:
+            p.error(why)
     from simgrip.interrupt import signals_as_interrupt
 
     try:
@@ -531,9 +572,16 @@ def main(argv=None) -> int:
            if (spec := spec_from(args)) is not None else {}),
         **({"init_from": str(args.init_from), "init_command": init_command} if args.init_from is not None else {}),
         **({"wrapper": "VecNormalize (SB3 defaults: observation and return)"} if args.normalize else {}),
+        **({"replay": str(args.replay)} if args.replay is not None else {}),
         "command": [Path(sys.argv[0]).name] + list(sys.argv[1:] if argv is None else argv)})
     plot(summary, results, out / "learning_curves.png")
     _print_summary(summary)
+    for r in results:
+        rep = r.get("replay")
+        if rep:
+            (mine, theirs) = rep["success_rate"]
+            print(f"{r['algo']} seed {r['seed']}: {'identical to' if rep['identical'] else 'differs from'} the "
+                  f"record ({mine} against {theirs} held-out success, {rep['timesteps'][0]} steps)", flush=True)
     failed = [f"{a}_seed{s}" for (a, s), c in codes.items() if c != 0]
     if failed or any(r["returncode"] != 0 for r in results):
         bad = failed or [f"{r['algo'].lower()}_seed{r['seed']}" for r in results if r["returncode"] != 0]

@@ -116,6 +116,11 @@ held-out ones) every ``M`` budget minutes and keeps the best as the model and ev
 (:mod:`simgrip.envs.selection`: the validations count in the budget); ``<algo>_eval.json``'s ``selection`` lists
 them, the one chosen and the last policy's held-out success beside the chosen one's.
 
+``--replay RECORD`` reruns a recorded run (this command being that run's, checked field by field) with the budget
+read from the record's steps instead of the clock: it checkpoints and stops at the record's steps however fast this
+machine is, and ``<algo>_eval.json``'s ``replay`` sets its results beside the record's, ``identical`` when every one
+is equal (:mod:`simgrip.envs.budget_replay`; every run records its package ``versions``).
+
 ``--threads`` sets PyTorch's intra-op threads (default 1: one core per
 training; run two trainings side by side to use two cores).
 """
@@ -139,6 +144,7 @@ import numpy as np  # noqa: E402
 
 import simgrip.envs  # noqa: E402,F401  (registers the simgrip ids)
 from simgrip.command_parser import CommandParser
+from simgrip.envs.budget_replay import compare, load_schedule, versions
 from simgrip.envs.env_options import EnvOptions, check_training_env, make_env
 from simgrip.envs.evaluation import (GAMMA, add_training_aid_arguments, check_env_id, checkpoint_tag, episode_count,
                                      json_object, non_negative_int, outcomes, positive_int, positive_minutes,
@@ -246,7 +252,7 @@ def train(algo: str, env_id: str, *, steps: int, minutes: float, seed: int, out:
           options: EnvOptions | None = None, normalize: bool = False, gamma: float | None = None,
           init_from: str | None = None, log_std_init: float | None = None, eval_start: bool = False,
           critic_warmup: int = 0, lr_decay: bool = False, ent_coef: float | None = None, n_envs: int = 1,
-          n_steps: int | None = None, selection: SelectionSpec | None = None) -> dict:
+          n_steps: int | None = None, selection: SelectionSpec | None = None, replay=None) -> dict:
     """Train ``algo`` with library defaults within the budget, write its curve, model and evaluation
     (``options``: the env's keyword arguments and wrappers, :class:`simgrip.envs.env_options.EnvOptions`: training
     behind all of them, evaluation behind those that are part of the policy, the action offset, the residual and
@@ -260,7 +266,9 @@ def train(algo: str, env_id: str, *, steps: int, minutes: float, seed: int, out:
     :class:`simgrip.envs.lr_decay.BudgetDecay`; ``ent_coef``: PPO's entropy coefficient instead of 0; ``n_envs``:
     copies of the training env stepped one after the other, SB3's ``DummyVecEnv``, copy ``i`` seeded ``seed + i``;
     ``n_steps``: PPO's steps a rollout collects from each env instead of 2048; ``selection``: validate the policy
-    periodically within the budget and keep the best, :mod:`simgrip.envs.selection`)."""
+    periodically within the budget and keep the best, :mod:`simgrip.envs.selection`; ``replay``: a
+    :class:`simgrip.envs.budget_replay.ReplaySchedule`, the budget read from a record's steps instead of the clock,
+    and the held-out results compared with the record's as ``replay``)."""
     options = EnvOptions() if options is None else options
     from stable_baselines3 import PPO, SAC
     from stable_baselines3.common.callbacks import BaseCallback
@@ -273,6 +281,9 @@ def train(algo: str, env_id: str, *, steps: int, minutes: float, seed: int, out:
     t_start, c_start = time.perf_counter(), time.process_time()
     budget = 60.0 * minutes
     spent = (lambda: time.process_time() - c_start) if clock == "cpu" else (lambda: time.perf_counter() - t_start)
+    progress = [0]  # the steps taken, as the last callback saw them (what a replay's clock reads)
+    if replay is not None:
+        spent = lambda: replay.seconds(progress[0])  # noqa: E731
 
     checkpoints = []
     best = out / f"{algo}_model.zip"  # with a selection: the best validated policy so far
@@ -285,6 +296,7 @@ def train(algo: str, env_id: str, *, steps: int, minutes: float, seed: int, out:
         """Record every finished training episode; checkpoint; stop when the budget is spent."""
 
         def _on_step(self) -> bool:
+            progress[0] = self.num_timesteps
             now = spent()  # one reading serves the checkpoints and the stop: the last checkpoint is never skipped
             # (read again after a validation: at the last one every checkpoint up to the budget is due)
             now, stop = (now, False) if chooser is None else chooser.step(self.model, now, self.num_timesteps, spent)
@@ -372,7 +384,8 @@ def train(algo: str, env_id: str, *, steps: int, minutes: float, seed: int, out:
     result = {"algo": algo.upper(), "env": env_id, "timesteps": int(model.num_timesteps), "wall_s": round(wall, 1), "cpu_s": round(cpu, 1),
               "clock": clock, "budget_minutes": minutes,
               "train_episodes": len(rows), "seed": seed, "n_envs": n_envs,
-              "hyperparameters": hyperparameters(gamma, log_std_init, decay, ent_coef, n_steps)}
+              "hyperparameters": hyperparameters(gamma, log_std_init, decay, ent_coef, n_steps),
+              "versions": versions()}
     keys, wrappers = options.record()
     result.update(keys)
     if n_envs > 1:
@@ -402,6 +415,8 @@ def train(algo: str, env_id: str, *, steps: int, minutes: float, seed: int, out:
                    if k in ("success_rate", "mean_return")})
     if checkpoints:
         result["checkpoints"] = checkpoints
+    if replay is not None:
+        result["replay"] = {"from": replay.source, **compare(result, replay.record)}
     write_json(out / f"{algo}_eval.json", result)
     return result
 
@@ -447,7 +462,7 @@ def plot_curves(out: Path, window: int = 100) -> Path | None:
     return target
 
 
-def main(argv=None) -> int:
+def build_parser() -> argparse.ArgumentParser:
     p = CommandParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     p.add_argument("--algo", nargs="+", choices=ALGOS, default=list(ALGOS), help="algorithms, trained one after the other")
     p.add_argument("--env", default="simgrip/Pick-v1",
@@ -479,7 +494,35 @@ def main(argv=None) -> int:
                    help="PPO only: its first STEPS environment steps (rounded up to whole rollouts of 2048) with the "
                         "policy frozen, so that only the value function learns (simgrip.envs.critic_warmup; "
                         "within --steps and --minutes; default 0: none)")
+    p.add_argument("--replay", default=None, metavar="RECORD",
+                   help="checkpoint and stop at the steps of the run recorded in RECORD (its <algo>_eval.json, or "
+                        "rl_baselines.py's <algo>_seed<S>.json) instead of at the clock's, this command being that "
+                        "run's; the JSON's replay compares the results (simgrip.envs.budget_replay)")
     p.add_argument("--out", required=True, help="output folder")
+    return p
+
+
+def replay_schedule(args):
+    """The :class:`simgrip.envs.budget_replay.ReplaySchedule` of ``args.replay`` for the command ``args`` (None
+    without ``--replay``); ValueError naming what the record and the command disagree on."""
+    if args.replay is None:
+        return None
+    if len(args.algo) != 1:
+        raise ValueError(f"--replay: one --algo, the record's (got {' '.join(args.algo)})")
+    identity = {"algo": args.algo[0], "env": args.env, "seed": args.seed, "clock": args.clock,
+                "budget_minutes": args.minutes, "n_envs": args.n_envs,
+                "hyperparameters": hyperparameters(args.gamma, args.log_std_init, None, args.ent_coef, args.n_steps),
+                "eval_seeds": [args.eval_seed, args.eval_seed + args.eval_episodes - 1],
+                **EnvOptions.from_args(args).record()[0]}
+    schedule = load_schedule(args.replay, identity, checkpoint_minutes=args.checkpoint_minutes,
+                             lr_decay=args.lr_decay, selection=spec_from(args) is not None)
+    if args.steps < schedule.timesteps:
+        raise ValueError(f"--replay: --steps {args.steps} stops before the record's {schedule.timesteps} steps")
+    return schedule
+
+
+def main(argv=None) -> int:
+    p = build_parser()
     args = p.parse_args(argv)
     why = training_conflict(args)  # before the rl extra is looked for
     if why:
@@ -492,6 +535,10 @@ def main(argv=None) -> int:
     check_env_id(p, args.env, retired=True)
     try:  # refused before any training, the env built once
         check_training_env(args)
+    except ValueError as e:
+        p.error(str(e))
+    try:
+        schedule = replay_schedule(args)
     except ValueError as e:
         p.error(str(e))
     try:  # after the options and the env are checked: a bad one is named whether the rl extra is there or not
@@ -524,7 +571,7 @@ def main(argv=None) -> int:
                        normalize=args.normalize, gamma=args.gamma, init_from=args.init_from,
                        log_std_init=args.log_std_init, eval_start=args.eval_start, lr_decay=args.lr_decay,
                        ent_coef=args.ent_coef, critic_warmup=args.critic_warmup, n_envs=args.n_envs,
-                       n_steps=args.n_steps, selection=spec_from(args))
+                       n_steps=args.n_steps, selection=spec_from(args), replay=schedule)
         print(json.dumps(result), flush=True)
     plot_curves(out)
     return 0

@@ -1,0 +1,183 @@
+"""A learned run's budget replayed in environment steps: the same training on a machine of another speed.
+
+A training's budget is CPU time (``examples/train_sb3.py --minutes M``), and what a CPU-minute buys moves with
+the machine: the place task's aided command took 715k-719k steps in 15 CPU-minutes when its record was made and
+480k-540k on the same machine on later days (``docs/learning.md``, "Steps per CPU-minute").  A record's numbers
+therefore reproduce only within the spread that the machine's speed adds.  Every decision the budget makes is
+taken at a step, and the record keeps those steps: each checkpoint's ``timesteps`` (the step at which the time
+spent first reached ``k`` checkpoint periods) and the final ``timesteps`` (the step at which it reached the
+budget).  :class:`ReplaySchedule` is a clock that reads those steps instead of the time: at each recorded step it
+gives exactly the budget time the decision there needed, and between two of them a time in between (linear in the
+steps, always short of the next decision's time), so a replayed run (``train_sb3.py --replay RECORD``,
+``rl_baselines.py --replay FOLDER``) checkpoints and stops at the record's steps whatever the machine's speed.
+
+The training itself is deterministic in the steps (its seed fixes the environment's and the learner's random
+numbers; one torch thread), so a replay on the same software trains the same policy bit for bit, and its held-out
+results equal the record's: ``replay["identical"]`` in the replay's ``<algo>_eval.json`` says whether the final
+steps, success rate, mean return and outcomes, and every checkpoint's steps, success rate and mean return, are
+equal.  Other versions of MuJoCo, PyTorch, Stable-Baselines3 or NumPy, or another CPU's arithmetic, may change
+the last bits of the physics or of an update, after which the runs part: the replay is then a run of the same
+steps, a new sample of the recipe at the record's step count.  Each run records the versions it ran with
+(``versions``).
+
+What cannot be replayed (refused before any training, naming why): a run whose budget was not what stopped it
+(stopped by its ``--steps`` cap: rerun that command), a learning rate that falls over the budget (``--lr-decay``:
+it was read from the CPU clock at every update, which the record does not keep), validations within the budget
+(``--select-every``: when each ran depended on what the earlier ones cost), and a record of another experiment
+(algorithm, env, seed, budget, clock, hyperparameters, environment options, held-out seeds: each must be the
+command's own).
+"""
+
+from __future__ import annotations
+
+import json
+import math
+from dataclasses import dataclass
+from pathlib import Path
+
+__all__ = ["IDENTITY_KEYS", "OPTION_KEYS", "ReplaySchedule", "compare", "load_schedule", "versions"]
+
+#: the fields of a run's record that a replay's command must give alike (besides the options below)
+IDENTITY_KEYS = ("algo", "env", "seed", "clock", "budget_minutes", "hyperparameters", "eval_seeds")
+#: :meth:`simgrip.envs.env_options.EnvOptions.record`'s keys (each recorded only where set)
+OPTION_KEYS = ("env_kwargs", "action_offset", "residual", "frame_stack", "scripted_start", "light_bias",
+               "crush_charge", "step_charge", "crush_margin")
+
+
+@dataclass(frozen=True)
+class ReplaySchedule:
+    """Budget seconds as a function of the training's steps (module docstring).
+
+    ``anchors``: ``(timesteps, seconds)`` pairs, both non-decreasing, from ``(0, 0.0)`` to ``(timesteps,
+    budget_s)``: each checkpoint's step and period, then the final step and the budget.  ``source``: the record's
+    path; ``record``: its contents (what :func:`compare` compares with)."""
+
+    anchors: tuple
+    budget_s: float
+    source: str
+    record: dict
+
+    @property
+    def timesteps(self) -> int:
+        """The record's final steps, where the replay stops."""
+        return int(self.anchors[-1][0])
+
+    def seconds(self, timesteps: int) -> float:
+        """The budget time [s] the clock reads after ``timesteps`` steps: at an anchor's step its time (the largest,
+        where several share the step), strictly between two anchors' steps a time strictly below the later one's."""
+        anchors = self.anchors
+        lo, hi = 0, len(anchors)
+        while lo < hi:  # the first anchor beyond timesteps
+            mid = (lo + hi) // 2
+            if anchors[mid][0] <= timesteps:
+                lo = mid + 1
+            else:
+                hi = mid
+        if lo == len(anchors):  # at or past the last step: the budget (the clock never reads past it)
+            return self.budget_s
+        s_a, t_a = anchors[lo - 1]
+        s_b, t_b = anchors[lo]
+        if timesteps == s_a:
+            return float(t_a)
+        t = t_a + (t_b - t_a) * (timesteps - s_a) / (s_b - s_a)
+        return min(t, math.nextafter(t_b, -math.inf))
+
+
+def versions() -> dict:
+    """The versions of what a training's numbers depend on (Python and the packages that compute), as a run
+    records them (``versions``); a package that is not installed is None."""
+    import platform
+    from importlib import metadata
+
+    found = {"python": platform.python_version()}
+    for name in ("mujoco", "numpy", "gymnasium", "stable-baselines3", "torch"):
+        try:
+            found[name] = metadata.version(name)
+        except metadata.PackageNotFoundError:
+            found[name] = None
+    return found
+
+
+def _read(path) -> dict:
+    try:
+        record = json.loads(Path(path).read_text())
+    except (OSError, ValueError) as e:
+        raise ValueError(f"--replay: cannot read the record {str(path)!r} ({e})") from None
+    if not isinstance(record, dict):
+        raise ValueError(f"--replay: {str(path)!r} is not a run's record (a JSON object)")
+    return record
+
+
+def load_schedule(path, identity: dict, *, checkpoint_minutes: float | None, lr_decay: bool = False,
+                  selection: bool = False) -> ReplaySchedule:
+    """The schedule of the run recorded at ``path`` (``train_sb3.py``'s ``<algo>_eval.json``, or
+    ``rl_baselines.py``'s ``<algo>_seed<S>.json``), checked against the replay's command.
+
+    ``identity``: the command's own values of :data:`IDENTITY_KEYS` and of the options it sets
+    (:data:`OPTION_KEYS`); ``checkpoint_minutes``: its checkpoint period; ``lr_decay``, ``selection``: whether it
+    decays the learning rate or validates within the budget (both refused).  Raises ValueError naming what
+    differs or why the run cannot be replayed (module docstring)."""
+    if lr_decay:
+        raise ValueError("--replay: --lr-decay cannot be replayed (the learning rate followed the CPU clock at each "
+                         "update, which the record does not keep)")
+    if selection:
+        raise ValueError("--replay: --select-every cannot be replayed (when each validation ran depended on what the "
+                         "earlier ones cost)")
+    record = _read(path)
+    if record.get("returncode", 0) != 0 or "success_rate" not in record or "timesteps" not in record:
+        raise ValueError(f"--replay: {str(path)!r} records no finished run")
+    if "selection" in record:
+        raise ValueError(f"--replay: {str(path)!r} validated within its budget (--select-every), which cannot be "
+                         "replayed")
+    for key in IDENTITY_KEYS:
+        have, want = record.get(key), identity.get(key)
+        if key == "algo":
+            have = None if have is None else str(have).lower()
+        if have != want:
+            raise ValueError(f"--replay: the record's {key} is {have!r}, this command's {want!r}")
+    for key in OPTION_KEYS:
+        if record.get(key) != identity.get(key):
+            raise ValueError(f"--replay: the record's {key} is {record.get(key)!r}, this command's "
+                             f"{identity.get(key)!r}")
+    if record.get("n_envs", 1) != identity.get("n_envs", 1):
+        raise ValueError(f"--replay: the record's n_envs is {record.get('n_envs', 1)!r}, this command's "
+                         f"{identity.get('n_envs', 1)!r}")
+    budget = 60.0 * float(record["budget_minutes"])
+    spent = float(record["cpu_s"] if record["clock"] == "cpu" else record["wall_s"])
+    final = int(record["timesteps"])
+    if spent < budget:
+        raise ValueError(f"--replay: {str(path)!r} was stopped by its step cap at {final} steps, not by its budget; "
+                         f"rerun its command with --steps {final}")
+    checkpoints = record.get("checkpoints") or []
+    periods = [float(c["minutes"]) for c in checkpoints]
+    if checkpoints:
+        want = [round(checkpoint_minutes * (k + 1), 6) for k in range(len(checkpoints))] if checkpoint_minutes \
+            else None
+        if want != periods:
+            raise ValueError(f"--replay: the record's checkpoints are at {periods} minutes; this command's "
+                             f"--checkpoint-minutes {checkpoint_minutes} gives others")
+    elif checkpoint_minutes and checkpoint_minutes <= float(record["budget_minutes"]) + 1e-9:
+        raise ValueError(f"--replay: the record has no checkpoints; this command's --checkpoint-minutes "
+                         f"{checkpoint_minutes} adds some")
+    anchors = [(0, 0.0)] + [(int(c["timesteps"]), 60.0 * float(c["minutes"])) for c in checkpoints] + [(final, budget)]
+    if any(b[0] < a[0] or b[1] < a[1] for a, b in zip(anchors, anchors[1:])):
+        raise ValueError(f"--replay: {str(path)!r}'s checkpoints are out of order")
+    return ReplaySchedule(tuple(anchors), budget, str(path), record)
+
+
+def compare(result: dict, record: dict) -> dict:
+    """``result`` (a replay's held-out results) beside ``record``'s: per quantity ``[replay, record]``, and
+    ``identical``: the final steps, success rate, mean return and outcomes, and every checkpoint's steps, success
+    rate and mean return, all equal."""
+    keys = ("timesteps", "success_rate", "mean_return", "outcomes")
+    out = {k: [result.get(k), record.get(k)] for k in keys}
+    same = all(a == b for a, b in out.values())
+    cps = []
+    for mine, theirs in zip(result.get("checkpoints") or [], record.get("checkpoints") or []):
+        row = {"minutes": mine.get("minutes")}
+        for k in ("timesteps", "success_rate", "mean_return"):
+            row[k] = [mine.get(k), theirs.get(k)]
+            same = same and mine.get(k) == theirs.get(k)
+        cps.append(row)
+    same = same and len(result.get("checkpoints") or []) == len(record.get("checkpoints") or [])
+    return {**out, "checkpoints": cps, "identical": bool(same)}
