@@ -2,7 +2,7 @@
 
 A training's budget is CPU time (``examples/train_sb3.py --minutes M``), and what a CPU-minute buys moves with
 the machine: the place task's aided command took 715k-719k steps in 15 CPU-minutes when its record was made and
-480k-540k on the same machine on later days (``docs/learning.md``, "Steps per CPU-minute").  A record's numbers
+480k-539k on later days (``docs/learning.md``, "The budget replayed in steps").  A record's numbers
 therefore reproduce only within the spread that the machine's speed adds.  Every decision the budget makes is
 taken at a step, and the record keeps those steps: each checkpoint's ``timesteps`` (the step at which the time
 spent first reached ``k`` checkpoint periods) and the final ``timesteps`` (the step at which it reached the
@@ -15,10 +15,15 @@ The training itself is deterministic in the steps (its seed fixes the environmen
 numbers; one torch thread), so a replay on the same software trains the same policy bit for bit, and its held-out
 results equal the record's: ``replay["identical"]`` in the replay's ``<algo>_eval.json`` says whether the final
 steps, success rate, mean return and outcomes, and every checkpoint's steps, success rate and mean return, are
-equal.  Other versions of MuJoCo, PyTorch, Stable-Baselines3 or NumPy, or another CPU's arithmetic, may change
-the last bits of the physics or of an update, after which the runs part: the replay is then a run of the same
-steps, a new sample of the recipe at the record's step count.  Each run records the versions it ran with
-(``versions``).
+equal (measured: the pinch's aided command run for 4 CPU-minutes and replayed on the same machine, identical over
+168k steps and 82 updates).  Other versions of MuJoCo, PyTorch, Stable-Baselines3 or NumPy, or another CPU's
+arithmetic (the learner's matrix kernels follow the instruction set), change the last bits of the physics or of an
+update, after which the runs part: the replay is then a run of the same steps, a new sample of the recipe at the
+record's step count (measured: seed 0 of the pinch's discount batch, recorded a day earlier when the machine
+gave 1.7 times the steps per CPU-minute, replayed at its 968,002 steps, gave 66 / 84 / 68 % at its
+checkpoints against the record's 80 / 70 / 84 %, parted by the first checkpoint; the record, made before runs
+recorded their versions, cannot say whether the host or a package differed).  Each run records the versions it ran
+with (``versions``).
 
 What cannot be replayed (refused before any training, naming why): a run whose budget was not what stopped it
 (stopped by its ``--steps`` cap: rerun that command), a learning rate that falls over the budget (``--lr-decay``:
