@@ -1,4 +1,4 @@
-"""A learned run's budget replayed in environment steps: the same training on a machine of another speed.
+"""A learned run's budget replayed in environment steps: the record's steps on a machine of another speed.
 
 A training's budget is CPU time (``examples/train_sb3.py --minutes M``), and what a CPU-minute buys moves with
 the machine: the place task's aided command took 715k-719k steps in 15 CPU-minutes when its record was made and
@@ -12,8 +12,8 @@ steps, always short of the next decision's time), so a replayed run (``train_sb3
 ``rl_baselines.py --replay FOLDER``) checkpoints and stops at the record's steps whatever the machine's speed.
 
 The training itself is deterministic in the steps (its seed fixes the environment's and the learner's random
-numbers; one torch thread), so a replay on the same software trains the same policy bit for bit, and its held-out
-results equal the record's: ``replay["identical"]`` in the replay's ``<algo>_eval.json`` says whether the final
+numbers; one torch thread), so a replay on the same machine and software trains the same policy bit for bit, and
+its held-out results equal the record's: ``replay["identical"]`` in the replay's ``<algo>_eval.json`` says whether the final
 steps, success rate, mean return and outcomes, and every checkpoint's steps, success rate and mean return, are
 equal (measured: the pinch's aided command run for 4 CPU-minutes and replayed on the same machine, identical over
 168k steps and 82 updates).  Other versions of MuJoCo, PyTorch, Stable-Baselines3 or NumPy, or another CPU's

@@ -75,10 +75,11 @@ the summary and the command is equal) over different seeds, copies their ``<algo
 ``aggregate.json`` (the seeds merged, the summary recomputed, ``combined_from``: each batch's command) and
 ``learning_curves.png``; the runs' folders (models, logs) stay in the batches.
 
-A recorded batch is rerun step for step on a machine of another speed by its own command with ``--replay FOLDER``
-(the batch's folder, e.g. ``docs/baselines/rl_pick_v7_peak_log_std_gamma``): each run checkpoints and stops at its
-record's steps instead of at the clock's, and its JSON's ``replay`` sets its results beside the record's
-(``identical`` when all are equal; :mod:`simgrip.envs.budget_replay`, which says what cannot be replayed).
+A recorded batch is rerun at its record's steps, whatever this machine's speed, by its own command with ``--replay
+FOLDER`` (the batch's folder, e.g. ``docs/baselines/rl_pick_v7_peak_log_std_gamma``): each run checkpoints and stops
+at its record's steps instead of at the clock's, and its JSON's ``replay`` sets its results beside the record's
+(``identical`` when all are equal: on the same machine and software they are; elsewhere the runs part, and the
+replay is a new draw at the same steps; :mod:`simgrip.envs.budget_replay`, which says what cannot be replayed).
 
 Ctrl-C, or SIGTERM (``kill``, ``timeout``, a batch scheduler), stops every running child (SIGTERM, then SIGKILL
 after 5 s) and exits 130 with one line.  Exit 2 (one

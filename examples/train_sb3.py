@@ -119,7 +119,8 @@ them, the one chosen and the last policy's held-out success beside the chosen on
 ``--replay RECORD`` reruns a recorded run (this command being that run's, checked field by field) with the budget
 read from the record's steps instead of the clock: it checkpoints and stops at the record's steps however fast this
 machine is, and ``<algo>_eval.json``'s ``replay`` sets its results beside the record's, ``identical`` when every one
-is equal (:mod:`simgrip.envs.budget_replay`; every run records its package ``versions``).
+is equal (on the same machine and software; elsewhere the runs part: :mod:`simgrip.envs.budget_replay`; every run
+records its package ``versions``).
 
 ``--threads`` sets PyTorch's intra-op threads (default 1: one core per
 training; run two trainings side by side to use two cores).
