@@ -4,7 +4,8 @@ A reference's digests are MuJoCo's physics to the last bit, so each file stores 
 versions under which its replay was seen to give every recorded digest: the one it was recorded with, and each
 later one added by ``python tests/test_env_*_reference.py --add-version`` (which replays the whole file under
 the installed MuJoCo and adds its version only when nothing differs).  Under any other version the tests skip,
-saying so.
+saying so.  A host whose arithmetic gives other last bits for the same actions adds its own digest set beside the
+file (``--add-host``, :func:`add_host`); a replay must equal one set whole.
 """
 
 from __future__ import annotations
@@ -17,6 +18,38 @@ import numpy as np
 def recorded_versions(ref) -> list[str]:
     """The MuJoCo versions ``ref`` (an open ``.npz``) holds for, oldest first."""
     return [str(v) for v in np.atleast_1d(ref["mujoco_version"])]
+
+
+def host_sets(path: Path) -> list[Path]:
+    """The reference at ``path`` and its other hosts' digest sets beside it (``<stem>.host<i>.npz``), in order."""
+    return [path] + sorted(path.parent.glob(f"{path.stem}.host*.npz"))
+
+
+def host_digests(path: Path) -> list[tuple[list[str], dict]]:
+    """Each digest set of the reference at ``path`` (:func:`host_sets`): its MuJoCo versions and its digests
+    (``d...`` arrays).  The same recorded actions replayed on another host can give other last bits (its CPU's
+    vector instructions, the MuJoCo build's), so a reference may hold one set a host that reproduced it; a replay
+    passes when it equals one set whole, so any change of an env's output still fails everywhere."""
+    out = []
+    for p in host_sets(path):
+        with np.load(p) as ref:
+            out.append((recorded_versions(ref), {k: ref[k] for k in ref.files if k.startswith("d")}))
+    return out
+
+
+def add_host(path: Path, got: dict) -> Path:  # pragma: no cover - maintenance command
+    """Write this host's digests ``got`` (replayed from the reference's own actions) as the next digest set beside
+    ``path``, for the installed MuJoCo; unless one set equals them already (then nothing is written)."""
+    import mujoco
+
+    for versions, digests in host_digests(path):
+        if digests.keys() == got.keys() and all(np.array_equal(digests[k], got[k]) for k in got):
+            raise SystemExit(f"{path.name}: this host reproduces a recorded set already")
+    with np.load(path) as ref:
+        ids = ref["ids"]
+    target = path.with_name(f"{path.stem}.host{len(host_sets(path))}.npz")
+    np.savez_compressed(target, mujoco_version=np.array([mujoco.__version__]), ids=ids, **got)
+    return target
 
 
 def skip_unless_recorded(ref) -> None:

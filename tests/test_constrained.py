@@ -67,6 +67,22 @@ def test_grip_I_at_kappa_minus_10_touches_the_top_corner():
     assert eq.N == pytest.approx(19.8724, abs=1e-3)
 
 
+@pytest.mark.parametrize("n", [16, 24, 32])
+def test_no_link_cuts_the_box_s_corner(n):
+    """From its own start (as the full-contact references call it) the chain at kappa = -10 rests a link on the
+    corner; no link passes inside the box between a node on its top and one on its face.  (Such a state has every
+    node outside and a lower energy: at n = 16 a host's round-off once left node 4 on the top's plane and node 5 on
+    the face's just below the corner's arms, so the corner's signed distance was not applied to link 4,
+    ``contact_geometry.ARM_TOL``.)"""
+    eq = solve_constrained("I", STANDARD, Uniform(-10.0), n, box=Box(depth=0.4))
+    assert eq.kinds() == {"corner": 1}
+    top = eq.tip[1] + 0.4
+    s = np.linspace(0.0, 1.0, 201)[:, None, None]
+    points = (eq.nodes[:-1][None] * (1 - s) + eq.nodes[1:][None] * s).reshape(-1, 2)
+    inside = (points[:, 0] < 0.3 - 1e-9) & (points[:, 1] < top - 1e-9)
+    assert not inside.any(), points[inside][:3]
+
+
 def test_grip_II_rests_the_box_on_its_bottom_corner():
     """Grip II at kappa = 10: the box (bottom face 0.4 l below the tip) rests on the rod at its corner,
     which pushes the rod down; the tip's friction then holds the box down (F_f > 0)."""

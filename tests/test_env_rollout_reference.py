@@ -34,7 +34,8 @@ from pathlib import Path
 import numpy as np
 
 sys.path.insert(0, str(Path(__file__).parent))
-from reference_versions import add_installed_version, recorded_versions, skip_unless_recorded  # noqa: E402
+from reference_versions import (add_host, add_installed_version, host_digests, recorded_versions,  # noqa: E402
+                                skip_unless_recorded)
 from test_env_step_reference import _digest  # noqa: E402  (the canonical digest of a step's output)
 
 DATA = Path(__file__).parent / "data" / "env_rollout_reference.npz"
@@ -108,42 +109,64 @@ def _record() -> None:  # pragma: no cover - regenerates the reference
     np.savez_compressed(DATA, **arrays)
 
 
-def _mismatches(ref) -> tuple[list[str], int]:
-    """Where the replay of every recorded id under the installed MuJoCo differs from ``ref`` (empty: nowhere),
-    and how many resets the recorded runs hold."""
+def _replay_all(ref) -> dict:
+    """This host's digests of every recorded run, keyed as the reference's (``d<k>_<run>``)."""
     import simgrip.envs  # noqa: F401  (registers the ids)
 
-    out, resets = [], 0
+    got = {}
     for k, env_id in enumerate(ref["ids"].tolist()):
         env = _make(env_id)
         try:
             for run in RUNS:
                 actions = ref[f"a{k}_{run}"]  # (stored: a change of numpy's random streams changes nothing here)
-                got = np.frombuffer(b"".join(_rollout(env, SEED + k, actions)), dtype=np.uint64)
-                want = ref[f"d{k}_{run}"]
-                bad = np.flatnonzero(got[:want.size] != want[:got.size])
-                if bad.size or got.size != want.size:
-                    out.append(f"{env_id}, {run} run: output differs from the reference at digest "
-                               f"{int(bad[0]) if bad.size else min(got.size, want.size)} ({got.size} replayed, "
-                               f"{want.size} recorded)")
-                resets += want.size - STEPS - 1
+                got[f"d{k}_{run}"] = np.frombuffer(b"".join(_rollout(env, SEED + k, actions)), dtype=np.uint64)
         finally:
             env.close()
+    return got
+
+
+def _compare(ids: list, got: dict, want: dict) -> tuple[list[str], int]:
+    """Where the digests ``got`` differ from the set ``want`` (empty: nowhere), and how many resets it holds."""
+    out, resets = [], 0
+    for k, env_id in enumerate(ids):
+        for run in RUNS:
+            g, w = got[f"d{k}_{run}"], want[f"d{k}_{run}"]
+            bad = np.flatnonzero(g[:w.size] != w[:g.size])
+            if bad.size or g.size != w.size:
+                out.append(f"{env_id}, {run} run: output differs from the reference at digest "
+                           f"{int(bad[0]) if bad.size else min(g.size, w.size)} ({g.size} replayed, "
+                           f"{w.size} recorded)")
+            resets += w.size - STEPS - 1
     return out, resets
 
 
+def _mismatches(ref) -> tuple[list[str], int]:
+    """Where the replay of every recorded id under the installed MuJoCo differs from ``ref`` (empty: nowhere),
+    and how many resets the recorded runs hold."""
+    return _compare(ref["ids"].tolist(), _replay_all(ref), {k: ref[k] for k in ref.files if k.startswith("d")})
+
+
 def test_long_rollouts_match_the_reference():
+    import mujoco
+
+    sets = [d for versions, d in host_digests(DATA) if mujoco.__version__ in versions]
     with np.load(DATA) as ref:  # closed at the end (an open NpzFile warns when collected)
-        skip_unless_recorded(ref)
-        bad, resets = _mismatches(ref)
-    assert not bad, bad[0]
-    assert resets > 10, "the runs should reach terminations (and the resets after them)"
+        if not sets:
+            skip_unless_recorded(ref)  # (skips, naming the versions recorded)
+        ids, got = ref["ids"].tolist(), _replay_all(ref)
+    found = [_compare(ids, got, want) for want in sets]
+    match = [resets for bad, resets in found if not bad]
+    assert match, found[0][0][0]  # one recorded set, whole
+    assert match[0] > 10, "the runs should reach terminations (and the resets after them)"
 
 
 if __name__ == "__main__":  # pragma: no cover
-    if sys.argv[1:] not in ([], ["--regenerate"], ["--add-version"]):
-        raise SystemExit("usage: python tests/test_env_rollout_reference.py [--regenerate | --add-version]")
-    if sys.argv[1:] == ["--add-version"]:
+    if sys.argv[1:] not in ([], ["--regenerate"], ["--add-version"], ["--add-host"]):
+        raise SystemExit("usage: python tests/test_env_rollout_reference.py [--regenerate | --add-version | --add-host]")
+    if sys.argv[1:] == ["--add-host"]:
+        with np.load(DATA) as ref:
+            print(add_host(DATA, _replay_all(ref)))
+    elif sys.argv[1:] == ["--add-version"]:
         with np.load(DATA) as ref:
             found, _ = _mismatches(ref)
         add_installed_version(DATA, found)

@@ -23,7 +23,7 @@ from pathlib import Path
 import numpy as np
 
 sys.path.insert(0, str(Path(__file__).parent))
-from reference_versions import add_installed_version, skip_unless_recorded  # noqa: E402
+from reference_versions import add_host, add_installed_version, host_digests, skip_unless_recorded  # noqa: E402
 
 DATA = Path(__file__).parent / "data" / "env_step_reference.npz"
 SEED = 4321  # episode seeds SEED, SEED + 1 (the scripted and the random episode)
@@ -111,38 +111,59 @@ def _record() -> None:  # pragma: no cover - regenerates the reference
     np.savez_compressed(DATA, **arrays)
 
 
-def _mismatches(ref) -> list[str]:
-    """Where the replay of every recorded id under the installed MuJoCo differs from ``ref`` (empty: nowhere)."""
+def _replay_all(ref) -> dict:
+    """This host's digests of every recorded episode, keyed as the reference's (``d<k>_<e>``)."""
     import simgrip.envs  # noqa: F401  (registers the ids)
 
-    out = []
+    got = {}
     for k, env_id in enumerate(ref["ids"].tolist()):
         env = _make(env_id)  # a retired id through retired_spec (no deprecation notice)
         try:
             for e in (0, 1):
-                got = np.frombuffer(b"".join(_replay(env, SEED + e, ref[f"a{k}_{e}"])), dtype=np.uint64)
-                want = ref[f"d{k}_{e}"]
-                bad = [i for i in range(min(got.size, want.size)) if got[i] != want[i]]
-                if bad or got.size != want.size:
-                    out.append(f"{env_id}, episode {e}: output differs from the reference at "
-                               f"{'reset' if bad and bad[0] == 0 else 'step %d' % (bad[0] if bad else min(got.size, want.size))}"
-                               f" ({got.size - 1} steps replayed, {want.size - 1} recorded)")
+                got[f"d{k}_{e}"] = np.frombuffer(b"".join(_replay(env, SEED + e, ref[f"a{k}_{e}"])), dtype=np.uint64)
         finally:
             env.close()
+    return got
+
+
+def _compare(ids: list, got: dict, want: dict) -> list[str]:
+    """Where the digests ``got`` differ from the set ``want`` (empty: nowhere)."""
+    out = []
+    for k, env_id in enumerate(ids):
+        for e in (0, 1):
+            g, w = got[f"d{k}_{e}"], want[f"d{k}_{e}"]
+            bad = [i for i in range(min(g.size, w.size)) if g[i] != w[i]]
+            if bad or g.size != w.size:
+                out.append(f"{env_id}, episode {e}: output differs from the reference at "
+                           f"{'reset' if bad and bad[0] == 0 else 'step %d' % (bad[0] if bad else min(g.size, w.size))}"
+                           f" ({g.size - 1} steps replayed, {w.size - 1} recorded)")
     return out
 
 
+def _mismatches(ref) -> list[str]:
+    """Where the replay of every recorded id under the installed MuJoCo differs from ``ref`` (empty: nowhere)."""
+    return _compare(ref["ids"].tolist(), _replay_all(ref), {k: ref[k] for k in ref.files if k.startswith("d")})
+
+
 def test_env_steps_match_the_reference():
+    import mujoco
+
+    sets = [d for versions, d in host_digests(DATA) if mujoco.__version__ in versions]
     with np.load(DATA) as ref:  # closed at the end (an open NpzFile warns when collected)
-        skip_unless_recorded(ref)
-        bad = _mismatches(ref)
-    assert not bad, bad[0]
+        if not sets:
+            skip_unless_recorded(ref)  # (skips, naming the versions recorded)
+        ids, got = ref["ids"].tolist(), _replay_all(ref)
+    found = [_compare(ids, got, want) for want in sets]
+    assert any(not bad for bad in found), found[0][0]  # one recorded set, whole
 
 
 if __name__ == "__main__":  # pragma: no cover
-    if sys.argv[1:] not in ([], ["--regenerate"], ["--add-version"]):
-        raise SystemExit("usage: python tests/test_env_step_reference.py [--regenerate | --add-version]")
-    if sys.argv[1:] == ["--add-version"]:
+    if sys.argv[1:] not in ([], ["--regenerate"], ["--add-version"], ["--add-host"]):
+        raise SystemExit("usage: python tests/test_env_step_reference.py [--regenerate | --add-version | --add-host]")
+    if sys.argv[1:] == ["--add-host"]:
+        with np.load(DATA) as ref:
+            print(add_host(DATA, _replay_all(ref)))
+    elif sys.argv[1:] == ["--add-version"]:
         with np.load(DATA) as ref:
             found = _mismatches(ref)
         add_installed_version(DATA, found)

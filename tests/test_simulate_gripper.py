@@ -36,7 +36,10 @@ def test_record_has_the_planar_fields_and_one_record_per_finger(capsys, options,
         assert set(f) >= {"normal_force", "friction_force", "tip", "contact"}
         assert f["normal_force"] == pytest.approx(first["normal_force"], abs=1e-9)  # symmetric grip
     # the weight K M is carried: the friction forces on the rods sum to -K M
-    assert sum(f["friction_force"] for f in rec["fingers"]) == pytest.approx(-3 * STANDARD.M, abs=rec["residual"])
+    # (within the settle's residual, which bounds that balance's error, and the round-off of a sum of forces ~15: the
+    # error can equal the residual to the last bits)
+    assert sum(f["friction_force"] for f in rec["fingers"]) == pytest.approx(-3 * STANDARD.M,
+                                                                             abs=rec["residual"] + 1e-12)
     assert rec["min_eigenvalue"] > 0
 
 

@@ -106,6 +106,11 @@ class Spec:
     pairs: np.ndarray  # (p, 3) int: node k, link j, side sign (+1 left of link j, -1 right)
 
 
+#: how near a face's plane a node counts as on it when deciding which links straddle the box's corner (over l:
+#: far above the round-off of the solver's active constraints, ~1e-15, far below any link, 1/n)
+ARM_TOL = 1e-9
+
+
 def _corner(geo: Geometry, sp: Spec):
     """The box's corner ``(b/2, Y(l) + sd depth)`` repeated for every link, and its derivative (n, 2, n)."""
     n = sp.n
@@ -137,8 +142,13 @@ def _blocks(geo: Geometry, sp: Spec, want_keys: bool = False):
         q, dq = _corner(geo, sp)
         corner_y = q[0, 1]
         ends = geo.P
-        arm_a = (ends[:, 0] < sp.xb) & (sp.sd * (ends[:, 1] - corner_y) >= 0.0)
-        arm_b = (ends[:, 0] >= sp.xb) & (sp.sd * (ends[:, 1] - corner_y) < 0.0)
+        # which side of the corner each node is on, a node on a face's plane (an active constraint holds it there
+        # to round-off) counted on both: a link from a node on the top to one on the face is then signed whatever
+        # the round-off, so it cannot cut the corner unseen (a point on the planes' boundary is in both arms)
+        tol = ARM_TOL * max(1.0, abs(sp.xb), abs(corner_y))
+        above = sp.sd * (ends[:, 1] - corner_y)
+        arm_a = (ends[:, 0] < sp.xb + tol) & (above >= -tol)
+        arm_b = (ends[:, 0] >= sp.xb - tol) & (above < tol)
         straddle = (arm_a[:-1] & arm_b[1:]) | (arm_b[:-1] & arm_a[1:])
         t = geo.tangent(j)
         nl = np.stack([-t[:, 1], t[:, 0]], axis=1)
