@@ -24,6 +24,13 @@ the others' digests reproduced unchanged).  The physics is MuJoCo's: the referen
 stored beside it (the one it was recorded with and each later one whose replay gave every digest,
 ``--add-version``: ``tests/reference_versions.py``); another version skips, saying so.  An intended change
 of an env's output regenerates the file with the command above.
+
+A host whose arithmetic (its CPU's vector instructions, the MuJoCo build) gives other last bits for the same
+actions holds its own digest set beside the file (``tests/data/env_rollout_reference.host<i>.npz``, written by
+``python tests/test_env_rollout_reference.py --add-host``
+from the file's own actions): the replay must equal one set whole (``tests/reference_versions.py``), so a
+change of any env's output fails on every host.  ``--regenerate``
+leaves those sets behind: delete them and add each host again.
 """
 
 from __future__ import annotations
