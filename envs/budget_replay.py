@@ -13,9 +13,9 @@ steps, always short of the next decision's time), so a replayed run (``train_sb3
 
 The training itself is deterministic in the steps (its seed fixes the environment's and the learner's random
 numbers; one torch thread), so a replay on the same machine and software trains the same policy bit for bit, and
-its held-out results equal the record's: ``replay["identical"]`` in the replay's ``<algo>_eval.json`` says whether the final
-steps, success rate, mean return and outcomes, and every checkpoint's steps, success rate and mean return, are
-equal (measured: the pinch's aided command run for 4 CPU-minutes and replayed on the same machine, identical over
+its held-out results equal the record's: ``replay["identical"]`` in the replay's ``<algo>_eval.json`` says whether
+the final steps, success rate, mean return and outcomes, and every checkpoint's steps, success rate and mean return,
+are equal (measured: the pinch's aided command run for 4 CPU-minutes and replayed on the same machine, identical over
 168k steps and 82 updates).  Other versions of MuJoCo, PyTorch, Stable-Baselines3 or NumPy, or another CPU's
 arithmetic (the learner's matrix kernels follow the instruction set), change the last bits of the physics or of an
 update, after which the runs part: the replay is then a run of the same steps, a new sample of the recipe at the

@@ -169,7 +169,8 @@ def test_long_rollouts_match_the_reference():
 
 if __name__ == "__main__":  # pragma: no cover
     if sys.argv[1:] not in ([], ["--regenerate"], ["--add-version"], ["--add-host"]):
-        raise SystemExit("usage: python tests/test_env_rollout_reference.py [--regenerate | --add-version | --add-host]")
+        raise SystemExit("usage: python tests/test_env_rollout_reference.py "
+                         "[--regenerate | --add-version | --add-host]")
     if sys.argv[1:] == ["--add-host"]:
         with np.load(DATA) as ref:
             print(add_host(DATA, _replay_all(ref)))
