@@ -35,6 +35,7 @@ command's own).
 
 from __future__ import annotations
 
+import bisect
 import json
 import math
 from dataclasses import dataclass
@@ -71,13 +72,7 @@ class ReplaySchedule:
         """The budget time [s] the clock reads after ``timesteps`` steps: at an anchor's step its time (the largest,
         where several share the step), strictly between two anchors' steps a time strictly below the later one's."""
         anchors = self.anchors
-        lo, hi = 0, len(anchors)
-        while lo < hi:  # the first anchor beyond timesteps
-            mid = (lo + hi) // 2
-            if anchors[mid][0] <= timesteps:
-                lo = mid + 1
-            else:
-                hi = mid
+        lo = bisect.bisect_right(anchors, (timesteps, math.inf))  # the first anchor beyond timesteps
         if lo == len(anchors):  # at or past the last step: the budget (the clock never reads past it)
             return self.budget_s
         s_a, t_a = anchors[lo - 1]
@@ -134,19 +129,13 @@ def load_schedule(path, identity: dict, *, checkpoint_minutes: float | None, lr_
     if "selection" in record:
         raise ValueError(f"--replay: {str(path)!r} validated within its budget (--select-every), which cannot be "
                          "replayed")
-    for key in IDENTITY_KEYS:
-        have, want = record.get(key), identity.get(key)
-        if key == "algo":
-            have = None if have is None else str(have).lower()
+    defaults = {"n_envs": 1}  # (recorded only where it differs)
+    for key in (*IDENTITY_KEYS, *OPTION_KEYS, "n_envs"):
+        have, want = record.get(key, defaults.get(key)), identity.get(key, defaults.get(key))
+        if key == "algo" and have is not None:
+            have = str(have).lower()
         if have != want:
             raise ValueError(f"--replay: the record's {key} is {have!r}, this command's {want!r}")
-    for key in OPTION_KEYS:
-        if record.get(key) != identity.get(key):
-            raise ValueError(f"--replay: the record's {key} is {record.get(key)!r}, this command's "
-                             f"{identity.get(key)!r}")
-    if record.get("n_envs", 1) != identity.get("n_envs", 1):
-        raise ValueError(f"--replay: the record's n_envs is {record.get('n_envs', 1)!r}, this command's "
-                         f"{identity.get('n_envs', 1)!r}")
     budget = 60.0 * float(record["budget_minutes"])
     spent = float(record["cpu_s"] if record["clock"] == "cpu" else record["wall_s"])
     final = int(record["timesteps"])

@@ -5,7 +5,9 @@ versions under which its replay was seen to give every recorded digest: the one 
 later one added by ``python tests/test_env_*_reference.py --add-version`` (which replays the whole file under
 the installed MuJoCo and adds its version only when nothing differs).  Under any other version the tests skip,
 saying so.  A host whose arithmetic gives other last bits for the same actions adds its own digest set beside the
-file (``--add-host``, :func:`add_host`); a replay must equal one set whole.
+file (``tests/data/<reference>.host<i>.npz``, written by ``python tests/test_env_*_reference.py --add-host`` from
+the file's own actions, :func:`add_host`); a replay must equal one set whole, so a change of any env's output fails
+on every host.  ``--regenerate`` leaves those sets behind: delete them and add each host again.
 """
 
 from __future__ import annotations
@@ -50,6 +52,18 @@ def add_host(path: Path, got: dict) -> Path:  # pragma: no cover - maintenance c
     target = path.with_name(f"{path.stem}.host{len(host_sets(path))}.npz")
     np.savez_compressed(target, mujoco_version=np.array([mujoco.__version__]), ids=ids, **got)
     return target
+
+
+def installed_sets(path: Path) -> list[dict]:
+    """The digest sets of the reference at ``path`` that hold for the installed MuJoCo (:func:`host_digests`);
+    ``pytest.skip`` naming the versions recorded when none does."""
+    import mujoco
+
+    sets = [digests for versions, digests in host_digests(path) if mujoco.__version__ in versions]
+    if not sets:
+        with np.load(path) as ref:
+            skip_unless_recorded(ref)
+    return sets
 
 
 def skip_unless_recorded(ref) -> None:

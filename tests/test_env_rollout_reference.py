@@ -25,12 +25,8 @@ stored beside it (the one it was recorded with and each later one whose replay g
 ``--add-version``: ``tests/reference_versions.py``); another version skips, saying so.  An intended change
 of an env's output regenerates the file with the command above.
 
-A host whose arithmetic (its CPU's vector instructions, the MuJoCo build) gives other last bits for the same
-actions holds its own digest set beside the file (``tests/data/env_rollout_reference.host<i>.npz``, written by
-``python tests/test_env_rollout_reference.py --add-host``
-from the file's own actions): the replay must equal one set whole (``tests/reference_versions.py``), so a
-change of any env's output fails on every host.  ``--regenerate``
-leaves those sets behind: delete them and add each host again.
+A host whose arithmetic gives other last bits holds its own digest set beside the file (``--add-host``:
+``tests/reference_versions.py``).
 """
 
 from __future__ import annotations
@@ -41,8 +37,7 @@ from pathlib import Path
 import numpy as np
 
 sys.path.insert(0, str(Path(__file__).parent))
-from reference_versions import (add_host, add_installed_version, host_digests, recorded_versions,  # noqa: E402
-                                skip_unless_recorded)
+from reference_versions import add_host, add_installed_version, installed_sets, recorded_versions  # noqa: E402
 from test_env_step_reference import _digest  # noqa: E402  (the canonical digest of a step's output)
 
 DATA = Path(__file__).parent / "data" / "env_rollout_reference.npz"
@@ -154,12 +149,8 @@ def _mismatches(ref) -> tuple[list[str], int]:
 
 
 def test_long_rollouts_match_the_reference():
-    import mujoco
-
-    sets = [d for versions, d in host_digests(DATA) if mujoco.__version__ in versions]
+    sets = installed_sets(DATA)  # (skips, naming the versions recorded, when none holds for this MuJoCo)
     with np.load(DATA) as ref:  # closed at the end (an open NpzFile warns when collected)
-        if not sets:
-            skip_unless_recorded(ref)  # (skips, naming the versions recorded)
         ids, got = ref["ids"].tolist(), _replay_all(ref)
     found = [_compare(ids, got, want) for want in sets]
     match = [resets for bad, resets in found if not bad]
