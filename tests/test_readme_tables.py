@@ -410,3 +410,29 @@ def test_the_peak_probe_screens_on_the_learning_page_are_their_records():
             assert (int(said[seed][0]), int(said[seed][1])) == (ev["outcomes"]["crushed"],
                                                                 ev["crushed_after_touch"]["0"]), (folder, seed)
             assert f"{round(run['timesteps'] / 1000)}k" == steps.split(", ")[seed], (folder, seed)
+
+
+def test_the_sac_screens_behind_the_aids_are_their_records():
+    """The learning page's "SAC behind the aids" paragraph: each screen's options (its command), 0 % at every
+    checkpoint, its steps, training episodes, and the final policy's crushes and timeouts of 50 held out."""
+    text = " ".join((ROOT / "docs" / "learning.md").read_text(encoding="utf-8").split())
+    para = text[text.index("**SAC behind the aids**"):]
+    para = para[:para.index(" **")]
+    screens = [("rl_pick_v7_peak_sac_screen", ["--action-offset", "-0.2", "0.2"]),
+               ("rl_multi_v7_peak_light_step_charge_sac_screen",
+                ["--action-offset", "-0.2", "0.2", "--light-bias", "0.5", "--step-charge", "0.005"])]
+    runs = []
+    for folder, options in screens:
+        assert folder in para
+        agg = json.loads((BASELINES / folder / "aggregate.json").read_text(encoding="utf-8"))
+        command = agg["command"]
+        assert " ".join(options) in " ".join(command) and agg["algos"] == ["sac"] and agg["minutes"] == 15.0
+        assert agg["eval_seeds"] == [8000, 8049] and agg["seeds"] == [0], folder
+        assert [c["minutes"] for c in agg["summary"]["sac"]["checkpoints"]] == [5.0, 10.0, 15.0]
+        assert all(c["success_rates"] == [0.0] for c in agg["summary"]["sac"]["checkpoints"]), folder
+        runs.append(json.loads((BASELINES / folder / "sac_seed0.json").read_text(encoding="utf-8")))
+    assert f"on {runs[0]['timesteps']:,} and {runs[1]['timesteps']:,} steps" in para
+    assert f"no success in {runs[0]['train_episodes']} and {runs[1]['train_episodes']} training episodes" in para
+    assert all(r["success_rate"] == 0.0 for r in runs)
+    crushed, timeout = [r["outcomes"]["crushed"] for r in runs], [r["outcomes"]["timeout"] for r in runs]
+    assert f"crush {crushed[0]} and {crushed[1]} of 50 and let {timeout[0]} and {timeout[1]} time out" in para
