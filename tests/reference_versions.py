@@ -7,7 +7,9 @@ the installed MuJoCo and adds its version only when nothing differs).  Under any
 saying so.  A host whose arithmetic gives other last bits for the same actions adds its own digest set beside the
 file (``tests/data/<reference>.host<i>.npz``, written by ``python tests/test_env_*_reference.py --add-host`` from
 the file's own actions, :func:`add_host`); a replay must equal one set whole, so a change of any env's output fails
-on every host.  ``--regenerate`` leaves those sets behind: delete them and add each host again.
+on every host.  ``--which-host`` prints the set this host reproduces (:func:`which_host`; the reference itself is
+the set of the hosts the records of ``docs/baselines`` were trained on).  ``--regenerate`` leaves those sets behind:
+delete them and add each host again.
 """
 
 from __future__ import annotations
@@ -39,14 +41,24 @@ def host_digests(path: Path) -> list[tuple[list[str], dict]]:
     return out
 
 
+def which_host(path: Path, got: dict) -> Path | None:  # pragma: no cover - maintenance command
+    """The digest set of the reference at ``path`` (:func:`host_sets`) that equals this host's digests ``got``
+    (replayed from the reference's own actions) whole, or None.  The reference itself is the set of the hosts the
+    records of ``docs/baselines`` were trained on: a training replayed on a host that reproduces it
+    (``--replay``, :mod:`simgrip.envs.budget_replay`) sees the records' env outputs to the last bit."""
+    for p, (versions, digests) in zip(host_sets(path), host_digests(path)):
+        if digests.keys() == got.keys() and all(np.array_equal(digests[k], got[k]) for k in got):
+            return p
+    return None
+
+
 def add_host(path: Path, got: dict) -> Path:  # pragma: no cover - maintenance command
     """Write this host's digests ``got`` (replayed from the reference's own actions) as the next digest set beside
     ``path``, for the installed MuJoCo; unless one set equals them already (then nothing is written)."""
     import mujoco
 
-    for versions, digests in host_digests(path):
-        if digests.keys() == got.keys() and all(np.array_equal(digests[k], got[k]) for k in got):
-            raise SystemExit(f"{path.name}: this host reproduces a recorded set already")
+    if which_host(path, got) is not None:
+        raise SystemExit(f"{path.name}: this host reproduces a recorded set already")
     with np.load(path) as ref:
         ids = ref["ids"]
     target = path.with_name(f"{path.stem}.host{len(host_sets(path))}.npz")

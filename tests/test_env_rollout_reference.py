@@ -25,8 +25,8 @@ stored beside it (the one it was recorded with and each later one whose replay g
 ``--add-version``: ``tests/reference_versions.py``); another version skips, saying so.  An intended change
 of an env's output regenerates the file with the command above.
 
-A host whose arithmetic gives other last bits holds its own digest set beside the file (``--add-host``:
-``tests/reference_versions.py``).
+A host whose arithmetic gives other last bits holds its own digest set beside the file (``--add-host``;
+``--which-host`` names the set this host reproduces: ``tests/reference_versions.py``).
 """
 
 from __future__ import annotations
@@ -37,7 +37,8 @@ from pathlib import Path
 import numpy as np
 
 sys.path.insert(0, str(Path(__file__).parent))
-from reference_versions import add_host, add_installed_version, installed_sets, recorded_versions  # noqa: E402
+from reference_versions import (add_host, add_installed_version, installed_sets, recorded_versions,  # noqa: E402
+                                which_host)
 from test_env_step_reference import _digest  # noqa: E402  (the canonical digest of a step's output)
 
 DATA = Path(__file__).parent / "data" / "env_rollout_reference.npz"
@@ -159,12 +160,16 @@ def test_long_rollouts_match_the_reference():
 
 
 if __name__ == "__main__":  # pragma: no cover
-    if sys.argv[1:] not in ([], ["--regenerate"], ["--add-version"], ["--add-host"]):
+    if sys.argv[1:] not in ([], ["--regenerate"], ["--add-version"], ["--add-host"], ["--which-host"]):
         raise SystemExit("usage: python tests/test_env_rollout_reference.py "
-                         "[--regenerate | --add-version | --add-host]")
+                         "[--regenerate | --add-version | --add-host | --which-host]")
     if sys.argv[1:] == ["--add-host"]:
         with np.load(DATA) as ref:
             print(add_host(DATA, _replay_all(ref)))
+    elif sys.argv[1:] == ["--which-host"]:  # the digest set this host reproduces (reference_versions.which_host)
+        with np.load(DATA) as ref:
+            found = which_host(DATA, _replay_all(ref))
+        print(found.name if found else "none: this host's digests differ from every recorded set")
     elif sys.argv[1:] == ["--add-version"]:
         with np.load(DATA) as ref:
             found, _ = _mismatches(ref)
