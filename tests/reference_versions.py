@@ -8,8 +8,8 @@ saying so.  A host whose arithmetic gives other last bits for the same actions a
 file (``tests/data/<reference>.host<i>.npz``, written by ``python tests/test_env_*_reference.py --add-host`` from
 the file's own actions, :func:`add_host`); a replay must equal one set whole, so a change of any env's output fails
 on every host.  ``--which-host`` prints the set this host reproduces (:func:`which_host`; the reference itself is
-the set of the hosts the records of ``docs/baselines`` were trained on).  ``--regenerate`` leaves those sets behind:
-delete them and add each host again.
+the set of the host it was recorded on).  ``--regenerate`` leaves those sets behind: delete them and add each host
+again.
 """
 
 from __future__ import annotations
@@ -43,9 +43,9 @@ def host_digests(path: Path) -> list[tuple[list[str], dict]]:
 
 def which_host(path: Path, got: dict) -> Path | None:  # pragma: no cover - maintenance command
     """The digest set of the reference at ``path`` (:func:`host_sets`) that equals this host's digests ``got``
-    (replayed from the reference's own actions) whole, or None.  The reference itself is the set of the hosts the
-    records of ``docs/baselines`` were trained on: a training replayed on a host that reproduces it
-    (``--replay``, :mod:`simgrip.envs.budget_replay`) sees the records' env outputs to the last bit."""
+    (replayed from the reference's own actions) whole, or None.  Two hosts that reproduce one set give the same env
+    outputs to the last bit, so a training replayed on one at a record's steps (``--replay``,
+    :mod:`simgrip.envs.budget_replay`) can be the record made on the other (the learner's own arithmetic aside)."""
     for p, (versions, digests) in zip(host_sets(path), host_digests(path)):
         if digests.keys() == got.keys() and all(np.array_equal(digests[k], got[k]) for k in got):
             return p
