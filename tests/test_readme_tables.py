@@ -436,3 +436,27 @@ def test_the_sac_screens_behind_the_aids_are_their_records():
     assert all(r["success_rate"] == 0.0 for r in runs)
     crushed, timeout = [r["outcomes"]["crushed"] for r in runs], [r["outcomes"]["timeout"] for r in runs]
     assert f"crush {crushed[0]} and {crushed[1]} of 50 and let {timeout[0]} and {timeout[1]} time out" in para
+
+
+def test_the_identical_replays_on_the_learning_page_are_their_records():
+    """The learning page's replays of whole README cells on a machine of the references' arithmetic (stop 64): each
+    replayed seed's JSON says ``identical`` against the cell's own record (the folder it names), and the
+    checkpoints, steps and training episodes the page gives are the record's."""
+    text = " ".join((ROOT / "docs" / "learning.md").read_text(encoding="utf-8").split())
+    found = re.findall(r"the \w+'s aided cell \(`(rl_[\w]+)`, recorded at stop \d+\): seeds 0–2 \*\*identical\*\* to "
+                       r"the record \(`docs/baselines/(rl_[\w]+_replay_012)/`\): ([\d /,and]+) % at 5 / 10 / 15 CPU-min, "
+                       r"on ([\d,]+), ([\d,]+) and ([\d,]+) steps, .*? training episodes too \(([\d,]+), ([\d,]+) and "
+                       r"([\d,]+)\)", text)
+    assert len(found) == 2, found
+    for cell, folder, rates, *numbers in found:
+        assert cell in {columns[AIDED] for _, columns in ROWS.values()}, cell  # a README cell's record
+        cells = [[int(v) for v in seed.split(" / ")] for seed in re.split(r", | and ", rates)]
+        steps, episodes = numbers[:3], numbers[3:]
+        for seed in range(3):
+            record = json.loads((BASELINES / cell / f"ppo_seed{seed}.json").read_text(encoding="utf-8"))
+            run = json.loads((BASELINES / folder / f"ppo_seed{seed}.json").read_text(encoding="utf-8"))
+            assert run["replay"]["identical"] is True and run["replay"]["from"].endswith(f"{cell}/ppo_seed{seed}.json")
+            assert [pct(c["success_rate"]) for c in record["checkpoints"]] == cells[seed], (folder, seed)
+            assert f"{record['timesteps']:,}" == steps[seed] == f"{run['timesteps']:,}", (folder, seed)
+            assert f"{record['train_episodes']:,}" == episodes[seed] == f"{run['train_episodes']:,}", (folder, seed)
+            assert [c["success_rate"] for c in run["checkpoints"]] == [c["success_rate"] for c in record["checkpoints"]]
