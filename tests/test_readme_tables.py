@@ -439,15 +439,15 @@ def test_the_sac_screens_behind_the_aids_are_their_records():
 
 
 def test_the_identical_replays_on_the_learning_page_are_their_records():
-    """The learning page's replays of README cells on a machine of the references' arithmetic (stop 64: two cells
-    whole, seed 0 of two more): each replayed seed's JSON says ``identical`` against the cell's own record (the folder
+    """The learning page's replays of README cells on a machine of the references' arithmetic (stop 64: three cells
+    whole, seed 0 of a fourth): each replayed seed's JSON says ``identical`` against the cell's own record (the folder
     it names), and the checkpoints, steps and training episodes the page gives are the record's."""
     text = " ".join((ROOT / "docs" / "learning.md").read_text(encoding="utf-8").split())
     found = re.findall(r"the \w+'s aided cell \(`(rl_[\w]+)`, recorded at stop \d+\): seeds 0–2 \*\*identical\*\* to "
                        r"the record \(`docs/baselines/(rl_[\w]+_replay_012)/`\): ([\d /,and]+) % at 5 / 10 / 15 CPU-min, "
                        r"on ([\d,]+), ([\d,]+) and ([\d,]+) steps, .*? training episodes too \(([\d,]+), ([\d,]+) and "
                        r"([\d,]+)\)", text)
-    assert len(found) == 2, found
+    assert len(found) == 3, found
     for cell, folder, rates, *numbers in found:
         assert cell in {columns[AIDED] for _, columns in ROWS.values()}, cell  # a README cell's record
         cells = [[int(v) for v in seed.split(" / ")] for seed in re.split(r", | and ", rates)]
@@ -460,20 +460,17 @@ def test_the_identical_replays_on_the_learning_page_are_their_records():
             assert f"{record['timesteps']:,}" == steps[seed] == f"{run['timesteps']:,}", (folder, seed)
             assert f"{record['train_episodes']:,}" == episodes[seed] == f"{run['train_episodes']:,}", (folder, seed)
             assert [c["success_rate"] for c in run["checkpoints"]] == [c["success_rate"] for c in record["checkpoints"]]
-    # seed 0 of two more cells: "(`A` and `B`, recorded ...): **identical** too (`docs/baselines/A'/` and `B'/`): x / y / z
-    # and u / v / w % at 5 / 10 / 15 CPU-min, on N and M steps, and E and F training episodes"
-    more = re.search(r"seed 0 of the \w+'s and of the \w+'s aided cells \(`(rl_\w+)` and `(rl_\w+)`, recorded at stop "
-                     r"\d+\): \*\*identical\*\* too \(`docs/baselines/(rl_\w+_replay_s0)/` and `(rl_\w+_replay_s0)/`\): "
-                     r"([\d /]+) and ([\d /]+) % at 5 / 10 / 15 CPU-min, on ([\d,]+) and ([\d,]+) steps, and ([\d,]+) "
-                     r"and ([\d,]+) training episodes", text)
-    assert more, "the cradle's and the sphere's replays"
-    g = more.groups()
-    for i in range(2):
-        cell, folder = g[i], g[2 + i]
-        assert cell in {columns[AIDED] for _, columns in ROWS.values()}, cell
-        record = json.loads((BASELINES / cell / "ppo_seed0.json").read_text(encoding="utf-8"))
-        run = json.loads((BASELINES / folder / "ppo_seed0.json").read_text(encoding="utf-8"))
-        assert run["replay"]["identical"] is True and run["replay"]["from"].endswith(f"{cell}/ppo_seed0.json")
-        assert [pct(c["success_rate"]) for c in record["checkpoints"]] == [int(v) for v in g[4 + i].split(" / ")]
-        assert f"{record['timesteps']:,}" == g[6 + i] == f"{run['timesteps']:,}", folder
-        assert f"{record['train_episodes']:,}" == g[8 + i] == f"{run['train_episodes']:,}", folder
+    # seed 0 of one more cell: "(`A`, recorded ...): **identical** too (`docs/baselines/B/`): x / y / z % at 5 / 10 / 15
+    # CPU-min, on N steps and E training episodes"
+    more = re.search(r"seed 0 of the \w+'s aided cell \(`(rl_\w+)`, recorded at stop \d+\): \*\*identical\*\* too "
+                     r"\(`docs/baselines/(rl_\w+_replay_s0)/`\): ([\d /]+) % at 5 / 10 / 15 CPU-min, on ([\d,]+) steps and "
+                     r"([\d,]+) training episodes", text)
+    assert more, "the sphere's replay"
+    cell, folder, rates, steps, episodes = more.groups()
+    assert cell in {columns[AIDED] for _, columns in ROWS.values()}, cell
+    record = json.loads((BASELINES / cell / "ppo_seed0.json").read_text(encoding="utf-8"))
+    run = json.loads((BASELINES / folder / "ppo_seed0.json").read_text(encoding="utf-8"))
+    assert run["replay"]["identical"] is True and run["replay"]["from"].endswith(f"{cell}/ppo_seed0.json")
+    assert [pct(c["success_rate"]) for c in record["checkpoints"]] == [int(v) for v in rates.split(" / ")]
+    assert f"{record['timesteps']:,}" == steps == f"{run['timesteps']:,}", folder
+    assert f"{record['train_episodes']:,}" == episodes == f"{run['train_episodes']:,}", folder
