@@ -46,7 +46,7 @@ def which_host(path: Path, got: dict) -> Path | None:
     (replayed from the reference's own actions) whole, or None.  Two hosts that reproduce one set give the same env
     outputs on its actions to the last bit, so a training replayed on one at a record's steps (``--replay``,
     :mod:`simgrip.envs.budget_replay`) can be the record made on the other (the learner's own arithmetic aside)."""
-    for p, (versions, digests) in zip(host_sets(path), host_digests(path)):
+    for p, (_, digests) in zip(host_sets(path), host_digests(path)):
         if digests.keys() == got.keys() and all(np.array_equal(digests[k], got[k]) for k in got):
             return p
     return None
