@@ -106,3 +106,25 @@ def add_installed_version(path: Path, mismatches: list[str]) -> None:  # pragma:
     np.savez_compressed(tmp, **arrays)
     tmp.replace(path)
     print(f"{path.name}: holds for MuJoCo {', '.join(versions)}")
+
+
+def maintain(script: str, path: Path, argv: list, replay_all, mismatches, record) -> None:  # pragma: no cover
+    """The reference scripts' command line (``python tests/<script> [--regenerate | --add-version | --add-host |
+    --which-host]``) for the reference at ``path``: ``replay_all(ref)`` gives this host's digests of the open
+    reference ``ref``, ``mismatches(ref)`` where they differ from it (a list of messages), ``record()`` records it
+    anew (no option, or ``--regenerate``)."""
+    if argv not in ([], ["--regenerate"], ["--add-version"], ["--add-host"], ["--which-host"]):
+        raise SystemExit(f"usage: python tests/{script} [--regenerate | --add-version | --add-host | --which-host]")
+    if argv in ([], ["--regenerate"]):
+        record()
+        return
+    with np.load(path) as ref:  # (closed before any file is written)
+        found = mismatches(ref) if argv == ["--add-version"] else None
+        got = None if argv == ["--add-version"] else replay_all(ref)
+    if argv == ["--add-version"]:
+        add_installed_version(path, found)
+    elif argv == ["--add-host"]:
+        print(add_host(path, got))
+    else:  # --which-host: the digest set this host reproduces
+        match = which_host(path, got)
+        print(match.name if match else "none: this host's digests differ from every recorded set")

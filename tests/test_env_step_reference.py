@@ -26,7 +26,7 @@ from pathlib import Path
 import numpy as np
 
 sys.path.insert(0, str(Path(__file__).parent))
-from reference_versions import add_host, add_installed_version, installed_sets, which_host  # noqa: E402
+from reference_versions import installed_sets, maintain  # noqa: E402
 
 DATA = Path(__file__).parent / "data" / "env_step_reference.npz"
 SEED = 4321  # episode seeds SEED, SEED + 1 (the scripted and the random episode)
@@ -157,19 +157,4 @@ def test_env_steps_match_the_reference():
 
 
 if __name__ == "__main__":  # pragma: no cover
-    if sys.argv[1:] not in ([], ["--regenerate"], ["--add-version"], ["--add-host"], ["--which-host"]):
-        raise SystemExit("usage: python tests/test_env_step_reference.py "
-                         "[--regenerate | --add-version | --add-host | --which-host]")
-    if sys.argv[1:] == ["--add-host"]:
-        with np.load(DATA) as ref:
-            print(add_host(DATA, _replay_all(ref)))
-    elif sys.argv[1:] == ["--which-host"]:  # the digest set this host reproduces (reference_versions.which_host)
-        with np.load(DATA) as ref:
-            found = which_host(DATA, _replay_all(ref))
-        print(found.name if found else "none: this host's digests differ from every recorded set")
-    elif sys.argv[1:] == ["--add-version"]:
-        with np.load(DATA) as ref:
-            found = _mismatches(ref)
-        add_installed_version(DATA, found)
-    else:
-        _record()
+    maintain("test_env_step_reference.py", DATA, sys.argv[1:], _replay_all, _mismatches, _record)
