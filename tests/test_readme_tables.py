@@ -438,6 +438,20 @@ def test_the_sac_screens_behind_the_aids_are_their_records():
     assert f"crush {crushed[0]} and {crushed[1]} of 50 and let {timeout[0]} and {timeout[1]} time out" in para
 
 
+def _assert_replayed(cell: str, folder: str, seed: int, rates: str, steps: str, episodes: str) -> None:
+    """Seed ``seed`` of the README cell ``cell``'s record replayed into ``folder``: the replay says ``identical``
+    against that record, whose checkpoints (``rates``, "x / y / z"), steps and training episodes (as the page writes
+    them) are the page's and the replay's."""
+    assert cell in {columns[AIDED] for _, columns in ROWS.values()}, cell  # a README cell's record
+    record = json.loads((BASELINES / cell / f"ppo_seed{seed}.json").read_text(encoding="utf-8"))
+    run = json.loads((BASELINES / folder / f"ppo_seed{seed}.json").read_text(encoding="utf-8"))
+    assert run["replay"]["identical"] is True and run["replay"]["from"].endswith(f"{cell}/ppo_seed{seed}.json")
+    assert [pct(c["success_rate"]) for c in record["checkpoints"]] == [int(v) for v in rates.split(" / ")], folder
+    assert f"{record['timesteps']:,}" == steps == f"{run['timesteps']:,}", (folder, seed)
+    assert f"{record['train_episodes']:,}" == episodes == f"{run['train_episodes']:,}", (folder, seed)
+    assert [c["success_rate"] for c in run["checkpoints"]] == [c["success_rate"] for c in record["checkpoints"]]
+
+
 def test_the_identical_replays_on_the_learning_page_are_their_records():
     """The learning page's replays of README cells on a machine of the references' arithmetic (stop 64: three cells
     whole, seed 0 of a fourth): each replayed seed's JSON says ``identical`` against the cell's own record (the folder
@@ -449,17 +463,8 @@ def test_the_identical_replays_on_the_learning_page_are_their_records():
                        r"([\d,]+)\)", text)
     assert len(found) == 3, found
     for cell, folder, rates, *numbers in found:
-        assert cell in {columns[AIDED] for _, columns in ROWS.values()}, cell  # a README cell's record
-        cells = [[int(v) for v in seed.split(" / ")] for seed in re.split(r", | and ", rates)]
-        steps, episodes = numbers[:3], numbers[3:]
-        for seed in range(3):
-            record = json.loads((BASELINES / cell / f"ppo_seed{seed}.json").read_text(encoding="utf-8"))
-            run = json.loads((BASELINES / folder / f"ppo_seed{seed}.json").read_text(encoding="utf-8"))
-            assert run["replay"]["identical"] is True and run["replay"]["from"].endswith(f"{cell}/ppo_seed{seed}.json")
-            assert [pct(c["success_rate"]) for c in record["checkpoints"]] == cells[seed], (folder, seed)
-            assert f"{record['timesteps']:,}" == steps[seed] == f"{run['timesteps']:,}", (folder, seed)
-            assert f"{record['train_episodes']:,}" == episodes[seed] == f"{run['train_episodes']:,}", (folder, seed)
-            assert [c["success_rate"] for c in run["checkpoints"]] == [c["success_rate"] for c in record["checkpoints"]]
+        for seed, seed_rates in enumerate(re.split(r", | and ", rates)):
+            _assert_replayed(cell, folder, seed, seed_rates, numbers[seed], numbers[3 + seed])
     # seed 0 of one more cell: "(`A`, recorded ...): **identical** too (`docs/baselines/B/`): x / y / z % at 5 / 10 / 15
     # CPU-min, on N steps and E training episodes"
     more = re.search(r"seed 0 of the \w+'s aided cell \(`(rl_\w+)`, recorded at stop \d+\): \*\*identical\*\* too "
@@ -467,10 +472,4 @@ def test_the_identical_replays_on_the_learning_page_are_their_records():
                      r"([\d,]+) training episodes", text)
     assert more, "the sphere's replay"
     cell, folder, rates, steps, episodes = more.groups()
-    assert cell in {columns[AIDED] for _, columns in ROWS.values()}, cell
-    record = json.loads((BASELINES / cell / "ppo_seed0.json").read_text(encoding="utf-8"))
-    run = json.loads((BASELINES / folder / "ppo_seed0.json").read_text(encoding="utf-8"))
-    assert run["replay"]["identical"] is True and run["replay"]["from"].endswith(f"{cell}/ppo_seed0.json")
-    assert [pct(c["success_rate"]) for c in record["checkpoints"]] == [int(v) for v in rates.split(" / ")]
-    assert f"{record['timesteps']:,}" == steps == f"{run['timesteps']:,}", folder
-    assert f"{record['train_episodes']:,}" == episodes == f"{run['train_episodes']:,}", folder
+    _assert_replayed(cell, folder, 0, rates, steps, episodes)
