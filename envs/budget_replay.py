@@ -25,9 +25,13 @@ checkpoints against the record's 80 / 70 / 84 %, parted by the first checkpoint;
 recorded their versions, cannot say whether the host or a package differed).  Each run records the versions it ran
 with (``versions``).
 
+A learning rate that falls over the budget (``--lr-decay``) read the clock at every update; a PPO run records what
+each reading gave (``lr_fractions``, :class:`simgrip.envs.lr_decay.BudgetDecay`), and its replay is given those
+instead of the clock (``identical`` then also asks that the replay read them all, no more and no fewer).
+
 What cannot be replayed (refused before any training, naming why): a run whose budget was not what stopped it
-(stopped by its ``--steps`` cap: rerun that command), a learning rate that falls over the budget (``--lr-decay``:
-it was read from the CPU clock at every update, which the record does not keep), validations within the budget
+(stopped by its ``--steps`` cap: rerun that command), a learning rate that falls over the budget in a record that
+did not keep its readings (SAC's, and runs recorded before they were kept), validations within the budget
 (``--select-every``: when each ran depended on what the earlier ones cost), and a record of another experiment
 (algorithm, env, seed, budget, clock, hyperparameters, environment options, held-out seeds: each must be the
 command's own).
@@ -56,12 +60,14 @@ class ReplaySchedule:
 
     ``anchors``: ``(timesteps, seconds)`` pairs, both non-decreasing, from ``(0, 0.0)`` to ``(timesteps,
     budget_s)``: each checkpoint's step and period, then the final step and the budget.  ``source``: the record's
-    path; ``record``: its contents (what :func:`compare` compares with)."""
+    path; ``record``: its contents (what :func:`compare` compares with); ``lr_fractions``: with ``--lr-decay``, the
+    shares of the budget its learning rate read, in call order (:class:`simgrip.envs.lr_decay.BudgetDecay`)."""
 
     anchors: tuple
     budget_s: float
     source: str
     record: dict
+    lr_fractions: tuple | None = None
 
     @property
     def timesteps(self) -> int:
@@ -114,12 +120,9 @@ def load_schedule(path, identity: dict, *, checkpoint_minutes: float | None, lr_
     ``rl_baselines.py``'s ``<algo>_seed<S>.json``), checked against the replay's command.
 
     ``identity``: the command's own values of :data:`IDENTITY_KEYS` and of the options it sets
-    (:data:`OPTION_KEYS`); ``checkpoint_minutes``: its checkpoint period; ``lr_decay``, ``selection``: whether it
-    decays the learning rate or validates within the budget (both refused).  Raises ValueError naming what
-    differs or why the run cannot be replayed (module docstring)."""
-    if lr_decay:
-        raise ValueError("--replay: --lr-decay cannot be replayed (the learning rate followed the CPU clock at each "
-                         "update, which the record does not keep)")
+    (:data:`OPTION_KEYS`); ``checkpoint_minutes``: its checkpoint period; ``lr_decay``: whether it decays the
+    learning rate (the record must keep its readings); ``selection``: whether it validates within the budget
+    (refused).  Raises ValueError naming what differs or why the run cannot be replayed (module docstring)."""
     if selection:
         raise ValueError("--replay: --select-every cannot be replayed (when each validation ran depended on what the "
                          "earlier ones cost)")
@@ -153,16 +156,26 @@ def load_schedule(path, identity: dict, *, checkpoint_minutes: float | None, lr_
     elif checkpoint_minutes and checkpoint_minutes <= float(record["budget_minutes"]) + 1e-9:
         raise ValueError(f"--replay: the record has no checkpoints; this command's --checkpoint-minutes "
                          f"{checkpoint_minutes} adds some")
+    fractions = None
+    if lr_decay:
+        fractions = record.get("lr_fractions")
+        if not isinstance(fractions, list) or not fractions or not all(
+                isinstance(x, (int, float)) and not isinstance(x, bool) and 0.0 <= x <= 1.0 for x in fractions):
+            raise ValueError(f"--replay: --lr-decay cannot be replayed from {str(path)!r}: it does not keep its "
+                             "learning rate's readings of the clock (lr_fractions: SAC's are not kept, nor were any "
+                             "before they were recorded)")
+        fractions = tuple(float(x) for x in fractions)
     anchors = [(0, 0.0)] + [(int(c["timesteps"]), 60.0 * float(c["minutes"])) for c in checkpoints] + [(final, budget)]
     if any(b[0] < a[0] or b[1] < a[1] for a, b in zip(anchors, anchors[1:])):
         raise ValueError(f"--replay: {str(path)!r}'s checkpoints are out of order")
-    return ReplaySchedule(tuple(anchors), budget, str(path), record)
+    return ReplaySchedule(tuple(anchors), budget, str(path), record, fractions)
 
 
 def compare(result: dict, record: dict) -> dict:
     """``result`` (a replay's held-out results) beside ``record``'s: per quantity ``[replay, record]``, and
-    ``identical``: the final steps, success rate, mean return and outcomes, and every checkpoint's steps, success
-    rate and mean return, all equal."""
+    ``identical``: the final steps, success rate, mean return and outcomes, every checkpoint's steps, success rate
+    and mean return, and where the record kept them the learning rate's readings (``lr_readings``: how many each
+    made), all equal."""
     keys = ("timesteps", "success_rate", "mean_return", "outcomes")
     out = {k: [result.get(k), record.get(k)] for k in keys}
     same = all(a == b for a, b in out.values())
@@ -174,4 +187,8 @@ def compare(result: dict, record: dict) -> dict:
             same = same and mine.get(k) == theirs.get(k)
         cps.append(row)
     same = same and len(result.get("checkpoints") or []) == len(record.get("checkpoints") or [])
+    if "lr_fractions" in record:
+        mine, theirs = result.get("lr_fractions") or [], record["lr_fractions"]
+        out["lr_readings"] = [len(mine), len(theirs)]
+        same = same and mine == theirs
     return {**out, "checkpoints": cps, "identical": bool(same)}

@@ -17,7 +17,15 @@ Why (the Gymnasium environments page, "Where the learning target stands"): with 
 from 60 % to 36 % held-out success.  A rate that reaches zero at the budget's end makes the last updates
 small.
 
-Pickled with the model (SB3 saves its ``lr_schedule``): it holds numbers and the clock's name only.
+Replays (:mod:`simgrip.envs.budget_replay`): every reading of the clock a call made is kept, in call order, as the
+share of the budget it left (:attr:`BudgetDecay.readings`; ``examples/train_sb3.py`` records them as ``lr_fractions``
+in a PPO run's ``<algo>_eval.json``: one as the model is built, then two an update, as SB3 reads its schedule once
+to log the rate and once to set it; SAC reads it at every step, too often to record).
+``BudgetDecay(..., replay=fractions)`` returns those shares in the same order instead of reading the clock, so a
+replay (``--replay``) trains with the record's rates to the last bit, on a machine of any speed.
+
+Pickled with the model (SB3 saves its ``lr_schedule``): it holds numbers and the clock's name only (the readings
+and a replay's shares are left out).
 """
 
 from __future__ import annotations
@@ -42,9 +50,17 @@ class BudgetDecay:
         Seconds of ``clock`` over which it falls to 0, finite and > 0.
     clock : {"cpu", "wall"}
         This process's CPU time or the wall clock.
+    replay : sequence of float, optional
+        The shares of the budget left that a recorded run's calls read (its :attr:`readings`), returned in call
+        order instead of the clock's: a replay's rates are the record's.  Each in ``[0, 1]``.
+
+    Attributes
+    ----------
+    readings : list of float
+        The share of the budget left that each call so far returned its rate for, in call order.
     """
 
-    def __init__(self, initial: float, budget_s: float, clock: str = "cpu"):
+    def __init__(self, initial: float, budget_s: float, clock: str = "cpu", replay=None):
         for name, value in (("initial", initial), ("budget_s", budget_s)):
             if isinstance(value, bool) or not isinstance(value, (int, float)) or not math.isfinite(value) \
                     or value <= 0:
@@ -52,6 +68,13 @@ class BudgetDecay:
         if clock not in _CLOCKS:
             raise ValueError(f"clock must be 'cpu' or 'wall', got {clock!r}")
         self.initial, self.budget_s, self.clock = float(initial), float(budget_s), clock
+        self.readings = []
+        self.replay = None
+        if replay is not None:
+            shares = [float(x) if not isinstance(x, bool) and isinstance(x, (int, float)) else math.nan for x in replay]
+            if not all(0.0 <= x <= 1.0 for x in shares):
+                raise ValueError("replay must be shares of the budget left, each a number in [0, 1]")
+            self.replay = tuple(shares)
         self.start()
 
     def start(self, at: float | None = None) -> None:
@@ -67,8 +90,26 @@ class BudgetDecay:
         return max(0.0, 1.0 - (_CLOCKS[self.clock]() - self.started) / self.budget_s)
 
     def __call__(self, progress_remaining: float) -> float:
-        """The rate now (SB3's ``progress_remaining`` is not used: module docstring)."""
-        return self.initial * self.fraction_left()
+        """The rate now (SB3's ``progress_remaining`` is not used: module docstring); in a replay the record's rate
+        for this call.  Raises RuntimeError when a replay calls more often than its record did."""
+        if self.replay is None:
+            share = self.fraction_left()
+        else:
+            k = len(self.readings)
+            if k >= len(self.replay):
+                raise RuntimeError(f"--replay: the training read its learning rate a {k + 1}th time; the record "
+                                   f"kept {len(self.replay)} readings (the runs differ)")
+            share = self.replay[k]
+        self.readings.append(share)
+        return self.initial * share
+
+    def __getstate__(self) -> dict:
+        state = dict(self.__dict__)
+        state["readings"], state["replay"] = [], None
+        return state
+
+    def __setstate__(self, state: dict) -> None:  # (a schedule pickled before the readings were kept has none)
+        self.__dict__.update({"replay": None, **state, "readings": []})
 
     def __repr__(self) -> str:
         return f"BudgetDecay({self.initial!r}, {self.budget_s!r}, {self.clock!r})"

@@ -87,7 +87,8 @@ says so; the held-out ``mean_discounted_return`` is then at ``G``.  ``--log-std-
 another, the policy's initial log standard deviation (``policy_kwargs={"log_std_init": X}``; default 0, a
 standard deviation of 1 in every action), also named in ``hyperparameters``, and ``--lr-decay`` a third, the
 learning rate, which falls linearly from the library's default to 0 over the budget
-(:mod:`simgrip.envs.lr_decay`), and ``--ent-coef C`` (PPO only) a fourth, the entropy bonus's coefficient
+(:mod:`simgrip.envs.lr_decay`; a PPO run records each reading of the clock it made, ``lr_fractions``, which
+``--replay`` gives back), and ``--ent-coef C`` (PPO only) a fourth, the entropy bonus's coefficient
 (default 0).  ``examples/evaluate_policy.py``
 re-evaluates a saved model, or a scripted controller, the same way.
 
@@ -237,6 +238,15 @@ def model_kwargs(algo: str, gamma: float | None, log_std_init: float | None, lr_
     return kwargs
 
 
+def budget_decay(algo: str, budget_s: float, clock: str, replay=None) -> BudgetDecay:
+    """``--lr-decay``'s schedule: the algorithm's default rate falling to 0 over ``budget_s`` seconds of ``clock``
+    (a replay's: the record's readings, ``replay``)."""
+    from stable_baselines3 import PPO, SAC
+
+    initial = inspect.signature({"ppo": PPO, "sac": SAC}[algo]).parameters["learning_rate"].default
+    return BudgetDecay(initial, budget_s, clock, replay=replay)
+
+
 def hyperparameters(gamma: float | None, log_std_init: float | None, lr_decay=None,
                     ent_coef: float | None = None, n_steps: int | None = None) -> str:
     """The JSON's ``hyperparameters``: the library's defaults, and which ones this run changed."""
@@ -337,8 +347,7 @@ def train(algo: str, env_id: str, *, steps: int, minutes: float, seed: int, out:
         from stable_baselines3.common.vec_env import VecNormalize
 
         env = VecNormalize(env)  # SB3's defaults; the Monitor inside still records the env's own returns
-    decay = BudgetDecay(inspect.signature(cls).parameters["learning_rate"].default, budget, clock) \
-        if lr_decay else None
+    decay = budget_decay(algo, budget, clock, None if replay is None else replay.lr_fractions) if lr_decay else None
     if decay is not None:  # on the budget's own clock, from the budget's start (before the model is built)
         decay.start(c_start if clock == "cpu" else t_start)
     model = cls("MlpPolicy", env, seed=seed, verbose=0, **model_kwargs(algo, gamma, log_std_init, decay,
@@ -387,6 +396,8 @@ def train(algo: str, env_id: str, *, steps: int, minutes: float, seed: int, out:
               "train_episodes": len(rows), "seed": seed, "n_envs": n_envs,
               "hyperparameters": hyperparameters(gamma, log_std_init, decay, ent_coef, n_steps),
               "versions": versions()}
+    if decay is not None and algo == "ppo":  # what a replay reads instead of the clock (envs.lr_decay)
+        result["lr_fractions"] = list(decay.readings)
     keys, wrappers = options.record()
     result.update(keys)
     if n_envs > 1:
@@ -512,7 +523,9 @@ def replay_schedule(args):
         raise ValueError(f"--replay: one --algo, the record's (got {' '.join(args.algo)})")
     identity = {"algo": args.algo[0], "env": args.env, "seed": args.seed, "clock": args.clock,
                 "budget_minutes": args.minutes, "n_envs": args.n_envs,
-                "hyperparameters": hyperparameters(args.gamma, args.log_std_init, None, args.ent_coef, args.n_steps),
+                "hyperparameters": hyperparameters(args.gamma, args.log_std_init, budget_decay(
+                    args.algo[0], 60.0 * args.minutes, args.clock) if args.lr_decay else None, args.ent_coef,
+                    args.n_steps),
                 "eval_seeds": [args.eval_seed, args.eval_seed + args.eval_episodes - 1],
                 **EnvOptions.from_args(args).record()[0]}
     schedule = load_schedule(args.replay, identity, checkpoint_minutes=args.checkpoint_minutes,
@@ -538,15 +551,15 @@ def main(argv=None) -> int:
         check_training_env(args)
     except ValueError as e:
         p.error(str(e))
-    try:
-        schedule = replay_schedule(args)
-    except ValueError as e:
-        p.error(str(e))
     try:  # after the options and the env are checked: a bad one is named whether the rl extra is there or not
         import stable_baselines3  # noqa: F401
         import torch
     except ImportError:
         p.error('needs Stable-Baselines3 and PyTorch: pip install "simgrip[rl]"')
+    try:
+        schedule = replay_schedule(args)
+    except ValueError as e:
+        p.error(str(e))
     if args.init_from is not None:
         if args.algo != ["ppo"]:
             p.error("--init-from: PPO only (--algo ppo)")

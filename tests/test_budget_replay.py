@@ -71,7 +71,10 @@ def test_a_record_of_another_experiment_is_refused_naming_the_field(tmp_path, ke
 
 
 @pytest.mark.parametrize("rec,kw,why", [
-    (_record(), {"lr_decay": True}, "--lr-decay cannot be replayed"),
+    (_record(), {"lr_decay": True}, "--lr-decay cannot be replayed from .*: it does not keep"),
+    (_record(lr_fractions=[]), {"lr_decay": True}, "--lr-decay cannot be replayed"),
+    (_record(lr_fractions=[1.0, 0.5, 1.5]), {"lr_decay": True}, "--lr-decay cannot be replayed"),
+    (_record(lr_fractions=[1.0, True]), {"lr_decay": True}, "--lr-decay cannot be replayed"),
     (_record(), {"selection": True}, "--select-every cannot be replayed"),
     (_record(selection={"every_minutes": 1.0}), {}, "validated within its budget"),
     (_record(returncode=1), {}, "records no finished run"),
@@ -87,6 +90,19 @@ def test_what_cannot_be_replayed_is_refused_saying_why(tmp_path, rec, kw, why):
     kw = {"checkpoint_minutes": 5.0, **kw}
     with pytest.raises(ValueError, match="--replay: .*" + why.replace("[", r"\[").replace("]", r"\]")):
         load_schedule(_write(tmp_path, rec), IDENTITY, **kw)
+
+
+def test_a_decaying_rate_is_replayed_from_the_readings_its_record_kept(tmp_path):
+    s = load_schedule(_write(tmp_path, _record(lr_fractions=[1.0, 0.75, 0.75, 0])), IDENTITY, checkpoint_minutes=5.0,
+                      lr_decay=True)
+    assert s.lr_fractions == (1.0, 0.75, 0.75, 0.0)
+    assert load_schedule(_write(tmp_path, _record()), IDENTITY, checkpoint_minutes=5.0).lr_fractions is None
+    rec = _record(lr_fractions=[1.0, 0.75, 0.75])
+    same = compare(rec, rec)
+    assert same["identical"] and same["lr_readings"] == [3, 3]
+    fewer = compare({**rec, "lr_fractions": [1.0, 0.75]}, rec)  # a replay that stopped reading early
+    assert not fewer["identical"] and fewer["lr_readings"] == [2, 3]
+    assert not compare({**rec, "lr_fractions": [1.0, 0.75, 0.5]}, rec)["identical"]
 
 
 def test_an_unreadable_record_is_named(tmp_path):
@@ -178,3 +194,38 @@ def test_a_replay_trains_the_record_s_policy_step_for_step(tmp_path):
     out = json.loads((tmp_path / "c" / "ppo_eval.json").read_text())
     assert out["timesteps"] == 1500 and [c["timesteps"] for c in out["checkpoints"]] == [500, 1000, 1500]
     assert out["replay"]["timesteps"] == [1500, 1500] and out["replay"]["from"] == str(tmp_path / "moved.json")
+
+
+def test_a_replay_of_a_decaying_rate_trains_the_record_s_policy(tmp_path):
+    """``--lr-decay``: the record keeps each reading of the clock its rate made, and the replay, given them instead of
+    the clock, trains the same policy (updates at rates below SB3's, none repeated: the clock moved between them);
+    a record whose readings were others (another machine's clock) gives the replay its rates."""
+    pytest.importorskip("stable_baselines3")
+    train = _example("train_sb3")
+    common = ["--algo", "ppo", "--env", "simgrip/PickFragile-v7", "--seed", "6", "--minutes", "0.15",
+              "--checkpoint-minutes", "0.05", "--eval-episodes", "2", "--eval-seed", "8370", "--lr-decay"]
+    train.main([*common, "--out", str(tmp_path / "a")])
+    rec = json.loads((tmp_path / "a" / "ppo_eval.json").read_text())
+    updates = rec["timesteps"] // 2048
+    assert updates >= 2, rec["timesteps"]  # two updates at least: the second one's rate read later than the first
+    shares = rec["lr_fractions"]
+    assert len(shares) == 1 + 2 * updates  # one as the model is built, two an update (the log's and the set's)
+    assert shares == sorted(shares, reverse=True) and 0.0 <= shares[-1] < shares[2] < shares[0] <= 1.0
+    train.main([*common, "--replay", str(tmp_path / "a" / "ppo_eval.json"), "--out", str(tmp_path / "b")])
+    rep = json.loads((tmp_path / "b" / "ppo_eval.json").read_text())
+    assert rep["replay"]["identical"], rep["replay"]
+    assert rep["lr_fractions"] == shares and rep["replay"]["lr_readings"] == [len(shares)] * 2
+    # other readings (another machine's clock), stopped after the first update: the replay's rates are the record's,
+    # not its own clock's, and it says it read fewer than the record kept
+    other = [x * 0.5 for x in shares]
+    short = {**rec, "lr_fractions": other, "timesteps": 2100,
+             "checkpoints": [{**c, "timesteps": n} for c, n in zip(rec["checkpoints"], (700, 1400, 2100))]}
+    _write(tmp_path, short, "other.json")
+    train.main([*common, "--replay", str(tmp_path / "other.json"), "--out", str(tmp_path / "c")])
+    out = json.loads((tmp_path / "c" / "ppo_eval.json").read_text())
+    assert out["timesteps"] == 2100 and out["lr_fractions"] == other[:3]
+    assert not out["replay"]["identical"] and out["replay"]["lr_readings"] == [3, len(other)]
+    from stable_baselines3 import PPO
+
+    model = PPO.load(tmp_path / "c" / "ppo_model.zip", device="cpu")
+    assert model.policy.optimizer.param_groups[0]["lr"] == 3e-4 * other[2]

@@ -60,11 +60,39 @@ def test_start_at_a_reading_of_the_clock_counts_from_it(clock):
             decay.start(at=bad)
 
 
+def test_each_call_keeps_its_reading_and_a_replay_returns_the_readings_in_order(clock):
+    decay = BudgetDecay(1e-3, 100.0, "cpu")
+    rates = []
+    for t in (100.0, 125.0, 125.0, 150.0, 300.0):
+        clock[0] = t
+        rates.append(decay(0.3))
+    assert decay.readings == [1.0, 0.75, 0.75, 0.5, 0.0]
+    assert rates == [1e-3 * s for s in decay.readings]
+    again = BudgetDecay(1e-3, 100.0, "cpu", replay=decay.readings)
+    clock[0] = 900.0  # the clock is not read: the record's readings are
+    assert [again(0.9) for _ in range(5)] == rates and again.readings == decay.readings
+    with pytest.raises(RuntimeError, match="a 6th time; the record kept 5 readings"):
+        again(0.9)
+    for bad in ([1.2], [-0.1], [math.nan], ["0.5"], [True]):
+        with pytest.raises(ValueError, match="replay"):
+            BudgetDecay(1e-3, 100.0, "cpu", replay=bad)
+
+
 def test_it_pickles_with_its_numbers_and_clock():
     decay = BudgetDecay(3e-4, 900.0, "wall")
     again = pickle.loads(pickle.dumps(decay))
     assert (again.initial, again.budget_s, again.clock, again.started) == (3e-4, 900.0, "wall", decay.started)
     assert repr(again) == "BudgetDecay(0.0003, 900.0, 'wall')"
+    decay(1.0)  # its readings and a replay's shares stay behind: a saved model holds the schedule, not its history
+    replayed = BudgetDecay(3e-4, 900.0, "wall", replay=[1.0, 0.5])
+    for d in (decay, replayed):
+        back = pickle.loads(pickle.dumps(d))
+        assert back.readings == [] and back.replay is None and back.initial == 3e-4
+    old = BudgetDecay(3e-4, 900.0, "wall")  # pickled before the readings were kept: without them
+    state = {k: v for k, v in old.__dict__.items() if k not in ("readings", "replay")}
+    restored = BudgetDecay.__new__(BudgetDecay)
+    restored.__setstate__(state)
+    assert restored.readings == [] and restored.replay is None and 0.0 <= restored(1.0) <= 3e-4
 
 
 @pytest.mark.parametrize("args, word", [((0.0, 60.0), "initial"), ((-3e-4, 60.0), "initial"),
