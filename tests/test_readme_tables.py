@@ -438,6 +438,41 @@ def test_the_sac_screens_behind_the_aids_are_their_records():
     assert f"crush {crushed[0]} and {crushed[1]} of 50 and let {timeout[0]} and {timeout[1]} time out" in para
 
 
+def test_the_25_hz_screen_on_the_learning_page_is_its_record():
+    """The learning page's "K fingers commanded at 25 Hz": the record's options (the control step, the valve's rate
+    and the episode's steps, per second what the registered task's are; the step charge per second too), each seed's
+    checkpoints, its steps and the simulated seconds they cover, and its crushes of 50 held out."""
+    text = " ".join((ROOT / "docs" / "learning.md").read_text(encoding="utf-8").split())
+    para = text[text.index("**The K fingers commanded at 25 Hz**"):]
+    para = para[:para.index(" **", len("**The K fingers commanded at 25 Hz**"))]
+    folder = "rl_multi_v7_peak_light_log_std_half_lr_decay_step_charge_25hz_screen"
+    assert folder in para
+    agg = json.loads((BASELINES / folder / "aggregate.json").read_text(encoding="utf-8"))
+    assert agg["seeds"] == [0, 1] and agg["minutes"] == 15.0 and agg["eval_seeds"] == [8000, 8049]
+    import gymnasium as gym
+
+    import simgrip.envs  # noqa: F401
+
+    spec = gym.spec("simgrip/PickMultiFragile-v7")
+    env = gym.make(spec.id).unwrapped
+    try:
+        fs, rate, dt = env.frame_skip, env.kappa_rate, env.dt
+    finally:
+        env.close()
+    kwargs = agg["env_kwargs"]
+    # twice the control step; per second the valve's rate, the episode and the step charge of the registered task
+    assert kwargs["frame_skip"] == 2 * fs and kwargs["kappa_rate"] == 2 * rate
+    assert kwargs["max_episode_steps"] * 2 == spec.max_episode_steps and agg["step_charge"] == 2 * 0.005
+    runs = [json.loads((BASELINES / folder / f"ppo_seed{k}.json").read_text(encoding="utf-8")) for k in (0, 1)]
+    rates = [" / ".join(str(pct(c["success_rate"])) for c in r["checkpoints"]) for r in runs]
+    assert f"{rates[0]} and {rates[1]} % at 5 / 10 / 15 CPU-min" in para
+    assert f"on {runs[0]['timesteps']:,} and {runs[1]['timesteps']:,} steps" in para
+    seconds = [round(r["timesteps"] * 2 * dt, -1) for r in runs]
+    assert f"({seconds[0]:,.0f} and {seconds[1]:,.0f} s of simulated time" in para
+    crushed = [r["outcomes"]["crushed"] for r in runs]
+    assert f"{crushed[0]} and {crushed[1]} crushes of 50 held out" in para
+
+
 def _assert_replayed(cell: str, folder: str, seed: int, rates: str, steps: str, episodes: str) -> None:
     """Seed ``seed`` of the README cell ``cell``'s record replayed into ``folder``: the replay says ``identical``
     against that record, whose checkpoints (``rates``, "x / y / z"), steps and training episodes (as the page writes
