@@ -489,7 +489,7 @@ def _assert_replayed(cell: str, folder: str, seed: int, rates: str, steps: str, 
 
 def test_the_identical_replays_on_the_learning_page_are_their_records():
     """The learning page's replays of README cells on a machine of the references' arithmetic (stop 64: three cells
-    whole, seed 0 of a fourth): each replayed seed's JSON says ``identical`` against the cell's own record (the folder
+    whole, seed 0 of a fourth; stop 65: the fourth's seeds 1 and 2): each replayed seed's JSON says ``identical`` against the cell's own record (the folder
     it names), and the checkpoints, steps and training episodes the page gives are the record's."""
     text = " ".join((ROOT / "docs" / "learning.md").read_text(encoding="utf-8").split())
     found = re.findall(r"the \w+'s aided cell \(`(rl_[\w]+)`, recorded at stop \d+\): seeds 0–2 \*\*identical\*\* to "
@@ -508,3 +508,12 @@ def test_the_identical_replays_on_the_learning_page_are_their_records():
     assert more, "the sphere's replay"
     cell, folder, rates, steps, episodes = more.groups()
     _assert_replayed(cell, folder, 0, rates, steps, episodes)
+    # and its seeds 1 and 2: "(`docs/baselines/B/`): x / y / z and x / y / z % at 5 / 10 / 15 CPU-min, on N and N steps
+    # and E and E training episodes"
+    rest = re.search(r"its seeds 1 and 2 \(stop \d+, [^)]*\) \*\*identical\*\* too \(`docs/baselines/(rl_\w+_replay_12)/`\): "
+                     r"([\d /]+) and ([\d /]+) % at 5 / 10 / 15 CPU-min, on ([\d,]+) and ([\d,]+) steps and ([\d,]+) and "
+                     r"([\d,]+) training episodes", text)
+    assert rest, "the sphere's seeds 1 and 2"
+    folder, r1, r2, s1, s2, e1, e2 = rest.groups()
+    _assert_replayed(cell, folder, 1, r1, s1, e1)
+    _assert_replayed(cell, folder, 2, r2, s2, e2)
