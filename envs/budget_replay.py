@@ -14,8 +14,8 @@ steps, always short of the next decision's time), so a replayed run (``train_sb3
 The training itself is deterministic in the steps (its seed fixes the environment's and the learner's random
 numbers; one torch thread), so a replay on the same machine and software trains the same policy bit for bit, and
 its held-out results equal the record's: ``replay["identical"]`` in the replay's ``<algo>_eval.json`` says whether
-the final steps, success rate, mean return and outcomes, and every checkpoint's steps, success rate and mean return,
-are equal (measured: the pinch's aided command run for 4 CPU-minutes and replayed on the same machine, identical over
+the final steps, success rate, mean return and outcomes, every checkpoint's steps, success rate and mean return, and
+(where the record has one) the final policy's digest, :func:`policy_digest`, are equal (measured: the pinch's aided command run for 4 CPU-minutes and replayed on the same machine, identical over
 168k steps and 82 updates).  Other versions of MuJoCo, PyTorch, Stable-Baselines3 or NumPy, or another CPU's
 arithmetic (the learner's matrix kernels follow the instruction set), change the last bits of the physics or of an
 update, after which the runs part: the replay is then a run of the same steps, a new sample of the recipe at the
@@ -45,7 +45,7 @@ import math
 from dataclasses import dataclass
 from pathlib import Path
 
-__all__ = ["IDENTITY_KEYS", "OPTION_KEYS", "ReplaySchedule", "compare", "load_schedule", "versions"]
+__all__ = ["IDENTITY_KEYS", "OPTION_KEYS", "ReplaySchedule", "compare", "load_schedule", "policy_digest", "versions"]
 
 #: the fields of a run's record that a replay's command must give alike (besides the options below)
 IDENTITY_KEYS = ("algo", "env", "seed", "clock", "budget_minutes", "hyperparameters", "eval_seeds")
@@ -102,6 +102,20 @@ def versions() -> dict:
         except metadata.PackageNotFoundError:
             found[name] = None
     return found
+
+
+def policy_digest(model) -> str:
+    """A digest of a Stable-Baselines3 model's policy: SHA-256 (its first 16 hex digits) of every parameter's name,
+    shape, dtype and bytes, in the policy's order.  Equal digests are the same network to the last bit; a run records
+    its final policy's (``policy_digest``), and a replay's ``identical`` asks for the record's."""
+    import hashlib
+
+    h = hashlib.sha256()
+    for name, tensor in model.policy.state_dict().items():
+        a = tensor.detach().cpu().contiguous().numpy()
+        h.update(f"{name}:{a.shape}:{a.dtype}:".encode())
+        h.update(a.tobytes())
+    return h.hexdigest()[:16]
 
 
 def _read(path) -> dict:
@@ -174,8 +188,8 @@ def load_schedule(path, identity: dict, *, checkpoint_minutes: float | None, lr_
 def compare(result: dict, record: dict) -> dict:
     """``result`` (a replay's held-out results) beside ``record``'s: per quantity ``[replay, record]``, and
     ``identical``: the final steps, success rate, mean return and outcomes, every checkpoint's steps, success rate
-    and mean return, and where the record kept them the learning rate's readings (``lr_readings``: how many each
-    made), all equal."""
+    and mean return, and where the record kept them the final policy's digest (:func:`policy_digest`) and the
+    learning rate's readings (``lr_readings``: how many each made), all equal."""
     keys = ("timesteps", "success_rate", "mean_return", "outcomes")
     out = {k: [result.get(k), record.get(k)] for k in keys}
     same = all(a == b for a, b in out.values())
@@ -187,6 +201,9 @@ def compare(result: dict, record: dict) -> dict:
             same = same and mine.get(k) == theirs.get(k)
         cps.append(row)
     same = same and len(result.get("checkpoints") or []) == len(record.get("checkpoints") or [])
+    if "policy_digest" in record:
+        out["policy_digest"] = [result.get("policy_digest"), record["policy_digest"]]
+        same = same and out["policy_digest"][0] == out["policy_digest"][1]
     if "lr_fractions" in record:
         mine, theirs = result.get("lr_fractions") or [], record["lr_fractions"]
         out["lr_readings"] = [len(mine), len(theirs)]

@@ -146,7 +146,7 @@ import numpy as np  # noqa: E402
 
 import simgrip.envs  # noqa: E402,F401  (registers the simgrip ids)
 from simgrip.command_parser import CommandParser
-from simgrip.envs.budget_replay import compare, load_schedule, versions
+from simgrip.envs.budget_replay import compare, load_schedule, policy_digest, versions
 from simgrip.envs.env_options import EnvOptions, check_training_env, make_env
 from simgrip.envs.evaluation import (GAMMA, add_training_aid_arguments, check_env_id, checkpoint_tag, episode_count,
                                      json_object, non_negative_int, outcomes, positive_int, positive_minutes,
@@ -419,6 +419,7 @@ def train(algo: str, env_id: str, *, steps: int, minutes: float, seed: int, out:
         last = evaluate(model, env_id, eval_episodes, eval_seed, options)
         result["selection"] = {**chooser.record(), "last": {k: last[k] for k in ("success_rate", "mean_return", "outcomes")}}
         model = cls.load(best)
+    result["policy_digest"] = policy_digest(model)  # the saved policy's, to the last bit (envs.budget_replay)
     result.update(evaluate(model, env_id, eval_episodes, eval_seed, options, normalizer))
     for cp in checkpoints:  # the held-out success of each checkpoint: how soon the target was reached
         cp_model = cls.load(out / cp["file"])

@@ -8,7 +8,7 @@ import math
 import pytest
 
 from helpers import load_example as _example, rl_baselines_args
-from simgrip.envs.budget_replay import IDENTITY_KEYS, ReplaySchedule, compare, load_schedule, versions
+from simgrip.envs.budget_replay import IDENTITY_KEYS, ReplaySchedule, compare, load_schedule, policy_digest, versions
 
 IDENTITY = {"algo": "ppo", "env": "simgrip/PickFragile-v7", "seed": 0, "clock": "cpu", "budget_minutes": 15.0,
             "hyperparameters": "Stable-Baselines3 defaults but gamma = 0.995", "eval_seeds": [8000, 8049],
@@ -124,6 +124,28 @@ def test_compare_sets_each_result_beside_the_record_s():
     assert not compare({**rec, "outcomes": {"success": 39, "crushed": 1}}, rec)["identical"]
 
 
+def test_the_policy_digest_is_the_network_to_the_last_bit():
+    pytest.importorskip("stable_baselines3")
+    import gymnasium as gym
+    import numpy as np
+    import torch
+    from stable_baselines3 import PPO
+
+    env = gym.make("Pendulum-v1")
+    a, b = (PPO("MlpPolicy", env, seed=3, device="cpu") for _ in range(2))
+    assert policy_digest(a) == policy_digest(b) and len(policy_digest(a)) == 16
+    with torch.no_grad():  # one parameter one unit in the last place away
+        p = next(b.policy.parameters())
+        p.view(-1)[0] = float(np.nextafter(np.float32(p.view(-1)[0].item()), np.float32(np.inf)))
+    assert policy_digest(a) != policy_digest(b)
+    rec = {**_record(), "policy_digest": policy_digest(a)}
+    assert compare({**rec}, rec)["identical"]
+    other = compare({**rec, "policy_digest": policy_digest(b)}, rec)
+    assert not other["identical"] and other["policy_digest"] == [policy_digest(b), policy_digest(a)]
+    assert compare(_record(), _record())["identical"] and "policy_digest" not in compare(_record(), _record())
+    env.close()
+
+
 def test_versions_name_what_the_numbers_depend_on():
     import platform
 
@@ -177,6 +199,7 @@ def test_a_replay_trains_the_record_s_policy_step_for_step(tmp_path):
     train.main([*common, "--replay", str(tmp_path / "a" / "ppo_eval.json"), "--out", str(tmp_path / "b")])
     rep = json.loads((tmp_path / "b" / "ppo_eval.json").read_text())
     assert rep["replay"]["identical"], rep["replay"]
+    assert rep["policy_digest"] == rec["policy_digest"] and rep["replay"]["policy_digest"] == [rec["policy_digest"]] * 2
     assert rep["timesteps"] == rec["timesteps"]
     assert [c["timesteps"] for c in rep["checkpoints"]] == [c["timesteps"] for c in rec["checkpoints"]]
     assert (tmp_path / "b" / "ppo_model.zip").stat().st_size > 0
@@ -194,6 +217,7 @@ def test_a_replay_trains_the_record_s_policy_step_for_step(tmp_path):
     out = json.loads((tmp_path / "c" / "ppo_eval.json").read_text())
     assert out["timesteps"] == 1500 and [c["timesteps"] for c in out["checkpoints"]] == [500, 1000, 1500]
     assert out["replay"]["timesteps"] == [1500, 1500] and out["replay"]["from"] == str(tmp_path / "moved.json")
+    assert out["policy_digest"] != rec["policy_digest"] and not out["replay"]["identical"]  # fewer updates
 
 
 def test_a_replay_of_a_decaying_rate_trains_the_record_s_policy(tmp_path):
