@@ -15,8 +15,8 @@ The training itself is deterministic in the steps (its seed fixes the environmen
 numbers; one torch thread), so a replay on the same machine and software trains the same policy bit for bit, and
 its held-out results equal the record's: ``replay["identical"]`` in the replay's ``<algo>_eval.json`` says whether
 the final steps, success rate, mean return and outcomes, every checkpoint's steps, success rate and mean return, and
-(where the record has one) the final policy's digest, :func:`policy_digest`, are equal (measured: the pinch's aided command run for 4 CPU-minutes and replayed on the same machine, identical over
-168k steps and 82 updates).  Other versions of MuJoCo, PyTorch, Stable-Baselines3 or NumPy, or another CPU's
+(where the record has one) the final policy's digest, :func:`policy_digest`, are equal (measured: the pinch's aided
+command run for 4 CPU-minutes and replayed on the same machine, identical over 168k steps and 82 updates).  Other versions of MuJoCo, PyTorch, Stable-Baselines3 or NumPy, or another CPU's
 arithmetic (the learner's matrix kernels follow the instruction set), change the last bits of the physics or of an
 update, after which the runs part: the replay is then a run of the same steps, a new sample of the recipe at the
 record's step count (measured: seed 0 of the pinch's discount batch, recorded a day earlier when the machine
