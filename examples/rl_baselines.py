@@ -371,7 +371,8 @@ def combine(batches: list[Path]) -> tuple[dict, list[dict]]:
     :func:`aggregate`, ``combined_from`` the batches' commands.  ``results``: every run's ``<algo>_seed<S>.json``.
 
     Raises ValueError naming ``--combine`` when a batch lacks a file, the batches differ in a field other than
-    ``_PER_BATCH`` (the field named), or a seed is in two batches."""
+    ``_PER_BATCH`` (the field named; replays of records in several folders: ``replay`` lists them), or a seed is in
+    two batches."""
     if len(batches) < 2:
         raise ValueError(f"--combine: at least two batch folders, got {len(batches)}")
     if len(set(b.resolve() for b in batches)) != len(batches):
@@ -380,7 +381,8 @@ def combine(batches: list[Path]) -> tuple[dict, list[dict]]:
     first = heads[0]
     for b, head in zip(batches[1:], heads[1:]):
         for key in sorted(set(first) | set(head)):
-            if key not in _PER_BATCH and first.get(key) != head.get(key):
+            if key not in _PER_BATCH and first.get(key) != head.get(key) and not (key == "replay" and key in head
+                                                                               and key in first):
                 raise ValueError(f"--combine: {b} is not the experiment of {batches[0]}: {key!r} differs "
                                  f"({head.get(key)!r}, not {first.get(key)!r})")
     seeds: list[int] = []
@@ -398,8 +400,9 @@ def combine(batches: list[Path]) -> tuple[dict, list[dict]]:
             for seed in head["seeds"]:
                 results.append(_read_json(b / f"{algo}_seed{seed}.json", "the run's result"))
     combined = {k: v for k, v in first.items() if k not in _PER_BATCH}
-    combined.update(seeds=sorted(seeds), summary=aggregate(results),
-                    combined_from=[head.get("command") for head in heads])
+    folders = list(dict.fromkeys(head["replay"] for head in heads if "replay" in head))
+    combined.update(seeds=sorted(seeds), summary=aggregate(results), combined_from=[h.get("command") for h in heads],
+                    **({"replay": folders} if len(folders) > 1 else {}))
     return combined, results
 
 

@@ -326,6 +326,23 @@ def test_combine_merges_batches_as_one_run_would(tmp_path):
     assert (out / "learning_curves.png").stat().st_size > 0
 
 
+def test_combine_merges_replays_of_records_in_several_folders(tmp_path):
+    """Replays (``replay``: the folder of their records) combine whether their records share a folder or not; a
+    replay does not combine with a batch that is not one."""
+    mod = _module()
+    a = _batch(tmp_path / "a", [0], [0.2], replay="/r/x")
+    b = _batch(tmp_path / "b", [1], [0.8], replay="/r/y")
+    c = _batch(tmp_path / "c", [2], [0.5], replay="/r/y")
+    assert mod.main(["--combine", str(a), str(b), str(c), "--out", str(tmp_path / "o")]) == 0
+    assert json.loads((tmp_path / "o" / "aggregate.json").read_text())["replay"] == ["/r/x", "/r/y"]
+    assert mod.main(["--combine", str(b), str(c), "--out", str(tmp_path / "o2")]) == 0
+    assert json.loads((tmp_path / "o2" / "aggregate.json").read_text())["replay"] == "/r/y"
+    plain = _batch(tmp_path / "p", [3], [0.5])
+    with pytest.raises(SystemExit) as e:
+        mod.main(["--combine", str(a), str(plain), "--out", str(tmp_path / "o3")])
+    assert e.value.code == 2
+
+
 @pytest.mark.parametrize("case, word", [
     ("other_minutes", "'minutes' differs"), ("other_aid", "'action_offset' differs"), ("seed_twice", "seed 1"),
     ("one_batch", "at least two"), ("missing_run", "ppo_seed2.json"), ("out_is_a_batch", "--out"),
