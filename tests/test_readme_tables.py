@@ -517,3 +517,43 @@ def test_the_identical_replays_on_the_learning_page_are_their_records():
     folder, r1, r2, s1, s2, e1, e2 = rest.groups()
     _assert_replayed(cell, folder, 1, r1, s1, e1)
     _assert_replayed(cell, folder, 2, r2, s2, e2)
+
+
+def test_the_lr_decay_rerun_and_its_replays_are_their_records():
+    """The learning page's "A learning rate that follows the clock, replayed": the rerun is the K fingers' README
+    cell's experiment (the same options and hyperparameters as its record), its checkpoints, crushes and steps are
+    the page's, each seed's replay says ``identical`` against it having read every one of the rate's readings, and
+    the README and the environments page give its final success."""
+    text = " ".join((ROOT / "docs" / "learning.md").read_text(encoding="utf-8").split())
+    para = text[text.index("**A learning rate that follows the clock, replayed**"):]
+    rerun = "rl_multi_v7_peak_light_log_std_half_lr_decay_step_charge_rerun"
+    cell = ROWS["PickMultiFragile-v7"][1][AIDED]
+    assert f"docs/baselines/{rerun}/" in para and f"docs/baselines/{rerun}_replay_012/" in para
+    agg = json.loads((BASELINES / rerun / "aggregate.json").read_text(encoding="utf-8"))
+    old = json.loads((BASELINES / cell / "aggregate.json").read_text(encoding="utf-8"))
+    for key in ("env", "algos", "minutes", "checkpoint_minutes", "clock", "eval_seeds", "hyperparameters",
+                "action_offset", "light_bias", "step_charge", "seeds"):
+        assert agg.get(key) == old.get(key), key
+    runs = [json.loads((BASELINES / rerun / f"ppo_seed{k}.json").read_text(encoding="utf-8")) for k in range(3)]
+    rates = [" / ".join(str(pct(c["success_rate"])) for c in r["checkpoints"]) for r in runs]
+    assert f"{rates[0]}, {rates[1]} and {rates[2]} % at 5 / 10 / 15 CPU-min" in para
+    crushed = [r["outcomes"]["crushed"] for r in runs]
+    assert f"{crushed[0]}, {crushed[1]} and {crushed[2]} crushes of 50 held out" in para
+    assert f"on {runs[0]['timesteps']:,}, {runs[1]['timesteps']:,} and {runs[2]['timesteps']:,} steps" in para
+    episodes, readings = [], []
+    for k, run in enumerate(runs):
+        assert len(run["lr_fractions"]) == 1 + 2 * (run["timesteps"] // 2048), k  # built, then two an update
+        rep = json.loads((BASELINES / f"{rerun}_replay_012" / f"ppo_seed{k}.json").read_text(encoding="utf-8"))
+        # the record replayed: this seed's batch of the rerun (the folder its command wrote, combined_from)
+        batch = next(c[c.index("--out") + 1] for c in agg["combined_from"] if c[c.index("--seeds") + 1] == str(k))
+        assert rep["replay"]["identical"] is True and rep["replay"]["from"] == f"{batch}/ppo_seed{k}.json"
+        assert rep["replay"]["lr_readings"] == [len(run["lr_fractions"])] * 2 and rep["lr_fractions"] == \
+            run["lr_fractions"]
+        assert rep["train_episodes"] == run["train_episodes"] and rep["timesteps"] == run["timesteps"]
+        episodes.append(f"{run['train_episodes']:,}")
+        readings.append(str(len(run["lr_fractions"])))
+    assert f"training episodes ({episodes[0]}, {episodes[1]} and {episodes[2]}), with all {readings[0]}, " \
+        f"{readings[1]} and {readings[2]} of the rate's readings" in para
+    final = " / ".join(str(pct(r["success_rate"])) for r in runs)
+    for page in (ROOT / "README.md", ROOT / "docs" / "environments.md"):
+        assert f"{final} % at 15 CPU-min" in " ".join(page.read_text(encoding="utf-8").split()), page
