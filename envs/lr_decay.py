@@ -97,7 +97,7 @@ class BudgetDecay:
         else:
             k = len(self.readings)
             if k >= len(self.replay):
-                raise RuntimeError(f"--replay: the training read its learning rate a {k + 1}th time; the record "
+                raise RuntimeError(f"--replay: the training read its learning rate {k + 1} times; the record "
                                    f"kept {len(self.replay)} readings (the runs differ)")
             share = self.replay[k]
         self.readings.append(share)

@@ -71,7 +71,7 @@ def test_each_call_keeps_its_reading_and_a_replay_returns_the_readings_in_order(
     again = BudgetDecay(1e-3, 100.0, "cpu", replay=decay.readings)
     clock[0] = 900.0  # the clock is not read: the record's readings are
     assert [again(0.9) for _ in range(5)] == rates and again.readings == decay.readings
-    with pytest.raises(RuntimeError, match="a 6th time; the record kept 5 readings"):
+    with pytest.raises(RuntimeError, match="read its learning rate 6 times; the record kept 5 readings"):
         again(0.9)
     for bad in ([1.2], [-0.1], [math.nan], ["0.5"], [True]):
         with pytest.raises(ValueError, match="replay"):
