@@ -11,19 +11,19 @@ gives exactly the budget time the decision there needed, and between two of them
 steps, always short of the next decision's time), so a replayed run (``train_sb3.py --replay RECORD``,
 ``rl_baselines.py --replay FOLDER``) checkpoints and stops at the record's steps whatever the machine's speed.
 
-The training itself is deterministic in the steps (its seed fixes the environment's and the learner's random
-numbers; one torch thread), so a replay on the same machine and software trains the same policy bit for bit, and
-its held-out results equal the record's: ``replay["identical"]`` in the replay's ``<algo>_eval.json`` says whether
-the final steps, success rate, mean return and outcomes, every checkpoint's steps, success rate and mean return, and
-(where the record has one) the final policy's digest, :func:`policy_digest`, are equal (measured: the pinch's aided
-command run for 4 CPU-minutes and replayed on the same machine, identical over 168k steps and 82 updates).  Other
-versions of MuJoCo, PyTorch, Stable-Baselines3 or NumPy, or another CPU's arithmetic (the learner's matrix kernels
-follow the instruction set), change the last bits of the physics or of an update, after which the runs part: the replay is then a run of the same steps, a new sample of the recipe at the
-record's step count (measured: seed 0 of the pinch's discount batch, recorded a day earlier when the machine
-gave 1.7 times the steps per CPU-minute, replayed at its 968,002 steps, gave 66 / 84 / 68 % at its
-checkpoints against the record's 80 / 70 / 84 %, parted by the first checkpoint; the record, made before runs
-recorded their versions, cannot say whether the host or a package differed).  Each run records the versions it ran
-with (``versions``).
+The training itself is deterministic in the steps (its seed fixes the environment's and the learner's random numbers;
+one torch thread), so a replay on the same machine and software trains the same policy bit for bit, and its held-out
+results equal the record's: ``replay["identical"]`` in the replay's ``<algo>_eval.json`` says whether the final steps,
+success rate, mean return and outcomes, every checkpoint's steps, success rate and mean return, and (where the record
+has one) the final policy's digest, :func:`policy_digest`, are equal (measured: the pinch's aided command run for 4
+CPU-minutes and replayed on the same machine, identical over 168k steps and 82 updates).  Other versions of MuJoCo,
+PyTorch, Stable-Baselines3 or NumPy, or another CPU's arithmetic (the learner's matrix kernels follow the instruction
+set), change the last bits of the physics or of an update, after which the runs part: the replay is then a run of the
+same steps, a new sample of the recipe at the record's step count (measured: seed 0 of the pinch's discount batch,
+recorded a day earlier when the machine gave 1.7 times the steps per CPU-minute, replayed at its 968,002 steps, gave
+66 / 84 / 68 % at its checkpoints against the record's 80 / 70 / 84 %, parted by the first checkpoint; the record, made
+before runs recorded their versions, cannot say whether the host or a package differed).  Each run records the versions
+it ran with (``versions``).
 
 A learning rate that falls over the budget (``--lr-decay``) read the clock at every update; a PPO run records what
 each reading gave (``lr_fractions``, :class:`simgrip.envs.lr_decay.BudgetDecay`), and its replay is given those
