@@ -557,3 +557,23 @@ def test_the_lr_decay_rerun_and_its_replays_are_their_records():
     final = " / ".join(str(pct(r["success_rate"])) for r in runs)
     for page in (ROOT / "README.md", ROOT / "docs" / "environments.md"):
         assert f"{final} % at 15 CPU-min" in " ".join(page.read_text(encoding="utf-8").split()), page
+
+
+def test_the_30_minute_rerun_on_the_learning_page_is_its_record():
+    """"Twice the budget again, from a fresh clone": each seed's six checkpoints, its steps and crushes, and that the
+    runs keep what a replay needs (the rate's readings, the policy's digest)."""
+    text = " ".join((ROOT / "docs" / "learning.md").read_text(encoding="utf-8").split())
+    para = text[text.index("**Twice the budget again, from a fresh clone**"):]
+    para = para[:para.index(" **", 10)]
+    folder = "rl_multi_v7_peak_light_log_std_half_lr_decay_step_charge_30min_rerun"
+    assert f"docs/baselines/{folder}/" in para
+    agg = json.loads((BASELINES / folder / "aggregate.json").read_text(encoding="utf-8"))
+    assert agg["minutes"] == 30.0 and agg["seeds"] == [0, 1] and agg["step_charge"] == 0.005
+    runs = [json.loads((BASELINES / folder / f"ppo_seed{k}.json").read_text(encoding="utf-8")) for k in (0, 1)]
+    rates = [" / ".join(str(pct(c["success_rate"])) for c in r["checkpoints"]) for r in runs]
+    assert f"{rates[0]} and {rates[1]} % at 5 / 10 / … / 30 CPU-min" in para
+    assert f"on {runs[0]['timesteps']:,} and {runs[1]['timesteps']:,} steps" in para
+    crushed = [r["outcomes"]["crushed"] for r in runs]
+    assert f"({crushed[0]} and {crushed[1]} crushes of 50 held out)" in para
+    assert all(len(r["lr_fractions"]) == 1 + 2 * (r["timesteps"] // 2048) and len(r["policy_digest"]) == 16
+               for r in runs)
