@@ -45,6 +45,8 @@ import math
 from dataclasses import dataclass
 from pathlib import Path
 
+from simgrip.envs.lr_decay import budget_shares
+
 __all__ = ["IDENTITY_KEYS", "OPTION_KEYS", "ReplaySchedule", "compare", "load_schedule", "policy_digest", "versions"]
 
 #: the fields of a run's record that a replay's command must give alike (besides the options below)
@@ -172,13 +174,14 @@ def load_schedule(path, identity: dict, *, checkpoint_minutes: float | None, lr_
                          f"{checkpoint_minutes} adds some")
     fractions = None
     if lr_decay:
-        fractions = record.get("lr_fractions")
-        if not isinstance(fractions, list) or not fractions or not all(
-                isinstance(x, (int, float)) and not isinstance(x, bool) and 0.0 <= x <= 1.0 for x in fractions):
+        try:  # (BudgetDecay's own check of a replay's shares)
+            fractions = budget_shares(record.get("lr_fractions"))
+        except ValueError:
+            fractions = ()
+        if not fractions:
             raise ValueError(f"--replay: --lr-decay cannot be replayed from {str(path)!r}: it does not keep its "
                              "learning rate's readings of the clock (lr_fractions: SAC's are not kept, nor were any "
                              "before they were recorded)")
-        fractions = tuple(float(x) for x in fractions)
     anchors = [(0, 0.0)] + [(int(c["timesteps"]), 60.0 * float(c["minutes"])) for c in checkpoints] + [(final, budget)]
     if any(b[0] < a[0] or b[1] < a[1] for a, b in zip(anchors, anchors[1:])):
         raise ValueError(f"--replay: {str(path)!r}'s checkpoints are out of order")

@@ -33,9 +33,18 @@ from __future__ import annotations
 import math
 import time
 
-__all__ = ["BudgetDecay"]
+__all__ = ["BudgetDecay", "budget_shares"]
 
 _CLOCKS = {"cpu": time.process_time, "wall": time.perf_counter}
+
+
+def budget_shares(values) -> tuple:
+    """``values`` (a list or tuple: a record's ``lr_fractions``) as a tuple of floats, each a share of the budget left
+    in ``[0, 1]``; ValueError otherwise (a bool is not a share)."""
+    if not isinstance(values, (list, tuple)) or not all(
+            isinstance(x, (int, float)) and not isinstance(x, bool) and 0.0 <= x <= 1.0 for x in values):
+        raise ValueError("replay must be shares of the budget left, each a number in [0, 1]")
+    return tuple(float(x) for x in values)
 
 
 class BudgetDecay:
@@ -69,12 +78,7 @@ class BudgetDecay:
             raise ValueError(f"clock must be 'cpu' or 'wall', got {clock!r}")
         self.initial, self.budget_s, self.clock = float(initial), float(budget_s), clock
         self.readings = []
-        self.replay = None
-        if replay is not None:
-            shares = [float(x) if not isinstance(x, bool) and isinstance(x, (int, float)) else math.nan for x in replay]
-            if not all(0.0 <= x <= 1.0 for x in shares):
-                raise ValueError("replay must be shares of the budget left, each a number in [0, 1]")
-            self.replay = tuple(shares)
+        self.replay = None if replay is None else budget_shares(replay)
         self.start()
 
     def start(self, at: float | None = None) -> None:
