@@ -156,6 +156,28 @@ def pct(x: float) -> int:
     return round(100 * x)
 
 
+def joined(path: Path) -> str:
+    """The page at ``path`` with its whitespace runs (line breaks too) read as single spaces."""
+    return " ".join(path.read_text(encoding="utf-8").split())
+
+
+def learning_paragraph(title: str) -> str:
+    """The learning page's paragraph that opens with ``title`` (``**...**``), up to the next bold text."""
+    text = joined(ROOT / "docs" / "learning.md")
+    start = text.index(title)
+    return text[start:text.index(" **", start + len(title))]
+
+
+def seed_runs(folder: str, seeds) -> list[dict]:
+    """The runs ``ppo_seed<S>.json`` of the record ``folder`` for ``seeds``."""
+    return [json.loads((BASELINES / folder / f"ppo_seed{k}.json").read_text(encoding="utf-8")) for k in seeds]
+
+
+def checkpoint_rates(run: dict) -> str:
+    """A run's held-out success at its checkpoints as the pages write it: "x / y / z"."""
+    return " / ".join(str(pct(c["success_rate"])) for c in run["checkpoints"])
+
+
 def clopper_pearson(k: int, n: int, digits: int | None = None) -> tuple:
     """The 95 % Clopper-Pearson interval of ``k`` successes in ``n`` in percent, each end rounded to the nearest
     percent (``digits`` None) or to ``digits`` decimals."""
@@ -241,7 +263,7 @@ def test_the_stated_mass_ranges_are_the_envs():
 
     import simgrip.envs  # noqa: F401
 
-    text = " ".join((ROOT / "README.md").read_text(encoding="utf-8").split())
+    text = joined(ROOT / "README.md")
     m = re.search(r"mass \((\d+)–(\d+) g; cradle and sphere (\d+)–(\d+) g\)", text)
     assert m, "the README's fragile-suite mass ranges"
     stated = {"pinch": m.group(1, 2), "claws": m.group(3, 4)}
@@ -315,7 +337,7 @@ def test_target_table_is_its_records():
             assert not options & {"--normalize", "--init-from", "--crush-charge", "--frame-stack"}
             verdicts.setdefault(row["task"], []).append(verdict)
     # the summary sentence under the table (a task with ", vN" holds the batches of its version before)
-    text = " ".join(TARGET_PAGE.read_text(encoding="utf-8").split())
+    text = joined(TARGET_PAGE)
     assert ("So on the registered versions the pinch meets the target in one batch of three with a longer discount "
             "as well (γ 0.995: seeds 0–2, not 3–5, where seed 3 stays at 0 %, nor 6–8; the batch with the best of "
             "validations kept meets it too, but its runs are the first batch's stopped sooner, not a new sample), and "
@@ -335,7 +357,7 @@ def test_the_tuned_open_loop_members_on_unseen_seeds():
     def interval(k, n):
         return "{:.1f}–{:.1f}".format(*clopper_pearson(k, n, 1))
 
-    text = " ".join((ROOT / "README.md").read_text(encoding="utf-8").split())
+    text = joined(ROOT / "README.md")
     recs = {}
     for base in ("PickFragile-v7", "PickMultiFragile-v7"):
         rec = recs[base] = record(base, "openloop-10000")
@@ -360,7 +382,7 @@ def test_the_tuned_open_loop_members_on_unseen_seeds():
 def test_the_longer_budgets_under_the_target_table_are_their_records():
     """Each "(`--minutes M`, seeds A–B) ends at x / y / z % (`record`" under the target table: the record's budget,
     seeds and final held-out success per seed, and the checkpoints it names ("at 15 CPU-min x / y / z %")."""
-    text = " ".join(TARGET_PAGE.read_text(encoding="utf-8").split())
+    text = joined(TARGET_PAGE)
     found = re.findall(r"\(`--minutes (\d+)`, seeds (\d+)–(\d+)\) ends at ([\d /]+) %(?: \(at 15 CPU-min ([\d /]+) %\))? "
                        r"\(`(rl_[\w/]+)`", text)
     assert len(found) >= 2, found
@@ -415,9 +437,7 @@ def test_the_peak_probe_screens_on_the_learning_page_are_their_records():
 def test_the_sac_screens_behind_the_aids_are_their_records():
     """The learning page's "SAC behind the aids" paragraph: each screen's options (its command), 0 % at every
     checkpoint, its steps, training episodes, and the final policy's crushes and timeouts of 50 held out."""
-    text = " ".join((ROOT / "docs" / "learning.md").read_text(encoding="utf-8").split())
-    para = text[text.index("**SAC behind the aids**"):]
-    para = para[:para.index(" **")]
+    para = learning_paragraph("**SAC behind the aids**")
     screens = [("rl_pick_v7_peak_sac_screen", ["--action-offset", "-0.2", "0.2"]),
                ("rl_multi_v7_peak_light_step_charge_sac_screen",
                 ["--action-offset", "-0.2", "0.2", "--light-bias", "0.5", "--step-charge", "0.005"])]
@@ -442,9 +462,7 @@ def test_the_25_hz_screen_on_the_learning_page_is_its_record():
     """The learning page's "K fingers commanded at 25 Hz": the record's options (the control step, the valve's rate
     and the episode's steps, per second what the registered task's are; the step charge per second too), each seed's
     checkpoints, its steps and the simulated seconds they cover, and its crushes of 50 held out."""
-    text = " ".join((ROOT / "docs" / "learning.md").read_text(encoding="utf-8").split())
-    para = text[text.index("**The K fingers commanded at 25 Hz**"):]
-    para = para[:para.index(" **", len("**The K fingers commanded at 25 Hz**"))]
+    para = learning_paragraph("**The K fingers commanded at 25 Hz**")
     folder = "rl_multi_v7_peak_light_log_std_half_lr_decay_step_charge_25hz_screen"
     assert folder in para
     agg = json.loads((BASELINES / folder / "aggregate.json").read_text(encoding="utf-8"))
@@ -463,8 +481,8 @@ def test_the_25_hz_screen_on_the_learning_page_is_its_record():
     # twice the control step; per second the valve's rate, the episode and the step charge of the registered task
     assert kwargs["frame_skip"] == 2 * fs and kwargs["kappa_rate"] == 2 * rate
     assert kwargs["max_episode_steps"] * 2 == spec.max_episode_steps and agg["step_charge"] == 2 * 0.005
-    runs = [json.loads((BASELINES / folder / f"ppo_seed{k}.json").read_text(encoding="utf-8")) for k in (0, 1)]
-    rates = [" / ".join(str(pct(c["success_rate"])) for c in r["checkpoints"]) for r in runs]
+    runs = seed_runs(folder, (0, 1))
+    rates = [checkpoint_rates(r) for r in runs]
     assert f"{rates[0]} and {rates[1]} % at 5 / 10 / 15 CPU-min" in para
     assert f"on {runs[0]['timesteps']:,} and {runs[1]['timesteps']:,} steps" in para
     seconds = [round(r["timesteps"] * 2 * dt, -1) for r in runs]
@@ -489,9 +507,10 @@ def _assert_replayed(cell: str, folder: str, seed: int, rates: str, steps: str, 
 
 def test_the_identical_replays_on_the_learning_page_are_their_records():
     """The learning page's replays of README cells on a machine of the references' arithmetic (stop 64: three cells
-    whole, seed 0 of a fourth; stop 65: the fourth's seeds 1 and 2): each replayed seed's JSON says ``identical`` against the cell's own record (the folder
-    it names), and the checkpoints, steps and training episodes the page gives are the record's."""
-    text = " ".join((ROOT / "docs" / "learning.md").read_text(encoding="utf-8").split())
+    whole, seed 0 of a fourth; stop 65: the fourth's seeds 1 and 2): each replayed seed's JSON says ``identical``
+    against the cell's own record (the folder it names), and the checkpoints, steps and training episodes the page
+    gives are the record's."""
+    text = joined(ROOT / "docs" / "learning.md")
     found = re.findall(r"the \w+'s aided cell \(`(rl_[\w]+)`, recorded at stop \d+\): seeds 0–2 \*\*identical\*\* to "
                        r"the record \(`docs/baselines/(rl_[\w]+_replay_012)/`\): ([\d /,and]+) % at 5 / 10 / 15 CPU-min, "
                        r"on ([\d,]+), ([\d,]+) and ([\d,]+) steps, .*? training episodes too \(([\d,]+), ([\d,]+) and "
@@ -510,8 +529,9 @@ def test_the_identical_replays_on_the_learning_page_are_their_records():
     _assert_replayed(cell, folder, 0, rates, steps, episodes)
     # and its seeds 1 and 2: "(`docs/baselines/B/`): x / y / z and x / y / z % at 5 / 10 / 15 CPU-min, on N and N steps
     # and E and E training episodes"
-    rest = re.search(r"its seeds 1 and 2 \(stop \d+, [^)]*\) \*\*identical\*\* too \(`docs/baselines/(rl_\w+_replay_12)/`\): "
-                     r"([\d /]+) and ([\d /]+) % at 5 / 10 / 15 CPU-min, on ([\d,]+) and ([\d,]+) steps and ([\d,]+) and "
+    rest = re.search(r"its seeds 1 and 2 \(stop \d+, [^)]*\) \*\*identical\*\* too "
+                     r"\(`docs/baselines/(rl_\w+_replay_12)/`\): ([\d /]+) and ([\d /]+) % at 5 / 10 / 15 CPU-min, "
+                     r"on ([\d,]+) and ([\d,]+) steps and ([\d,]+) and "
                      r"([\d,]+) training episodes", text)
     assert rest, "the sphere's seeds 1 and 2"
     folder, r1, r2, s1, s2, e1, e2 = rest.groups()
@@ -524,7 +544,7 @@ def test_the_lr_decay_rerun_and_its_replays_are_their_records():
     cell's experiment (the same options and hyperparameters as its record), its checkpoints, crushes and steps are
     the page's, each seed's replay says ``identical`` against it having read every one of the rate's readings, and
     the README and the environments page give its final success."""
-    text = " ".join((ROOT / "docs" / "learning.md").read_text(encoding="utf-8").split())
+    text = joined(ROOT / "docs" / "learning.md")
     para = text[text.index("**A learning rate that follows the clock, replayed**"):]
     rerun = "rl_multi_v7_peak_light_log_std_half_lr_decay_step_charge_rerun"
     cell = ROWS["PickMultiFragile-v7"][1][AIDED]
@@ -534,8 +554,8 @@ def test_the_lr_decay_rerun_and_its_replays_are_their_records():
     for key in ("env", "algos", "minutes", "checkpoint_minutes", "clock", "eval_seeds", "hyperparameters",
                 "action_offset", "light_bias", "step_charge", "seeds"):
         assert agg.get(key) == old.get(key), key
-    runs = [json.loads((BASELINES / rerun / f"ppo_seed{k}.json").read_text(encoding="utf-8")) for k in range(3)]
-    rates = [" / ".join(str(pct(c["success_rate"])) for c in r["checkpoints"]) for r in runs]
+    runs = seed_runs(rerun, range(3))
+    rates = [checkpoint_rates(r) for r in runs]
     assert f"{rates[0]}, {rates[1]} and {rates[2]} % at 5 / 10 / 15 CPU-min" in para
     crushed = [r["outcomes"]["crushed"] for r in runs]
     assert f"{crushed[0]}, {crushed[1]} and {crushed[2]} crushes of 50 held out" in para
@@ -543,7 +563,7 @@ def test_the_lr_decay_rerun_and_its_replays_are_their_records():
     episodes, readings = [], []
     for k, run in enumerate(runs):
         assert len(run["lr_fractions"]) == 1 + 2 * (run["timesteps"] // 2048), k  # built, then two an update
-        rep = json.loads((BASELINES / f"{rerun}_replay_012" / f"ppo_seed{k}.json").read_text(encoding="utf-8"))
+        rep, = seed_runs(f"{rerun}_replay_012", [k])
         # the record replayed: this seed's batch of the rerun (the folder its command wrote, combined_from)
         batch = next(c[c.index("--out") + 1] for c in agg["combined_from"] if c[c.index("--seeds") + 1] == str(k))
         assert rep["replay"]["identical"] is True and rep["replay"]["from"] == f"{batch}/ppo_seed{k}.json"
@@ -556,21 +576,19 @@ def test_the_lr_decay_rerun_and_its_replays_are_their_records():
         f"{readings[1]} and {readings[2]} of the rate's readings" in para
     final = " / ".join(str(pct(r["success_rate"])) for r in runs)
     for page in (ROOT / "README.md", ROOT / "docs" / "environments.md"):
-        assert f"{final} % at 15 CPU-min" in " ".join(page.read_text(encoding="utf-8").split()), page
+        assert f"{final} % at 15 CPU-min" in joined(page), page
 
 
 def test_the_30_minute_rerun_on_the_learning_page_is_its_record():
     """"Twice the budget again, from a fresh clone": each seed's six checkpoints, its steps and crushes, and that the
     runs keep what a replay needs (the rate's readings, the policy's digest)."""
-    text = " ".join((ROOT / "docs" / "learning.md").read_text(encoding="utf-8").split())
-    para = text[text.index("**Twice the budget again, from a fresh clone**"):]
-    para = para[:para.index(" **", 10)]
+    para = learning_paragraph("**Twice the budget again, from a fresh clone**")
     folder = "rl_multi_v7_peak_light_log_std_half_lr_decay_step_charge_30min_rerun"
     assert f"docs/baselines/{folder}/" in para
     agg = json.loads((BASELINES / folder / "aggregate.json").read_text(encoding="utf-8"))
     assert agg["minutes"] == 30.0 and agg["seeds"] == [0, 1] and agg["step_charge"] == 0.005
-    runs = [json.loads((BASELINES / folder / f"ppo_seed{k}.json").read_text(encoding="utf-8")) for k in (0, 1)]
-    rates = [" / ".join(str(pct(c["success_rate"])) for c in r["checkpoints"]) for r in runs]
+    runs = seed_runs(folder, (0, 1))
+    rates = [checkpoint_rates(r) for r in runs]
     assert f"{rates[0]} and {rates[1]} % at 5 / 10 / … / 30 CPU-min" in para
     assert f"on {runs[0]['timesteps']:,} and {runs[1]['timesteps']:,} steps" in para
     crushed = [r["outcomes"]["crushed"] for r in runs]
