@@ -31,7 +31,7 @@ ROWS = {
                                           AIDED: "rl_pick_v7_peak_log_std_gamma"}),
     "PickMultiFragile-v7": ("PickMultiFragile-v7", {"PPO, 3 seeds": "rl_multi_v7",
                                                     "SAC, 3 seeds": "rl_multi_v7_sac",
-                                                    AIDED: "rl_multi_v7_peak_light_log_std_half_lr_decay_step_charge"}),
+                                                    AIDED: "rl_multi_v7_peak_light_log_std_half_lr_decay_step_charge_rerun"}),
     "PlaceFragile-v8": ("PlaceFragile-v8", {"PPO, 3 seeds": "rl_place_v8", "SAC, 3 seeds": "rl_place_v8_sac",
                                             AIDED: "rl_place_v8_residual_palm_log_std"}),
     "PickCradleFragile-v6": ("PickCradleFragile-v6", {"PPO, 3 seeds": "rl_cradle_v6",
@@ -540,17 +540,19 @@ def test_the_identical_replays_on_the_learning_page_are_their_records():
 
 
 def test_the_lr_decay_rerun_and_its_replays_are_their_records():
-    """The learning page's "A learning rate that follows the clock, replayed": the rerun is the K fingers' README
-    cell's experiment (the same options and hyperparameters as its record), its checkpoints, crushes and steps are
-    the page's, each seed's replay says ``identical`` against it having read every one of the rate's readings, and
-    the README and the environments page give its final success."""
+    """The learning page's "A learning rate that follows the clock, replayed": the rerun, the K fingers' README cell
+    since stop 66, is the experiment of the stop-58 batch it replaced (the same options and hyperparameters), its
+    checkpoints, crushes and steps are the page's, each seed's replay says ``identical`` against it having read every
+    one of the rate's readings, and the README and the environments page give its final success and the replaced
+    batch's."""
     text = joined(ROOT / "docs" / "learning.md")
     para = text[text.index("**A learning rate that follows the clock, replayed**"):]
-    rerun = "rl_multi_v7_peak_light_log_std_half_lr_decay_step_charge_rerun"
-    cell = ROWS["PickMultiFragile-v7"][1][AIDED]
+    rerun = ROWS["PickMultiFragile-v7"][1][AIDED]  # the README's cell since stop 66
+    first = "rl_multi_v7_peak_light_log_std_half_lr_decay_step_charge"  # its batch of stop 58, not replayable
+    assert rerun == f"{first}_rerun"
     assert f"docs/baselines/{rerun}/" in para and f"docs/baselines/{rerun}_replay_012/" in para
     agg = json.loads((BASELINES / rerun / "aggregate.json").read_text(encoding="utf-8"))
-    old = json.loads((BASELINES / cell / "aggregate.json").read_text(encoding="utf-8"))
+    old = json.loads((BASELINES / first / "aggregate.json").read_text(encoding="utf-8"))
     for key in ("env", "algos", "minutes", "checkpoint_minutes", "clock", "eval_seeds", "hyperparameters",
                 "action_offset", "light_bias", "step_charge", "seeds"):
         assert agg.get(key) == old.get(key), key
@@ -575,8 +577,9 @@ def test_the_lr_decay_rerun_and_its_replays_are_their_records():
     assert f"training episodes ({episodes[0]}, {episodes[1]} and {episodes[2]}), with all {readings[0]}, " \
         f"{readings[1]} and {readings[2]} of the rate's readings" in para
     final = " / ".join(str(pct(r["success_rate"])) for r in runs)
+    replaced = " / ".join(str(pct(v)) for v in old["summary"]["ppo"]["final"]["success_rates"])
     for page in (ROOT / "README.md", ROOT / "docs" / "environments.md"):
-        assert f"{final} % at 15 CPU-min" in joined(page), page
+        assert f"{final} % at" in joined(page) and f"its batch of stop 58, {replaced} %" in joined(page), page
 
 
 def test_the_30_minute_rerun_on_the_learning_page_is_its_record():
