@@ -74,7 +74,8 @@ def test_the_learner_gives_a_recorded_policy():
     assert got["versions"] == installed and got["timesteps"] == 4096
     assert which_set(got) is not None, (
         f"policy digest {got['policy_digest']} is none of the recorded "
-        f"{[s['policy_digest'] for s in recorded]}: this host's learner gives other last bits")
+        f"{[s['policy_digest'] for s in recorded]}: this host gives other last bits (its envs', where "
+        f"tests/test_env_step_reference.py --which-host names no set, or its learner's)")
 
 
 def test_a_digest_or_versions_not_recorded_is_no_set():
