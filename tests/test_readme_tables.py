@@ -582,19 +582,28 @@ def test_the_lr_decay_rerun_and_its_replays_are_their_records():
         assert f"{final} % at" in joined(page) and f"its batch of stop 58, {replaced} %" in joined(page), page
 
 
-def test_the_30_minute_rerun_on_the_learning_page_is_its_record():
-    """"Twice the budget again, from a fresh clone": each seed's six checkpoints, its steps and crushes, and that the
-    runs keep what a replay needs (the rate's readings, the policy's digest)."""
-    para = learning_paragraph("**Twice the budget again, from a fresh clone**")
-    folder = "rl_multi_v7_peak_light_log_std_half_lr_decay_step_charge_30min_rerun"
+def _listed(items) -> str:
+    """Items as the pages list them: "a and b", "a, b and c"."""
+    items = [str(i) for i in items]
+    return ", ".join(items[:-1]) + " and " + items[-1]
+
+
+def _assert_long_run(title: str, folder: str, minutes: int, seeds: tuple) -> None:
+    """The learning page's paragraph ``title`` on the record ``folder`` (``--minutes minutes``, ``seeds``): each
+    seed's checkpoints ("a, b and c % at 5 / 10 / … / M CPU-min"), its steps and crushes, and that the runs keep what
+    a replay needs (the rate's readings, the policy's digest)."""
+    para = learning_paragraph(title)
     assert f"docs/baselines/{folder}/" in para
     agg = json.loads((BASELINES / folder / "aggregate.json").read_text(encoding="utf-8"))
-    assert agg["minutes"] == 30.0 and agg["seeds"] == [0, 1] and agg["step_charge"] == 0.005
-    runs = seed_runs(folder, (0, 1))
-    rates = [checkpoint_rates(r) for r in runs]
-    assert f"{rates[0]} and {rates[1]} % at 5 / 10 / … / 30 CPU-min" in para
-    assert f"on {runs[0]['timesteps']:,} and {runs[1]['timesteps']:,} steps" in para
-    crushed = [r["outcomes"]["crushed"] for r in runs]
-    assert f"({crushed[0]} and {crushed[1]} crushes of 50 held out)" in para
+    assert agg["minutes"] == float(minutes) and agg["seeds"] == list(seeds) and agg["step_charge"] == 0.005
+    runs = seed_runs(folder, seeds)
+    assert f"{_listed(checkpoint_rates(r) for r in runs)} % at 5 / 10 / … / {minutes} CPU-min" in para
+    assert f"on {_listed(format(r['timesteps'], ',') for r in runs)} steps" in para
+    assert f"({_listed(r['outcomes']['crushed'] for r in runs)} crushes of 50 held out)" in para
     assert all(len(r["lr_fractions"]) == 1 + 2 * (r["timesteps"] // 2048) and len(r["policy_digest"]) == 16
                for r in runs)
+
+
+def test_the_30_minute_rerun_on_the_learning_page_is_its_record():
+    _assert_long_run("**Twice the budget again, from a fresh clone**",
+                     "rl_multi_v7_peak_light_log_std_half_lr_decay_step_charge_30min_rerun", 30, (0, 1))
