@@ -1,0 +1,266 @@
+"""The learning page's paragraphs and tables against the records their commands wrote (issue 18: "no number ...
+that its command does not give"): the screens, the replays and the longer budgets of ``docs/learning.md``, each
+read back from its ``docs/baselines/`` folder (the README's and the target table's cells: ``test_readme_tables.py``,
+whose row map and readers this file shares).
+"""
+
+from __future__ import annotations
+
+import json
+import re
+import sys
+from pathlib import Path
+
+sys.path.insert(0, str(Path(__file__).parent))
+from test_readme_tables import (AIDED, BASELINES, ROOT, ROWS, TASKS, joined, measured_as, pct,  # noqa: E402
+                                training_command)
+
+
+def learning_paragraph(title: str) -> str:
+    """The learning page's paragraph that opens with ``title`` (``**...**``), up to the next bold text."""
+    text = joined(ROOT / "docs" / "learning.md")
+    start = text.index(title)
+    return text[start:text.index(" **", start + len(title))]
+
+
+def seed_runs(folder: str, seeds) -> list[dict]:
+    """The runs ``ppo_seed<S>.json`` of the record ``folder`` for ``seeds``."""
+    return [json.loads((BASELINES / folder / f"ppo_seed{k}.json").read_text(encoding="utf-8")) for k in seeds]
+
+
+def checkpoint_rates(run: dict) -> str:
+    """A run's held-out success at its checkpoints as the pages write it: "x / y / z"."""
+    return " / ".join(str(pct(c["success_rate"])) for c in run["checkpoints"])
+
+
+def test_the_peak_probe_screens_on_the_learning_page_are_their_records():
+    """The learning page's table of the stop-62 screens (the claws and the place behind the peak probe, the place
+    with the crush margin, and its control): each seed's checkpoints, its final crushes and those within the step
+    of the first touch (its ``evaluate_seedS.json``, the final model run on the same held-out seeds), its steps,
+    and the offset and the margin the options name are the record's."""
+    lines = (ROOT / "docs" / "learning.md").read_text(encoding="utf-8").splitlines()
+    start = next(i for i, line in enumerate(lines) if line.startswith("| task | options | seed 0 at 5 / 10 / 15"))
+    rows = []
+    for line in lines[start + 2:]:
+        if not line.startswith("|"):
+            break
+        rows.append([c.strip() for c in line.strip().strip("|").split("|")])
+    assert [r[0] for r in rows] == ["place", "place", "place", "cradle", "cradle", "sphere", "sphere"]
+    for task, options, seed0, seed1, crushes, steps, folder in rows:
+        folder = folder.strip("`/")
+        agg = json.loads((BASELINES / folder / "aggregate.json").read_text(encoding="utf-8"))
+        seeds = [0] if seed1 == "—" else [0, 1]  # (the claws' controls: seed 0 alone)
+        assert measured_as(agg) == TASKS[task] and agg["seeds"] == seeds and agg["minutes"] == 15.0, folder
+        command = training_command(agg)
+        assert float(command[command.index("--action-offset") + 1]) == (-0.2 if "peak" in options else -0.4)
+        margin = re.search(r"crush margin ([\d.]+)", options)
+        assert ("--crush-margin" in command) == bool(margin), folder
+        if margin:
+            value = float(margin.group(1))
+            assert float(command[command.index("--crush-margin") + 1]) == value == agg["crush_margin"], folder
+        said = re.findall(r"(\d+) \((\d+)\)", crushes)
+        for seed, cells in enumerate((seed0, seed1)[:len(seeds)]):
+            run = json.loads((BASELINES / folder / f"ppo_seed{seed}.json").read_text(encoding="utf-8"))
+            assert [int(v) for v in cells.rstrip(" %").split(" / ")] == \
+                [pct(c["success_rate"]) for c in run["checkpoints"]], (folder, seed)
+            ev = json.loads((BASELINES / folder / f"evaluate_seed{seed}.json").read_text(encoding="utf-8"))
+            assert ev["success_rate"] == run["success_rate"] and ev["eval_seeds"] == [8000, 8049]
+            assert ev["episodes"] == 50
+            assert (int(said[seed][0]), int(said[seed][1])) == (ev["outcomes"]["crushed"],
+                                                                ev["crushed_after_touch"]["0"]), (folder, seed)
+            assert f"{round(run['timesteps'] / 1000)}k" == steps.split(", ")[seed], (folder, seed)
+
+
+def test_the_sac_screens_behind_the_aids_are_their_records():
+    """The learning page's "SAC behind the aids" paragraph: each screen's options (its command), 0 % at every
+    checkpoint, its steps, training episodes, and the final policy's crushes and timeouts of 50 held out."""
+    para = learning_paragraph("**SAC behind the aids**")
+    screens = [("rl_pick_v7_peak_sac_screen", ["--action-offset", "-0.2", "0.2"]),
+               ("rl_multi_v7_peak_light_step_charge_sac_screen",
+                ["--action-offset", "-0.2", "0.2", "--light-bias", "0.5", "--step-charge", "0.005"])]
+    runs = []
+    for folder, options in screens:
+        assert folder in para
+        agg = json.loads((BASELINES / folder / "aggregate.json").read_text(encoding="utf-8"))
+        command = agg["command"]
+        assert " ".join(options) in " ".join(command) and agg["algos"] == ["sac"] and agg["minutes"] == 15.0
+        assert agg["eval_seeds"] == [8000, 8049] and agg["seeds"] == [0], folder
+        assert [c["minutes"] for c in agg["summary"]["sac"]["checkpoints"]] == [5.0, 10.0, 15.0]
+        assert all(c["success_rates"] == [0.0] for c in agg["summary"]["sac"]["checkpoints"]), folder
+        runs.append(json.loads((BASELINES / folder / "sac_seed0.json").read_text(encoding="utf-8")))
+    assert f"on {runs[0]['timesteps']:,} and {runs[1]['timesteps']:,} steps" in para
+    assert f"no success in {runs[0]['train_episodes']} and {runs[1]['train_episodes']} training episodes" in para
+    assert all(r["success_rate"] == 0.0 for r in runs)
+    crushed, timeout = [r["outcomes"]["crushed"] for r in runs], [r["outcomes"]["timeout"] for r in runs]
+    assert f"crush {crushed[0]} and {crushed[1]} of 50 and let {timeout[0]} and {timeout[1]} time out" in para
+
+
+def test_the_25_hz_screen_on_the_learning_page_is_its_record():
+    """The learning page's "K fingers commanded at 25 Hz": the record's options (the control step, the valve's rate
+    and the episode's steps, per second what the registered task's are; the step charge per second too), each seed's
+    checkpoints, its steps and the simulated seconds they cover, and its crushes of 50 held out."""
+    para = learning_paragraph("**The K fingers commanded at 25 Hz**")
+    folder = "rl_multi_v7_peak_light_log_std_half_lr_decay_step_charge_25hz_screen"
+    assert folder in para
+    agg = json.loads((BASELINES / folder / "aggregate.json").read_text(encoding="utf-8"))
+    assert agg["seeds"] == [0, 1] and agg["minutes"] == 15.0 and agg["eval_seeds"] == [8000, 8049]
+    import gymnasium as gym
+
+    import simgrip.envs  # noqa: F401
+
+    spec = gym.spec("simgrip/PickMultiFragile-v7")
+    env = gym.make(spec.id).unwrapped
+    try:
+        fs, rate, dt = env.frame_skip, env.kappa_rate, env.dt
+    finally:
+        env.close()
+    kwargs = agg["env_kwargs"]
+    # twice the control step; per second the valve's rate, the episode and the step charge of the registered task
+    assert kwargs["frame_skip"] == 2 * fs and kwargs["kappa_rate"] == 2 * rate
+    assert kwargs["max_episode_steps"] * 2 == spec.max_episode_steps and agg["step_charge"] == 2 * 0.005
+    runs = seed_runs(folder, (0, 1))
+    rates = [checkpoint_rates(r) for r in runs]
+    assert f"{rates[0]} and {rates[1]} % at 5 / 10 / 15 CPU-min" in para
+    assert f"on {runs[0]['timesteps']:,} and {runs[1]['timesteps']:,} steps" in para
+    seconds = [round(r["timesteps"] * 2 * dt, -1) for r in runs]
+    assert f"({seconds[0]:,.0f} and {seconds[1]:,.0f} s of simulated time" in para
+    crushed = [r["outcomes"]["crushed"] for r in runs]
+    assert f"{crushed[0]} and {crushed[1]} crushes of 50 held out" in para
+
+
+def _assert_replayed(cell: str, folder: str, seed: int, rates: str, steps: str, episodes: str) -> None:
+    """Seed ``seed`` of the README cell ``cell``'s record replayed into ``folder``: the replay says ``identical``
+    against that record, whose checkpoints (``rates``, "x / y / z"), steps and training episodes (as the page writes
+    them) are the page's and the replay's."""
+    assert cell in {columns[AIDED] for _, columns in ROWS.values()}, cell  # a README cell's record
+    record = json.loads((BASELINES / cell / f"ppo_seed{seed}.json").read_text(encoding="utf-8"))
+    run = json.loads((BASELINES / folder / f"ppo_seed{seed}.json").read_text(encoding="utf-8"))
+    assert run["replay"]["identical"] is True and run["replay"]["from"].endswith(f"{cell}/ppo_seed{seed}.json")
+    assert [pct(c["success_rate"]) for c in record["checkpoints"]] == [int(v) for v in rates.split(" / ")], folder
+    assert f"{record['timesteps']:,}" == steps == f"{run['timesteps']:,}", (folder, seed)
+    assert f"{record['train_episodes']:,}" == episodes == f"{run['train_episodes']:,}", (folder, seed)
+    assert [c["success_rate"] for c in run["checkpoints"]] == [c["success_rate"] for c in record["checkpoints"]]
+
+
+def test_the_identical_replays_on_the_learning_page_are_their_records():
+    """The learning page's replays of README cells on a machine of the references' arithmetic (stop 64: three cells
+    whole, seed 0 of a fourth; stop 65: the fourth's seeds 1 and 2): each replayed seed's JSON says ``identical``
+    against the cell's own record (the folder it names), and the checkpoints, steps and training episodes the page
+    gives are the record's."""
+    text = joined(ROOT / "docs" / "learning.md")
+    found = re.findall(r"the \w+'s aided cell \(`(rl_[\w]+)`, recorded at stop \d+\): seeds 0–2 \*\*identical\*\* to "
+                       r"the record \(`docs/baselines/(rl_[\w]+_replay_012)/`\): ([\d /,and]+) % at 5 / 10 / 15 CPU-min, "
+                       r"on ([\d,]+), ([\d,]+) and ([\d,]+) steps, .*? training episodes too \(([\d,]+), ([\d,]+) and "
+                       r"([\d,]+)\)", text)
+    assert len(found) == 3, found
+    for cell, folder, rates, *numbers in found:
+        for seed, seed_rates in enumerate(re.split(r", | and ", rates)):
+            _assert_replayed(cell, folder, seed, seed_rates, numbers[seed], numbers[3 + seed])
+    # seed 0 of one more cell: "(`A`, recorded ...): **identical** too (`docs/baselines/B/`): x / y / z % at 5 / 10 / 15
+    # CPU-min, on N steps and E training episodes"
+    more = re.search(r"seed 0 of the \w+'s aided cell \(`(rl_\w+)`, recorded at stop \d+\): \*\*identical\*\* too "
+                     r"\(`docs/baselines/(rl_\w+_replay_s0)/`\): ([\d /]+) % at 5 / 10 / 15 CPU-min, on ([\d,]+) steps and "
+                     r"([\d,]+) training episodes", text)
+    assert more, "the sphere's replay"
+    cell, folder, rates, steps, episodes = more.groups()
+    _assert_replayed(cell, folder, 0, rates, steps, episodes)
+    # and its seeds 1 and 2: "(`docs/baselines/B/`): x / y / z and x / y / z % at 5 / 10 / 15 CPU-min, on N and N steps
+    # and E and E training episodes"
+    rest = re.search(r"its seeds 1 and 2 \(stop \d+, [^)]*\) \*\*identical\*\* too "
+                     r"\(`docs/baselines/(rl_\w+_replay_12)/`\): ([\d /]+) and ([\d /]+) % at 5 / 10 / 15 CPU-min, "
+                     r"on ([\d,]+) and ([\d,]+) steps and ([\d,]+) and "
+                     r"([\d,]+) training episodes", text)
+    assert rest, "the sphere's seeds 1 and 2"
+    folder, r1, r2, s1, s2, e1, e2 = rest.groups()
+    _assert_replayed(cell, folder, 1, r1, s1, e1)
+    _assert_replayed(cell, folder, 2, r2, s2, e2)
+
+
+def test_the_lr_decay_rerun_and_its_replays_are_their_records():
+    """The learning page's "A learning rate that follows the clock, replayed": the rerun, the K fingers' README cell
+    since stop 66, is the experiment of the stop-58 batch it replaced (the same options and hyperparameters), its
+    checkpoints, crushes and steps are the page's, each seed's replay says ``identical`` against it having read every
+    one of the rate's readings, and the README and the environments page give its final success and the replaced
+    batch's."""
+    text = joined(ROOT / "docs" / "learning.md")
+    para = text[text.index("**A learning rate that follows the clock, replayed**"):]
+    rerun = ROWS["PickMultiFragile-v7"][1][AIDED]  # the README's cell since stop 66
+    first = "rl_multi_v7_peak_light_log_std_half_lr_decay_step_charge"  # its batch of stop 58, not replayable
+    assert rerun == f"{first}_rerun"
+    assert f"docs/baselines/{rerun}/" in para and f"docs/baselines/{rerun}_replay_012/" in para
+    agg = json.loads((BASELINES / rerun / "aggregate.json").read_text(encoding="utf-8"))
+    old = json.loads((BASELINES / first / "aggregate.json").read_text(encoding="utf-8"))
+    for key in ("env", "algos", "minutes", "checkpoint_minutes", "clock", "eval_seeds", "hyperparameters",
+                "action_offset", "light_bias", "step_charge", "seeds"):
+        assert agg.get(key) == old.get(key), key
+    runs = seed_runs(rerun, range(3))
+    rates = [checkpoint_rates(r) for r in runs]
+    assert f"{rates[0]}, {rates[1]} and {rates[2]} % at 5 / 10 / 15 CPU-min" in para
+    crushed = [r["outcomes"]["crushed"] for r in runs]
+    assert f"{crushed[0]}, {crushed[1]} and {crushed[2]} crushes of 50 held out" in para
+    assert f"on {runs[0]['timesteps']:,}, {runs[1]['timesteps']:,} and {runs[2]['timesteps']:,} steps" in para
+    episodes, readings = [], []
+    for k, run in enumerate(runs):
+        assert len(run["lr_fractions"]) == 1 + 2 * (run["timesteps"] // 2048), k  # built, then two an update
+        rep, = seed_runs(f"{rerun}_replay_012", [k])
+        # the record replayed: this seed's batch of the rerun (the folder its command wrote, combined_from)
+        batch = next(c[c.index("--out") + 1] for c in agg["combined_from"] if c[c.index("--seeds") + 1] == str(k))
+        assert rep["replay"]["identical"] is True and rep["replay"]["from"] == f"{batch}/ppo_seed{k}.json"
+        assert rep["replay"]["lr_readings"] == [len(run["lr_fractions"])] * 2 and rep["lr_fractions"] == \
+            run["lr_fractions"]
+        assert rep["train_episodes"] == run["train_episodes"] and rep["timesteps"] == run["timesteps"]
+        episodes.append(f"{run['train_episodes']:,}")
+        readings.append(str(len(run["lr_fractions"])))
+    assert f"training episodes ({episodes[0]}, {episodes[1]} and {episodes[2]}), with all {readings[0]}, " \
+        f"{readings[1]} and {readings[2]} of the rate's readings" in para
+    final = " / ".join(str(pct(r["success_rate"])) for r in runs)
+    replaced = " / ".join(str(pct(v)) for v in old["summary"]["ppo"]["final"]["success_rates"])
+    for page in (ROOT / "README.md", ROOT / "docs" / "environments.md"):
+        assert f"{final} % at" in joined(page) and f"its batch of stop 58, {replaced} %" in joined(page), page
+
+
+def _listed(items) -> str:
+    """Items as the pages list them: "a and b", "a, b and c"."""
+    items = [str(i) for i in items]
+    return ", ".join(items[:-1]) + " and " + items[-1]
+
+
+def _assert_long_run(title: str, folder: str, minutes: int, seeds: tuple) -> None:
+    """The learning page's paragraph ``title`` on the record ``folder`` (``--minutes minutes``, ``seeds``): each
+    seed's checkpoints ("a, b and c % at 5 / 10 / … / M CPU-min"), its steps and crushes, and that the runs keep what
+    a replay needs (the rate's readings, the policy's digest)."""
+    para = learning_paragraph(title)
+    assert f"docs/baselines/{folder}/" in para
+    agg = json.loads((BASELINES / folder / "aggregate.json").read_text(encoding="utf-8"))
+    assert agg["minutes"] == float(minutes) and agg["seeds"] == list(seeds) and agg["step_charge"] == 0.005
+    runs = seed_runs(folder, seeds)
+    assert f"{_listed(checkpoint_rates(r) for r in runs)} % at 5 / 10 / … / {minutes} CPU-min" in para
+    assert f"on {_listed(format(r['timesteps'], ',') for r in runs)} steps" in para
+    assert f"({_listed(r['outcomes']['crushed'] for r in runs)} crushes of 50 held out)" in para
+    assert all(len(r["lr_fractions"]) == 1 + 2 * (r["timesteps"] // 2048) and len(r["policy_digest"]) == 16
+               for r in runs)
+
+
+def test_the_30_minute_rerun_on_the_learning_page_is_its_record():
+    _assert_long_run("**Twice the budget again, from a fresh clone**",
+                     "rl_multi_v7_peak_light_log_std_half_lr_decay_step_charge_30min_rerun", 30, (0, 1))
+
+
+def test_the_40_minute_batch_and_its_replay_are_their_records():
+    """"Forty CPU-minutes, from a fresh clone": each seed's eight checkpoints, steps and crushes (the page), seed 0's
+    replay ``identical`` against its batch having read every one of the rate's readings, and the README's final
+    success per seed."""
+    folder = "rl_multi_v7_peak_light_log_std_half_lr_decay_step_charge_40min"
+    _assert_long_run("**Forty CPU-minutes, from a fresh clone**", folder, 40, (0, 1, 2))
+    agg = json.loads((BASELINES / folder / "aggregate.json").read_text(encoding="utf-8"))
+    run, = seed_runs(folder, [0])
+    rep, = seed_runs(f"{folder}_replay_s0", [0])
+    batch = next(c[c.index("--out") + 1] for c in agg["combined_from"] if c[c.index("--seeds") + 1] == "0")
+    assert rep["replay"]["identical"] is True and rep["replay"]["from"] == f"{batch}/ppo_seed0.json"
+    assert rep["replay"]["lr_readings"] == [len(run["lr_fractions"])] * 2 and rep["policy_digest"] == run["policy_digest"]
+    para = learning_paragraph("**Forty CPU-minutes, from a fresh clone**")
+    assert f"{folder}_replay_s0/" in para and f"its {len(run['lr_fractions']):,} readings of the rate" in para
+    final = " / ".join(str(pct(v)) for v in agg["summary"]["ppo"]["final"]["success_rates"])
+    assert f"given 40 CPU-minutes, 1.7M–2.3M steps: {final} %" in joined(ROOT / "README.md")
+    steps = agg["summary"]["ppo"]["final"]["timesteps"]
+    assert round(min(steps) / 1e5) / 10 == 1.7 and round(max(steps) / 1e5) / 10 == 2.3
