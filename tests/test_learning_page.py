@@ -246,20 +246,22 @@ def test_the_30_minute_rerun_on_the_learning_page_is_its_record():
                      "rl_multi_v7_peak_light_log_std_half_lr_decay_step_charge_30min_rerun", 30, (0, 1))
 
 
-def test_the_40_minute_batch_and_its_replay_are_their_records():
-    """"Forty CPU-minutes, from a fresh clone": each seed's eight checkpoints, steps and crushes (the page), seed 0's
-    replay ``identical`` against its batch having read every one of the rate's readings, and the README's final
-    success per seed."""
+def test_the_40_minute_batch_and_its_replays_are_their_records():
+    """"Forty CPU-minutes, from a fresh clone": each seed's eight checkpoints, steps and crushes (the page), seeds 0
+    and 1 replayed ``identical`` against their batches having read every one of the rate's readings, and the README's
+    final success per seed."""
     folder = "rl_multi_v7_peak_light_log_std_half_lr_decay_step_charge_40min"
     _assert_long_run("**Forty CPU-minutes, from a fresh clone**", folder, 40, (0, 1, 2))
     agg = json.loads((BASELINES / folder / "aggregate.json").read_text(encoding="utf-8"))
-    run, = seed_runs(folder, [0])
-    rep, = seed_runs(f"{folder}_replay_s0", [0])
-    batch = next(c[c.index("--out") + 1] for c in agg["combined_from"] if c[c.index("--seeds") + 1] == "0")
-    assert rep["replay"]["identical"] is True and rep["replay"]["from"] == f"{batch}/ppo_seed0.json"
-    assert rep["replay"]["lr_readings"] == [len(run["lr_fractions"])] * 2 and rep["policy_digest"] == run["policy_digest"]
+    runs = seed_runs(folder, (0, 1))
+    for k, (run, rep) in enumerate(zip(runs, seed_runs(f"{folder}_replay_01", (0, 1)))):
+        batch = next(c[c.index("--out") + 1] for c in agg["combined_from"] if c[c.index("--seeds") + 1] == str(k))
+        assert rep["replay"]["identical"] is True and rep["replay"]["from"] == f"{batch}/ppo_seed{k}.json"
+        assert rep["replay"]["lr_readings"] == [len(run["lr_fractions"])] * 2
+        assert rep["policy_digest"] == run["policy_digest"]
     para = learning_paragraph("**Forty CPU-minutes, from a fresh clone**")
-    assert f"{folder}_replay_s0/" in para and f"its {len(run['lr_fractions']):,} readings of the rate" in para
+    readings = _listed(format(len(r["lr_fractions"]), ",") for r in runs)
+    assert f"{folder}_replay_01/" in para and f"their {readings} readings of the rate" in para
     final = " / ".join(str(pct(v)) for v in agg["summary"]["ppo"]["final"]["success_rates"])
     assert f"given 40 CPU-minutes, 1.7M–2.3M steps: {final} %" in joined(ROOT / "README.md")
     steps = agg["summary"]["ppo"]["final"]["timesteps"]
