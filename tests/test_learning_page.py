@@ -12,8 +12,8 @@ import sys
 from pathlib import Path
 
 sys.path.insert(0, str(Path(__file__).parent))
-from test_readme_tables import (AIDED, BASELINES, ROOT, ROWS, TASKS, joined, measured_as, pct,  # noqa: E402
-                                training_command)
+from test_readme_tables import (AIDED, BASELINES, ROOT, ROWS, TASKS, aggregate, joined, measured_as,  # noqa: E402
+                                pct, training_command)
 
 
 def learning_paragraph(title: str) -> str:
@@ -26,6 +26,12 @@ def learning_paragraph(title: str) -> str:
 def seed_runs(folder: str, seeds) -> list[dict]:
     """The runs ``ppo_seed<S>.json`` of the record ``folder`` for ``seeds``."""
     return [json.loads((BASELINES / folder / f"ppo_seed{k}.json").read_text(encoding="utf-8")) for k in seeds]
+
+
+def batch_of(agg: dict, seed: int) -> str:
+    """The folder that seed ``seed``'s batch of the combined record ``agg`` was written to (its command's ``--out``,
+    ``combined_from``): where a replay of that seed reads its record."""
+    return next(c[c.index("--out") + 1] for c in agg["combined_from"] if c[c.index("--seeds") + 1] == str(seed))
 
 
 def checkpoint_rates(run: dict) -> str:
@@ -48,7 +54,7 @@ def test_the_peak_probe_screens_on_the_learning_page_are_their_records():
     assert [r[0] for r in rows] == ["place", "place", "place", "cradle", "cradle", "sphere", "sphere"]
     for task, options, seed0, seed1, crushes, steps, folder in rows:
         folder = folder.strip("`/")
-        agg = json.loads((BASELINES / folder / "aggregate.json").read_text(encoding="utf-8"))
+        agg = aggregate(folder)
         seeds = [0] if seed1 == "—" else [0, 1]  # (the claws' controls: seed 0 alone)
         assert measured_as(agg) == TASKS[task] and agg["seeds"] == seeds and agg["minutes"] == 15.0, folder
         command = training_command(agg)
@@ -60,7 +66,7 @@ def test_the_peak_probe_screens_on_the_learning_page_are_their_records():
             assert float(command[command.index("--crush-margin") + 1]) == value == agg["crush_margin"], folder
         said = re.findall(r"(\d+) \((\d+)\)", crushes)
         for seed, cells in enumerate((seed0, seed1)[:len(seeds)]):
-            run = json.loads((BASELINES / folder / f"ppo_seed{seed}.json").read_text(encoding="utf-8"))
+            run, = seed_runs(folder, [seed])
             assert [int(v) for v in cells.rstrip(" %").split(" / ")] == \
                 [pct(c["success_rate"]) for c in run["checkpoints"]], (folder, seed)
             ev = json.loads((BASELINES / folder / f"evaluate_seed{seed}.json").read_text(encoding="utf-8"))
@@ -81,7 +87,7 @@ def test_the_sac_screens_behind_the_aids_are_their_records():
     runs = []
     for folder, options in screens:
         assert folder in para
-        agg = json.loads((BASELINES / folder / "aggregate.json").read_text(encoding="utf-8"))
+        agg = aggregate(folder)
         command = agg["command"]
         assert " ".join(options) in " ".join(command) and agg["algos"] == ["sac"] and agg["minutes"] == 15.0
         assert agg["eval_seeds"] == [8000, 8049] and agg["seeds"] == [0], folder
@@ -102,7 +108,7 @@ def test_the_25_hz_screen_on_the_learning_page_is_its_record():
     para = learning_paragraph("**The K fingers commanded at 25 Hz**")
     folder = "rl_multi_v7_peak_light_log_std_half_lr_decay_step_charge_25hz_screen"
     assert folder in para
-    agg = json.loads((BASELINES / folder / "aggregate.json").read_text(encoding="utf-8"))
+    agg = aggregate(folder)
     assert agg["seeds"] == [0, 1] and agg["minutes"] == 15.0 and agg["eval_seeds"] == [8000, 8049]
     import gymnasium as gym
 
@@ -133,8 +139,8 @@ def _assert_replayed(cell: str, folder: str, seed: int, rates: str, steps: str, 
     against that record, whose checkpoints (``rates``, "x / y / z"), steps and training episodes (as the page writes
     them) are the page's and the replay's."""
     assert cell in {columns[AIDED] for _, columns in ROWS.values()}, cell  # a README cell's record
-    record = json.loads((BASELINES / cell / f"ppo_seed{seed}.json").read_text(encoding="utf-8"))
-    run = json.loads((BASELINES / folder / f"ppo_seed{seed}.json").read_text(encoding="utf-8"))
+    record, = seed_runs(cell, [seed])
+    run, = seed_runs(folder, [seed])
     assert run["replay"]["identical"] is True and run["replay"]["from"].endswith(f"{cell}/ppo_seed{seed}.json")
     assert [pct(c["success_rate"]) for c in record["checkpoints"]] == [int(v) for v in rates.split(" / ")], folder
     assert f"{record['timesteps']:,}" == steps == f"{run['timesteps']:,}", (folder, seed)
@@ -188,8 +194,8 @@ def test_the_lr_decay_rerun_and_its_replays_are_their_records():
     first = "rl_multi_v7_peak_light_log_std_half_lr_decay_step_charge"  # its batch of stop 58, not replayable
     assert rerun == f"{first}_rerun"
     assert f"docs/baselines/{rerun}/" in para and f"docs/baselines/{rerun}_replay_012/" in para
-    agg = json.loads((BASELINES / rerun / "aggregate.json").read_text(encoding="utf-8"))
-    old = json.loads((BASELINES / first / "aggregate.json").read_text(encoding="utf-8"))
+    agg = aggregate(rerun)
+    old = aggregate(first)
     for key in ("env", "algos", "minutes", "checkpoint_minutes", "clock", "eval_seeds", "hyperparameters",
                 "action_offset", "light_bias", "step_charge", "seeds"):
         assert agg.get(key) == old.get(key), key
@@ -204,7 +210,7 @@ def test_the_lr_decay_rerun_and_its_replays_are_their_records():
         assert len(run["lr_fractions"]) == 1 + 2 * (run["timesteps"] // 2048), k  # built, then two an update
         rep, = seed_runs(f"{rerun}_replay_012", [k])
         # the record replayed: this seed's batch of the rerun (the folder its command wrote, combined_from)
-        batch = next(c[c.index("--out") + 1] for c in agg["combined_from"] if c[c.index("--seeds") + 1] == str(k))
+        batch = batch_of(agg, k)
         assert rep["replay"]["identical"] is True and rep["replay"]["from"] == f"{batch}/ppo_seed{k}.json"
         assert rep["replay"]["lr_readings"] == [len(run["lr_fractions"])] * 2 and rep["lr_fractions"] == \
             run["lr_fractions"]
@@ -231,7 +237,7 @@ def _assert_long_run(title: str, folder: str, minutes: int, seeds: tuple) -> Non
     a replay needs (the rate's readings, the policy's digest)."""
     para = learning_paragraph(title)
     assert f"docs/baselines/{folder}/" in para
-    agg = json.loads((BASELINES / folder / "aggregate.json").read_text(encoding="utf-8"))
+    agg = aggregate(folder)
     assert agg["minutes"] == float(minutes) and agg["seeds"] == list(seeds) and agg["step_charge"] == 0.005
     runs = seed_runs(folder, seeds)
     assert f"{_listed(checkpoint_rates(r) for r in runs)} % at 5 / 10 / … / {minutes} CPU-min" in para
@@ -252,10 +258,10 @@ def test_the_40_minute_batch_and_its_replays_are_their_records():
     final success per seed."""
     folder = "rl_multi_v7_peak_light_log_std_half_lr_decay_step_charge_40min"
     _assert_long_run("**Forty CPU-minutes, from a fresh clone**", folder, 40, (0, 1, 2))
-    agg = json.loads((BASELINES / folder / "aggregate.json").read_text(encoding="utf-8"))
+    agg = aggregate(folder)
     runs = seed_runs(folder, (0, 1))
     for k, (run, rep) in enumerate(zip(runs, seed_runs(f"{folder}_replay_01", (0, 1)))):
-        batch = next(c[c.index("--out") + 1] for c in agg["combined_from"] if c[c.index("--seeds") + 1] == str(k))
+        batch = batch_of(agg, k)
         assert rep["replay"]["identical"] is True and rep["replay"]["from"] == f"{batch}/ppo_seed{k}.json"
         assert rep["replay"]["lr_readings"] == [len(run["lr_fractions"])] * 2
         assert rep["policy_digest"] == run["policy_digest"]

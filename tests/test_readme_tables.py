@@ -152,6 +152,11 @@ def record(base: str, policy: str) -> dict:
     return json.loads((BASELINES / f"{base}-{policy}.json").read_text(encoding="utf-8"))
 
 
+def aggregate(folder: str) -> dict:
+    """The ``aggregate.json`` of the record ``folder`` under ``docs/baselines/``."""
+    return json.loads((BASELINES / folder / "aggregate.json").read_text(encoding="utf-8"))
+
+
 def pct(x: float) -> int:
     return round(100 * x)
 
@@ -159,12 +164,6 @@ def pct(x: float) -> int:
 def joined(path: Path) -> str:
     """The page at ``path`` with its whitespace runs (line breaks too) read as single spaces."""
     return " ".join(path.read_text(encoding="utf-8").split())
-
-
-
-
-
-
 
 
 def clopper_pearson(k: int, n: int, digits: int | None = None) -> tuple:
@@ -216,7 +215,7 @@ def test_learned_cells_are_their_aggregates(row):
     _, learned = ROWS[row]
     cells = readme_table()[1][row]
     for column, folder in learned.items():
-        agg = json.loads((BASELINES / folder / "aggregate.json").read_text(encoding="utf-8"))
+        agg = aggregate(folder)
         assert agg["eval_seeds"] == [8000, 8049] and agg["minutes"] == 15.0 and len(agg["seeds"]) == 3
         algo = column.split()[0].rstrip(",").lower()
         assert agg["algos"] == [algo]
@@ -303,7 +302,7 @@ def test_target_table_is_its_records():
         batches, met, folders = (row[k].split("; ") for k in ("success per seed, 15 CPU-min", "met", "record"))
         assert len(batches) == len(met) == len(folders), row
         for batch, verdict, folder in zip(batches, met, folders):
-            agg = json.loads((BASELINES / folder / "aggregate.json").read_text(encoding="utf-8"))
+            agg = aggregate(folder)
             m = _BATCH.match(batch)
             assert m, batch
             rates = [int(v) for v in m.group(1).split(" / ")]
@@ -376,7 +375,7 @@ def test_the_longer_budgets_under_the_target_table_are_their_records():
                        r"\(`(rl_[\w/]+)`", text)
     assert len(found) >= 2, found
     for minutes, first, last, rates, at15, folder in found:
-        agg = json.loads((BASELINES / folder / "aggregate.json").read_text(encoding="utf-8"))
+        agg = aggregate(folder)
         assert agg["minutes"] == float(minutes) and agg["seeds"] == list(range(int(first), int(last) + 1)), folder
         summary = agg["summary"]["ppo"]
         assert [int(v) for v in rates.split(" / ")] == [pct(x) for x in summary["final"]["success_rates"]], folder
