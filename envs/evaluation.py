@@ -26,7 +26,7 @@ __all__ = ["EpisodeResult", "GAMMA", "add_episode_arguments", "add_training_aid_
            "discount", "entropy_coefficient", "env_kwargs", "json_object", "log_std", "log_std_init_conflict",
            "outcome", "outcomes", "positive_minutes", "positive_int", "non_negative_int", "probability", "run_episodes",
            "summary", "checkpoint_tag", "training_conflict", "training_files", "training_seed", "episode_count",
-           "env_count", "rollout_steps", "MAX_EPISODES", "MAX_ENVS", "MAX_TRAINING_SEED"]
+           "env_count", "rollout_steps", "minibatch_size", "MAX_EPISODES", "MAX_ENVS", "MAX_TRAINING_SEED"]
 
 #: the discount of the returns :func:`run_episodes` also reports: Stable-Baselines3's default ``gamma`` (PPO, SAC)
 GAMMA = 0.99
@@ -71,6 +71,9 @@ training_seed = _int_at_least(
 rollout_steps = _int_at_least(
     "rollout_steps", 2, "a number of steps in [2, 1048576]",
     "argparse type: PPO's steps a rollout collects from each env, an integer in ``[2, 2**20]``.", hi=2**20)
+minibatch_size = _int_at_least(
+    "minibatch_size", 2, "a minibatch size in [2, 1048576]",
+    "argparse type: the transitions of one gradient step, an integer in ``[2, 2**20]``.", hi=2**20)
 env_count = _int_at_least(
     "env_count", 1, f"a number of environments in [1, {MAX_ENVS}]",
     "argparse type: the environments a training steps side by side, an integer in ``[1, MAX_ENVS]``.", hi=MAX_ENVS)
@@ -128,9 +131,10 @@ def critic_warmup_conflict(steps, algos) -> str | None:
 def training_conflict(args) -> str | None:
     """The first reason the parsed options of ``train_sb3.py`` / ``rl_baselines.py`` (both have ``algo``,
     ``log_std_init``, ``ent_coef``, ``init_from``, ``critic_warmup``, ``crush_charge``, ``crush_charge_from``,
-    ``minutes``, ``checkpoint_minutes``, ``n_steps``, ``normalize``, the ``select_*`` options and the held-out
+    ``minutes``, ``checkpoint_minutes``, ``n_steps``, ``batch_size``, ``normalize``, the ``select_*`` options and the held-out
     seeds: ``eval_seeds``, or ``eval_seed`` and ``eval_episodes``) cannot go together, or None:
-    :func:`log_std_init_conflict`, :func:`critic_warmup_conflict`, ``--n-steps`` or ``--ent-coef`` with SAC,
+    :func:`log_std_init_conflict`, :func:`critic_warmup_conflict`, ``--n-steps`` or ``--ent-coef`` with SAC, a
+    ``--batch-size`` that does not divide PPO's rollout,
     ``--crush-charge-from`` without ``--crush-charge``, :func:`simgrip.envs.selection.selection_conflict`, a checkpoint period longer than the budget (no checkpoint
     would be taken), a budget over :data:`MAX_TRAINING_MINUTES` or more than :data:`MAX_CHECKPOINTS` checkpoints.
     The options alone decide (nothing is imported)."""
@@ -141,6 +145,10 @@ def training_conflict(args) -> str | None:
         return why
     if args.n_steps is not None and set(algos) != {"ppo"}:
         return "--n-steps: PPO only (--algo ppo; SAC collects no rollouts)"
+    rollout = (args.n_steps or 2048) * args.n_envs
+    if args.batch_size is not None and "ppo" in algos and rollout % args.batch_size:
+        return (f"--batch-size: {args.batch_size} does not divide PPO's rollout of {rollout} steps (--n-steps times "
+                "--n-envs), so each epoch's last minibatch would be cut short")
     if args.ent_coef is not None and set(algos) != {"ppo"}:
         return "--ent-coef: PPO only (--algo ppo; SAC tunes its own entropy coefficient)"
     if args.crush_charge_from and args.crush_charge is None:
@@ -190,7 +198,7 @@ def add_training_aid_arguments(parser: argparse.ArgumentParser) -> None:
     its runs, with the same names, checks and meanings: ``--normalize``, ``--action-offset A ...``,
     ``--frame-stack N``, ``--gamma G``, ``--log-std-init X``, ``--scripted-start P``, ``--light-bias P``,
     ``--residual NAME ...``, ``--crush-charge F``, ``--crush-charge-from STEPS``, ``--step-charge C``,
-    ``--crush-margin C``, ``--lr-decay``, ``--ent-coef C``, ``--n-steps S``, ``--select-every M``,
+    ``--crush-margin C``, ``--lr-decay``, ``--ent-coef C``, ``--n-steps S``, ``--batch-size B``, ``--select-every M``,
     ``--select-episodes E``, ``--select-seed S`` (each off by default) and ``--n-envs N`` (default 1)."""
     add = parser.add_argument
     add("--normalize", action="store_true",
@@ -239,6 +247,9 @@ def add_training_aid_arguments(parser: argparse.ArgumentParser) -> None:
         help="PPO only: the steps a rollout collects from each env, instead of the library default 2048 (with "
              "--n-envs N the rollout holds S * N steps: --n-envs 4 --n-steps 512 keeps the default's 2048 an update; "
              "recorded in the JSON)")
+    add("--batch-size", type=minibatch_size, default=None, metavar="B",
+        help="the transitions of each gradient step, instead of the library default (PPO 64, SAC 256); with PPO "
+             "it must divide the rollout's steps, --n-steps times --n-envs (recorded in the JSON)")
     add("--select-every", type=positive_minutes, default=None, metavar="M",
         help="every M budget minutes run the policy on the validation seeds and keep the best so far as the "
              "result (simgrip.envs.selection: the validations' time counts in the budget; the held-out evaluation "

@@ -60,8 +60,8 @@ option (every training step's reward lowered by ``C``, :mod:`simgrip.envs.step_c
 near its largest finger force came to the hidden crush limit, :mod:`simgrip.envs.crush_margin`), recorded as
 ``crush_margin``; ``--n-envs N`` passes that option (each run trains on ``N`` copies of the env stepped one after the
 other in its own process, SB3's ``DummyVecEnv``: still one core a run), recorded as ``n_envs`` and in
-``hyperparameters``; ``--n-steps S`` (PPO only) passes PPO's steps a rollout collects from each env, named in
-``hyperparameters``; ``--select-every M`` (with ``--select-episodes E``, ``--select-seed S``) passes those options
+``hyperparameters``; ``--n-steps S`` (PPO only) passes PPO's steps a rollout collects from each env and
+``--batch-size B`` the transitions of each gradient step, each named in ``hyperparameters``; ``--select-every M`` (with ``--select-episodes E``, ``--select-seed S``) passes those options
 (every ``M`` budget minutes each run validates its policy on seeds apart from ``--eval-seeds`` and keeps the best,
 :mod:`simgrip.envs.selection`, the validations inside the budget), recorded as ``selection``.
 
@@ -165,8 +165,8 @@ def run_command(algo: str, seed: int, args, folder: Path) -> list[str]:
         cmd += ["--crush-margin", repr(args.crush_margin)]
     if args.n_envs != 1:
         cmd += ["--n-envs", str(args.n_envs)]
-    if args.n_steps is not None:
-        cmd += ["--n-steps", str(args.n_steps)]
+    cmd += [] if args.n_steps is None else ["--n-steps", str(args.n_steps)]
+    cmd += [] if args.batch_size is None else ["--batch-size", str(args.batch_size)]
     spec = spec_from(args)
     if spec is not None:
         cmd += ["--select-every", repr(spec.every_minutes), "--select-episodes", str(spec.episodes),
@@ -208,7 +208,7 @@ def hyperparameters(args) -> str:
     return "Stable-Baselines3 defaults, " + ("one env" if args.n_envs == 1 else f"{args.n_envs} envs (DummyVecEnv)") \
         + ", one torch thread" + "".join(f"; but {k} = {v!r}" for k, v in (
             ("gamma", args.gamma), ("log_std_init", args.log_std_init), ("ent_coef", args.ent_coef),
-            ("n_steps", args.n_steps)) if v is not None) \
+            ("n_steps", args.n_steps), ("batch_size", args.batch_size)) if v is not None) \
         + ("; but the learning rate falls linearly to 0 over the budget" if args.lr_decay else "")
 
 

@@ -109,7 +109,9 @@ them one after the other in this process, copy ``i`` seeded ``--seed + i``): the
 environment steps and PPO's rollouts hold ``2048 * N`` steps (its updates as many minibatches of 64 more), so a
 CPU-minute buys more steps; SAC's default, one gradient step a call of its ``train_freq`` (one vector step), becomes
 one per ``N`` environment steps.  ``--n-steps S`` (PPO only) changes the steps a rollout collects from each env
-(default 2048; ``--n-envs 4 --n-steps 512`` keeps the default's 2048 steps an update), named in ``hyperparameters``.
+(default 2048; ``--n-envs 4 --n-steps 512`` keeps the default's 2048 steps an update), and ``--batch-size B`` the
+transitions of each gradient step (PPO 64, SAC 256; with PPO a divisor of the rollout), each named in
+``hyperparameters``.
 The evaluation runs one env as always; ``<algo>_eval.json`` records ``n_envs``.
 
 ``--select-every M`` runs the policy on validation seeds (``--select-episodes``, ``--select-seed``; never the
@@ -215,20 +217,19 @@ def _warm_start(model, train_env, init_from: str, action_offset) -> dict:
 
 
 def model_kwargs(algo: str, gamma: float | None, log_std_init: float | None, lr_decay=None,
-                 ent_coef: float | None = None, n_steps: int | None = None) -> dict:
+                 ent_coef: float | None = None, n_steps: int | None = None, batch_size: int | None = None) -> dict:
     """The keyword arguments that change the library's defaults: ``gamma``; ``log_std_init`` (PPO only: SAC's
     standard deviation is an output of its network, not a parameter); ``lr_decay``, a
     :class:`simgrip.envs.lr_decay.BudgetDecay` for the learning rate; ``ent_coef`` and ``n_steps``, the steps a
-    rollout collects from each env (PPO only)."""
+    rollout collects from each env (PPO only); ``batch_size``, the transitions of each gradient step."""
     kwargs = {} if gamma is None else {"gamma": gamma}
-    if ent_coef is not None:
-        if algo != "ppo":
-            raise ValueError(f"ent_coef: PPO only, got algo {algo!r}")
-        kwargs["ent_coef"] = float(ent_coef)
-    if n_steps is not None:
-        if algo != "ppo":
-            raise ValueError(f"n_steps: PPO only, got algo {algo!r}")
-        kwargs["n_steps"] = int(n_steps)
+    if batch_size is not None:
+        kwargs["batch_size"] = int(batch_size)
+    for name, value, kind in (("ent_coef", ent_coef, float), ("n_steps", n_steps, int)):
+        if value is not None:
+            if algo != "ppo":
+                raise ValueError(f"{name}: PPO only, got algo {algo!r}")
+            kwargs[name] = kind(value)
     if lr_decay is not None:
         kwargs["learning_rate"] = lr_decay
     if log_std_init is not None:
@@ -248,12 +249,10 @@ def budget_decay(algo: str, budget_s: float, clock: str, replay=None) -> BudgetD
 
 
 def hyperparameters(gamma: float | None, log_std_init: float | None, lr_decay=None,
-                    ent_coef: float | None = None, n_steps: int | None = None) -> str:
+                    ent_coef: float | None = None, n_steps: int | None = None, batch_size: int | None = None) -> str:
     """The JSON's ``hyperparameters``: the library's defaults, and which ones this run changed."""
-    changed = ([] if gamma is None else [f"gamma = {gamma!r}"]) + \
-        ([] if log_std_init is None else [f"log_std_init = {log_std_init!r}"]) + \
-        ([] if ent_coef is None else [f"ent_coef = {ent_coef!r}"]) + \
-        ([] if n_steps is None else [f"n_steps = {n_steps!r}"]) + \
+    changed = [f"{k} = {v!r}" for k, v in (("gamma", gamma), ("log_std_init", log_std_init), ("ent_coef", ent_coef),
+                                           ("n_steps", n_steps), ("batch_size", batch_size)) if v is not None] + \
         ([] if lr_decay is None else [f"learning_rate = {lr_decay.initial!r} falling linearly to 0 over the budget"])
     return "Stable-Baselines3 defaults" + (" but " + ", ".join(changed) if changed else "")
 
@@ -263,7 +262,8 @@ def train(algo: str, env_id: str, *, steps: int, minutes: float, seed: int, out:
           options: EnvOptions | None = None, normalize: bool = False, gamma: float | None = None,
           init_from: str | None = None, log_std_init: float | None = None, eval_start: bool = False,
           critic_warmup: int = 0, lr_decay: bool = False, ent_coef: float | None = None, n_envs: int = 1,
-          n_steps: int | None = None, selection: SelectionSpec | None = None, replay=None) -> dict:
+          n_steps: int | None = None, batch_size: int | None = None, selection: SelectionSpec | None = None,
+          replay=None) -> dict:
     """Train ``algo`` with library defaults within the budget, write its curve, model and evaluation
     (``options``: the env's keyword arguments and wrappers, :class:`simgrip.envs.env_options.EnvOptions`: training
     behind all of them, evaluation behind those that are part of the policy, the action offset, the residual and
@@ -276,7 +276,8 @@ def train(algo: str, env_id: str, *, steps: int, minutes: float, seed: int, out:
     library's learning rate falling linearly to 0 over the budget, on its clock,
     :class:`simgrip.envs.lr_decay.BudgetDecay`; ``ent_coef``: PPO's entropy coefficient instead of 0; ``n_envs``:
     copies of the training env stepped one after the other, SB3's ``DummyVecEnv``, copy ``i`` seeded ``seed + i``;
-    ``n_steps``: PPO's steps a rollout collects from each env instead of 2048; ``selection``: validate the policy
+    ``n_steps``: PPO's steps a rollout collects from each env instead of 2048; ``batch_size``: the transitions of
+    each gradient step instead of the library's (PPO 64, SAC 256); ``selection``: validate the policy
     periodically within the budget and keep the best, :mod:`simgrip.envs.selection`; ``replay``: a
     :class:`simgrip.envs.budget_replay.ReplaySchedule`, the budget read from a record's steps instead of the clock,
     and the held-out results compared with the record's as ``replay``)."""
@@ -351,7 +352,7 @@ def train(algo: str, env_id: str, *, steps: int, minutes: float, seed: int, out:
     if decay is not None:  # on the budget's own clock, from the budget's start (before the model is built)
         decay.start(c_start if clock == "cpu" else t_start)
     model = cls("MlpPolicy", env, seed=seed, verbose=0, **model_kwargs(algo, gamma, log_std_init, decay,
-                                                                       ent_coef, n_steps))
+                                                                       ent_coef, n_steps, batch_size))
     model.set_logger(Logger(None, []))  # no output; SB3's own would make an empty /tmp/SB3-<time> per learn()
     init = start = None
     if init_from is not None:
@@ -394,7 +395,7 @@ def train(algo: str, env_id: str, *, steps: int, minutes: float, seed: int, out:
     result = {"algo": algo.upper(), "env": env_id, "timesteps": int(model.num_timesteps), "wall_s": round(wall, 1), "cpu_s": round(cpu, 1),
               "clock": clock, "budget_minutes": minutes,
               "train_episodes": len(rows), "seed": seed, "n_envs": n_envs,
-              "hyperparameters": hyperparameters(gamma, log_std_init, decay, ent_coef, n_steps),
+              "hyperparameters": hyperparameters(gamma, log_std_init, decay, ent_coef, n_steps, batch_size),
               "versions": versions()}
     if decay is not None and algo == "ppo":  # what a replay reads instead of the clock (envs.lr_decay)
         result["lr_fractions"] = list(decay.readings)
@@ -526,7 +527,7 @@ def replay_schedule(args):
                 "budget_minutes": args.minutes, "n_envs": args.n_envs,
                 "hyperparameters": hyperparameters(args.gamma, args.log_std_init, budget_decay(
                     args.algo[0], 60.0 * args.minutes, args.clock) if args.lr_decay else None, args.ent_coef,
-                    args.n_steps),
+                    args.n_steps, args.batch_size),
                 "eval_seeds": [args.eval_seed, args.eval_seed + args.eval_episodes - 1],
                 **EnvOptions.from_args(args).record()[0]}
     schedule = load_schedule(args.replay, identity, checkpoint_minutes=args.checkpoint_minutes,
@@ -586,7 +587,7 @@ def main(argv=None) -> int:
                        normalize=args.normalize, gamma=args.gamma, init_from=args.init_from,
                        log_std_init=args.log_std_init, eval_start=args.eval_start, lr_decay=args.lr_decay,
                        ent_coef=args.ent_coef, critic_warmup=args.critic_warmup, n_envs=args.n_envs,
-                       n_steps=args.n_steps, selection=spec_from(args), replay=schedule)
+                       n_steps=args.n_steps, batch_size=args.batch_size, selection=spec_from(args), replay=schedule)
         print(json.dumps(result), flush=True)
     plot_curves(out)
     return 0

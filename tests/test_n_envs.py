@@ -1,6 +1,6 @@
 """``--n-envs N`` of ``examples/train_sb3.py`` and ``examples/rl_baselines.py``: the training steps ``N`` copies of
 the env in its own process (Stable-Baselines3's ``DummyVecEnv``); and ``--n-steps S``, PPO's steps a rollout
-collects from each env.
+collects from each env; and ``--batch-size B``, the transitions of each gradient step.
 
 Checked on what they change and record: PPO's rollout becomes ``S * N`` steps (one rollout under ``--steps 64``),
 the JSON names the copies and the rollout's length, the same command gives the same numbers twice, bad values exit
@@ -49,6 +49,16 @@ def test_n_steps_sets_each_envs_share_of_the_rollout(tmp_path):
     assert [r.split(",")[0] for r in policy[1:]] == ["2048"]  # one window: the one rollout
 
 
+def test_batch_size_sets_the_minibatch_and_is_named(tmp_path, monkeypatch):
+    sb3 = pytest.importorskip("stable_baselines3")
+    seen = []
+    train = sb3.PPO.train
+    monkeypatch.setattr(sb3.PPO, "train", lambda self: seen.append(self.batch_size) or train(self))
+    four = _train(tmp_path, 4, "--n-steps", "512", "--batch-size", "128")
+    assert seen == [128] and four["timesteps"] == 2048
+    assert four["hyperparameters"] == "Stable-Baselines3 defaults but n_steps = 512, batch_size = 128"
+
+
 def test_one_env_is_recorded_as_one(tmp_path):
     pytest.importorskip("stable_baselines3")
     one = _train(tmp_path, 1)
@@ -58,7 +68,9 @@ def test_one_env_is_recorded_as_one(tmp_path):
 @pytest.mark.parametrize("script", ["train_sb3", "rl_baselines"])
 @pytest.mark.parametrize("option, value", [("--n-envs", "0"), ("--n-envs", "-1"), ("--n-envs", "65"),
                                            ("--n-envs", "2.5"), ("--n-envs", "x"), ("--n-steps", "1"),
-                                           ("--n-steps", "1048577"), ("--n-steps", "nan")])
+                                           ("--n-steps", "1048577"), ("--n-steps", "nan"),
+                                           ("--batch-size", "1"), ("--batch-size", "1048577"),
+                                           ("--batch-size", "64.0")])
 def test_a_bad_count_exits_2_naming_it(script, option, value, tmp_path, capsys):
     with pytest.raises(SystemExit) as e:
         _example(script).main(["--env", "simgrip/PickFragile-v7", "--out", str(tmp_path / "o"), option, value])
@@ -74,6 +86,18 @@ def test_n_steps_is_ppos_alone(script, tmp_path, capsys):
     assert e.value.code == 2 and "--n-steps: PPO only" in capsys.readouterr().err
 
 
+@pytest.mark.parametrize("script", ["train_sb3", "rl_baselines"])
+@pytest.mark.parametrize("extra, rollout", [(["--batch-size", "100"], 2048),
+                                            (["--n-envs", "3", "--n-steps", "512", "--batch-size", "1024"], 1536)])
+def test_a_batch_size_that_does_not_divide_the_rollout_exits_2(script, extra, rollout, tmp_path, capsys):
+    with pytest.raises(SystemExit) as e:
+        _example(script).main(["--env", "simgrip/PickFragile-v7", "--algo", "ppo", "--out", str(tmp_path / "o"),
+                               *extra])
+    err = capsys.readouterr().err
+    assert e.value.code == 2 and f"does not divide PPO's rollout of {rollout} steps" in err and "--batch-size" in err
+    assert not (tmp_path / "o").exists()
+
+
 def test_rl_baselines_passes_it_to_every_run_and_names_it(tmp_path):
     mod = _example("rl_baselines")
     args = rl_baselines_args(mod, n_envs=4)
@@ -83,6 +107,10 @@ def test_rl_baselines_passes_it_to_every_run_and_names_it(tmp_path):
     args.n_steps = 512
     assert mod.run_command("ppo", 0, args, tmp_path)[-2:] == ["--n-steps", "512"]
     assert mod.hyperparameters(args).endswith("one torch thread; but n_steps = 512")
+    args.batch_size = 128
+    assert mod.run_command("ppo", 0, args, tmp_path)[-4:] == ["--n-steps", "512", "--batch-size", "128"]
+    assert mod.hyperparameters(args).endswith("one torch thread; but n_steps = 512; but batch_size = 128")
+    args.batch_size = None
     args.n_envs, args.n_steps, args.gamma, args.lr_decay = 1, None, 0.995, True
     assert "--n-envs" not in mod.run_command("ppo", 0, args, tmp_path)
     assert "--n-steps" not in mod.run_command("ppo", 0, args, tmp_path)
