@@ -99,6 +99,7 @@ from pathlib import Path
 
 from simgrip.command_parser import CommandParser
 from simgrip.envs.selection import spec_from
+from simgrip.interrupt import kill_descendants, signals_as_interrupt
 
 ALGOS = ("ppo", "sac")
 TRAIN_SCRIPT = Path(__file__).resolve().with_name("train_sb3.py")
@@ -250,8 +251,8 @@ def _child_env() -> dict:
 
 def run_all(jobs: list[tuple[str, int, list[str], Path]], max_jobs: int, poll: float = 0.2) -> dict:
     """Run ``(algo, seed, command, folder)`` jobs, at most ``max_jobs`` at once; returns ``{(algo, seed):
-    returncode}``.  On KeyboardInterrupt every running child is terminated (then killed after 5 s) and the
-    interrupt is re-raised."""
+    returncode}``.  On KeyboardInterrupt every running child is terminated (then killed after 5 s), any other
+    descendant killed, and the interrupt re-raised."""
     env = _child_env()
     pending, running, codes = list(jobs), {}, {}
     try:
@@ -259,34 +260,32 @@ def run_all(jobs: list[tuple[str, int, list[str], Path]], max_jobs: int, poll: f
             while pending and len(running) < max_jobs:
                 algo, seed, cmd, folder = pending.pop(0)
                 folder.mkdir(parents=True, exist_ok=True)
-                log = open(folder / "log.txt", "w")
-                # own session: a terminal's Ctrl-C reaches the driver only, which stops the children itself
-                proc = subprocess.Popen(cmd, stdout=log, stderr=subprocess.STDOUT, env=env, start_new_session=True)
-                running[(algo, seed)] = (proc, log)
-            for key, (proc, log) in list(running.items()):
+                with open(folder / "log.txt", "w") as log:  # (the child writes through its own copy)
+                    # own session: a terminal's Ctrl-C reaches the driver only, which stops the children itself
+                    proc = subprocess.Popen(cmd, stdout=log, stderr=subprocess.STDOUT, env=env, start_new_session=True)
+                running[(algo, seed)] = proc
+            for key, proc in list(running.items()):
                 if proc.poll() is not None:
-                    log.close()
                     codes[key] = proc.returncode
                     del running[key]
             time.sleep(poll)
     except KeyboardInterrupt:
         _stop(running)
+        kill_descendants()  # a child forked as the signal came, before Popen returned: in no list, in its own session
         raise
     return codes
 
 
 def _stop(running: dict) -> None:
-    for proc, _ in running.values():
-        if proc.poll() is None:
-            proc.send_signal(signal.SIGTERM)
+    for proc in running.values():
+        proc.send_signal(signal.SIGTERM)  # (Popen's own check: nothing once it has exited)
     deadline = time.monotonic() + 5.0
-    for proc, log in running.values():
+    for proc in running.values():
         try:
             proc.wait(timeout=max(0.0, deadline - time.monotonic()))
         except subprocess.TimeoutExpired:
             proc.kill()
             proc.wait()
-        log.close()
 
 
 def _stats(values: list[float]) -> dict:
@@ -534,8 +533,6 @@ def main(argv=None) -> int:
         why = _check_replay(args, jobs)
         if why:
             p.error(why)
-    from simgrip.interrupt import signals_as_interrupt
-
     try:
         with signals_as_interrupt():  # SIGTERM too: the children run in their own sessions, only we can stop them
             codes = run_all(jobs, args.jobs)

@@ -176,6 +176,28 @@ def test_ctrl_c_or_sigterm_stops_every_child_with_one_line(tmp_path, signum):
     assert not alive, alive
 
 
+@pytest.mark.skipif(not Path("/proc/self/task").exists(), reason="finds the stray child through /proc")
+def test_an_interrupt_as_a_child_starts_stops_that_child_too(tmp_path, monkeypatch):
+    """A signal that comes after a child is forked and before the driver has listed it (inside Popen, which waits for
+    the exec, or just after; the window the test above hit on a loaded machine) leaves that child in no list, in a
+    session of its own: ``run_all`` kills it all the same."""
+    mod = _module()
+    real, started = subprocess.Popen, []
+
+    def popen_then_interrupt(*args, **kwargs):
+        started.append(real(*args, **kwargs))
+        raise KeyboardInterrupt  # as if the signal came before Popen returned
+
+    monkeypatch.setattr(mod.subprocess, "Popen", popen_then_interrupt)
+    with pytest.raises(KeyboardInterrupt):
+        mod.run_all([("ppo", 0, [sys.executable, "-c", "import time; time.sleep(60)"], tmp_path / "run")], 1)
+    child, = started
+    try:
+        assert child.wait(timeout=10) == -signal.SIGKILL  # stopped, not left to run its budget
+    finally:
+        child.kill()
+
+
 def test_normalize_reaches_every_run_command(tmp_path):
     mod = _module()
     args = rl_baselines_args(mod, normalize=True)
