@@ -31,7 +31,7 @@ ROWS = {
                                           AIDED: "rl_pick_v7_peak_log_std_gamma"}),
     "PickMultiFragile-v7": ("PickMultiFragile-v7", {"PPO, 3 seeds": "rl_multi_v7",
                                                     "SAC, 3 seeds": "rl_multi_v7_sac",
-                                                    AIDED: "rl_multi_v7_peak_light_log_std_half_lr_decay_step_charge_rerun"}),
+                                                    AIDED: "rl_multi_v7_peak_light_log_std_half_lr_decay_step_charge_4envs_512_batch128"}),
     "PlaceFragile-v8": ("PlaceFragile-v8", {"PPO, 3 seeds": "rl_place_v8", "SAC, 3 seeds": "rl_place_v8_sac",
                                             AIDED: "rl_place_v8_residual_palm_log_std"}),
     "PickCradleFragile-v6": ("PickCradleFragile-v6", {"PPO, 3 seeds": "rl_cradle_v6",
@@ -46,7 +46,7 @@ ROWS = {
 AIDS = {"offset": "--action-offset", "peak offset": "--action-offset", "light bias": "--light-bias",
         "scripted palm": "--residual", "log std": "--log-std-init", "γ": "--gamma", "lr decay": "--lr-decay",
         "entropy": "--ent-coef", "step charge": "--step-charge", "crush margin": "--crush-margin", "envs": "--n-envs",
-        "n steps": "--n-steps", "select every": "--select-every"}
+        "n steps": "--n-steps", "batch": "--batch-size", "select every": "--select-every"}
 
 
 def assert_the_hyperparameters_named(text: str, agg: dict) -> None:
@@ -55,7 +55,7 @@ def assert_the_hyperparameters_named(text: str, agg: dict) -> None:
     record's ``hyperparameters``; "step charge X" (the training reward's charge a step) at its value in the command
     and the record's ``step_charge``, "crush margin X" likewise (``crush_margin``); "N envs" (copies of the training
     env) at N in the command, the record's ``n_envs`` and its ``hyperparameters``, "n steps S" (PPO's rollout a
-    copy) at S in the command and the ``hyperparameters``; "select every M" (the best of validations every M budget
+    copy) at S in the command and the ``hyperparameters``, "batch B" (PPO's minibatch) likewise; "select every M" (the best of validations every M budget
     minutes kept) at M in the command and the record's ``selection``; "light bias [X]" at X (0.5 where no value is named) in the command and the
     record's ``light_bias``; nothing to check where the text names none (that the options are exactly the
     aids named: AIDS)."""
@@ -80,6 +80,11 @@ def assert_the_hyperparameters_named(text: str, agg: dict) -> None:
         value = int(named.group(1))
         assert int(cmd[cmd.index("--n-steps") + 1]) == value, (named.group(0), cmd)
         assert f"; but n_steps = {value}" in agg["hyperparameters"], (named.group(0), agg["hyperparameters"])
+    named = re.search(r"batch (\d+)", text)
+    if named:  # PPO's minibatch: a hyperparameter, an integer
+        value = int(named.group(1))
+        assert int(cmd[cmd.index("--batch-size") + 1]) == value, (named.group(0), cmd)
+        assert f"; but batch_size = {value}" in agg["hyperparameters"], (named.group(0), agg["hyperparameters"])
     named = re.search(r"select every ([\d.]+)", text)
     if named:  # model selection within the budget: the command's period, the record's selection
         value = float(named.group(1))
@@ -326,14 +331,22 @@ def test_target_table_is_its_records():
             verdicts.setdefault(row["task"], []).append(verdict)
     # the summary sentence under the table (a task with ", vN" holds the batches of its version before)
     text = joined(TARGET_PAGE)
+    four = "rl_multi_v7_peak_light_log_std_half_lr_decay_step_charge_4envs_512_batch128"
+    k_fingers = [" / ".join(str(pct(x)) for x in aggregate(f)["summary"]["ppo"]["final"]["success_rates"])
+                 for f in (four, f"{four}_345")]
+    steps = aggregate(four)["summary"]["ppo"]["final"]["timesteps"] + aggregate(f"{four}_345")["summary"]["ppo"][
+        "final"]["timesteps"]
+    assert {round(t / 1e5) / 10 for t in steps} == {1.4}  # "1.4M steps in 15 CPU-minutes"
     assert ("So on the registered versions the pinch meets the target in one batch of three with a longer discount "
             "as well (γ 0.995: seeds 0–2, not 3–5, where seed 3 stays at 0 %, nor 6–8; the batch with the best of "
             "validations kept meets it too, but its runs are the first batch's stopped sooner, not a new sample), and "
-            "the K fingers, the place, the "
-            "cradle and the sphere do not; on the versions before, the pinch and the K "
-            "fingers met it, the cradle in one batch of two, and the sphere and the place did not.") in text
+            "the K fingers in one batch of two when PPO steps four copies of the env and learns from minibatches of "
+            f"128 (`4 envs, n steps 512, batch 128`: 1.4M steps in 15 CPU-minutes; seeds 0–2, {k_fingers[0]} %, not "
+            f"3–5, {k_fingers[1]} %), while the place, the cradle and the sphere do not; on the versions before, the pinch "
+            "and the K fingers met it, the cradle in one batch of two, and the sphere and the place did not.") in text
     assert verdicts["pinch"].count("yes") == 2  # the first γ batch, and the same runs stopped sooner (select every 1)
-    assert not any("yes" in verdicts[t] for t in ("K fingers", "place", "cradle", "sphere"))
+    assert verdicts["K fingers"].count("yes") == 1  # four copies, minibatches of 128: seeds 0-2, not 3-5
+    assert not any("yes" in verdicts[t] for t in ("place", "cradle", "sphere"))
     assert all("yes" in verdicts[t] for t in ("pinch, v6", "K fingers, v6", "cradle, v5"))
     assert verdicts["cradle, v5"].count("yes") == 1 and len(verdicts["cradle, v5"]) == 2
     assert "yes" not in verdicts["sphere, v5"] + verdicts["place, v7"]
