@@ -131,8 +131,9 @@ def critic_warmup_conflict(steps, algos) -> str | None:
 def training_conflict(args) -> str | None:
     """The first reason the parsed options of ``train_sb3.py`` / ``rl_baselines.py`` (both have ``algo``,
     ``log_std_init``, ``ent_coef``, ``init_from``, ``critic_warmup``, ``crush_charge``, ``crush_charge_from``,
-    ``minutes``, ``checkpoint_minutes``, ``n_steps``, ``batch_size``, ``normalize``, the ``select_*`` options and the held-out
-    seeds: ``eval_seeds``, or ``eval_seed`` and ``eval_episodes``) cannot go together, or None:
+    ``minutes``, ``checkpoint_minutes``, ``n_steps``, ``batch_size``, ``n_envs``, ``normalize``, the ``select_*``
+    options and the held-out seeds: ``eval_seeds``, or ``eval_seed`` and ``eval_episodes``) cannot go together, or
+    None:
     :func:`log_std_init_conflict`, :func:`critic_warmup_conflict`, ``--n-steps`` or ``--ent-coef`` with SAC, a
     ``--batch-size`` that does not divide PPO's rollout,
     ``--crush-charge-from`` without ``--crush-charge``, :func:`simgrip.envs.selection.selection_conflict`, a checkpoint period longer than the budget (no checkpoint

@@ -55,7 +55,8 @@ def assert_the_hyperparameters_named(text: str, agg: dict) -> None:
     record's ``hyperparameters``; "step charge X" (the training reward's charge a step) at its value in the command
     and the record's ``step_charge``, "crush margin X" likewise (``crush_margin``); "N envs" (copies of the training
     env) at N in the command, the record's ``n_envs`` and its ``hyperparameters``, "n steps S" (PPO's rollout a
-    copy) at S in the command and the ``hyperparameters``, "batch B" (PPO's minibatch) likewise; "select every M" (the best of validations every M budget
+    copy) at S in the command and the ``hyperparameters``, "batch B" (PPO's minibatch) likewise;
+    "select every M" (the best of validations every M budget
     minutes kept) at M in the command and the record's ``selection``; "light bias [X]" at X (0.5 where no value is named) in the command and the
     record's ``light_bias``; nothing to check where the text names none (that the options are exactly the
     aids named: AIDS)."""
@@ -342,8 +343,8 @@ def test_target_table_is_its_records():
             "validations kept meets it too, but its runs are the first batch's stopped sooner, not a new sample), and "
             "the K fingers in one batch of two when PPO steps four copies of the env and learns from minibatches of "
             f"128 (`4 envs, n steps 512, batch 128`: 1.4M steps in 15 CPU-minutes; seeds 0–2, {k_fingers[0]} %, not "
-            f"3–5, {k_fingers[1]} %), while the place, the cradle and the sphere do not; on the versions before, the pinch "
-            "and the K fingers met it, the cradle in one batch of two, and the sphere and the place did not.") in text
+            f"3–5, {k_fingers[1]} %), while the place, the cradle and the sphere do not; on the versions before, "
+            "the pinch and the K fingers met it, the cradle in one batch of two, and the sphere and the place did not.") in text
     assert verdicts["pinch"].count("yes") == 2  # the first γ batch, and the same runs stopped sooner (select every 1)
     assert verdicts["K fingers"].count("yes") == 1  # four copies, minibatches of 128: seeds 0-2, not 3-5
     assert not any("yes" in verdicts[t] for t in ("place", "cradle", "sphere"))
