@@ -146,7 +146,7 @@ def training_conflict(args) -> str | None:
         return why
     if args.n_steps is not None and set(algos) != {"ppo"}:
         return "--n-steps: PPO only (--algo ppo; SAC collects no rollouts)"
-    rollout = (args.n_steps or 2048) * args.n_envs
+    rollout = (args.n_steps or 2048) * args.n_envs  # PPO's steps an update
     if args.batch_size is not None and "ppo" in algos and rollout % args.batch_size:
         return (f"--batch-size: {args.batch_size} does not divide PPO's rollout of {rollout} steps (--n-steps times "
                 "--n-envs), so each epoch's last minibatch would be cut short")

@@ -229,6 +229,26 @@ def _listed(items) -> str:
     return ", ".join(items[:-1]) + " and " + items[-1]
 
 
+def _assert_seeds_on_page(para: str, runs: list, span: str = "15", crushes_end: str = ")") -> None:
+    """Each run's checkpoints ("a, b and c % at 5 / 10 / {span} CPU-min"), steps ("on n, m and k steps") and crushes
+    ("(a, b and c crushes of 50 held out{crushes_end}") as the paragraph ``para`` gives them."""
+    assert f"{_listed(checkpoint_rates(r) for r in runs)} % at 5 / 10 / {span} CPU-min" in para
+    assert f"on {_listed(format(r['timesteps'], ',') for r in runs)} steps" in para
+    assert f"({_listed(r['outcomes']['crushed'] for r in runs)} crushes of 50 held out{crushes_end}" in para
+
+
+def _assert_replays_identical(folder: str, replayed: str, seeds: tuple) -> list[dict]:
+    """Each seed's replay in ``replayed`` says ``identical`` against its batch of the record ``folder`` (the folder
+    its command wrote, ``combined_from``), having read every one of the rate's readings, with the record's policy
+    digest; returns the record's runs."""
+    agg, runs = aggregate(folder), seed_runs(folder, seeds)
+    for k, run, rep in zip(seeds, runs, seed_runs(replayed, seeds)):
+        assert rep["replay"]["identical"] is True and rep["replay"]["from"] == f"{batch_of(agg, k)}/ppo_seed{k}.json"
+        assert rep["replay"]["lr_readings"] == [len(run["lr_fractions"])] * 2
+        assert rep["policy_digest"] == run["policy_digest"]
+    return runs
+
+
 def _assert_long_run(title: str, folder: str, minutes: int, seeds: tuple) -> None:
     """The learning page's paragraph ``title`` on the record ``folder`` (``--minutes minutes``, ``seeds``): each
     seed's checkpoints ("a, b and c % at 5 / 10 / … / M CPU-min"), its steps and crushes, and that the runs keep what
@@ -238,9 +258,7 @@ def _assert_long_run(title: str, folder: str, minutes: int, seeds: tuple) -> Non
     agg = aggregate(folder)
     assert agg["minutes"] == float(minutes) and agg["seeds"] == list(seeds) and agg["step_charge"] == 0.005
     runs = seed_runs(folder, seeds)
-    assert f"{_listed(checkpoint_rates(r) for r in runs)} % at 5 / 10 / … / {minutes} CPU-min" in para
-    assert f"on {_listed(format(r['timesteps'], ',') for r in runs)} steps" in para
-    assert f"({_listed(r['outcomes']['crushed'] for r in runs)} crushes of 50 held out)" in para
+    _assert_seeds_on_page(para, runs, f"… / {minutes}")
     assert all(len(r["lr_fractions"]) == 1 + 2 * (r["timesteps"] // 2048) and len(r["policy_digest"]) == 16
                for r in runs)
 
@@ -257,12 +275,7 @@ def test_the_40_minute_batch_and_its_replays_are_their_records():
     folder = "rl_multi_v7_peak_light_log_std_half_lr_decay_step_charge_40min"
     _assert_long_run("**Forty CPU-minutes, from a fresh clone**", folder, 40, (0, 1, 2))
     agg = aggregate(folder)
-    runs = seed_runs(folder, (0, 1))
-    for k, (run, rep) in enumerate(zip(runs, seed_runs(f"{folder}_replay_01", (0, 1)))):
-        batch = batch_of(agg, k)
-        assert rep["replay"]["identical"] is True and rep["replay"]["from"] == f"{batch}/ppo_seed{k}.json"
-        assert rep["replay"]["lr_readings"] == [len(run["lr_fractions"])] * 2
-        assert rep["policy_digest"] == run["policy_digest"]
+    runs = _assert_replays_identical(folder, f"{folder}_replay_01", (0, 1))
     para = learning_paragraph("**Forty CPU-minutes, from a fresh clone**")
     readings = _listed(format(len(r["lr_fractions"]), ",") for r in runs)
     assert f"{folder}_replay_01/" in para and f"their {readings} readings of the rate" in para
@@ -286,28 +299,24 @@ def test_four_copies_and_minibatches_of_128_are_their_records():
         runs = seed_runs(name, seeds)
         assert all(r["hyperparameters"].endswith("n_steps = 512, batch_size = 128, learning_rate = 0.0003 falling "
                                                  "linearly to 0 over the budget") for r in runs)
-        assert f"{_listed(checkpoint_rates(r) for r in runs)} % at 5 / 10 / 15 CPU-min" in para
         means = " / ".join(str(pct(c["mean"])) for c in agg["summary"]["ppo"]["checkpoints"])
-        assert f"({_listed(r['outcomes']['crushed'] for r in runs)} crushes of 50 held out; mean {means} %)" in para
-        assert f"on {_listed(format(r['timesteps'], ',') for r in runs)} steps" in para
+        _assert_seeds_on_page(para, runs, crushes_end=f"; mean {means} %)")
         assert all(len(r["lr_fractions"]) == 1 + 2 * (r["timesteps"] // 2048) for r in runs)
     finals = [" / ".join(str(pct(x)) for x in aggregate(f)["summary"]["ppo"]["final"]["success_rates"])
               for f in (folder, f"{folder}_345")]
     assert f"(seeds 0–2: {finals[0]} %; 3–5: {finals[1]} %;" in joined(ROOT / "README.md")
-    agg, runs = aggregate(folder), seed_runs(folder, (0, 1, 2))
     replayed = f"{folder}_replay_012"
     assert f"docs/baselines/{replayed}/" in para
-    for k, (run, rep) in enumerate(zip(runs, seed_runs(replayed, (0, 1, 2)))):
-        assert rep["replay"]["identical"] is True and rep["replay"]["from"] == f"{batch_of(agg, k)}/ppo_seed{k}.json"
-        assert rep["replay"]["lr_readings"] == [len(run["lr_fractions"])] * 2
-        assert rep["policy_digest"] == run["policy_digest"] and rep["train_episodes"] == run["train_episodes"]
+    runs = _assert_replays_identical(folder, replayed, (0, 1, 2))
+    assert all(rep["train_episodes"] == run["train_episodes"] for run, rep in zip(runs, seed_runs(replayed, (0, 1, 2))))
     assert f"training episodes ({_listed(format(r['train_episodes'], ',') for r in runs)}), their " \
         f"{_listed(format(len(r['lr_fractions']), ',') for r in runs)} readings of the rate" in para
 
 
-def test_the_pinchs_four_copies_screen_is_its_record():
-    """"The pinch's discount command on four copies with minibatches of 128": seeds 3-5 of the pinch's aided command with the K fingers' four copies; each seed's checkpoints, steps and crushes are the
-    record's, and the one-copy numbers it is set against are the batch of seeds 3-5's."""
+def test_the_pinchs_four_copies_batch_is_its_record():
+    """"The pinch's discount command on four copies with minibatches of 128": seeds 3-5 of the pinch's aided command
+    with the K fingers' four copies; each seed's checkpoints, steps and crushes are the record's, and the one-copy
+    numbers it is set against are the batch of seeds 3-5's."""
     folder = "rl_pick_v7_peak_log_std_gamma_4envs_512_batch128_345"
     para = learning_paragraph("**The pinch's discount command on four copies with minibatches of 128**")
     assert f"docs/baselines/{folder}/" in para
@@ -315,10 +324,7 @@ def test_the_pinchs_four_copies_screen_is_its_record():
     assert agg["seeds"] == [3, 4, 5] and agg["n_envs"] == 4 and measured_as(agg) == "PickFragile-v7"
     assert agg["hyperparameters"].endswith("; but gamma = 0.995; but log_std_init = -1.0; but n_steps = 512; but "
                                            "batch_size = 128")
-    runs = seed_runs(folder, (3, 4, 5))
-    assert f"{_listed(checkpoint_rates(r) for r in runs)} % at 5 / 10 / 15 CPU-min" in para
-    assert f"on {_listed(format(r['timesteps'], ',') for r in runs)} steps" in para
-    assert f"({_listed(r['outcomes']['crushed'] for r in runs)} crushes of 50 held out)" in para
+    _assert_seeds_on_page(para, seed_runs(folder, (3, 4, 5)))
     one = seed_runs("rl_pick_v7_peak_log_std_gamma_345", (3, 4))
     assert f"against {_listed(checkpoint_rates(r) for r in one)} % for seeds 3 and 4 on one copy" in para
     fifth, = seed_runs("rl_pick_v7_peak_log_std_gamma_345", (5,))
