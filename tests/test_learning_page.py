@@ -331,3 +331,42 @@ def test_the_pinchs_four_copies_batch_is_its_record():
     assert f"whose seed 5 ended at {pct(fifth['success_rate'])} %" in para
     millions = [f"{r['timesteps'] / 1e6:.2f}M" for r in one]
     assert f"({_listed(millions)} steps" in para
+
+
+def test_the_claws_four_copies_screens_are_their_records():
+    """"The claws on four copies with minibatches of 128": each claw's two-seed screen (its command's options, each
+    seed's checkpoints, steps and crushes), the crushes within four steps of the first touch and those of the
+    heaviest third (the final policies' ``evaluate_seedS.json``, whose success is the run's), and the records the
+    screens are set against (their per-seed finals and their steps)."""
+    para = learning_paragraph("**The claws on four copies with minibatches of 128**")
+    touch, heavy = [], []
+    for task, env in (("cradle", "PickCradleFragile-v6"), ("sphere", "PickSphereFragile-v6")):
+        record = f"rl_{task}_v6_residual_palm_light_log_std"
+        folder = f"{record}_4envs_512_batch128_screen"
+        assert f"docs/baselines/{folder}/" in para
+        agg = aggregate(folder)
+        assert agg["seeds"] == [0, 1] and agg["minutes"] == 15.0 and agg["n_envs"] == 4 and measured_as(agg) == env
+        assert agg["hyperparameters"].endswith("; but log_std_init = -1.0; but n_steps = 512; but batch_size = 128")
+        assert agg["residual"] == ["palm_z"] and agg["light_bias"] == 0.5 and agg["action_offset"] == [-0.4, 0.0]
+        runs = seed_runs(folder, (0, 1))
+        _assert_seeds_on_page(para, runs)
+        for k, run in enumerate(runs):
+            ev = json.loads((BASELINES / folder / f"evaluate_seed{k}.json").read_text(encoding="utf-8"))
+            assert ev["eval_seeds"] == [8000, 8049] and ev["success_rate"] == run["success_rate"]
+            assert ev["outcomes"] == run["outcomes"]
+            after = ev["crushed_after_touch"]
+            touch.append(f"{after['0']} and {after['1-4']} of {ev['outcomes']['crushed']}")
+            heavy.append(ev["by_mass"]["74-200 g"])
+        final = aggregate(record)["summary"]["ppo"]["final"]
+        steps = f"{round(min(final['timesteps']), -3) // 1000}k–{round(max(final['timesteps']), -3) // 1000}k steps"
+        assert f"record's {' / '.join(str(pct(x)) for x in final['success_rates'])} % " in para and steps in para
+    assert (f"{touch[0]} and {touch[1]} on the cradle, {touch[2]} and {touch[3]} on the sphere" in para)
+    assert f"{heavy[2]['crushed']} and {heavy[3]['crushed']} of its {sum(heavy[2].values())} pieces" in para
+    assert sum(heavy[2].values()) == sum(heavy[3].values())
+    # the environments page's sentence: the screens' steps and finals
+    screens = [aggregate(f"rl_{t}_v6_residual_palm_light_log_std_4envs_512_batch128_screen")["summary"]["ppo"]["final"]
+               for t in ("cradle", "sphere")]
+    steps = [s for f in screens for s in f["timesteps"]]
+    finals = [" / ".join(str(pct(x)) for x in f["success_rates"]) for f in screens]
+    assert (f"twice their records' steps ({min(steps) / 1e6:.2f}M–{max(steps) / 1e6:.2f}M) and leave them where they "
+            f"were: {finals[0]} % on the cradle and {finals[1]} % on the sphere") in joined(ROOT / "docs" / "environments.md")
