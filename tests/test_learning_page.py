@@ -370,3 +370,31 @@ def test_the_claws_four_copies_screens_are_their_records():
     finals = [" / ".join(str(pct(x)) for x in f["success_rates"]) for f in screens]
     assert (f"twice their records' steps ({min(steps) / 1e6:.2f}M–{max(steps) / 1e6:.2f}M) and leave them where they "
             f"were: {finals[0]} % on the cradle and {finals[1]} % on the sphere") in joined(ROOT / "docs" / "environments.md")
+
+
+def test_the_spheres_falling_rate_and_step_charge_screen_is_its_record():
+    """"The sphere with the K fingers' falling rate and step charge": its options, each seed's checkpoints, steps and
+    crushes, the crushes of the heaviest third and in the touch's step (``evaluate_seedS.json``, whose outcomes are
+    the run's), and the record's finals it is set against."""
+    folder = "rl_sphere_v6_residual_palm_light_log_std_lr_decay_step_charge_screen"
+    para = learning_paragraph("**The sphere with the K fingers' falling rate and step charge**")
+    assert f"docs/baselines/{folder}/" in para
+    agg = aggregate(folder)
+    assert agg["seeds"] == [0, 1] and agg["minutes"] == 15.0 and measured_as(agg) == "PickSphereFragile-v6"
+    assert agg["hyperparameters"] == ("Stable-Baselines3 defaults, one env, one torch thread; but log_std_init = -1.0; "
+                                      "but the learning rate falls linearly to 0 over the budget")
+    assert agg["step_charge"] == 0.005 and agg["residual"] == ["palm_z"] and agg["light_bias"] == 0.5
+    runs = seed_runs(folder, (0, 1))
+    _assert_seeds_on_page(para, runs)
+    assert all(c1["success_rate"] >= c0["success_rate"] for r in runs for c0, c1 in zip(r["checkpoints"],
+                                                                                        r["checkpoints"][1:]))
+    evs = [json.loads((BASELINES / folder / f"evaluate_seed{k}.json").read_text(encoding="utf-8")) for k in (0, 1)]
+    assert [e["outcomes"] for e in evs] == [r["outcomes"] for r in runs]
+    heavy = [e["by_mass"]["74-200 g"] for e in evs]
+    assert f"({heavy[0]['crushed']} and {heavy[1]['crushed']} of its {sum(heavy[0].values())} pieces" in para
+    assert sum(heavy[0].values()) == sum(heavy[1].values())
+    assert f"({evs[0]['crushed_after_touch']['0']} and {evs[1]['crushed_after_touch']['0']} of the crushes" in para
+    final = aggregate("rl_sphere_v6_residual_palm_light_log_std")["summary"]["ppo"]["final"]["success_rates"]
+    assert f"against its record's {' / '.join(str(pct(x)) for x in final)} %." in para
+    finals = " / ".join(str(pct(r["success_rate"])) for r in runs)
+    assert f"behind the sphere's aids: {finals} %" in joined(ROOT / "docs" / "environments.md")
