@@ -402,3 +402,17 @@ def test_the_spheres_falling_rate_and_step_charge_screen_is_its_record():
     assert f"against its record's {' / '.join(str(pct(x)) for x in final)} %." in para
     finals = " / ".join(str(pct(r["success_rate"])) for r in runs)
     assert f"behind the sphere's aids: {finals} %" in joined(ROOT / "docs" / "environments.md")
+    # the K fingers' whole recipe: the same on four copies with minibatches of 128
+    four = folder.replace("_screen", "_4envs_512_batch128_screen")
+    assert f"docs/baselines/{four}/" in para
+    agg = aggregate(four)
+    assert agg["seeds"] == [0, 1] and agg["n_envs"] == 4 and agg["step_charge"] == 0.005
+    assert agg["hyperparameters"].endswith("n_steps = 512; but batch_size = 128; but the learning rate falls linearly "
+                                           "to 0 over the budget")
+    runs = seed_runs(four, (0, 1))
+    _assert_seeds_on_page(para, runs, crushes_end="),")
+    touch = [json.loads((BASELINES / four / f"evaluate_seed{k}.json").read_text(encoding="utf-8"))["crushed_after_touch"]
+             ["0"] for k in (0, 1)]
+    assert f"{touch[0]} and {touch[1]} of the crushes in the touch's step: the same as on one copy" in para
+    finals = " / ".join(str(pct(r["success_rate"])) for r in runs)
+    assert f"and {finals} % on four copies with minibatches of 128 as well" in joined(ROOT / "docs" / "environments.md")
