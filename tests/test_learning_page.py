@@ -311,6 +311,14 @@ def test_four_copies_and_minibatches_of_128_are_their_records():
     assert all(rep["train_episodes"] == run["train_episodes"] for run, rep in zip(runs, seed_runs(replayed, (0, 1, 2))))
     assert f"training episodes ({_listed(format(r['train_episodes'], ',') for r in runs)}), their " \
         f"{_listed(format(len(r['lr_fractions']), ',') for r in runs)} readings of the rate" in para
+    # seeds 3-5 replayed at stop 68 against their batches (named on the environments page too)
+    replayed = f"{folder}_replay_345"
+    assert f"docs/baselines/{replayed}/" in para and (BASELINES / replayed).is_dir()
+    assert "its batch of seeds 3–5 (`..._batch128_replay_345`" in joined(ROOT / "docs" / "environments.md")
+    runs = _assert_replays_identical(f"{folder}_345", replayed, (3, 4, 5))
+    assert all(rep["train_episodes"] == run["train_episodes"] for run, rep in zip(runs, seed_runs(replayed, (3, 4, 5))))
+    assert f"training episodes ({_listed(format(r['train_episodes'], ',') for r in runs)}), their " \
+        f"{_listed(format(len(r['lr_fractions']), ',') for r in runs)} readings of the rate" in para
 
 
 def test_the_pinchs_four_copies_batch_is_its_record():
