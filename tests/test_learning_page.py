@@ -339,6 +339,20 @@ def test_the_pinchs_four_copies_batch_is_its_record():
     assert f"whose seed 5 ended at {pct(fifth['success_rate'])} %" in para
     millions = [f"{r['timesteps'] / 1e6:.2f}M" for r in one]
     assert f"({_listed(millions)} steps" in para
+    # seeds 0-2 (stop 68): met, with one seed that never grips; the count and the steps over six seeds
+    first = folder.removesuffix("_345")
+    assert f"docs/baselines/{first}/" in para and aggregate(first)["hyperparameters"] == agg["hyperparameters"]
+    runs = seed_runs(first, (0, 1, 2))
+    _assert_seeds_on_page(para, runs)
+    one = seed_runs("rl_pick_v7_peak_log_std_gamma", (0, 1, 2))
+    assert f"as one copy's batch of these seeds ({' / '.join(str(pct(r['success_rate'])) for r in one)} %)" in para
+    assert runs[1]["outcomes"]["timeout"] == 40 and "(40 of its 50 held-out episodes time out)" in para
+    four = runs + seed_runs(folder, (3, 4, 5))
+    one += seed_runs("rl_pick_v7_peak_log_std_gamma_345", (3, 4, 5))
+    assert sum(r["success_rate"] >= 0.8 for r in four) == sum(r["success_rate"] >= 0.8 for r in one) == 3
+    span = [f"{min(r['timesteps'] for r in rs) / 1e6:.2f}M–{max(r['timesteps'] for r in rs) / 1e6:.2f}M"
+            for rs in (four, one)]
+    assert f"({span[0]} against {span[1]})" in para
 
 
 def test_the_claws_four_copies_screens_are_their_records():

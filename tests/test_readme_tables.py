@@ -335,17 +335,23 @@ def test_target_table_is_its_records():
     four = "rl_multi_v7_peak_light_log_std_half_lr_decay_step_charge_4envs_512_batch128"
     k_fingers = [" / ".join(str(pct(x)) for x in aggregate(f)["summary"]["ppo"]["final"]["success_rates"])
                  for f in (four, f"{four}_345")]
+    pinch = [" / ".join(str(pct(x)) for x in aggregate(f)["summary"]["ppo"]["final"]["success_rates"])
+             for f in ("rl_pick_v7_peak_log_std_gamma_4envs_512_batch128",
+                       "rl_pick_v7_peak_log_std_gamma_4envs_512_batch128_345")]
     steps = aggregate(four)["summary"]["ppo"]["final"]["timesteps"] + aggregate(f"{four}_345")["summary"]["ppo"][
         "final"]["timesteps"]
     assert {round(t / 1e5) / 10 for t in steps} == {1.4}  # "1.4M steps in 15 CPU-minutes"
     assert ("So on the registered versions the pinch meets the target in one batch of three with a longer discount "
             "as well (γ 0.995: seeds 0–2, not 3–5, where seed 3 stays at 0 %, nor 6–8; the batch with the best of "
-            "validations kept meets it too, but its runs are the first batch's stopped sooner, not a new sample), and "
-            "the K fingers in one batch of two when PPO steps four copies of the env and learns from minibatches of "
+            "validations kept meets it too, but its runs are the first batch's stopped sooner, not a new sample; on "
+            f"four copies with minibatches of 128 it meets it in one batch of two, seeds 0–2, {pinch[0]} %, not 3–5, "
+            f"{pinch[1]} %), and the K fingers in one batch of two when PPO steps four copies of the env and learns "
+            "from minibatches of "
             f"128 (`4 envs, n steps 512, batch 128`: 1.4M steps in 15 CPU-minutes; seeds 0–2, {k_fingers[0]} %, not "
             f"3–5, {k_fingers[1]} %), while the place, the cradle and the sphere do not; on the versions before, "
             "the pinch and the K fingers met it, the cradle in one batch of two, and the sphere and the place did not.") in text
-    assert verdicts["pinch"].count("yes") == 2  # the first γ batch, and the same runs stopped sooner (select every 1)
+    # the first γ batch, the same runs stopped sooner (select every 1), and the four copies' seeds 0-2
+    assert verdicts["pinch"].count("yes") == 3
     assert verdicts["K fingers"].count("yes") == 1  # four copies, minibatches of 128: seeds 0-2, not 3-5
     assert not any("yes" in verdicts[t] for t in ("place", "cradle", "sphere"))
     assert all("yes" in verdicts[t] for t in ("pinch, v6", "K fingers, v6", "cradle, v5"))
