@@ -322,9 +322,9 @@ def test_four_copies_and_minibatches_of_128_are_their_records():
 
 
 def test_the_pinchs_four_copies_batch_is_its_record():
-    """"The pinch's discount command on four copies with minibatches of 128": seeds 3-5 of the pinch's aided command
-    with the K fingers' four copies; each seed's checkpoints, steps and crushes are the record's, and the one-copy
-    numbers it is set against are the batch of seeds 3-5's."""
+    """"The pinch's discount command on four copies with minibatches of 128": seeds 3-5 and 0-2 of the pinch's aided
+    command with the K fingers' four copies; each seed's checkpoints, steps and crushes are the record's, and the
+    one-copy numbers each batch is set against are that copy's batch of the same seeds."""
     folder = "rl_pick_v7_peak_log_std_gamma_4envs_512_batch128_345"
     para = learning_paragraph("**The pinch's discount command on four copies with minibatches of 128**")
     assert f"docs/baselines/{folder}/" in para
