@@ -62,8 +62,9 @@ near its largest finger force came to the hidden crush limit, :mod:`simgrip.envs
 other in its own process, SB3's ``DummyVecEnv``: still one core a run), recorded as ``n_envs`` and in
 ``hyperparameters``; ``--n-steps S`` (PPO only) passes PPO's steps a rollout collects from each env and
 ``--batch-size B`` the transitions of each gradient step, each named in ``hyperparameters``; ``--select-every M``
-(with ``--select-episodes E``, ``--select-seed S``) passes those options (every ``M`` budget minutes each run validates its policy on seeds apart from ``--eval-seeds`` and keeps the best,
-:mod:`simgrip.envs.selection`, the validations inside the budget), recorded as ``selection``.
+(with ``--select-episodes E``, ``--select-seed S``) passes those options (every ``M`` budget minutes each run
+validates its policy on seeds apart from ``--eval-seeds`` and keeps the best, :mod:`simgrip.envs.selection`, the
+validations inside the budget), recorded as ``selection``.
 
 Batches of one experiment run apart (some seeds here, others there or later, each with this command but for
 ``--seeds``, ``--jobs`` and ``--out``) are combined into one folder, as if run at once, by

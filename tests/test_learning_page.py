@@ -12,8 +12,8 @@ import sys
 from pathlib import Path
 
 sys.path.insert(0, str(Path(__file__).parent))
-from test_readme_tables import (AIDED, BASELINES, ROOT, ROWS, TASKS, aggregate, joined, measured_as,  # noqa: E402
-                                pct, training_command)
+from test_readme_tables import (AIDED, BASELINES, ROOT, ROWS, TASKS, aggregate, final_rates, joined,  # noqa: E402
+                                measured_as, pct, training_command)
 
 
 def learning_paragraph(title: str) -> str:
@@ -302,8 +302,7 @@ def test_four_copies_and_minibatches_of_128_are_their_records():
         means = " / ".join(str(pct(c["mean"])) for c in agg["summary"]["ppo"]["checkpoints"])
         _assert_seeds_on_page(para, runs, crushes_end=f"; mean {means} %)")
         assert all(len(r["lr_fractions"]) == 1 + 2 * (r["timesteps"] // 2048) for r in runs)
-    finals = [" / ".join(str(pct(x)) for x in aggregate(f)["summary"]["ppo"]["final"]["success_rates"])
-              for f in (folder, f"{folder}_345")]
+    finals = [final_rates(f) for f in (folder, f"{folder}_345")]
     assert f"(seeds 0–2: {finals[0]} %; 3–5: {finals[1]} %;" in joined(ROOT / "README.md")
     replayed = f"{folder}_replay_012"
     assert f"docs/baselines/{replayed}/" in para

@@ -167,6 +167,11 @@ def pct(x: float) -> int:
     return round(100 * x)
 
 
+def final_rates(folder: str) -> str:
+    """The record ``folder``'s final held-out success per seed as the pages write it: "a / b / c"."""
+    return " / ".join(str(pct(x)) for x in aggregate(folder)["summary"]["ppo"]["final"]["success_rates"])
+
+
 def joined(path: Path) -> str:
     """The page at ``path`` with its whitespace runs (line breaks too) read as single spaces."""
     return " ".join(path.read_text(encoding="utf-8").split())
@@ -333,11 +338,9 @@ def test_target_table_is_its_records():
     # the summary sentence under the table (a task with ", vN" holds the batches of its version before)
     text = joined(TARGET_PAGE)
     four = "rl_multi_v7_peak_light_log_std_half_lr_decay_step_charge_4envs_512_batch128"
-    k_fingers = [" / ".join(str(pct(x)) for x in aggregate(f)["summary"]["ppo"]["final"]["success_rates"])
-                 for f in (four, f"{four}_345")]
-    pinch = [" / ".join(str(pct(x)) for x in aggregate(f)["summary"]["ppo"]["final"]["success_rates"])
-             for f in ("rl_pick_v7_peak_log_std_gamma_4envs_512_batch128",
-                       "rl_pick_v7_peak_log_std_gamma_4envs_512_batch128_345")]
+    k_fingers = [final_rates(f) for f in (four, f"{four}_345")]
+    pinch = [final_rates(f) for f in ("rl_pick_v7_peak_log_std_gamma_4envs_512_batch128",
+                                      "rl_pick_v7_peak_log_std_gamma_4envs_512_batch128_345")]
     steps = aggregate(four)["summary"]["ppo"]["final"]["timesteps"] + aggregate(f"{four}_345")["summary"]["ppo"][
         "final"]["timesteps"]
     assert {round(t / 1e5) / 10 for t in steps} == {1.4}  # "1.4M steps in 15 CPU-minutes"
