@@ -9,12 +9,12 @@ settles below a controller's success rate while its discounted return is above t
 to optimise: under that discount, its faster and riskier policy is worth more.
 
     python examples/evaluate_policy.py --env simgrip/PickFragile-v7 (--model ZIP [--algo ppo|sac] |
-        --policy observation|oracle) [--action-offset A0 A1] [--frame-stack N] [--residual NAME ...]
+        --policy observation|oracle) [--action-offset A0 A1] [--frame-stack N] [--residual NAME ... [--residual-alone]]
         [--scripted-start P] [--env-kwargs JSON] [--episodes 50] [--seed 8000] [--gamma 0.99]
         [--crush-charge F ...] [--json]
 
-``--action-offset``, ``--frame-stack`` and ``--residual`` must be the ones the model was trained with
-(``train_sb3.py``'s options of those names);
+``--action-offset``, ``--frame-stack``, ``--residual`` and ``--residual-alone`` must be the ones the model was
+trained with (``train_sb3.py``'s options of those names);
 a model trained behind ``VecNormalize`` is not supported here.  Prints one line, or with ``--json`` one JSON
 object: ``{"env", "policy", "episodes", "success_rate", "mean_return", "mean_length", "outcomes",
 "mean_success_length", "mean_discounted_return", "gamma", "eval_seeds"}``.  Exit 2 naming the option on bad
@@ -42,6 +42,11 @@ it; ``"1-4"``, ``"5-24"``, ``"25+"``): a crush on touch is the approach's speed,
 And ``crush_overrun``: over the crushed episodes, the median and largest relative overrun ``x = (F - L) / L`` of
 the crushing step's largest finger force ``F`` over the episode's hidden limit ``L`` (``None`` without a crush):
 what a crush charge graded by ``x`` (the fragile tasks' ``w_crush x / (1 + x)``) charges them.
+And ``first_touch``: ``{"touches", "read", "end", "above_limit"}``, over the episodes that touched, the median and
+largest ratio to the hidden limit of the first touch's step's largest finger force as the crush rule reads it
+(``"read"``: :func:`crush_force`, the peak within the step where the env reads it) and at the step's end
+(``"end"``, ``info["normal_force"]``), and how many read above the limit: an impact's transient at the touch (the
+peak far above the end) against a grip pressed too hard.
 And ``crush_weight``: the mean over the episodes of ``gamma ** (n - 1)`` for each crushed episode of ``n`` steps
 (0 for the others), what a flat charge of 1 on every crush would take off ``mean_discounted_return``
 (:func:`crush_weight`); ``--crush-charge F [F ...]`` adds ``crush_charged_return``, ``{"F":
@@ -129,6 +134,20 @@ def crushed_after_touch(results, touch_steps) -> dict:
     return counts
 
 
+def first_touch(ratios) -> dict | None:
+    """``{"touches", "read", "end", "above_limit"}`` of the first touches' force ratios (``ratios[i]``: episode
+    ``i``'s ``(read, end)``, its first touch's step's largest :func:`crush_force` and largest ``normal_force`` over
+    its ``crush_limit``, ``None`` if it never touched): ``"read"`` and ``"end"`` as ``{"median", "max"}``,
+    ``"above_limit"`` the touches whose read ratio exceeds 1 (each a crush in the touch's step); ``None`` when no
+    episode touched."""
+    pairs = [r for r in ratios if r is not None]
+    if not pairs:
+        return None
+    stats = lambda xs: {"median": float(statistics.median(xs)), "max": float(max(xs))}  # noqa: E731
+    return {"touches": len(pairs), "read": stats([r for r, _ in pairs]), "end": stats([e for _, e in pairs]),
+            "above_limit": sum(bool(r > 1.0) for r, _ in pairs)}
+
+
 def crush_force(info) -> list:
     """Each finger's force the crush rule read in a step's ``info`` [N]: ``peak_normal_force`` (the largest within
     the step) where the env reads the peak (``crush_at="peak"``), else ``normal_force`` (the step's end)."""
@@ -188,6 +207,8 @@ def main(argv=None) -> dict:
                    help="the observations stacked when the model was trained (train_sb3.py's --frame-stack)")
     p.add_argument("--residual", nargs="+", default=None, metavar="NAME",
                    help="with --model: the ScriptedResidual the model was trained behind (train_sb3.py's --residual)")
+    p.add_argument("--residual-alone", action="store_true",
+                   help="with --residual: the controller drove those actions alone (train_sb3.py's --residual-alone)")
     p.add_argument("--scripted-start", type=probability, default=None, metavar="P",
                    help="with --model: start that share of the episodes part-way through the scripted "
                         "observation-only controller's (simgrip.envs.scripted_start); adds by_handover")
@@ -217,12 +238,14 @@ def main(argv=None) -> dict:
         # (its --crush-charge scores the episodes: not the training wrapper of that name)
         env = make_env(args.env, EnvOptions(env_kwargs=args.env_kwargs or {}, action_offset=args.action_offset,
                                             frame_stack=args.frame_stack, residual=args.residual,
+                                            residual_alone=args.residual_alone,
                                             scripted_start=args.scripted_start))
     except ValueError as exc:
         p.error(str(exc))
     handovers: list[int] = []
     masses: list[float] = []
     touches: list[int | None] = []  # per episode: the first step with a finger force (crushed_after_touch)
+    touch_ratios: list[tuple[float, float] | None] = []  # per episode: its first touch's forces over the limit
     edges = mass_bins(env)
     if args.crush_charge is not None and edges is None:
         env.close()
@@ -255,12 +278,16 @@ def main(argv=None) -> dict:
         def on_reset_and_mass(env_, info, seed, then=on_reset):
             masses.append(episode_mass(env_))
             touches.append(None)
+            touch_ratios.append(None)
             if then is not None:
                 then(env_, info, seed)
 
         def on_step(info, n):
             if touches[-1] is None and "normal_force" in info and max(crush_force(info)) > 0.0:
                 touches[-1] = n
+                if "crush_limit" in info:
+                    limit = info["crush_limit"]
+                    touch_ratios[-1] = (max(crush_force(info)) / limit, max(info["normal_force"]) / limit)
 
         results = run_episodes(env, act, args.episodes, args.seed, on_reset=on_reset_and_mass, on_step=on_step,
                                gamma=args.gamma)
@@ -270,12 +297,15 @@ def main(argv=None) -> dict:
            "eval_seeds": [args.seed, args.seed + args.episodes - 1]}
     if args.residual is not None:
         out["residual"] = list(args.residual)
+        if args.residual_alone:
+            out["residual_alone"] = True
     if args.scripted_start is not None:
         out["scripted_start"] = args.scripted_start
         out["by_handover"] = by_handover(results, handovers)
     if edges is not None:
         out["by_mass"] = by_mass(results, masses, edges)
         out["crushed_after_touch"] = crushed_after_touch(results, touches)
+        out["first_touch"] = first_touch(touch_ratios)
         out["crush_overrun"] = crush_overrun(results)
         out["crush_weight"] = w = crush_weight(results, args.gamma)
         if args.crush_charge is not None:
