@@ -33,6 +33,8 @@ class EnvOptions:
     residual : sequence of str or None
         Action names the task's scripted observation-only controller drives, the action added to it
         (:class:`~simgrip.envs.scripted_residual.ScriptedResidual`; part of the policy).
+    residual_alone : bool
+        With ``residual``: the controller drives those actions alone and the policy acts on the others only.
     scripted_start : float or None
         Training only: that share of the resets starts part-way through the scripted controller's episode.
     light_bias : float or None
@@ -50,6 +52,7 @@ class EnvOptions:
     action_offset: tuple | None = None
     frame_stack: int | None = None
     residual: tuple | None = None
+    residual_alone: bool = False
     scripted_start: float | None = None
     light_bias: float | None = None
     crush_charge: tuple | None = None
@@ -67,6 +70,7 @@ class EnvOptions:
         charge = get("crush_charge")
         return cls(env_kwargs=dict(get("env_kwargs") or {}), action_offset=_tuple(get("action_offset")),
                    frame_stack=get("frame_stack"), residual=_tuple(get("residual")),
+                   residual_alone=bool(get("residual_alone")),
                    scripted_start=get("scripted_start"), light_bias=get("light_bias"),
                    crush_charge=None if charge is None else (charge, get("crush_charge_from") or 0),
                    step_charge=get("step_charge"), crush_margin=get("crush_margin"))
@@ -82,8 +86,9 @@ class EnvOptions:
 
     def record(self) -> tuple[dict, list[str]]:
         """What ``<algo>_eval.json`` records of the options: its keys (``env_kwargs``, ``action_offset``,
-        ``residual``, ``frame_stack``, ``scripted_start``, ``light_bias``, ``crush_charge`` as ``{"charge",
-        "start"}``, ``step_charge``, ``crush_margin``; each only where set) and the wrappers named, in that order."""
+        ``residual``, ``residual_alone`` (only where true), ``frame_stack``, ``scripted_start``, ``light_bias``,
+        ``crush_charge`` as ``{"charge", "start"}``, ``step_charge``, ``crush_margin``; each only where set) and the
+        wrappers named, in that order."""
         keys, wrappers = {}, []
         if self.env_kwargs:
             keys["env_kwargs"] = dict(self.env_kwargs)
@@ -92,7 +97,9 @@ class EnvOptions:
             wrappers.append(f"ActionOffset({keys['action_offset']})")
         if self.residual is not None:
             keys["residual"] = list(self.residual)
-            wrappers.append(f"ScriptedResidual({list(self.residual)})")
+            if self.residual_alone:
+                keys["residual_alone"] = True
+            wrappers.append(f"ScriptedResidual({list(self.residual)}{', alone' if self.residual_alone else ''})")
         if self.frame_stack is not None and self.frame_stack > 1:
             keys["frame_stack"] = int(self.frame_stack)
             wrappers.append(f"FrameStackObservation({int(self.frame_stack)})")
@@ -127,7 +134,8 @@ def make_env(env_id: str, options: EnvOptions | None = None):
     env's episodes, ``--scripted-start`` when it is not a probability or the env has no scripted controller,
     ``--light-bias`` when it is not a probability or the env is not a fragile task (the env is closed first),
     ``--residual`` when a name is not one of the env's actions, the env has no scripted controller, or
-    ``scripted_start`` is given too, ``--crush-charge``, ``--step-charge`` and ``--crush-margin`` when the env is
+    ``scripted_start`` is given too, ``--residual-alone`` without ``--residual`` or where it names every action,
+    ``--crush-charge``, ``--step-charge`` and ``--crush-margin`` when the env is
     not a fragile task (the env is closed first)."""
     import json
 
@@ -141,6 +149,8 @@ def make_env(env_id: str, options: EnvOptions | None = None):
         raise ValueError(f"--frame-stack: a whole number >= 1, got {o.frame_stack!r}")
     if o.residual is not None and o.scripted_start is not None:
         raise ValueError("--residual: not with --scripted-start (the controller would start mid-episode)")
+    if o.residual_alone and o.residual is None:
+        raise ValueError("--residual-alone: needs --residual (the actions the controller drives alone)")
     kwargs = dict(o.env_kwargs or {})
     try:
         env = gym.make(make_spec(env_id), **kwargs)
@@ -169,7 +179,10 @@ def make_env(env_id: str, options: EnvOptions | None = None):
     if o.residual is not None:
         from simgrip.envs.scripted_residual import ScriptedResidual
 
-        env = _wrap_or_close(env, ScriptedResidual, o.residual, "--residual")
+        if o.residual_alone:
+            env = _wrap_or_close(env, lambda e, v: ScriptedResidual(e, v, alone=True), o.residual, "--residual-alone")
+        else:
+            env = _wrap_or_close(env, ScriptedResidual, o.residual, "--residual")
     if o.action_offset is not None:
         from simgrip.envs.action_offset import ActionOffset
 

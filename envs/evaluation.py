@@ -198,9 +198,10 @@ def add_training_aid_arguments(parser: argparse.ArgumentParser) -> None:
     """Add the training aids ``examples/train_sb3.py`` applies and ``examples/rl_baselines.py`` passes to each of
     its runs, with the same names, checks and meanings: ``--normalize``, ``--action-offset A ...``,
     ``--frame-stack N``, ``--gamma G``, ``--log-std-init X``, ``--scripted-start P``, ``--light-bias P``,
-    ``--residual NAME ...``, ``--crush-charge F``, ``--crush-charge-from STEPS``, ``--step-charge C``,
-    ``--crush-margin C``, ``--lr-decay``, ``--ent-coef C``, ``--n-steps S``, ``--batch-size B``, ``--select-every M``,
-    ``--select-episodes E``, ``--select-seed S`` (each off by default) and ``--n-envs N`` (default 1)."""
+    ``--residual NAME ...``, ``--residual-alone``, ``--crush-charge F``, ``--crush-charge-from STEPS``,
+    ``--step-charge C``, ``--crush-margin C``, ``--lr-decay``, ``--ent-coef C``, ``--n-steps S``, ``--batch-size B``,
+    ``--select-every M``, ``--select-episodes E``, ``--select-seed S`` (each off by default) and ``--n-envs N``
+    (default 1)."""
     add = parser.add_argument
     add("--normalize", action="store_true",
         help="train behind SB3's VecNormalize (observation and return, library defaults; default off)")
@@ -226,6 +227,9 @@ def add_training_aid_arguments(parser: argparse.ArgumentParser) -> None:
         help="train and evaluate behind simgrip.envs.scripted_residual.ScriptedResidual: the task's scripted "
              "observation-only controller drives these actions (the place's palm: palm_x palm_z) and the policy's "
              "action is added to it (default none)")
+    add("--residual-alone", action="store_true",
+        help="with --residual: the controller drives those actions alone, and the policy acts on the others only "
+             "(its action space loses them; default off: the policy's action is added on every action)")
     add("--crush-charge", type=charge, default=None, metavar="F",
         help="lower the training reward of every crush by F (simgrip.envs.crush_charge; a fragile task only; "
              "evaluation runs the task's own reward; default none)")

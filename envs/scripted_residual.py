@@ -18,8 +18,14 @@ behind it (the Gymnasium environments page, "The palm scripted, the grip learned
 :class:`~simgrip.envs.scripted_start.ScriptedStart` (a training aid) the wrapper is part of the policy: it is
 trained and evaluated behind it, and ``train_sb3.py --residual`` records it.
 
-Raises ValueError naming ``channels`` when a name is not one of the env's actions or names one twice, ``env``
-when the task has no scripted controller.
+With ``alone=True`` the named actions are the controller's alone: the learner's action space loses them (it acts
+on the other actions only, in the env's order) and the env performs ``b`` there, as it would behind the residual
+with the learner's action 0 on them.  On the claws the learner's own palm correction lowered the palm onto the
+sphere as the fingers touched it, an impact the crush rule reads (the Gymnasium environments page, "The first
+touch"); alone, the palm's path is the script's and only the curvature is learned.
+
+Raises ValueError naming ``channels`` when a name is not one of the env's actions or names one twice, or (with
+``alone``) names every action, ``env`` when the task has no scripted controller.
 """
 
 from __future__ import annotations
@@ -43,17 +49,21 @@ class ScriptedResidual(gym.Wrapper):
         A fragile task as ``gym.make`` builds it (its raw action space: wrap before any action wrapper).
     channels : sequence of str
         The actions the controller drives, names of ``env.unwrapped.action_names`` (at least one).
+    alone : bool
+        The controller drives ``channels`` alone and the learner's action space holds only the other actions
+        (default False: the learner's action, over every action, is added to the controller's).
 
     Attributes
     ----------
     channels : tuple of str
     mask : numpy.ndarray
-        1.0 on the scripted channels, 0.0 elsewhere (float32, the action's shape).
+        1.0 on the scripted channels, 0.0 elsewhere (float32, the env's action's shape).
+    alone : bool
     obs_layout : list of (str, int)
         The env's ``obs_layout`` and one ``("base_<name>", 1)`` per action.
     """
 
-    def __init__(self, env: gym.Env, channels):
+    def __init__(self, env: gym.Env, channels, alone: bool = False):
         super().__init__(env)
         u = env.unwrapped
         names = tuple(getattr(u, "action_names", ()))
@@ -70,9 +80,16 @@ class ScriptedResidual(gym.Wrapper):
             self._make = policy_maker(env, "observation")
         except ValueError as e:
             raise ValueError(f"env: {e}") from None
-        self.channels = channels
+        if not isinstance(alone, (bool, np.bool_)):
+            raise ValueError(f"alone must be True or False, got {alone!r}")
+        if alone and len(channels) == len(names):
+            raise ValueError(f"channels: with alone, not every action of {names} (the learner would have none)")
+        self.channels, self.alone = channels, bool(alone)
         space = env.action_space
         self.mask = np.array([1.0 if n in channels else 0.0 for n in names], dtype=np.float32)
+        self._free = np.flatnonzero(self.mask == 0.0)  # the learner's actions where alone
+        if self.alone:
+            self.action_space = gym.spaces.Box(space.low[self._free], space.high[self._free], dtype=space.dtype)
         n = len(names)
         obs = env.observation_space
         self.observation_space = gym.spaces.Box(np.concatenate([obs.low, space.low]).astype(obs.dtype),
@@ -96,6 +113,10 @@ class ScriptedResidual(gym.Wrapper):
     def step(self, action):
         if self._act is None:
             raise RuntimeError("ScriptedResidual: call reset() before step()")
+        if self.alone:
+            full = np.zeros_like(self._base)
+            full[self._free] = np.asarray(action, dtype=np.float32)
+            action = full
         a = np.clip(self._base + np.asarray(action, dtype=np.float32), self._low, self._high)
         obs, reward, terminated, truncated, info = self.env.step(a)
         self._t += 1

@@ -41,7 +41,8 @@ starts part-way through the scripted observation-only controller's episode,
 of the mass range, :class:`simgrip.envs.light_bias.LightBias`; evaluation draws the task's own), recorded as
 ``light_bias``; ``--residual NAME ...`` passes that option (the task's scripted observation-only controller
 drives the named actions and the policy's action is added to it, in training and evaluation alike,
-:class:`simgrip.envs.scripted_residual.ScriptedResidual`), recorded as ``residual``;
+:class:`simgrip.envs.scripted_residual.ScriptedResidual`), recorded as ``residual``, and ``--residual-alone`` too
+(the controller drives them alone and the policy acts on the other actions only), recorded as ``residual_alone``;
 ``--init-from DIR`` (PPO only) starts each seed ``S`` from ``DIR/ppo_seed<S>/ppo_model.zip``, the policy of an
 earlier ``rl_baselines.py`` run of the same seed on another task (a curriculum: the pinch's policies for the
 pick-and-place; :mod:`simgrip.envs.warm_start`), recorded as ``init_from`` with that run's command
@@ -152,7 +153,7 @@ def run_command(algo: str, seed: int, args, folder: Path) -> list[str]:
     if args.light_bias is not None:
         cmd += ["--light-bias", repr(args.light_bias)]
     if args.residual is not None:
-        cmd += ["--residual", *args.residual]
+        cmd += ["--residual", *args.residual, *(["--residual-alone"] if args.residual_alone else [])]
     if args.init_from is not None:
         cmd += ["--init-from", str(init_model(args.init_from, algo, seed))]
     if args.eval_start:
@@ -564,6 +565,7 @@ def main(argv=None) -> int:
         **({"scripted_start": args.scripted_start} if args.scripted_start is not None else {}),
         **({"light_bias": args.light_bias} if args.light_bias is not None else {}),
         **({"residual": list(args.residual)} if args.residual is not None else {}),
+        **({"residual_alone": True} if args.residual_alone else {}),
         **({"critic_warmup": args.critic_warmup} if args.critic_warmup else {}),
         **({"crush_charge": {"charge": args.crush_charge, "start": args.crush_charge_from}}
            if args.crush_charge is not None else {}),

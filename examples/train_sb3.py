@@ -72,7 +72,8 @@ reads the limit the policy never sees), recorded as ``crush_margin``.  Ctrl-C or
 the task's scripted observation-only controller drives the named actions (``palm_x palm_z``: the palm's path)
 and the policy's action is added to its action there; the observation gets the controller's action appended.
 Residual policy learning: the wrapper is part of the policy (the held-out evaluation runs behind it too);
-``<algo>_eval.json`` records ``residual``.  Not with ``--scripted-start`` or ``--init-from``.
+``<algo>_eval.json`` records ``residual``.  Not with ``--scripted-start`` or ``--init-from``.  With
+``--residual-alone`` the controller drives those actions alone and the policy acts on the others only.
 
 ``--init-from MODEL`` (PPO only) starts the training from a PPO policy trained on another task (a curriculum:
 the pinch's policy for the pick-and-place), copied by :func:`simgrip.envs.warm_start.transfer_ppo` (observation
