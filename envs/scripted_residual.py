@@ -20,9 +20,9 @@ trained and evaluated behind it, and ``train_sb3.py --residual`` records it.
 
 With ``alone=True`` the named actions are the controller's alone: the learner's action space loses them (it acts
 on the other actions only, in the env's order) and the env performs ``b`` there, as it would behind the residual
-with the learner's action 0 on them.  On the claws the learner's own palm correction lowered the palm onto the
-sphere as the fingers touched it, an impact the crush rule reads (the Gymnasium environments page, "The first
-touch"); alone, the palm's path is the script's and only the curvature is learned.
+with the learner's action 0 on them.  On the sphere the learners' own palm correction kept lowering the palm as
+the fingers touched it, part of an impact the crush rule reads (the learning page, "The first touch on the
+sphere"); alone, the palm's path is the script's and only the curvature is learned.
 
 Raises ValueError naming ``channels`` when a name is not one of the env's actions or names one twice, or (with
 ``alone``) names every action, ``env`` when the task has no scripted controller.
