@@ -25,6 +25,7 @@ VALVE = {"cradle": ("rl_cradle_v6_residual_palm_light_log_std", [-0.4, 0.0], ["p
          "sphere": ("rl_sphere_v6_residual_palm_light_log_std", [-0.4, 0.0], ["palm_z"], 0.5),
          "place": ("rl_place_v8_residual_palm_log_std", [-0.4, 0.0, 0.0], ["palm_x", "palm_z"], None)}
 ALONE = "rl_sphere_v6_palm_alone_light_log_std_valve005_screen"
+ALONE_HALF = "rl_sphere_v6_palm_alone_light_log_std_valve01_screen"
 
 
 @pytest.fixture(scope="module")
@@ -83,7 +84,8 @@ def test_the_half_rate_screens_are_their_records(controller):
     finals = {t: final_rates(f"{VALVE[t][0]}_valve01_screen") for t in VALVE}
     assert (f"{finals['cradle']} % on the cradle, {finals['sphere']} % on the sphere and {finals['place']} % on "
             f"the place in two-seed screens (`*_valve01_screen`") in page
-    assert f"and the valve at a quarter of its rate, {final_rates(ALONE)} % (`{ALONE}`)" in page
+    assert (f"at half the valve's rate {final_rates(ALONE_HALF)} % (`{ALONE_HALF}`) and at a quarter of it "
+            f"{final_rates(ALONE)} % (`{ALONE}`)") in page
 
 
 def test_the_first_touch_paragraph_is_the_policies_and_the_controllers_figures(controller):
@@ -107,10 +109,29 @@ def test_the_first_touch_paragraph_is_the_policies_and_the_controllers_figures(c
         assert e["touches"] == 50
 
 
-def test_the_palm_alone_screen_is_its_record(controller):
-    """"The sphere with the palm the script's alone": its options, seeds, checkpoints, steps and crushes, its first
-    touches against the controller's at the same rate, its crushes in the touch's step and its heavy third."""
+def test_the_palm_alone_screens_are_their_records(controller):
+    """"The sphere with the palm the script's alone": each screen's options, seeds, checkpoints, steps and crushes;
+    at half the rate its crushes in the touch's step and first touches against the residual's screen; at a quarter
+    its first touches against the controller's at the same rate, its crushes in the touch's step, its heavy third."""
     para = learning_paragraph("**The sphere with the palm the script's alone**")
+    assert f"docs/baselines/{ALONE_HALF}/" in para
+    agg = aggregate(ALONE_HALF)
+    assert agg["env_kwargs"] == {"kappa_rate": 0.01} and agg["residual"] == ["palm_z"] and agg["residual_alone"]
+    assert agg["action_offset"] == [-0.4] and agg["light_bias"] == 0.5 and agg["seeds"] == [0, 1]
+    runs = seed_runs(ALONE_HALF, (0, 1))
+    _assert_seeds_on_page(para, runs, crushes_end="),")
+    evs = [_evaluation(ALONE_HALF, k) for k in (0, 1)]
+    assert [e["outcomes"] for e in evs] == [r["outcomes"] for r in runs]
+    touch = [e["first_touch"] for e in evs]
+    with_palm = [_evaluation("rl_sphere_v6_residual_palm_light_log_std_valve01_screen", k) for k in (0, 1)]
+    assert (f"{_listed(e['crushed_after_touch']['0'] for e in evs)} of them in the touch's step, whose first touches "
+            f"read a median {_listed(_ratio(t['read']['median']) for t in touch)} of the limit (at most "
+            f"{_listed(_ratio(t['read']['max']) for t in touch)}; the controller's at this rate "
+            f"{_ratio(controller[SPHERE, 0.01]['first_touch']['read']['median'])}): without the palm's correction the "
+            f"learners crush as often at the touch as with it "
+            f"({_listed(e['crushed_after_touch']['0'] for e in with_palm)}, above)") in para
+    assert sum(e["crushed_after_touch"]["0"] for e in evs) >= sum(e["crushed_after_touch"]["0"] for e in with_palm)
+    assert min(t["read"]["median"] for t in touch) > controller[SPHERE, 0.01]["first_touch"]["read"]["median"]
     assert f"docs/baselines/{ALONE}/" in para
     agg = aggregate(ALONE)
     assert agg["env_kwargs"] == {"kappa_rate": 0.005} and agg["residual"] == ["palm_z"] and agg["residual_alone"]
