@@ -21,7 +21,8 @@ PLACE, SPHERE = "simgrip/PlaceFragile-v8", "simgrip/PickSphereFragile-v6"
 
 @pytest.mark.parametrize("env_id, channels, seed", [(SPHERE, ("palm_z",), 8012), (PLACE, PALM_CHANNELS, 8010)])
 def test_alone_is_the_residual_with_the_learners_action_0_on_the_scripted_channels(env_id, channels, seed):
-    alone, plain = ScriptedResidual(gym.make(env_id), channels, alone=True), ScriptedResidual(gym.make(env_id), channels)
+    alone = ScriptedResidual(gym.make(env_id), channels, alone=True)
+    plain = ScriptedResidual(gym.make(env_id), channels)
     names = plain.unwrapped.action_names
     assert alone.action_space.shape == (len(names) - len(channels),) and alone.alone and not plain.alone
     assert alone.observation_space == plain.observation_space and alone.obs_layout == plain.obs_layout
