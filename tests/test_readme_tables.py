@@ -324,6 +324,8 @@ def test_target_table_is_its_records():
             assert agg["summary"]["ppo"]["failed"] == 0
             assert verdict == ("yes" if sum(x >= 0.8 for x in final) >= 2 else "no"), (folder, batch)
             assert measured_as(agg) == want, (folder, agg["env"])
+            kwargs = json.dumps(agg.get("env_kwargs", {}), sort_keys=True)  # a changed task is not its id's cell
+            assert kwargs == "{}" or (agg["env"].split("/")[1], kwargs) in EQUIVALENT, (folder, kwargs)
             options = {a for a in training_command(agg) if a.startswith("--")}
             # each aid by its name, its value dropped ("log std -1" -> "log std", "γ 0.995" -> "γ")
             # ("4 envs" -> "envs")
