@@ -179,10 +179,8 @@ def make_env(env_id: str, options: EnvOptions | None = None):
     if o.residual is not None:
         from simgrip.envs.scripted_residual import ScriptedResidual
 
-        if o.residual_alone:
-            env = _wrap_or_close(env, lambda e, v: ScriptedResidual(e, v, alone=True), o.residual, "--residual-alone")
-        else:
-            env = _wrap_or_close(env, ScriptedResidual, o.residual, "--residual")
+        env = _wrap_or_close(env, lambda e, v: ScriptedResidual(e, v, alone=o.residual_alone), o.residual,
+                             "--residual-alone" if o.residual_alone else "--residual")
     if o.action_offset is not None:
         from simgrip.envs.action_offset import ActionOffset
 

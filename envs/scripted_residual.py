@@ -113,11 +113,11 @@ class ScriptedResidual(gym.Wrapper):
     def step(self, action):
         if self._act is None:
             raise RuntimeError("ScriptedResidual: call reset() before step()")
-        if self.alone:
-            full = np.zeros_like(self._base)
-            full[self._free] = np.asarray(action, dtype=np.float32)
-            action = full
-        a = np.clip(self._base + np.asarray(action, dtype=np.float32), self._low, self._high)
+        learner = np.asarray(action, dtype=np.float32)
+        if self.alone:  # the learner's actions in their places, 0 on the scripted channels
+            learner = np.zeros_like(self._base)
+            learner[self._free] = action
+        a = np.clip(self._base + learner, self._low, self._high)
         obs, reward, terminated, truncated, info = self.env.step(a)
         self._t += 1
         return self._observe(obs), reward, terminated, truncated, info

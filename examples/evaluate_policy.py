@@ -283,11 +283,11 @@ def main(argv=None) -> dict:
                 then(env_, info, seed)
 
         def on_step(info, n):
-            if touches[-1] is None and "normal_force" in info and max(crush_force(info)) > 0.0:
+            if touches[-1] is None and "normal_force" in info and (read := max(crush_force(info))) > 0.0:
                 touches[-1] = n
                 if "crush_limit" in info:
                     limit = info["crush_limit"]
-                    touch_ratios[-1] = (max(crush_force(info)) / limit, max(info["normal_force"]) / limit)
+                    touch_ratios[-1] = (read / limit, max(info["normal_force"]) / limit)
 
         results = run_episodes(env, act, args.episodes, args.seed, on_reset=on_reset_and_mass, on_step=on_step,
                                gamma=args.gamma)
