@@ -1,14 +1,14 @@
 """How the training and evaluation scripts build an env: the registered task behind the options' wrappers.
 
 :class:`EnvOptions` holds every option that shapes the env a policy is trained or evaluated on: ``gym.make``'s
-keyword arguments, the wrappers that are part of the policy (``--action-offset``, ``--residual``,
-``--frame-stack``: training and evaluation alike) and the training aids (``--scripted-start``, ``--light-bias``,
+keyword arguments, the wrappers that are part of the policy (``--valve-share``, ``--action-offset``,
+``--residual``, ``--frame-stack``: training and evaluation alike) and the training aids (``--scripted-start``, ``--light-bias``,
 ``--crush-charge``, ``--step-charge``, ``--crush-margin``: training only; evaluation runs the task, which
 :meth:`EnvOptions.evaluation` gives).  :func:`make_env` builds the env they describe; ``<algo>_eval.json`` records
 them through :meth:`EnvOptions.record`.
 
-The wrappers, innermost first: ``LightBias``, ``CrushCharge``, ``StepCharge``, ``CrushMargin``, ``ScriptedStart``
-or ``ScriptedResidual``, ``ActionOffset``, ``FrameStackObservation``.
+The wrappers, innermost first: ``LightBias``, ``CrushCharge``, ``StepCharge``, ``CrushMargin``, ``ScriptedStart``,
+``ValveShare``, ``ScriptedResidual``, ``ActionOffset``, ``FrameStackObservation``.
 """
 
 from __future__ import annotations
@@ -35,6 +35,9 @@ class EnvOptions:
         (:class:`~simgrip.envs.scripted_residual.ScriptedResidual`; part of the policy).
     residual_alone : bool
         With ``residual``: the controller drives those actions alone and the policy acts on the others only.
+    valve_share : float or None
+        The policy's curvature rate times it before the valve (:class:`~simgrip.envs.valve_share.ValveShare`, a
+        restrictor; part of the policy): it closes at most that share of the valve's rate.
     scripted_start : float or None
         Training only: that share of the resets starts part-way through the scripted controller's episode.
     light_bias : float or None
@@ -53,6 +56,7 @@ class EnvOptions:
     frame_stack: int | None = None
     residual: tuple | None = None
     residual_alone: bool = False
+    valve_share: float | None = None
     scripted_start: float | None = None
     light_bias: float | None = None
     crush_charge: tuple | None = None
@@ -70,7 +74,7 @@ class EnvOptions:
         charge = get("crush_charge")
         return cls(env_kwargs=dict(get("env_kwargs") or {}), action_offset=_tuple(get("action_offset")),
                    frame_stack=get("frame_stack"), residual=_tuple(get("residual")),
-                   residual_alone=bool(get("residual_alone")),
+                   residual_alone=bool(get("residual_alone")), valve_share=get("valve_share"),
                    scripted_start=get("scripted_start"), light_bias=get("light_bias"),
                    crush_charge=None if charge is None else (charge, get("crush_charge_from") or 0),
                    step_charge=get("step_charge"), crush_margin=get("crush_margin"))
@@ -86,9 +90,9 @@ class EnvOptions:
 
     def record(self) -> tuple[dict, list[str]]:
         """What ``<algo>_eval.json`` records of the options: its keys (``env_kwargs``, ``action_offset``,
-        ``residual``, ``residual_alone`` (only where true), ``frame_stack``, ``scripted_start``, ``light_bias``,
-        ``crush_charge`` as ``{"charge", "start"}``, ``step_charge``, ``crush_margin``; each only where set) and the
-        wrappers named, in that order."""
+        ``residual``, ``residual_alone`` (only where true), ``valve_share``, ``frame_stack``, ``scripted_start``,
+        ``light_bias``, ``crush_charge`` as ``{"charge", "start"}``, ``step_charge``, ``crush_margin``; each only
+        where set) and the wrappers named, in that order."""
         keys, wrappers = {}, []
         if self.env_kwargs:
             keys["env_kwargs"] = dict(self.env_kwargs)
@@ -100,6 +104,9 @@ class EnvOptions:
             if self.residual_alone:
                 keys["residual_alone"] = True
             wrappers.append(f"ScriptedResidual({list(self.residual)}{', alone' if self.residual_alone else ''})")
+        if self.valve_share is not None:
+            keys["valve_share"] = float(self.valve_share)
+            wrappers.append(f"ValveShare({keys['valve_share']!r})")
         if self.frame_stack is not None and self.frame_stack > 1:
             keys["frame_stack"] = int(self.frame_stack)
             wrappers.append(f"FrameStackObservation({int(self.frame_stack)})")
@@ -135,6 +142,7 @@ def make_env(env_id: str, options: EnvOptions | None = None):
     ``--light-bias`` when it is not a probability or the env is not a fragile task (the env is closed first),
     ``--residual`` when a name is not one of the env's actions, the env has no scripted controller, or
     ``scripted_start`` is given too, ``--residual-alone`` without ``--residual`` or where it names every action,
+    ``--valve-share`` when it is not in ``(0, 1]``, the env has no valve or a residual drives its curvature,
     ``--crush-charge``, ``--step-charge`` and ``--crush-margin`` when the env is
     not a fragile task (the env is closed first)."""
     import json
@@ -176,6 +184,15 @@ def make_env(env_id: str, options: EnvOptions | None = None):
         from simgrip.envs.scripted_start import ScriptedStart
 
         env = _wrap_or_close(env, ScriptedStart, o.scripted_start, "--scripted-start")
+    if o.valve_share is not None:
+        from simgrip.envs.valve_share import ValveShare
+
+        names = tuple(getattr(env.unwrapped, "action_names", ()))
+        if o.residual is not None and names and names[0] in o.residual:
+            env.close()
+            raise ValueError(f"--valve-share: not with a residual on the curvature ({names[0]}): the scripted "
+                             "controller's command would be cut too")
+        env = _wrap_or_close(env, ValveShare, o.valve_share, "--valve-share")
     if o.residual is not None:
         from simgrip.envs.scripted_residual import ScriptedResidual
 

@@ -178,6 +178,11 @@ def probability(text: str) -> float:
     return _number_in(text, lambda p: 0.0 <= p <= 1.0, "[0, 1]")
 
 
+def share(text: str) -> float:
+    """argparse type: a share in (0, 1]."""
+    return _number_in(text, lambda x: 0.0 < x <= 1.0, "(0, 1]")
+
+
 def charge(text: str) -> float:
     """argparse type: a charge in reward units, finite and >= 0."""
     return _number_in(text, lambda x: 0.0 <= x < math.inf, "[0, inf)")
@@ -198,7 +203,7 @@ def add_training_aid_arguments(parser: argparse.ArgumentParser) -> None:
     """Add the training aids ``examples/train_sb3.py`` applies and ``examples/rl_baselines.py`` passes to each of
     its runs, with the same names, checks and meanings: ``--normalize``, ``--action-offset A ...``,
     ``--frame-stack N``, ``--gamma G``, ``--log-std-init X``, ``--scripted-start P``, ``--light-bias P``,
-    ``--residual NAME ...``, ``--residual-alone``, ``--crush-charge F``, ``--crush-charge-from STEPS``,
+    ``--residual NAME ...``, ``--residual-alone``, ``--valve-share S``, ``--crush-charge F``, ``--crush-charge-from STEPS``,
     ``--step-charge C``, ``--crush-margin C``, ``--lr-decay``, ``--ent-coef C``, ``--n-steps S``, ``--batch-size B``,
     ``--select-every M``, ``--select-episodes E``, ``--select-seed S`` (each off by default) and ``--n-envs N``
     (default 1)."""
@@ -230,6 +235,9 @@ def add_training_aid_arguments(parser: argparse.ArgumentParser) -> None:
     add("--residual-alone", action="store_true",
         help="with --residual: the controller drives those actions alone, and the policy acts on the others only "
              "(its action space loses them; default off: the policy's action is added on every action)")
+    add("--valve-share", type=share, default=None, metavar="S",
+        help="train and evaluate behind simgrip.envs.valve_share.ValveShare: the policy's curvature rate times S "
+             "before the valve, in (0, 1], a restrictor (it closes at most S of the valve's rate; default none)")
     add("--crush-charge", type=charge, default=None, metavar="F",
         help="lower the training reward of every crush by F (simgrip.envs.crush_charge; a fragile task only; "
              "evaluation runs the task's own reward; default none)")

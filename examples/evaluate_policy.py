@@ -10,11 +10,11 @@ to optimise: under that discount, its faster and riskier policy is worth more.
 
     python examples/evaluate_policy.py --env simgrip/PickFragile-v7 (--model ZIP [--algo ppo|sac] |
         --policy observation|oracle) [--action-offset A0 A1] [--frame-stack N] [--residual NAME ... [--residual-alone]]
-        [--scripted-start P] [--env-kwargs JSON] [--episodes 50] [--seed 8000] [--gamma 0.99]
+        [--valve-share S] [--scripted-start P] [--env-kwargs JSON] [--episodes 50] [--seed 8000] [--gamma 0.99]
         [--crush-charge F ...] [--json]
 
-``--action-offset``, ``--frame-stack``, ``--residual`` and ``--residual-alone`` must be the ones the model was
-trained with (``train_sb3.py``'s options of those names);
+``--action-offset``, ``--frame-stack``, ``--residual``, ``--residual-alone`` and ``--valve-share`` must be the
+ones the model was trained with (``train_sb3.py``'s options of those names);
 a model trained behind ``VecNormalize`` is not supported here.  Prints one line, or with ``--json`` one JSON
 object: ``{"env", "policy", "episodes", "success_rate", "mean_return", "mean_length", "outcomes",
 "mean_success_length", "mean_discounted_return", "gamma", "eval_seeds"}``.  Exit 2 naming the option on bad
@@ -72,7 +72,7 @@ import simgrip.envs  # noqa: E402,F401  (registers the simgrip ids)
 from simgrip.command_parser import CommandParser
 from simgrip.envs.env_options import EnvOptions, make_env
 from simgrip.envs.evaluation import (charge, check_env_id, discount, episode_count, json_object, non_negative_int,
-                                     outcomes, positive_int, probability, run_episodes, summary)
+                                     outcomes, positive_int, probability, run_episodes, share, summary)
 from simgrip.envs.light_bias import episode_mass, mass_bins
 from simgrip.envs.outcome import outcome
 
@@ -209,6 +209,9 @@ def main(argv=None) -> dict:
                    help="with --model: the ScriptedResidual the model was trained behind (train_sb3.py's --residual)")
     p.add_argument("--residual-alone", action="store_true",
                    help="with --residual: the controller drove those actions alone (train_sb3.py's --residual-alone)")
+    p.add_argument("--valve-share", type=share, default=None, metavar="S",
+                   help="with --model: the ValveShare restrictor the model was trained behind (train_sb3.py's "
+                        "--valve-share)")
     p.add_argument("--scripted-start", type=probability, default=None, metavar="P",
                    help="with --model: start that share of the episodes part-way through the scripted "
                         "observation-only controller's (simgrip.envs.scripted_start); adds by_handover")
@@ -227,6 +230,8 @@ def main(argv=None) -> dict:
         p.error("--scripted-start: only with --model (a scripted controller started part-way is not itself)")
     if args.policy is not None and args.residual is not None:
         p.error("--residual: only with --model (the scripted controller alone is --policy observation)")
+    if args.policy is not None and args.valve_share is not None:
+        p.error("--valve-share: only with --model (the scripted controllers command the valve at its own rate)")
     if args.policy is not None and args.frame_stack is not None:
         p.error("--frame-stack: only with --model (the scripted controllers read the env's own observation)")
     if args.model is not None:
@@ -238,7 +243,7 @@ def main(argv=None) -> dict:
         # (its --crush-charge scores the episodes: not the training wrapper of that name)
         env = make_env(args.env, EnvOptions(env_kwargs=args.env_kwargs or {}, action_offset=args.action_offset,
                                             frame_stack=args.frame_stack, residual=args.residual,
-                                            residual_alone=args.residual_alone,
+                                            residual_alone=args.residual_alone, valve_share=args.valve_share,
                                             scripted_start=args.scripted_start))
     except ValueError as exc:
         p.error(str(exc))
@@ -299,6 +304,8 @@ def main(argv=None) -> dict:
         out["residual"] = list(args.residual)
         if args.residual_alone:
             out["residual_alone"] = True
+    if args.valve_share is not None:
+        out["valve_share"] = args.valve_share
     if args.scripted_start is not None:
         out["scripted_start"] = args.scripted_start
         out["by_handover"] = by_handover(results, handovers)

@@ -43,6 +43,7 @@ of the mass range, :class:`simgrip.envs.light_bias.LightBias`; evaluation draws 
 drives the named actions and the policy's action is added to it, in training and evaluation alike,
 :class:`simgrip.envs.scripted_residual.ScriptedResidual`), recorded as ``residual``, and ``--residual-alone`` too
 (the controller drives them alone and the policy acts on the other actions only), recorded as ``residual_alone``;
+``--valve-share S`` passes that option (a restrictor: :class:`simgrip.envs.valve_share.ValveShare`), recorded so;
 ``--init-from DIR`` (PPO only) starts each seed ``S`` from ``DIR/ppo_seed<S>/ppo_model.zip``, the policy of an
 earlier ``rl_baselines.py`` run of the same seed on another task (a curriculum: the pinch's policies for the
 pick-and-place; :mod:`simgrip.envs.warm_start`), recorded as ``init_from`` with that run's command
@@ -138,12 +139,9 @@ def run_command(algo: str, seed: int, args, folder: Path) -> list[str]:
         cmd += ["--normalize"]
     if args.action_offset is not None:
         cmd += ["--action-offset", *[repr(float(x)) for x in args.action_offset]]
-    if args.frame_stack is not None:
-        cmd += ["--frame-stack", str(args.frame_stack)]
-    if args.gamma is not None:
-        cmd += ["--gamma", repr(args.gamma)]
-    if args.log_std_init is not None:
-        cmd += ["--log-std-init", repr(args.log_std_init)]
+    cmd += [] if args.frame_stack is None else ["--frame-stack", str(args.frame_stack)]
+    cmd += [] if args.gamma is None else ["--gamma", repr(args.gamma)]
+    cmd += [] if args.log_std_init is None else ["--log-std-init", repr(args.log_std_init)]
     if args.lr_decay:
         cmd += ["--lr-decay"]
     if args.ent_coef is not None:
@@ -154,6 +152,7 @@ def run_command(algo: str, seed: int, args, folder: Path) -> list[str]:
         cmd += ["--light-bias", repr(args.light_bias)]
     if args.residual is not None:
         cmd += ["--residual", *args.residual, *(["--residual-alone"] if args.residual_alone else [])]
+    cmd += [] if args.valve_share is None else ["--valve-share", repr(args.valve_share)]
     if args.init_from is not None:
         cmd += ["--init-from", str(init_model(args.init_from, algo, seed))]
     if args.eval_start:
@@ -566,6 +565,7 @@ def main(argv=None) -> int:
         **({"light_bias": args.light_bias} if args.light_bias is not None else {}),
         **({"residual": list(args.residual)} if args.residual is not None else {}),
         **({"residual_alone": True} if args.residual_alone else {}),
+        **({"valve_share": args.valve_share} if args.valve_share is not None else {}),
         **({"critic_warmup": args.critic_warmup} if args.critic_warmup else {}),
         **({"crush_charge": {"charge": args.crush_charge, "start": args.crush_charge_from}}
            if args.crush_charge is not None else {}),

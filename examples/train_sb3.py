@@ -74,6 +74,8 @@ and the policy's action is added to its action there; the observation gets the c
 Residual policy learning: the wrapper is part of the policy (the held-out evaluation runs behind it too);
 ``<algo>_eval.json`` records ``residual``.  Not with ``--scripted-start`` or ``--init-from``.  With
 ``--residual-alone`` the controller drives those actions alone and the policy acts on the others only.
+``--valve-share S`` multiplies the policy's curvature rate by ``S`` before the valve (a restrictor,
+:class:`simgrip.envs.valve_share.ValveShare`, part of the policy), recorded as ``valve_share``.
 
 ``--init-from MODEL`` (PPO only) starts the training from a PPO policy trained on another task (a curriculum:
 the pinch's policy for the pick-and-place), copied by :func:`simgrip.envs.warm_start.transfer_ppo` (observation
@@ -223,9 +225,7 @@ def model_kwargs(algo: str, gamma: float | None, log_std_init: float | None, lr_
     standard deviation is an output of its network, not a parameter); ``lr_decay``, a
     :class:`simgrip.envs.lr_decay.BudgetDecay` for the learning rate; ``ent_coef`` and ``n_steps``, the steps a
     rollout collects from each env (PPO only); ``batch_size``, the transitions of each gradient step."""
-    kwargs = {} if gamma is None else {"gamma": gamma}
-    if batch_size is not None:
-        kwargs["batch_size"] = int(batch_size)
+    kwargs = {k: v for k, v in (("gamma", gamma), ("batch_size", batch_size and int(batch_size))) if v is not None}
     for name, value, kind in (("ent_coef", ent_coef, float), ("n_steps", n_steps, int)):
         if value is not None:
             if algo != "ppo":
