@@ -1,0 +1,64 @@
+"""The learning page's paragraphs of stop 70 against their records: the restrictor between the policy and the valve
+(``--valve-share``) and the screens run with it or with the valve it stands for (``docs/learning.md``; the helpers
+are ``test_learning_page.py``'s, the records' readers ``test_readme_tables.py``'s).
+"""
+
+from __future__ import annotations
+
+import sys
+from pathlib import Path
+
+sys.path.insert(0, str(Path(__file__).parent))
+from test_learning_page import _assert_seeds_on_page, _listed, learning_paragraph, seed_runs  # noqa: E402
+from test_learning_page_claws import _evaluation  # noqa: E402
+from test_readme_tables import ROOT, aggregate, final_rates  # noqa: E402
+
+BASELINES = ROOT / "docs" / "baselines"
+CRADLE_RECIPE = "rl_cradle_v6_palm_alone_light_log_std_lr_decay_step_charge_valve005_screen"
+
+
+def test_the_restrictor_stands_for_every_restricted_valve_screen():
+    """"A restrictor between the policy and the valve": every screen run with the valve restricted (``kappa_rate``
+    at 1/2 or 1/4 of 0.02) leaves the curvature to the policy, where ``tests/test_valve_share.py`` shows the
+    restrictor at that share to step bit for bit as that valve."""
+    para = learning_paragraph("**A restrictor between the policy and the valve (`--valve-share`)**")
+    assert "`tests/test_valve_share.py`" in para and (ROOT / "tests" / "test_valve_share.py").is_file()
+    assert "for `S` = 1/2 and 1/4" in para
+    restricted = [f.name for f in BASELINES.iterdir() if (f / "aggregate.json").is_file()
+                  and aggregate(f.name).get("env_kwargs", {}).get("kappa_rate", 0.02) < 0.02]  # (25 Hz: 0.04)
+    assert len(restricted) >= 8
+    for folder in restricted:
+        agg = aggregate(folder)
+        assert agg["env_kwargs"] == {"kappa_rate": agg["env_kwargs"]["kappa_rate"]}, folder  # nothing else changed
+        assert agg["env_kwargs"]["kappa_rate"] in (0.01, 0.005), folder
+        assert "curvature" not in agg.get("residual", []), folder  # the curvature is the policy's
+
+
+def test_the_spheres_recipe_on_the_cradle_is_its_record():
+    """"The sphere's recipe on the cradle": its options, seeds, checkpoints, steps and crushes, the records it is
+    set against, and where its crushes come (its final policies' ``evaluate_seedS.json``, whose outcomes are the
+    runs')."""
+    para = learning_paragraph("**The sphere's recipe on the cradle**")
+    assert f"docs/baselines/{CRADLE_RECIPE}/" in para
+    agg = aggregate(CRADLE_RECIPE)
+    assert agg["env"] == "simgrip/PickCradleFragile-v6" and agg["env_kwargs"] == {"kappa_rate": 0.005}
+    assert agg["residual"] == ["palm_z"] and agg["residual_alone"] and agg["action_offset"] == [-0.8]
+    assert agg["step_charge"] == 0.005 and agg["light_bias"] == 0.5 and agg["seeds"] == [0, 1]
+    assert agg["hyperparameters"].endswith("log_std_init = -1.0; but the learning rate falls linearly to 0 over the "
+                                           "budget")
+    sphere = aggregate(CRADLE_RECIPE.replace("cradle", "sphere"))
+    assert {k: v for k, v in agg.items() if k not in ("env", "command", "summary", "combined_from", "versions")} == \
+        {k: v for k, v in sphere.items() if k not in ("env", "command", "summary", "combined_from", "versions")}
+    runs = seed_runs(CRADLE_RECIPE, (0, 1))
+    _assert_seeds_on_page(para, runs, crushes_end="),")
+    assert f"against {final_rates('rl_cradle_v6_residual_palm_light_log_std')} % for the cradle's record and " \
+           f"{final_rates('rl_cradle_v6_residual_palm_light_log_std_valve01_screen')} % at half the rate" in para
+    evs = [_evaluation(CRADLE_RECIPE, k) for k in (0, 1)]
+    assert [e["outcomes"] for e in evs] == [r["outcomes"] for r in runs]
+    heavy = [e["by_mass"]["74-200 g"] for e in evs]
+    assert f"({_listed(h['success'] for h in heavy)} of {sum(heavy[0].values())})" in para
+    after = [e["crushed_after_touch"] for e in evs]
+    assert f"({_listed(a['0'] for a in after)} in the touch's step)" in para
+    assert f"({_listed(a['5-24'] for a in after)} five to 24 steps after the first touch)" in para
+    assert all(a["5-24"] > a["0"] + a["1-4"] + a.get("25+", 0) for a in after)  # "most come in the squeeze"
+    assert sum(h.get("crushed", 0) for h in heavy) == 1  # "all but one on the lighter two thirds"
