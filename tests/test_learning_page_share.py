@@ -11,7 +11,7 @@ from pathlib import Path
 sys.path.insert(0, str(Path(__file__).parent))
 from test_learning_page import _assert_seeds_on_page, _listed, learning_paragraph, seed_runs  # noqa: E402
 from test_learning_page_claws import _evaluation  # noqa: E402
-from test_readme_tables import ROOT, aggregate, final_rates  # noqa: E402
+from test_readme_tables import ROOT, aggregate, final_rates, joined  # noqa: E402
 
 BASELINES = ROOT / "docs" / "baselines"
 CRADLE_RECIPE = "rl_cradle_v6_palm_alone_light_log_std_lr_decay_step_charge_valve005_screen"
@@ -62,3 +62,7 @@ def test_the_spheres_recipe_on_the_cradle_is_its_record():
     assert f"({_listed(a['5-24'] for a in after)} five to 24 steps after the first touch)" in para
     assert all(a["5-24"] > a["0"] + a["1-4"] + a.get("25+", 0) for a in after)  # "most come in the squeeze"
     assert sum(h.get("crushed", 0) for h in heavy) == 1  # "all but one on the lighter two thirds"
+    page = joined(ROOT / "docs" / "environments.md")
+    assert (f"On the cradle the same recipe gives {final_rates(CRADLE_RECIPE)} % (`{CRADLE_RECIPE}`; the learning "
+            "page, \"The sphere's recipe on the cradle\")") in page
+    assert "it is the registered task behind a restrictor, `--valve-share 0.5`, bit for bit" in page
