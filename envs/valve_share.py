@@ -35,6 +35,8 @@ import math
 import gymnasium as gym
 import numpy as np
 
+from simgrip.envs.arguments import check_number
+
 __all__ = ["ValveShare"]
 
 
@@ -56,13 +58,11 @@ class ValveShare(gym.ActionWrapper):
 
     def __init__(self, env: gym.Env, share):
         super().__init__(env)
-        if isinstance(share, (bool, np.bool_)):
-            raise ValueError(f"share must be a number in (0, 1], got {share!r}")
         try:
-            s = float(share)
-        except (TypeError, ValueError):
-            raise ValueError(f"share must be a number in (0, 1], got {share!r}") from None
-        if not math.isfinite(s) or not 0.0 < s <= 1.0:
+            s = check_number("share", share)  # finite and > 0 (bools refused)
+        except ValueError:
+            s = math.nan
+        if not s <= 1.0:
             raise ValueError(f"share must be a number in (0, 1] (of the valve's rate), got {share!r}")
         u = env.unwrapped
         if not hasattr(u, "kappa_rate"):
