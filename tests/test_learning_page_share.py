@@ -9,7 +9,8 @@ import sys
 from pathlib import Path
 
 sys.path.insert(0, str(Path(__file__).parent))
-from test_learning_page import _assert_seeds_on_page, _listed, learning_paragraph, seed_runs  # noqa: E402
+from test_learning_page import (_assert_long_run, _assert_seeds_on_page, _listed, learning_paragraph,  # noqa: E402
+                                seed_runs)
 from test_learning_page_claws import _evaluation  # noqa: E402
 from test_readme_tables import ROOT, aggregate, final_rates, joined  # noqa: E402
 
@@ -66,3 +67,28 @@ def test_the_spheres_recipe_on_the_cradle_is_its_record():
     assert (f"On the cradle the same recipe gives {final_rates(CRADLE_RECIPE)} % (`{CRADLE_RECIPE}`; the learning "
             "page, \"The sphere's recipe on the cradle\")") in page
     assert "it is the registered task behind a restrictor, `--valve-share 0.5`, bit for bit" in page
+
+
+def test_the_spheres_recipe_given_twice_the_budget_is_its_record():
+    """"The sphere's recipe given twice the budget, behind the restrictor": the 15-minute screen's options with the
+    restrictor in place of the valve's keyword argument (so the registered task), each seed's six checkpoints,
+    steps and crushes, none at 80 %, the first touches alike, and seed 1's light pieces crushed in the squeeze."""
+    title = "**The sphere's recipe given twice the budget, behind the restrictor**"
+    folder = "rl_sphere_v6_palm_alone_light_log_std_lr_decay_step_charge_share025_30min_screen"
+    _assert_long_run(title, folder, 30, (0, 1))
+    agg = aggregate(folder)
+    screen = aggregate("rl_sphere_v6_palm_alone_light_log_std_lr_decay_step_charge_valve005_screen")
+    assert "env_kwargs" not in agg and agg["valve_share"] == 0.25 and screen["env_kwargs"] == {"kappa_rate": 0.005}
+    same = ("env", "action_offset", "residual", "residual_alone", "light_bias", "step_charge", "hyperparameters")
+    assert {k: agg[k] for k in same} == {k: screen[k] for k in same}
+    runs = seed_runs(folder, (0, 1))
+    assert max(c["success_rate"] for r in runs for c in r["checkpoints"]) < 0.8  # "no checkpoint of either at 80 %"
+    evs = [_evaluation(folder, k) for k in (0, 1)]
+    assert [e["outcomes"] for e in evs] == [r["outcomes"] for r in runs]
+    para = learning_paragraph(title)
+    assert evs[0]["first_touch"] == evs[1]["first_touch"]  # "their first touches read the same"
+    assert f"a median {evs[0]['first_touch']['read']['median']:.2f} of the limit" in para
+    light = evs[1]["by_mass"]["10-27 g"]
+    assert f"{light['crushed']} of the {sum(light.values())} lightest crushed" in para
+    crushed = evs[1]["outcomes"]["crushed"]
+    assert f"{evs[1]['crushed_after_touch']['5-24']} of its {crushed} crushes five to 24 steps after the touch" in para
