@@ -92,3 +92,6 @@ def test_the_spheres_recipe_given_twice_the_budget_is_its_record():
     assert f"{light['crushed']} of the {sum(light.values())} lightest crushed" in para
     crushed = evs[1]["outcomes"]["crushed"]
     assert f"{evs[1]['crushed_after_touch']['5-24']} of its {crushed} crushes five to 24 steps after the touch" in para
+    page = joined(ROOT / "docs" / "environments.md")
+    at15 = " / ".join(str(round(100 * r["checkpoints"][2]["success_rate"])) for r in runs)
+    assert f"ends at {final_rates(folder)} % (at 15 CPU-min {at15} %) (`{folder}`;" in page
