@@ -95,3 +95,38 @@ def test_the_spheres_recipe_given_twice_the_budget_is_its_record():
     page = joined(ROOT / "docs" / "environments.md")
     at15 = " / ".join(str(round(100 * r["checkpoints"][2]["success_rate"])) for r in runs)
     assert f"ends at {final_rates(folder)} % (at 15 CPU-min {at15} %) (`{folder}`;" in page
+
+
+def test_the_cradle_at_half_the_rate_behind_the_restrictor_is_its_record():
+    """"The cradle at half the rate behind the restrictor, with the learning rate falling": the half-rate screen's
+    options with the restrictor in place of the valve's keyword argument and the falling rate, each seed's
+    checkpoints, steps and crushes, the screen it is set against (the same mean), and the crushes in the touch's
+    step."""
+    title = "**The cradle at half the rate behind the restrictor, with the learning rate falling**"
+    folder = "rl_cradle_v6_residual_palm_light_log_std_lr_decay_share05_screen"
+    para = learning_paragraph(title)
+    assert f"docs/baselines/{folder}/" in para
+    agg, half = aggregate(folder), aggregate("rl_cradle_v6_residual_palm_light_log_std_valve01_screen")
+    assert "env_kwargs" not in agg and agg["valve_share"] == 0.5 and half["env_kwargs"] == {"kappa_rate": 0.01}
+    same = ("env", "action_offset", "residual", "light_bias", "seeds")
+    assert {k: agg[k] for k in same} == {k: half[k] for k in same} and "residual_alone" not in agg
+    assert agg["hyperparameters"] == half["hyperparameters"] + "; but the learning rate falls linearly to 0 over the " \
+                                                               "budget"
+    runs = seed_runs(folder, (0, 1))
+    _assert_seeds_on_page(para, runs, crushes_end="),")
+    assert f"against {final_rates('rl_cradle_v6_residual_palm_light_log_std_valve01_screen')} % at the same rate" \
+        in para
+
+    def mean(f):
+        return round(100 * aggregate(f)["summary"]["ppo"]["final"]["mean"])
+
+    assert f"a mean of {mean(folder)} % against {mean('rl_cradle_v6_residual_palm_light_log_std_valve01_screen')} %" \
+        in para
+    spread = {f: aggregate(f)["summary"]["ppo"]["final"] for f in (folder, "rl_cradle_v6_residual_palm_light_log_std_"
+                                                                       "valve01_screen")}
+    assert [s["max"] - s["min"] for s in spread.values()] == sorted(s["max"] - s["min"] for s in spread.values())
+    evs = [_evaluation(folder, k) for k in (0, 1)]
+    assert [e["outcomes"] for e in evs] == [r["outcomes"] for r in runs]
+    touch = [e["crushed_after_touch"]["0"] for e in evs]
+    assert f"Half its crushes ({_listed(touch)}) come in the touch's step" in para
+    assert all(2 * t >= e["outcomes"]["crushed"] - 1 for t, e in zip(touch, evs))  # half, to within one
