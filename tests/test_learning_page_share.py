@@ -124,7 +124,8 @@ def test_the_cradle_at_half_the_rate_behind_the_restrictor_is_its_record():
         in para
     spread = {f: aggregate(f)["summary"]["ppo"]["final"] for f in (folder, "rl_cradle_v6_residual_palm_light_log_std_"
                                                                        "valve01_screen")}
-    assert [s["max"] - s["min"] for s in spread.values()] == sorted(s["max"] - s["min"] for s in spread.values())
+    ours, theirs = (s["max"] - s["min"] for s in spread.values())
+    assert ours < theirs  # "with less spread"
     evs = [_evaluation(folder, k) for k in (0, 1)]
     assert [e["outcomes"] for e in evs] == [r["outcomes"] for r in runs]
     touch = [e["crushed_after_touch"]["0"] for e in evs]
