@@ -2,10 +2,10 @@
 
 :class:`EnvOptions` holds every option that shapes the env a policy is trained or evaluated on: ``gym.make``'s
 keyword arguments, the wrappers that are part of the policy (``--valve-share``, ``--action-offset``,
-``--residual``, ``--frame-stack``: training and evaluation alike) and the training aids (``--scripted-start``, ``--light-bias``,
-``--crush-charge``, ``--step-charge``, ``--crush-margin``: training only; evaluation runs the task, which
-:meth:`EnvOptions.evaluation` gives).  :func:`make_env` builds the env they describe; ``<algo>_eval.json`` records
-them through :meth:`EnvOptions.record`.
+``--residual``, ``--frame-stack``: training and evaluation alike) and the training aids (``--scripted-start``,
+``--light-bias``, ``--crush-charge``, ``--step-charge``, ``--crush-margin``: training only; evaluation runs the
+task, which :meth:`EnvOptions.evaluation` gives).  :func:`make_env` builds the env they describe;
+``<algo>_eval.json`` records them through :meth:`EnvOptions.record`.
 
 The wrappers, innermost first: ``LightBias``, ``CrushCharge``, ``StepCharge``, ``CrushMargin``, ``ScriptedStart``,
 ``ValveShare``, ``ScriptedResidual``, ``ActionOffset``, ``FrameStackObservation``.

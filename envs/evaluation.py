@@ -203,10 +203,10 @@ def add_training_aid_arguments(parser: argparse.ArgumentParser) -> None:
     """Add the training aids ``examples/train_sb3.py`` applies and ``examples/rl_baselines.py`` passes to each of
     its runs, with the same names, checks and meanings: ``--normalize``, ``--action-offset A ...``,
     ``--frame-stack N``, ``--gamma G``, ``--log-std-init X``, ``--scripted-start P``, ``--light-bias P``,
-    ``--residual NAME ...``, ``--residual-alone``, ``--valve-share S``, ``--crush-charge F``, ``--crush-charge-from STEPS``,
-    ``--step-charge C``, ``--crush-margin C``, ``--lr-decay``, ``--ent-coef C``, ``--n-steps S``, ``--batch-size B``,
-    ``--select-every M``, ``--select-episodes E``, ``--select-seed S`` (each off by default) and ``--n-envs N``
-    (default 1)."""
+    ``--residual NAME ...``, ``--residual-alone``, ``--valve-share S``, ``--crush-charge F``,
+    ``--crush-charge-from STEPS``, ``--step-charge C``, ``--crush-margin C``, ``--lr-decay``, ``--ent-coef C``,
+    ``--n-steps S``, ``--batch-size B``, ``--select-every M``, ``--select-episodes E``, ``--select-seed S`` (each off
+    by default) and ``--n-envs N`` (default 1)."""
     add = parser.add_argument
     add("--normalize", action="store_true",
         help="train behind SB3's VecNormalize (observation and return, library defaults; default off)")

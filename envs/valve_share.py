@@ -14,8 +14,8 @@ touch, which the learner cannot undo; the restrictor is that cap as a wrapper on
 
 Order: innermost of the wrappers that are part of the policy, under
 :class:`~simgrip.envs.scripted_residual.ScriptedResidual` and :class:`~simgrip.envs.action_offset.ActionOffset`:
-the env's curvature rate is ``share * clip(base + offset + a)``.  So a residual whose controller drives the
-curvature is refused (its command would be cut too); on the palm it is unaffected.
+the env's curvature rate is ``share * clip(a + offset)``.  A residual whose controller drives the curvature is
+refused (its command would be cut too); on the palm the controller's command passes unchanged.
 
 Equivalence: where the curvature is the policy's (no residual on it), the env behind ``ValveShare(env, s)`` steps
 bit for bit as the task made with ``kappa_rate = s * 0.02`` for a power-of-two ``s`` (``1/2``, ``1/4``:
