@@ -138,3 +138,20 @@ def test_rl_baselines_passes_it_to_every_run(tmp_path):
     assert cmd[i + 1] == "0.25"
     args.valve_share = None
     assert "--valve-share" not in mod.run_command("ppo", 0, args, tmp_path / "run")
+
+
+def test_a_training_behind_the_restrictor_is_the_training_on_that_valve(tmp_path):
+    """The same observations and rewards give the same learner: PPO trained for two updates behind
+    ``--valve-share 0.25`` and on the task made with ``kappa_rate = 0.005`` ends with the same policy to the last
+    bit (``policy_digest``), and on the registered valve alone with another."""
+    pytest.importorskip("stable_baselines3")
+    train = load_example("train_sb3", "_share_digest")
+    common = ["--algo", "ppo", "--env", SPHERE, "--steps", "512", "--n-steps", "256", "--batch-size", "64",
+              "--action-offset", "-0.8", "--residual", "palm_z", "--residual-alone", "--eval-episodes", "1",
+              "--eval-seed", "8040"]
+    digests = {}
+    for name, extra in (("share", ["--valve-share", "0.25"]), ("kwarg", ["--env-kwargs", '{"kappa_rate": 0.005}']),
+                        ("plain", [])):
+        train.main(common + extra + ["--out", str(tmp_path / name)])
+        digests[name] = json.loads((tmp_path / name / "ppo_eval.json").read_text())["policy_digest"]
+    assert digests["share"] == digests["kwarg"] != digests["plain"]
