@@ -46,7 +46,8 @@ ROWS = {
 AIDS = {"offset": "--action-offset", "peak offset": "--action-offset", "light bias": "--light-bias",
         "scripted palm": "--residual", "log std": "--log-std-init", "γ": "--gamma", "lr decay": "--lr-decay",
         "entropy": "--ent-coef", "step charge": "--step-charge", "crush margin": "--crush-margin", "envs": "--n-envs",
-        "n steps": "--n-steps", "batch": "--batch-size", "select every": "--select-every"}
+        "n steps": "--n-steps", "batch": "--batch-size", "select every": "--select-every",
+        "palm alone": "--residual-alone", "valve share": "--valve-share"}
 
 
 def assert_the_hyperparameters_named(text: str, agg: dict) -> None:
@@ -72,6 +73,10 @@ def assert_the_hyperparameters_named(text: str, agg: dict) -> None:
     if named:  # a training-reward wrapper, not a hyperparameter: in the command and the record's step_charge
         value = float(named.group(1))
         assert float(cmd[cmd.index("--step-charge") + 1]) == value == agg["step_charge"], (named.group(0), cmd)
+    named = re.search(r"valve share ([\d.]+)", text)
+    if named:  # the restrictor between the policy and the valve: in the command and the record's valve_share
+        value = float(named.group(1))
+        assert float(cmd[cmd.index("--valve-share") + 1]) == value == agg["valve_share"], (named.group(0), cmd)
     named = re.search(r"crush margin ([\d.]+)", text)
     if named:  # the same for the dense crush shaping: in the command and the record's crush_margin
         value = float(named.group(1))
@@ -105,11 +110,13 @@ def assert_the_hyperparameters_named(text: str, agg: dict) -> None:
 
 
 def assert_the_offset_named(text: str, command: list) -> None:
-    """"peak offset" (simgrip.envs.action_offset.PEAK_PROBE_OFFSET) closes the valve at -0.2, "offset" (PROBE_OFFSET)
-    at -0.4: the record's --action-offset is the one the text names (nothing to check where it names neither)."""
+    """"peak offset" (simgrip.envs.action_offset.PEAK_PROBE_OFFSET) closes the valve at -0.2 of its rate, "offset"
+    (PROBE_OFFSET) at -0.4: the record's --action-offset, times its --valve-share where it has one (the restrictor
+    under the offset), is the one the text names (nothing to check where it names neither)."""
     if "offset" not in text:
         return
-    valve = float(command[command.index("--action-offset") + 1])
+    share = float(command[command.index("--valve-share") + 1]) if "--valve-share" in command else 1.0
+    valve = float(command[command.index("--action-offset") + 1]) * share
     assert valve == (-0.2 if "peak offset" in text else -0.4), (text, valve)
 
 _RAMP_PEAK = '{"crush_at": "peak", "palm_ramp": true}'
