@@ -9,10 +9,10 @@ import sys
 from pathlib import Path
 
 sys.path.insert(0, str(Path(__file__).parent))
-from test_learning_page import (_assert_long_run, _assert_seeds_on_page, _listed, learning_paragraph,  # noqa: E402
-                                seed_runs)
+from test_learning_page import (_assert_long_run, _assert_seeds_on_page, _listed, checkpoint_rates,  # noqa: E402
+                                learning_paragraph, seed_runs)
 from test_learning_page_claws import _evaluation  # noqa: E402
-from test_readme_tables import ROOT, aggregate, final_rates, joined  # noqa: E402
+from test_readme_tables import ROOT, aggregate, final_rates, joined, pct  # noqa: E402
 
 BASELINES = ROOT / "docs" / "baselines"
 CRADLE_RECIPE = "rl_cradle_v6_palm_alone_light_log_std_lr_decay_step_charge_valve005_screen"
@@ -131,3 +131,63 @@ def test_the_cradle_at_half_the_rate_behind_the_restrictor_is_its_record():
     touch = [e["crushed_after_touch"]["0"] for e in evs]
     assert f"Half its crushes ({_listed(touch)}) come in the touch's step" in para
     assert all(2 * t >= e["outcomes"]["crushed"] - 1 for t, e in zip(touch, evs))  # half, to within one
+
+
+def test_the_spheres_recipe_behind_the_restrictor_is_its_batch():
+    """"The sphere's recipe behind the restrictor, seeds 0–2": the screen's options with the restrictor in place of
+    the valve's keyword argument, each seed's checkpoints, steps and crushes, the means set against each other, and
+    seed 0's crushes (its final policy's ``evaluate_seed0.json``)."""
+    title = "**The sphere's recipe behind the restrictor, seeds 0–2**"
+    folder = "rl_sphere_v6_palm_alone_light_log_std_lr_decay_step_charge_share025"
+    screen = "rl_sphere_v6_palm_alone_light_log_std_lr_decay_step_charge_valve005_screen"
+    para = learning_paragraph(title)
+    assert f"docs/baselines/{folder}/" in para
+    agg, scr = aggregate(folder), aggregate(screen)
+    assert "env_kwargs" not in agg and agg["valve_share"] == 0.25 and agg["seeds"] == [0, 1, 2]
+    same = ("env", "action_offset", "residual", "residual_alone", "light_bias", "step_charge", "hyperparameters",
+            "minutes")
+    assert {k: agg[k] for k in same} == {k: scr[k] for k in same}
+    runs = seed_runs(folder, (0, 1, 2))
+    _assert_seeds_on_page(para, runs, crushes_end="):")
+    means = [round(100 * aggregate(f)["summary"]["ppo"]["final"]["mean"]) for f in (folder, screen)]
+    assert f"a mean of {means[0]} % where the screen's two seeds gave {means[1]} %" in para
+    finals = [pct(r["success_rate"]) for r in runs]
+    assert f"this recipe's seeds spread from {min(finals)} to {max(finals)} %" in para
+    evs = [_evaluation(folder, k) for k in (0, 1, 2)]
+    assert [e["outcomes"] for e in evs] == [r["outcomes"] for r in runs]
+    lighter = [v for k, v in evs[0]["by_mass"].items() if k != "74-200 g"]
+    n = sum(sum(v.values()) for v in lighter)
+    assert all(set(v) == {"crushed"} for v in lighter) and f"Seed 0 crushes all {n} pieces of its lighter" in para
+    assert (f"{evs[0]['crushed_after_touch']['5-24']} of its {evs[0]['outcomes']['crushed']} crushes five to 24 steps "
+            "after the touch") in para
+
+
+def test_the_spheres_recipe_on_the_place_is_its_record():
+    """"The sphere's recipe on the place": one seed's checkpoints, steps and crushes, the place's record it is set
+    against, and where its crushes come (``evaluate_seed0.json``)."""
+    folder = "rl_place_v8_palm_alone_log_std_lr_decay_step_charge_share025_screen"
+    para = learning_paragraph("**The sphere's recipe on the place**")
+    assert f"docs/baselines/{folder}/" in para
+    agg = aggregate(folder)
+    assert agg["env"] == "simgrip/PlaceFragile-v8" and agg["seeds"] == [0] and "env_kwargs" not in agg
+    assert agg["residual"] == ["palm_x", "palm_z"] and agg["residual_alone"] and agg["valve_share"] == 0.25
+    assert agg["step_charge"] == 0.005 and "light_bias" not in agg
+    (run,) = seed_runs(folder, (0,))
+    assert f"{checkpoint_rates(run)} % at 5 / 10 / 15 CPU-min, on {run['timesteps']:,} steps " \
+           f"({run['outcomes']['crushed']} crushes of 50 held out)" in para
+    assert f"against {final_rates('rl_place_v8_residual_palm_log_std')} % for the place's record" in para
+    ev = _evaluation(folder, 0)
+    assert ev["outcomes"] == run["outcomes"]
+    lighter = [v for k, v in ev["by_mass"].items() if k != "68-250 g"]
+    assert all(set(v) == {"crushed"} for v in lighter)  # "every piece of its lighter two thirds is crushed"
+    late = ev["crushed_after_touch"]["5-24"] + ev["crushed_after_touch"]["25+"]
+    assert f"{late} of the {run['outcomes']['crushed']} crushes five or more steps after the touch" in para
+
+
+def test_the_environments_page_gives_the_restrictor_batch():
+    folder = "rl_sphere_v6_palm_alone_light_log_std_lr_decay_step_charge_share025"
+    screen = "rl_sphere_v6_palm_alone_light_log_std_lr_decay_step_charge_valve005_screen"
+    page = joined(ROOT / "docs" / "environments.md")
+    assert (f"the sphere's recipe gives {final_rates(folder)} % over seeds 0–2 (`{folder}`; the learning page, "
+            f"\"The sphere's recipe behind the restrictor, seeds 0–2\"): the screen's {final_rates(screen)} % was "
+            "the good end of a wide spread") in page
