@@ -15,6 +15,22 @@ def load_example(name: str, tag: str = ""):
     return module
 
 
+def train_and_evaluate_again(env: str, options: list, out: Path, tag: str):
+    """``train_sb3.py`` (PPO, 64 steps, 2 held-out episodes from seed 8040) on ``env`` behind the policy's
+    ``options`` into ``out``, then ``evaluate_policy.py`` on its saved model with the same options and episodes:
+    ``(train, evaluate, record, again)``, the two loaded scripts, the training's ``ppo_eval.json`` and the
+    evaluation's JSON (whose figures the caller compares with the record's)."""
+    import json
+
+    train, ev = load_example("train_sb3", tag), load_example("evaluate_policy", tag)
+    train.main(["--algo", "ppo", "--env", env, "--steps", "64", *options, "--eval-episodes", "2", "--eval-seed",
+                "8040", "--out", str(out)])
+    record = json.loads((out / "ppo_eval.json").read_text())
+    again = ev.main(["--env", env, "--model", str(out / "ppo_model.zip"), *options, "--episodes", "2", "--seed",
+                     "8040", "--json"])
+    return train, ev, record, again
+
+
 def rl_baselines_args(mod, env: str = "simgrip/PickFragile-v7", **overrides):
     """``examples/rl_baselines.py``'s parsed options (``mod`` is the loaded script) as its ``main`` passes them to
     ``run_command``: the script's own parser's defaults, so a new option cannot be missing, a short budget, ``env``,

@@ -11,7 +11,7 @@ import simgrip.envs  # noqa: F401  (registers the ids)
 from simgrip.envs.scripted_policies import policy_maker
 from simgrip.envs.env_options import EnvOptions, make_env
 from simgrip.envs.scripted_residual import PALM_CHANNELS, ScriptedResidual
-from helpers import load_example, rl_baselines_args
+from helpers import load_example, rl_baselines_args, train_and_evaluate_again
 
 PLACE, PINCH = "simgrip/PlaceFragile-v8", "simgrip/PickFragile-v7"
 
@@ -126,16 +126,10 @@ def test_train_sb3_trains_and_evaluates_behind_the_residual(tmp_path, capsys):
     """Recorded in the JSON, and the saved model evaluated again behind the same wrapper (evaluate_policy) gives
     train_sb3's held-out figures; without it the spaces differ (exit 2); bad names and --init-from refused."""
     pytest.importorskip("stable_baselines3")
-    train = load_example("train_sb3", "_res")
-    train.main(["--algo", "ppo", "--env", PLACE, "--steps", "64", "--action-offset", "-0.4", "0", "0",
-                "--residual", "palm_x", "palm_z", "--eval-episodes", "2", "--eval-seed", "8040",
-                "--out", str(tmp_path)])
-    rec = json.loads((tmp_path / "ppo_eval.json").read_text())
-    assert rec["residual"] == ["palm_x", "palm_z"] and "ScriptedResidual(['palm_x', 'palm_z'])" in rec["wrapper"]
+    train, ev, rec, again = train_and_evaluate_again(
+        PLACE, ["--action-offset", "-0.4", "0", "0", "--residual", "palm_x", "palm_z"], tmp_path, "_res")
     capsys.readouterr()
-    ev = load_example("evaluate_policy", "_res2")
-    again = ev.main(["--env", PLACE, "--model", str(tmp_path / "ppo_model.zip"), "--action-offset", "-0.4", "0",
-                     "0", "--residual", "palm_x", "palm_z", "--episodes", "2", "--seed", "8040", "--json"])
+    assert rec["residual"] == ["palm_x", "palm_z"] and "ScriptedResidual(['palm_x', 'palm_z'])" in rec["wrapper"]
     assert again["residual"] == ["palm_x", "palm_z"]
     for key in ("success_rate", "mean_return", "mean_length", "outcomes"):
         assert again[key] == rec[key], key

@@ -14,7 +14,7 @@ import pytest
 import simgrip.envs  # noqa: F401  (registers the ids)
 from simgrip.envs.env_options import EnvOptions, make_env
 from simgrip.envs.scripted_residual import PALM_CHANNELS, ScriptedResidual
-from helpers import load_example, rl_baselines_args
+from helpers import load_example, rl_baselines_args, train_and_evaluate_again
 
 PLACE, SPHERE = "simgrip/PlaceFragile-v8", "simgrip/PickSphereFragile-v6"
 
@@ -70,16 +70,11 @@ def test_make_env_builds_records_and_checks_the_option():
 
 def test_train_sb3_records_it_and_evaluate_policy_gives_its_figures_again(tmp_path, capsys):
     pytest.importorskip("stable_baselines3")
-    train = load_example("train_sb3", "_alone")
-    train.main(["--algo", "ppo", "--env", SPHERE, "--steps", "64", "--action-offset", "-0.8", "--residual", "palm_z",
-                "--residual-alone", "--eval-episodes", "2", "--eval-seed", "8040", "--out", str(tmp_path)])
-    rec = json.loads((tmp_path / "ppo_eval.json").read_text())
+    train, ev, rec, again = train_and_evaluate_again(
+        SPHERE, ["--action-offset", "-0.8", "--residual", "palm_z", "--residual-alone"], tmp_path, "_alone")
+    capsys.readouterr()
     assert rec["residual"] == ["palm_z"] and rec["residual_alone"] is True
     assert "ScriptedResidual(['palm_z'], alone)" in rec["wrapper"]
-    capsys.readouterr()
-    ev = load_example("evaluate_policy", "_alone")
-    again = ev.main(["--env", SPHERE, "--model", str(tmp_path / "ppo_model.zip"), "--action-offset", "-0.8",
-                     "--residual", "palm_z", "--residual-alone", "--episodes", "2", "--seed", "8040", "--json"])
     assert again["residual_alone"] is True
     for key in ("success_rate", "mean_return", "mean_length", "outcomes"):
         assert again[key] == rec[key], key

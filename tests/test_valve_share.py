@@ -17,7 +17,7 @@ import simgrip.envs  # noqa: F401  (registers the ids)
 from simgrip.envs.env_options import EnvOptions, make_env
 from simgrip.envs.valve import KAPPA_RATE
 from simgrip.envs.valve_share import ValveShare
-from helpers import load_example, rl_baselines_args
+from helpers import load_example, rl_baselines_args, train_and_evaluate_again
 
 PLACE, SPHERE, CRADLE = "simgrip/PlaceFragile-v8", "simgrip/PickSphereFragile-v6", "simgrip/PickCradleFragile-v6"
 
@@ -106,17 +106,11 @@ def test_make_env_records_it_and_refuses_what_it_cannot_restrict():
 
 def test_train_sb3_records_it_and_evaluate_policy_gives_its_figures_again(tmp_path, capsys):
     pytest.importorskip("stable_baselines3")
-    train = load_example("train_sb3", "_share")
-    train.main(["--algo", "ppo", "--env", SPHERE, "--steps", "64", "--action-offset", "-0.8", "--residual", "palm_z",
-                "--residual-alone", "--valve-share", "0.25", "--eval-episodes", "2", "--eval-seed", "8040",
-                "--out", str(tmp_path)])
-    rec = json.loads((tmp_path / "ppo_eval.json").read_text())
-    assert rec["valve_share"] == 0.25 and "ValveShare(0.25)" in rec["wrapper"] and "env_kwargs" not in rec
+    train, ev, rec, again = train_and_evaluate_again(
+        SPHERE, ["--action-offset", "-0.8", "--residual", "palm_z", "--residual-alone", "--valve-share", "0.25"],
+        tmp_path, "_share")
     capsys.readouterr()
-    ev = load_example("evaluate_policy", "_share")
-    again = ev.main(["--env", SPHERE, "--model", str(tmp_path / "ppo_model.zip"), "--action-offset", "-0.8",
-                     "--residual", "palm_z", "--residual-alone", "--valve-share", "0.25", "--episodes", "2",
-                     "--seed", "8040", "--json"])
+    assert rec["valve_share"] == 0.25 and "ValveShare(0.25)" in rec["wrapper"] and "env_kwargs" not in rec
     assert again["valve_share"] == 0.25
     for key in ("success_rate", "mean_return", "mean_length", "outcomes"):
         assert again[key] == rec[key], key
