@@ -5,7 +5,6 @@ The reference is the residual itself: alone, the env must run exactly as behind 
 learner's action 0 on the scripted channels (``clip(b + 0) = b``), step for step and bit for bit.
 """
 
-
 import gymnasium as gym
 import numpy as np
 import pytest
