@@ -2,13 +2,13 @@
 
 :class:`EnvOptions` holds every option that shapes the env a policy is trained or evaluated on: ``gym.make``'s
 keyword arguments, the wrappers that are part of the policy (``--valve-share``, ``--action-offset``,
-``--residual``, ``--frame-stack``: training and evaluation alike) and the training aids (``--scripted-start``,
-``--light-bias``, ``--crush-charge``, ``--step-charge``, ``--crush-margin``: training only; evaluation runs the
-task, which :meth:`EnvOptions.evaluation` gives).  :func:`make_env` builds the env they describe;
+``--residual``, ``--privileged-critic``, ``--frame-stack``: training and evaluation alike) and the training aids
+(``--scripted-start``, ``--light-bias``, ``--crush-charge``, ``--step-charge``, ``--crush-margin``: training only;
+evaluation runs the task, which :meth:`EnvOptions.evaluation` gives).  :func:`make_env` builds the env they describe;
 ``<algo>_eval.json`` records them through :meth:`EnvOptions.record`.
 
 The wrappers, innermost first: ``LightBias``, ``CrushCharge``, ``StepCharge``, ``CrushMargin``, ``ScriptedStart``,
-``ValveShare``, ``ScriptedResidual``, ``ActionOffset``, ``FrameStackObservation``.
+``ValveShare``, ``ScriptedResidual``, ``ActionOffset``, ``PrivilegedObservation``, ``FrameStackObservation``.
 """
 
 from __future__ import annotations
@@ -38,6 +38,9 @@ class EnvOptions:
     valve_share : float or None
         The policy's curvature rate times it before the valve (:class:`~simgrip.envs.valve_share.ValveShare`, a
         restrictor; part of the policy): it closes at most that share of the valve's rate.
+    privileged_critic : bool
+        The observation gains the hidden entries PPO's value function reads and its policy does not
+        (:class:`~simgrip.envs.privileged_critic.PrivilegedObservation`; training and evaluation alike).
     scripted_start : float or None
         Training only: that share of the resets starts part-way through the scripted controller's episode.
     light_bias : float or None
@@ -57,6 +60,7 @@ class EnvOptions:
     residual: tuple | None = None
     residual_alone: bool = False
     valve_share: float | None = None
+    privileged_critic: bool = False
     scripted_start: float | None = None
     light_bias: float | None = None
     crush_charge: tuple | None = None
@@ -75,6 +79,7 @@ class EnvOptions:
         return cls(env_kwargs=dict(get("env_kwargs") or {}), action_offset=_tuple(get("action_offset")),
                    frame_stack=get("frame_stack"), residual=_tuple(get("residual")),
                    residual_alone=bool(get("residual_alone")), valve_share=get("valve_share"),
+                   privileged_critic=bool(get("privileged_critic")),
                    scripted_start=get("scripted_start"), light_bias=get("light_bias"),
                    crush_charge=None if charge is None else (charge, get("crush_charge_from") or 0),
                    step_charge=get("step_charge"), crush_margin=get("crush_margin"))
@@ -90,7 +95,8 @@ class EnvOptions:
 
     def record(self) -> tuple[dict, list[str]]:
         """What ``<algo>_eval.json`` records of the options: its keys (``env_kwargs``, ``action_offset``,
-        ``residual``, ``residual_alone`` (only where true), ``valve_share``, ``frame_stack``, ``scripted_start``,
+        ``residual``, ``residual_alone`` (only where true), ``valve_share``, ``privileged_critic`` (only where
+        true), ``frame_stack``, ``scripted_start``,
         ``light_bias``, ``crush_charge`` as ``{"charge", "start"}``, ``step_charge``, ``crush_margin``; each only
         where set) and the wrappers named, in that order."""
         keys, wrappers = {}, []
@@ -107,6 +113,9 @@ class EnvOptions:
         if self.valve_share is not None:
             keys["valve_share"] = float(self.valve_share)
             wrappers.append(f"ValveShare({keys['valve_share']!r})")
+        if self.privileged_critic:
+            keys["privileged_critic"] = True
+            wrappers.append("PrivilegedObservation (the critic's)")
         if self.frame_stack is not None and self.frame_stack > 1:
             keys["frame_stack"] = int(self.frame_stack)
             wrappers.append(f"FrameStackObservation({int(self.frame_stack)})")
@@ -143,6 +152,7 @@ def make_env(env_id: str, options: EnvOptions | None = None):
     ``--residual`` when a name is not one of the env's actions, the env has no scripted controller, or
     ``scripted_start`` is given too, ``--residual-alone`` without ``--residual`` or where it names every action,
     ``--valve-share`` when it is not in ``(0, 1]``, the env has no valve or a residual drives its curvature,
+    ``--privileged-critic`` when the env is not a fragile task or with ``--frame-stack``,
     ``--crush-charge``, ``--step-charge`` and ``--crush-margin`` when the env is
     not a fragile task (the env is closed first)."""
     import json
@@ -202,6 +212,14 @@ def make_env(env_id: str, options: EnvOptions | None = None):
         from simgrip.envs.action_offset import ActionOffset
 
         env = _wrap_or_close(env, ActionOffset, o.action_offset, "--action-offset")
+    if o.privileged_critic:
+        from simgrip.envs.privileged_critic import PrivilegedObservation
+
+        if o.frame_stack is not None and o.frame_stack > 1:
+            env.close()
+            raise ValueError("--privileged-critic: not with --frame-stack (the policy's view hides the last entries "
+                             "of one observation)")
+        env = _wrap_or_close(env, lambda e, _: PrivilegedObservation(e), True, "--privileged-critic")
     if o.frame_stack is not None and o.frame_stack > 1:
         longest = getattr(env.spec, "max_episode_steps", None)
         if longest is not None and o.frame_stack > longest:

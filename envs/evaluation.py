@@ -134,7 +134,8 @@ def training_conflict(args) -> str | None:
     ``minutes``, ``checkpoint_minutes``, ``n_steps``, ``batch_size``, ``n_envs``, ``normalize``, the ``select_*``
     options and the held-out seeds: ``eval_seeds``, or ``eval_seed`` and ``eval_episodes``) cannot go together, or
     None:
-    :func:`log_std_init_conflict`, :func:`critic_warmup_conflict`, ``--n-steps`` or ``--ent-coef`` with SAC, a
+    :func:`log_std_init_conflict`, :func:`critic_warmup_conflict`, ``--n-steps``, ``--ent-coef`` or
+    ``--privileged-critic`` with SAC, a
     ``--batch-size`` that does not divide PPO's rollout,
     ``--crush-charge-from`` without ``--crush-charge``, :func:`simgrip.envs.selection.selection_conflict`, a checkpoint period longer than the budget (no checkpoint
     would be taken), a budget over :data:`MAX_TRAINING_MINUTES` or more than :data:`MAX_CHECKPOINTS` checkpoints.
@@ -154,6 +155,8 @@ def training_conflict(args) -> str | None:
         return "--ent-coef: PPO only (--algo ppo; SAC tunes its own entropy coefficient)"
     if args.crush_charge_from and args.crush_charge is None:
         return "--crush-charge-from: only with --crush-charge"
+    if getattr(args, "privileged_critic", False) and set(algos) != {"ppo"}:
+        return "--privileged-critic: PPO only (--algo ppo; the asymmetric policy is PPO's actor-critic)"
     why = selection_conflict(args, args.eval_seeds if hasattr(args, "eval_seeds")
                              else (args.eval_seed, args.eval_seed + args.eval_episodes - 1))
     if why:
@@ -203,7 +206,7 @@ def add_training_aid_arguments(parser: argparse.ArgumentParser) -> None:
     """Add the training aids ``examples/train_sb3.py`` applies and ``examples/rl_baselines.py`` passes to each of
     its runs, with the same names, checks and meanings: ``--normalize``, ``--action-offset A ...``,
     ``--frame-stack N``, ``--gamma G``, ``--log-std-init X``, ``--scripted-start P``, ``--light-bias P``,
-    ``--residual NAME ...``, ``--residual-alone``, ``--valve-share S``, ``--crush-charge F``,
+    ``--residual NAME ...``, ``--residual-alone``, ``--valve-share S``, ``--privileged-critic``, ``--crush-charge F``,
     ``--crush-charge-from STEPS``, ``--step-charge C``, ``--crush-margin C``, ``--lr-decay``, ``--ent-coef C``,
     ``--n-steps S``, ``--batch-size B``, ``--select-every M``, ``--select-episodes E``, ``--select-seed S`` (each off
     by default) and ``--n-envs N`` (default 1)."""
@@ -238,6 +241,9 @@ def add_training_aid_arguments(parser: argparse.ArgumentParser) -> None:
     add("--valve-share", type=share, default=None, metavar="S",
         help="train and evaluate behind simgrip.envs.valve_share.ValveShare: the policy's curvature rate times S "
              "before the valve, in (0, 1], a restrictor (it closes at most S of the valve's rate; default none)")
+    add("--privileged-critic", action="store_true",
+        help="PPO only: train and evaluate behind simgrip.envs.privileged_critic, the value function also reading the "
+             "hidden hold force and crush limit, the policy not (an asymmetric actor-critic; default off)")
     add("--crush-charge", type=charge, default=None, metavar="F",
         help="lower the training reward of every crush by F (simgrip.envs.crush_charge; a fragile task only; "
              "evaluation runs the task's own reward; default none)")

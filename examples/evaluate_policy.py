@@ -10,11 +10,11 @@ to optimise: under that discount, its faster and riskier policy is worth more.
 
     python examples/evaluate_policy.py --env simgrip/PickFragile-v7 (--model ZIP [--algo ppo|sac] |
         --policy observation|oracle) [--action-offset A0 A1] [--frame-stack N] [--residual NAME ... [--residual-alone]]
-        [--valve-share S] [--scripted-start P] [--env-kwargs JSON] [--episodes 50] [--seed 8000] [--gamma 0.99]
-        [--crush-charge F ...] [--json]
+        [--valve-share S] [--privileged-critic] [--scripted-start P] [--env-kwargs JSON] [--episodes 50]
+        [--seed 8000] [--gamma 0.99] [--crush-charge F ...] [--json]
 
-``--action-offset``, ``--frame-stack``, ``--residual``, ``--residual-alone`` and ``--valve-share`` must be the
-ones the model was trained with (``train_sb3.py``'s options of those names);
+``--action-offset``, ``--frame-stack``, ``--residual``, ``--residual-alone``, ``--valve-share`` and
+``--privileged-critic`` must be the ones the model was trained with (``train_sb3.py``'s options of those names);
 a model trained behind ``VecNormalize`` is not supported here.  Prints one line, or with ``--json`` one JSON
 object: ``{"env", "policy", "episodes", "success_rate", "mean_return", "mean_length", "outcomes",
 "mean_success_length", "mean_discounted_return", "gamma", "eval_seeds"}``.  Exit 2 naming the option on bad
@@ -212,6 +212,9 @@ def main(argv=None) -> dict:
     p.add_argument("--valve-share", type=share, default=None, metavar="S",
                    help="with --model: the ValveShare restrictor the model was trained behind (train_sb3.py's "
                         "--valve-share)")
+    p.add_argument("--privileged-critic", action="store_true",
+                   help="with --model: the model's critic read the hidden workpiece (train_sb3.py's "
+                        "--privileged-critic; its policy ignores those entries)")
     p.add_argument("--scripted-start", type=probability, default=None, metavar="P",
                    help="with --model: start that share of the episodes part-way through the scripted "
                         "observation-only controller's (simgrip.envs.scripted_start); adds by_handover")
@@ -232,6 +235,8 @@ def main(argv=None) -> dict:
         p.error("--residual: only with --model (the scripted controller alone is --policy observation)")
     if args.policy is not None and args.valve_share is not None:
         p.error("--valve-share: only with --model (the scripted controllers command the valve at its own rate)")
+    if args.policy is not None and args.privileged_critic:
+        p.error("--privileged-critic: only with --model (the scripted controllers read the env's own observation)")
     if args.policy is not None and args.frame_stack is not None:
         p.error("--frame-stack: only with --model (the scripted controllers read the env's own observation)")
     if args.model is not None:
@@ -244,6 +249,7 @@ def main(argv=None) -> dict:
         env = make_env(args.env, EnvOptions(env_kwargs=args.env_kwargs or {}, action_offset=args.action_offset,
                                             frame_stack=args.frame_stack, residual=args.residual,
                                             residual_alone=args.residual_alone, valve_share=args.valve_share,
+                                            privileged_critic=args.privileged_critic,
                                             scripted_start=args.scripted_start))
     except ValueError as exc:
         p.error(str(exc))
@@ -269,7 +275,7 @@ def main(argv=None) -> dict:
             if model.observation_space.shape != env.observation_space.shape or (
                     model.action_space.shape != env.action_space.shape):
                 p.error(f"--model: its spaces do not match {args.env}'s "
-                        "(trained with another --frame-stack or --residual?)")
+                        "(trained with another --frame-stack, --residual or --privileged-critic?)")
             act = lambda obs: model.predict(obs, deterministic=True)[0]  # noqa: E731
             policy = f"{args.algo} {args.model}"
             if args.scripted_start is not None:
@@ -306,6 +312,8 @@ def main(argv=None) -> dict:
             out["residual_alone"] = True
     if args.valve_share is not None:
         out["valve_share"] = args.valve_share
+    if args.privileged_critic:
+        out["privileged_critic"] = True
     if args.scripted_start is not None:
         out["scripted_start"] = args.scripted_start
         out["by_handover"] = by_handover(results, handovers)

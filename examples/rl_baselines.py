@@ -43,7 +43,8 @@ of the mass range, :class:`simgrip.envs.light_bias.LightBias`; evaluation draws 
 drives the named actions and the policy's action is added to it, in training and evaluation alike,
 :class:`simgrip.envs.scripted_residual.ScriptedResidual`), recorded as ``residual``, and ``--residual-alone`` too
 (the controller drives them alone and the policy acts on the other actions only), recorded as ``residual_alone``;
-``--valve-share S`` passes that option (a restrictor: :class:`simgrip.envs.valve_share.ValveShare`), recorded so;
+``--valve-share S`` (a restrictor: :class:`simgrip.envs.valve_share.ValveShare`) and ``--privileged-critic`` (PPO's
+critic reads the hidden workpiece: :mod:`simgrip.envs.privileged_critic`) pass those options, recorded so;
 ``--init-from DIR`` (PPO only) starts each seed ``S`` from ``DIR/ppo_seed<S>/ppo_model.zip``, the policy of an
 earlier ``rl_baselines.py`` run of the same seed on another task (a curriculum: the pinch's policies for the
 pick-and-place; :mod:`simgrip.envs.warm_start`), recorded as ``init_from`` with that run's command
@@ -142,8 +143,7 @@ def run_command(algo: str, seed: int, args, folder: Path) -> list[str]:
     cmd += [] if args.frame_stack is None else ["--frame-stack", str(args.frame_stack)]
     cmd += [] if args.gamma is None else ["--gamma", repr(args.gamma)]
     cmd += [] if args.log_std_init is None else ["--log-std-init", repr(args.log_std_init)]
-    if args.lr_decay:
-        cmd += ["--lr-decay"]
+    cmd += ["--lr-decay"] * args.lr_decay + ["--privileged-critic"] * args.privileged_critic
     if args.ent_coef is not None:
         cmd += ["--ent-coef", repr(args.ent_coef)]
     if args.scripted_start is not None:
@@ -155,8 +155,7 @@ def run_command(algo: str, seed: int, args, folder: Path) -> list[str]:
     cmd += [] if args.valve_share is None else ["--valve-share", repr(args.valve_share)]
     if args.init_from is not None:
         cmd += ["--init-from", str(init_model(args.init_from, algo, seed))]
-    if args.eval_start:
-        cmd += ["--eval-start"]
+    cmd += ["--eval-start"] * args.eval_start
     if args.critic_warmup:
         cmd += ["--critic-warmup", str(args.critic_warmup)]
     if args.crush_charge is not None:
@@ -566,6 +565,7 @@ def main(argv=None) -> int:
         **({"residual": list(args.residual)} if args.residual is not None else {}),
         **({"residual_alone": True} if args.residual_alone else {}),
         **({"valve_share": args.valve_share} if args.valve_share is not None else {}),
+        **({"privileged_critic": True} if args.privileged_critic else {}),
         **({"critic_warmup": args.critic_warmup} if args.critic_warmup else {}),
         **({"crush_charge": {"charge": args.crush_charge, "start": args.crush_charge_from}}
            if args.crush_charge is not None else {}),

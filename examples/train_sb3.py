@@ -75,7 +75,9 @@ Residual policy learning: the wrapper is part of the policy (the held-out evalua
 ``<algo>_eval.json`` records ``residual``.  Not with ``--scripted-start`` or ``--init-from``.  With
 ``--residual-alone`` the controller drives those actions alone and the policy acts on the others only.
 ``--valve-share S`` multiplies the policy's curvature rate by ``S`` before the valve (a restrictor,
-:class:`simgrip.envs.valve_share.ValveShare`, part of the policy), recorded as ``valve_share``.
+:class:`simgrip.envs.valve_share.ValveShare`, part of the policy), recorded as ``valve_share``.  ``--privileged-critic``
+(PPO only) gives PPO's value function the hidden hold force and crush limit, and not its policy (an asymmetric
+actor-critic, :mod:`simgrip.envs.privileged_critic`), recorded as ``privileged_critic``.
 
 ``--init-from MODEL`` (PPO only) starts the training from a PPO policy trained on another task (a curriculum:
 the pinch's policy for the pick-and-place), copied by :func:`simgrip.envs.warm_start.transfer_ppo` (observation
@@ -92,8 +94,7 @@ standard deviation of 1 in every action), also named in ``hyperparameters``, and
 learning rate, which falls linearly from the library's default to 0 over the budget
 (:mod:`simgrip.envs.lr_decay`; a PPO run records each reading of the clock it made, ``lr_fractions``, which
 ``--replay`` gives back), and ``--ent-coef C`` (PPO only) a fourth, the entropy bonus's coefficient
-(default 0).  ``examples/evaluate_policy.py``
-re-evaluates a saved model, or a scripted controller, the same way.
+(default 0).  ``examples/evaluate_policy.py`` re-evaluates a saved model, or a scripted controller, the same way.
 
 ``--eval-start`` also evaluates the policy before its first update (a fresh one, or the ``--init-from`` copy) on
 the same held-out seeds and records it as ``start`` (``success_rate``, ``mean_return``,
@@ -114,8 +115,7 @@ CPU-minute buys more steps; SAC's default, one gradient step a call of its ``tra
 one per ``N`` environment steps.  ``--n-steps S`` (PPO only) changes the steps a rollout collects from each env
 (default 2048; ``--n-envs 4 --n-steps 512`` keeps the default's 2048 steps an update), and ``--batch-size B`` the
 transitions of each gradient step (PPO 64, SAC 256; with PPO a divisor of the rollout), each named in
-``hyperparameters``.
-The evaluation runs one env as always; ``<algo>_eval.json`` records ``n_envs``.
+``hyperparameters``.  The evaluation runs one env as always; ``<algo>_eval.json`` records ``n_envs``.
 
 ``--select-every M`` runs the policy on validation seeds (``--select-episodes``, ``--select-seed``; never the
 held-out ones) every ``M`` budget minutes and keeps the best as the model and every checkpoint
@@ -157,6 +157,7 @@ from simgrip.envs.evaluation import (GAMMA, add_training_aid_arguments, check_en
                                      json_object, non_negative_int, outcomes, positive_int, positive_minutes,
                                      run_episodes, summary, training_conflict, training_files, training_seed)
 from simgrip.envs.lr_decay import BudgetDecay
+from simgrip.envs.privileged_critic import policy_for
 from simgrip.envs.selection import Selection, SelectionSpec, spec_from
 from simgrip.envs.training_logs import ActionWindow, write_curve, write_policy
 from simgrip.io import atomic_write, check_output_dir, check_output_files_in, write_json
@@ -231,8 +232,7 @@ def model_kwargs(algo: str, gamma: float | None, log_std_init: float | None, lr_
             if algo != "ppo":
                 raise ValueError(f"{name}: PPO only, got algo {algo!r}")
             kwargs[name] = kind(value)
-    if lr_decay is not None:
-        kwargs["learning_rate"] = lr_decay
+    kwargs.update({} if lr_decay is None else {"learning_rate": lr_decay})
     if log_std_init is not None:
         if algo != "ppo":
             raise ValueError(f"log_std_init: PPO only, got algo {algo!r}")
@@ -352,7 +352,7 @@ def train(algo: str, env_id: str, *, steps: int, minutes: float, seed: int, out:
     decay = budget_decay(algo, budget, clock, None if replay is None else replay.lr_fractions) if lr_decay else None
     if decay is not None:  # on the budget's own clock, from the budget's start (before the model is built)
         decay.start(c_start if clock == "cpu" else t_start)
-    model = cls("MlpPolicy", env, seed=seed, verbose=0, **model_kwargs(algo, gamma, log_std_init, decay,
+    model = cls(policy_for(options), env, seed=seed, verbose=0, **model_kwargs(algo, gamma, log_std_init, decay,
                                                                        ent_coef, n_steps, batch_size))
     model.set_logger(Logger(None, []))  # no output; SB3's own would make an empty /tmp/SB3-<time> per learn()
     init = start = None
