@@ -102,6 +102,7 @@ import time
 from pathlib import Path
 
 from simgrip.command_parser import CommandParser
+from simgrip.envs.env_options import EnvOptions
 from simgrip.envs.selection import spec_from
 from simgrip.interrupt import kill_descendants, signals_as_interrupt
 
@@ -555,22 +556,11 @@ def main(argv=None) -> int:
     summary = aggregate(results)
     lo, hi = args.eval_seeds
     write_json(out / "aggregate.json", {
-        "env": args.env, **({"env_kwargs": args.env_kwargs} if args.env_kwargs else {}), "algos": algos, "seeds": args.seeds, "minutes": args.minutes,
+        "env": args.env, "algos": algos, "seeds": args.seeds, "minutes": args.minutes,
         "checkpoint_minutes": args.checkpoint_minutes, "clock": "cpu", "eval_seeds": [lo, hi],
         "hyperparameters": hyperparameters(args), "summary": summary,
-        **({"action_offset": [float(x) for x in args.action_offset]} if args.action_offset is not None else {}),
-        **({"frame_stack": args.frame_stack} if args.frame_stack is not None else {}),
-        **({"scripted_start": args.scripted_start} if args.scripted_start is not None else {}),
-        **({"light_bias": args.light_bias} if args.light_bias is not None else {}),
-        **({"residual": list(args.residual)} if args.residual is not None else {}),
-        **({"residual_alone": True} if args.residual_alone else {}),
-        **({"valve_share": args.valve_share} if args.valve_share is not None else {}),
-        **({"privileged_critic": True} if args.privileged_critic else {}),
+        **EnvOptions.from_args(args).record()[0],  # the options' keys, as each run's <algo>_eval.json has them
         **({"critic_warmup": args.critic_warmup} if args.critic_warmup else {}),
-        **({"crush_charge": {"charge": args.crush_charge, "start": args.crush_charge_from}}
-           if args.crush_charge is not None else {}),
-        **({"step_charge": args.step_charge} if args.step_charge is not None else {}),
-        **({"crush_margin": args.crush_margin} if args.crush_margin is not None else {}),
         **({"n_envs": args.n_envs} if args.n_envs != 1 else {}),
         **({"selection": {"every_minutes": spec.every_minutes, "episodes": spec.episodes, "seeds": list(spec.seeds)}}
            if (spec := spec_from(args)) is not None else {}),

@@ -160,3 +160,26 @@ def test_rl_baselines_passes_it_to_every_run_and_refuses_sac(tmp_path):
         mod.main(["--env", CRADLE, "--algo", "sac", "--privileged-critic", "--seeds", "0", "--minutes", "1",
                   "--eval-seeds", "8000-8001", "--out", str(tmp_path / "o")])
     assert e.value.code == 2
+
+
+def test_rl_baselines_aggregate_names_the_options_as_each_run_records_them(tmp_path):
+    pytest.importorskip("stable_baselines3")
+    import json
+    import subprocess
+    import sys
+    from pathlib import Path
+
+    root = Path(__file__).resolve().parents[1]
+    out = tmp_path / "runs"
+    cmd = [sys.executable, str(root / "examples" / "rl_baselines.py"), "--env", CRADLE, "--algo", "ppo", "--seeds",
+           "0", "--steps", "64", "--minutes", "1", "--eval-seeds", "8000-8000", "--jobs", "1",
+           "--action-offset", "-0.4", "0", "--residual", "palm_z", "--light-bias", "0.5", "--privileged-critic",
+           "--out", str(out)]
+    r = subprocess.run(cmd, capture_output=True, text=True, timeout=300, cwd=root)
+    assert r.returncode == 0, r.stderr[-2000:]
+    agg = json.loads((out / "aggregate.json").read_text())
+    run = json.loads((out / "ppo_seed0" / "ppo_eval.json").read_text())
+    keys = ("action_offset", "residual", "light_bias", "privileged_critic")
+    assert {k: agg[k] for k in keys} == {k: run[k] for k in keys} == {
+        "action_offset": [-0.4, 0.0], "residual": ["palm_z"], "light_bias": 0.5, "privileged_critic": True}
+    assert not {"env_kwargs", "valve_share", "residual_alone", "frame_stack"} & set(agg)
