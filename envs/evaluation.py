@@ -135,7 +135,7 @@ def training_conflict(args) -> str | None:
     options and the held-out seeds: ``eval_seeds``, or ``eval_seed`` and ``eval_episodes``) cannot go together, or
     None:
     :func:`log_std_init_conflict`, :func:`critic_warmup_conflict`, ``--n-steps``, ``--ent-coef`` or
-    ``--privileged-critic`` with SAC, a
+    ``--privileged-critic`` or ``--sde`` with SAC, a
     ``--batch-size`` that does not divide PPO's rollout,
     ``--crush-charge-from`` without ``--crush-charge``, :func:`simgrip.envs.selection.selection_conflict`, a checkpoint period longer than the budget (no checkpoint
     would be taken), a budget over :data:`MAX_TRAINING_MINUTES` or more than :data:`MAX_CHECKPOINTS` checkpoints.
@@ -155,6 +155,8 @@ def training_conflict(args) -> str | None:
         return "--ent-coef: PPO only (--algo ppo; SAC tunes its own entropy coefficient)"
     if args.crush_charge_from and args.crush_charge is None:
         return "--crush-charge-from: only with --crush-charge"
+    if getattr(args, "sde", False) and set(algos) != {"ppo"}:
+        return "--sde: PPO only (--algo ppo; SAC's own use_sde is not offered)"
     if getattr(args, "privileged_critic", False) and set(algos) != {"ppo"}:
         return "--privileged-critic: PPO only (--algo ppo; the asymmetric policy is PPO's actor-critic)"
     why = selection_conflict(args, args.eval_seeds if hasattr(args, "eval_seeds")
@@ -208,8 +210,8 @@ def add_training_aid_arguments(parser: argparse.ArgumentParser) -> None:
     ``--frame-stack N``, ``--gamma G``, ``--log-std-init X``, ``--scripted-start P``, ``--light-bias P``,
     ``--residual NAME ...``, ``--residual-alone``, ``--valve-share S``, ``--privileged-critic``, ``--crush-charge F``,
     ``--crush-charge-from STEPS``, ``--step-charge C``, ``--crush-margin C``, ``--lr-decay``, ``--ent-coef C``,
-    ``--n-steps S``, ``--batch-size B``, ``--select-every M``, ``--select-episodes E``, ``--select-seed S`` (each off
-    by default) and ``--n-envs N`` (default 1)."""
+    ``--n-steps S``, ``--batch-size B``, ``--sde``, ``--select-every M``, ``--select-episodes E``, ``--select-seed S``
+    (each off by default) and ``--n-envs N`` (default 1)."""
     add = parser.add_argument
     add("--normalize", action="store_true",
         help="train behind SB3's VecNormalize (observation and return, library defaults; default off)")
@@ -269,6 +271,10 @@ def add_training_aid_arguments(parser: argparse.ArgumentParser) -> None:
     add("--batch-size", type=minibatch_size, default=None, metavar="B",
         help="the transitions of each gradient step, instead of the library default (PPO 64, SAC 256); with PPO "
              "it must divide the rollout's steps, --n-steps times --n-envs (recorded in the JSON)")
+    add("--sde", action="store_true",
+        help="PPO only: explore by gSDE, SB3's generalised state-dependent exploration (use_sde=True: the noise a "
+             "function of the policy's last features, its matrix drawn once a rollout; named in the JSON; default "
+             "off: SB3's independent Gaussian noise every step)")
     add("--select-every", type=positive_minutes, default=None, metavar="M",
         help="every M budget minutes run the policy on the validation seeds and keep the best so far as the "
              "result (simgrip.envs.selection: the validations' time counts in the budget; the held-out evaluation "

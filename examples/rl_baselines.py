@@ -64,7 +64,8 @@ near its largest finger force came to the hidden crush limit, :mod:`simgrip.envs
 ``crush_margin``; ``--n-envs N`` passes that option (each run trains on ``N`` copies of the env stepped one after the
 other in its own process, SB3's ``DummyVecEnv``: still one core a run), recorded as ``n_envs`` and in
 ``hyperparameters``; ``--n-steps S`` (PPO only) passes PPO's steps a rollout collects from each env and
-``--batch-size B`` the transitions of each gradient step, each named in ``hyperparameters``; ``--select-every M``
+``--batch-size B`` the transitions of each gradient step, and ``--sde`` (PPO only) gSDE's exploration, each named in
+``hyperparameters``; ``--select-every M``
 (with ``--select-episodes E``, ``--select-seed S``) passes those options (every ``M`` budget minutes each run
 validates its policy on seeds apart from ``--eval-seeds`` and keeps the best, :mod:`simgrip.envs.selection`, the
 validations inside the budget), recorded as ``selection``.
@@ -144,7 +145,7 @@ def run_command(algo: str, seed: int, args, folder: Path) -> list[str]:
     cmd += [] if args.frame_stack is None else ["--frame-stack", str(args.frame_stack)]
     cmd += [] if args.gamma is None else ["--gamma", repr(args.gamma)]
     cmd += [] if args.log_std_init is None else ["--log-std-init", repr(args.log_std_init)]
-    cmd += ["--lr-decay"] * args.lr_decay + ["--privileged-critic"] * args.privileged_critic
+    cmd += ["--lr-decay"] * args.lr_decay + ["--privileged-critic"] * args.privileged_critic + ["--sde"] * args.sde
     if args.ent_coef is not None:
         cmd += ["--ent-coef", repr(args.ent_coef)]
     if args.scripted_start is not None:
@@ -211,7 +212,8 @@ def hyperparameters(args) -> str:
         + ", one torch thread" + "".join(f"; but {k} = {v!r}" for k, v in (
             ("gamma", args.gamma), ("log_std_init", args.log_std_init), ("ent_coef", args.ent_coef),
             ("n_steps", args.n_steps), ("batch_size", args.batch_size)) if v is not None) \
-        + ("; but the learning rate falls linearly to 0 over the budget" if args.lr_decay else "")
+        + ("; but the learning rate falls linearly to 0 over the budget" if args.lr_decay else "") \
+        + ("; but use_sde = True" if args.sde else "")
 
 
 def init_model(folder, algo: str, seed: int) -> Path:

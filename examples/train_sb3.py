@@ -74,6 +74,8 @@ and the policy's action is added to its action there; the observation gets the c
 Residual policy learning: the wrapper is part of the policy (the held-out evaluation runs behind it too);
 ``<algo>_eval.json`` records ``residual``.  Not with ``--scripted-start`` or ``--init-from``.  With
 ``--residual-alone`` the controller drives those actions alone and the policy acts on the others only.
+``--sde`` (PPO only) explores by SB3's generalised state-dependent exploration (``use_sde=True``: the noise a
+function of the policy's last features, drawn once a rollout), named in ``hyperparameters``.
 ``--valve-share S`` multiplies the policy's curvature rate by ``S`` before the valve (a restrictor,
 :class:`simgrip.envs.valve_share.ValveShare`, part of the policy), recorded as ``valve_share``.  ``--privileged-critic``
 (PPO only) gives PPO's value function the hidden hold force and crush limit, and not its policy (an asymmetric
@@ -135,7 +137,6 @@ training; run two trainings side by side to use two cores).
 from __future__ import annotations
 
 import argparse
-import inspect
 import json
 import os
 import pickle
@@ -156,7 +157,7 @@ from simgrip.envs.env_options import EnvOptions, check_training_env, make_env
 from simgrip.envs.evaluation import (GAMMA, add_training_aid_arguments, check_env_id, checkpoint_tag, episode_count,
                                      json_object, non_negative_int, outcomes, positive_int, positive_minutes,
                                      run_episodes, summary, training_conflict, training_files, training_seed)
-from simgrip.envs.lr_decay import BudgetDecay
+from simgrip.envs.hyperparameters import budget_decay, hyperparameters, model_kwargs
 from simgrip.envs.privileged_critic import policy_for
 from simgrip.envs.selection import Selection, SelectionSpec, spec_from
 from simgrip.envs.training_logs import ActionWindow, write_curve, write_policy
@@ -185,8 +186,8 @@ def evaluate(model, env_id: str, episodes: int, seed0: int, options: EnvOptions 
 
 
 def _log_std(model):
-    """PPO's state-independent log standard deviation (a NumPy array), or None (SAC)."""
-    p = getattr(model.policy, "log_std", None)
+    """PPO's state-independent log standard deviation (a NumPy array), or None (SAC; gSDE's is per feature)."""
+    p = None if getattr(model, "use_sde", False) else getattr(model.policy, "log_std", None)
     return None if p is None or not hasattr(p, "detach") else p.detach().cpu().numpy().ravel()
 
 
@@ -220,51 +221,13 @@ def _warm_start(model, train_env, init_from: str, action_offset) -> dict:
             "new_observation": list(plan.new_obs), "new_actions": list(plan.new_actions)}
 
 
-def model_kwargs(algo: str, gamma: float | None, log_std_init: float | None, lr_decay=None,
-                 ent_coef: float | None = None, n_steps: int | None = None, batch_size: int | None = None) -> dict:
-    """The keyword arguments that change the library's defaults: ``gamma``; ``log_std_init`` (PPO only: SAC's
-    standard deviation is an output of its network, not a parameter); ``lr_decay``, a
-    :class:`simgrip.envs.lr_decay.BudgetDecay` for the learning rate; ``ent_coef`` and ``n_steps``, the steps a
-    rollout collects from each env (PPO only); ``batch_size``, the transitions of each gradient step."""
-    kwargs = {k: v for k, v in (("gamma", gamma), ("batch_size", batch_size and int(batch_size))) if v is not None}
-    for name, value, kind in (("ent_coef", ent_coef, float), ("n_steps", n_steps, int)):
-        if value is not None:
-            if algo != "ppo":
-                raise ValueError(f"{name}: PPO only, got algo {algo!r}")
-            kwargs[name] = kind(value)
-    kwargs.update({} if lr_decay is None else {"learning_rate": lr_decay})
-    if log_std_init is not None:
-        if algo != "ppo":
-            raise ValueError(f"log_std_init: PPO only, got algo {algo!r}")
-        kwargs["policy_kwargs"] = {"log_std_init": float(log_std_init)}
-    return kwargs
-
-
-def budget_decay(algo: str, budget_s: float, clock: str, replay=None) -> BudgetDecay:
-    """``--lr-decay``'s schedule: the algorithm's default rate falling to 0 over ``budget_s`` seconds of ``clock``
-    (a replay's: the record's readings, ``replay``)."""
-    from stable_baselines3 import PPO, SAC
-
-    initial = inspect.signature({"ppo": PPO, "sac": SAC}[algo]).parameters["learning_rate"].default
-    return BudgetDecay(initial, budget_s, clock, replay=replay)
-
-
-def hyperparameters(gamma: float | None, log_std_init: float | None, lr_decay=None,
-                    ent_coef: float | None = None, n_steps: int | None = None, batch_size: int | None = None) -> str:
-    """The JSON's ``hyperparameters``: the library's defaults, and which ones this run changed."""
-    changed = [f"{k} = {v!r}" for k, v in (("gamma", gamma), ("log_std_init", log_std_init), ("ent_coef", ent_coef),
-                                           ("n_steps", n_steps), ("batch_size", batch_size)) if v is not None] + \
-        ([] if lr_decay is None else [f"learning_rate = {lr_decay.initial!r} falling linearly to 0 over the budget"])
-    return "Stable-Baselines3 defaults" + (" but " + ", ".join(changed) if changed else "")
-
-
 def train(algo: str, env_id: str, *, steps: int, minutes: float, seed: int, out: Path,
           eval_episodes: int, eval_seed: int, clock: str = "cpu", checkpoint_minutes: float | None = None,
           options: EnvOptions | None = None, normalize: bool = False, gamma: float | None = None,
           init_from: str | None = None, log_std_init: float | None = None, eval_start: bool = False,
           critic_warmup: int = 0, lr_decay: bool = False, ent_coef: float | None = None, n_envs: int = 1,
           n_steps: int | None = None, batch_size: int | None = None, selection: SelectionSpec | None = None,
-          replay=None) -> dict:
+          replay=None, use_sde: bool = False) -> dict:
     """Train ``algo`` with library defaults within the budget, write its curve, model and evaluation
     (``options``: the env's keyword arguments and wrappers, :class:`simgrip.envs.env_options.EnvOptions`: training
     behind all of them, evaluation behind those that are part of the policy, the action offset, the residual and
@@ -281,7 +244,8 @@ def train(algo: str, env_id: str, *, steps: int, minutes: float, seed: int, out:
     each gradient step instead of the library's (PPO 64, SAC 256); ``selection``: validate the policy
     periodically within the budget and keep the best, :mod:`simgrip.envs.selection`; ``replay``: a
     :class:`simgrip.envs.budget_replay.ReplaySchedule`, the budget read from a record's steps instead of the clock,
-    and the held-out results compared with the record's as ``replay``)."""
+    and the held-out results compared with the record's as ``replay``; ``use_sde``: PPO explores by gSDE,
+    :mod:`simgrip.envs.hyperparameters`)."""
     options = EnvOptions() if options is None else options
     from stable_baselines3 import PPO, SAC
     from stable_baselines3.common.callbacks import BaseCallback
@@ -353,7 +317,7 @@ def train(algo: str, env_id: str, *, steps: int, minutes: float, seed: int, out:
     if decay is not None:  # on the budget's own clock, from the budget's start (before the model is built)
         decay.start(c_start if clock == "cpu" else t_start)
     model = cls(policy_for(options), env, seed=seed, verbose=0, **model_kwargs(algo, gamma, log_std_init, decay,
-                                                                       ent_coef, n_steps, batch_size))
+                                                                       ent_coef, n_steps, batch_size, use_sde))
     model.set_logger(Logger(None, []))  # no output; SB3's own would make an empty /tmp/SB3-<time> per learn()
     init = start = None
     if init_from is not None:
@@ -396,7 +360,7 @@ def train(algo: str, env_id: str, *, steps: int, minutes: float, seed: int, out:
     result = {"algo": algo.upper(), "env": env_id, "timesteps": int(model.num_timesteps), "wall_s": round(wall, 1), "cpu_s": round(cpu, 1),
               "clock": clock, "budget_minutes": minutes,
               "train_episodes": len(rows), "seed": seed, "n_envs": n_envs,
-              "hyperparameters": hyperparameters(gamma, log_std_init, decay, ent_coef, n_steps, batch_size),
+              "hyperparameters": hyperparameters(gamma, log_std_init, decay, ent_coef, n_steps, batch_size, use_sde),
               "versions": versions()}
     if decay is not None and algo == "ppo":  # what a replay reads instead of the clock (envs.lr_decay)
         result["lr_fractions"] = list(decay.readings)
@@ -528,7 +492,7 @@ def replay_schedule(args):
                 "budget_minutes": args.minutes, "n_envs": args.n_envs,
                 "hyperparameters": hyperparameters(args.gamma, args.log_std_init, budget_decay(
                     args.algo[0], 60.0 * args.minutes, args.clock) if args.lr_decay else None, args.ent_coef,
-                    args.n_steps, args.batch_size),
+                    args.n_steps, args.batch_size, args.sde),
                 "eval_seeds": [args.eval_seed, args.eval_seed + args.eval_episodes - 1],
                 **EnvOptions.from_args(args).record()[0]}
     schedule = load_schedule(args.replay, identity, checkpoint_minutes=args.checkpoint_minutes,
@@ -588,7 +552,8 @@ def main(argv=None) -> int:
                        normalize=args.normalize, gamma=args.gamma, init_from=args.init_from,
                        log_std_init=args.log_std_init, eval_start=args.eval_start, lr_decay=args.lr_decay,
                        ent_coef=args.ent_coef, critic_warmup=args.critic_warmup, n_envs=args.n_envs,
-                       n_steps=args.n_steps, batch_size=args.batch_size, selection=spec_from(args), replay=schedule)
+                       n_steps=args.n_steps, batch_size=args.batch_size, selection=spec_from(args), replay=schedule,
+                       use_sde=args.sde)
         print(json.dumps(result), flush=True)
     plot_curves(out)
     return 0
