@@ -1,0 +1,58 @@
+"""The learning page's paragraphs of stop 71 against their records: the value function given the hidden workpiece
+(``--privileged-critic``) and gSDE's exploration (``--sde``) (``docs/learning.md``; the helpers are
+``test_learning_page.py``'s, the records' readers ``test_readme_tables.py``'s).
+"""
+
+from __future__ import annotations
+
+import sys
+from pathlib import Path
+
+sys.path.insert(0, str(Path(__file__).parent))
+from test_learning_page import _assert_seeds_on_page, _listed, checkpoint_rates, learning_paragraph, seed_runs  # noqa: E402
+from test_learning_page_claws import _evaluation  # noqa: E402
+from test_readme_tables import ROOT, aggregate, final_rates  # noqa: E402
+
+CRADLE_AIDED = "rl_cradle_v6_residual_palm_light_log_std"
+SPHERE_RECIPE = "rl_sphere_v6_palm_alone_light_log_std_lr_decay_step_charge_share025"
+CRADLE_PC = CRADLE_AIDED + "_privileged_critic_screen"
+SPHERE_PC = SPHERE_RECIPE + "_privileged_critic_screen"
+IGNORED = ("command", "summary", "combined_from", "versions", "seeds", "privileged_critic")
+
+
+def _same_options_but_the_critic(folder: str, base: str) -> None:
+    agg, ref = aggregate(folder), aggregate(base)
+    assert agg["privileged_critic"] is True and "privileged_critic" not in ref
+    assert {k: v for k, v in agg.items() if k not in IGNORED} == {k: v for k, v in ref.items() if k not in IGNORED}
+
+
+def test_the_privileged_critic_screens_are_their_records():
+    """"The value function given the hidden workpiece": each screen's options (its base's with the critic), seeds,
+    checkpoints, steps and crushes, the records it is set against, and where its crushes come and its heavy pieces
+    end (its final policies' ``evaluate_seedS.json``, whose outcomes are the runs')."""
+    para = learning_paragraph("**The value function given the hidden workpiece (`--privileged-critic`)**")
+    assert "(`tests/test_privileged_critic.py`)" in para and (ROOT / "tests" / "test_privileged_critic.py").is_file()
+    for folder, base in ((CRADLE_PC, CRADLE_AIDED), (SPHERE_PC, SPHERE_RECIPE)):
+        assert f"`docs/baselines/{folder}/`" in para
+        _same_options_but_the_critic(folder, base)
+        assert aggregate(folder)["seeds"] == [0, 1]
+        runs = seed_runs(folder, (0, 1))
+        assert f"{_listed(checkpoint_rates(r) for r in runs)} % at 5 / 10 / 15 CPU-min" in para
+        assert f"on {_listed(format(r['timesteps'], ',') for r in runs)} steps" in para
+        assert f"({_listed(r['outcomes']['crushed'] for r in runs)} crushes of 50 held out)" in para
+        evs = [_evaluation(folder, k) for k in (0, 1)]
+        assert [e["outcomes"] for e in evs] == [r["outcomes"] for r in runs]
+        assert all(e["privileged_critic"] is True for e in evs)
+    base = seed_runs(CRADLE_AIDED, (0, 1))
+    assert f"against {' / '.join(str(round(100 * r['success_rate'])) for r in base)} % for the same seeds in the cradle's " \
+           f"record, on {_listed(format(r['timesteps'], ',') for r in base)} steps" in para
+    after = [_evaluation(CRADLE_PC, k)["crushed_after_touch"] for k in (0, 1)]
+    assert f"; {_listed(a['0'] for a in after)} of its crushes come in the touch's step" in para
+    assert f"against {final_rates(SPHERE_RECIPE)} % for the recipe's three seeds" in para
+    sphere = [_evaluation(SPHERE_PC, k) for k in (0, 1)]
+    after = [e["crushed_after_touch"] for e in sphere]
+    assert f"{_listed(a['5-24'] for a in after)} of its crushes come five to 24 steps after the touch and " \
+           f"{_listed(a['25+'] for a in after)} later still" in para
+    heavy = [e["by_mass"]["74-200 g"] for e in sphere]
+    assert f"of the {sum(heavy[0].values())} heaviest pieces {_listed(h['timeout'] for h in heavy)} time out" in para
+    assert max(r["success_rate"] for f in (CRADLE_PC, SPHERE_PC) for r in seed_runs(f, (0, 1))) < 0.8
