@@ -47,7 +47,8 @@ AIDS = {"offset": "--action-offset", "peak offset": "--action-offset", "light bi
         "scripted palm": "--residual", "log std": "--log-std-init", "γ": "--gamma", "lr decay": "--lr-decay",
         "entropy": "--ent-coef", "step charge": "--step-charge", "crush margin": "--crush-margin", "envs": "--n-envs",
         "n steps": "--n-steps", "batch": "--batch-size", "select every": "--select-every",
-        "palm alone": "--residual-alone", "valve share": "--valve-share"}
+        "palm alone": "--residual-alone", "valve share": "--valve-share", "privileged critic": "--privileged-critic",
+        "gSDE": "--sde"}
 
 
 def assert_the_hyperparameters_named(text: str, agg: dict) -> None:
