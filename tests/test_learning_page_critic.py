@@ -56,3 +56,30 @@ def test_the_privileged_critic_screens_are_their_records():
     heavy = [e["by_mass"]["74-200 g"] for e in sphere]
     assert f"of the {sum(heavy[0].values())} heaviest pieces {_listed(h['timeout'] for h in heavy)} time out" in para
     assert max(r["success_rate"] for f in (CRADLE_PC, SPHERE_PC) for r in seed_runs(f, (0, 1))) < 0.8
+
+
+def test_the_gsde_screen_is_its_record():
+    """"Exploration by gSDE": the aided command with ``--sde`` and its own initial log standard deviation (the
+    options otherwise the cradle's record's), each seed's checkpoints, steps and crushes, and no success at 15."""
+    folder = "rl_cradle_v6_residual_palm_light_sde_screen"
+    para = learning_paragraph("**Exploration by gSDE (`--sde`)**")
+    assert f"`docs/baselines/{folder}/`" in para
+    agg, ref = aggregate(folder), aggregate(CRADLE_AIDED)
+    assert agg["hyperparameters"] == ref["hyperparameters"].replace("-1.0", "-2.25") + "; but use_sde = True"
+    same = ("env", "action_offset", "residual", "light_bias")
+    assert {k: agg[k] for k in same} == {k: ref[k] for k in same} and agg["seeds"] == [0, 1]
+    runs = seed_runs(folder, (0, 1))
+    _assert_seeds_on_page(para, runs)
+    assert "--log-std-init -2.25 --sde" in para and all(r["success_rate"] == 0.0 for r in runs)
+    evs = [_evaluation(folder, k) for k in (0, 1)]
+    assert [e["outcomes"] for e in evs] == [r["outcomes"] for r in runs]
+    assert f"in their {_listed(format(r['train_episodes'], ',') for r in runs)} training episodes" in para
+
+
+def test_the_environments_page_lists_them_as_measured_and_not_adopted():
+    from test_readme_tables import joined
+
+    page = joined(ROOT / "docs" / "environments.md")
+    assert (f"a value function given the hidden workpiece (`--privileged-critic`: the cradle {final_rates(CRADLE_PC)} %, "
+            f"the sphere's recipe {final_rates(SPHERE_PC)} %), gSDE's exploration (`--sde`: the cradle "
+            f"{final_rates('rl_cradle_v6_residual_palm_light_sde_screen')} %)") in page
