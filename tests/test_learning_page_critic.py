@@ -17,6 +17,8 @@ CRADLE_AIDED = "rl_cradle_v6_residual_palm_light_log_std"
 SPHERE_RECIPE = "rl_sphere_v6_palm_alone_light_log_std_lr_decay_step_charge_share025"
 CRADLE_PC = CRADLE_AIDED + "_privileged_critic_screen"
 SPHERE_PC = SPHERE_RECIPE + "_privileged_critic_screen"
+PLACE_AIDED = "rl_place_v8_residual_palm_log_std"
+PLACE_PC = PLACE_AIDED + "_privileged_critic_screen"
 IGNORED = ("command", "summary", "combined_from", "versions", "seeds", "privileged_critic")
 
 
@@ -32,7 +34,7 @@ def test_the_privileged_critic_screens_are_their_records():
     end (its final policies' ``evaluate_seedS.json``, whose outcomes are the runs')."""
     para = learning_paragraph("**The value function given the hidden workpiece (`--privileged-critic`)**")
     assert "(`tests/test_privileged_critic.py`)" in para and (ROOT / "tests" / "test_privileged_critic.py").is_file()
-    for folder, base in ((CRADLE_PC, CRADLE_AIDED), (SPHERE_PC, SPHERE_RECIPE)):
+    for folder, base in ((CRADLE_PC, CRADLE_AIDED), (SPHERE_PC, SPHERE_RECIPE), (PLACE_PC, PLACE_AIDED)):
         assert f"`docs/baselines/{folder}/`" in para
         _same_options_but_the_critic(folder, base)
         assert aggregate(folder)["seeds"] == [0, 1]
@@ -55,7 +57,15 @@ def test_the_privileged_critic_screens_are_their_records():
            f"{_listed(a['25+'] for a in after)} later still" in para
     heavy = [e["by_mass"]["74-200 g"] for e in sphere]
     assert f"of the {sum(heavy[0].values())} heaviest pieces {_listed(h['timeout'] for h in heavy)} time out" in para
-    assert max(r["success_rate"] for f in (CRADLE_PC, SPHERE_PC) for r in seed_runs(f, (0, 1))) < 0.8
+    for base, rerun in ((PLACE_AIDED, PLACE_AIDED + "_rerun_screen"),):
+        ref, again = seed_runs(base, (0, 1)), seed_runs(rerun, (0, 1))
+        assert f"against {' / '.join(str(round(100 * r['success_rate'])) for r in ref)} % for the same seeds in the " \
+               f"place's record, on {_listed(format(r['timesteps'], ',') for r in ref)} steps, and " \
+               f"{' / '.join(str(round(100 * r['success_rate'])) for r in again)} % for its rerun at stop 62 on " \
+               f"{_listed(format(r['timesteps'], ',') for r in again)}" in para
+    after = [_evaluation(PLACE_PC, k)["crushed_after_touch"] for k in (0, 1)]
+    assert f"; {_listed(a['0'] for a in after)} of its crushes come in the touch's step. Not adopted" in para
+    assert max(r["success_rate"] for f in (CRADLE_PC, SPHERE_PC, PLACE_PC) for r in seed_runs(f, (0, 1))) < 0.8
 
 
 def test_the_gsde_screen_is_its_record():
@@ -81,5 +91,5 @@ def test_the_environments_page_lists_them_as_measured_and_not_adopted():
 
     page = joined(ROOT / "docs" / "environments.md")
     assert (f"a value function given the hidden workpiece (`--privileged-critic`: the cradle {final_rates(CRADLE_PC)} %, "
-            f"the sphere's recipe {final_rates(SPHERE_PC)} %), gSDE's exploration (`--sde`: the cradle "
+            f"the sphere's recipe {final_rates(SPHERE_PC)} %, the place {final_rates(PLACE_PC)} %), gSDE's exploration (`--sde`: the cradle "
             f"{final_rates('rl_cradle_v6_residual_palm_light_sde_screen')} %)") in page
