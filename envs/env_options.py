@@ -96,9 +96,8 @@ class EnvOptions:
     def record(self) -> tuple[dict, list[str]]:
         """What ``<algo>_eval.json`` records of the options: its keys (``env_kwargs``, ``action_offset``,
         ``residual``, ``residual_alone`` (only where true), ``valve_share``, ``privileged_critic`` (only where
-        true), ``frame_stack``, ``scripted_start``,
-        ``light_bias``, ``crush_charge`` as ``{"charge", "start"}``, ``step_charge``, ``crush_margin``; each only
-        where set) and the wrappers named, in that order."""
+        true), ``frame_stack``, ``scripted_start``, ``light_bias``, ``crush_charge`` as ``{"charge", "start"}``,
+        ``step_charge``, ``crush_margin``; each only where set) and the wrappers named, in that order."""
         keys, wrappers = {}, []
         if self.env_kwargs:
             keys["env_kwargs"] = dict(self.env_kwargs)

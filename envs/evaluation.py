@@ -134,8 +134,8 @@ def training_conflict(args) -> str | None:
     ``minutes``, ``checkpoint_minutes``, ``n_steps``, ``batch_size``, ``n_envs``, ``normalize``, the ``select_*``
     options and the held-out seeds: ``eval_seeds``, or ``eval_seed`` and ``eval_episodes``) cannot go together, or
     None:
-    :func:`log_std_init_conflict`, :func:`critic_warmup_conflict`, ``--n-steps``, ``--ent-coef`` or
-    ``--privileged-critic`` or ``--sde`` with SAC, a
+    :func:`log_std_init_conflict`, :func:`critic_warmup_conflict`, ``--n-steps``, ``--ent-coef``,
+    ``--privileged-critic`` or ``--sde`` with SAC (the last two also with ``--init-from``), a
     ``--batch-size`` that does not divide PPO's rollout,
     ``--crush-charge-from`` without ``--crush-charge``, :func:`simgrip.envs.selection.selection_conflict`, a checkpoint period longer than the budget (no checkpoint
     would be taken), a budget over :data:`MAX_TRAINING_MINUTES` or more than :data:`MAX_CHECKPOINTS` checkpoints.
@@ -155,10 +155,12 @@ def training_conflict(args) -> str | None:
         return "--ent-coef: PPO only (--algo ppo; SAC tunes its own entropy coefficient)"
     if args.crush_charge_from and args.crush_charge is None:
         return "--crush-charge-from: only with --crush-charge"
-    if getattr(args, "sde", False) and set(algos) != {"ppo"}:
-        return "--sde: PPO only (--algo ppo; SAC's own use_sde is not offered)"
-    if getattr(args, "privileged_critic", False) and set(algos) != {"ppo"}:
-        return "--privileged-critic: PPO only (--algo ppo; the asymmetric policy is PPO's actor-critic)"
+    for name, option, why in (("sde", "--sde", "SAC's own use_sde is not offered"),
+                              ("privileged_critic", "--privileged-critic", "the asymmetric policy is PPO's actor-critic")):
+        if getattr(args, name, False) and set(algos) != {"ppo"}:
+            return f"{option}: PPO only (--algo ppo; {why})"
+        if getattr(args, name, False) and args.init_from is not None:
+            return f"{option}: not with --init-from (the copied policy was built without it)"
     why = selection_conflict(args, args.eval_seeds if hasattr(args, "eval_seeds")
                              else (args.eval_seed, args.eval_seed + args.eval_episodes - 1))
     if why:

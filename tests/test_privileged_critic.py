@@ -137,6 +137,8 @@ def test_train_sb3_records_it_and_evaluate_policy_gives_its_figures_again(tmp_pa
         ev.main(["--env", CRADLE, "--model", str(tmp_path / "ppo_model.zip"), *options[:-1], "--episodes", "1"])
     assert e.value.code == 2 and "--privileged-critic?" in capsys.readouterr().err
     for argv, why in ((["--algo", "sac", "--privileged-critic"], "--privileged-critic: PPO only"),
+                      (["--algo", "ppo", "--privileged-critic", "--init-from", str(tmp_path / "ppo_model.zip")],
+                       "--privileged-critic: not with --init-from"),
                       (["--algo", "ppo", "--privileged-critic", "--frame-stack", "2"], "not with --frame-stack")):
         with pytest.raises(SystemExit) as e:
             train.main(["--env", CRADLE, *argv, "--out", str(tmp_path / "o")])

@@ -45,9 +45,13 @@ def test_train_sb3_trains_with_it_and_records_it(tmp_path, capsys):
     with pytest.raises(SystemExit) as e:  # the record names use_sde: a replay without it is another command
         train.main(common + ["--replay", str(tmp_path / "a" / "ppo_eval.json"), "--out", str(tmp_path / "b")])
     assert e.value.code == 2 and "hyperparameters" in capsys.readouterr().err
-    with pytest.raises(SystemExit) as e:
-        train.main(["--algo", "sac", "--env", CRADLE, "--sde", "--out", str(tmp_path / "c")])
-    assert e.value.code == 2 and "--sde: PPO only" in capsys.readouterr().err
+    for argv, why in ((["--algo", "sac", "--sde"], "--sde: PPO only"),
+                      (["--algo", "ppo", "--sde", "--init-from", str(tmp_path / "a" / "ppo_model.zip")],
+                       "--sde: not with --init-from")):
+        with pytest.raises(SystemExit) as e:
+            train.main(["--env", CRADLE, *argv, "--out", str(tmp_path / "c")])
+        assert e.value.code == 2 and why in capsys.readouterr().err
+    assert not (tmp_path / "c").exists()
 
 
 def test_rl_baselines_passes_it_and_names_it(tmp_path):
