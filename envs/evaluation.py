@@ -155,8 +155,8 @@ def training_conflict(args) -> str | None:
         return "--ent-coef: PPO only (--algo ppo; SAC tunes its own entropy coefficient)"
     if args.crush_charge_from and args.crush_charge is None:
         return "--crush-charge-from: only with --crush-charge"
-    for name, option, why in (("sde", "--sde", "SAC's own use_sde is not offered"),
-                              ("privileged_critic", "--privileged-critic", "the asymmetric policy is PPO's actor-critic")):
+    for name, option, why in (("sde", "--sde", "SAC's own use_sde is not offered"), ("privileged_critic",
+                              "--privileged-critic", "the asymmetric policy is PPO's actor-critic")):
         if getattr(args, name, False) and set(algos) != {"ppo"}:
             return f"{option}: PPO only (--algo ppo; {why})"
         if getattr(args, name, False) and args.init_from is not None:

@@ -9,7 +9,8 @@ import sys
 from pathlib import Path
 
 sys.path.insert(0, str(Path(__file__).parent))
-from test_learning_page import _assert_seeds_on_page, _listed, checkpoint_rates, learning_paragraph, seed_runs  # noqa: E402
+from test_learning_page import (_assert_seeds_on_page, _listed, checkpoint_rates, learning_paragraph,  # noqa: E402
+                                seed_runs)
 from test_learning_page_claws import _evaluation  # noqa: E402
 from test_readme_tables import ROOT, aggregate, final_rates  # noqa: E402
 
@@ -46,8 +47,9 @@ def test_the_privileged_critic_screens_are_their_records():
         assert [e["outcomes"] for e in evs] == [r["outcomes"] for r in runs]
         assert all(e["privileged_critic"] is True for e in evs)
     base = seed_runs(CRADLE_AIDED, (0, 1))
-    assert f"against {' / '.join(str(round(100 * r['success_rate'])) for r in base)} % for the same seeds in the cradle's " \
-           f"record, on {_listed(format(r['timesteps'], ',') for r in base)} steps" in para
+    finals = " / ".join(str(round(100 * r["success_rate"])) for r in base)
+    steps = _listed(format(r["timesteps"], ",") for r in base)
+    assert f"against {finals} % for the same seeds in the cradle's record, on {steps} steps" in para
     after = [_evaluation(CRADLE_PC, k)["crushed_after_touch"] for k in (0, 1)]
     assert f"; {_listed(a['0'] for a in after)} of its crushes come in the touch's step" in para
     assert f"against {final_rates(SPHERE_RECIPE)} % for the recipe's three seeds" in para
@@ -90,6 +92,7 @@ def test_the_environments_page_lists_them_as_measured_and_not_adopted():
     from test_readme_tables import joined
 
     page = joined(ROOT / "docs" / "environments.md")
-    assert (f"a value function given the hidden workpiece (`--privileged-critic`: the cradle {final_rates(CRADLE_PC)} %, "
-            f"the sphere's recipe {final_rates(SPHERE_PC)} %, the place {final_rates(PLACE_PC)} %), gSDE's exploration (`--sde`: the cradle "
+    assert (f"a value function given the hidden workpiece (`--privileged-critic`: the cradle "
+            f"{final_rates(CRADLE_PC)} %, the sphere's recipe {final_rates(SPHERE_PC)} %, the place "
+            f"{final_rates(PLACE_PC)} %), gSDE's exploration (`--sde`: the cradle "
             f"{final_rates('rl_cradle_v6_residual_palm_light_sde_screen')} %)") in page

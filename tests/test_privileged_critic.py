@@ -30,9 +30,9 @@ def _expected(task, info) -> list:
             math.log1p(force / hold)]
 
 
-@pytest.mark.parametrize("env_id, options", [(CRADLE, AIDS), (SPHERE, dict(action_offset=(-0.4,),
-                                                                           residual=("palm_z",), residual_alone=True)),
-                                             (PLACE, dict(action_offset=(-0.4, 0.0, 0.0), residual=("palm_x", "palm_z")))])
+@pytest.mark.parametrize("env_id, options", [
+    (CRADLE, AIDS), (SPHERE, dict(action_offset=(-0.4,), residual=("palm_z",), residual_alone=True)),
+    (PLACE, dict(action_offset=(-0.4, 0.0, 0.0), residual=("palm_x", "palm_z")))])
 def test_the_task_is_unchanged_and_the_entries_follow_the_table(env_id, options):
     wrapped = make_env(env_id, EnvOptions(privileged_critic=True, **options))
     plain = make_env(env_id, EnvOptions(**options))

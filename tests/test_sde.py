@@ -22,7 +22,8 @@ def test_the_keyword_and_the_sentence():
     assert model_kwargs("ppo", None, None, use_sde=False) == {} == model_kwargs("sac", None, None)
     with pytest.raises(ValueError, match="use_sde: PPO only"):
         model_kwargs("sac", None, None, use_sde=True)
-    assert hyperparameters(None, -1.0, use_sde=True) == "Stable-Baselines3 defaults but log_std_init = -1.0, use_sde = True"
+    assert hyperparameters(None, -1.0, use_sde=True) == \
+        "Stable-Baselines3 defaults but log_std_init = -1.0, use_sde = True"
     assert hyperparameters(None, -1.0, use_sde=False) == hyperparameters(None, -1.0)  # the records before it read alike
 
 
