@@ -96,3 +96,29 @@ def test_the_environments_page_lists_them_as_measured_and_not_adopted():
             f"{final_rates(CRADLE_PC)} %, the sphere's recipe {final_rates(SPHERE_PC)} %, the place "
             f"{final_rates(PLACE_PC)} %), gSDE's exploration (`--sde`: the cradle "
             f"{final_rates('rl_cradle_v6_residual_palm_light_sde_screen')} %)") in page
+
+
+def test_the_unaided_cells_replay_is_identical():
+    """"The README's unaided cell, replayed": seeds 0 and 2 of ``rl_pick_v7`` replayed with the cell's own command,
+    each ``identical`` against its record's run (checkpoints, outcomes), the training episodes equal, and the page's
+    figures the records'."""
+    from test_readme_tables import joined
+
+    page = joined(ROOT / "docs" / "learning.md")
+    para = page[page.index("- **The README's unaided cell, replayed** (stop 71)."):]
+    assert "`docs/baselines/rl_pick_v7_replay_02/`" in para and "--replay docs/baselines/rl_pick_v7 " in para
+    runs, again = seed_runs("rl_pick_v7", (0, 2)), seed_runs("rl_pick_v7_replay_02", (0, 2))
+    for k, run, rep in zip((0, 2), runs, again):
+        assert rep["replay"]["identical"] is True
+        assert rep["replay"]["from"] == f"docs/baselines/rl_pick_v7/ppo_seed{k}.json"
+        assert rep["train_episodes"] == run["train_episodes"] and rep["timesteps"] == run["timesteps"]
+        assert [c["success_rate"] for c in rep["checkpoints"]] == [c["success_rate"] for c in run["checkpoints"]]
+    assert f"{_listed(checkpoint_rates(r) for r in runs)} % at 5 / 10 / 15 CPU-min on " \
+           f"{_listed(format(r['timesteps'], ',') for r in runs)} steps" in para
+    assert f"the training episodes too ({_listed(format(r['train_episodes'], ',') for r in runs)})" in para
+    agg = aggregate("rl_pick_v7_replay_02")
+    assert agg["seeds"] == [0, 2] and all("--replay" in c for c in agg["combined_from"])
+    readme = joined(ROOT / "README.md")
+    assert "and the pinch's unaided cell in both seeds that grip" in readme
+    never = seed_runs("rl_pick_v7", (1,))[0]  # the seed not replayed: it never grips
+    assert never["outcomes"].get("success", 0) == 0 and all(c["success_rate"] == 0 for c in never["checkpoints"])
