@@ -5,6 +5,7 @@
 
 from __future__ import annotations
 
+import re
 import sys
 from pathlib import Path
 
@@ -98,27 +99,29 @@ def test_the_environments_page_lists_them_as_measured_and_not_adopted():
             f"{final_rates('rl_cradle_v6_residual_palm_light_sde_screen')} %)") in page
 
 
-def test_the_unaided_cells_replay_is_identical():
-    """"The README's unaided cell, replayed": seeds 0 and 2 of ``rl_pick_v7`` replayed with the cell's own command,
-    each ``identical`` against its record's run (checkpoints, outcomes), the training episodes equal, and the page's
-    figures the records'."""
+def test_the_unaided_cells_replays_are_identical():
+    """"The README's unaided cells, replayed": seeds 0 and 2 of ``rl_pick_v7`` and 0 and 1 of ``rl_multi_v7`` replayed
+    with each cell's own command, each ``identical`` against its record's run (checkpoints, outcomes), the training
+    episodes equal, and the page's figures the records'."""
     from test_readme_tables import joined
 
     page = joined(ROOT / "docs" / "learning.md")
-    para = page[page.index("- **The README's unaided cell, replayed** (stop 71)."):]
-    assert "`docs/baselines/rl_pick_v7_replay_02/`" in para and "--replay docs/baselines/rl_pick_v7 " in para
-    runs, again = seed_runs("rl_pick_v7", (0, 2)), seed_runs("rl_pick_v7_replay_02", (0, 2))
-    for k, run, rep in zip((0, 2), runs, again):
-        assert rep["replay"]["identical"] is True
-        assert rep["replay"]["from"] == f"docs/baselines/rl_pick_v7/ppo_seed{k}.json"
-        assert rep["train_episodes"] == run["train_episodes"] and rep["timesteps"] == run["timesteps"]
-        assert [c["success_rate"] for c in rep["checkpoints"]] == [c["success_rate"] for c in run["checkpoints"]]
-    assert f"{_listed(checkpoint_rates(r) for r in runs)} % at 5 / 10 / 15 CPU-min on " \
-           f"{_listed(format(r['timesteps'], ',') for r in runs)} steps" in para
-    assert f"the training episodes too ({_listed(format(r['train_episodes'], ',') for r in runs)})" in para
-    agg = aggregate("rl_pick_v7_replay_02")
-    assert agg["seeds"] == [0, 2] and all("--replay" in c for c in agg["combined_from"])
+    para = page[page.index("- **The README's unaided cells, replayed** (stop 71)."):]
+    for cell, seeds, replayed in (("rl_pick_v7", (0, 2), "rl_pick_v7_replay_02"),
+                                  ("rl_multi_v7", (0, 1), "rl_multi_v7_replay_01")):
+        assert f"`docs/baselines/{replayed}/`" in para and re.search(rf"--replay docs/baselines/{cell}[ `]", para)
+        runs, again = seed_runs(cell, seeds), seed_runs(replayed, seeds)
+        for k, run, rep in zip(seeds, runs, again):
+            assert rep["replay"]["identical"] is True
+            assert rep["replay"]["from"] == f"docs/baselines/{cell}/ppo_seed{k}.json"
+            assert rep["train_episodes"] == run["train_episodes"] and rep["timesteps"] == run["timesteps"]
+            assert [c["success_rate"] for c in rep["checkpoints"]] == [c["success_rate"] for c in run["checkpoints"]]
+        assert f"{_listed(checkpoint_rates(r) for r in runs)} % at 5 / 10 / 15 CPU-min on " \
+               f"{_listed(format(r['timesteps'], ',') for r in runs)} steps" in para
+        assert f"the training episodes too ({_listed(format(r['train_episodes'], ',') for r in runs)})" in para
+        agg = aggregate(replayed)
+        assert agg["seeds"] == list(seeds) and all("--replay" in c for c in agg["combined_from"])
     readme = joined(ROOT / "README.md")
-    assert "and the pinch's unaided cell in both seeds that grip" in readme
-    never = seed_runs("rl_pick_v7", (1,))[0]  # the seed not replayed: it never grips
+    assert "and two seeds each of the pinch's and the K fingers' unaided cells" in readme
+    never = seed_runs("rl_pick_v7", (1,))[0]  # the pinch's seed not replayed: it never grips
     assert never["outcomes"].get("success", 0) == 0 and all(c["success_rate"] == 0 for c in never["checkpoints"])
