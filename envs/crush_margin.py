@@ -26,6 +26,7 @@ from __future__ import annotations
 import gymnasium as gym
 
 from simgrip.envs.arguments import check_charge
+from simgrip.envs.touch_history import read_forces
 
 __all__ = ["CrushMargin", "MARGIN_ONSET"]
 
@@ -58,8 +59,7 @@ class CrushMargin(gym.Wrapper):
 
     def step(self, action):
         obs, reward, terminated, truncated, info = self.env.step(action)
-        forces = info.get("peak_normal_force", info["normal_force"])
-        share = max(forces) / self._task.crush_limit
+        share = max(read_forces(info)) / self._task.crush_limit
         cost = self.charge * min(max((share - MARGIN_ONSET) / (1.0 - MARGIN_ONSET), 0.0), 1.0)
         info["reward_crush_margin"] = 0.0 - cost
         return obs, reward - cost, terminated, truncated, info

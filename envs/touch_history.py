@@ -26,10 +26,18 @@ from __future__ import annotations
 import mujoco
 import numpy as np
 
-__all__ = ["TouchPeaks", "add_touch_sensors", "touch_contacts"]
+__all__ = ["TouchPeaks", "add_touch_sensors", "read_forces", "touch_contacts"]
 
 #: the sensors' names, one per finger
 SENSOR_NAME = "touch_f{}"
+
+
+def read_forces(info: dict):
+    """Each finger's normal force [N] as a fragile task's crush rule read it in the step whose ``info`` this is:
+    ``info["peak_normal_force"]`` where the rule reads the peak within the step (``crush_at="peak"``), else
+    ``info["normal_force"]`` (the step's end).  What the training wrappers that judge a grip against the hidden limit
+    read (:mod:`simgrip.envs.crush_margin`, :mod:`simgrip.envs.privileged_critic`)."""
+    return info.get("peak_normal_force", info["normal_force"])
 
 
 def touch_contacts(n_links: int) -> int:
