@@ -37,6 +37,8 @@ import math
 import gymnasium as gym
 import numpy as np
 
+from simgrip.envs.touch_history import read_forces
+
 __all__ = ["N_PRIVILEGED", "ActorView", "AsymmetricActorCriticPolicy", "PrivilegedObservation", "policy_for"]
 
 #: the entries :class:`PrivilegedObservation` appends (module docstring's table)
@@ -71,30 +73,34 @@ class PrivilegedObservation(gym.Wrapper):
         self.observation_space = gym.spaces.Box(low, high, dtype=space.dtype)
 
     def privileged(self, force: float) -> np.ndarray:
-        """The appended entries for the largest finger force ``force`` [N] (the module docstring's table)."""
-        hold, crush = float(self._task.hold_force), float(self._task.crush_limit)
-        if not (hold > 0.0 and math.isfinite(crush) and crush >= hold):
-            raise ValueError(f"env: hold force {hold!r} and crush limit {crush!r} give no window")
-        return np.array([math.log(crush / hold), math.log1p(hold / self._unit), min(force / crush, NEAR_MAX),
-                         math.log1p(force / hold)], dtype=self.observation_space.dtype)
+        """The appended entries for the largest finger force ``force`` [N] (the module docstring's table), the
+        episode's hidden hold force and crush limit as drawn at the last ``reset``."""
+        hold, crush = self._hidden
+        return np.array([*self._episode, min(force / crush, NEAR_MAX), math.log1p(force / hold)],
+                        dtype=self.observation_space.dtype)
 
     def _with(self, obs, force: float) -> np.ndarray:
         return np.concatenate([np.asarray(obs, dtype=self.observation_space.dtype), self.privileged(force)])
 
     def reset(self, **kwargs):
         obs, info = self.env.reset(**kwargs)
+        hold, crush = float(self._task.hold_force), float(self._task.crush_limit)  # drawn anew at each reset
+        if not (hold > 0.0 and math.isfinite(crush) and crush >= hold):
+            raise ValueError(f"env: hold force {hold!r} and crush limit {crush!r} give no window")
+        self._hidden = (hold, crush)
+        self._episode = (math.log(crush / hold), math.log1p(hold / self._unit))  # entries 0 and 1: the episode's
         return self._with(obs, 0.0), info
 
     def step(self, action):
         obs, reward, terminated, truncated, info = self.env.step(action)
-        force = max(float(f) for f in info.get("peak_normal_force", info["normal_force"]))
+        force = max(float(f) for f in read_forces(info))
         return self._with(obs, force), reward, terminated, truncated, info
 
 
 def policy_for(options):
     """The policy an SB3 model is built with for ``options`` (:class:`~simgrip.envs.env_options.EnvOptions`, or
     None): :class:`AsymmetricActorCriticPolicy` where ``options.privileged_critic``, else ``"MlpPolicy"``."""
-    return __getattr__("AsymmetricActorCriticPolicy") if getattr(options, "privileged_critic", False) else "MlpPolicy"
+    return _classes()[1] if getattr(options, "privileged_critic", False) else "MlpPolicy"
 
 
 def _actor_view_class():
@@ -144,12 +150,17 @@ def _policy_class():
     return view, AsymmetricActorCriticPolicy
 
 
-def __getattr__(name):
-    # the torch classes are made on first access, so that importing the wrapper does not import torch
-    if name in ("ActorView", "AsymmetricActorCriticPolicy"):
-        if name in globals():
-            return globals()[name]
+def _classes() -> tuple:
+    """``(ActorView, AsymmetricActorCriticPolicy)``, made once, on first use."""
+    if "AsymmetricActorCriticPolicy" not in globals():
         view, policy = _policy_class()
         globals().update(ActorView=view, AsymmetricActorCriticPolicy=policy)
-        return globals()[name]
+    return globals()["ActorView"], globals()["AsymmetricActorCriticPolicy"]
+
+
+def __getattr__(name):
+    # the torch classes are made on first access, so that importing the wrapper does not import torch (the rl
+    # extra is optional); a saved model names its policy class by this module's path, which this resolves
+    if name in ("ActorView", "AsymmetricActorCriticPolicy"):
+        return dict(zip(("ActorView", "AsymmetricActorCriticPolicy"), _classes()))[name]
     raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
