@@ -227,18 +227,15 @@ def main(argv=None) -> dict:
     p.add_argument("--json", action="store_true", help="print only a JSON object")
     args = p.parse_args(argv)
     check_env_id(p, args.env, retired=True)  # make_env builds a retired one through its spec
-    if args.policy is not None and args.action_offset is not None:
-        p.error("--action-offset: only with --model (the scripted controllers command the env directly)")
-    if args.policy is not None and args.scripted_start is not None:
-        p.error("--scripted-start: only with --model (a scripted controller started part-way is not itself)")
-    if args.policy is not None and args.residual is not None:
-        p.error("--residual: only with --model (the scripted controller alone is --policy observation)")
-    if args.policy is not None and args.valve_share is not None:
-        p.error("--valve-share: only with --model (the scripted controllers command the valve at its own rate)")
-    if args.policy is not None and args.privileged_critic:
-        p.error("--privileged-critic: only with --model (the scripted controllers read the env's own observation)")
-    if args.policy is not None and args.frame_stack is not None:
-        p.error("--frame-stack: only with --model (the scripted controllers read the env's own observation)")
+    for name, why in (("action_offset", "the scripted controllers command the env directly"),
+                      ("scripted_start", "a scripted controller started part-way is not itself"),
+                      ("residual", "the scripted controller alone is --policy observation"),
+                      ("valve_share", "the scripted controllers command the valve at its own rate"),
+                      ("privileged_critic", "the scripted controllers read the env's own observation"),
+                      ("frame_stack", "the scripted controllers read the env's own observation")):
+        value = getattr(args, name)  # a trained policy's option (None or False: not given), not a controller's
+        if args.policy is not None and value is not None and value is not False:
+            p.error(f"--{name.replace('_', '-')}: only with --model ({why})")
     if args.model is not None:
         import os
 
