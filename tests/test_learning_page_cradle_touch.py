@@ -1,0 +1,100 @@
+"""The learning page's screens of stop 72 against their records: the cradle's recipe with a charge near the crush,
+and the cradle with its palm the script's alone at half the valve's rate (``docs/learning.md``; the helpers are
+``test_learning_page.py``'s, the records' readers ``test_readme_tables.py``'s).
+
+The scripted observation-only controller's first touches, which the second paragraph sets the learners against,
+are measured here again with ``evaluate_policy.py``'s own command on the held-out seeds 8000-8049.
+"""
+
+from __future__ import annotations
+
+import sys
+from pathlib import Path
+
+sys.path.insert(0, str(Path(__file__).parent))
+from helpers import load_example  # noqa: E402
+from test_learning_page import (_assert_seeds_on_page, _listed, checkpoint_rates, learning_paragraph,  # noqa: E402
+                                seed_runs)
+from test_learning_page_claws import _evaluation  # noqa: E402
+from test_readme_tables import ROOT, aggregate, final_rates, joined  # noqa: E402
+
+RECIPE = "rl_cradle_v6_palm_alone_light_log_std_lr_decay_step_charge_valve005_screen"
+MARGIN = "rl_cradle_v6_palm_alone_light_log_std_lr_decay_step_charge_share025_crush_margin_screen"
+HALF = "rl_cradle_v6_residual_palm_light_log_std_lr_decay_share05_screen"
+ALONE_HALF = "rl_cradle_v6_palm_alone_light_log_std_lr_decay_share05_screen"
+IGNORED = ("command", "summary", "combined_from", "versions", "seeds")
+
+
+def _options(folder: str, *drop: str) -> dict:
+    return {k: v for k, v in aggregate(folder).items() if k not in IGNORED + drop}
+
+
+def _pct(x: float) -> str:
+    return f"{x:.2f}"
+
+
+def test_the_crush_margin_screen_is_its_record():
+    """"The cradle's recipe with a charge near the crush": the recipe's options with the restrictor in place of the
+    valve's keyword argument (a quarter: the same task bit for bit) and the charge, each seed's checkpoints, steps and
+    crushes, the recipe's seeds it is set against, where its crushes come and by how much seed 1's overrun."""
+    para = learning_paragraph("**The cradle's recipe with a charge near the crush**")
+    assert f"`docs/baselines/{MARGIN}/`" in para
+    agg, ref = aggregate(MARGIN), aggregate(RECIPE)
+    assert ref["env_kwargs"] == {"kappa_rate": 0.005} and "env_kwargs" not in agg
+    assert agg["valve_share"] == 0.25 and agg["crush_margin"] == 0.2 and agg["seeds"] == [0, 1]
+    assert _options(MARGIN, "valve_share", "crush_margin") == _options(RECIPE, "env_kwargs")
+    runs = seed_runs(MARGIN, (0, 1))
+    _assert_seeds_on_page(para, runs)
+    assert f"against {_listed(checkpoint_rates(r) for r in seed_runs(RECIPE, (0, 1)))} % without the charge" in para
+    evs = [_evaluation(MARGIN, k) for k in (0, 1)]
+    assert [e["outcomes"] for e in evs] == [r["outcomes"] for r in runs]
+    after = [e["crushed_after_touch"] for e in evs]
+    assert (f"{_listed(a['0'] for a in after)} in the touch's step, {_listed(a['5-24'] for a in after)} five to 24 "
+            f"steps after it, {_listed(a['25+'] for a in after)} later still") in para
+    crushed = runs[1]["outcomes"]["crushed"]
+    assert f"seed 1 crushes {crushed} of 50 held-out pieces, over the limit by a median " \
+           f"{100 * evs[1]['crush_overrun']['median']:.1f} %" in para
+    assert f"(the K fingers with the same charge: " \
+           f"{final_rates('rl_multi_v7_peak_light_log_std_half_lr_decay_step_charge_crush_margin')} %, the place: " \
+           f"{final_rates('rl_place_v8_residual_palm_log_std_crush_margin_screen')} %)" in para
+    assert max(r["success_rate"] for r in runs) < 0.8 and "not adopted" in para
+
+
+def test_the_palm_alone_half_rate_screen_is_its_record():
+    """"The cradle with its palm the script's alone at half the rate": the half-rate command's options with the palm
+    the script's alone (the policy's action the curvature's only), each seed's checkpoints, steps and crushes, the
+    half-rate screen with the palm's correction it is set against, and the crushes and first touches of both against
+    the scripted controller's (measured again here)."""
+    para = learning_paragraph("**The cradle with its palm the script's alone at half the rate**")
+    assert f"`docs/baselines/{ALONE_HALF}/`" in para
+    agg = aggregate(ALONE_HALF)
+    assert agg["residual_alone"] is True and agg["action_offset"] == [-0.4] and agg["seeds"] == [0, 1]
+    assert aggregate(HALF)["action_offset"] == [-0.4, 0.0]
+    assert _options(ALONE_HALF, "residual_alone", "action_offset") == _options(HALF, "action_offset")
+    runs = seed_runs(ALONE_HALF, (0, 1))
+    _assert_seeds_on_page(para, runs)
+    assert f"against {_listed(checkpoint_rates(r) for r in seed_runs(HALF, (0, 1)))} % with the palm's correction" \
+        in para
+    evs = [_evaluation(ALONE_HALF, k) for k in (0, 1)]
+    assert [e["outcomes"] for e in evs] == [r["outcomes"] for r in runs]
+    before = [_evaluation(HALF, k)["crushed_after_touch"]["0"] for k in (0, 1)]
+    assert (f"as many crushes come in the touch's step ({_listed(e['crushed_after_touch']['0'] for e in evs)}, "
+            f"against {_listed(before)})") in para
+    touch = [e["first_touch"] for e in evs]
+    assert (f"a median {_listed(_pct(t['read']['median']) for t in touch)} of the limit (at most "
+            f"{_listed(_pct(t['read']['max']) for t in touch)})") in para
+    ctrl = load_example("evaluate_policy", "_cradle_touch").main(
+        ["--env", "simgrip/PickCradleFragile-v6", "--policy", "observation", "--episodes", "50", "--seed", "8000",
+         "--json"])
+    first = ctrl["first_touch"]
+    assert first["touches"] == 50 and first["above_limit"] == 0 and ctrl["crushed_after_touch"]["0"] == 0
+    assert (f"against the controller's {_pct(first['read']['median'])} (at most {_pct(first['read']['max'])}; none "
+            f"above the limit, no crush in the touch's step") in para
+    assert min(t["read"]["median"] for t in touch) > first["read"]["median"]
+    assert max(r["success_rate"] for r in runs) < 0.8 and "not adopted" in para
+
+
+def test_the_environments_page_lists_them_as_measured_and_not_adopted():
+    page = joined(ROOT / "docs" / "environments.md")
+    assert (f"the cradle's recipe with a charge near the crush (`--crush-margin 0.2`: {final_rates(MARGIN)} %) and "
+            f"with its palm the script's alone at half the valve's rate ({final_rates(ALONE_HALF)} %)") in page
