@@ -224,9 +224,9 @@ def test_the_lr_decay_rerun_and_its_replays_are_their_records():
 
 
 def _listed(items) -> str:
-    """Items as the pages list them: "a and b", "a, b and c"."""
+    """Items as the pages list them: "a", "a and b", "a, b and c"."""
     items = [str(i) for i in items]
-    return ", ".join(items[:-1]) + " and " + items[-1]
+    return items[0] if len(items) == 1 else ", ".join(items[:-1]) + " and " + items[-1]
 
 
 def _assert_seeds_on_page(para: str, runs: list, span: str = "15", crushes_end: str = ")") -> None:

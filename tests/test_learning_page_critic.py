@@ -99,6 +99,28 @@ def test_the_environments_page_lists_them_as_measured_and_not_adopted():
             f"{final_rates('rl_cradle_v6_residual_palm_light_sde_screen')} %)") in page
 
 
+def _assert_unaided_replays(para: str, cells) -> None:
+    """Each ``(cell, seeds, replayed)``: the replay folder named in ``para`` with the cell's ``--replay``, each seed
+    ``identical`` against its record's run (checkpoints, outcomes), the training episodes equal, and ``para``'s
+    figures the records'."""
+    for cell, seeds, replayed in cells:
+        assert f"`docs/baselines/{replayed}/`" in para and re.search(rf"--replay docs/baselines/{cell}[ `]", para)
+        runs, again = seed_runs(cell, seeds), seed_runs(replayed, seeds)
+        for k, run, rep in zip(seeds, runs, again):
+            assert rep["replay"]["identical"] is True
+            assert rep["replay"]["from"] == f"docs/baselines/{cell}/ppo_seed{k}.json"
+            assert rep["train_episodes"] == run["train_episodes"] and rep["timesteps"] == run["timesteps"]
+            assert [c["success_rate"] for c in rep["checkpoints"]] == [c["success_rate"] for c in run["checkpoints"]]
+            assert rep["outcomes"] == run["outcomes"]
+        assert f"{_listed(checkpoint_rates(r) for r in runs)} % at 5 / 10 / 15 CPU-min on " \
+               f"{_listed(format(r['timesteps'], ',') for r in runs)} steps" in para
+        assert f"the training episodes too ({_listed(format(r['train_episodes'], ',') for r in runs)})" in para
+        agg = aggregate(replayed)
+        assert agg["seeds"] == list(seeds)
+        commands = [c for c in agg.get("combined_from") or [agg["command"]]]
+        assert all("--replay" in c for c in commands)
+
+
 def test_the_unaided_cells_replays_are_identical():
     """"The README's unaided cells, replayed": seeds 0 and 2 of ``rl_pick_v7`` and 0 and 1 of ``rl_multi_v7`` replayed
     with each cell's own command, each ``identical`` against its record's run (checkpoints, outcomes), the training
@@ -107,21 +129,26 @@ def test_the_unaided_cells_replays_are_identical():
 
     page = joined(ROOT / "docs" / "learning.md")
     para = page[page.index("- **The README's unaided cells, replayed** (stop 71)."):]
-    for cell, seeds, replayed in (("rl_pick_v7", (0, 2), "rl_pick_v7_replay_02"),
-                                  ("rl_multi_v7", (0, 1), "rl_multi_v7_replay_01")):
-        assert f"`docs/baselines/{replayed}/`" in para and re.search(rf"--replay docs/baselines/{cell}[ `]", para)
-        runs, again = seed_runs(cell, seeds), seed_runs(replayed, seeds)
-        for k, run, rep in zip(seeds, runs, again):
-            assert rep["replay"]["identical"] is True
-            assert rep["replay"]["from"] == f"docs/baselines/{cell}/ppo_seed{k}.json"
-            assert rep["train_episodes"] == run["train_episodes"] and rep["timesteps"] == run["timesteps"]
-            assert [c["success_rate"] for c in rep["checkpoints"]] == [c["success_rate"] for c in run["checkpoints"]]
-        assert f"{_listed(checkpoint_rates(r) for r in runs)} % at 5 / 10 / 15 CPU-min on " \
-               f"{_listed(format(r['timesteps'], ',') for r in runs)} steps" in para
-        assert f"the training episodes too ({_listed(format(r['train_episodes'], ',') for r in runs)})" in para
-        agg = aggregate(replayed)
-        assert agg["seeds"] == list(seeds) and all("--replay" in c for c in agg["combined_from"])
+    _assert_unaided_replays(para, (("rl_pick_v7", (0, 2), "rl_pick_v7_replay_02"),
+                                   ("rl_multi_v7", (0, 1), "rl_multi_v7_replay_01")))
     readme = joined(ROOT / "README.md")
     assert "and two seeds each of the pinch's and the K fingers' unaided cells" in readme
     never = seed_runs("rl_pick_v7", (1,))[0]  # the pinch's seed not replayed: it never grips
     assert never["outcomes"].get("success", 0) == 0 and all(c["success_rate"] == 0 for c in never["checkpoints"])
+
+
+def test_the_claws_unaided_replays_are_identical():
+    """"The cradle's and the sphere's unaided cells, replayed": the one seed of each that ends above 0 % (seed 2 of
+    ``rl_cradle_v6``, seed 0 of ``rl_sphere_v6``), as the test above; every other seed of theirs and of the place's
+    unaided cell ends at 0 %, as the page and the README say."""
+    from test_readme_tables import joined
+
+    page = joined(ROOT / "docs" / "learning.md")
+    para = page[page.index("- **The cradle's and the sphere's unaided cells, replayed** (stop 72)."):]
+    _assert_unaided_replays(para, (("rl_cradle_v6", (2,), "rl_cradle_v6_replay_2"),
+                                   ("rl_sphere_v6", (0,), "rl_sphere_v6_replay_0")))
+    for cell, others in (("rl_cradle_v6", (0, 1)), ("rl_sphere_v6", (1, 2)), ("rl_place_v8", (0, 1, 2))):
+        assert all(r["success_rate"] == 0 for r in seed_runs(cell, others))
+    assert "Their other seeds, and every seed of the place's unaided cell, end at 0 %." in para
+    readme = joined(ROOT / "README.md")
+    assert "unaided cells and the one seed of the cradle's and of the sphere's that grips." in readme
