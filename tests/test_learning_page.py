@@ -134,11 +134,16 @@ def test_the_25_hz_screen_on_the_learning_page_is_its_record():
     assert f"{crushed[0]} and {crushed[1]} crushes of 50 held out" in para
 
 
+#: the README's aided cells since replaced -> the record that replaced each (the cradle's at stop 72, the environments
+#: page says so)
+FORMER_CELLS = {"rl_cradle_v6_residual_palm_light_log_std": "rl_cradle_v6_residual_palm_light_log_std_peak_gamma_select"}
+
+
 def _assert_replayed(cell: str, folder: str, seed: int, rates: str, steps: str, episodes: str) -> None:
     """Seed ``seed`` of the README cell ``cell``'s record replayed into ``folder``: the replay says ``identical``
     against that record, whose checkpoints (``rates``, "x / y / z"), steps and training episodes (as the page writes
-    them) are the page's and the replay's."""
-    assert cell in {columns[AIDED] for _, columns in ROWS.values()}, cell  # a README cell's record
+    them) are the page's and the replay's.  A cell the README has since replaced counts too (:data:`FORMER_CELLS`)."""
+    assert cell in {columns[AIDED] for _, columns in ROWS.values()} | set(FORMER_CELLS), cell  # a README cell's
     record, = seed_runs(cell, [seed])
     run, = seed_runs(folder, [seed])
     assert run["replay"]["identical"] is True and run["replay"]["from"].endswith(f"{cell}/ppo_seed{seed}.json")
@@ -159,6 +164,10 @@ def test_the_identical_replays_on_the_learning_page_are_their_records():
                        r"on ([\d,]+), ([\d,]+) and ([\d,]+) steps, .*? training episodes too \(([\d,]+), ([\d,]+) and "
                        r"([\d,]+)\)", text)
     assert len(found) == 3, found
+    page = joined(ROOT / "docs" / "environments.md")
+    for former, now in FORMER_CELLS.items():
+        assert now in {columns[AIDED] for _, columns in ROWS.values()}, now
+        assert f"`{now}/` since stop 72 (before it `{former}/`" in page, (former, now)
     for cell, folder, rates, *numbers in found:
         for seed, seed_rates in enumerate(re.split(r", | and ", rates)):
             _assert_replayed(cell, folder, seed, seed_rates, numbers[seed], numbers[3 + seed])

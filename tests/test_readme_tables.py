@@ -24,6 +24,9 @@ ROOT = Path(__file__).resolve().parents[1]
 BASELINES = ROOT / "docs" / "baselines"
 
 AIDED = "PPO behind its aid, 3 seeds"
+#: the cradle's batch that meets the learning target, and the same command without the selection
+CRADLE_SELECT = "rl_cradle_v6_residual_palm_light_log_std_peak_gamma_select"
+CRADLE_GAMMA = "rl_cradle_v6_residual_palm_light_log_std_peak_gamma_screen"
 
 #: README row -> (the id whose non-learned records it shows, {learned column header: aggregate folder}).
 ROWS = {
@@ -36,7 +39,7 @@ ROWS = {
                                             AIDED: "rl_place_v8_residual_palm_log_std"}),
     "PickCradleFragile-v6": ("PickCradleFragile-v6", {"PPO, 3 seeds": "rl_cradle_v6",
                                                       "SAC, 3 seeds": "rl_cradle_v6_sac",
-                                                      AIDED: "rl_cradle_v6_residual_palm_light_log_std"}),
+                                                      AIDED: CRADLE_SELECT}),
     "PickSphereFragile-v6": ("PickSphereFragile-v6", {"PPO, 3 seeds": "rl_sphere_v6",
                                                       "SAC, 3 seeds": "rl_sphere_v6_sac",
                                                       AIDED: "rl_sphere_v6_residual_palm_light_log_std"}),
@@ -136,6 +139,31 @@ def training_command(agg: dict) -> list:
     """The ``rl_baselines.py`` command that trained a record's runs: its ``command``, or for a record combined from
     batches (``--combine``, which checks that they are one experiment over different seeds) the first batch's."""
     return agg["combined_from"][0] if "combined_from" in agg else agg["command"]
+
+
+def _options_but(command: list, *drop: str) -> list:
+    """A training command from its first option on, without the options ``drop`` and their values (the seeds and
+    the output folder differ between batches of one experiment)."""
+    out, skip = [], False
+    for arg in command[command.index("--env"):]:
+        if arg.startswith("--"):
+            skip = arg in drop
+        if not skip:
+            out.append(arg)
+    return out
+
+
+def _assert_stopped_sooner(selected: str, plain: str, seeds: tuple) -> None:
+    """The record ``selected`` is ``plain``'s command with ``--select-every`` (its runs, being ``plain``'s stopped
+    sooner: the validations draw no random number, the budget they spend the only difference): the same options,
+    and each seed's run fewer steps and training episodes, one validation a budget minute."""
+    drop = ("--select-every", "--seeds", "--out")
+    assert _options_but(training_command(aggregate(selected)), *drop) == \
+        _options_but(training_command(aggregate(plain)), *drop)
+    for k in seeds:
+        chosen, last = (json.loads((BASELINES / f / f"ppo_seed{k}.json").read_text()) for f in (selected, plain))
+        assert chosen["timesteps"] < last["timesteps"] and chosen["train_episodes"] < last["train_episodes"]
+        assert len(chosen["selection"]["validations"]) == 15 and "selection" not in last
 
 
 def measured_as(rec: dict) -> str:
@@ -361,12 +389,18 @@ def test_target_table_is_its_records():
             f"{pinch[1]} %), and the K fingers in one batch of two when PPO steps four copies of the env and learns "
             "from minibatches of "
             f"128 (`4 envs, n steps 512, batch 128`: 1.4M steps in 15 CPU-minutes; seeds 0–2, {k_fingers[0]} %, not "
-            f"3–5, {k_fingers[1]} %), while the place, the cradle and the sphere do not; on the versions before, "
+            f"3–5, {k_fingers[1]} %), and the cradle in one batch of three at the pinch's discount with the best "
+            f"of validations kept (`peak offset, scripted palm, light bias, log std -1, γ 0.995, select every 1`: "
+            f"seeds 0–2, {final_rates(CRADLE_SELECT)} %; seed 3 alone, {final_rates(CRADLE_SELECT + '_3')} %; its "
+            f"runs are those of the same command without the selection, {final_rates(CRADLE_GAMMA)} % for seeds "
+            f"0–1, stopped sooner), while the place and the sphere do not; on the versions before, "
             "the pinch and the K fingers met it, the cradle in one batch of two, and the sphere and the place did not.") in text
     # the first γ batch, the same runs stopped sooner (select every 1), and the four copies' seeds 0-2
     assert verdicts["pinch"].count("yes") == 3
     assert verdicts["K fingers"].count("yes") == 1  # four copies, minibatches of 128: seeds 0-2, not 3-5
-    assert not any("yes" in verdicts[t] for t in ("place", "cradle", "sphere"))
+    assert not any("yes" in verdicts[t] for t in ("place", "sphere"))
+    assert verdicts["cradle"].count("yes") == 1  # the discount with the best of validations kept: seeds 0-2
+    _assert_stopped_sooner(CRADLE_SELECT, CRADLE_GAMMA, (0, 1))
     assert all("yes" in verdicts[t] for t in ("pinch, v6", "K fingers, v6", "cradle, v5"))
     assert verdicts["cradle, v5"].count("yes") == 1 and len(verdicts["cradle, v5"]) == 2
     assert "yes" not in verdicts["sphere, v5"] + verdicts["place, v7"]
