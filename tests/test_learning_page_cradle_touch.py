@@ -152,3 +152,20 @@ def test_the_discount_and_selection_screens_are_their_records(controller):
     assert evs[0]["outcomes"]["success"] == wins == 45 and f"holds {wins} of the 50 held-out" in para
     assert f"crushes {evs[0]['crushed_after_touch']['0']} in the touch's step, where the controller crushes none" \
         in para and controller["crushed_after_touch"]["0"] == 0
+
+
+def test_the_recipe_on_the_sphere_is_its_record():
+    """The same paragraph's last sentences: the cradle's selection command on the sphere (its options the cradle
+    batch's but the id), each seed's checkpoints, steps and crushes, and those in the touch's step."""
+    page = joined(ROOT / "docs" / "learning.md")
+    title = "**The cradle at the pinch's discount, with the best of validations kept** (stop 72)."
+    para = page[page.index(title):page.index("**The budget replayed in steps**")]
+    folder = "rl_sphere_v6_residual_palm_light_log_std_peak_gamma_select_screen"
+    assert f"`docs/baselines/{folder}/`" in para and aggregate(folder)["env"] == "simgrip/PickSphereFragile-v6"
+    assert _options(folder, "env") == _options(SELECT, "env") and aggregate(folder)["seeds"] == [0, 1]
+    runs = seed_runs(folder, (0, 1))
+    _assert_seeds_on_page(para, runs)
+    evs = [_evaluation(folder, k) for k in (0, 1)]
+    assert [e["outcomes"] for e in evs] == [r["outcomes"] for r in runs]
+    assert f"{_listed(e['crushed_after_touch']['0'] for e in evs)} of them in the touch's step: not adopted" in para
+    assert max(r["success_rate"] for r in runs) < 0.8
