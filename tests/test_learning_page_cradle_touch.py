@@ -43,6 +43,14 @@ def _options(folder: str, *drop: str) -> dict:
     return {k: v for k, v in aggregate(folder).items() if k not in IGNORED + drop}
 
 
+def _selection_paragraph() -> str:
+    """"The cradle at the pinch's discount, with the best of validations kept", cut at the next paragraph's title
+    (its own "**met**" would end :func:`learning_paragraph`'s cut)."""
+    page = joined(ROOT / "docs" / "learning.md")
+    title = "**The cradle at the pinch's discount, with the best of validations kept** (stop 72)."
+    return page[page.index(title):page.index("**The budget replayed in steps**")]
+
+
 def _pct(x: float) -> str:
     return f"{x:.2f}"
 
@@ -116,9 +124,7 @@ def test_the_discount_and_selection_screens_are_their_records(controller):
     command's, with the pinch's start and discount), the selection batches' (the same with ``--select-every 1``),
     each seed's checkpoints, steps and crushes, the verdict, the chosen and last policies' held-out success and
     when each was chosen, and seed 0's chosen policy against the controller."""
-    page = joined(ROOT / "docs" / "learning.md")  # (its "**met**" would end learning_paragraph's cut)
-    title = "**The cradle at the pinch's discount, with the best of validations kept** (stop 72)."
-    para = page[page.index(title):page.index("**The budget replayed in steps**")]
+    para = _selection_paragraph()
     base = aggregate("rl_cradle_v6_residual_palm_light_log_std")
     agg = aggregate(GAMMA)
     assert agg["action_offset"] == [-0.2, 0.0] and base["action_offset"] == [-0.4, 0.0]
@@ -157,9 +163,7 @@ def test_the_discount_and_selection_screens_are_their_records(controller):
 def test_the_recipe_on_the_sphere_is_its_record():
     """The same paragraph's last sentences: the cradle's selection command on the sphere (its options the cradle
     batch's but the id), each seed's checkpoints, steps and crushes, and those in the touch's step."""
-    page = joined(ROOT / "docs" / "learning.md")
-    title = "**The cradle at the pinch's discount, with the best of validations kept** (stop 72)."
-    para = page[page.index(title):page.index("**The budget replayed in steps**")]
+    para = _selection_paragraph()
     folder = "rl_sphere_v6_residual_palm_light_log_std_peak_gamma_select_screen"
     assert f"`docs/baselines/{folder}/`" in para and aggregate(folder)["env"] == "simgrip/PickSphereFragile-v6"
     assert _options(folder, "env") == _options(SELECT, "env") and aggregate(folder)["seeds"] == [0, 1]
