@@ -161,6 +161,7 @@ def _classes() -> tuple:
 def __getattr__(name):
     # the torch classes are made on first access, so that importing the wrapper does not import torch (the rl
     # extra is optional); a saved model names its policy class by this module's path, which this resolves
-    if name in ("ActorView", "AsymmetricActorCriticPolicy"):
-        return dict(zip(("ActorView", "AsymmetricActorCriticPolicy"), _classes()))[name]
+    names = ("ActorView", "AsymmetricActorCriticPolicy")
+    if name in names:
+        return _classes()[names.index(name)]
     raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
