@@ -8,8 +8,9 @@ of PPO's rollouts and updates (4,096 steps: 2 x 10 epochs of SB3's minibatches, 
 digest of the policy it saves (:func:`simgrip.envs.budget_replay.policy_digest`) is compared with the recorded ones.
 A set is recorded per (MuJoCo, NumPy, PyTorch, Stable-Baselines3) versions and host (``--add-host``); the set
 recorded first (stop 66) is of a host of the kind that made and replayed the README's records (whose envs give
-``env_step_reference.npz``), so where the test passes on it a replay of those records can give them whole.  Under
-versions no set names the test skips.
+``env_step_reference.npz``), so where the test passes on it a replay of those records can give them whole; a set
+added later names the CPU that gave it (``cpu``), and a host that reproduces only such a set replays the records to
+other last bits.  Under versions no set names the test skips.
 
     python tests/test_learner_reference.py [--regenerate | --add-host | --which-host]
 
@@ -49,6 +50,19 @@ def _run() -> dict:
 
 def _sets() -> list[dict]:
     return json.loads(DATA.read_text(encoding="utf-8"))["sets"] if DATA.exists() else []
+
+
+def _cpu() -> str:  # pragma: no cover - maintenance command
+    """This host's CPU model as Linux names it (``/proc/cpuinfo``), or ``platform.processor()`` elsewhere."""
+    import platform
+
+    try:
+        for line in Path("/proc/cpuinfo").read_text(encoding="utf-8").splitlines():
+            if line.startswith("model name"):
+                return line.split(":", 1)[1].strip()
+    except OSError:
+        pass
+    return platform.processor() or "unknown"
 
 
 def which_set(got: dict) -> int | None:
@@ -102,7 +116,7 @@ def main(argv: list[str]) -> None:  # pragma: no cover - maintenance command
     elif argv == ["--add-host"]:
         if found is not None:
             raise SystemExit(f"{DATA.name}: this host reproduces set {found} already")
-        _write(_sets() + [got])
+        _write(_sets() + [{**got, "cpu": _cpu()}])
         print(f"{DATA.name}: set {len(_sets()) - 1} added")
     else:
         _write([got])
