@@ -48,7 +48,7 @@ def _selection_paragraph() -> str:
     (its own "**met**" would end :func:`learning_paragraph`'s cut)."""
     page = joined(ROOT / "docs" / "learning.md")
     title = "**The cradle at the pinch's discount, with the best of validations kept** (stop 72)."
-    return page[page.index(title):page.index("**The budget replayed in steps**")]
+    return page[page.index(title):page.index("**The cradle's recipe on the place, and the light pieces' share**")]
 
 
 def _pct(x: float) -> str:

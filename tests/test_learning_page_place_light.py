@@ -1,0 +1,117 @@
+"""The learning page's screens of stop 73 against their records: the cradle's recipe on the place at the light bias
+of 0.5 and of 0.25, and the sphere's recipe behind the restrictor at half the valve's rate (``docs/learning.md``,
+"The cradle's recipe on the place, and the light pieces' share"; the helpers are ``test_learning_page.py``'s, the
+records' readers ``test_readme_tables.py``'s).
+
+The place's scripted observation-only controller, which the paragraph sets the learners against, is measured here
+again with ``evaluate_policy.py``'s own command on the held-out seeds 8000-8049.
+"""
+
+from __future__ import annotations
+
+import sys
+from pathlib import Path
+
+import pytest
+
+sys.path.insert(0, str(Path(__file__).parent))
+from helpers import load_example  # noqa: E402
+from test_learning_page import _assert_seeds_on_page, _listed, seed_runs  # noqa: E402
+from test_learning_page_claws import _evaluation  # noqa: E402
+from test_readme_tables import ROOT, aggregate, joined  # noqa: E402
+
+TITLE = "**The cradle's recipe on the place, and the light pieces' share** (stop 73;"
+CRADLE_SELECT = "rl_cradle_v6_residual_palm_light_log_std_peak_gamma_select"
+SPHERE_SELECT = "rl_sphere_v6_residual_palm_light_log_std_peak_gamma_select_screen"
+PLACE_HALF = "rl_place_v8_residual_palm_light_log_std_peak_gamma_select_screen"
+PLACE_QUARTER = "rl_place_v8_residual_palm_light25_log_std_peak_gamma_select"
+SPHERE_SHARE = "rl_sphere_v6_residual_palm_light_log_std_peak_gamma_select_share05_screen"
+#: the stop-62 place screens whose light pieces' crushes the paragraph opens with (two seeds each)
+PLACE_STOP62 = ("rl_place_v8_residual_palm_log_std_peak_screen", "rl_place_v8_residual_palm_log_std_rerun_screen",
+                "rl_place_v8_residual_palm_log_std_crush_margin_screen")
+IGNORED = ("command", "summary", "combined_from", "versions", "seeds")
+LIGHT, HEAVY = "5-18 g", "68-250 g"
+
+
+@pytest.fixture(scope="module")
+def controller():
+    """``evaluate_policy.py --env simgrip/PlaceFragile-v8 --policy observation --episodes 50 --seed 8000 --json``:
+    the place's scripted observation-only controller on the held-out seeds."""
+    return load_example("evaluate_policy", "_place_light").main(
+        ["--env", "simgrip/PlaceFragile-v8", "--policy", "observation", "--episodes", "50", "--seed", "8000",
+         "--json"])
+
+
+def _paragraph() -> str:
+    """The paragraph, cut at the next one's title."""
+    page = joined(ROOT / "docs" / "learning.md")
+    start = page.index(TITLE)
+    return page[start:page.index(" **", start + len(TITLE))]
+
+
+def _options(folder: str, *drop: str) -> dict:
+    return {k: v for k, v in aggregate(folder).items() if k not in IGNORED + drop}
+
+
+def _count(ev: dict, bin_: str, outcome: str) -> int:
+    return ev["by_mass"][bin_].get(outcome, 0)
+
+
+def test_the_place_screens_are_the_cradles_recipe(controller):
+    """The place's screens: the cradle's selection batch's options but the id, its three-entry offset and its
+    palm's two residual channels (at the light bias of 0.5, and of 0.25 in the three-seed batch); each seed's
+    checkpoints, steps and crushes; the light and heavy pieces placed and knocked over (the final policies'
+    ``evaluate_seedS.json``, whose outcomes are the runs'); the chosen and the last policies' held-out success; and
+    the controller's crushes and placements they are set against."""
+    para = _paragraph()
+    assert _options(PLACE_HALF, "env", "action_offset", "residual") == _options(CRADLE_SELECT, "env", "action_offset",
+                                                                                  "residual")
+    half, quarter = aggregate(PLACE_HALF), aggregate(PLACE_QUARTER)
+    assert half["env"] == "simgrip/PlaceFragile-v8" and half["action_offset"] == [-0.2, 0.0, 0.0]
+    assert half["residual"] == ["palm_x", "palm_z"] and half["light_bias"] == 0.5 and half["seeds"] == [0, 1]
+    assert _options(PLACE_QUARTER, "light_bias") == _options(PLACE_HALF, "light_bias")
+    assert quarter["light_bias"] == 0.25 and quarter["seeds"] == [0, 1, 2]
+    for folder in (PLACE_HALF, PLACE_QUARTER):
+        assert f"`docs/baselines/{folder}/`" in para
+    runs_h, runs_q = seed_runs(PLACE_HALF, (0, 1)), seed_runs(PLACE_QUARTER, (0, 1, 2))
+    _assert_seeds_on_page(para, runs_h)
+    _assert_seeds_on_page(para, runs_q, crushes_end="): not met")
+    assert not any(r["success_rate"] >= 0.8 for r in runs_h + runs_q)
+    ev_h, ev_q = [_evaluation(PLACE_HALF, k) for k in (0, 1)], [_evaluation(PLACE_QUARTER, k) for k in (0, 1, 2)]
+    assert [e["outcomes"] for e in ev_h + ev_q] == [r["outcomes"] for r in runs_h + runs_q]
+    lights = {sum(e["by_mass"][LIGHT].values()) for e in ev_h + ev_q}
+    heavies = {sum(e["by_mass"][HEAVY].values()) for e in ev_h + ev_q}
+    assert lights == {21} and heavies == {17}
+    assert (f"held now, {_listed(_count(e, LIGHT, 'success') for e in ev_h)} of the 21, and the heavy ones lost: of "
+            f"the 17 pieces of 68–250 g the chosen policies place {_listed(_count(e, HEAVY, 'success') for e in ev_h)}"
+            f" and knock {_listed(_count(e, HEAVY, 'knocked_over') for e in ev_h)} over, where the controller places "
+            f"{_count(controller, HEAVY, 'success')}") in para
+    assert (f"Seed 0 places {_count(ev_q[0], LIGHT, 'success')} of the light pieces and "
+            f"{_count(ev_q[0], HEAVY, 'success')} of the heavy ones; seeds 1 and 2 place "
+            f"{_listed(_count(e, LIGHT, 'success') for e in ev_q[1:])} of the light ones and knock "
+            f"{_listed(_count(e, HEAVY, 'knocked_over') for e in ev_q[1:])} of the heavy ones over") in para
+    runs = runs_h + runs_q
+    assert (f"the policies chosen score {_listed(round(100 * r['success_rate']) for r in runs)} % held out, the last "
+            f"ones {_listed(round(100 * r['selection']['last']['success_rate']) for r in runs)} %") in para
+    assert (f"the scripted observation-only controller crushes {_count(controller, LIGHT, 'crushed')} and places "
+            f"{controller['outcomes']['success']} of the 50") in para
+    stop62 = [_count(_evaluation(f, k), LIGHT, "crushed") for f in PLACE_STOP62 for k in (0, 1)]
+    assert f"crush {min(stop62)}–{max(stop62)} of the 21 pieces of 5–18 g" in para
+
+
+def test_the_sphere_at_half_the_valves_rate_is_its_record():
+    """The paragraph's last sentences: the sphere's selection screen's options with the restrictor at a half and the
+    offset doubled (the start's closing, offset x share, unchanged), its checkpoints, steps, crushes and those in
+    the touch's step, against the full rate's screen's."""
+    para = _paragraph()
+    assert f"`docs/baselines/{SPHERE_SHARE}/`" in para
+    agg, ref = aggregate(SPHERE_SHARE), aggregate(SPHERE_SELECT)
+    assert _options(SPHERE_SHARE, "action_offset", "valve_share") == _options(SPHERE_SELECT, "action_offset")
+    assert agg["valve_share"] == 0.5 and "valve_share" not in ref and agg["seeds"] == [0]
+    assert agg["action_offset"][0] * agg["valve_share"] == ref["action_offset"][0] == -0.2
+    runs = seed_runs(SPHERE_SHARE, (0,))
+    ev = _evaluation(SPHERE_SHARE, 0)
+    assert ev["outcomes"] == runs[0]["outcomes"] and runs[0]["success_rate"] < 0.8
+    _assert_seeds_on_page(para, runs, crushes_end=f"), {ev['crushed_after_touch']['0']} of them in the touch's step")
+    full = [_evaluation(SPHERE_SELECT, k)["crushed_after_touch"]["0"] for k in (0, 1)]
+    assert f"against {_listed(full)} at the valve's full rate: not adopted" in para
