@@ -18,7 +18,7 @@ sys.path.insert(0, str(Path(__file__).parent))
 from helpers import load_example  # noqa: E402
 from test_learning_page import _assert_seeds_on_page, _listed, seed_runs  # noqa: E402
 from test_learning_page_claws import _evaluation  # noqa: E402
-from test_readme_tables import ROOT, aggregate, joined  # noqa: E402
+from test_readme_tables import ROOT, aggregate, final_rates, joined  # noqa: E402
 
 TITLE = "**The cradle's recipe on the place, and the light pieces' share** (stop 73;"
 CRADLE_SELECT = "rl_cradle_v6_residual_palm_light_log_std_peak_gamma_select"
@@ -115,3 +115,55 @@ def test_the_sphere_at_half_the_valves_rate_is_its_record():
     _assert_seeds_on_page(para, runs, crushes_end=f"), {ev['crushed_after_touch']['0']} of them in the touch's step")
     full = [_evaluation(SPHERE_SELECT, k)["crushed_after_touch"]["0"] for k in (0, 1)]
     assert f"against {_listed(full)} at the valve's full rate: not adopted" in para
+
+
+PALM_ALONE = "rl_place_v8_palm_alone_light_log_std_peak_gamma_select_screen"
+ALONE_TITLE = "**The place with its palm the script's alone, on the cradle's recipe** (stop 73)."
+
+
+def _alone_paragraph() -> str:
+    page = joined(ROOT / "docs" / "learning.md")
+    start = page.index(ALONE_TITLE)
+    return page[start:page.index(" **", start + len(ALONE_TITLE))]
+
+
+def test_the_light_bias_batches_knock_their_pieces_over_before_the_carry():
+    """The paragraph's premise: the pieces the light-bias batches' chosen policies knock over on the held-out seeds
+    (``evaluate_seedS.json``), and how many of them had been carried."""
+    para = _alone_paragraph()
+    evs = [_evaluation(PLACE_HALF, k) for k in (0, 1)] + [_evaluation(PLACE_QUARTER, k) for k in (0, 1, 2)]
+    knocked = sum(e["outcomes"].get("knocked_over", 0) for e in evs)
+    carried = sum(e["carried"]["outcomes"].get("knocked_over", 0) for e in evs)
+    heavy = sum(_count(e, HEAVY, "knocked_over") for e in evs)
+    assert (f"of the {knocked} pieces its five chosen policies knock over, {heavy} of the heaviest third, "
+            f"{'one' if carried == 1 else carried} had been carried") in para
+
+
+def test_the_palm_alone_screen_is_its_record():
+    """The palm-alone screen: the place screen's options with the palm the script's alone and the offset on the
+    curvature alone; each seed's checkpoints, steps and crushes; no piece knocked over; the pieces of each third
+    placed, crushed and timed out (the final policies' ``evaluate_seedS.json``, whose outcomes are the runs'); the
+    screen it is set against; and seed 1's best validation in its last minute."""
+    para = _alone_paragraph()
+    assert f"`docs/baselines/{PALM_ALONE}/`" in para
+    agg = aggregate(PALM_ALONE)
+    assert _options(PALM_ALONE, "action_offset", "residual_alone") == _options(PLACE_HALF, "action_offset")
+    assert agg["action_offset"] == [-0.2] and agg["residual_alone"] is True and agg["seeds"] == [0, 1]
+    runs = seed_runs(PALM_ALONE, (0, 1))
+    _assert_seeds_on_page(para, runs)
+    assert f"against {final_rates(PLACE_HALF)} % with the palm corrected" in para
+    assert not any(r["success_rate"] >= 0.8 for r in runs) and "Not met" in para
+    evs = [_evaluation(PALM_ALONE, k) for k in (0, 1)]
+    assert [e["outcomes"] for e in evs] == [r["outcomes"] for r in runs]
+    assert "No piece is knocked over" in para and not any("knocked_over" in e["outcomes"] for e in evs)
+    middle = "18-68 g"
+    assert {sum(e["by_mass"][middle].values()) for e in evs} == {12}
+    assert all(e["by_mass"][middle] == {"success": 12} for e in evs) and "all 12 of the middle third" in para
+    assert (f"place {_listed(_count(e, LIGHT, 'success') for e in evs)} of the 21 light pieces") in para
+    assert (f"of the 17 heavy ones place {_listed(_count(e, HEAVY, 'success') for e in evs)}, crush "
+            f"{_listed(_count(e, HEAVY, 'crushed') for e in evs)} and run out of time on "
+            f"{_listed(_count(e, HEAVY, 'timeout') for e in evs)}") in para
+    sel = runs[1]["selection"]
+    best = max(v["success_rate"] for v in sel["validations"])
+    assert sel["chosen"] == len(sel["validations"]) - 1 and sel["validations"][-1]["success_rate"] == best
+    assert f"seed 1's validations reach their best, {round(100 * best)} %, in the budget's last minute" in para
