@@ -167,3 +167,27 @@ def test_the_palm_alone_screen_is_its_record():
     best = max(v["success_rate"] for v in sel["validations"])
     assert sel["chosen"] == len(sel["validations"]) - 1 and sel["validations"][-1]["success_rate"] == best
     assert f"seed 1's validations reach their best, {round(100 * best)} %, in the budget's last minute" in para
+
+
+def test_the_palm_alone_screen_given_twice_the_budget_is_its_record(controller):
+    """The paragraph's last sentences: the palm-alone command at 30 CPU-minutes (its options but the budget), each
+    seed's six checkpoints, steps and crushes, seed 0's choice (when, and its validation and held-out success), and
+    the heavy pieces placed, crushed and timed out against the controller's."""
+    para = _alone_paragraph()
+    folder = PALM_ALONE.replace("_screen", "_30min_screen")
+    assert f"`docs/baselines/{folder}/`" in para
+    assert _options(folder, "minutes") == _options(PALM_ALONE, "minutes") and aggregate(folder)["minutes"] == 30.0
+    runs = seed_runs(folder, (0, 1))
+    _assert_seeds_on_page(para, runs, span="… / 30")
+    assert not any(c["success_rate"] >= 0.8 for r in runs for c in r["checkpoints"])
+    sel = runs[0]["selection"]
+    chosen = sel["validations"][sel["chosen"]]
+    assert len(sel["validations"]) == 30 and "the best of thirty validations" in para
+    assert (f"Seed 0's choice, at {chosen['minutes']:.1f} CPU-min, scored {round(100 * chosen['success_rate'])} % on "
+            f"the validation seeds and {round(100 * runs[0]['success_rate'])} % held out") in para
+    evs = [_evaluation(folder, k) for k in (0, 1)]
+    assert [e["outcomes"] for e in evs] == [r["outcomes"] for r in runs]
+    assert (f"({_listed(_count(e, HEAVY, 'success') for e in evs)} of the 17 placed, "
+            f"{_listed(_count(e, HEAVY, 'crushed') for e in evs)} crushed, "
+            f"{_listed(_count(e, HEAVY, 'timeout') for e in evs)} timed out)") in para
+    assert f"the scripted observation-only controller places {_count(controller, HEAVY, 'success')} of them" in para
