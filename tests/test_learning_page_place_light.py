@@ -16,9 +16,10 @@ import pytest
 
 sys.path.insert(0, str(Path(__file__).parent))
 from helpers import load_example  # noqa: E402
-from test_learning_page import _assert_seeds_on_page, _listed, seed_runs  # noqa: E402
+from test_learning_page import _assert_seeds_on_page, _listed, learning_paragraph, seed_runs  # noqa: E402
 from test_learning_page_claws import _evaluation  # noqa: E402
-from test_readme_tables import ROOT, aggregate, final_rates, joined  # noqa: E402
+from test_learning_page_cradle_touch import _options  # noqa: E402
+from test_readme_tables import aggregate, final_rates  # noqa: E402
 
 TITLE = "**The cradle's recipe on the place, and the light pieces' share** (stop 73;"
 CRADLE_SELECT = "rl_cradle_v6_residual_palm_light_log_std_peak_gamma_select"
@@ -29,7 +30,6 @@ SPHERE_SHARE = "rl_sphere_v6_residual_palm_light_log_std_peak_gamma_select_share
 #: the stop-62 place screens whose light pieces' crushes the paragraph opens with (two seeds each)
 PLACE_STOP62 = ("rl_place_v8_residual_palm_log_std_peak_screen", "rl_place_v8_residual_palm_log_std_rerun_screen",
                 "rl_place_v8_residual_palm_log_std_crush_margin_screen")
-IGNORED = ("command", "summary", "combined_from", "versions", "seeds")
 LIGHT, HEAVY = "5-18 g", "68-250 g"
 
 
@@ -42,17 +42,6 @@ def controller():
          "--json"])
 
 
-def _paragraph() -> str:
-    """The paragraph, cut at the next one's title."""
-    page = joined(ROOT / "docs" / "learning.md")
-    start = page.index(TITLE)
-    return page[start:page.index(" **", start + len(TITLE))]
-
-
-def _options(folder: str, *drop: str) -> dict:
-    return {k: v for k, v in aggregate(folder).items() if k not in IGNORED + drop}
-
-
 def _count(ev: dict, bin_: str, outcome: str) -> int:
     return ev["by_mass"][bin_].get(outcome, 0)
 
@@ -63,7 +52,7 @@ def test_the_place_screens_are_the_cradles_recipe(controller):
     checkpoints, steps and crushes; the light and heavy pieces placed and knocked over (the final policies'
     ``evaluate_seedS.json``, whose outcomes are the runs'); the chosen and the last policies' held-out success; and
     the controller's crushes and placements they are set against."""
-    para = _paragraph()
+    para = learning_paragraph(TITLE)
     assert _options(PLACE_HALF, "env", "action_offset", "residual") == _options(CRADLE_SELECT, "env", "action_offset",
                                                                                   "residual")
     half, quarter = aggregate(PLACE_HALF), aggregate(PLACE_QUARTER)
@@ -104,7 +93,7 @@ def test_the_sphere_at_half_the_valves_rate_is_its_record():
     """The paragraph's last sentences: the sphere's selection screen's options with the restrictor at a half and the
     offset doubled (the start's closing, offset x share, unchanged), its checkpoints, steps, crushes and those in
     the touch's step, against the full rate's screen's."""
-    para = _paragraph()
+    para = learning_paragraph(TITLE)
     assert f"`docs/baselines/{SPHERE_SHARE}/`" in para
     agg, ref = aggregate(SPHERE_SHARE), aggregate(SPHERE_SELECT)
     assert _options(SPHERE_SHARE, "action_offset", "valve_share") == _options(SPHERE_SELECT, "action_offset")
@@ -122,16 +111,10 @@ PALM_ALONE = "rl_place_v8_palm_alone_light_log_std_peak_gamma_select_screen"
 ALONE_TITLE = "**The place with its palm the script's alone, on the cradle's recipe** (stop 73)."
 
 
-def _alone_paragraph() -> str:
-    page = joined(ROOT / "docs" / "learning.md")
-    start = page.index(ALONE_TITLE)
-    return page[start:page.index(" **", start + len(ALONE_TITLE))]
-
-
 def test_the_light_bias_batches_knock_their_pieces_over_before_the_carry():
     """The paragraph's premise: the pieces the light-bias batches' chosen policies knock over on the held-out seeds
     (``evaluate_seedS.json``), and how many of them had been carried."""
-    para = _alone_paragraph()
+    para = learning_paragraph(ALONE_TITLE)
     evs = [_evaluation(PLACE_HALF, k) for k in (0, 1)] + [_evaluation(PLACE_QUARTER, k) for k in (0, 1, 2)]
     knocked = sum(e["outcomes"].get("knocked_over", 0) for e in evs)
     carried = sum(e["carried"]["outcomes"].get("knocked_over", 0) for e in evs)
@@ -145,7 +128,7 @@ def test_the_palm_alone_screen_is_its_record():
     curvature alone; each seed's checkpoints, steps and crushes; no piece knocked over; the pieces of each third
     placed, crushed and timed out (the final policies' ``evaluate_seedS.json``, whose outcomes are the runs'); the
     screen it is set against; and seed 1's best validation in its last minute."""
-    para = _alone_paragraph()
+    para = learning_paragraph(ALONE_TITLE)
     assert f"`docs/baselines/{PALM_ALONE}/`" in para
     agg = aggregate(PALM_ALONE)
     assert _options(PALM_ALONE, "action_offset", "residual_alone") == _options(PLACE_HALF, "action_offset")
@@ -174,7 +157,7 @@ def test_the_palm_alone_screen_given_twice_the_budget_is_its_record(controller):
     """The paragraph's last sentences: the palm-alone command at 30 CPU-minutes (its options but the budget), each
     seed's six checkpoints, steps and crushes, seed 0's choice (when, and its validation and held-out success), and
     the heavy pieces placed, crushed and timed out against the controller's."""
-    para = _alone_paragraph()
+    para = learning_paragraph(ALONE_TITLE)
     folder = PALM_ALONE.replace("_screen", "_30min_screen")
     assert f"`docs/baselines/{folder}/`" in para
     assert _options(folder, "minutes") == _options(PALM_ALONE, "minutes") and aggregate(folder)["minutes"] == 30.0
