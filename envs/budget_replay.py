@@ -52,8 +52,9 @@ __all__ = ["IDENTITY_KEYS", "OPTION_KEYS", "ReplaySchedule", "compare", "load_sc
 #: the fields of a run's record that a replay's command must give alike (besides the options below)
 IDENTITY_KEYS = ("algo", "env", "seed", "clock", "budget_minutes", "hyperparameters", "eval_seeds")
 #: :meth:`simgrip.envs.env_options.EnvOptions.record`'s keys (each recorded only where set)
-OPTION_KEYS = ("env_kwargs", "action_offset", "residual", "residual_alone", "valve_share", "privileged_critic",
-               "frame_stack", "scripted_start", "light_bias", "crush_charge", "step_charge", "crush_margin")
+OPTION_KEYS = ("env_kwargs", "action_offset", "residual", "residual_alone", "valve_share", "touch_memory",
+               "privileged_critic", "frame_stack", "scripted_start", "light_bias", "crush_charge", "step_charge",
+               "crush_margin")
 
 
 @dataclass(frozen=True)

@@ -2,13 +2,14 @@
 
 :class:`EnvOptions` holds every option that shapes the env a policy is trained or evaluated on: ``gym.make``'s
 keyword arguments, the wrappers that are part of the policy (``--valve-share``, ``--action-offset``,
-``--residual``, ``--privileged-critic``, ``--frame-stack``: training and evaluation alike) and the training aids
+``--residual``, ``--touch-memory``, ``--privileged-critic``, ``--frame-stack``: training and evaluation alike) and the training aids
 (``--scripted-start``, ``--light-bias``, ``--crush-charge``, ``--step-charge``, ``--crush-margin``: training only;
 evaluation runs the task, which :meth:`EnvOptions.evaluation` gives).  :func:`make_env` builds the env they describe;
 ``<algo>_eval.json`` records them through :meth:`EnvOptions.record`.
 
 The wrappers, innermost first: ``LightBias``, ``CrushCharge``, ``StepCharge``, ``CrushMargin``, ``ScriptedStart``,
-``ValveShare``, ``ScriptedResidual``, ``ActionOffset``, ``PrivilegedObservation``, ``FrameStackObservation``.
+``ValveShare``, ``ScriptedResidual``, ``TouchMemory``, ``ActionOffset``, ``PrivilegedObservation``,
+``FrameStackObservation``.
 """
 
 from __future__ import annotations
@@ -38,6 +39,9 @@ class EnvOptions:
     valve_share : float or None
         The policy's curvature rate times it before the valve (:class:`~simgrip.envs.valve_share.ValveShare`, a
         restrictor; part of the policy): it closes at most that share of the valve's rate.
+    touch_memory : bool
+        The observation gains the first touch's memory (:class:`~simgrip.envs.touch_memory.TouchMemory`; part of
+        the policy).
     privileged_critic : bool
         The observation gains the hidden entries PPO's value function reads and its policy does not
         (:class:`~simgrip.envs.privileged_critic.PrivilegedObservation`; training and evaluation alike).
@@ -60,6 +64,7 @@ class EnvOptions:
     residual: tuple | None = None
     residual_alone: bool = False
     valve_share: float | None = None
+    touch_memory: bool = False
     privileged_critic: bool = False
     scripted_start: float | None = None
     light_bias: float | None = None
@@ -79,6 +84,7 @@ class EnvOptions:
         return cls(env_kwargs=dict(get("env_kwargs") or {}), action_offset=_tuple(get("action_offset")),
                    frame_stack=get("frame_stack"), residual=_tuple(get("residual")),
                    residual_alone=bool(get("residual_alone")), valve_share=get("valve_share"),
+                   touch_memory=bool(get("touch_memory")),
                    privileged_critic=bool(get("privileged_critic")),
                    scripted_start=get("scripted_start"), light_bias=get("light_bias"),
                    crush_charge=None if charge is None else (charge, get("crush_charge_from") or 0),
@@ -95,8 +101,8 @@ class EnvOptions:
 
     def record(self) -> tuple[dict, list[str]]:
         """What ``<algo>_eval.json`` records of the options: its keys (``env_kwargs``, ``action_offset``,
-        ``residual``, ``residual_alone`` (only where true), ``valve_share``, ``privileged_critic`` (only where
-        true), ``frame_stack``, ``scripted_start``, ``light_bias``, ``crush_charge`` as ``{"charge", "start"}``,
+        ``residual``, ``residual_alone`` (only where true), ``valve_share``, ``touch_memory`` and
+        ``privileged_critic`` (only where true), ``frame_stack``, ``scripted_start``, ``light_bias``, ``crush_charge`` as ``{"charge", "start"}``,
         ``step_charge``, ``crush_margin``; each only where set) and the wrappers named, in that order."""
         keys, wrappers = {}, []
         if self.env_kwargs:
@@ -112,6 +118,9 @@ class EnvOptions:
         if self.valve_share is not None:
             keys["valve_share"] = float(self.valve_share)
             wrappers.append(f"ValveShare({keys['valve_share']!r})")
+        if self.touch_memory:
+            keys["touch_memory"] = True
+            wrappers.append("TouchMemory")
         if self.privileged_critic:
             keys["privileged_critic"] = True
             wrappers.append("PrivilegedObservation (the critic's)")
@@ -151,6 +160,7 @@ def make_env(env_id: str, options: EnvOptions | None = None):
     ``--residual`` when a name is not one of the env's actions, the env has no scripted controller, or
     ``scripted_start`` is given too, ``--residual-alone`` without ``--residual`` or where it names every action,
     ``--valve-share`` when it is not in ``(0, 1]``, the env has no valve or a residual drives its curvature,
+    ``--touch-memory`` when the env does not observe the curvature, the finger forces and the lift,
     ``--privileged-critic`` when the env is not a fragile task or with ``--frame-stack``,
     ``--crush-charge``, ``--step-charge`` and ``--crush-margin`` when the env is
     not a fragile task (the env is closed first)."""
@@ -207,6 +217,10 @@ def make_env(env_id: str, options: EnvOptions | None = None):
 
         env = _wrap_or_close(env, lambda e, v: ScriptedResidual(e, v, alone=o.residual_alone), o.residual,
                              "--residual-alone" if o.residual_alone else "--residual")
+    if o.touch_memory:
+        from simgrip.envs.touch_memory import TouchMemory
+
+        env = _wrap_or_close(env, lambda e, _: TouchMemory(e), True, "--touch-memory")
     if o.action_offset is not None:
         from simgrip.envs.action_offset import ActionOffset
 

@@ -210,10 +210,10 @@ def add_training_aid_arguments(parser: argparse.ArgumentParser) -> None:
     """Add the training aids ``examples/train_sb3.py`` applies and ``examples/rl_baselines.py`` passes to each of
     its runs, with the same names, checks and meanings: ``--normalize``, ``--action-offset A ...``,
     ``--frame-stack N``, ``--gamma G``, ``--log-std-init X``, ``--scripted-start P``, ``--light-bias P``,
-    ``--residual NAME ...``, ``--residual-alone``, ``--valve-share S``, ``--privileged-critic``, ``--crush-charge F``,
-    ``--crush-charge-from STEPS``, ``--step-charge C``, ``--crush-margin C``, ``--lr-decay``, ``--ent-coef C``,
-    ``--n-steps S``, ``--batch-size B``, ``--sde``, ``--select-every M``, ``--select-episodes E``, ``--select-seed S``
-    (each off by default) and ``--n-envs N`` (default 1)."""
+    ``--residual NAME ...``, ``--residual-alone``, ``--valve-share S``, ``--touch-memory``, ``--privileged-critic``,
+    ``--crush-charge F``, ``--crush-charge-from STEPS``, ``--step-charge C``, ``--crush-margin C``, ``--lr-decay``,
+    ``--ent-coef C``, ``--n-steps S``, ``--batch-size B``, ``--sde``, ``--select-every M``, ``--select-episodes E``,
+    ``--select-seed S`` (each off by default) and ``--n-envs N`` (default 1)."""
     add = parser.add_argument
     add("--normalize", action="store_true",
         help="train behind SB3's VecNormalize (observation and return, library defaults; default off)")
@@ -245,6 +245,9 @@ def add_training_aid_arguments(parser: argparse.ArgumentParser) -> None:
     add("--valve-share", type=share, default=None, metavar="S",
         help="train and evaluate behind simgrip.envs.valve_share.ValveShare: the policy's curvature rate times S "
              "before the valve, in (0, 1], a restrictor (it closes at most S of the valve's rate; default none)")
+    add("--touch-memory", action="store_true",
+        help="train and evaluate behind simgrip.envs.touch_memory.TouchMemory: the observation gains the first "
+             "touch's memory (touched, curvature closed and workpiece risen since it; default off)")
     add("--privileged-critic", action="store_true",
         help="PPO only: train and evaluate behind simgrip.envs.privileged_critic, the value function also reading the "
              "hidden hold force and crush limit, the policy not (an asymmetric actor-critic; default off)")

@@ -229,14 +229,17 @@ def prepare_transfer(model_path, target_env, target_offset=None, *, normalize: b
 
 
 def check_init_from(model_path, env_id: str, env_kwargs=None, target_offset=None, *, normalize: bool = False,
-                    frame_stack: int | None = None, residual=None) -> None:
+                    frame_stack: int | None = None, residual=None, touch_memory: bool = False) -> None:
     """:func:`prepare_transfer` onto a fresh ``env_id`` (made with ``env_kwargs``, closed after): the example
     scripts' check of ``--init-from`` before any training (``ValueError`` naming the option; refused with a
-    ``residual``, whose observation has the controller's action appended)."""
+    ``residual``, whose observation has the controller's action appended, and with ``touch_memory``, whose
+    observation has the touch's memory appended)."""
     from simgrip.envs.env_options import EnvOptions, make_env
 
     if residual is not None:
         raise ValueError("--init-from: not with --residual (the observation has the controller's action appended)")
+    if touch_memory:
+        raise ValueError("--init-from: not with --touch-memory (the observation has the touch's memory appended)")
 
     env = make_env(env_id, EnvOptions(env_kwargs=env_kwargs or {}))
     try:

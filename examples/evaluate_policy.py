@@ -10,11 +10,11 @@ to optimise: under that discount, its faster and riskier policy is worth more.
 
     python examples/evaluate_policy.py --env simgrip/PickFragile-v7 (--model ZIP [--algo ppo|sac] |
         --policy observation|oracle) [--action-offset A0 A1] [--frame-stack N] [--residual NAME ... [--residual-alone]]
-        [--valve-share S] [--privileged-critic] [--scripted-start P] [--env-kwargs JSON] [--episodes 50]
+        [--valve-share S] [--touch-memory] [--privileged-critic] [--scripted-start P] [--env-kwargs JSON] [--episodes 50]
         [--seed 8000] [--gamma 0.99] [--crush-charge F ...] [--json]
 
-``--action-offset``, ``--frame-stack``, ``--residual``, ``--residual-alone``, ``--valve-share`` and
-``--privileged-critic`` must be the ones the model was trained with (``train_sb3.py``'s options of those names);
+``--action-offset``, ``--frame-stack``, ``--residual``, ``--residual-alone``, ``--valve-share``, ``--touch-memory``
+and ``--privileged-critic`` must be the ones the model was trained with (``train_sb3.py``'s options of those names);
 a model trained behind ``VecNormalize`` is not supported here.  Prints one line, or with ``--json`` one JSON
 object: ``{"env", "policy", "episodes", "success_rate", "mean_return", "mean_length", "outcomes",
 "mean_success_length", "mean_discounted_return", "gamma", "eval_seeds"}``.  Exit 2 naming the option on bad
@@ -212,6 +212,8 @@ def main(argv=None) -> dict:
     p.add_argument("--valve-share", type=share, default=None, metavar="S",
                    help="with --model: the ValveShare restrictor the model was trained behind (train_sb3.py's "
                         "--valve-share)")
+    p.add_argument("--touch-memory", action="store_true",
+                   help="with --model: the model observed the first touch's memory (train_sb3.py's --touch-memory)")
     p.add_argument("--privileged-critic", action="store_true",
                    help="with --model: the model's critic read the hidden workpiece (train_sb3.py's "
                         "--privileged-critic; its policy ignores those entries)")
@@ -232,6 +234,7 @@ def main(argv=None) -> dict:
                       ("residual", "the scripted controller alone is --policy observation"),
                       ("valve_share", "the scripted controllers command the valve at its own rate"),
                       ("privileged_critic", "the scripted controllers read the env's own observation"),
+                      ("touch_memory", "the scripted controllers read the env's own observation"),
                       ("frame_stack", "the scripted controllers read the env's own observation")):
         value = getattr(args, name)  # a trained policy's option (None or False: not given), not a controller's
         if args.policy is not None and value is not None and value is not False:
@@ -246,6 +249,7 @@ def main(argv=None) -> dict:
         env = make_env(args.env, EnvOptions(env_kwargs=args.env_kwargs or {}, action_offset=args.action_offset,
                                             frame_stack=args.frame_stack, residual=args.residual,
                                             residual_alone=args.residual_alone, valve_share=args.valve_share,
+                                            touch_memory=args.touch_memory,
                                             privileged_critic=args.privileged_critic,
                                             scripted_start=args.scripted_start))
     except ValueError as exc:
@@ -272,7 +276,7 @@ def main(argv=None) -> dict:
             if model.observation_space.shape != env.observation_space.shape or (
                     model.action_space.shape != env.action_space.shape):
                 p.error(f"--model: its spaces do not match {args.env}'s "
-                        "(trained with another --frame-stack, --residual or --privileged-critic?)")
+                        "(trained with another --frame-stack, --residual, --touch-memory or --privileged-critic?)")
             act = lambda obs: model.predict(obs, deterministic=True)[0]  # noqa: E731
             policy = f"{args.algo} {args.model}"
             if args.scripted_start is not None:
@@ -309,6 +313,8 @@ def main(argv=None) -> dict:
             out["residual_alone"] = True
     if args.valve_share is not None:
         out["valve_share"] = args.valve_share
+    if args.touch_memory:
+        out["touch_memory"] = True
     if args.privileged_critic:
         out["privileged_critic"] = True
     if args.scripted_start is not None:

@@ -43,8 +43,9 @@ of the mass range, :class:`simgrip.envs.light_bias.LightBias`; evaluation draws 
 drives the named actions and the policy's action is added to it, in training and evaluation alike,
 :class:`simgrip.envs.scripted_residual.ScriptedResidual`), recorded as ``residual``, and ``--residual-alone`` too
 (the controller drives them alone and the policy acts on the other actions only), recorded as ``residual_alone``;
-``--valve-share S`` (a restrictor: :class:`simgrip.envs.valve_share.ValveShare`) and ``--privileged-critic`` (PPO's
-critic reads the hidden workpiece: :mod:`simgrip.envs.privileged_critic`) pass those options, recorded so;
+``--valve-share S`` (a restrictor: :class:`simgrip.envs.valve_share.ValveShare`), ``--touch-memory`` (the observation
+gains the first touch's memory: :mod:`simgrip.envs.touch_memory`) and ``--privileged-critic`` (PPO's critic reads the
+hidden workpiece: :mod:`simgrip.envs.privileged_critic`) pass those options, recorded so;
 ``--init-from DIR`` (PPO only) starts each seed ``S`` from ``DIR/ppo_seed<S>/ppo_model.zip``, the policy of an
 earlier ``rl_baselines.py`` run of the same seed on another task (a curriculum: the pinch's policies for the
 pick-and-place; :mod:`simgrip.envs.warm_start`), recorded as ``init_from`` with that run's command
@@ -146,6 +147,7 @@ def run_command(algo: str, seed: int, args, folder: Path) -> list[str]:
     cmd += [] if args.gamma is None else ["--gamma", repr(args.gamma)]
     cmd += [] if args.log_std_init is None else ["--log-std-init", repr(args.log_std_init)]
     cmd += ["--lr-decay"] * args.lr_decay + ["--privileged-critic"] * args.privileged_critic + ["--sde"] * args.sde
+    cmd += ["--touch-memory"] * args.touch_memory
     if args.ent_coef is not None:
         cmd += ["--ent-coef", repr(args.ent_coef)]
     if args.scripted_start is not None:
@@ -230,7 +232,8 @@ def _check_init(p: argparse.ArgumentParser, args, algos: list[str]) -> str | Non
     for seed in args.seeds:
         try:
             check_init_from(init_model(args.init_from, "ppo", seed), args.env, args.env_kwargs, args.action_offset,
-                            normalize=args.normalize, frame_stack=args.frame_stack, residual=args.residual)
+                            normalize=args.normalize, frame_stack=args.frame_stack, residual=args.residual,
+                            touch_memory=args.touch_memory)
         except ValueError as e:
             p.error(f"{e} (seed {seed})")
     try:

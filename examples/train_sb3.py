@@ -79,7 +79,9 @@ function of the policy's last features, drawn once a rollout), named in ``hyperp
 ``--valve-share S`` multiplies the policy's curvature rate by ``S`` before the valve (a restrictor,
 :class:`simgrip.envs.valve_share.ValveShare`, part of the policy), recorded as ``valve_share``.  ``--privileged-critic``
 (PPO only) gives PPO's value function the hidden hold force and crush limit, and not its policy (an asymmetric
-actor-critic, :mod:`simgrip.envs.privileged_critic`), recorded as ``privileged_critic``.
+actor-critic, :mod:`simgrip.envs.privileged_critic`), recorded as ``privileged_critic``.  ``--touch-memory`` appends
+the first touch's memory to the observation (:class:`simgrip.envs.touch_memory.TouchMemory`, part of the policy),
+recorded as ``touch_memory``.
 
 ``--init-from MODEL`` (PPO only) starts the training from a PPO policy trained on another task (a curriculum:
 the pinch's policy for the pick-and-place), copied by :func:`simgrip.envs.warm_start.transfer_ppo` (observation
@@ -534,7 +536,8 @@ def main(argv=None) -> int:
 
         try:
             check_init_from(args.init_from, args.env, args.env_kwargs, args.action_offset, normalize=args.normalize,
-                            frame_stack=args.frame_stack, residual=args.residual)
+                            frame_stack=args.frame_stack, residual=args.residual,
+                            touch_memory=args.touch_memory)
         except ValueError as e:
             p.error(str(e))
     try:  # simgrip.io's output-path policy: a folder, and no FIFO/device/folder where a result file goes
