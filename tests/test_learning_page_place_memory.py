@@ -1,6 +1,8 @@
-"""The learning page's place screens of stop 74 against their records: the palm-alone command without the light bias
-(``docs/learning.md``, "The place with its palm the script's alone, without the light bias"; the helpers are
-``test_learning_page.py``'s, the records' readers ``test_readme_tables.py``'s).
+"""The learning page's screens of stop 74 against their records: the place's palm-alone command without the light
+bias, and the sphere's best screen at the pinch's discount with the best of validations kept (``docs/learning.md``,
+"The place with its palm the script's alone, without the light bias", "The sphere's falling rate and step charge,
+with the pinch's discount and the best of validations kept"; the helpers are ``test_learning_page.py``'s, the
+records' readers ``test_readme_tables.py``'s).
 """
 
 from __future__ import annotations
@@ -47,3 +49,39 @@ def test_the_environments_page_lists_it_as_not_adopted():
     """The Gymnasium environments page's "Measured and not adopted" names the screen's final success."""
     page = joined(ROOT / "docs" / "environments.md")
     assert f"so without the light bias, {final_rates(NO_LIGHT)} %)" in page
+
+
+SPHERE_CHARGE = "rl_sphere_v6_residual_palm_light_log_std_lr_decay_step_charge_screen"
+SPHERE_SELECT = SPHERE_CHARGE.replace("_screen", "_gamma_select_screen")
+SPHERE_TITLE = "**The sphere's falling rate and step charge, with the pinch's discount and the best of validations kept**"
+
+
+def test_the_spheres_charge_screen_with_the_discount_and_the_choice_is_its_record():
+    """The sphere's screen: its base's options with the discount and the selection; each seed's checkpoints, steps
+    and crushes; when and from what the choices came and what the last policies hold; the crushes in the touch's
+    step against the base's (the final policies' ``evaluate_seedS.json``, whose outcomes are the runs')."""
+    para = learning_paragraph(SPHERE_TITLE)
+    assert f"`docs/baselines/{SPHERE_SELECT}/`" in para
+    agg = aggregate(SPHERE_SELECT)
+    assert _options(SPHERE_SELECT, "hyperparameters", "selection") == _options(SPHERE_CHARGE, "hyperparameters")
+    assert agg["hyperparameters"] == aggregate(SPHERE_CHARGE)["hyperparameters"].replace(
+        "; but log_std_init", "; but gamma = 0.995; but log_std_init")
+    assert agg["selection"]["every_minutes"] == 1.0 and "selection" not in aggregate(SPHERE_CHARGE)
+    assert agg["seeds"] == [0, 1]
+    assert f"behind its aids: {final_rates(SPHERE_CHARGE)} %)" in para
+    runs = seed_runs(SPHERE_SELECT, (0, 1))
+    _assert_seeds_on_page(para, runs)
+    assert not any(r["success_rate"] >= 0.8 for r in runs) and "Not met, not adopted" in para
+    chosen = [r["selection"]["validations"][r["selection"]["chosen"]] for r in runs]
+    when = _listed(format(c["minutes"], ".1f") for c in chosen)
+    assert f"choices came at {when} CPU-min" in para
+    assert f"from {_listed(round(100 * c['success_rate']) for c in chosen)} % on the validation seeds" in para
+    last = [round(100 * r["selection"]["last"]["success_rate"]) for r in runs]
+    assert f"the last policies hold {_listed(last)} % held" in para and last[1] > 100 * runs[1]["success_rate"]
+    evs = [_evaluation(SPHERE_SELECT, k) for k in (0, 1)]
+    assert [e["outcomes"] for e in evs] == [r["outcomes"] for r in runs]
+    base = [_evaluation(SPHERE_CHARGE, k)["crushed_after_touch"]["0"] for k in (0, 1)]
+    assert (f"{_listed(e['crushed_after_touch']['0'] for e in evs)} of the crushes come in the touch's step "
+            f"({_listed(base)} without the discount and the choice)") in para
+    page = joined(ROOT / "docs" / "environments.md")
+    assert f"with the best of validations kept ({final_rates(SPHERE_SELECT)} %)" in page
