@@ -53,7 +53,8 @@ def test_the_environments_page_lists_it_as_not_adopted():
 
 SPHERE_CHARGE = "rl_sphere_v6_residual_palm_light_log_std_lr_decay_step_charge_screen"
 SPHERE_SELECT = SPHERE_CHARGE.replace("_screen", "_gamma_select_screen")
-SPHERE_TITLE = "**The sphere's falling rate and step charge, with the pinch's discount and the best of validations kept**"
+SPHERE_TITLE = ("**The sphere's falling rate and step charge, with the pinch's discount and the best of validations "
+                "kept**")
 
 
 def test_the_spheres_charge_screen_with_the_discount_and_the_choice_is_its_record():
