@@ -134,9 +134,11 @@ def test_the_25_hz_screen_on_the_learning_page_is_its_record():
     assert f"{crushed[0]} and {crushed[1]} crushes of 50 held out" in para
 
 
-#: the README's aided cells since replaced -> the record that replaced each (the cradle's at stop 72, the environments
-#: page says so)
-FORMER_CELLS = {"rl_cradle_v6_residual_palm_light_log_std": "rl_cradle_v6_residual_palm_light_log_std_peak_gamma_select"}
+#: the README's aided cells since replaced -> the record that replaced each and the stop it did (the cradle's at stop
+#: 72, the place's at stop 74; the environments page says so)
+FORMER_CELLS = {
+    "rl_cradle_v6_residual_palm_light_log_std": ("rl_cradle_v6_residual_palm_light_log_std_peak_gamma_select", 72),
+    "rl_place_v8_residual_palm_log_std": ("rl_place_v8_palm_alone_light_log_std_peak_gamma_select_touch_memory", 74)}
 
 
 def _assert_replayed(cell: str, folder: str, seed: int, rates: str, steps: str, episodes: str) -> None:
@@ -165,9 +167,9 @@ def test_the_identical_replays_on_the_learning_page_are_their_records():
                        r"([\d,]+)\)", text)
     assert len(found) == 3, found
     page = joined(ROOT / "docs" / "environments.md")
-    for former, now in FORMER_CELLS.items():
+    for former, (now, stop) in FORMER_CELLS.items():
         assert now in {columns[AIDED] for _, columns in ROWS.values()}, now
-        assert f"`{now}/` since stop 72 (before it `{former}/`" in page, (former, now)
+        assert f"`{now}/` since stop {stop} (before it `{former}/`" in page, (former, now)
     for cell, folder, rates, *numbers in found:
         for seed, seed_rates in enumerate(re.split(r", | and ", rates)):
             _assert_replayed(cell, folder, seed, seed_rates, numbers[seed], numbers[3 + seed])

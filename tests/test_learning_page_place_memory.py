@@ -1,8 +1,9 @@
-"""The learning page's screens of stop 74 against their records: the place's palm-alone command without the light
-bias, and the sphere's best screen at the pinch's discount with the best of validations kept (``docs/learning.md``,
-"The place with its palm the script's alone, without the light bias", "The sphere's falling rate and step charge,
-with the pinch's discount and the best of validations kept"; the helpers are ``test_learning_page.py``'s, the
-records' readers ``test_readme_tables.py``'s).
+"""The learning page's runs of stop 74 against their records: the place's palm-alone command without the light bias,
+the sphere's best screen at the pinch's discount with the best of validations kept, and the place and the sphere
+given the first touch's memory (``docs/learning.md``, "The place with its palm the script's alone, without the light
+bias", "The sphere's falling rate and step charge, with the pinch's discount and the best of validations kept", "The
+first touch remembered"; the helpers are ``test_learning_page.py``'s, the records' readers
+``test_readme_tables.py``'s).
 """
 
 from __future__ import annotations
@@ -11,7 +12,8 @@ import sys
 from pathlib import Path
 
 sys.path.insert(0, str(Path(__file__).parent))
-from test_learning_page import _assert_seeds_on_page, _listed, learning_paragraph, seed_runs  # noqa: E402
+from test_learning_page import (_assert_seeds_on_page, _listed, checkpoint_rates, learning_paragraph,  # noqa: E402
+                                seed_runs)
 from test_learning_page_claws import _evaluation  # noqa: E402
 from test_learning_page_cradle_touch import _options  # noqa: E402
 from test_learning_page_place_light import HEAVY, LIGHT, PALM_ALONE, _count  # noqa: E402
@@ -86,3 +88,59 @@ def test_the_spheres_charge_screen_with_the_discount_and_the_choice_is_its_recor
             f"({_listed(base)} without the discount and the choice)") in para
     page = joined(ROOT / "docs" / "environments.md")
     assert f"with the best of validations kept ({final_rates(SPHERE_SELECT)} %)" in page
+
+
+MEMORY = "rl_place_v8_palm_alone_light_log_std_peak_gamma_select_touch_memory"
+SPHERE_MEMORY = SPHERE_CHARGE.replace("_screen", "_touch_memory_screen")
+MEMORY_TITLE = "**The first touch remembered (`--touch-memory`)** (stop 74)."
+
+
+def test_the_place_given_the_first_touchs_memory_is_its_record():
+    """The place's batch: the palm-alone screen's options with the memory; each seed's checkpoints, steps and
+    crushes against the screen's; the heavy and light pieces placed, the touch's crushes of seed 1, the verdict and
+    the last policies (the final policies' ``evaluate_seedS.json``, whose outcomes are the runs')."""
+    para = learning_paragraph(MEMORY_TITLE)
+    assert f"`docs/baselines/{MEMORY}/`" in para and "`tests/test_touch_memory.py`" in para
+    agg = aggregate(MEMORY)
+    assert _options(MEMORY, "touch_memory") == _options(PALM_ALONE) and agg["touch_memory"] is True
+    assert agg["seeds"] == [0, 1, 2] and "touch_memory" not in aggregate(PALM_ALONE)
+    runs, before = seed_runs(MEMORY, (0, 1, 2)), seed_runs(PALM_ALONE, (0, 1))
+    _assert_seeds_on_page(para, runs)
+    assert f"against {_listed(checkpoint_rates(r) for r in before)} % without it" in para
+    finals = [round(100 * r["success_rate"]) for r in runs]
+    assert sum(x >= 80 for x in finals) == 1 and finals[0] == 80 and "Seed 0 ends at 80 %" in para
+    assert "not met" in para
+    evs, biased = [_evaluation(MEMORY, k) for k in (0, 1, 2)], [_evaluation(PALM_ALONE, k) for k in (0, 1)]
+    assert [e["outcomes"] for e in evs] == [r["outcomes"] for r in runs]
+    heavy = _listed(_count(e, HEAVY, "success") for e in evs)
+    assert (f"of the 17 pieces of 68–250 g the chosen policies place {heavy}"
+            f" (without it {_listed(_count(e, HEAVY, 'success') for e in biased)})") in para
+    assert not any(_count(e, HEAVY, k) for e in evs for k in ("timeout", "knocked_over"))
+    assert (f"place {_listed(_count(e, LIGHT, 'success') for e in evs)} of the 21 pieces of 5–18 g (without it "
+            f"{_listed(_count(e, LIGHT, 'success') for e in biased)})") in para
+    assert (f"seed 1 crushes {evs[1]['crushed_after_touch']['0']} of its {_count(evs[1], LIGHT, 'crushed')} in the "
+            f"touch's step") in para
+    last = [round(100 * r["selection"]["last"]["success_rate"]) for r in runs]
+    assert f"the last policies hold {_listed(last)} % held out (the chosen {_listed(finals)} %)" in para
+    readme = joined(ROOT / "README.md")
+    assert ("not on the place (given the first touch's memory, which its controller keeps and a feed-forward policy "
+            f"cannot: {final_rates(MEMORY)} %) or the sphere") in readme
+
+
+def test_the_sphere_given_the_first_touchs_memory_is_its_record():
+    """The paragraph's sphere run: its recipe's options with the memory, its checkpoints, steps, crushes and those in
+    the touch's step, against its recipe's seed 0."""
+    para = learning_paragraph(MEMORY_TITLE)
+    assert f"`docs/baselines/{SPHERE_MEMORY}/`" in para
+    assert _options(SPHERE_MEMORY, "touch_memory") == _options(SPHERE_CHARGE)
+    assert aggregate(SPHERE_MEMORY)["seeds"] == [0] and aggregate(SPHERE_MEMORY)["touch_memory"] is True
+    run, = seed_runs(SPHERE_MEMORY, (0,))
+    base, = seed_runs(SPHERE_CHARGE, (0,))
+    assert (f"gives {checkpoint_rates(run)} % at 5 / 10 / 15 CPU-min, on {run['timesteps']:,} steps "
+            f"({run['outcomes']['crushed']} crushes of 50 held out), against {round(100 * base['success_rate'])} % "
+            "without it") in para
+    ev = _evaluation(SPHERE_MEMORY, 0)
+    assert ev["outcomes"] == run["outcomes"]
+    assert f"({ev['crushed_after_touch']['0']} of the {run['outcomes']['crushed']} here)" in para
+    page = joined(ROOT / "docs" / "environments.md")
+    assert f"(`--touch-memory`, one seed: {final_rates(SPHERE_MEMORY)} %)" in page

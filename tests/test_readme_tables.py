@@ -27,6 +27,8 @@ AIDED = "PPO behind its aid, 3 seeds"
 #: the cradle's batch that meets the learning target, and the same command without the selection
 CRADLE_SELECT = "rl_cradle_v6_residual_palm_light_log_std_peak_gamma_select"
 CRADLE_GAMMA = "rl_cradle_v6_residual_palm_light_log_std_peak_gamma_screen"
+#: the place's best batch: the cradle's recipe with the palm the script's alone and the first touch remembered
+PLACE_MEMORY = "rl_place_v8_palm_alone_light_log_std_peak_gamma_select_touch_memory"
 
 #: README row -> (the id whose non-learned records it shows, {learned column header: aggregate folder}).
 ROWS = {
@@ -36,7 +38,7 @@ ROWS = {
                                                     "SAC, 3 seeds": "rl_multi_v7_sac",
                                                     AIDED: "rl_multi_v7_peak_light_log_std_half_lr_decay_step_charge_4envs_512_batch128"}),
     "PlaceFragile-v8": ("PlaceFragile-v8", {"PPO, 3 seeds": "rl_place_v8", "SAC, 3 seeds": "rl_place_v8_sac",
-                                            AIDED: "rl_place_v8_residual_palm_log_std"}),
+                                            AIDED: PLACE_MEMORY}),
     "PickCradleFragile-v6": ("PickCradleFragile-v6", {"PPO, 3 seeds": "rl_cradle_v6",
                                                       "SAC, 3 seeds": "rl_cradle_v6_sac",
                                                       AIDED: CRADLE_SELECT}),
@@ -51,7 +53,7 @@ AIDS = {"offset": "--action-offset", "peak offset": "--action-offset", "light bi
         "entropy": "--ent-coef", "step charge": "--step-charge", "crush margin": "--crush-margin", "envs": "--n-envs",
         "n steps": "--n-steps", "batch": "--batch-size", "select every": "--select-every",
         "palm alone": "--residual-alone", "valve share": "--valve-share", "privileged critic": "--privileged-critic",
-        "gSDE": "--sde"}
+        "gSDE": "--sde", "touch memory": "--touch-memory"}
 
 
 def assert_the_hyperparameters_named(text: str, agg: dict) -> None:
