@@ -43,6 +43,16 @@ def rl_baselines_args(mod, env: str = "simgrip/PickFragile-v7", **overrides):
     return args
 
 
+def assert_passes_flag(mod, env: str, name: str, folder: Path) -> None:
+    """``examples/rl_baselines.py`` (``mod``, the loaded script) passes the on/off option ``name`` (its attribute,
+    ``"touch_memory"`` for ``--touch-memory``) to a run's command where it is on, and not where it is off."""
+    option = "--" + name.replace("_", "-")
+    args = rl_baselines_args(mod, env, **{name: True})
+    assert option in mod.run_command("ppo", 0, args, folder)
+    setattr(args, name, False)
+    assert option not in mod.run_command("ppo", 0, args, folder)
+
+
 def alive(pid: int) -> bool:
     """Whether process ``pid`` exists and is not a zombie (``/proc``; Linux)."""
     try:

@@ -16,7 +16,7 @@ import simgrip.envs  # noqa: F401  (registers the ids)
 from simgrip.envs.budget_replay import OPTION_KEYS
 from simgrip.envs.env_options import EnvOptions, make_env
 from simgrip.envs.privileged_critic import N_PRIVILEGED, NEAR_MAX, PrivilegedObservation, policy_for
-from helpers import load_example, rl_baselines_args, train_and_evaluate_again
+from helpers import assert_passes_flag, load_example, train_and_evaluate_again
 
 CRADLE, SPHERE, PLACE = "simgrip/PickCradleFragile-v6", "simgrip/PickSphereFragile-v6", "simgrip/PlaceFragile-v8"
 AIDS = dict(action_offset=(-0.4, 0.0), residual=("palm_z",))
@@ -154,10 +154,7 @@ def test_train_sb3_records_it_and_evaluate_policy_gives_its_figures_again(tmp_pa
 
 def test_rl_baselines_passes_it_to_every_run_and_refuses_sac(tmp_path):
     mod = load_example("rl_baselines", "_privileged")
-    args = rl_baselines_args(mod, CRADLE, privileged_critic=True)
-    assert "--privileged-critic" in mod.run_command("ppo", 0, args, tmp_path / "run")
-    args.privileged_critic = False
-    assert "--privileged-critic" not in mod.run_command("ppo", 0, args, tmp_path / "run")
+    assert_passes_flag(mod, CRADLE, "privileged_critic", tmp_path / "run")
     with pytest.raises(SystemExit) as e:
         mod.main(["--env", CRADLE, "--algo", "sac", "--privileged-critic", "--seeds", "0", "--minutes", "1",
                   "--eval-seeds", "8000-8001", "--out", str(tmp_path / "o")])

@@ -14,7 +14,7 @@ import simgrip.envs  # noqa: F401  (registers the ids)
 from simgrip.envs.budget_replay import OPTION_KEYS
 from simgrip.envs.env_options import EnvOptions, make_env
 from simgrip.envs.touch_memory import CLOSE_UNIT, RISE_UNIT, TouchMemory
-from helpers import load_example, rl_baselines_args, train_and_evaluate_again
+from helpers import assert_passes_flag, load_example, train_and_evaluate_again
 
 PLACE, SPHERE, PINCH = "simgrip/PlaceFragile-v8", "simgrip/PickSphereFragile-v6", "simgrip/PickFragile-v7"
 PALM_ALONE = dict(action_offset=(-0.2,), residual=("palm_x", "palm_z"), residual_alone=True)
@@ -106,8 +106,4 @@ def test_train_sb3_records_it_and_evaluate_policy_gives_its_figures_again(tmp_pa
 
 
 def test_rl_baselines_passes_it_to_every_run(tmp_path):
-    mod = load_example("rl_baselines", "_touch_memory")
-    args = rl_baselines_args(mod, PLACE, touch_memory=True)
-    assert "--touch-memory" in mod.run_command("ppo", 0, args, tmp_path / "run")
-    args.touch_memory = False
-    assert "--touch-memory" not in mod.run_command("ppo", 0, args, tmp_path / "run")
+    assert_passes_flag(load_example("rl_baselines", "_touch_memory"), PLACE, "touch_memory", tmp_path / "run")
