@@ -2,10 +2,10 @@
 
 :class:`EnvOptions` holds every option that shapes the env a policy is trained or evaluated on: ``gym.make``'s
 keyword arguments, the wrappers that are part of the policy (``--valve-share``, ``--action-offset``,
-``--residual``, ``--touch-memory``, ``--privileged-critic``, ``--frame-stack``: training and evaluation alike) and the training aids
-(``--scripted-start``, ``--light-bias``, ``--crush-charge``, ``--step-charge``, ``--crush-margin``: training only;
-evaluation runs the task, which :meth:`EnvOptions.evaluation` gives).  :func:`make_env` builds the env they describe;
-``<algo>_eval.json`` records them through :meth:`EnvOptions.record`.
+``--residual``, ``--touch-memory``, ``--privileged-critic``, ``--frame-stack``: training and evaluation alike) and
+the training aids (``--scripted-start``, ``--light-bias``, ``--crush-charge``, ``--step-charge``,
+``--crush-margin``: training only; evaluation runs the task, which :meth:`EnvOptions.evaluation` gives).
+:func:`make_env` builds the env they describe; ``<algo>_eval.json`` records them through :meth:`EnvOptions.record`.
 
 The wrappers, innermost first: ``LightBias``, ``CrushCharge``, ``StepCharge``, ``CrushMargin``, ``ScriptedStart``,
 ``ValveShare``, ``ScriptedResidual``, ``TouchMemory``, ``ActionOffset``, ``PrivilegedObservation``,
@@ -102,8 +102,9 @@ class EnvOptions:
     def record(self) -> tuple[dict, list[str]]:
         """What ``<algo>_eval.json`` records of the options: its keys (``env_kwargs``, ``action_offset``,
         ``residual``, ``residual_alone`` (only where true), ``valve_share``, ``touch_memory`` and
-        ``privileged_critic`` (only where true), ``frame_stack``, ``scripted_start``, ``light_bias``, ``crush_charge`` as ``{"charge", "start"}``,
-        ``step_charge``, ``crush_margin``; each only where set) and the wrappers named, in that order."""
+        ``privileged_critic`` (only where true), ``frame_stack``, ``scripted_start``, ``light_bias``,
+        ``crush_charge`` as ``{"charge", "start"}``, ``step_charge``, ``crush_margin``; each only where set) and the
+        wrappers named, in that order."""
         keys, wrappers = {}, []
         if self.env_kwargs:
             keys["env_kwargs"] = dict(self.env_kwargs)

@@ -10,8 +10,8 @@ to optimise: under that discount, its faster and riskier policy is worth more.
 
     python examples/evaluate_policy.py --env simgrip/PickFragile-v7 (--model ZIP [--algo ppo|sac] |
         --policy observation|oracle) [--action-offset A0 A1] [--frame-stack N] [--residual NAME ... [--residual-alone]]
-        [--valve-share S] [--touch-memory] [--privileged-critic] [--scripted-start P] [--env-kwargs JSON] [--episodes 50]
-        [--seed 8000] [--gamma 0.99] [--crush-charge F ...] [--json]
+        [--valve-share S] [--touch-memory] [--privileged-critic] [--scripted-start P] [--env-kwargs JSON]
+        [--episodes 50] [--seed 8000] [--gamma 0.99] [--crush-charge F ...] [--json]
 
 ``--action-offset``, ``--frame-stack``, ``--residual``, ``--residual-alone``, ``--valve-share``, ``--touch-memory``
 and ``--privileged-critic`` must be the ones the model was trained with (``train_sb3.py``'s options of those names);
