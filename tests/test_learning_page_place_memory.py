@@ -2,7 +2,7 @@
 the sphere's best screen at the pinch's discount with the best of validations kept, and the place and the sphere
 given the first touch's memory (``docs/learning.md``, "The place with its palm the script's alone, without the light
 bias", "The sphere's falling rate and step charge, with the pinch's discount and the best of validations kept", "The
-first touch remembered"; the helpers are ``test_learning_page.py``'s, the records' readers
+first touch remembered", "The place with the first touch remembered, given twice the budget"; the helpers are ``test_learning_page.py``'s, the records' readers
 ``test_readme_tables.py``'s).
 """
 
@@ -16,7 +16,7 @@ from test_learning_page import (_assert_seeds_on_page, _listed, checkpoint_rates
                                 seed_runs)
 from test_learning_page_claws import _evaluation  # noqa: E402
 from test_learning_page_cradle_touch import _options  # noqa: E402
-from test_learning_page_place_light import HEAVY, LIGHT, PALM_ALONE, _count  # noqa: E402
+from test_learning_page_place_light import HEAVY, LIGHT, PALM_ALONE, _count, controller  # noqa: E402, F401
 from test_readme_tables import ROOT, aggregate, final_rates, joined  # noqa: E402
 
 NO_LIGHT = "rl_place_v8_palm_alone_log_std_peak_gamma_select_screen"
@@ -144,3 +144,35 @@ def test_the_sphere_given_the_first_touchs_memory_is_its_record():
     assert f"({ev['crushed_after_touch']['0']} of the {run['outcomes']['crushed']} here)" in para
     page = joined(ROOT / "docs" / "environments.md")
     assert f"(`--touch-memory`, one seed: {final_rates(SPHERE_MEMORY)} %)" in page
+
+
+MEMORY_30 = MEMORY + "_30min_screen"
+
+
+def test_the_place_given_the_memory_and_twice_the_budget_is_its_record():
+    """The batch's command at 30 CPU-minutes (its options but the budget), each seed's six checkpoints, steps and
+    crushes, the choices (when, their validation success) and the last policies, the heavy pieces placed and the
+    light ones crushed against the controller's (the final policies' ``evaluate_seedS.json``)."""
+    para = learning_paragraph("**The place with the first touch remembered, given twice the budget** (stop 74).")
+    assert f"`docs/baselines/{MEMORY_30}/`" in para
+    assert _options(MEMORY_30, "minutes") == _options(MEMORY, "minutes") and aggregate(MEMORY_30)["minutes"] == 30.0
+    runs = seed_runs(MEMORY_30, (0, 1))
+    _assert_seeds_on_page(para, runs, span="… / 30")
+    assert not any(c["success_rate"] >= 0.8 for r in runs for c in r["checkpoints"]) and "Not met" in para
+    sels = [r["selection"] for r in runs]
+    chosen = [s["validations"][s["chosen"]] for s in sels]
+    assert all(len(s["validations"]) == 30 for s in sels)
+    assert (f"The choices came at {_listed(format(c['minutes'], '.1f') for c in chosen)} CPU-min, from "
+            f"{_listed(round(100 * c['success_rate']) for c in chosen)} % on the validation seeds, and the last "
+            f"policies hold {_listed(round(100 * s['last']['success_rate']) for s in sels)} % held out") in para
+    evs = [_evaluation(MEMORY_30, k) for k in (0, 1)]
+    assert [e["outcomes"] for e in evs] == [r["outcomes"] for r in runs]
+    assert f"({_listed(_count(e, HEAVY, 'success') for e in evs)} of the 17 placed)" in para
+    assert f"({_listed(_count(e, LIGHT, 'crushed') for e in evs)} of the 21 crushed)" in para
+
+
+def test_the_controller_crushes_one_light_piece(controller):
+    """The paragraph's comparison, measured again (``test_learning_page_place_light.controller``: the place's
+    scripted observation-only controller on the held-out seeds), the pieces of 5-18 g it crushes."""
+    para = learning_paragraph("**The place with the first touch remembered, given twice the budget** (stop 74).")
+    assert f"the scripted observation-only controller crushes {_count(controller, LIGHT, 'crushed')} of them" in para
